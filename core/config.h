@@ -1,0 +1,80 @@
+// Reading YAML configuration with errors that name the file, line and field.
+//
+//   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile("etc/rig.yaml"));
+//   double fx = root.Child("camera").Number("fx_px", {.min = 1});
+//   if (!root.ok()) return root.status();
+//     -> "etc/rig.yaml:12:7: field 'camera.fx_px': expected a number >= 1, got 'abc'"
+//
+// Accessors never throw and never abort: a missing or malformed field records
+// the first error in state shared by every node of the document and returns a
+// neutral value (0, "", empty), so a loader reads all its fields and then checks
+// `status()` once. Optional fields take a fallback.
+#pragma once
+
+#include <initializer_list>
+#include <limits>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/status.h"
+
+namespace hairrig {
+
+struct NumberRange {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+};
+
+class ConfigNode {
+ public:
+  static Result<ConfigNode> LoadFile(const std::string& path);
+  // `origin` names the text in messages (a file name, "<command line>").
+  static Result<ConfigNode> LoadString(const std::string& text, const std::string& origin);
+
+  ConfigNode();
+  ~ConfigNode();
+  ConfigNode(const ConfigNode&);
+  ConfigNode& operator=(const ConfigNode&);
+
+  bool ok() const;
+  Status status() const;            // first error recorded anywhere in this document
+  const std::string& file() const;  // the file (or origin) the document came from
+  const std::string& path() const;  // dotted path of this node: "cameras[1].pose"
+  std::string Where() const;        // "file:line:col" of this node
+  bool IsMap() const;
+  bool Has(std::string_view key) const;
+
+  double Number(std::string_view key, NumberRange range = {}) const;
+  double Number(std::string_view key, double fallback, NumberRange range = {}) const;
+  int Integer(std::string_view key, NumberRange range = {}) const;
+  int Integer(std::string_view key, int fallback, NumberRange range = {}) const;
+  std::string String(std::string_view key) const;
+  std::string String(std::string_view key, const std::string& fallback) const;
+  // One of `choices`; the message lists them.
+  std::string Choice(std::string_view key, std::initializer_list<const char*> choices,
+                     const std::string& fallback = "") const;
+  bool Bool(std::string_view key, bool fallback) const;
+  std::vector<double> Numbers(std::string_view key, size_t expected_size = 0) const;
+  Eigen::Vector3d Vec3(std::string_view key) const;
+  Eigen::Vector3d Vec3(std::string_view key, const Eigen::Vector3d& fallback) const;
+
+  ConfigNode Child(std::string_view key) const;          // required map
+  ConfigNode OptionalChild(std::string_view key) const;  // IsMap() false when absent
+  std::vector<ConfigNode> Items(std::string_view key) const;  // required sequence of maps
+  std::vector<ConfigNode> OptionalItems(std::string_view key) const;
+
+  // Records an error for any key of this map not in `allowed` (catches typos).
+  void AllowOnlyKeys(std::initializer_list<const char*> allowed) const;
+  // Records an error at this node's field `key` (or the node itself for "").
+  void Fail(std::string_view key, const std::string& what) const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<Impl> impl_;
+};
+
+}  // namespace hairrig
