@@ -1,0 +1,73 @@
+// A camera: industrial (Aravis, V4L2), DSLR (gphoto2) or simulated.
+//
+// Capture is split so that several cameras can be triggered together and their
+// downloads overlap the next turntable move:
+//   Configure(settings) -> Arm() -> [SoftwareTrigger() | pulse on the trigger line]
+//   -> WaitFrame(timeout), any number of times; Disarm() when done.
+// WaitFrame returns frames in trigger order; Timeout if none arrives in time
+// (the device stays usable), Unavailable if the camera dropped off the bus.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "drivers/device.h"
+
+namespace hairrig {
+
+enum class PixelFormat { kMono8, kRgb8, kBgr8, kBayerRG8, kEncoded };
+const char* PixelFormatName(PixelFormat format);
+int BytesPerPixel(PixelFormat format);  // 0 for kEncoded
+
+enum class TriggerSource { kSoftware, kLine };
+
+struct CaptureSettings {
+  double exposure_s = 0.01;
+  double gain_db = 0.0;
+  PixelFormat format = PixelFormat::kRgb8;
+  TriggerSource trigger = TriggerSource::kSoftware;
+  std::string trigger_line;  // name of the TriggerLine device when trigger == kLine
+};
+
+struct CameraCapabilities {
+  int width_px = 0;
+  int height_px = 0;
+  std::vector<PixelFormat> formats;
+  double min_exposure_s = 0;
+  double max_exposure_s = 0;
+  bool line_trigger = false;
+  double readout_s = 0;   // sensor readout after exposure
+  double download_s = 0;  // typical transfer time of one frame
+};
+
+struct Frame {
+  std::string camera_serial;
+  uint64_t sequence = 0;  // per camera, from 0 after Arm()
+  int width_px = 0;
+  int height_px = 0;
+  PixelFormat format = PixelFormat::kRgb8;
+  std::string encoding;  // for kEncoded: file extension of `data` ("jpg", "png")
+  std::vector<uint8_t> data;
+  double exposure_s = 0;
+  double gain_db = 0;
+  int64_t trigger_time_ns = 0;   // steady clock, when the exposure started
+  int64_t received_time_ns = 0;  // steady clock, when the host had all bytes
+  // Bytes a raw frame of this geometry must have; 0 for encoded frames.
+  size_t ExpectedBytes() const;
+};
+
+class Camera : public Device {
+ public:
+  using Device::Device;
+  virtual CameraCapabilities capabilities() const = 0;
+  // ready -> ready. OutOfRange names the setting outside the capabilities.
+  virtual Status Configure(const CaptureSettings& settings) = 0;
+  virtual Status Arm() = 0;
+  virtual Status Disarm() = 0;
+  virtual Status SoftwareTrigger() = 0;
+  virtual Result<Frame> WaitFrame(std::chrono::milliseconds timeout) = 0;
+};
+
+}  // namespace hairrig

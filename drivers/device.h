@@ -1,0 +1,68 @@
+// The device vocabulary shared by every backend (real, simulated, replay).
+//
+// Every device has an explicit state and calls that return a Status with a
+// message a technician can act on; none aborts or throws on I/O failure.
+//
+//   closed --Open()--> ready --(start of work)--> busy --(done)--> ready
+//      ^                 |  any I/O fault --> faulted --Close()/Open()--> ...
+//      +----Close()------+
+//
+// A call made in the wrong state returns FailedPrecondition naming the device,
+// the call and the state. Devices are identified by serial number, never by
+// port or bus order; `name` is the role the rig config gives it ("upper").
+#pragma once
+
+#include <atomic>
+#include <initializer_list>
+#include <string>
+
+#include "core/status.h"
+
+namespace hairrig {
+
+enum class DeviceKind { kTurntable, kLight, kCamera, kTriggerLine };
+enum class DeviceState { kClosed, kReady, kBusy, kFaulted };
+
+const char* DeviceKindName(DeviceKind kind);
+const char* DeviceStateName(DeviceState state);
+
+struct DeviceInfo {
+  DeviceKind kind = DeviceKind::kCamera;
+  std::string name;     // role in the rig config
+  std::string backend;  // "sim", "modbus", "gphoto2", ...
+  std::string serial;   // identity of the physical unit
+  std::string model;    // vendor/model text for humans
+};
+
+class Device {
+ public:
+  explicit Device(DeviceInfo info) : info_(std::move(info)) {}
+  virtual ~Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  const DeviceInfo& info() const { return info_; }
+  DeviceState state() const { return state_.load(); }
+  // "camera 'upper' (sim, serial SIM-CAM-UPPER)": how messages name the device.
+  std::string Describe() const;
+
+  // closed/faulted -> ready. Finds the unit by serial; Unavailable if absent.
+  virtual Status Open() = 0;
+  // any -> closed. Safe to call twice.
+  virtual Status Close() = 0;
+  // Talks to the unit (reads a status register, a config value) without side effects.
+  virtual Status HealthCheck() = 0;
+
+ protected:
+  void SetState(DeviceState s) { state_.store(s); }
+  // FailedPrecondition unless the state is one of `allowed`.
+  Status RequireState(std::initializer_list<DeviceState> allowed, const char* call) const;
+  // Marks the device faulted and returns `status` prefixed with Describe().
+  Status Fault(const Status& status);
+
+ private:
+  DeviceInfo info_;
+  std::atomic<DeviceState> state_{DeviceState::kClosed};
+};
+
+}  // namespace hairrig

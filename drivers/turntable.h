@@ -1,0 +1,53 @@
+// A motorised turntable (Modbus stepper/servo controller, or simulated).
+// Angles in degrees, increasing counter-clockwise seen from above (about world
+// +z, core/transform.h). Positions are absolute after Home().
+#pragma once
+
+#include <chrono>
+
+#include "drivers/device.h"
+
+namespace hairrig {
+
+struct TurntableCapabilities {
+  double max_speed_deg_s = 0;
+  double max_accel_deg_s2 = 0;
+  double resolution_deg = 0;  // smallest commandable step
+  bool can_home = true;
+};
+
+struct MotionProfile {
+  double speed_deg_s = 30;
+  double accel_deg_s2 = 60;
+};
+
+struct TurntableStatus {
+  double position_deg = 0;  // measured (encoder)
+  double target_deg = 0;    // last commanded
+  bool moving = false;
+  bool in_position = false;  // controller's in-position flag
+  bool homed = false;
+  bool fault = false;
+};
+
+class Turntable : public Device {
+ public:
+  using Device::Device;
+  virtual TurntableCapabilities capabilities() const = 0;
+  // Finds the index and sets position 0. Blocks up to `timeout`.
+  virtual Status Home(std::chrono::milliseconds timeout) = 0;
+  // Starts an absolute move and returns at once (state busy until in position).
+  // OutOfRange if the profile exceeds the capabilities.
+  virtual Status StartMove(double target_deg, const MotionProfile& profile) = 0;
+  virtual Result<TurntableStatus> ReadStatus() = 0;
+  // Blocks until the in-position flag is set; Timeout if not within `timeout`,
+  // DeviceFault if the controller reports a fault (stall, following error).
+  virtual Status WaitInPosition(std::chrono::milliseconds timeout) = 0;
+  // Decelerates to a stop at once (e-stop, interlock); valid in any open state.
+  virtual Status Stop() = 0;
+
+  // StartMove then WaitInPosition.
+  Status MoveTo(double target_deg, const MotionProfile& profile, std::chrono::milliseconds timeout);
+};
+
+}  // namespace hairrig
