@@ -1,0 +1,187 @@
+#include "sim_hw/scene.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/config.h"
+
+namespace hairrig {
+
+int Scene::FindCamera(const std::string& serial) const {
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    if (cameras[i].serial == serial) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+namespace {
+
+std::string Resolve(const std::string& base_file, const std::string& relative) {
+  if (relative.empty() || relative[0] == '/') return relative;
+  return (std::filesystem::path(base_file).parent_path() / relative).lexically_normal().string();
+}
+
+Rigid3d ReadPose(const ConfigNode& n) {
+  n.AllowOnlyKeys({"translation_mm", "rotation_deg"});
+  const Eigen::Vector3d t = n.Vec3("translation_mm", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d r = n.Vec3("rotation_deg", Eigen::Vector3d::Zero());
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(DegToRad(r.z()), Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(DegToRad(r.y()), Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(DegToRad(r.x()), Eigen::Vector3d::UnitX());
+  return Rigid3d(q, t);
+}
+
+void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) {
+  n.AllowOnlyKeys({"style", "strands", "length_mm", "segment_mm", "scalp_min_elevation_deg", "face_dir",
+                   "face_half_angle_deg", "wave_amplitude_mm", "wave_period_mm", "curl_radius_mm",
+                   "curl_pitch_mm", "file", "albedo", "seed"});
+  const std::string style = n.Choice("style", {"straight", "wavy", "curly", "file"}, "wavy");
+  w->style = style == "straight" ? WigStyle::kStraight
+             : style == "curly"  ? WigStyle::kCurly
+             : style == "file"   ? WigStyle::kFile
+                                 : WigStyle::kWavy;
+  w->num_strands = n.Integer("strands", w->num_strands, {.min = 1, .max = 2e6});
+  if (n.Has("length_mm")) {
+    const auto l = n.Numbers("length_mm", 2);
+    if (l.size() == 2) {
+      w->min_length_mm = l[0];
+      w->max_length_mm = l[1];
+      if (!(l[0] > 0 && l[1] >= l[0])) n.Fail("length_mm", "expected [min, max] with 0 < min <= max");
+    }
+  }
+  w->segment_mm = n.Number("segment_mm", w->segment_mm, {.min = 0.1, .max = 100});
+  w->scalp_min_elevation_deg = n.Number("scalp_min_elevation_deg", w->scalp_min_elevation_deg, {.min = -90, .max = 89});
+  w->face_dir = n.Vec3("face_dir", w->face_dir);
+  if (w->face_dir.norm() < 1e-9) n.Fail("face_dir", "must not be the zero vector");
+  w->face_dir.normalize();
+  w->face_half_angle_deg = n.Number("face_half_angle_deg", w->face_half_angle_deg, {.min = 0, .max = 180});
+  w->wave_amplitude_mm = n.Number("wave_amplitude_mm", w->wave_amplitude_mm, {.min = 0});
+  w->wave_period_mm = n.Number("wave_period_mm", w->wave_period_mm, {.min = 1});
+  w->curl_radius_mm = n.Number("curl_radius_mm", w->curl_radius_mm, {.min = 0});
+  w->curl_pitch_mm = n.Number("curl_pitch_mm", w->curl_pitch_mm, {.min = 0.5});
+  w->albedo = n.Vec3("albedo", w->albedo);
+  w->seed = static_cast<uint64_t>(n.Integer("seed", static_cast<int>(w->seed), {.min = 0}));
+  if (w->style == WigStyle::kFile) w->file = Resolve(scene_path, n.String("file"));
+}
+
+SceneCamera ReadCamera(const ConfigNode& n) {
+  n.AllowOnlyKeys({"serial", "resolution", "intrinsics", "eye_mm", "target_mm", "read_noise_dn",
+                   "shot_noise_gain", "exposure_s", "sensitivity"});
+  SceneCamera c;
+  c.serial = n.String("serial");
+  const auto res = n.Numbers("resolution", 2);
+  const ConfigNode in = n.Child("intrinsics");
+  in.AllowOnlyKeys({"fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "p1", "p2", "k3"});
+  if (res.size() == 2) {
+    c.intrinsics.width_px = static_cast<int>(res[0]);
+    c.intrinsics.height_px = static_cast<int>(res[1]);
+    if (res[0] < 16 || res[1] < 16 || res[0] > 20000 || res[1] > 20000) {
+      n.Fail("resolution", "expected [width, height] between 16 and 20000 pixels");
+    }
+  }
+  c.intrinsics.fx_px = in.Number("fx_px", {.min = 1});
+  c.intrinsics.fy_px = in.Number("fy_px", {.min = 1});
+  c.intrinsics.cx_px = in.Number("cx_px", 0.5 * (c.intrinsics.width_px - 1));
+  c.intrinsics.cy_px = in.Number("cy_px", 0.5 * (c.intrinsics.height_px - 1));
+  c.intrinsics.k1 = in.Number("k1", 0.0, {.min = -2, .max = 2});
+  c.intrinsics.k2 = in.Number("k2", 0.0, {.min = -2, .max = 2});
+  c.intrinsics.p1 = in.Number("p1", 0.0, {.min = -0.1, .max = 0.1});
+  c.intrinsics.p2 = in.Number("p2", 0.0, {.min = -0.1, .max = 0.1});
+  c.intrinsics.k3 = in.Number("k3", 0.0, {.min = -2, .max = 2});
+  const Eigen::Vector3d eye = n.Vec3("eye_mm");
+  const Eigen::Vector3d target = n.Vec3("target_mm");
+  if (n.ok() && (eye - target).norm() < 1.0) n.Fail("target_mm", "the camera must look somewhere: eye_mm equals target_mm");
+  c.cam_from_world = LookAt(eye, target);
+  c.read_noise_dn = n.Number("read_noise_dn", c.read_noise_dn, {.min = 0, .max = 100});
+  c.shot_noise_gain = n.Number("shot_noise_gain", c.shot_noise_gain, {.min = 0, .max = 10});
+  c.exposure_s = n.Number("exposure_s", c.exposure_s, {.min = 1e-6, .max = 30});
+  c.sensitivity = n.Number("sensitivity", c.sensitivity, {.min = 1e-6});
+  return c;
+}
+
+}  // namespace
+
+Result<Scene> LoadScene(const std::string& path) {
+  HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
+  root.AllowOnlyKeys({"name", "seed", "head", "wig", "calib_box", "lights", "cameras", "backdrop_albedo",
+                      "ambient", "turntable"});
+  Scene scene;
+  scene.path = path;
+  scene.name = root.String("name", "unnamed scene");
+  scene.seed = static_cast<uint64_t>(root.Integer("seed", 1, {.min = 0}));
+  if (root.Has("head")) {
+    const ConfigNode h = root.Child("head");
+    h.AllowOnlyKeys({"center_mm", "radii_mm", "albedo"});
+    scene.head.center_turntable_mm = h.Vec3("center_mm", scene.head.center_turntable_mm);
+    scene.head.radii_mm = h.Vec3("radii_mm", scene.head.radii_mm);
+    if (root.ok() && scene.head.radii_mm.minCoeff() <= 0) h.Fail("radii_mm", "every radius must be positive");
+    scene.head.albedo = h.Vec3("albedo", scene.head.albedo);
+  }
+  if (root.Has("wig")) ReadWig(root.Child("wig"), path, &scene.wig);
+  const ConfigNode box = root.Child("calib_box");
+  box.AllowOnlyKeys({"file", "turntable_from_box"});
+  const std::string box_file = Resolve(path, box.String("file"));
+  scene.turntable_from_box = ReadPose(box.Child("turntable_from_box"));
+  for (const ConfigNode& l : root.Items("lights")) {
+    l.AllowOnlyKeys({"name", "position_mm", "intensity"});
+    scene.lights.push_back({l.String("name"), l.Vec3("position_mm"), l.Number("intensity", 1.0, {.min = 0})});
+  }
+  for (const ConfigNode& c : root.Items("cameras")) scene.cameras.push_back(ReadCamera(c));
+  scene.backdrop_albedo = root.Vec3("backdrop_albedo", scene.backdrop_albedo);
+  scene.ambient = root.Number("ambient", scene.ambient, {.min = 0, .max = 1});
+  if (root.Has("turntable")) {
+    const ConfigNode t = root.Child("turntable");
+    t.AllowOnlyKeys({"stops", "speed_deg_s", "accel_deg_s2", "settle_s", "camera_readout_s", "camera_download_s"});
+    scene.turntable_stops = t.Integer("stops", scene.turntable_stops, {.min = 1, .max = 3600});
+    scene.turntable_speed_deg_s = t.Number("speed_deg_s", scene.turntable_speed_deg_s, {.min = 0.01});
+    scene.turntable_accel_deg_s2 = t.Number("accel_deg_s2", scene.turntable_accel_deg_s2, {.min = 0.01});
+    scene.turntable_settle_s = t.Number("settle_s", scene.turntable_settle_s, {.min = 0});
+    scene.camera_readout_s = t.Number("camera_readout_s", scene.camera_readout_s, {.min = 0});
+    scene.camera_download_s = t.Number("camera_download_s", scene.camera_download_s, {.min = 0});
+  }
+  if (!root.ok()) return root.status();
+  HR_ASSIGN_OR_RETURN(scene.box, LoadCalibBox(box_file));
+  HR_RETURN_IF_ERROR(ValidateScene(scene));
+  return scene;
+}
+
+Status ValidateScene(const Scene& scene) {
+  if (scene.cameras.empty()) return InvalidArgument(scene.path + ": the scene has no cameras");
+  const Eigen::Vector3d half = 0.5 * scene.box.size_mm;
+  for (const SceneCamera& cam : scene.cameras) {
+    HR_RETURN_IF_ERROR(cam.intrinsics.Validate().WithContext(scene.path + ": camera " + cam.serial));
+    for (int stop = 0; stop < scene.turntable_stops; ++stop) {
+      const Rigid3d cam_from_box =
+          cam.cam_from_world * WorldFromTurntable(scene.StopAngleDeg(stop)) * scene.turntable_from_box;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d p_box((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
+                                    (corner & 4 ? 1 : -1) * half.z());
+        if ((cam_from_box * p_box).z() < 10.0) {
+          return InvalidArgument(scene.path + ": camera " + cam.serial + " has the calibration box behind it (or " +
+                                 "closer than 10 mm) at turntable stop " + std::to_string(stop) +
+                                 ": check calib_box.turntable_from_box and the camera's eye_mm/target_mm");
+        }
+      }
+    }
+  }
+  // The box hangs above the head: its lowest corner clears the crown and the hair on it.
+  constexpr double kHairOnCrownMm = 20.0;
+  double box_bottom_mm = 1e30;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p_box((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
+                                (corner & 4 ? 1 : -1) * half.z());
+    box_bottom_mm = std::min(box_bottom_mm, (scene.turntable_from_box * p_box).z());
+  }
+  const double crown_mm = scene.head.center_turntable_mm.z() + scene.head.radii_mm.z() + kHairOnCrownMm;
+  if (box_bottom_mm < crown_mm) {
+    return InvalidArgument(scene.path + ": the calibration box (lowest corner at z = " + std::to_string(box_bottom_mm) +
+                           " mm) does not hang clear of the head and its hair (crown at z = " +
+                           std::to_string(crown_mm) + " mm): raise calib_box.turntable_from_box.translation_mm");
+  }
+  for (const SceneLight& l : scene.lights) {
+    if (l.name.empty()) return InvalidArgument(scene.path + ": a light has no name");
+  }
+  return Status::Ok();
+}
+
+}  // namespace hairrig
