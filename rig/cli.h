@@ -1,0 +1,35 @@
+// The `hairrig` command line: each subcommand parses, validates, calls the
+// libraries and writes; no algorithm lives here (design.md section 7).
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/status.h"
+
+namespace CLI {
+class App;
+}
+
+namespace hairrig {
+
+// Options every subcommand shares.
+struct CommonOptions {
+  bool json = false;      // print the summary as one JSON object on stdout
+  std::string log_level = "info";
+};
+
+// A subcommand's work: returns its summary as JSON, or a Status for the error.
+using CommandAction = std::function<Result<nlohmann::json>()>;
+// What main runs after parsing.
+struct Dispatch {
+  CommandAction action;
+  std::function<void(const nlohmann::json&)> print_human;
+};
+
+void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+
+}  // namespace hairrig

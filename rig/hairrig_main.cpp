@@ -1,0 +1,47 @@
+#include <cstdio>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "core/log.h"
+#include "rig/cli.h"
+
+int main(int argc, char** argv) {
+  using namespace hairrig;
+  CLI::App app{
+      "hairrig: capture rig control and hair pipeline.\n"
+      "With no --config, the rig is the simulated one in etc/ (etc/rig.yaml)."};
+  app.require_subcommand(1);
+  CommonOptions common;
+  app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")->capture_default_str();
+  Dispatch dispatch;
+  AddDevicesCommand(app, common, dispatch);
+  AddSimCommand(app, common, dispatch);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  LogLevel level;
+  if (!ParseLogLevel(common.log_level, &level)) {
+    std::fprintf(stderr, "hairrig: error: --log-level '%s' is not one of debug, info, warning, error, off\n",
+                 common.log_level.c_str());
+    return 2;
+  }
+  SetLogLevel(level);
+  if (!dispatch.action) {
+    std::cerr << app.help();
+    return 2;
+  }
+  auto result = dispatch.action();
+  if (!result.ok()) {
+    std::fprintf(stderr, "hairrig: error: %s\n", result.status().ToString().c_str());
+    return 1;
+  }
+  if (common.json) {
+    std::cout << result->dump() << std::endl;
+  } else if (dispatch.print_human) {
+    dispatch.print_human(*result);
+  }
+  return 0;
+}

@@ -1,0 +1,64 @@
+#include "rig/rig_config.h"
+
+#include <cstdlib>
+#include <filesystem>
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+
+Result<std::string> EtcPath(const std::string& relative) {
+  std::vector<fs::path> candidates;
+  if (const char* env = std::getenv("HAIRRIG_ETC")) candidates.emplace_back(env);
+  candidates.emplace_back(fs::path(HAIRRIG_SOURCE_DIR) / "etc");
+  candidates.emplace_back(fs::current_path() / "etc");
+  std::string tried;
+  for (const auto& dir : candidates) {
+    const fs::path p = dir / relative;
+    if (fs::exists(p)) return p.lexically_normal().string();
+    tried += (tried.empty() ? "" : ", ") + p.string();
+  }
+  return NotFound("cannot find " + relative + " (tried " + tried + "); set HAIRRIG_ETC to the project's etc/ folder");
+}
+
+Result<std::string> DefaultRigConfigPath() { return EtcPath("rig.yaml"); }
+
+Result<RigConfig> LoadRigConfig(const std::string& path) {
+  HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
+  root.AllowOnlyKeys({"name", "sim", "devices", "plan", "storage", "retries", "calibration"});
+  RigConfig config;
+  config.path = path;
+  config.root = root;
+  config.name = root.String("name", fs::path(path).stem().string());
+  if (root.Has("sim")) {
+    const ConfigNode sim = root.Child("sim");
+    sim.AllowOnlyKeys({"scene", "time_scale"});
+    const std::string scene = sim.String("scene");
+    config.sim_time_scale = sim.Number("time_scale", 0.01, {.min = 1e-6, .max = 100});
+    if (!scene.empty() && scene[0] != '/') {
+      config.sim_scene_path = (fs::path(path).parent_path() / scene).lexically_normal().string();
+    } else {
+      config.sim_scene_path = scene;
+    }
+  }
+  root.Child("devices");
+  if (!root.ok()) return root.status();
+  return config;
+}
+
+Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config) {
+  auto rig = std::make_unique<Rig>();
+  rig->config = config;
+  DeviceRegistry registry;
+  if (!config.sim_scene_path.empty()) {
+    HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));
+    SimWorldOptions options;
+    options.time_scale = config.sim_time_scale;
+    HR_ASSIGN_OR_RETURN(rig->sim_world, CreateSimWorld(scene, options));
+    RegisterSimBackends(&registry, rig->sim_world);
+  }
+  HR_ASSIGN_OR_RETURN(rig->devices, BuildDevices(config.root.Child("devices"), registry));
+  return rig;
+}
+
+}  // namespace hairrig

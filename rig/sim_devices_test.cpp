@@ -1,0 +1,117 @@
+// The simulated devices behind the driver interfaces, built from etc/rig.yaml
+// as the CLI builds them.
+#include <numeric>
+
+#include <gtest/gtest.h>
+
+#include "rig/rig_config.h"
+
+namespace hairrig {
+namespace {
+
+using std::chrono::milliseconds;
+
+std::unique_ptr<Rig> OpenDefaultRig() {
+  auto config = LoadRigConfig("etc/rig.yaml");
+  EXPECT_TRUE(config.ok()) << config.status().ToString();
+  auto rig = BuildRig(*config);
+  EXPECT_TRUE(rig.ok()) << rig.status().ToString();
+  EXPECT_TRUE((*rig)->devices.OpenAll().ok());
+  return std::move(rig).value();
+}
+
+double MeanDn(const Frame& f) {
+  return std::accumulate(f.data.begin(), f.data.end(), 0.0) / static_cast<double>(f.data.size());
+}
+
+TEST(SimDevices, TurntableReachesItsTargetAfterTheProfileAndSettle) {
+  auto rig = OpenDefaultRig();
+  Turntable& tt = *rig->devices.turntable;
+  ASSERT_TRUE(tt.Home(milliseconds(5000)).ok());
+  ASSERT_TRUE(tt.StartMove(90.0, {30.0, 60.0}).ok());
+  auto moving = tt.ReadStatus();
+  ASSERT_TRUE(moving.ok());
+  EXPECT_FALSE(moving->in_position);
+  EXPECT_EQ(tt.state(), DeviceState::kBusy);
+  ASSERT_TRUE(tt.WaitInPosition(milliseconds(5000)).ok());
+  auto there = tt.ReadStatus();
+  EXPECT_TRUE(there->in_position);
+  EXPECT_NEAR(there->position_deg, 90.0, 1e-9);
+  EXPECT_EQ(tt.StartMove(10.0, {1000.0, 60.0}).code(), StatusCode::kOutOfRange);
+  // A move of 4 simulated seconds (at time_scale 0.01: 40 ms) cannot be waited for in 1 ms.
+  ASSERT_TRUE(tt.StartMove(0.0, {30.0, 60.0}).ok());
+  EXPECT_EQ(tt.WaitInPosition(milliseconds(1)).code(), StatusCode::kTimeout);
+}
+
+TEST(SimDevices, OneTriggerPulseExposesEveryCameraOnTheLineAtOnce) {
+  auto rig = OpenDefaultRig();
+  for (auto& light : rig->devices.lights) ASSERT_TRUE(light->SetOn(true).ok());
+  for (auto& cam : rig->devices.cameras) {
+    CaptureSettings s;
+    s.trigger = TriggerSource::kLine;
+    s.trigger_line = "trig0";
+    s.format = PixelFormat::kMono8;
+    s.exposure_s = 0.02;
+    ASSERT_TRUE(cam->Configure(s).ok());
+    ASSERT_TRUE(cam->Arm().ok());
+  }
+  ASSERT_TRUE(rig->devices.trigger_lines[0]->Pulse(std::chrono::microseconds(100)).ok());
+  for (auto& cam : rig->devices.cameras) {
+    auto frame = cam->WaitFrame(milliseconds(10000));
+    ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+    EXPECT_EQ(frame->camera_serial, cam->info().serial);
+    EXPECT_EQ(frame->data.size(), frame->ExpectedBytes());
+    EXPECT_EQ(frame->width_px, 1200);
+    EXPECT_GT(MeanDn(*frame), 20.0);
+    // Nothing more was triggered.
+    EXPECT_EQ(cam->WaitFrame(milliseconds(50)).status().code(), StatusCode::kTimeout);
+  }
+}
+
+TEST(SimDevices, LightsOffGiveADarkFrame) {
+  auto rig = OpenDefaultRig();
+  Camera& cam = *rig->devices.cameras[0];
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  ASSERT_TRUE(cam.Configure(s).ok());
+  ASSERT_TRUE(cam.Arm().ok());
+  for (auto& light : rig->devices.lights) ASSERT_TRUE(light->SetOn(false).ok());
+  ASSERT_TRUE(cam.SoftwareTrigger().ok());
+  auto dark = cam.WaitFrame(milliseconds(10000));
+  for (auto& light : rig->devices.lights) ASSERT_TRUE(light->SetOn(true).ok());
+  ASSERT_TRUE(cam.SoftwareTrigger().ok());
+  auto lit = cam.WaitFrame(milliseconds(10000));
+  ASSERT_TRUE(dark.ok() && lit.ok());
+  std::printf("mean DN: dark %.2f, lit %.2f\n", MeanDn(*dark), MeanDn(*lit));
+  EXPECT_LT(MeanDn(*dark), 2.0);
+  EXPECT_GT(MeanDn(*lit), 10 * MeanDn(*dark) + 20);
+}
+
+TEST(SimDevices, CallsInTheWrongStateSayWhatToDo) {
+  auto config = LoadRigConfig("etc/rig.yaml");
+  auto rig = BuildRig(*config);
+  ASSERT_TRUE(rig.ok());
+  Camera& cam = *(*rig)->devices.cameras[0];
+  const Status s = cam.SoftwareTrigger();
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(s.message().find("SIM-CAM-UPPER"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("call Open first"), std::string::npos) << s.message();
+}
+
+TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
+  auto root = ConfigNode::LoadString(
+      "name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n  cameras:\n    - {name: c, backend: sim, serial: NOPE}\n",
+      "etc/test-rig.yaml");
+  ASSERT_TRUE(root.ok());
+  RigConfig config;
+  config.path = "etc/test-rig.yaml";
+  config.sim_scene_path = "etc/scenes/default.yaml";
+  config.root = *root;
+  auto rig = BuildRig(config);
+  ASSERT_FALSE(rig.ok());
+  EXPECT_NE(rig.status().message().find("no camera with serial 'NOPE'"), std::string::npos) << rig.status().ToString();
+  EXPECT_NE(rig.status().message().find("devices.cameras[0]"), std::string::npos) << rig.status().ToString();
+}
+
+}  // namespace
+}  // namespace hairrig

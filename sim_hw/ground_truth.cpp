@@ -1,0 +1,73 @@
+#include "sim_hw/ground_truth.h"
+
+#include <nlohmann/json.hpp>
+
+namespace hairrig {
+
+int NumViews(const Scene& scene) { return scene.turntable_stops * static_cast<int>(scene.cameras.size()); }
+
+ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view) {
+  ViewGroundTruth g;
+  const int cams = static_cast<int>(scene.cameras.size());
+  g.view = view;
+  g.stop = view / cams;
+  g.camera_index = view % cams;
+  const SceneCamera& cam = scene.cameras[static_cast<size_t>(g.camera_index)];
+  g.camera_serial = cam.serial;
+  g.turntable_deg = scene.StopAngleDeg(g.stop);
+  g.intrinsics = cam.intrinsics;
+  g.cam_from_world = cam.cam_from_world;
+  g.world_from_turntable = WorldFromTurntable(g.turntable_deg);
+  g.cam_from_box = cam.cam_from_world * g.world_from_turntable * scene.turntable_from_box;
+  return g;
+}
+
+namespace {
+nlohmann::json PoseJson(const Rigid3d& t) {
+  const auto& q = t.rotation;
+  nlohmann::json m = nlohmann::json::array();
+  const auto mat = t.ToMatrix3x4();
+  for (int r = 0; r < 3; ++r) m.push_back({mat(r, 0), mat(r, 1), mat(r, 2), mat(r, 3)});
+  return {{"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}},
+          {"translation_mm", {t.translation.x(), t.translation.y(), t.translation.z()}},
+          {"matrix_3x4", m}};
+}
+}  // namespace
+
+std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views) {
+  nlohmann::json root;
+  root["simulation_only"] = true;
+  root["note"] = "Ground truth of the simulated rig. a_from_b maps frame b to frame a; mm, deg; "
+                 "pixel (0,0) is the centre of the top-left pixel.";
+  root["scene"] = scene.path;
+  root["turntable_from_box"] = PoseJson(scene.turntable_from_box);
+  root["views"] = nlohmann::json::array();
+  for (const ViewGroundTruth& g : views) {
+    nlohmann::json v;
+    v["view"] = g.view;
+    v["stop"] = g.stop;
+    v["camera_serial"] = g.camera_serial;
+    v["turntable_deg"] = g.turntable_deg;
+    nlohmann::json intr;
+    const auto p = g.intrinsics.ToParams();
+    for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) intr[CameraIntrinsics::kParamNames[i]] = p[i];
+    intr["width_px"] = g.intrinsics.width_px;
+    intr["height_px"] = g.intrinsics.height_px;
+    v["intrinsics"] = intr;
+    v["cam_from_world"] = PoseJson(g.cam_from_world);
+    v["world_from_turntable"] = PoseJson(g.world_from_turntable);
+    v["cam_from_box"] = PoseJson(g.cam_from_box);
+    v["tags"] = nlohmann::json::array();
+    for (const TagTruth& t : g.tags) {
+      if (!t.in_image || t.facing_deg <= 0) continue;
+      nlohmann::json corners = nlohmann::json::array();
+      for (const auto& c : t.corners_px) corners.push_back({c.x(), c.y()});
+      v["tags"].push_back({{"id", t.id}, {"corners_px", corners}, {"facing_deg", t.facing_deg},
+                           {"unoccluded", t.unoccluded}});
+    }
+    root["views"].push_back(v);
+  }
+  return root.dump(1);
+}
+
+}  // namespace hairrig

@@ -1,0 +1,35 @@
+// Ground truth of the simulated rig, written beside simulated captures and
+// renders and clearly marked simulation-only. Frames as in core/transform.h.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/camera_model.h"
+#include "core/transform.h"
+#include "sim_hw/renderer.h"
+#include "sim_hw/scene.h"
+
+namespace hairrig {
+
+struct ViewGroundTruth {
+  int view = 0;  // stop * num_cameras + camera
+  int stop = 0;
+  int camera_index = 0;
+  std::string camera_serial;
+  double turntable_deg = 0;
+  CameraIntrinsics intrinsics;
+  Rigid3d cam_from_world;
+  Rigid3d world_from_turntable;
+  Rigid3d cam_from_box;
+  std::vector<TagTruth> tags;
+};
+
+// The view numbering of the default plan: at each stop every camera shoots.
+int NumViews(const Scene& scene);
+ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view);
+
+// JSON text: {"simulation_only": true, "scene": ..., "turntable_from_box": ..., "views": [...]}.
+std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views);
+
+}  // namespace hairrig

@@ -1,0 +1,510 @@
+#include "sim_hw/sim_devices.h"
+
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include <opencv2/imgproc.hpp>
+
+namespace hairrig {
+
+using Clock = std::chrono::steady_clock;
+
+namespace {
+int64_t NowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
+
+// Trapezoidal (or triangular) move: position after `t` seconds of a move of
+// `distance` deg at the given speed and acceleration; duration in *duration_s.
+double TrapezoidPosition(double distance, double speed, double accel, double t, double* duration_s) {
+  const double d = std::abs(distance);
+  const double t_acc = speed / accel;
+  double duration, pos;
+  if (d < speed * t_acc) {  // never reaches full speed
+    const double t_half = std::sqrt(d / accel);
+    duration = 2 * t_half;
+    pos = t < t_half ? 0.5 * accel * t * t : d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
+  } else {
+    duration = d / speed + t_acc;
+    if (t < t_acc) pos = 0.5 * accel * t * t;
+    else if (t < duration - t_acc) pos = 0.5 * speed * t_acc + speed * (t - t_acc);
+    else pos = d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
+  }
+  *duration_s = duration;
+  return std::copysign(std::min(pos, d), distance);
+}
+}  // namespace
+
+class SimWorld {
+ public:
+  SimWorld(std::unique_ptr<Renderer> renderer, SimWorldOptions options)
+      : renderer_(std::move(renderer)), options_(options) {
+    for (const SceneLight& l : renderer_->scene().lights) light_levels_[l.name] = 0.0;
+  }
+
+  const Renderer& renderer() const { return *renderer_; }
+  const Scene& scene() const { return renderer_->scene(); }
+  double time_scale() const { return options_.time_scale; }
+  bool noise() const { return options_.noise; }
+
+  // Sleeps `sim_seconds` of simulated time.
+  void SleepSim(double sim_seconds) const {
+    if (sim_seconds > 0) std::this_thread::sleep_for(std::chrono::duration<double>(sim_seconds * options_.time_scale));
+  }
+  double SimSecondsSince(Clock::time_point t0) const {
+    return std::chrono::duration<double>(Clock::now() - t0).count() / options_.time_scale;
+  }
+
+  // --- turntable motion -------------------------------------------------
+  void StartMove(double target_deg, const MotionProfile& p) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    move_start_deg_ = AngleLocked();
+    move_target_deg_ = target_deg;
+    move_profile_ = p;
+    move_start_ = Clock::now();
+  }
+  double AngleDeg() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return AngleLocked();
+  }
+  // Simulated seconds until in position (move plus settle); 0 when there.
+  double SecondsToInPosition() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    double duration = 0;
+    TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_.speed_deg_s, move_profile_.accel_deg_s2, 0, &duration);
+    return std::max(0.0, duration + scene().turntable_settle_s - SimSecondsSince(move_start_));
+  }
+  void StopMotion() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    move_start_deg_ = move_target_deg_ = AngleLocked();
+    move_start_ = Clock::now();
+  }
+
+  // --- lights -----------------------------------------------------------
+  Status SetLightLevel(const std::string& name, double level) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = light_levels_.find(name);
+    if (it == light_levels_.end()) return NotFound("the scene has no light '" + name + "'");
+    it->second = level;
+    return Status::Ok();
+  }
+  double LightLevel(const std::string& name) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = light_levels_.find(name);
+    return it == light_levels_.end() ? 0.0 : it->second;
+  }
+  std::vector<double> LightLevels() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<double> levels;
+    for (const SceneLight& l : scene().lights) levels.push_back(light_levels_.at(l.name));
+    return levels;
+  }
+
+  // --- trigger lines ----------------------------------------------------
+  using TriggerFn = std::function<void()>;
+  int Subscribe(const std::string& line, TriggerFn fn) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    subscribers_[line][++next_subscription_] = std::move(fn);
+    return next_subscription_;
+  }
+  void Unsubscribe(const std::string& line, int id) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    subscribers_[line].erase(id);
+  }
+  void FireLine(const std::string& line) {
+    std::vector<TriggerFn> fns;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto& [id, fn] : subscribers_[line]) fns.push_back(fn);
+    }
+    for (auto& fn : fns) fn();
+  }
+
+ private:
+  double AngleLocked() const {
+    double duration = 0;
+    const double moved = TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_.speed_deg_s,
+                                           move_profile_.accel_deg_s2, SimSecondsSince(move_start_), &duration);
+    return move_start_deg_ + moved;
+  }
+
+  std::unique_ptr<Renderer> renderer_;
+  SimWorldOptions options_;
+  mutable std::mutex mutex_;
+  double move_start_deg_ = 0, move_target_deg_ = 0;
+  MotionProfile move_profile_;
+  Clock::time_point move_start_ = Clock::now();
+  std::map<std::string, double> light_levels_;
+  std::map<std::string, std::map<int, TriggerFn>> subscribers_;
+  int next_subscription_ = 0;
+};
+
+Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options) {
+  if (!(options.time_scale > 0) || !std::isfinite(options.time_scale)) {
+    return InvalidArgument("sim time_scale must be a positive number (1 = real time)");
+  }
+  HR_ASSIGN_OR_RETURN(std::unique_ptr<Renderer> renderer, Renderer::Create(scene));
+  return std::make_shared<SimWorld>(std::move(renderer), options);
+}
+const Renderer& WorldRenderer(const SimWorld& world) { return world.renderer(); }
+double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); }
+
+namespace {
+
+// Shared open/close/health behaviour of the simulated devices.
+template <typename Base>
+class SimDevice : public Base {
+ public:
+  SimDevice(DeviceInfo info, std::shared_ptr<SimWorld> world) : Base(std::move(info)), world_(std::move(world)) {}
+  Status Open() override {
+    this->SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+  Status Close() override {
+    this->SetState(DeviceState::kClosed);
+    return Status::Ok();
+  }
+  Status HealthCheck() override { return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"); }
+
+ protected:
+  std::shared_ptr<SimWorld> world_;
+};
+
+class SimTurntable : public SimDevice<Turntable> {
+ public:
+  using SimDevice::SimDevice;
+  TurntableCapabilities capabilities() const override {
+    return {.max_speed_deg_s = 90, .max_accel_deg_s2 = 360, .resolution_deg = 0.001, .can_home = true};
+  }
+  Status Home(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(StartMove(0.0, {world_->scene().turntable_speed_deg_s, world_->scene().turntable_accel_deg_s2}));
+    HR_RETURN_IF_ERROR(WaitInPosition(timeout));
+    homed_ = true;
+    return Status::Ok();
+  }
+  Status StartMove(double target_deg, const MotionProfile& p) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+    const auto caps = capabilities();
+    if (!std::isfinite(target_deg)) return InvalidArgument(Describe() + ": target angle is not a finite number");
+    if (!(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s)) {
+      return OutOfRange(Describe() + ": speed " + std::to_string(p.speed_deg_s) + " deg/s outside (0, " +
+                        std::to_string(caps.max_speed_deg_s) + "]");
+    }
+    if (!(p.accel_deg_s2 > 0 && p.accel_deg_s2 <= caps.max_accel_deg_s2)) {
+      return OutOfRange(Describe() + ": acceleration " + std::to_string(p.accel_deg_s2) + " deg/s^2 outside (0, " +
+                        std::to_string(caps.max_accel_deg_s2) + "]");
+    }
+    world_->StartMove(target_deg, p);
+    target_deg_ = target_deg;
+    SetState(DeviceState::kBusy);
+    return Status::Ok();
+  }
+  Result<TurntableStatus> ReadStatus() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "ReadStatus"));
+    TurntableStatus s;
+    s.position_deg = world_->AngleDeg();
+    s.target_deg = target_deg_;
+    s.in_position = world_->SecondsToInPosition() <= 0;
+    s.moving = !s.in_position;
+    s.homed = homed_;
+    if (s.in_position && state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    return s;
+  }
+  Status WaitInPosition(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+    const double wait_real_s = world_->SecondsToInPosition() * world_->time_scale();
+    if (wait_real_s > std::chrono::duration<double>(timeout).count()) {
+      std::this_thread::sleep_for(timeout);
+      return Timeout(Describe() + ": not in position within " + std::to_string(timeout.count()) + " ms");
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(wait_real_s));
+    SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+  Status Stop() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Stop"));
+    world_->StopMotion();
+    SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+
+ private:
+  double target_deg_ = 0;
+  bool homed_ = false;
+};
+
+class SimLight : public SimDevice<Light> {
+ public:
+  SimLight(DeviceInfo info, std::shared_ptr<SimWorld> world, std::string scene_light)
+      : SimDevice(std::move(info), std::move(world)), scene_light_(std::move(scene_light)) {}
+  LightCapabilities capabilities() const override { return {.dimmable = true}; }
+  Status SetOn(bool on) override { return SetLevel(on ? 1.0 : 0.0); }
+  Status SetLevel(double level) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetLevel"));
+    if (!(level >= 0 && level <= 1)) return OutOfRange(Describe() + ": level must be within 0..1");
+    return world_->SetLightLevel(scene_light_, level);
+  }
+  Result<bool> IsOn() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsOn"));
+    return world_->LightLevel(scene_light_) > 0;
+  }
+  Status Close() override {
+    if (state() == DeviceState::kReady) (void)world_->SetLightLevel(scene_light_, 0.0);
+    return SimDevice::Close();
+  }
+
+ private:
+  std::string scene_light_;
+};
+
+class SimTriggerLine : public SimDevice<TriggerLine> {
+ public:
+  using SimDevice::SimDevice;
+  Status Pulse(std::chrono::microseconds width) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
+    if (width.count() <= 0) return InvalidArgument(Describe() + ": pulse width must be positive");
+    world_->FireLine(info().name);  // cameras latch on the rising edge
+    std::this_thread::sleep_for(width);
+    return Status::Ok();
+  }
+  Status Set(bool active) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Set"));
+    if (active && !active_) world_->FireLine(info().name);
+    active_ = active;
+    return Status::Ok();
+  }
+
+ private:
+  bool active_ = false;
+};
+
+// Renders on a worker thread so that downloads overlap whatever the caller does next.
+class SimCamera : public SimDevice<Camera> {
+ public:
+  SimCamera(DeviceInfo info, std::shared_ptr<SimWorld> world, int scene_camera, std::string line)
+      : SimDevice(std::move(info), std::move(world)), scene_camera_(scene_camera), configured_line_(std::move(line)) {
+    settings_.trigger = configured_line_.empty() ? TriggerSource::kSoftware : TriggerSource::kLine;
+    settings_.trigger_line = configured_line_;
+    settings_.exposure_s = world_->scene().cameras[static_cast<size_t>(scene_camera_)].exposure_s;
+  }
+  ~SimCamera() override { StopWorker(); }
+
+  CameraCapabilities capabilities() const override {
+    const auto& intr = world_->scene().cameras[static_cast<size_t>(scene_camera_)].intrinsics;
+    return {.width_px = intr.width_px,
+            .height_px = intr.height_px,
+            .formats = {PixelFormat::kRgb8, PixelFormat::kBgr8, PixelFormat::kMono8, PixelFormat::kBayerRG8},
+            .min_exposure_s = 1e-5,
+            .max_exposure_s = 2.0,
+            .line_trigger = true,
+            .readout_s = world_->scene().camera_readout_s,
+            .download_s = world_->scene().camera_download_s};
+  }
+  Status Configure(const CaptureSettings& s) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+    const auto caps = capabilities();
+    if (!(s.exposure_s >= caps.min_exposure_s && s.exposure_s <= caps.max_exposure_s)) {
+      return OutOfRange(Describe() + ": exposure_s " + std::to_string(s.exposure_s) + " outside the camera's range");
+    }
+    if (s.format == PixelFormat::kEncoded) return OutOfRange(Describe() + ": delivers raw frames only");
+    if (s.trigger == TriggerSource::kLine && s.trigger_line.empty()) {
+      return InvalidArgument(Describe() + ": line trigger needs a trigger_line");
+    }
+    settings_ = s;
+    return Status::Ok();
+  }
+  Status Arm() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+    StopWorker();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      sequence_ = 0;
+      ready_.clear();
+      stopping_ = false;
+    }
+    worker_ = std::thread([this] { WorkerLoop(); });
+    if (settings_.trigger == TriggerSource::kLine) {
+      subscribed_line_ = settings_.trigger_line;
+      subscription_ = world_->Subscribe(subscribed_line_, [this] { OnTrigger(); });
+    }
+    SetState(DeviceState::kBusy);
+    return Status::Ok();
+  }
+  Status Disarm() override {
+    StopWorker();
+    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+  Status SoftwareTrigger() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+    OnTrigger();
+    return Status::Ok();
+  }
+  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!cv_.wait_for(lock, timeout, [this] { return !ready_.empty(); })) {
+      return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms");
+    }
+    Result<Frame> frame = std::move(ready_.front());
+    ready_.pop_front();
+    return frame;
+  }
+  Status Close() override {
+    StopWorker();
+    return SimDevice::Close();
+  }
+
+ private:
+  struct Job {
+    uint64_t sequence;
+    double angle_deg;
+    std::vector<double> lights;
+    CaptureSettings settings;
+    int64_t trigger_ns;
+  };
+
+  void OnTrigger() {
+    // The exposure sees the world as it is now; rendering and transfer come after.
+    Job job{0, world_->AngleDeg(), world_->LightLevels(), settings_, NowNs()};
+    std::lock_guard<std::mutex> lock(mutex_);
+    job.sequence = sequence_++;
+    jobs_.push_back(std::move(job));
+    cv_.notify_all();
+  }
+
+  void WorkerLoop() {
+    for (;;) {
+      Job job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+        if (stopping_) return;
+        job = std::move(jobs_.front());
+        jobs_.pop_front();
+      }
+      const auto t0 = Clock::now();
+      Result<Frame> frame = RenderFrame(job);
+      // Exposure, readout and download take at least their simulated time.
+      const Scene& scene = world_->scene();
+      const double minimum_s =
+          (job.settings.exposure_s + scene.camera_readout_s + scene.camera_download_s) * world_->time_scale();
+      const double spent_s = std::chrono::duration<double>(Clock::now() - t0).count();
+      if (spent_s < minimum_s) std::this_thread::sleep_for(std::chrono::duration<double>(minimum_s - spent_s));
+      if (frame.ok()) frame->received_time_ns = NowNs();
+      std::lock_guard<std::mutex> lock(mutex_);
+      ready_.push_back(std::move(frame));
+      cv_.notify_all();
+    }
+  }
+
+  Result<Frame> RenderFrame(const Job& job) const {
+    RenderOptions o;
+    o.light_levels = job.lights;
+    o.exposure_s = job.settings.exposure_s;
+    o.gain_db = job.settings.gain_db;
+    o.noise = world_->noise();
+    o.noise_seed = std::hash<std::string>{}(info().serial) ^ (job.sequence * 0x9E3779B97F4A7C15ull) ^ world_->scene().seed;
+    HR_ASSIGN_OR_RETURN(RenderedView view, world_->renderer().Render(scene_camera_, job.angle_deg, o));
+    cv::Mat out;
+    switch (job.settings.format) {
+      case PixelFormat::kBgr8: out = view.image; break;
+      case PixelFormat::kRgb8: cv::cvtColor(view.image, out, cv::COLOR_BGR2RGB); break;
+      case PixelFormat::kMono8: cv::cvtColor(view.image, out, cv::COLOR_BGR2GRAY); break;
+      case PixelFormat::kBayerRG8: out = ToBayerRG(view.image); break;
+      case PixelFormat::kEncoded: return Internal("encoded output is not simulated");
+    }
+    Frame f;
+    f.camera_serial = info().serial;
+    f.sequence = job.sequence;
+    f.width_px = out.cols;
+    f.height_px = out.rows;
+    f.format = job.settings.format;
+    f.data.assign(out.datastart, out.dataend);
+    f.exposure_s = job.settings.exposure_s;
+    f.gain_db = job.settings.gain_db;
+    f.trigger_time_ns = job.trigger_ns;
+    return f;
+  }
+
+  // RGGB mosaic of a BGR image.
+  static cv::Mat ToBayerRG(const cv::Mat& bgr) {
+    cv::Mat bayer(bgr.rows, bgr.cols, CV_8UC1);
+    for (int y = 0; y < bgr.rows; ++y) {
+      for (int x = 0; x < bgr.cols; ++x) {
+        const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+        const int channel = (y % 2 == 0) ? (x % 2 == 0 ? 2 : 1) : (x % 2 == 0 ? 1 : 0);
+        bayer.at<uint8_t>(y, x) = p[channel];
+      }
+    }
+    return bayer;
+  }
+
+  void StopWorker() {
+    if (subscription_ != 0) {
+      world_->Unsubscribe(subscribed_line_, subscription_);
+      subscription_ = 0;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+      cv_.notify_all();
+    }
+    if (worker_.joinable()) worker_.join();
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs_.clear();
+  }
+
+  int scene_camera_;
+  std::string configured_line_;
+  CaptureSettings settings_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Job> jobs_;
+  std::deque<Result<Frame>> ready_;
+  uint64_t sequence_ = 0;
+  bool stopping_ = false;
+  std::thread worker_;
+  std::string subscribed_line_;
+  int subscription_ = 0;
+};
+
+}  // namespace
+
+void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world) {
+  registry->AddBackend<Turntable>(DeviceKind::kTurntable, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
+    c.node.AllowOnlyKeys({"name", "backend", "serial"});
+    if (!c.node.ok()) return c.node.status();
+    return std::unique_ptr<Turntable>(std::make_unique<SimTurntable>(c.Info("simulated turntable"), world));
+  });
+  registry->AddBackend<Light>(DeviceKind::kLight, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
+    c.node.AllowOnlyKeys({"name", "backend", "serial", "light"});
+    const std::string scene_light = c.node.String("light", c.name);
+    if (!c.node.ok()) return c.node.status();
+    bool known = false;
+    for (const SceneLight& l : world->scene().lights) known = known || l.name == scene_light;
+    if (!known) return NotFound("the simulated scene has no light '" + scene_light + "' (set 'light:' to a scene light)");
+    return std::unique_ptr<Light>(std::make_unique<SimLight>(c.Info("simulated LED panel"), world, scene_light));
+  });
+  registry->AddBackend<TriggerLine>(DeviceKind::kTriggerLine, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<TriggerLine>> {
+    c.node.AllowOnlyKeys({"name", "backend", "serial"});
+    if (!c.node.ok()) return c.node.status();
+    return std::unique_ptr<TriggerLine>(std::make_unique<SimTriggerLine>(c.Info("simulated trigger line"), world));
+  });
+  registry->AddBackend<Camera>(DeviceKind::kCamera, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
+    c.node.AllowOnlyKeys({"name", "backend", "serial", "trigger_line"});
+    const std::string line = c.node.String("trigger_line", "");
+    if (!c.node.ok()) return c.node.status();
+    const int index = world->scene().FindCamera(c.serial);
+    if (index < 0) {
+      return NotFound("the simulated scene (" + world->scene().path + ") has no camera with serial '" + c.serial + "'");
+    }
+    return std::unique_ptr<Camera>(std::make_unique<SimCamera>(c.Info("simulated camera"), world, index, line));
+  });
+}
+
+}  // namespace hairrig

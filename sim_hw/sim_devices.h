@@ -1,0 +1,39 @@
+// The in-process `sim` backend: turntable, LED panels, trigger lines and
+// cameras behind the drivers/ interfaces, sharing one SimWorld whose renderer
+// draws each frame at the turntable angle and light state of its trigger.
+//
+// Timings are the scene's realistic ones (turntable speed, acceleration and
+// settle; camera exposure, readout and download) multiplied by `time_scale`
+// (1 = real time; 0.01 = a hundred times faster), so tests run fast and
+// capture efficiency can still be measured against the physical lower bound.
+//
+// Backend fields in the rig config (devices section):
+//   lights:        light: <scene light name>   (default: the device name)
+//   trigger_lines: (none)
+//   cameras:       trigger_line: <line name>   (optional; cameras on one line
+//                  expose together on Pulse())
+#pragma once
+
+#include <memory>
+
+#include "drivers/registry.h"
+#include "sim_hw/renderer.h"
+
+namespace hairrig {
+
+class SimWorld;
+
+struct SimWorldOptions {
+  double time_scale = 0.01;  // > 0
+  bool noise = true;
+};
+
+// Creates the world (renderer included) for `scene`.
+Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options);
+const Renderer& WorldRenderer(const SimWorld& world);
+double WorldTurntableAngleDeg(const SimWorld& world);  // measured angle now
+
+// Registers the `sim` backend of every device kind; devices built from it act on `world`.
+void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world);
+
+}  // namespace hairrig
