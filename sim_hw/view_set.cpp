@@ -37,7 +37,7 @@ cv::Mat MakeContactSheet(const std::vector<cv::Mat>& images, const std::vector<s
     thumb.copyTo(sheet(where));
     if (i < labels.size()) {
       cv::rectangle(sheet, cv::Rect(where.x, where.y, where.width, 22), cv::Scalar(0, 0, 0), cv::FILLED);
-      cv::putText(sheet, labels[i], {where.x + 4, where.y + 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255),
+      cv::putText(sheet, labels[i], {where.x + 4, where.y + 16}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255),
                   1, cv::LINE_AA);
     }
   }
@@ -88,7 +88,7 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
   for (const ViewGroundTruth& g : truths) {
     summary.files.push_back(ViewFileName(g.view, g.camera_serial));
     char label[96];
-    std::snprintf(label, sizeof(label), "view %d  %s  %.1f deg", g.view, g.camera_serial.c_str(), g.turntable_deg);
+    std::snprintf(label, sizeof(label), "%d %s %.1f deg", g.view, g.camera_serial.c_str(), g.turntable_deg);
     labels.emplace_back(label);
   }
   const int columns = static_cast<int>(scene.cameras.size()) * 4;

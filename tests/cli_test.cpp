@@ -1,0 +1,108 @@
+// The hairrig command line as a user meets it: clear errors with non-zero exit
+// codes on bad input, JSON summaries with --json, files where it says.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+struct CommandRun {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandRun Hairrig(const std::string& args) {
+  const std::string cmd = std::string(HAIRRIG_BIN) + " " + args + " 2>&1";
+  CommandRun run;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return run;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+std::string TempFile(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(Cli, HelpListsTheCommands) {
+  const CommandRun r = Hairrig("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("devices"), std::string::npos);
+  EXPECT_NE(r.output.find("sim"), std::string::npos);
+}
+
+TEST(Cli, DevicesOnTheDefaultRigAreHealthyAsJson) {
+  const CommandRun r = Hairrig("devices --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["total"], 6);
+  EXPECT_EQ(j["healthy"], 6);
+}
+
+TEST(Cli, BrokenYamlNamesTheFileAndLine) {
+  const std::string path = TempFile("broken.yaml", "name: x\ndevices: [1, 2\n");
+  const CommandRun r = Hairrig("devices --config " + path);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find(path + ":"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not valid YAML"), std::string::npos) << r.output;
+}
+
+TEST(Cli, UnknownBackendNamesTheFieldAndTheChoices) {
+  const std::string path =
+      TempFile("rig.yaml", "name: x\ndevices:\n  cameras:\n    - {name: c, backend: ximea, serial: X1}\n");
+  const CommandRun r = Hairrig("devices --config " + path);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("devices.cameras[0].backend"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("unknown camera backend 'ximea'"), std::string::npos) << r.output;
+}
+
+TEST(Cli, SceneWithTheBoxBehindACameraIsRefused) {
+  std::string scene = ReadText("etc/scenes/default.yaml");
+  const std::string box = std::filesystem::absolute("etc/calib-box.yaml").string();
+  scene.replace(scene.find("../calib-box.yaml"), std::string("../calib-box.yaml").size(), box);
+  // Turn the upper camera round: it looks away from the box.
+  scene.replace(scene.find("target_mm: [0, 0, 390]"), std::string("target_mm: [0, 0, 390]").size(),
+                "target_mm: [1800, 0, 700]");
+  const CommandRun r = Hairrig("sim render --view 0 --out " + ::testing::TempDir() + "/x.png --scene " +
+                        TempFile("behind.yaml", scene));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("has the calibration box behind it"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("SIM-CAM-UPPER"), std::string::npos) << r.output;
+}
+
+TEST(Cli, RenderOneViewWritesTheImage) {
+  const std::string out = ::testing::TempDir() + "/view3.png";
+  std::filesystem::remove(out);
+  const CommandRun r = Hairrig("sim render --view 3 --out " + out + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["camera_serial"], "SIM-CAM-LOWER");
+  EXPECT_GT(std::filesystem::file_size(out), 100000u);
+  EXPECT_GE(j["tags_unoccluded"].get<int>(), 4);
+}
+
+TEST(Cli, BadArgumentsAreRefused) {
+  EXPECT_NE(Hairrig("sim render --view 99 --out /tmp/x.png").exit_code, 0);
+  EXPECT_NE(Hairrig("sim render --out /tmp/x.png").exit_code, 0);
+  EXPECT_NE(Hairrig("sim render --view 1 --out /tmp/x.txt").exit_code, 0);
+  EXPECT_NE(Hairrig("frobnicate").exit_code, 0);
+}
+
+}  // namespace
