@@ -64,12 +64,17 @@ TEST(CameraModel, UndistortInvertsProjection) {
   }
 }
 
-TEST(CameraModel, ProjectCheckedRefusesPointsBehind) {
+// A 100 x 100 pixel pinhole camera with f = 100 px and no distortion.
+CameraIntrinsics SmallCamera() {
   CameraIntrinsics c;
-  c.width_px = 100;
-  c.height_px = 100;
+  c.width_px = c.height_px = 100;
   c.fx_px = c.fy_px = 100;
   c.cx_px = c.cy_px = 50;
+  return c;
+}
+
+TEST(CameraModel, ProjectCheckedRefusesPointsBehind) {
+  CameraIntrinsics c = SmallCamera();
   Eigen::Vector2d uv;
   EXPECT_FALSE(ProjectChecked(c, Eigen::Vector3d(0, 0, -1), &uv));
   EXPECT_TRUE(ProjectChecked(c, Eigen::Vector3d(0, 0, 1), &uv));
@@ -77,11 +82,7 @@ TEST(CameraModel, ProjectCheckedRefusesPointsBehind) {
 }
 
 TEST(CameraModel, ValidateNamesTheBadParameter) {
-  CameraIntrinsics c;
-  c.width_px = 100;
-  c.height_px = 100;
-  c.fx_px = c.fy_px = 100;
-  c.cx_px = c.cy_px = 50;
+  CameraIntrinsics c = SmallCamera();
   EXPECT_TRUE(c.Validate().ok());
   c.k2 = std::nan("");
   const Status s = c.Validate();

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "core/file_util.h"
+#include "core/strand_test_util.h"
 
 namespace hairrig {
 namespace {
@@ -19,13 +20,6 @@ bool HaveShared() { return std::filesystem::exists(kStrandDir + "Bangs_100.hair"
                     "cannot be checked here";                                                  \
   }
 
-void ExpectSameGeometry(const StrandSet& a, const StrandSet& b) {
-  ASSERT_EQ(a.point_counts, b.point_counts);
-  ASSERT_EQ(a.points_mm.size(), b.points_mm.size());
-  for (size_t i = 0; i < a.points_mm.size(); ++i) {
-    ASSERT_EQ(a.points_mm[i], b.points_mm[i]) << "point " << i;  // bit-exact
-  }
-}
 
 TEST(StrandIo, GoldenFilesAgreeWithEachOtherAndTheReadme) {
   REQUIRE_SHARED();

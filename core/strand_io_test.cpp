@@ -5,18 +5,12 @@
 #include <gtest/gtest.h>
 
 #include "core/file_util.h"
+#include "core/strand_test_util.h"
 
 namespace hairrig {
 namespace {
 
 
-void ExpectSameGeometry(const StrandSet& a, const StrandSet& b) {
-  ASSERT_EQ(a.point_counts, b.point_counts);
-  ASSERT_EQ(a.points_mm.size(), b.points_mm.size());
-  for (size_t i = 0; i < a.points_mm.size(); ++i) {
-    ASSERT_EQ(a.points_mm[i], b.points_mm[i]) << "point " << i;  // bit-exact
-  }
-}
 
 TEST(StrandIo, WriteAndReadFilesThroughTheExtension) {
   StrandSet set;

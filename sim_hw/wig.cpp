@@ -18,6 +18,12 @@ Eigen::Vector3d KeepOutside(const Eigen::Vector3d& p, const SceneHead& head, dou
   return head.center_turntable_mm + (q / n).cwiseProduct(r);
 }
 
+// True within `margin_mm` (roughly) of the head's surface or inside it.
+bool IsNearHead(const Eigen::Vector3d& p, const SceneHead& head, double margin_mm) {
+  const Eigen::Vector3d r = head.radii_mm.array() + margin_mm;
+  return (p - head.center_turntable_mm).cwiseQuotient(r).norm() < 1.0;
+}
+
 Eigen::Vector3d EllipsoidNormal(const Eigen::Vector3d& p, const SceneHead& head) {
   const Eigen::Vector3d r2 = head.radii_mm.cwiseProduct(head.radii_mm);
   return (p - head.center_turntable_mm).cwiseQuotient(r2).normalized();
@@ -76,6 +82,12 @@ Result<StrandSet> GenerateWig(const WigOptions& o, const SceneHead& head) {
       const double arc = k * seg;
       const double w = std::exp(-arc / lift_mm);
       Eigen::Vector3d tangent = (w * normal + (1.0 - w) * (down + jitter)).normalized();
+      // Near the head, slide along it instead of stepping in: the strand keeps its length.
+      const Eigen::Vector3d surface_normal = EllipsoidNormal(centre, head);
+      const double into_head = tangent.dot(surface_normal);
+      if (into_head < 0 && IsNearHead(centre, head, 3.0)) {
+        tangent = (tangent - into_head * surface_normal).normalized();
+      }
       centre = KeepOutside(centre + seg * tangent, head, 1.0);
       // A frame around the centreline for the style's offset; it grows from 0 at the root.
       tangent = (centre - previous).normalized();

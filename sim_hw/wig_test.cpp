@@ -1,0 +1,74 @@
+#include "sim_hw/wig.h"
+
+#include <gtest/gtest.h>
+
+namespace hairrig {
+namespace {
+
+// Smallest value of the ellipsoid's implicit function over all points (1 = on the surface).
+double MinEllipsoidLevel(const StrandSet& s, const SceneHead& head) {
+  double level = 1e30;
+  for (const auto& p : s.points_mm) {
+    level = std::min(level, (p.cast<double>() - head.center_turntable_mm).cwiseQuotient(head.radii_mm).norm());
+  }
+  return level;
+}
+
+TEST(Wig, EveryStyleIsSeededHangsDownAndStaysOutsideTheHead) {
+  SceneHead head;
+  for (WigStyle style : {WigStyle::kStraight, WigStyle::kWavy, WigStyle::kCurly}) {
+    WigOptions o;
+    o.style = style;
+    o.num_strands = 500;
+    auto a = GenerateWig(o, head);
+    auto b = GenerateWig(o, head);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->points_mm, b->points_mm) << "same seed, same strands";
+    EXPECT_EQ(a->num_strands(), 500u);
+    EXPECT_TRUE(a->Validate().ok());
+    EXPECT_GE(MinEllipsoidLevel(*a, head), 1.0 - 1e-4);
+    // Tips are below roots on average: the hair falls.
+    double drop = 0;
+    const auto offsets = a->Offsets();
+    for (size_t s = 0; s < a->num_strands(); ++s) drop += a->points_mm[offsets[s]].z() - a->points_mm[offsets[s + 1] - 1].z();
+    EXPECT_GT(drop / static_cast<double>(a->num_strands()), 50.0);
+    const auto lengths = a->StrandLengths();
+    for (double l : lengths) EXPECT_GE(l, o.min_length_mm * 0.95) << "strands keep their length";
+    o.seed = 99;
+    auto c = GenerateWig(o, head);
+    EXPECT_NE(a->points_mm, c->points_mm) << "another seed, other strands";
+  }
+}
+
+TEST(Wig, CurlyStrandsAreLongerThanTheirSpanAndStraightOnesAreNot) {
+  SceneHead head;
+  WigOptions o;
+  o.num_strands = 200;
+  const auto ratio = [&](WigStyle style) {
+    o.style = style;
+    auto s = GenerateWig(o, head);
+    const auto offsets = s->Offsets();
+    const auto lengths = s->StrandLengths();
+    double sum = 0;
+    for (size_t i = 0; i < s->num_strands(); ++i) {
+      sum += lengths[i] / (s->points_mm[offsets[i + 1] - 1] - s->points_mm[offsets[i]]).norm();
+    }
+    return sum / static_cast<double>(s->num_strands());
+  };
+  const double straight = ratio(WigStyle::kStraight), curly = ratio(WigStyle::kCurly);
+  std::printf("path length / root-tip distance: straight %.2f, curly %.2f\n", straight, curly);
+  EXPECT_LT(straight, 1.3);
+  EXPECT_GT(curly, straight + 0.5);
+}
+
+TEST(Wig, AMissingStrandFileNamesTheField) {
+  WigOptions o;
+  o.style = WigStyle::kFile;
+  o.file = "/nonexistent/wig.hair";
+  auto s = GenerateWig(o, SceneHead{});
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("wig.file"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hairrig
