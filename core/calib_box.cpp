@@ -7,6 +7,14 @@
 
 namespace hairrig {
 
+std::array<Eigen::Vector3d, 8> BoxCornerPoints(const Eigen::Vector3d& half) {
+  std::array<Eigen::Vector3d, 8> corners;
+  for (int c = 0; c < 8; ++c) {
+    corners[c] = Eigen::Vector3d((c & 1 ? 1 : -1) * half.x(), (c & 2 ? 1 : -1) * half.y(), (c & 4 ? 1 : -1) * half.z());
+  }
+  return corners;
+}
+
 std::vector<BoxFace> MakeBoxFaces(const Eigen::Vector3d& size_mm) {
   struct Spec {
     const char* name;

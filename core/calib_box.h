@@ -58,6 +58,9 @@ struct CalibBox {
 // leaves its face, non-positive sizes.
 Result<CalibBox> LoadCalibBox(const std::string& path);
 
+// The eight corners (+-half.x, +-half.y, +-half.z) of a box centred at the origin.
+std::array<Eigen::Vector3d, 8> BoxCornerPoints(const Eigen::Vector3d& half_size_mm);
+
 // The six faces of a box of the given size, in the convention above.
 std::vector<BoxFace> MakeBoxFaces(const Eigen::Vector3d& size_mm);
 

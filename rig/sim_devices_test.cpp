@@ -89,7 +89,7 @@ TEST(SimDevices, LightsOffGiveADarkFrame) {
   EXPECT_GT(MeanDn(*lit), 10 * MeanDn(*dark) + 20);
 }
 
-TEST(SimDevices, CallsInTheWrongStateSayWhatToDo) {
+TEST(SimDevices, CallsInTheWrongStateExplainTheRemedy) {
   auto config = LoadRigConfig("etc/rig.yaml");
   auto rig = BuildRig(*config);
   ASSERT_TRUE(rig.ok());

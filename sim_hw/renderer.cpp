@@ -87,7 +87,6 @@ class NoiseSource {
       std::vector<float> t(kSize);
       for (size_t i = 0; i < kSize; ++i) {
         const double p = (static_cast<double>(i) + 0.5) / kSize;
-        // Acklam-style rational approximation refined by one Newton step on erfc.
         double x = std::sqrt(2.0) * InverseErf(2.0 * p - 1.0);
         t[i] = static_cast<float>(x);
       }
@@ -102,7 +101,8 @@ class NoiseSource {
     return table;
   }
   static double InverseErf(double y) {
-    double x = 0.0;  // Newton on erf(x) - y from a good start
+    // Winitzki's closed-form approximation, then Newton steps on erf(x) - y.
+    double x = 0.0;
     const double a = 0.147;
     const double ln = std::log(1.0 - y * y);
     const double term = 2.0 / (kPi * a) + ln / 2.0;
@@ -191,10 +191,7 @@ struct Renderer::Impl {
   std::vector<Eigen::Vector3d> BoxCorners(const Rigid3d& cam_from_frame, const Eigen::Vector3d& center,
                                           const Eigen::Vector3d& half) const {
     std::vector<Eigen::Vector3d> corners;
-    for (int c = 0; c < 8; ++c) {
-      corners.push_back(cam_from_frame * (center + Eigen::Vector3d((c & 1 ? 1 : -1) * half.x(), (c & 2 ? 1 : -1) * half.y(),
-                                                                   (c & 4 ? 1 : -1) * half.z())));
-    }
+    for (const Eigen::Vector3d& p : BoxCornerPoints(half)) corners.push_back(cam_from_frame * (center + p));
     return corners;
   }
 

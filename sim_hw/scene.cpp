@@ -153,9 +153,7 @@ Status ValidateScene(const Scene& scene) {
     for (int stop = 0; stop < scene.turntable_stops; ++stop) {
       const Rigid3d cam_from_box =
           cam.cam_from_world * WorldFromTurntable(scene.StopAngleDeg(stop)) * scene.turntable_from_box;
-      for (int corner = 0; corner < 8; ++corner) {
-        const Eigen::Vector3d p_box((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
-                                    (corner & 4 ? 1 : -1) * half.z());
+      for (const Eigen::Vector3d& p_box : BoxCornerPoints(half)) {
         if ((cam_from_box * p_box).z() < 10.0) {
           return InvalidArgument(scene.path + ": camera " + cam.serial + " has the calibration box behind it (or " +
                                  "closer than 10 mm) at turntable stop " + std::to_string(stop) +
@@ -167,9 +165,7 @@ Status ValidateScene(const Scene& scene) {
   // The box hangs above the head: its lowest corner clears the crown and the hair on it.
   constexpr double kHairOnCrownMm = 20.0;
   double box_bottom_mm = 1e30;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d p_box((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
-                                (corner & 4 ? 1 : -1) * half.z());
+  for (const Eigen::Vector3d& p_box : BoxCornerPoints(half)) {
     box_bottom_mm = std::min(box_bottom_mm, (scene.turntable_from_box * p_box).z());
   }
   const double crown_mm = scene.head.center_turntable_mm.z() + scene.head.radii_mm.z() + kHairOnCrownMm;

@@ -473,14 +473,21 @@ class SimCamera : public SimDevice<Camera> {
   int subscription_ = 0;
 };
 
+// A sim device with no fields of its own beyond name, backend and serial.
+template <typename Interface, typename Impl>
+void RegisterFieldlessSimBackend(DeviceRegistry* registry, DeviceKind kind, const std::string& model,
+                                 std::shared_ptr<SimWorld> world) {
+  registry->AddBackend<Interface>(kind, "sim", [world, model](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
+    c.node.AllowOnlyKeys({"name", "backend", "serial"});
+    if (!c.node.ok()) return c.node.status();
+    return std::unique_ptr<Interface>(std::make_unique<Impl>(c.Info(model), world));
+  });
+}
+
 }  // namespace
 
 void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world) {
-  registry->AddBackend<Turntable>(DeviceKind::kTurntable, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
-    c.node.AllowOnlyKeys({"name", "backend", "serial"});
-    if (!c.node.ok()) return c.node.status();
-    return std::unique_ptr<Turntable>(std::make_unique<SimTurntable>(c.Info("simulated turntable"), world));
-  });
+  RegisterFieldlessSimBackend<Turntable, SimTurntable>(registry, DeviceKind::kTurntable, "simulated turntable", world);
   registry->AddBackend<Light>(DeviceKind::kLight, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
     c.node.AllowOnlyKeys({"name", "backend", "serial", "light"});
     const std::string scene_light = c.node.String("light", c.name);
@@ -490,11 +497,8 @@ void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> wor
     if (!known) return NotFound("the simulated scene has no light '" + scene_light + "' (set 'light:' to a scene light)");
     return std::unique_ptr<Light>(std::make_unique<SimLight>(c.Info("simulated LED panel"), world, scene_light));
   });
-  registry->AddBackend<TriggerLine>(DeviceKind::kTriggerLine, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<TriggerLine>> {
-    c.node.AllowOnlyKeys({"name", "backend", "serial"});
-    if (!c.node.ok()) return c.node.status();
-    return std::unique_ptr<TriggerLine>(std::make_unique<SimTriggerLine>(c.Info("simulated trigger line"), world));
-  });
+  RegisterFieldlessSimBackend<TriggerLine, SimTriggerLine>(registry, DeviceKind::kTriggerLine, "simulated trigger line",
+                                                           world);
   registry->AddBackend<Camera>(DeviceKind::kCamera, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
     c.node.AllowOnlyKeys({"name", "backend", "serial", "trigger_line"});
     const std::string line = c.node.String("trigger_line", "");
