@@ -222,6 +222,23 @@ std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_si
   return values;
 }
 
+std::vector<std::string> ConfigNode::Strings(std::string_view key) const {
+  const YAML::Node n = Has(key) ? impl_->node[std::string(key)] : YAML::Node();
+  if (!n.IsSequence()) {
+    Fail(key, Has(key) ? "expected a list of names, got " + Describe(n) : "required list of names is missing");
+    return {};
+  }
+  std::vector<std::string> values;
+  for (size_t i = 0; i < n.size(); ++i) {
+    if (!n[i].IsScalar()) {
+      Fail(key, "element " + std::to_string(i) + " is not text: " + Describe(n[i]));
+      return {};
+    }
+    values.push_back(n[i].Scalar());
+  }
+  return values;
+}
+
 Eigen::Vector3d ConfigNode::Vec3(std::string_view key) const {
   const auto v = Numbers(key, 3);
   if (v.size() != 3) return Eigen::Vector3d::Zero();

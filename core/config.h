@@ -59,6 +59,7 @@ class ConfigNode {
                      const std::string& fallback = "") const;
   bool Bool(std::string_view key, bool fallback) const;
   std::vector<double> Numbers(std::string_view key, size_t expected_size = 0) const;
+  std::vector<std::string> Strings(std::string_view key) const;
   Eigen::Vector3d Vec3(std::string_view key) const;
   Eigen::Vector3d Vec3(std::string_view key, const Eigen::Vector3d& fallback) const;
 

@@ -23,14 +23,30 @@ Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path) {
   return bytes;
 }
 
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
+Status SyncFolder(const std::string& folder) {
+  const int fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return IoError(folder + ": cannot open the folder to sync it (" + std::strerror(errno) + ")");
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) return IoError(folder + ": fsync failed (" + std::strerror(errno) + ")");
+  return Status::Ok();
+}
+
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
+                       const std::function<void(const char* stage)>& on_stage) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return IoError(tmp + ": cannot create (" + std::strerror(errno) + ")");
   const auto* p = static_cast<const uint8_t*>(bytes);
   size_t left = size;
+  bool reported_half = !on_stage;
   while (left > 0) {
-    const ssize_t n = ::write(fd, p, left);
+    if (!reported_half && left <= size / 2) {
+      on_stage("half_written");
+      reported_half = true;
+    }
+    const size_t chunk = reported_half ? left : left - size / 2;
+    const ssize_t n = ::write(fd, p, chunk);
     if (n < 0) {
       if (errno == EINTR) continue;
       const std::string why = std::strerror(errno);
@@ -45,12 +61,14 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
     ::unlink(tmp.c_str());
     return IoError(path + ": fsync/close failed (" + std::strerror(errno) + ")");
   }
+  if (on_stage) on_stage("before_rename");
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     ::unlink(tmp.c_str());
     return IoError(path + ": rename into place failed (" + why + ")");
   }
-  return Status::Ok();
+  const size_t slash = path.find_last_of('/');
+  return SyncFolder(slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash));
 }
 
 std::string FileExtension(const std::string& path) {

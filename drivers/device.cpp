@@ -8,6 +8,7 @@ const char* DeviceKindName(DeviceKind kind) {
     case DeviceKind::kLight: return "light";
     case DeviceKind::kCamera: return "camera";
     case DeviceKind::kTriggerLine: return "trigger line";
+    case DeviceKind::kInputLine: return "input line";
   }
   return "device";
 }

@@ -20,7 +20,7 @@
 
 namespace hairrig {
 
-enum class DeviceKind { kTurntable, kLight, kCamera, kTriggerLine };
+enum class DeviceKind { kTurntable, kLight, kCamera, kTriggerLine, kInputLine };
 enum class DeviceState { kClosed, kReady, kBusy, kFaulted };
 
 const char* DeviceKindName(DeviceKind kind);
@@ -52,6 +52,10 @@ class Device {
   virtual Status Close() = 0;
   // Talks to the unit (reads a status register, a config value) without side effects.
   virtual Status HealthCheck() = 0;
+  // Wall-clock seconds per device second: 1 for real hardware; a simulated
+  // device whose timings are scaled to run faster returns its scale. Timings a
+  // device reports (capabilities, exposure) are in device seconds.
+  virtual double time_scale() const { return 1.0; }
 
  protected:
   void SetState(DeviceState s) { state_.store(s); }

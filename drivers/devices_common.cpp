@@ -1,3 +1,5 @@
+#include <cmath>
+
 #include "drivers/camera.h"
 #include "drivers/turntable.h"
 
@@ -6,6 +8,13 @@ namespace hairrig {
 Status Turntable::MoveTo(double target_deg, const MotionProfile& profile, std::chrono::milliseconds timeout) {
   HR_RETURN_IF_ERROR(StartMove(target_deg, profile));
   return WaitInPosition(timeout);
+}
+
+double MoveDurationS(double distance_deg, const MotionProfile& profile) {
+  const double d = std::abs(distance_deg);
+  const double t_acc = profile.speed_deg_s / profile.accel_deg_s2;
+  if (d < profile.speed_deg_s * t_acc) return 2 * std::sqrt(d / profile.accel_deg_s2);
+  return d / profile.speed_deg_s + t_acc;
 }
 
 const char* PixelFormatName(PixelFormat format) {

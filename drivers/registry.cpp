@@ -29,6 +29,7 @@ std::vector<Device*> DeviceSet::All() const {
   for (const auto& d : lights) all.push_back(d.get());
   for (const auto& d : trigger_lines) all.push_back(d.get());
   for (const auto& d : cameras) all.push_back(d.get());
+  for (const auto& d : input_lines) all.push_back(d.get());
   return all;
 }
 
@@ -96,7 +97,7 @@ class DeviceBuilder {
 }  // namespace
 
 Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& registry) {
-  devices.AllowOnlyKeys({"turntable", "lights", "trigger_lines", "cameras"});
+  devices.AllowOnlyKeys({"turntable", "lights", "trigger_lines", "cameras", "input_lines"});
   DeviceBuilder builder(registry);
   DeviceSet set;
   if (devices.Has("turntable")) set.turntable = builder.Build<Turntable>(DeviceKind::kTurntable, devices.Child("turntable"));
@@ -108,6 +109,9 @@ Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& 
   }
   for (const auto& n : devices.Items("cameras")) {
     if (auto d = builder.Build<Camera>(DeviceKind::kCamera, n)) set.cameras.push_back(std::move(d));
+  }
+  for (const auto& n : devices.OptionalItems("input_lines")) {
+    if (auto d = builder.Build<InputLine>(DeviceKind::kInputLine, n)) set.input_lines.push_back(std::move(d));
   }
   if (!devices.ok()) return devices.status();
   return set;

@@ -6,6 +6,7 @@
 //     lights:        [{name: top, backend: sim, serial: ...}, ...]
 //     trigger_lines: [{name: trig0, backend: sim, serial: ...}]
 //     cameras:       [{name: upper, backend: sim, serial: ..., trigger_line: trig0}]
+//     input_lines:   [{name: estop, backend: sim, serial: ...}]   (safety inputs)
 // Backends register a factory per kind; the registry knows none of them, so
 // drivers/ stays free of sim_hw/ and the rig wires the two together.
 #pragma once
@@ -19,6 +20,7 @@
 
 #include "core/config.h"
 #include "drivers/camera.h"
+#include "drivers/input_line.h"
 #include "drivers/light.h"
 #include "drivers/trigger_line.h"
 #include "drivers/turntable.h"
@@ -60,6 +62,7 @@ struct DeviceSet {
   std::vector<std::unique_ptr<Light>> lights;
   std::vector<std::unique_ptr<TriggerLine>> trigger_lines;
   std::vector<std::unique_ptr<Camera>> cameras;
+  std::vector<std::unique_ptr<InputLine>> input_lines;
 
   std::vector<Device*> All() const;
   Camera* FindCameraBySerial(const std::string& serial) const;

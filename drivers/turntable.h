@@ -14,12 +14,17 @@ struct TurntableCapabilities {
   double max_accel_deg_s2 = 0;
   double resolution_deg = 0;  // smallest commandable step
   bool can_home = true;
+  double settle_s = 0;        // time after the in-position flag before the platform is still
 };
 
 struct MotionProfile {
   double speed_deg_s = 30;
   double accel_deg_s2 = 60;
 };
+
+// Duration (s) of an acceleration-limited (trapezoidal, or triangular when
+// short) move of |distance_deg|, from rest to rest.
+double MoveDurationS(double distance_deg, const MotionProfile& profile);
 
 struct TurntableStatus {
   double position_deg = 0;  // measured (encoder)

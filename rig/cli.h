@@ -27,9 +27,12 @@ using CommandAction = std::function<Result<nlohmann::json>()>;
 struct Dispatch {
   CommandAction action;
   std::function<void(const nlohmann::json&)> print_human;
+  // Exit code for a summary (a capture stopped by a fault is not a success); 0 when unset.
+  std::function<int(const nlohmann::json&)> exit_code;
 };
 
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

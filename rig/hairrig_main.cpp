@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")->capture_default_str();
   Dispatch dispatch;
   AddDevicesCommand(app, common, dispatch);
+  AddCaptureCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);
@@ -43,5 +44,5 @@ int main(int argc, char** argv) {
   } else if (dispatch.print_human) {
     dispatch.print_human(*result);
   }
-  return 0;
+  return dispatch.exit_code ? dispatch.exit_code(*result) : 0;
 }

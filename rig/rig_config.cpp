@@ -23,20 +23,21 @@ Result<std::string> EtcPath(const std::string& relative) {
 
 Result<std::string> DefaultRigConfigPath() { return EtcPath("rig.yaml"); }
 
-Result<RigConfig> LoadRigConfig(const std::string& path) {
+Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& relative_to) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
   root.AllowOnlyKeys({"name", "sim", "devices", "plan", "storage", "retries", "calibration"});
   RigConfig config;
   config.path = path;
+  config.relative_to = relative_to.empty() ? fs::absolute(path).parent_path().string() : relative_to;
   config.root = root;
   config.name = root.String("name", fs::path(path).stem().string());
   if (root.Has("sim")) {
     const ConfigNode sim = root.Child("sim");
-    sim.AllowOnlyKeys({"scene", "time_scale"});
+    sim.AllowOnlyKeys({"scene", "time_scale", "faults"});
     const std::string scene = sim.String("scene");
     config.sim_time_scale = sim.Number("time_scale", 0.01, {.min = 1e-6, .max = 100});
     if (!scene.empty() && scene[0] != '/') {
-      config.sim_scene_path = (fs::path(path).parent_path() / scene).lexically_normal().string();
+      config.sim_scene_path = (fs::path(config.relative_to) / scene).lexically_normal().string();
     } else {
       config.sim_scene_path = scene;
     }
@@ -54,10 +55,20 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));
     SimWorldOptions options;
     options.time_scale = config.sim_time_scale;
+    HR_ASSIGN_OR_RETURN(options.faults, ParseSimFaults(config.root.Child("sim")));
     HR_ASSIGN_OR_RETURN(rig->sim_world, CreateSimWorld(scene, options));
     RegisterSimBackends(&registry, rig->sim_world);
   }
   HR_ASSIGN_OR_RETURN(rig->devices, BuildDevices(config.root.Child("devices"), registry));
+  for (const ConfigNode& camera : config.root.Child("devices").Items("cameras")) {
+    const std::string line = camera.String("trigger_line", "");
+    if (line.empty()) continue;
+    bool known = false;
+    for (const auto& l : rig->devices.trigger_lines) known = known || l->info().name == line;
+    if (!known) camera.Fail("trigger_line", "no trigger line named '" + line + "' in devices.trigger_lines");
+    rig->camera_trigger_lines[camera.String("name")] = line;
+  }
+  if (!config.root.ok()) return config.root.status();
   return rig;
 }
 

@@ -1,6 +1,7 @@
 // The rig config (etc/rig.yaml and its kin) and the devices built from it.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 
@@ -12,6 +13,7 @@ namespace hairrig {
 
 struct RigConfig {
   std::string path;
+  std::string relative_to;     // folder relative paths resolve against
   std::string name;
   std::string sim_scene_path;  // resolved; empty when no sim section
   double sim_time_scale = 0.01;
@@ -24,12 +26,18 @@ Result<std::string> DefaultRigConfigPath();
 // Resolves a path given relative to the project's etc/ folder ("scenes/default.yaml").
 Result<std::string> EtcPath(const std::string& relative);
 
-Result<RigConfig> LoadRigConfig(const std::string& path);
+// Relative paths in the config (sim.scene) resolve against `relative_to`, by
+// default the config file's folder (a capture's snapshot passes the folder of
+// the config it was taken from).
+Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& relative_to = "");
 
 struct Rig {
   RigConfig config;
   std::shared_ptr<SimWorld> sim_world;  // set when the config has a sim section
   DeviceSet devices;
+  // Camera name -> the trigger line it is wired to (devices.cameras[].trigger_line);
+  // cameras without one are triggered in software.
+  std::map<std::string, std::string> camera_trigger_lines;
 };
 
 // Builds every device (closed). The sim backend is available when the config

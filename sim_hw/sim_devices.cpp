@@ -20,21 +20,16 @@ int64_t NowNs() {
 
 // Trapezoidal (or triangular) move: position after `t` seconds of a move of
 // `distance` deg at the given speed and acceleration; duration in *duration_s.
-double TrapezoidPosition(double distance, double speed, double accel, double t, double* duration_s) {
+double TrapezoidPosition(double distance, const MotionProfile& p, double t) {
   const double d = std::abs(distance);
-  const double t_acc = speed / accel;
-  double duration, pos;
-  if (d < speed * t_acc) {  // never reaches full speed
-    const double t_half = std::sqrt(d / accel);
-    duration = 2 * t_half;
-    pos = t < t_half ? 0.5 * accel * t * t : d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
-  } else {
-    duration = d / speed + t_acc;
-    if (t < t_acc) pos = 0.5 * accel * t * t;
-    else if (t < duration - t_acc) pos = 0.5 * speed * t_acc + speed * (t - t_acc);
-    else pos = d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
-  }
-  *duration_s = duration;
+  const double speed = p.speed_deg_s, accel = p.accel_deg_s2;
+  const double duration = MoveDurationS(distance, p);
+  const double t_acc = std::min(speed / accel, 0.5 * duration);
+  const double peak = accel * t_acc;
+  double pos;
+  if (t < t_acc) pos = 0.5 * accel * t * t;
+  else if (t < duration - t_acc) pos = 0.5 * peak * t_acc + peak * (t - t_acc);
+  else pos = d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
   return std::copysign(std::min(pos, d), distance);
 }
 }  // namespace
@@ -42,10 +37,32 @@ double TrapezoidPosition(double distance, double speed, double accel, double t, 
 class SimWorld {
  public:
   SimWorld(std::unique_ptr<Renderer> renderer, SimWorldOptions options)
-      : renderer_(std::move(renderer)), options_(options) {
+      : renderer_(std::move(renderer)), options_(std::move(options)) {
     for (const SceneLight& l : renderer_->scene().lights) light_levels_[l.name] = 0.0;
   }
+  ~SimWorld() {
+    if (estop_timer_.joinable()) estop_timer_.join();
+  }
 
+  // --- fault injection --------------------------------------------------
+  // Counts one more event of `device` ("" for the turntable) and returns the
+  // first configured fault of `kind` that hits it, or nullptr.
+  const SimFault* NextEventFault(const std::string& device, std::initializer_list<SimFaultKind> kinds) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const int event = ++event_counts_[device];
+    for (const SimFault& f : options_.faults) {
+      for (SimFaultKind k : kinds) {
+        if (f.kind == k && f.device == device && f.Hits(event)) return &f;
+      }
+    }
+    return nullptr;
+  }
+  int DiskFullAfterFrames() const {
+    for (const SimFault& f : options_.faults) {
+      if (f.kind == SimFaultKind::kDiskFull) return f.at;
+    }
+    return -1;
+  }
   const Renderer& renderer() const { return *renderer_; }
   const Scene& scene() const { return renderer_->scene(); }
   double time_scale() const { return options_.time_scale; }
@@ -66,6 +83,13 @@ class SimWorld {
     move_target_deg_ = target_deg;
     move_profile_ = p;
     move_start_ = Clock::now();
+    stuck_ = false;
+  }
+  // The current move never sets the in-position flag (the controller hunts
+  // around the target: a following-error loop that never settles).
+  void JamMove() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stuck_ = true;
   }
   double AngleDeg() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -74,14 +98,45 @@ class SimWorld {
   // Simulated seconds until in position (move plus settle); 0 when there.
   double SecondsToInPosition() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    double duration = 0;
-    TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_.speed_deg_s, move_profile_.accel_deg_s2, 0, &duration);
+    if (stuck_) return std::numeric_limits<double>::infinity();
+    const double duration = MoveDurationS(move_target_deg_ - move_start_deg_, move_profile_);
     return std::max(0.0, duration + scene().turntable_settle_s - SimSecondsSince(move_start_));
   }
   void StopMotion() {
     std::lock_guard<std::mutex> lock(mutex_);
     move_start_deg_ = move_target_deg_ = AngleLocked();
     move_start_ = Clock::now();
+    stuck_ = false;
+  }
+
+  // --- safety inputs ----------------------------------------------------
+  using InputFn = std::function<void(bool)>;
+  void SetInputCallback(const std::string& line, InputFn fn) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (fn) input_callbacks_[line] = std::move(fn);
+    else input_callbacks_.erase(line);
+  }
+  bool InputActive() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return input_active_;
+  }
+  void SetInputActive(bool active) {
+    std::vector<InputFn> fns;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (input_active_ == active) return;
+      input_active_ = active;
+      for (auto& [name, fn] : input_callbacks_) fns.push_back(fn);
+    }
+    for (auto& fn : fns) fn(active);
+  }
+  // Presses the e-stop `after_s` device seconds from now, from another thread.
+  void ScheduleEstop(double after_s) {
+    if (estop_timer_.joinable()) estop_timer_.join();
+    estop_timer_ = std::thread([this, after_s] {
+      SleepSim(after_s);
+      SetInputActive(true);
+    });
   }
 
   // --- lights -----------------------------------------------------------
@@ -126,10 +181,8 @@ class SimWorld {
 
  private:
   double AngleLocked() const {
-    double duration = 0;
-    const double moved = TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_.speed_deg_s,
-                                           move_profile_.accel_deg_s2, SimSecondsSince(move_start_), &duration);
-    return move_start_deg_ + moved;
+    return move_start_deg_ + TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_,
+                                               SimSecondsSince(move_start_));
   }
 
   std::unique_ptr<Renderer> renderer_;
@@ -141,6 +194,11 @@ class SimWorld {
   std::map<std::string, double> light_levels_;
   std::map<std::string, std::map<int, TriggerFn>> subscribers_;
   int next_subscription_ = 0;
+  bool stuck_ = false;
+  std::map<std::string, int> event_counts_;
+  std::map<std::string, InputFn> input_callbacks_;
+  bool input_active_ = false;
+  std::thread estop_timer_;
 };
 
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options) {
@@ -152,6 +210,7 @@ Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWo
 }
 const Renderer& WorldRenderer(const SimWorld& world) { return world.renderer(); }
 double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); }
+int WorldDiskFullAfterFrames(const SimWorld& world) { return world.DiskFullAfterFrames(); }
 
 namespace {
 
@@ -169,6 +228,7 @@ class SimDevice : public Base {
     return Status::Ok();
   }
   Status HealthCheck() override { return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"); }
+  double time_scale() const override { return world_->time_scale(); }
 
  protected:
   std::shared_ptr<SimWorld> world_;
@@ -178,7 +238,11 @@ class SimTurntable : public SimDevice<Turntable> {
  public:
   using SimDevice::SimDevice;
   TurntableCapabilities capabilities() const override {
-    return {.max_speed_deg_s = 90, .max_accel_deg_s2 = 360, .resolution_deg = 0.001, .can_home = true};
+    return {.max_speed_deg_s = 90,
+            .max_accel_deg_s2 = 360,
+            .resolution_deg = 0.001,
+            .can_home = true,
+            .settle_s = world_->scene().turntable_settle_s};
   }
   Status Home(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(StartMove(0.0, {world_->scene().turntable_speed_deg_s, world_->scene().turntable_accel_deg_s2}));
@@ -198,43 +262,86 @@ class SimTurntable : public SimDevice<Turntable> {
       return OutOfRange(Describe() + ": acceleration " + std::to_string(p.accel_deg_s2) + " deg/s^2 outside (0, " +
                         std::to_string(caps.max_accel_deg_s2) + "]");
     }
+    const double move_s = MoveDurationS(target_deg - world_->AngleDeg(), p);
     world_->StartMove(target_deg, p);
     target_deg_ = target_deg;
+    stopped_ = false;
+    stall_after_s_ = -1;
+    InjectMoveFault(move_s);
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
   Result<TurntableStatus> ReadStatus() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "ReadStatus"));
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
     TurntableStatus s;
     s.position_deg = world_->AngleDeg();
     s.target_deg = target_deg_;
-    s.in_position = world_->SecondsToInPosition() <= 0;
-    s.moving = !s.in_position;
+    s.fault = state() == DeviceState::kFaulted;
+    s.in_position = !s.fault && world_->SecondsToInPosition() <= 0;
+    s.moving = !s.in_position && !s.fault;
     s.homed = homed_;
     if (s.in_position && state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return s;
   }
+  // Polls like a real driver reading the status register, so that Stop() from
+  // another thread (an e-stop) ends the wait at once.
   Status WaitInPosition(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
-    const double wait_real_s = world_->SecondsToInPosition() * world_->time_scale();
-    if (wait_real_s > std::chrono::duration<double>(timeout).count()) {
-      std::this_thread::sleep_for(timeout);
-      return Timeout(Describe() + ": not in position within " + std::to_string(timeout.count()) + " ms");
+    const auto deadline = Clock::now() + timeout;
+    for (;;) {
+      if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + Deg(target_deg_));
+      if (stall_after_s_ >= 0 && world_->SimSecondsSince(move_start_) >= stall_after_s_) {
+        world_->StopMotion();
+        return Fault(DeviceFault("the controller reports a stall (following error) at " + Deg(world_->AngleDeg()) +
+                                 " on the way to " + Deg(target_deg_) +
+                                 ": check that nothing blocks the platform, then home it again"));
+      }
+      const double left_real_s = world_->SecondsToInPosition() * world_->time_scale();
+      if (left_real_s <= 0) break;
+      if (Clock::now() >= deadline) {
+        return Timeout(Describe() + ": not in position at " + Deg(target_deg_) + " within " +
+                       std::to_string(timeout.count()) + " ms (now at " + Deg(world_->AngleDeg()) + ")");
+      }
+      const auto step = std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(2));
+      std::this_thread::sleep_for(std::min<Clock::duration>(
+          step, std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(left_real_s))));
     }
-    std::this_thread::sleep_for(std::chrono::duration<double>(wait_real_s));
     SetState(DeviceState::kReady);
     return Status::Ok();
   }
   Status Stop() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Stop"));
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
     world_->StopMotion();
-    SetState(DeviceState::kReady);
+    stopped_ = true;
+    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
 
  private:
+  static std::string Deg(double deg) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3f deg", deg);
+    return text;
+  }
+
+  void InjectMoveFault(double move_s) {
+    move_start_ = Clock::now();
+    const SimFault* fault = world_->NextEventFault(
+        "", {SimFaultKind::kTurntableTimeout, SimFaultKind::kTurntableStall, SimFaultKind::kEstop});
+    if (!fault) return;
+    switch (fault->kind) {
+      case SimFaultKind::kTurntableTimeout: world_->JamMove(); break;
+      case SimFaultKind::kTurntableStall: stall_after_s_ = 0.5 * move_s; break;
+      case SimFaultKind::kEstop: world_->ScheduleEstop(0.5 * move_s); break;
+      default: break;
+    }
+  }
+
   double target_deg_ = 0;
   bool homed_ = false;
+  std::atomic<bool> stopped_{false};
+  double stall_after_s_ = -1;  // device seconds into the move; < 0: no stall
+  Clock::time_point move_start_ = Clock::now();
 };
 
 class SimLight : public SimDevice<Light> {
@@ -282,6 +389,19 @@ class SimTriggerLine : public SimDevice<TriggerLine> {
   bool active_ = false;
 };
 
+class SimInputLine : public SimDevice<InputLine> {
+ public:
+  using SimDevice::SimDevice;
+  ~SimInputLine() override { world_->SetInputCallback(info().name, nullptr); }
+  Result<bool> IsActive() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsActive"));
+    return world_->InputActive();
+  }
+  void OnChange(std::function<void(bool active)> callback) override {
+    world_->SetInputCallback(info().name, std::move(callback));
+  }
+};
+
 // Renders on a worker thread so that downloads overlap whatever the caller does next.
 class SimCamera : public SimDevice<Camera> {
  public:
@@ -317,6 +437,23 @@ class SimCamera : public SimDevice<Camera> {
     settings_ = s;
     return Status::Ok();
   }
+  // A camera that dropped off the bus stays absent for the configured number
+  // of Open() attempts (fault camera_gone), like a DSLR that re-enumerates.
+  Status Open() override {
+    if (gone_) {
+      if (open_failures_left_ > 0) {
+        --open_failures_left_;
+        return Unavailable(Describe() + ": not found on the bus (is it connected and switched on?)");
+      }
+      gone_ = false;
+    }
+    StopWorker();
+    return SimDevice::Open();
+  }
+  Status HealthCheck() override {
+    if (gone_) return Fault(Unavailable("not found on the bus"));
+    return SimDevice::HealthCheck();
+  }
   Status Arm() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
     StopWorker();
@@ -340,16 +477,19 @@ class SimCamera : public SimDevice<Camera> {
     return Status::Ok();
   }
   Status SoftwareTrigger() override {
+    if (gone_) return Fault(Unavailable("dropped off the bus; reopen it"));
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
     OnTrigger();
     return Status::Ok();
   }
   Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
+    if (gone_) return Fault(Unavailable("dropped off the bus; reopen it"));
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
     std::unique_lock<std::mutex> lock(mutex_);
-    if (!cv_.wait_for(lock, timeout, [this] { return !ready_.empty(); })) {
+    if (!cv_.wait_for(lock, timeout, [this] { return !ready_.empty() || gone_; })) {
       return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms");
     }
+    if (gone_) return Fault(Unavailable("dropped off the bus; reopen it"));
     Result<Frame> frame = std::move(ready_.front());
     ready_.pop_front();
     return frame;
@@ -366,13 +506,26 @@ class SimCamera : public SimDevice<Camera> {
     std::vector<double> lights;
     CaptureSettings settings;
     int64_t trigger_ns;
+    double extra_delay_s = 0;  // download_timeout fault, device seconds
   };
 
   void OnTrigger() {
+    if (gone_) return;
     // The exposure sees the world as it is now; rendering and transfer come after.
     Job job{0, world_->AngleDeg(), world_->LightLevels(), settings_, NowNs()};
+    const SimFault* fault = world_->NextEventFault(
+        info().serial, {SimFaultKind::kDropFrame, SimFaultKind::kCameraGone, SimFaultKind::kDownloadTimeout});
     std::lock_guard<std::mutex> lock(mutex_);
     job.sequence = sequence_++;
+    if (fault && fault->kind == SimFaultKind::kDropFrame) return;
+    if (fault && fault->kind == SimFaultKind::kCameraGone) {
+      gone_ = true;
+      open_failures_left_ = fault->count;
+      SetState(DeviceState::kFaulted);
+      cv_.notify_all();
+      return;
+    }
+    if (fault) job.extra_delay_s = fault->delay_s;
     jobs_.push_back(std::move(job));
     cv_.notify_all();
   }
@@ -392,11 +545,14 @@ class SimCamera : public SimDevice<Camera> {
       // Exposure, readout and download take at least their simulated time.
       const Scene& scene = world_->scene();
       const double minimum_s =
-          (job.settings.exposure_s + scene.camera_readout_s + scene.camera_download_s) * world_->time_scale();
-      const double spent_s = std::chrono::duration<double>(Clock::now() - t0).count();
-      if (spent_s < minimum_s) std::this_thread::sleep_for(std::chrono::duration<double>(minimum_s - spent_s));
+          (job.settings.exposure_s + scene.camera_readout_s + scene.camera_download_s + job.extra_delay_s) *
+          world_->time_scale();
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (cv_.wait_until(lock, t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(minimum_s)),
+                         [this] { return stopping_; })) {
+        return;
+      }
       if (frame.ok()) frame->received_time_ns = NowNs();
-      std::lock_guard<std::mutex> lock(mutex_);
       ready_.push_back(std::move(frame));
       cv_.notify_all();
     }
@@ -471,6 +627,8 @@ class SimCamera : public SimDevice<Camera> {
   std::thread worker_;
   std::string subscribed_line_;
   int subscription_ = 0;
+  std::atomic<bool> gone_{false};
+  int open_failures_left_ = 0;
 };
 
 // A sim device with no fields of its own beyond name, backend and serial.
@@ -499,6 +657,8 @@ void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> wor
   });
   RegisterFieldlessSimBackend<TriggerLine, SimTriggerLine>(registry, DeviceKind::kTriggerLine, "simulated trigger line",
                                                            world);
+  RegisterFieldlessSimBackend<InputLine, SimInputLine>(registry, DeviceKind::kInputLine, "simulated e-stop input",
+                                                       world);
   registry->AddBackend<Camera>(DeviceKind::kCamera, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
     c.node.AllowOnlyKeys({"name", "backend", "serial", "trigger_line"});
     const std::string line = c.node.String("trigger_line", "");

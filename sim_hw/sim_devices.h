@@ -12,12 +12,16 @@
 //   trigger_lines: (none)
 //   cameras:       trigger_line: <line name>   (optional; cameras on one line
 //                  expose together on Pulse())
+//   input_lines:   (none; all simulated input lines go active on an `estop` fault)
+//
+// Faults (sim_hw/sim_faults.h) are injected through `SimWorldOptions::faults`.
 #pragma once
 
 #include <memory>
 
 #include "drivers/registry.h"
 #include "sim_hw/renderer.h"
+#include "sim_hw/sim_faults.h"
 
 namespace hairrig {
 
@@ -26,12 +30,16 @@ class SimWorld;
 struct SimWorldOptions {
   double time_scale = 0.01;  // > 0
   bool noise = true;
+  std::vector<SimFault> faults;
 };
 
 // Creates the world (renderer included) for `scene`.
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options);
 const Renderer& WorldRenderer(const SimWorld& world);
 double WorldTurntableAngleDeg(const SimWorld& world);  // measured angle now
+// Number of stored frames after which the simulated disk is full (a
+// `disk_full` fault); -1 when no such fault is configured.
+int WorldDiskFullAfterFrames(const SimWorld& world);
 
 // Registers the `sim` backend of every device kind; devices built from it act on `world`.
 void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world);

@@ -1,0 +1,37 @@
+// The hand-off from capture to the pipeline: a stage that wants each frame as
+// soon as it is stored (calibration detects tags during the capture) implements
+// FrameSink. Free of device types: a sink sees the stored file, its pixels and
+// where the view was taken, whether the frame came from a live rig, the
+// simulated one or a replay.
+#pragma once
+
+#include <string>
+
+#include <opencv2/core/mat.hpp>
+
+namespace hairrig {
+
+struct StoredFrame {
+  int view = 0;                 // index in the capture plan
+  int stop = 0;                 // turntable stop
+  std::string camera_name;      // role in the rig config ("upper")
+  std::string camera_serial;
+  std::string path;             // absolute path of the stored, verified file
+  std::string sha256;
+  double turntable_commanded_deg = 0;
+  double turntable_measured_deg = 0;
+  cv::Mat image;                // decoded pixels: 8-bit BGR or single channel
+};
+
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  // Called once per stored frame, from a capture worker thread, possibly from
+  // several threads at once; must be thread-safe and should return quickly
+  // (queue heavy work). A sink cannot fail the capture.
+  virtual void OnFrameStored(const StoredFrame& frame) = 0;
+  // Called once after the last frame of a session.
+  virtual void OnCaptureFinished() {}
+};
+
+}  // namespace hairrig

@@ -1,0 +1,689 @@
+#include "rig/capture.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "core/file_util.h"
+#include "core/log.h"
+#include "rig/capture_dataset.h"
+#include "rig/capture_plan.h"
+#include "rig/rig_config.h"
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+nlohmann::json CaptureSummary::ToJson() const {
+  return {{"dir", dir},
+          {"status", status},
+          {"message", message},
+          {"views_planned", views_planned},
+          {"views_completed", views_completed},
+          {"views_kept", views_kept},
+          {"frames", frames},
+          {"bytes", bytes},
+          {"faults", faults},
+          {"missing_views", missing_views},
+          {"setup_s", setup_s},
+          {"wall_s", wall_s},
+          {"lower_bound_s", lower_bound_s},
+          {"efficiency", efficiency}};
+}
+
+namespace {
+
+int64_t NowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
+void SleepS(double seconds) {
+  if (seconds > 0) std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+}
+std::chrono::milliseconds Ms(double seconds) {
+  return std::chrono::milliseconds(std::max<int64_t>(1, static_cast<int64_t>(std::ceil(seconds * 1000))));
+}
+std::string DegText(double deg) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f deg", deg);
+  return text;
+}
+
+// One camera's shot of one view, waiting for its frame.
+struct Shot {
+  int view = 0;
+  int stop = 0;
+  int64_t trigger_ns = 0;
+  Clock::time_point deadline;
+  double angle_commanded_deg = 0;
+  double angle_measured_deg = 0;
+};
+
+struct CameraSlot {
+  Camera* camera = nullptr;
+  std::deque<Shot> queue;
+  bool busy = false;          // the collector is working on a shot
+  bool needs_reopen = false;  // the camera dropped off the bus
+  std::thread collector;
+};
+
+class Sequencer {
+ public:
+  Sequencer(Rig& rig, const CapturePlan& plan, const CapturePolicies& policies, CaptureDataset& dataset,
+            const CaptureOptions& options)
+      : rig_(rig), plan_(plan), policies_(policies), dataset_(dataset), options_(options) {}
+
+  ~Sequencer() { StopCollectors(); }
+
+  CaptureSummary Run();
+
+ private:
+  // --- setup and teardown --------------------------------------------------
+  Status Setup();
+  void StopCollectors();
+  void OnSafetyInput(const Device& line, bool active);
+
+  // --- the sweep -------------------------------------------------------------
+  void RunPass(const std::vector<int>& views, int pass);
+  bool ShootStop(const PlannedStop& stop, const std::vector<int>& views);
+  Status Move(double angle_deg, double* measured_deg);
+  Status SetLights(const std::map<std::string, double>& levels);
+  void AllLightsOff();
+  Status EnsureCameraReady(CameraSlot& slot);
+  Status ReopenCamera(Camera& camera);
+  void WaitCollectorsIdle();
+
+  // --- collection --------------------------------------------------------------
+  void CollectorLoop(CameraSlot& slot);
+  bool Collect(CameraSlot& slot, const Shot& shot);
+
+  // --- bookkeeping -------------------------------------------------------------
+  void RecordFault(const Device* device, const Status& status, const std::string& action, int view = -1);
+  void StopRun(const std::string& why);
+  bool Stopping() const { return stop_run_.load() || estop_.load(); }
+  std::vector<int> MissingViews() const;
+  void Progress(const std::string& step, int stop);
+  double ExpectedFrameWallS(const Camera& camera) const;
+  double LowerBoundOfStop(double from_deg, const PlannedStop& stop) const;
+
+  Rig& rig_;
+  const CapturePlan& plan_;
+  const CapturePolicies& policies_;
+  CaptureDataset& dataset_;
+  const CaptureOptions& options_;
+
+  std::map<std::string, CameraSlot> slots_;  // by serial
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool shutdown_ = false;
+
+  std::atomic<bool> stop_run_{false};
+  std::atomic<bool> estop_{false};
+  std::string stop_reason_;  // guarded by mutex_
+  std::atomic<int> faults_{0};
+  std::atomic<int> frames_{0};
+  std::atomic<uint64_t> bytes_{0};
+  Clock::time_point sweep_start_{}, last_frame_{};
+  double lower_bound_s_ = 0;
+  double last_download_s_ = 0;
+  int stops_done_ = 0, stops_total_ = 0;
+};
+
+void Sequencer::RecordFault(const Device* device, const Status& status, const std::string& action, int view) {
+  ++faults_;
+  nlohmann::json r = {{"event", "fault"}, {"what", status.ToString()}, {"action", action}};
+  if (device) {
+    r["device"] = device->info().name;
+    r["serial"] = device->info().serial;
+  }
+  if (view >= 0) r["view"] = view;
+  LogWarning("fault: " + status.ToString() + " -> " + action);
+  (void)dataset_.Append(std::move(r));  // a journal failure must not hide the fault itself
+}
+
+void Sequencer::StopRun(const std::string& why) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stop_reason_.empty()) stop_reason_ = why;
+  stop_run_ = true;
+  cv_.notify_all();
+}
+
+double Sequencer::ExpectedFrameWallS(const Camera& camera) const {
+  const CameraCapabilities caps = camera.capabilities();
+  return (plan_.camera_settings.exposure_s + caps.readout_s + caps.download_s) * camera.time_scale();
+}
+
+// Section "How it is judged" of the capture issue: moves, settles and
+// exposures, each at the device's own time scale.
+double Sequencer::LowerBoundOfStop(double from_deg, const PlannedStop& stop) const {
+  const Turntable& table = *rig_.devices.turntable;
+  const double distance = std::abs(stop.angle_deg - from_deg);
+  double s = 0;
+  if (distance >= table.capabilities().resolution_deg) {
+    s += (MoveDurationS(distance, plan_.motion) + table.capabilities().settle_s) * table.time_scale();
+  }
+  double exposure = 0;
+  for (int v : stop.views) {
+    const Camera* c = rig_.devices.FindCameraBySerial(plan_.views[static_cast<size_t>(v)].camera_serial);
+    exposure = std::max(exposure, plan_.camera_settings.exposure_s * c->time_scale());
+  }
+  return s + exposure;
+}
+
+Status Sequencer::Setup() {
+  if (!rig_.devices.turntable) return FailedPrecondition("the rig config has no turntable");
+  for (Device* d : rig_.devices.All()) {
+    Status s;
+    for (int attempt = 1; attempt <= policies_.camera.attempts; ++attempt) {
+      SleepS(policies_.camera.BackoffBefore(attempt));
+      s = d->Open();
+      if (s.ok()) break;
+    }
+    if (!s.ok()) return s.WithContext("opening the rig's devices");
+  }
+  for (const auto& line : rig_.devices.input_lines) {
+    InputLine* l = line.get();
+    l->OnChange([this, l](bool active) { OnSafetyInput(*l, active); });
+    auto active = l->IsActive();
+    if (!active.ok()) return active.status();
+    if (*active) {
+      return FailedPrecondition(l->Describe() + " is active (e-stop pressed or door open): release it, then start again");
+    }
+  }
+  AllLightsOff();
+  if (plan_.home_first) {
+    HR_RETURN_IF_ERROR(rig_.devices.turntable->Home(Ms(policies_.move_timeout_s)));
+  }
+  for (const auto& c : rig_.devices.cameras) {
+    HR_RETURN_IF_ERROR(ReopenCamera(*c));
+    CameraSlot& slot = slots_[c->info().serial];
+    slot.camera = c.get();
+  }
+  for (auto& [serial, slot] : slots_) {
+    CameraSlot* s = &slot;
+    slot.collector = std::thread([this, s] { CollectorLoop(*s); });
+  }
+  return Status::Ok();
+}
+
+// Configure and arm (after Open); the trigger source follows the config's trigger_line.
+Status Sequencer::ReopenCamera(Camera& camera) {
+  if (camera.state() == DeviceState::kClosed || camera.state() == DeviceState::kFaulted) {
+    (void)camera.Close();
+    HR_RETURN_IF_ERROR(camera.Open());
+  }
+  (void)camera.Disarm();
+  CaptureSettings settings = plan_.camera_settings;
+  const auto line = rig_.camera_trigger_lines.find(camera.info().name);
+  if (line != rig_.camera_trigger_lines.end() && !line->second.empty()) {
+    settings.trigger = TriggerSource::kLine;
+    settings.trigger_line = line->second;
+  } else {
+    settings.trigger = TriggerSource::kSoftware;
+  }
+  HR_RETURN_IF_ERROR(camera.Configure(settings));
+  return camera.Arm();
+}
+
+void Sequencer::StopCollectors() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    shutdown_ = true;
+    cv_.notify_all();
+  }
+  for (auto& [serial, slot] : slots_) {
+    if (slot.collector.joinable()) slot.collector.join();
+  }
+}
+
+void Sequencer::OnSafetyInput(const Device& line, bool active) {
+  if (!active) return;
+  estop_ = true;
+  (void)rig_.devices.turntable->Stop();
+  AllLightsOff();
+  StopRun(line.Describe() + " went active (e-stop or interlock): motion stopped and lights off. "
+          "Release it, check the rig, then continue with --resume");
+  RecordFault(&line, Unavailable("safety input active"), "stop motion, lights off, end the run");
+  cv_.notify_all();
+}
+
+void Sequencer::AllLightsOff() {
+  for (const auto& l : rig_.devices.lights) {
+    if (l->state() == DeviceState::kReady) (void)l->SetOn(false);
+  }
+}
+
+Status Sequencer::SetLights(const std::map<std::string, double>& levels) {
+  for (const auto& l : rig_.devices.lights) {
+    const auto it = levels.find(l->info().name);
+    const double level = it == levels.end() ? 0.0 : it->second;
+    Status s;
+    for (int attempt = 1; attempt <= policies_.light.attempts; ++attempt) {
+      SleepS(policies_.light.BackoffBefore(attempt));
+      if (l->state() == DeviceState::kFaulted) (void)l->Open();
+      s = l->capabilities().dimmable ? l->SetLevel(level) : l->SetOn(level > 0);
+      if (s.ok()) break;
+      RecordFault(l.get(), s, attempt < policies_.light.attempts ? "retry" : "give up");
+    }
+    HR_RETURN_IF_ERROR(s);
+  }
+  return Status::Ok();
+}
+
+Status Sequencer::Move(double angle_deg, double* measured_deg) {
+  Turntable& table = *rig_.devices.turntable;
+  HR_ASSIGN_OR_RETURN(TurntableStatus now, table.ReadStatus());
+  if (std::abs(now.position_deg - angle_deg) < table.capabilities().resolution_deg && now.in_position) {
+    *measured_deg = now.position_deg;
+    return Status::Ok();
+  }
+  const double expected_s = (MoveDurationS(angle_deg - now.position_deg, plan_.motion) + table.capabilities().settle_s) *
+                            table.time_scale();
+  Status s;
+  for (int attempt = 1; attempt <= policies_.turntable.attempts && !Stopping(); ++attempt) {
+    SleepS(policies_.turntable.BackoffBefore(attempt));
+    s = table.MoveTo(angle_deg, plan_.motion, Ms(expected_s + policies_.move_timeout_s));
+    if (s.ok() || s.code() != StatusCode::kTimeout) break;
+    const bool last = attempt == policies_.turntable.attempts;
+    RecordFault(&table, s, last ? "stop the run" : "stop the table and command the move again");
+    (void)table.Stop();
+  }
+  if (Stopping() && s.ok()) return Unavailable("the run was stopped");
+  HR_RETURN_IF_ERROR(s);
+  HR_ASSIGN_OR_RETURN(TurntableStatus reached, table.ReadStatus());
+  *measured_deg = reached.position_deg;
+  return Status::Ok();
+}
+
+Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!slot.needs_reopen) return Status::Ok();
+    // The collector must be idle before the camera is touched from this thread.
+    cv_.wait(lock, [&] { return (slot.queue.empty() && !slot.busy) || shutdown_; });
+  }
+  Status s;
+  for (int attempt = 1; attempt <= policies_.camera.attempts; ++attempt) {
+    SleepS(policies_.camera.BackoffBefore(attempt));
+    s = ReopenCamera(*slot.camera);
+    if (s.ok()) break;
+    RecordFault(slot.camera, s, attempt < policies_.camera.attempts ? "reopen again after back-off" : "skip its views for now");
+  }
+  if (s.ok()) {
+    (void)dataset_.Append({{"event", "device_reopened"}, {"device", slot.camera->info().name},
+                           {"serial", slot.camera->info().serial}});
+    std::lock_guard<std::mutex> lock(mutex_);
+    slot.needs_reopen = false;
+  }
+  return s;
+}
+
+// Shoots the views of one stop; false when the run must end.
+bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views) {
+  auto free_bytes = dataset_.FreeBytes();
+  const double min_free = policies_.min_free_mb * 1e6;
+  if (!free_bytes.ok() || static_cast<double>(*free_bytes) < min_free) {
+    const Status s = free_bytes.ok() ? IoError(dataset_.dir() + ": only " + std::to_string(*free_bytes / 1000000) +
+                                               " MB free, below storage.min_free_mb (" +
+                                               std::to_string(static_cast<int>(policies_.min_free_mb)) + ")")
+                                     : free_bytes.status();
+    RecordFault(nullptr, s, "stop the run");
+    StopRun("disk nearly full: " + s.ToString() + ". Free space, then continue with --resume");
+    return false;
+  }
+  std::vector<CameraSlot*> shooting;
+  std::vector<int> shot_views;
+  for (int v : views) {
+    CameraSlot& slot = slots_.at(plan_.views[static_cast<size_t>(v)].camera_serial);
+    if (EnsureCameraReady(slot).ok()) {
+      shooting.push_back(&slot);
+      shot_views.push_back(v);
+    }
+  }
+  if (shooting.empty()) return !Stopping();
+  Progress("moving to " + DegText(stop.angle_deg), stop.index);
+  double measured = 0;
+  const auto before = rig_.devices.turntable->ReadStatus();
+  const double from = before.ok() ? before->position_deg : stop.angle_deg;
+  if (sweep_start_ == Clock::time_point{}) sweep_start_ = Clock::now();
+  const Status moved = Move(stop.angle_deg, &measured);
+  if (!moved.ok()) {
+    if (!Stopping()) {
+      RecordFault(rig_.devices.turntable.get(), moved, "stop the run");
+      StopRun(moved.ToString() + ". The frames stored so far are kept; check the turntable, then continue with --resume");
+    }
+    return false;
+  }
+  lower_bound_s_ += LowerBoundOfStop(from, stop);
+  (void)dataset_.Append({{"event", "position_reached"}, {"stop", stop.index},
+                         {"commanded_deg", stop.angle_deg}, {"measured_deg", measured}});
+  if (const Status s = SetLights(stop.light_levels); !s.ok()) {
+    StopRun(s.ToString() + ": cannot light the views; check the panel's power and connection");
+    return false;
+  }
+  if (Stopping()) return false;
+  Progress("exposing", stop.index);
+  // One pulse per trigger line used by this stop; a software trigger for the rest.
+  std::set<std::string> lines;
+  for (CameraSlot* slot : shooting) {
+    const auto it = rig_.camera_trigger_lines.find(slot->camera->info().name);
+    if (it != rig_.camera_trigger_lines.end() && !it->second.empty()) lines.insert(it->second);
+  }
+  const int64_t trigger_ns = NowNs();
+  const Clock::time_point trigger_time = Clock::now();
+  for (const std::string& name : lines) {
+    for (const auto& l : rig_.devices.trigger_lines) {
+      if (l->info().name != name) continue;
+      if (const Status s = l->Pulse(std::chrono::microseconds(100)); !s.ok()) RecordFault(l.get(), s, "re-shoot later");
+    }
+  }
+  double exposure_wall_s = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (size_t i = 0; i < shooting.size(); ++i) {
+      Camera& camera = *shooting[i]->camera;
+      const auto line = rig_.camera_trigger_lines.find(camera.info().name);
+      if (line == rig_.camera_trigger_lines.end() || line->second.empty()) {
+        if (const Status s = camera.SoftwareTrigger(); !s.ok()) shooting[i]->needs_reopen = true;
+      }
+      Shot shot{shot_views[i], stop.index, trigger_ns, {}, stop.angle_deg, measured};
+      shot.deadline = trigger_time + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                                         ExpectedFrameWallS(camera) + policies_.frame_timeout_s));
+      shooting[i]->queue.push_back(shot);
+      exposure_wall_s = std::max(exposure_wall_s, plan_.camera_settings.exposure_s * camera.time_scale());
+      const CameraCapabilities caps = camera.capabilities();
+      last_download_s_ = std::max(last_download_s_, (caps.readout_s + caps.download_s) * camera.time_scale());
+    }
+    cv_.notify_all();
+  }
+  // The turntable may move once every exposure has ended.
+  std::this_thread::sleep_until(trigger_time +
+                                std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(exposure_wall_s)));
+  return !Stopping();
+}
+
+void Sequencer::CollectorLoop(CameraSlot& slot) {
+  for (;;) {
+    Shot shot;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [&] { return shutdown_ || !slot.queue.empty(); });
+      if (slot.queue.empty()) return;
+      shot = slot.queue.front();
+      slot.queue.pop_front();
+      slot.busy = true;
+    }
+    Collect(slot, shot);
+    std::lock_guard<std::mutex> lock(mutex_);
+    slot.busy = false;
+    cv_.notify_all();
+  }
+}
+
+bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
+  Camera& camera = *slot.camera;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (slot.needs_reopen) {
+      RecordFault(&camera, Unavailable("the camera is being reopened"), "re-shoot later", shot.view);
+      return false;
+    }
+  }
+  for (;;) {
+    const double left_s = std::chrono::duration<double>(shot.deadline - Clock::now()).count();
+    Result<Frame> frame = left_s > 0 ? camera.WaitFrame(Ms(left_s))
+                                     : Result<Frame>(Timeout(camera.Describe() + ": no frame for view " +
+                                                             std::to_string(shot.view) + " in time"));
+    if (!frame.ok()) {
+      if (frame.status().code() != StatusCode::kTimeout) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        slot.needs_reopen = true;
+      }
+      RecordFault(&camera, frame.status(),
+                  frame.status().code() == StatusCode::kTimeout ? "re-shoot later" : "reopen the camera, re-shoot later",
+                  shot.view);
+      return false;
+    }
+    if (frame->trigger_time_ns < shot.trigger_ns) {
+      (void)dataset_.Append({{"event", "stale_frame_discarded"}, {"serial", camera.info().serial},
+                             {"trigger_time_ns", frame->trigger_time_ns}, {"waiting_for_view", shot.view}});
+      continue;
+    }
+    const PlannedView& view = plan_.views[static_cast<size_t>(shot.view)];
+    const CameraCapabilities caps = camera.capabilities();
+    FrameContext context{shot.view, shot.stop, view.camera_name, shot.angle_commanded_deg, shot.angle_measured_deg,
+                         caps.width_px, caps.height_px};
+    auto stored = dataset_.StoreFrame(*frame, context);
+    if (!stored.ok()) {
+      const bool storage = stored.status().code() == StatusCode::kIoError;
+      RecordFault(&camera, stored.status(), storage ? "stop the run" : "re-shoot later", shot.view);
+      if (storage) StopRun("storage failed: " + stored.status().ToString());
+      return false;
+    }
+    ++frames_;
+    bytes_ += stored->record.at("bytes").get<uint64_t>();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      last_frame_ = Clock::now();
+    }
+    if (options_.sink) {
+      StoredFrame out{shot.view,
+                      shot.stop,
+                      view.camera_name,
+                      camera.info().serial,
+                      stored->path,
+                      stored->record.at("sha256").get<std::string>(),
+                      shot.angle_commanded_deg,
+                      shot.angle_measured_deg,
+                      stored->image};
+      options_.sink->OnFrameStored(out);
+    }
+    return true;
+  }
+}
+
+void Sequencer::WaitCollectorsIdle() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait(lock, [&] {
+    for (auto& [serial, slot] : slots_) {
+      if (!slot.queue.empty() || slot.busy) return false;
+    }
+    return true;
+  });
+}
+
+std::vector<int> Sequencer::MissingViews() const {
+  std::vector<int> missing;
+  for (const PlannedView& v : plan_.views) {
+    if (!dataset_.HasVerifiedFrame(v.index)) missing.push_back(v.index);
+  }
+  return missing;
+}
+
+void Sequencer::Progress(const std::string& step, int stop) {
+  if (!options_.on_progress) return;
+  CaptureProgress p;
+  p.views_done = dataset_.VerifiedFrameCount();
+  p.views_total = static_cast<int>(plan_.views.size());
+  p.stop = stop;
+  p.stops_total = static_cast<int>(plan_.stops.size());
+  p.step = step;
+  p.faults = faults_.load();
+  if (stops_done_ > 0 && sweep_start_ != Clock::time_point{}) {
+    const double per_stop = std::chrono::duration<double>(Clock::now() - sweep_start_).count() / stops_done_;
+    p.eta_s = per_stop * std::max(0, stops_total_ - stops_done_);
+  }
+  options_.on_progress(p);
+}
+
+void Sequencer::RunPass(const std::vector<int>& views, int pass) {
+  std::map<int, std::vector<int>> by_stop;
+  for (int v : views) by_stop[plan_.views[static_cast<size_t>(v)].stop].push_back(v);
+  stops_total_ = stops_done_ + static_cast<int>(by_stop.size());
+  if (pass > 1) {
+    (void)dataset_.Append({{"event", "reshoot_pass"}, {"pass", pass}, {"views", views}});
+    Progress("re-shooting " + std::to_string(views.size()) + " views", by_stop.begin()->first);
+  }
+  for (const auto& [stop, stop_views] : by_stop) {
+    if (!ShootStop(plan_.stops[static_cast<size_t>(stop)], stop_views)) break;
+    ++stops_done_;
+  }
+  WaitCollectorsIdle();
+}
+
+CaptureSummary Sequencer::Run() {
+  CaptureSummary summary;
+  summary.views_planned = static_cast<int>(plan_.views.size());
+  summary.views_kept = dataset_.VerifiedFrameCount();
+  const auto t0 = Clock::now();
+  Status setup = Setup();
+  summary.setup_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (!setup.ok()) {
+    RecordFault(nullptr, setup, "stop the run");
+    StopRun(setup.ToString());
+  }
+  for (int pass = 1; pass <= policies_.camera.attempts && !Stopping(); ++pass) {
+    const std::vector<int> missing = MissingViews();
+    if (missing.empty()) break;
+    if (pass > 1) SleepS(policies_.camera.BackoffBefore(pass));
+    RunPass(missing, pass);
+  }
+  WaitCollectorsIdle();
+  StopCollectors();
+  AllLightsOff();
+  for (const auto& c : rig_.devices.cameras) (void)c->Disarm();
+  for (const auto& l : rig_.devices.input_lines) l->OnChange(nullptr);
+
+  summary.missing_views = MissingViews();
+  summary.views_completed = summary.views_planned - static_cast<int>(summary.missing_views.size());
+  summary.frames = frames_.load();
+  summary.bytes = bytes_.load();
+  summary.faults = faults_.load();
+  if (sweep_start_ != Clock::time_point{} && last_frame_ > sweep_start_) {
+    summary.wall_s = std::chrono::duration<double>(last_frame_ - sweep_start_).count();
+  }
+  summary.lower_bound_s = lower_bound_s_ + (summary.frames > 0 ? last_download_s_ : 0);
+  summary.efficiency = summary.wall_s > 0 ? summary.lower_bound_s / summary.wall_s : 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    summary.message = stop_reason_;
+  }
+  if (stop_run_ || estop_) {
+    summary.status = "stopped";
+  } else if (!summary.missing_views.empty()) {
+    summary.status = "incomplete";
+    summary.message = std::to_string(summary.missing_views.size()) + " views still missing after " +
+                      std::to_string(policies_.camera.attempts) +
+                      " passes (see the faults in journal.jsonl); fix the cause, then run again with --resume";
+  } else {
+    summary.status = "complete";
+  }
+  (void)dataset_.Append({{"event", "session_end"}, {"status", summary.status}, {"message", summary.message},
+                         {"views_completed", summary.views_completed}, {"frames", summary.frames},
+                         {"faults", summary.faults}});
+  (void)dataset_.WriteManifest(summary.status);
+  if (options_.sink) options_.sink->OnCaptureFinished();
+  return summary;
+}
+
+std::string ReadText(const std::string& path) {
+  auto bytes = ReadFileBytes(path);
+  return bytes.ok() ? std::string(bytes->begin(), bytes->end()) : std::string();
+}
+
+// The folder the original config sat in, from the capture's first session record.
+std::string RecordedConfigFolder(const CaptureDataset& dataset) {
+  for (const auto& r : dataset.Records()) {
+    if (r.value("event", "") == "session_start") return r.value("config_dir", "");
+  }
+  return "";
+}
+
+// Worst case of the frames' size on disk: raw pixels (PNG only shrinks them).
+double EstimatedBytes(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views) {
+  double total = 0;
+  for (int v : views) {
+    const Camera* c = devices.FindCameraBySerial(plan.views[static_cast<size_t>(v)].camera_serial);
+    const CameraCapabilities caps = c->capabilities();
+    total += static_cast<double>(caps.width_px) * caps.height_px * std::max(1, BytesPerPixel(plan.camera_settings.format));
+  }
+  return total;
+}
+
+}  // namespace
+
+Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
+  if (options.out_dir.empty()) return InvalidArgument("--out is required: the folder the capture is written to");
+  std::unique_ptr<CaptureDataset> dataset;
+  RigConfig config;
+  ResumeReport report;
+  DatasetOptions dataset_options;
+  std::string config_text;
+  if (options.resume) {
+    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::OpenForResume(options.out_dir, dataset_options, &report));
+    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(dataset->ConfigSnapshotPath(), RecordedConfigFolder(*dataset)));
+  } else {
+    if (fs::exists(options.out_dir)) {
+      return FailedPrecondition(options.out_dir + " already exists: choose a new --out folder, or add --resume to continue it");
+    }
+    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(options.config_path));
+    config_text = ReadText(options.config_path);
+  }
+  HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config));
+  HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
+  HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
+  dataset_options.png_compression = policies.png_compression;
+  if (rig->sim_world) dataset_options.simulated_full_after_frames = WorldDiskFullAfterFrames(*rig->sim_world);
+
+  // Space for the whole plan, checked before anything is written.
+  std::vector<int> all_views;
+  for (const PlannedView& v : plan.views) all_views.push_back(v.index);
+  const std::string probe_dir = options.resume ? options.out_dir : fs::absolute(options.out_dir).parent_path().string();
+  std::error_code ec;
+  const fs::space_info space = fs::space(probe_dir, ec);
+  const double needed = EstimatedBytes(plan, rig->devices, all_views) + policies.min_free_mb * 1e6;
+  if (!ec && static_cast<double>(space.available) < needed) {
+    return IoError(probe_dir + ": " + std::to_string(space.available / 1000000) + " MB free, the plan needs up to " +
+                   std::to_string(static_cast<uint64_t>(needed / 1e6)) +
+                   " MB (frames plus storage.min_free_mb): free space or choose another --out");
+  }
+  if (!options.resume) {
+    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text, dataset_options));
+  } else {
+    dataset->set_options(dataset_options);
+  }
+  dataset->SetPlanSummary(static_cast<int>(plan.views.size()), options.subject, config.name);
+  HR_RETURN_IF_ERROR(dataset->Append({{"event", "session_start"},
+                                      {"resume", options.resume},
+                                      {"subject", options.subject},
+                                      {"rig", config.name},
+                                      {"config_dir", config.relative_to},
+                                      {"views_planned", plan.views.size()},
+                                      {"frames_verified", report.frames_verified},
+                                      {"quarantined", report.quarantined},
+                                      {"partial_removed", report.partial_removed.size()}}));
+  if (!options.resume) {
+    for (const PlannedView& v : plan.views) {
+      const PlannedStop& stop = plan.stops[static_cast<size_t>(v.stop)];
+      HR_RETURN_IF_ERROR(dataset->Append({{"event", "view_planned"}, {"view", v.index}, {"stop", v.stop},
+                                          {"angle_deg", stop.angle_deg}, {"camera", v.camera_name},
+                                          {"serial", v.camera_serial}, {"lights", stop.light_levels}}));
+    }
+  }
+  HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
+  Sequencer sequencer(*rig, plan, policies, *dataset, options);
+  CaptureSummary summary = sequencer.Run();
+  rig->devices.CloseAll();
+  summary.dir = dataset->dir();
+  return summary;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,72 @@
+// The capture sequencer: runs a rig's plan (rig/capture_plan.h) into a capture
+// dataset (rig/capture_dataset.h).
+//
+// Per stop: move the turntable and wait for its in-position flag and settle
+// time, set the LED panels, trigger every camera of the stop together (one
+// pulse per shared trigger line, else a software trigger each), and move on as
+// soon as the exposure has ended. One collector thread per camera waits for
+// its frames, checks, encodes, hashes and stores them while the turntable
+// already moves to the next stop.
+//
+// Faults: a frame that does not arrive, arrives corrupt, or a camera that
+// drops off the bus marks the view for a re-shoot pass after the first sweep
+// (a camera is reopened with back-off first); a move that times out is
+// re-commanded; a turntable fault, an e-stop or interlock, a full disk stop
+// the run at once. Every fault is journalled; the dataset stays consistent and
+// `--resume` continues it.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/frame_sink.h"
+#include "core/status.h"
+
+namespace hairrig {
+
+struct CaptureProgress {
+  int views_done = 0;   // verified views, earlier sessions included
+  int views_total = 0;
+  int stop = 0;         // current stop (0-based)
+  int stops_total = 0;
+  std::string step;     // "moving to 37.9 deg", "exposing", "re-shooting 2 views", ...
+  double eta_s = 0;     // wall seconds left, estimated from the stops so far
+  int faults = 0;
+};
+
+struct CaptureOptions {
+  std::string config_path;  // rig config; ignored with resume (the snapshot is used)
+  std::string out_dir;      // the capture folder: must not exist, unless resume
+  std::string subject;      // recorded in the journal and manifest
+  bool resume = false;
+  FrameSink* sink = nullptr;                                // optional
+  std::function<void(const CaptureProgress&)> on_progress;  // optional, called from the sequencer thread
+};
+
+struct CaptureSummary {
+  std::string dir;
+  std::string status;   // "complete", "incomplete" (views missing after retries) or "stopped" (a fault ended the run)
+  std::string message;  // what happened and what to do, for stopped/incomplete runs
+  int views_planned = 0;
+  int views_completed = 0;  // verified, earlier sessions included
+  int views_kept = 0;       // verified frames kept from earlier sessions (resume)
+  int frames = 0;           // frames stored in this session
+  uint64_t bytes = 0;       // bytes stored in this session
+  int faults = 0;           // faults in this session
+  std::vector<int> missing_views;
+  double setup_s = 0;       // opening devices, homing, arming
+  double wall_s = 0;        // from the first stop's move to the last frame stored
+  double lower_bound_s = 0; // moves + settles + exposures of this session's stops + the last download
+  double efficiency = 0;    // lower_bound_s / wall_s
+  nlohmann::json ToJson() const;
+};
+
+// Runs (or resumes) a capture. An error Status means nothing was captured
+// (bad config, unusable folder, devices that cannot be opened); a run that
+// starts returns a summary, also when a fault stopped it.
+Result<CaptureSummary> RunCapture(const CaptureOptions& options);
+
+}  // namespace hairrig

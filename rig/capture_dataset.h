@@ -1,0 +1,133 @@
+// The capture dataset (design.md section 4): one folder per capture.
+//
+//   <capture>/rig.yaml          the rig config as used (snapshot)
+//   <capture>/journal.jsonl     append-only, one JSON record per line, fsync'd
+//   <capture>/manifest.json     state derived from the journal, rewritten atomically
+//   <capture>/frames/NNN_<serial>.<ext>   written atomically (temporary + fsync + rename)
+//   <capture>/quarantine/       files found on resume that no journal record vouches for
+//
+// Every record has "event", "seq" (from 0 over the capture's life) and
+// "time_utc". Events: session_start, view_planned, position_reached,
+// frame_stored (view, serial, file, bytes, sha256, exposure, timestamps),
+// fault, session_end, journal_repaired, file_quarantined, partial_removed.
+//
+// A frame counts only when its frame_stored record is in the journal, and it is
+// verified only when the file's size and SHA-256 match that record. Resume keeps
+// verified frames and never writes over them. Thread-safe: several cameras'
+// collectors store frames at once.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core/mat.hpp>
+
+#include "core/status.h"
+#include "drivers/camera.h"
+
+namespace hairrig {
+
+struct DatasetOptions {
+  int png_compression = 1;          // raw frames are stored as PNG, 0-9
+  // Simulated disk full (sim fault disk_full): after this many frames stored in
+  // the folder, FreeBytes() is 0 and writes fail like ENOSPC. -1: off.
+  int simulated_full_after_frames = -1;
+};
+
+// What the sequencer knows about a frame beyond the frame itself.
+struct FrameContext {
+  int view = 0;
+  int stop = 0;
+  std::string camera_name;
+  double angle_commanded_deg = 0;
+  double angle_measured_deg = 0;
+  int expected_width_px = 0;  // 0: not checked
+  int expected_height_px = 0;
+};
+
+struct StoredFrameInfo {
+  nlohmann::json record;  // the frame_stored journal record
+  std::string path;       // absolute path of the frame file
+  cv::Mat image;          // decoded pixels (BGR or single channel), for frame sinks
+};
+
+// What OpenForResume found and did.
+struct ResumeReport {
+  int frames_verified = 0;
+  std::vector<std::string> quarantined;     // files moved to quarantine/, with why
+  std::vector<std::string> partial_removed; // temporary files of interrupted writes
+  size_t journal_bytes_dropped = 0;         // a record cut short by the interruption
+};
+
+class CaptureDataset {
+ public:
+  // Creates `dir` (its parent must exist; AlreadyExists-like FailedPrecondition
+  // if `dir` exists) with the config snapshot and an empty journal.
+  static Result<std::unique_ptr<CaptureDataset>> Create(const std::string& dir, const std::string& config_text,
+                                                        const DatasetOptions& options);
+  // Opens an interrupted (or finished) capture: drops a journal record cut
+  // short, verifies every stored frame against its record, moves unvouched
+  // files to quarantine/ and deletes temporaries of interrupted writes.
+  static Result<std::unique_ptr<CaptureDataset>> OpenForResume(const std::string& dir, const DatasetOptions& options,
+                                                               ResumeReport* report);
+  ~CaptureDataset();
+
+  const std::string& dir() const { return dir_; }
+  // Options read from the snapshot after OpenForResume.
+  void set_options(const DatasetOptions& options) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    options_ = options;
+  }
+  std::string ConfigSnapshotPath() const { return dir_ + "/rig.yaml"; }
+  // Records of earlier sessions (OpenForResume) and this one, in order.
+  std::vector<nlohmann::json> Records() const;
+
+  // Appends one record (fills seq and time_utc) and fsyncs the journal.
+  Status Append(nlohmann::json record);
+  // Checks the frame (raw: byte count matches the geometry; encoded: decodes,
+  // right size), encodes raw frames as PNG, hashes, writes atomically, journals
+  // frame_stored and rewrites the manifest. CorruptData for a bad frame,
+  // FailedPrecondition if the view already has a verified frame, IoError for
+  // storage failures (disk full names the folder).
+  Result<StoredFrameInfo> StoreFrame(const Frame& frame, const FrameContext& context);
+
+  bool HasVerifiedFrame(int view) const;
+  int VerifiedFrameCount() const;
+  uint64_t BytesStored() const;  // of verified frames
+  // Free bytes on the capture's file system (0 once a simulated disk is full).
+  Result<uint64_t> FreeBytes() const;
+
+  // Manifest fields the sequencer owns.
+  void SetPlanSummary(int views_planned, const std::string& subject, const std::string& rig_name);
+  Status WriteManifest(const std::string& status);
+
+ private:
+  CaptureDataset(std::string dir, DatasetOptions options);
+  Status OpenJournal();
+  Status AppendLocked(nlohmann::json record);
+  Status WriteManifestLocked(const std::string& status);
+  Status Repair(ResumeReport* report);
+  Result<std::vector<uint8_t>> EncodeForStorage(const Frame& frame, const FrameContext& context, cv::Mat* image,
+                                                std::string* extension) const;
+
+  std::string dir_;
+  DatasetOptions options_;
+  int journal_fd_ = -1;
+  mutable std::mutex mutex_;
+  std::vector<nlohmann::json> records_;
+  std::map<int, nlohmann::json> verified_;  // view -> frame_stored record
+  int64_t next_seq_ = 0;
+  int frames_written_ = 0;  // files written into frames/ over the capture's life
+  int views_planned_ = 0;
+  std::string subject_, rig_name_, last_status_ = "in_progress";
+};
+
+// Current UTC time as ISO 8601 with milliseconds ("2026-11-22T10:04:05.123Z").
+std::string UtcNow();
+
+}  // namespace hairrig

@@ -1,0 +1,155 @@
+#include "rig/capture_plan.h"
+
+#include <cmath>
+#include <set>
+
+namespace hairrig {
+
+double RetryPolicy::BackoffBefore(int attempt) const {
+  if (attempt <= 1) return 0;
+  return backoff_s * std::pow(backoff_factor, attempt - 2);
+}
+
+namespace {
+
+std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std::string& key,
+                                              const DeviceSet& devices, const std::map<std::string, double>& fallback) {
+  if (!node.Has(key)) return fallback;
+  const ConfigNode levels = node.Child(key);
+  std::map<std::string, double> out;
+  for (const auto& light : devices.lights) {
+    out[light->info().name] = levels.Number(light->info().name, 0.0, {.min = 0, .max = 1});
+  }
+  for (const auto& [name, level] : fallback) {
+    if (!out.count(name)) levels.Fail(name, "no light of that name in the devices section");
+  }
+  return out;
+}
+
+// The stop a view belongs to: same angle and light state as an existing stop.
+int StopFor(CapturePlan* plan, double angle_deg, const std::map<std::string, double>& lights) {
+  for (PlannedStop& s : plan->stops) {
+    if (std::abs(s.angle_deg - angle_deg) < 1e-9 && s.light_levels == lights) return s.index;
+  }
+  PlannedStop stop;
+  stop.index = static_cast<int>(plan->stops.size());
+  stop.angle_deg = angle_deg;
+  stop.light_levels = lights;
+  plan->stops.push_back(stop);
+  return stop.index;
+}
+
+void AddView(CapturePlan* plan, int stop, const Camera& camera) {
+  PlannedView v;
+  v.index = static_cast<int>(plan->views.size());
+  v.stop = stop;
+  v.camera_name = camera.info().name;
+  v.camera_serial = camera.info().serial;
+  plan->stops[static_cast<size_t>(stop)].views.push_back(v.index);
+  plan->views.push_back(v);
+}
+
+const Camera* CameraByName(const DeviceSet& devices, const std::string& name) {
+  for (const auto& c : devices.cameras) {
+    if (c->info().name == name) return c.get();
+  }
+  return nullptr;
+}
+
+CaptureSettings ReadCameraSettings(const ConfigNode& plan) {
+  CaptureSettings s;
+  s.exposure_s = plan.Number("exposure_s", 0.02, {.min = 1e-6, .max = 60});
+  s.gain_db = plan.Number("gain_db", 0.0, {.min = 0, .max = 48});
+  const std::string format = plan.Choice("pixel_format", {"rgb8", "bgr8", "mono8", "bayer_rg8"}, "rgb8");
+  s.format = format == "mono8"       ? PixelFormat::kMono8
+             : format == "bgr8"      ? PixelFormat::kBgr8
+             : format == "bayer_rg8" ? PixelFormat::kBayerRG8
+                                     : PixelFormat::kRgb8;
+  return s;
+}
+
+}  // namespace
+
+Result<CapturePlan> ReadCapturePlan(const ConfigNode& root, const DeviceSet& devices) {
+  const ConfigNode node = root.OptionalChild("plan");
+  CapturePlan plan;
+  if (devices.cameras.empty()) return InvalidArgument(root.file() + ": the rig has no cameras to capture with");
+  std::map<std::string, double> all_on;
+  for (const auto& light : devices.lights) all_on[light->info().name] = 1.0;
+  // An absent section reads as an empty one: every field takes its default.
+  if (node.IsMap()) node.AllowOnlyKeys({"stops", "angles_deg", "cameras", "lights", "views", "speed_deg_s", "accel_deg_s2", "home",
+                      "exposure_s", "gain_db", "pixel_format"});
+  plan.motion.speed_deg_s = node.Number("speed_deg_s", 30, {.min = 0.01, .max = 3600});
+  plan.motion.accel_deg_s2 = node.Number("accel_deg_s2", 60, {.min = 0.01, .max = 36000});
+  plan.home_first = node.Bool("home", true);
+  plan.camera_settings = ReadCameraSettings(node);
+  const std::map<std::string, double> lights = ReadLightLevels(node, "lights", devices, all_on);
+  if (node.Has("views")) {
+    for (const ConfigNode& v : node.Items("views")) {
+      v.AllowOnlyKeys({"angle_deg", "camera", "lights"});
+      const double angle = v.Number("angle_deg", {.min = -3600, .max = 3600});
+      const std::string name = v.String("camera");
+      const auto view_lights = ReadLightLevels(v, "lights", devices, lights);
+      const Camera* camera = CameraByName(devices, name);
+      if (!camera) {
+        if (v.ok()) v.Fail("camera", "no camera named '" + name + "' in the devices section");
+        continue;
+      }
+      if (v.ok()) AddView(&plan, StopFor(&plan, angle, view_lights), *camera);
+    }
+  } else {
+    std::vector<double> angles;
+    if (node.Has("angles_deg")) {
+      angles = node.Numbers("angles_deg");
+    } else {
+      const int stops = node.Integer("stops", 19, {.min = 1, .max = 3600});
+      for (int s = 0; s < stops; ++s) angles.push_back(360.0 * s / stops);
+    }
+    std::vector<const Camera*> cameras;
+    if (node.Has("cameras")) {
+      for (const std::string& name : node.Strings("cameras")) {
+        const Camera* camera = CameraByName(devices, name);
+        if (camera) cameras.push_back(camera);
+        else node.Fail("cameras", "no camera named '" + name + "' in the devices section");
+      }
+    } else {
+      for (const auto& c : devices.cameras) cameras.push_back(c.get());
+    }
+    for (double angle : angles) {
+      const int stop = StopFor(&plan, angle, lights);
+      for (const Camera* c : cameras) AddView(&plan, stop, *c);
+    }
+  }
+  if (!node.ok()) return node.status();
+  if (plan.views.empty()) return InvalidArgument(node.Where() + ": the plan has no views");
+  return plan;
+}
+
+Result<CapturePolicies> ReadCapturePolicies(const ConfigNode& root) {
+  CapturePolicies p;
+  const ConfigNode retries = root.OptionalChild("retries");
+  if (retries.IsMap()) {
+    retries.AllowOnlyKeys({"camera", "turntable", "light", "frame_timeout_s", "move_timeout_s"});
+    for (auto [key, policy] : {std::pair{"camera", &p.camera}, {"turntable", &p.turntable}, {"light", &p.light}}) {
+      const ConfigNode r = retries.OptionalChild(key);
+      if (!r.IsMap()) continue;
+      r.AllowOnlyKeys({"attempts", "backoff_s", "backoff_factor"});
+      policy->attempts = r.Integer("attempts", policy->attempts, {.min = 1, .max = 100});
+      policy->backoff_s = r.Number("backoff_s", policy->backoff_s, {.min = 0, .max = 600});
+      policy->backoff_factor = r.Number("backoff_factor", policy->backoff_factor, {.min = 1, .max = 10});
+    }
+    p.frame_timeout_s = retries.Number("frame_timeout_s", p.frame_timeout_s, {.min = 0.01, .max = 3600});
+    p.move_timeout_s = retries.Number("move_timeout_s", p.move_timeout_s, {.min = 0.01, .max = 3600});
+    if (!retries.ok()) return retries.status();
+  }
+  const ConfigNode storage = root.OptionalChild("storage");
+  if (storage.IsMap()) {
+    storage.AllowOnlyKeys({"min_free_mb", "png_compression"});
+    p.min_free_mb = storage.Number("min_free_mb", p.min_free_mb, {.min = 0});
+    p.png_compression = storage.Integer("png_compression", p.png_compression, {.min = 0, .max = 9});
+    if (!storage.ok()) return storage.status();
+  }
+  return p;
+}
+
+}  // namespace hairrig

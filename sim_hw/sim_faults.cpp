@@ -1,0 +1,55 @@
+#include "sim_hw/sim_faults.h"
+
+#include <utility>
+
+namespace hairrig {
+namespace {
+
+constexpr std::pair<SimFaultKind, const char*> kKindNames[] = {
+    {SimFaultKind::kDropFrame, "drop_frame"},
+    {SimFaultKind::kCameraGone, "camera_gone"},
+    {SimFaultKind::kDownloadTimeout, "download_timeout"},
+    {SimFaultKind::kTurntableTimeout, "turntable_timeout"},
+    {SimFaultKind::kTurntableStall, "turntable_stall"},
+    {SimFaultKind::kEstop, "estop"},
+    {SimFaultKind::kDiskFull, "disk_full"},
+};
+
+bool IsCameraFault(SimFaultKind kind) {
+  return kind == SimFaultKind::kDropFrame || kind == SimFaultKind::kCameraGone ||
+         kind == SimFaultKind::kDownloadTimeout;
+}
+
+}  // namespace
+
+const char* SimFaultKindName(SimFaultKind kind) {
+  for (const auto& [k, name] : kKindNames) {
+    if (k == kind) return name;
+  }
+  return "?";
+}
+
+Result<std::vector<SimFault>> ParseSimFaults(const ConfigNode& faults) {
+  std::vector<SimFault> out;
+  for (const ConfigNode& node : faults.OptionalItems("faults")) {
+    node.AllowOnlyKeys({"kind", "device", "at", "count", "delay_s"});
+    SimFault fault;
+    const std::string kind = node.Choice("kind", {"drop_frame", "camera_gone", "download_timeout", "turntable_timeout",
+                                                   "turntable_stall", "estop", "disk_full"});
+    for (const auto& [k, name] : kKindNames) {
+      if (kind == name) fault.kind = k;
+    }
+    fault.device = node.String("device", "");
+    fault.at = node.Integer("at", 1, {.min = 1});
+    fault.count = node.Integer("count", 1, {.min = 1});
+    fault.delay_s = node.Number("delay_s", fault.delay_s, {.min = 0});
+    if (node.ok() && IsCameraFault(fault.kind) && fault.device.empty()) {
+      node.Fail("device", std::string("a ") + kind + " fault needs the serial of the camera it hits");
+    }
+    out.push_back(fault);
+  }
+  if (!faults.ok()) return faults.status();
+  return out;
+}
+
+}  // namespace hairrig
