@@ -72,6 +72,7 @@ struct CameraSlot {
   std::deque<Shot> queue;
   bool busy = false;          // the collector is working on a shot
   bool needs_reopen = false;  // the camera dropped off the bus
+  int gave_up_in_pass = 0;    // reopening failed every attempt in this pass: skip it until the next
   std::thread collector;
 };
 
@@ -135,6 +136,7 @@ class Sequencer {
   double lower_bound_s_ = 0;
   double last_download_s_ = 0;
   int stops_done_ = 0, stops_total_ = 0;
+  int pass_ = 0;
 };
 
 void Sequencer::RecordFault(const Device* device, const Status& status, const std::string& action, int view) {
@@ -252,7 +254,16 @@ void Sequencer::OnSafetyInput(const Device& line, bool active) {
   StopRun(line.Describe() + " went active (e-stop or interlock): motion stopped and lights off. "
           "Release it, check the rig, then continue with --resume");
   RecordFault(&line, Unavailable("safety input active"), "stop motion, lights off, end the run");
-  cv_.notify_all();
+  // What the devices report right after, for the record (and the tests).
+  nlohmann::json lights_on = nlohmann::json::array();
+  for (const auto& l : rig_.devices.lights) {
+    auto on = l->IsOn();
+    if (!on.ok() || *on) lights_on.push_back(l->info().name);
+  }
+  auto table = rig_.devices.turntable->ReadStatus();
+  (void)dataset_.Append({{"event", "safety_stop"}, {"input", line.info().name}, {"lights_on", lights_on},
+                         {"turntable_moving", table.ok() && table->moving && !table->in_position},
+                         {"turntable_deg", table.ok() ? table->position_deg : std::nan("")}});
 }
 
 void Sequencer::AllLightsOff() {
@@ -307,6 +318,7 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
     if (!slot.needs_reopen) return Status::Ok();
+    if (slot.gave_up_in_pass == pass_) return Unavailable(slot.camera->Describe() + ": skipped for the rest of this pass");
     // The collector must be idle before the camera is touched from this thread.
     cv_.wait(lock, [&] { return (slot.queue.empty() && !slot.busy) || shutdown_; });
   }
@@ -315,8 +327,10 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
     SleepS(policies_.camera.BackoffBefore(attempt));
     s = ReopenCamera(*slot.camera);
     if (s.ok()) break;
-    RecordFault(slot.camera, s, attempt < policies_.camera.attempts ? "reopen again after back-off" : "skip its views for now");
+    RecordFault(slot.camera, s,
+                attempt < policies_.camera.attempts ? "reopen again after back-off" : "skip its views until the next pass");
   }
+  if (!s.ok()) slot.gave_up_in_pass = pass_;
   if (s.ok()) {
     (void)dataset_.Append({{"event", "device_reopened"}, {"device", slot.camera->info().name},
                            {"serial", slot.camera->info().serial}});
@@ -525,6 +539,7 @@ void Sequencer::Progress(const std::string& step, int stop) {
 }
 
 void Sequencer::RunPass(const std::vector<int>& views, int pass) {
+  pass_ = pass;
   std::map<int, std::vector<int>> by_stop;
   for (int v : views) by_stop[plan_.views[static_cast<size_t>(v)].stop].push_back(v);
   stops_total_ = stops_done_ + static_cast<int>(by_stop.size());

@@ -85,6 +85,12 @@ class SimWorld {
     move_start_ = Clock::now();
     stuck_ = false;
   }
+  // Simulated seconds until the platform stops moving (settle excluded).
+  double MotionSecondsLeft() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const double duration = MoveDurationS(move_target_deg_ - move_start_deg_, move_profile_);
+    return std::max(0.0, duration - SimSecondsSince(move_start_));
+  }
   // The current move never sets the in-position flag (the controller hunts
   // around the target: a following-error loop that never settles).
   void JamMove() {
@@ -278,7 +284,7 @@ class SimTurntable : public SimDevice<Turntable> {
     s.target_deg = target_deg_;
     s.fault = state() == DeviceState::kFaulted;
     s.in_position = !s.fault && world_->SecondsToInPosition() <= 0;
-    s.moving = !s.in_position && !s.fault;
+    s.moving = !s.fault && world_->MotionSecondsLeft() > 0;
     s.homed = homed_;
     if (s.in_position && state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return s;

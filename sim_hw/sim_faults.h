@@ -45,7 +45,10 @@ struct SimFault {
   int count = 1;
   double delay_s = 30;  // download_timeout only
   // True when the `event`-th event (from 1) of this fault's device is affected.
-  bool Hits(int event) const { return event >= at && event < at + count; }
+  // A camera_gone fault happens once; its count is the failed Open() attempts.
+  bool Hits(int event) const {
+    return kind == SimFaultKind::kCameraGone ? event == at : event >= at && event < at + count;
+  }
 };
 
 // Reads the `faults` list; errors name the file, line and field.

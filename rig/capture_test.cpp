@@ -1,0 +1,257 @@
+#include "rig/capture.h"
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "rig/capture_test_util.h"
+
+namespace hairrig {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace hairrig::testing;
+
+class CountingSink : public FrameSink {
+ public:
+  void OnFrameStored(const StoredFrame& frame) override {
+    ++frames;
+    if (frame.image.cols == 300 && frame.image.rows == 400 && fs::exists(frame.path)) ++good;
+  }
+  void OnCaptureFinished() override { finished = true; }
+  std::atomic<int> frames{0}, good{0};
+  std::atomic<bool> finished{false};
+};
+
+CaptureSummary Capture(const std::string& config, const std::string& out, FrameSink* sink = nullptr) {
+  CaptureOptions o;
+  o.config_path = config;
+  o.out_dir = out;
+  o.sink = sink;
+  auto summary = RunCapture(o);
+  EXPECT_TRUE(summary.ok()) << summary.status().ToString();
+  return summary.ok() ? *summary : CaptureSummary{};
+}
+
+nlohmann::json Manifest(const std::string& dir) {
+  std::ifstream in(dir + "/manifest.json");
+  return nlohmann::json::parse(in);
+}
+
+// What every capture, complete or stopped, must satisfy: each journalled frame
+// verifies, the manifest agrees with the journal, no temporaries are left.
+void ExpectConsistent(const CaptureSummary& s) {
+  const auto journal = ReadJournal(s.dir);
+  const auto verified = VerifiedFramesOnDisk(s.dir);
+  EXPECT_EQ(static_cast<int>(verified.size()), CountEvents(journal, "frame_stored")) << "a journalled frame fails to verify";
+  EXPECT_EQ(static_cast<int>(verified.size()), s.views_completed);
+  const auto manifest = Manifest(s.dir);
+  EXPECT_EQ(manifest["views_completed"], s.views_completed);
+  EXPECT_EQ(manifest["status"], s.status);
+  EXPECT_EQ(manifest["frames"].size(), verified.size());
+  for (const auto& e : fs::directory_iterator(s.dir + "/frames")) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(journal.back()["event"], "session_end");
+}
+
+TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
+  const std::string dir = FreshDir("capture_complete");
+  CountingSink sink;
+  const CaptureSummary s = Capture(WriteSmallRig(dir), dir + "/c", &sink);
+  EXPECT_EQ(s.status, "complete") << s.message;
+  EXPECT_EQ(s.views_planned, 38);
+  EXPECT_EQ(s.views_completed, 38);
+  EXPECT_EQ(s.frames, 38);
+  EXPECT_EQ(s.faults, 0);
+  ExpectConsistent(s);
+  EXPECT_EQ(sink.frames.load(), 38);
+  EXPECT_EQ(sink.good.load(), 38);
+  EXPECT_TRUE(sink.finished.load());
+  const auto journal = ReadJournal(s.dir);
+  EXPECT_EQ(CountEvents(journal, "view_planned"), 38);
+  EXPECT_EQ(CountEvents(journal, "position_reached"), 19);
+  for (const auto& [view, r] : VerifiedFramesOnDisk(s.dir)) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/%03d_%s.png", view, r["serial"].get<std::string>().c_str());
+    EXPECT_EQ(r["file"], name);
+    EXPECT_EQ(r["serial"], view % 2 == 0 ? "SIM-CAM-UPPER" : "SIM-CAM-LOWER");
+    EXPECT_NEAR(r["angle_measured_deg"].get<double>(), 360.0 * (view / 2) / 19, 1e-3);
+    const cv::Mat image = cv::imread(s.dir + "/" + r["file"].get<std::string>());
+    EXPECT_EQ(image.cols, 300);
+    EXPECT_EQ(image.rows, 400);
+  }
+  EXPECT_TRUE(fs::exists(s.dir + "/rig.yaml"));
+  EXPECT_GT(s.lower_bound_s, 0);
+  std::printf("capture efficiency on the small rig at time_scale 0.01 (rendering bound, not asserted): %.3f\n",
+              s.efficiency);
+}
+
+TEST(Capture, RefusesAnExistingFolderWithoutResume) {
+  const std::string dir = FreshDir("capture_exists");
+  fs::create_directories(dir + "/c");
+  CaptureOptions o;
+  o.config_path = WriteSmallRig(dir);
+  o.out_dir = dir + "/c";
+  auto s = RunCapture(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("--resume"), std::string::npos) << s.status().ToString();
+}
+
+TEST(Capture, BrokenConfigCreatesNothing) {
+  const std::string dir = FreshDir("capture_bad_config");
+  CaptureOptions o;
+  o.config_path = WriteSmallRig(dir, {{"plan", "plan: {stops: 0}\n"}});
+  o.out_dir = dir + "/c";
+  auto s = RunCapture(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("plan.stops"), std::string::npos) << s.status().ToString();
+  EXPECT_FALSE(fs::exists(o.out_dir));
+}
+
+TEST(Capture, ExplicitViewsPlan) {
+  const std::string dir = FreshDir("capture_views");
+  const std::string plan =
+      "plan:\n  views:\n"
+      "    - {angle_deg: 90, camera: upper, lights: {top: 1, bottom: 0}}\n"
+      "    - {angle_deg: 90, camera: lower, lights: {top: 1, bottom: 0}}\n"
+      "    - {angle_deg: 180, camera: lower}\n";
+  const CaptureSummary s = Capture(WriteSmallRig(dir, {{"plan", plan}}), dir + "/c");
+  EXPECT_EQ(s.status, "complete");
+  EXPECT_EQ(s.views_planned, 3);
+  EXPECT_EQ(CountEvents(ReadJournal(s.dir), "position_reached"), 2);
+  ExpectConsistent(s);
+}
+
+std::map<std::string, std::string> SimWithFaults(const std::string& faults) {
+  return {{"sim", "sim:\n  scene: small_scene.yaml\n  time_scale: 0.01\n  faults:\n" + faults + "\n"}};
+}
+
+std::map<std::string, std::string> WithRetries(std::map<std::string, std::string> sections, const std::string& retries) {
+  sections["retries"] = retries;
+  return sections;
+}
+
+TEST(CaptureFaults, DroppedFrameIsReshot) {
+  const std::string dir = FreshDir("fault_drop");
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: drop_frame, device: SIM-CAM-UPPER, at: 3}")), dir + "/c");
+  EXPECT_EQ(s.status, "complete") << s.message;
+  EXPECT_EQ(s.views_completed, 38);
+  EXPECT_GE(s.faults, 1);
+  const auto journal = ReadJournal(s.dir);
+  EXPECT_EQ(CountEvents(journal, "reshoot_pass"), 1);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, CameraThatDropsOffIsReopened) {
+  const std::string dir = FreshDir("fault_gone");
+  const CaptureSummary s = Capture(
+      WriteSmallRig(dir, SimWithFaults("    - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 2}")), dir + "/c");
+  EXPECT_EQ(s.status, "complete") << s.message;
+  EXPECT_EQ(s.views_completed, 38);
+  EXPECT_EQ(CountEvents(ReadJournal(s.dir), "device_reopened"), 1);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, CameraThatStaysGoneLeavesTheCaptureIncomplete) {
+  const std::string dir = FreshDir("fault_gone_for_good");
+  const CaptureSummary s = Capture(
+      WriteSmallRig(dir, SimWithFaults("    - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 1000}")),
+      dir + "/c");
+  EXPECT_EQ(s.status, "incomplete");
+  // Every upper view; of the lower views at most the 4 triggered before it went
+  // (frames still in flight when a camera drops off are lost with it).
+  const auto verified = VerifiedFramesOnDisk(s.dir);
+  for (int view = 0; view < 38; view += 2) EXPECT_TRUE(verified.count(view)) << "upper view " << view;
+  EXPECT_LE(s.views_completed, 19 + 4);
+  for (int view : s.missing_views) EXPECT_EQ(view % 2, 1) << "only lower views may be missing";
+  EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, LateDownloadTimesOutAndIsReshot) {
+  const std::string dir = FreshDir("fault_late");
+  const CaptureSummary s = Capture(
+      WriteSmallRig(dir, WithRetries(SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 150}"),
+                                     "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 0.5\n")),
+      dir + "/c");
+  EXPECT_EQ(s.status, "complete") << s.message;
+  EXPECT_EQ(s.views_completed, 38);
+  EXPECT_GE(s.faults, 1);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, TurntableTimeoutIsRetried) {
+  const std::string dir = FreshDir("fault_tt_retry");
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_timeout, at: 4}")), dir + "/c");
+  EXPECT_EQ(s.status, "complete") << s.message;
+  EXPECT_EQ(s.faults, 1);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, TurntableThatNeverArrivesStopsTheRun) {
+  const std::string dir = FreshDir("fault_tt_timeout");
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_timeout, at: 4, count: 5}")), dir + "/c");
+  EXPECT_EQ(s.status, "stopped");
+  EXPECT_NE(s.message.find("not in position"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
+  EXPECT_EQ(s.views_completed, 6);  // home is move 1; stop 0 needs no move; stops 1, 2 are moves 2, 3
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, TurntableStallStopsTheRun) {
+  const std::string dir = FreshDir("fault_stall");
+  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_stall, at: 6}")), dir + "/c");
+  EXPECT_EQ(s.status, "stopped");
+  EXPECT_NE(s.message.find("stall"), std::string::npos) << s.message;
+  EXPECT_EQ(s.views_completed, 10);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, EstopStopsMotionAndSwitchesLightsOff) {
+  const std::string dir = FreshDir("fault_estop");
+  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: estop, at: 3}")), dir + "/c");
+  EXPECT_EQ(s.status, "stopped");
+  EXPECT_NE(s.message.find("e-stop"), std::string::npos) << s.message;
+  const auto journal = ReadJournal(s.dir);
+  ASSERT_EQ(CountEvents(journal, "safety_stop"), 1);
+  for (const auto& r : journal) {
+    if (r["event"] != "safety_stop") continue;
+    EXPECT_TRUE(r["lights_on"].empty()) << r.dump();
+    EXPECT_FALSE(r["turntable_moving"].get<bool>()) << r.dump();
+    // Stopped half-way into the move from stop 1 to stop 2.
+    EXPECT_GT(r["turntable_deg"].get<double>(), 360.0 / 19 + 1);
+    EXPECT_LT(r["turntable_deg"].get<double>(), 2 * 360.0 / 19 - 1);
+  }
+  EXPECT_EQ(s.views_completed, 4);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, FullDiskStopsTheRunWithEveryStoredFrameIntact) {
+  const std::string dir = FreshDir("fault_disk");
+  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: disk_full, at: 10}")), dir + "/c");
+  EXPECT_EQ(s.status, "stopped");
+  EXPECT_NE(s.message.find("space"), std::string::npos) << s.message;
+  EXPECT_EQ(s.views_completed, 10);
+  ExpectConsistent(s);
+}
+
+TEST(CaptureFaults, NotEnoughSpaceForThePlanIsRefusedBeforeStarting) {
+  const std::string dir = FreshDir("fault_no_space");
+  CaptureOptions o;
+  o.config_path = WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 1.0e12}\n"}});
+  o.out_dir = dir + "/c";
+  auto s = RunCapture(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("MB free"), std::string::npos) << s.status().ToString();
+  EXPECT_FALSE(fs::exists(o.out_dir));
+}
+
+}  // namespace
+}  // namespace hairrig

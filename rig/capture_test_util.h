@@ -1,0 +1,25 @@
+// Helpers shared by the capture tests: a fresh folder, a variant of the small
+// test rig (tests/data/small_rig.yaml) with extra YAML, and dataset checks that
+// re-derive everything from the files on disk.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace hairrig::testing {
+
+// A new empty folder under the test temp dir; its path.
+std::string FreshDir(const std::string& name);
+// Writes the small test rig into `dir` with top-level sections replaced or
+// added: {{"retries", "retries:\n  frame_timeout_s: 1\n"}}. Returns its path.
+std::string WriteSmallRig(const std::string& dir, const std::map<std::string, std::string>& sections = {});
+std::vector<nlohmann::json> ReadJournal(const std::string& capture_dir);
+// view -> frame_stored record, for records whose file verifies (size and SHA-256
+// recomputed here with sha256sum, an independent implementation).
+std::map<int, nlohmann::json> VerifiedFramesOnDisk(const std::string& capture_dir);
+int CountEvents(const std::vector<nlohmann::json>& journal, const std::string& event);
+
+}  // namespace hairrig::testing
