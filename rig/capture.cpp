@@ -614,13 +614,8 @@ std::string ReadText(const std::string& path) {
   return bytes.ok() ? std::string(bytes->begin(), bytes->end()) : std::string();
 }
 
-// The folder the original config sat in, from the capture's first session record.
-std::string RecordedConfigFolder(const CaptureDataset& dataset) {
-  for (const auto& r : dataset.Records()) {
-    if (r.value("event", "") == "session_start") return r.value("config_dir", "");
-  }
-  return "";
-}
+// The folder the original config's relative paths resolved against.
+std::string RecordedConfigFolder(const CaptureDataset& dataset) { return dataset.metadata().value("config_dir", ""); }
 
 // Worst case of the frames' size on disk: raw pixels (PNG only shrinks them).
 double EstimatedBytes(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views) {
@@ -671,14 +666,18 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
                    " MB (frames plus storage.min_free_mb): free space or choose another --out");
   }
   if (!options.resume) {
-    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text, dataset_options));
+    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text,
+                                                        {{"config_source", config.path},
+                                                                            {"subject", options.subject}},
+                                                        dataset_options));
   } else {
     dataset->set_options(dataset_options);
   }
-  dataset->SetPlanSummary(static_cast<int>(plan.views.size()), options.subject, config.name);
+  const std::string subject = options.resume ? dataset->metadata().value("subject", "") : options.subject;
+  dataset->SetPlanSummary(static_cast<int>(plan.views.size()), subject, config.name);
   HR_RETURN_IF_ERROR(dataset->Append({{"event", "session_start"},
                                       {"resume", options.resume},
-                                      {"subject", options.subject},
+                                      {"subject", subject},
                                       {"rig", config.name},
                                       {"config_dir", config.relative_to},
                                       {"views_planned", plan.views.size()},

@@ -38,6 +38,7 @@ namespace {
 
 constexpr const char* kJournal = "journal.jsonl";
 constexpr const char* kManifest = "manifest.json";
+constexpr const char* kMetadata = "capture.json";
 
 Status WriteAll(int fd, const char* p, size_t size, const std::string& what) {
   while (size > 0) {
@@ -81,7 +82,7 @@ Status CaptureDataset::OpenJournal() {
 }
 
 Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string& dir, const std::string& config_text,
-                                                               const DatasetOptions& options) {
+                                                               nlohmann::json metadata, const DatasetOptions& options) {
   std::error_code ec;
   if (fs::exists(dir, ec)) {
     return FailedPrecondition(dir + " already exists: choose a new --out folder, or add --resume to continue it");
@@ -93,6 +94,11 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string
   }
   auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
   HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text));
+  metadata["format"] = "hairrig-capture";
+  metadata["version"] = 1;
+  metadata["created_utc"] = UtcNow();
+  HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata.dump(2) + "\n"));
+  dataset->metadata_ = std::move(metadata);
   HR_RETURN_IF_ERROR(dataset->OpenJournal());
   HR_RETURN_IF_ERROR(SyncFolder(parent.string()));
   return dataset;
@@ -106,6 +112,12 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(const std:
     return NotFound(dir + " is not a capture folder (no " + kJournal + "): nothing to resume");
   }
   auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
+  const std::string metadata_path = dataset->dir_ + "/" + kMetadata;
+  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> metadata, ReadFileBytes(metadata_path));
+  dataset->metadata_ = nlohmann::json::parse(metadata.begin(), metadata.end(), nullptr, false);
+  if (!dataset->metadata_.is_object() || dataset->metadata_.value("format", "") != "hairrig-capture") {
+    return CorruptData(metadata_path + " is not a hairrig capture description: was the folder made by hairrig?");
+  }
   ResumeReport local;
   HR_RETURN_IF_ERROR(dataset->Repair(report ? report : &local));
   return dataset;

@@ -1,6 +1,8 @@
 // The capture dataset (design.md section 4): one folder per capture.
 //
 //   <capture>/rig.yaml          the rig config as used (snapshot)
+//   <capture>/capture.json      written once at creation: format version, creation time,
+//                               the folder the config's relative paths resolve against
 //   <capture>/journal.jsonl     append-only, one JSON record per line, fsync'd
 //   <capture>/manifest.json     state derived from the journal, rewritten atomically
 //   <capture>/frames/NNN_<serial>.<ext>   written atomically (temporary + fsync + rename)
@@ -69,7 +71,7 @@ class CaptureDataset {
   // Creates `dir` (its parent must exist; AlreadyExists-like FailedPrecondition
   // if `dir` exists) with the config snapshot and an empty journal.
   static Result<std::unique_ptr<CaptureDataset>> Create(const std::string& dir, const std::string& config_text,
-                                                        const DatasetOptions& options);
+                                                        nlohmann::json metadata, const DatasetOptions& options);
   // Opens an interrupted (or finished) capture: drops a journal record cut
   // short, verifies every stored frame against its record, moves unvouched
   // files to quarantine/ and deletes temporaries of interrupted writes.
@@ -84,6 +86,7 @@ class CaptureDataset {
     options_ = options;
   }
   std::string ConfigSnapshotPath() const { return dir_ + "/rig.yaml"; }
+  const nlohmann::json& metadata() const { return metadata_; }  // capture.json
   // Records of earlier sessions (OpenForResume) and this one, in order.
   std::vector<nlohmann::json> Records() const;
 
@@ -117,6 +120,7 @@ class CaptureDataset {
 
   std::string dir_;
   DatasetOptions options_;
+  nlohmann::json metadata_;
   int journal_fd_ = -1;
   mutable std::mutex mutex_;
   std::vector<nlohmann::json> records_;

@@ -54,7 +54,11 @@ std::vector<nlohmann::json> ReadJournal(const std::string& capture_dir) {
   std::vector<nlohmann::json> records;
   std::ifstream in(capture_dir + "/journal.jsonl");
   std::string line;
-  while (std::getline(in, line)) records.push_back(nlohmann::json::parse(line));
+  while (std::getline(in, line)) {
+    // A record cut short by a kill is not a record (resume drops it too).
+    auto record = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
+    if (!record.is_discarded()) records.push_back(std::move(record));
+  }
   return records;
 }
 
