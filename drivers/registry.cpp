@@ -57,7 +57,8 @@ namespace {
 
 class DeviceBuilder {
  public:
-  DeviceBuilder(const DeviceRegistry& registry) : registry_(registry) {}
+  DeviceBuilder(const DeviceRegistry& registry, std::string backend_override)
+      : registry_(registry), backend_override_(std::move(backend_override)) {}
 
   // Creates one device of `kind` from `node`; nullptr after recording an error.
   template <typename T>
@@ -69,6 +70,7 @@ class DeviceBuilder {
     config.backend = node.String("backend");
     config.serial = node.String("serial");
     if (!node.ok()) return nullptr;
+    if (!backend_override_.empty()) config.backend = backend_override_;
     if (config.serial.empty()) {
       node.Fail("serial", "a device is identified by its serial number; it may not be empty");
       return nullptr;
@@ -91,14 +93,16 @@ class DeviceBuilder {
 
  private:
   const DeviceRegistry& registry_;
+  std::string backend_override_;
   std::set<std::string> serials_, names_;
 };
 
 }  // namespace
 
-Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& registry) {
+Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& registry,
+                               const std::string& backend_override) {
   devices.AllowOnlyKeys({"turntable", "lights", "trigger_lines", "cameras", "input_lines"});
-  DeviceBuilder builder(registry);
+  DeviceBuilder builder(registry, backend_override);
   DeviceSet set;
   if (devices.Has("turntable")) set.turntable = builder.Build<Turntable>(DeviceKind::kTurntable, devices.Child("turntable"));
   for (const auto& n : devices.OptionalItems("lights")) {

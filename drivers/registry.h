@@ -72,6 +72,9 @@ struct DeviceSet {
 
 // Reads the `devices` section. Errors name the file, line and field (unknown
 // backend, missing or duplicate serial, duplicate name).
-Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& registry);
+// With `backend_override` every device is built by that backend instead of
+// its configured one (a replay stands in for a whole recorded rig).
+Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& registry,
+                               const std::string& backend_override = "");
 
 }  // namespace hairrig

@@ -647,7 +647,7 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
     HR_ASSIGN_OR_RETURN(config, LoadRigConfig(options.config_path));
     config_text = ReadText(options.config_path);
   }
-  HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config));
+  HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
   dataset_options.png_compression = policies.png_compression;

@@ -24,6 +24,7 @@
 
 #include "core/frame_sink.h"
 #include "core/status.h"
+#include "rig/rig_config.h"
 
 namespace hairrig {
 
@@ -44,6 +45,7 @@ struct CaptureOptions {
   bool resume = false;
   FrameSink* sink = nullptr;                                // optional
   std::function<void(const CaptureProgress&)> on_progress;  // optional, called from the sequencer thread
+  RigBuildOptions rig_build;  // how devices are made (the replay command swaps in its backend)
 };
 
 struct CaptureSummary {

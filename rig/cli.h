@@ -34,5 +34,6 @@ struct Dispatch {
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

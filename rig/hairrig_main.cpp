@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   Dispatch dispatch;
   AddDevicesCommand(app, common, dispatch);
   AddCaptureCommand(app, common, dispatch);
+  AddReplayCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);

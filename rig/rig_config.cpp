@@ -47,11 +47,12 @@ Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& rela
   return config;
 }
 
-Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config) {
+Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& build) {
   auto rig = std::make_unique<Rig>();
   rig->config = config;
   DeviceRegistry registry;
-  if (!config.sim_scene_path.empty()) {
+  if (build.register_backends) build.register_backends(&registry);
+  if (build.simulate && !config.sim_scene_path.empty()) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));
     SimWorldOptions options;
     options.time_scale = config.sim_time_scale;
@@ -59,7 +60,7 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config) {
     HR_ASSIGN_OR_RETURN(rig->sim_world, CreateSimWorld(scene, options));
     RegisterSimBackends(&registry, rig->sim_world);
   }
-  HR_ASSIGN_OR_RETURN(rig->devices, BuildDevices(config.root.Child("devices"), registry));
+  HR_ASSIGN_OR_RETURN(rig->devices, BuildDevices(config.root.Child("devices"), registry, build.backend_override));
   for (const ConfigNode& camera : config.root.Child("devices").Items("cameras")) {
     const std::string line = camera.String("trigger_line", "");
     if (line.empty()) continue;

@@ -1,6 +1,7 @@
 // The rig config (etc/rig.yaml and its kin) and the devices built from it.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -40,8 +41,15 @@ struct Rig {
   std::map<std::string, std::string> camera_trigger_lines;
 };
 
+struct RigBuildOptions {
+  // Registers further backends (the replay backend) before devices are built.
+  std::function<void(DeviceRegistry*)> register_backends;
+  std::string backend_override;  // build every device with this backend
+  bool simulate = true;          // create the sim world when the config has a `sim` section
+};
+
 // Builds every device (closed). The sim backend is available when the config
 // has a `sim` section.
-Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config);
+Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

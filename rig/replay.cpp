@@ -1,0 +1,385 @@
+#include "rig/replay.h"
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "core/file_util.h"
+#include "core/sha256.h"
+#include <nlohmann/json.hpp>
+
+namespace hairrig {
+
+using Clock = std::chrono::steady_clock;
+
+namespace {
+int64_t NowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
+
+// Milliseconds since the epoch of a journal time stamp ("...T10:04:05.123Z").
+double UtcSeconds(const std::string& text) {
+  std::tm tm{};
+  int ms = 0;
+  if (std::sscanf(text.c_str(), "%d-%d-%dT%d:%d:%d.%dZ", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
+                  &tm.tm_sec, &ms) != 7) {
+    return 0;
+  }
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  return static_cast<double>(timegm(&tm)) + ms / 1000.0;
+}
+
+bool SameAngle(double a, double b) { return std::abs(a - b) < 1e-6; }
+}  // namespace
+
+struct RecordedStop {
+  double commanded_deg = 0;
+  double measured_deg = 0;
+  double seconds_since_previous = 0;  // recorded wall time from the previous stop's arrival
+};
+
+struct RecordedFrame {
+  std::string path;
+  std::string extension;
+  double commanded_deg = 0;
+  double exposure_s = 0;
+  double gain_db = 0;
+  double download_s = 0;  // recorded trigger -> received
+};
+
+class ReplaySource {
+ public:
+  ReplayOptions options;
+  std::vector<RecordedStop> stops;
+  std::multimap<std::string, RecordedFrame> frames;  // by camera serial
+  std::map<std::string, std::pair<int, int>> sizes;  // serial -> width, height
+
+  // The turntable's commanded angle now (shared with the cameras).
+  void SetTarget(double deg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    target_deg_ = deg;
+  }
+  double Target() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return target_deg_;
+  }
+  const RecordedStop* FindStop(double commanded_deg) const {
+    for (const RecordedStop& s : stops) {
+      if (SameAngle(s.commanded_deg, commanded_deg)) return &s;
+    }
+    return nullptr;
+  }
+  const RecordedFrame* FindFrame(const std::string& serial, double commanded_deg) const {
+    const auto range = frames.equal_range(serial);
+    for (auto it = range.first; it != range.second; ++it) {
+      if (SameAngle(it->second.commanded_deg, commanded_deg)) return &it->second;
+    }
+    return nullptr;
+  }
+  double Scaled(double recorded_s) const { return options.speed > 0 ? recorded_s / options.speed : 0; }
+
+  // Trigger lines: cameras listening on a line.
+  int Subscribe(const std::string& line, std::function<void()> fn) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    listeners_[line][++next_id_] = std::move(fn);
+    return next_id_;
+  }
+  void Unsubscribe(const std::string& line, int id) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    listeners_[line].erase(id);
+  }
+  void Fire(const std::string& line) {
+    std::vector<std::function<void()>> fns;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto& [id, fn] : listeners_[line]) fns.push_back(fn);
+    }
+    for (auto& fn : fns) fn();
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  double target_deg_ = 0;
+  std::map<std::string, std::map<int, std::function<void()>>> listeners_;
+  int next_id_ = 0;
+};
+
+Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir, const ReplayOptions& options) {
+  if (!(options.speed >= 0) || !std::isfinite(options.speed)) {
+    return InvalidArgument("replay speed must be 0 (as fast as possible) or a positive factor");
+  }
+  // Read-only: the recorded folder is never modified (OpenForResume would repair it).
+  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(capture_dir + "/journal.jsonl"));
+  auto source = std::make_shared<ReplaySource>();
+  source->options = options;
+  double previous_arrival = 0;
+  size_t start = 0;
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    if (bytes[i] != '\n') continue;
+    const auto r = nlohmann::json::parse(bytes.begin() + static_cast<long>(start), bytes.begin() + static_cast<long>(i),
+                                         nullptr, false);
+    start = i + 1;
+    if (r.is_discarded() || !r.is_object()) continue;
+    const std::string event = r.value("event", "");
+    if (event == "position_reached") {
+      const double t = UtcSeconds(r.value("time_utc", ""));
+      RecordedStop stop{r.at("commanded_deg").get<double>(), r.at("measured_deg").get<double>(),
+                        previous_arrival > 0 ? t - previous_arrival : 0};
+      previous_arrival = t;
+      if (!source->FindStop(stop.commanded_deg)) source->stops.push_back(stop);
+    } else if (event == "session_start") {
+      previous_arrival = 0;
+    } else if (event == "frame_stored") {
+      const std::string file = r.at("file").get<std::string>();
+      const std::string path = capture_dir + "/" + file;
+      auto sha = Sha256OfFile(path);
+      if (!sha.ok() || *sha != r.at("sha256").get<std::string>()) continue;  // not verified: not served
+      const std::string serial = r.at("serial").get<std::string>();
+      RecordedFrame f{path, FileExtension(file), r.at("angle_commanded_deg").get<double>(), r.value("exposure_s", 0.0),
+                      r.value("gain_db", 0.0),
+                      1e-9 * static_cast<double>(r.value("received_time_ns", int64_t{0}) - r.value("trigger_time_ns", int64_t{0}))};
+      source->frames.emplace(serial, f);
+      source->sizes[serial] = {r.value("width_px", 0), r.value("height_px", 0)};
+    }
+  }
+  if (source->frames.empty()) return NotFound(capture_dir + ": the capture has no verified frames to replay");
+  return source;
+}
+
+int ReplayFrameCount(const ReplaySource& source) { return static_cast<int>(source.frames.size()); }
+
+namespace {
+
+template <typename Base>
+class ReplayDevice : public Base {
+ public:
+  ReplayDevice(DeviceInfo info, std::shared_ptr<ReplaySource> source) : Base(std::move(info)), source_(std::move(source)) {}
+  Status Open() override {
+    this->SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+  Status Close() override {
+    this->SetState(DeviceState::kClosed);
+    return Status::Ok();
+  }
+  Status HealthCheck() override { return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"); }
+
+ protected:
+  std::shared_ptr<ReplaySource> source_;
+};
+
+class ReplayTurntable : public ReplayDevice<Turntable> {
+ public:
+  using ReplayDevice::ReplayDevice;
+  TurntableCapabilities capabilities() const override {
+    return {.max_speed_deg_s = 3600, .max_accel_deg_s2 = 36000, .resolution_deg = 1e-6, .can_home = true, .settle_s = 0};
+  }
+  Status Home(std::chrono::milliseconds) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Home"));
+    source_->SetTarget(0);
+    position_deg_ = 0;
+    return Status::Ok();
+  }
+  Status StartMove(double target_deg, const MotionProfile&) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+    const RecordedStop* stop = source_->FindStop(target_deg);
+    if (!stop) {
+      return NotFound(Describe() + ": the recording has no stop at " + std::to_string(target_deg) +
+                      " deg (the plan differs from the recorded one)");
+    }
+    source_->SetTarget(target_deg);
+    position_deg_ = stop->measured_deg;
+    arrival_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                  std::chrono::duration<double>(source_->Scaled(stop->seconds_since_previous)));
+    SetState(DeviceState::kBusy);
+    return Status::Ok();
+  }
+  Result<TurntableStatus> ReadStatus() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "ReadStatus"));
+    TurntableStatus s;
+    s.position_deg = position_deg_;
+    s.target_deg = source_->Target();
+    s.in_position = Clock::now() >= arrival_;
+    s.moving = !s.in_position;
+    s.homed = true;
+    return s;
+  }
+  Status WaitInPosition(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+    if (arrival_ > Clock::now() + timeout) return Timeout(Describe() + ": recorded move is longer than the timeout");
+    std::this_thread::sleep_until(arrival_);
+    SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+  Status Stop() override {
+    arrival_ = Clock::now();
+    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+
+ private:
+  double position_deg_ = 0;
+  Clock::time_point arrival_ = Clock::now();
+};
+
+class ReplayLight : public ReplayDevice<Light> {
+ public:
+  using ReplayDevice::ReplayDevice;
+  LightCapabilities capabilities() const override { return {.dimmable = true}; }
+  Status SetOn(bool on) override { return SetLevel(on ? 1 : 0); }
+  Status SetLevel(double level) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetLevel"));
+    level_ = level;
+    return Status::Ok();
+  }
+  Result<bool> IsOn() override { return level_ > 0; }
+
+ private:
+  double level_ = 0;
+};
+
+class ReplayTriggerLine : public ReplayDevice<TriggerLine> {
+ public:
+  using ReplayDevice::ReplayDevice;
+  Status Pulse(std::chrono::microseconds) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
+    source_->Fire(info().name);
+    return Status::Ok();
+  }
+  Status Set(bool active) override {
+    if (active) source_->Fire(info().name);
+    return Status::Ok();
+  }
+};
+
+class ReplayInputLine : public ReplayDevice<InputLine> {
+ public:
+  using ReplayDevice::ReplayDevice;
+  Result<bool> IsActive() override { return false; }
+  void OnChange(std::function<void(bool)>) override {}
+};
+
+class ReplayCamera : public ReplayDevice<Camera> {
+ public:
+  using ReplayDevice::ReplayDevice;
+  ~ReplayCamera() override { Unsubscribe(); }
+  CameraCapabilities capabilities() const override {
+    const auto it = source_->sizes.find(info().serial);
+    const auto size = it == source_->sizes.end() ? std::pair<int, int>{0, 0} : it->second;
+    return {.width_px = size.first, .height_px = size.second, .formats = {PixelFormat::kEncoded},
+            .min_exposure_s = 0, .max_exposure_s = 3600, .line_trigger = true, .readout_s = 0, .download_s = 0};
+  }
+  Status Configure(const CaptureSettings& settings) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+    settings_ = settings;
+    return Status::Ok();
+  }
+  Status Arm() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+    Unsubscribe();
+    if (settings_.trigger == TriggerSource::kLine) {
+      line_ = settings_.trigger_line;
+      subscription_ = source_->Subscribe(line_, [this] { OnTrigger(); });
+    }
+    SetState(DeviceState::kBusy);
+    return Status::Ok();
+  }
+  Status Disarm() override {
+    Unsubscribe();
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_.clear();
+    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+  Status SoftwareTrigger() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+    OnTrigger();
+    return Status::Ok();
+  }
+  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+    Pending next;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (!cv_.wait_for(lock, timeout, [this] { return !pending_.empty(); })) {
+        return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms");
+      }
+      next = pending_.front();
+      pending_.pop_front();
+    }
+    std::this_thread::sleep_until(next.ready);
+    if (!next.frame) {
+      return NotFound(Describe() + ": the recording has no frame of this camera at " + std::to_string(next.angle_deg) +
+                      " deg");
+    }
+    HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(next.frame->path));
+    Frame f;
+    f.camera_serial = info().serial;
+    f.sequence = next.sequence;
+    f.format = PixelFormat::kEncoded;
+    f.encoding = next.frame->extension;
+    f.data = std::move(bytes);
+    f.exposure_s = next.frame->exposure_s;
+    f.gain_db = next.frame->gain_db;
+    f.trigger_time_ns = next.trigger_ns;
+    f.received_time_ns = NowNs();
+    return f;
+  }
+
+ private:
+  struct Pending {
+    const RecordedFrame* frame = nullptr;
+    double angle_deg = 0;
+    uint64_t sequence = 0;
+    int64_t trigger_ns = 0;
+    Clock::time_point ready;
+  };
+  void OnTrigger() {
+    Pending p;
+    p.angle_deg = source_->Target();
+    p.frame = source_->FindFrame(info().serial, p.angle_deg);
+    p.trigger_ns = NowNs();
+    const double delay = p.frame ? source_->Scaled(p.frame->download_s) : 0;
+    p.ready = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay));
+    std::lock_guard<std::mutex> lock(mutex_);
+    p.sequence = sequence_++;
+    pending_.push_back(p);
+    cv_.notify_all();
+  }
+  void Unsubscribe() {
+    if (subscription_ != 0) source_->Unsubscribe(line_, subscription_);
+    subscription_ = 0;
+  }
+
+  CaptureSettings settings_;
+  std::string line_;
+  int subscription_ = 0;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Pending> pending_;
+  uint64_t sequence_ = 0;
+};
+
+template <typename Interface, typename Impl>
+void AddReplay(DeviceRegistry* registry, DeviceKind kind, const std::string& model, std::shared_ptr<ReplaySource> source) {
+  registry->AddBackend<Interface>(kind, "replay", [source, model](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
+    return std::unique_ptr<Interface>(std::make_unique<Impl>(c.Info(model), source));
+  });
+}
+
+}  // namespace
+
+void RegisterReplayBackends(DeviceRegistry* registry, std::shared_ptr<ReplaySource> source) {
+  AddReplay<Turntable, ReplayTurntable>(registry, DeviceKind::kTurntable, "replayed turntable", source);
+  AddReplay<Light, ReplayLight>(registry, DeviceKind::kLight, "replayed LED panel", source);
+  AddReplay<TriggerLine, ReplayTriggerLine>(registry, DeviceKind::kTriggerLine, "replayed trigger line", source);
+  AddReplay<InputLine, ReplayInputLine>(registry, DeviceKind::kInputLine, "replayed input line", source);
+  AddReplay<Camera, ReplayCamera>(registry, DeviceKind::kCamera, "replayed camera", source);
+}
+
+}  // namespace hairrig

@@ -1,0 +1,87 @@
+#include "rig/replay.h"
+
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "core/file_util.h"
+#include "rig/capture.h"
+#include "rig/capture_test_util.h"
+
+namespace hairrig {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace hairrig::testing;
+
+Result<CaptureSummary> Replay(const std::string& recorded, const std::string& out, double speed) {
+  auto source = OpenReplaySource(recorded, {.speed = speed});
+  if (!source.ok()) return source.status();
+  CaptureOptions o;
+  o.config_path = recorded + "/rig.yaml";
+  o.out_dir = out;
+  std::shared_ptr<ReplaySource> shared = *source;
+  o.rig_build.register_backends = [shared](DeviceRegistry* r) { RegisterReplayBackends(r, shared); };
+  o.rig_build.backend_override = "replay";
+  o.rig_build.simulate = false;
+  return RunCapture(o);
+}
+
+class ReplayTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = FreshDir("replay");
+    CaptureOptions o;
+    o.config_path = WriteSmallRig(dir_);
+    o.out_dir = dir_ + "/recorded";
+    auto s = RunCapture(o);
+    ASSERT_TRUE(s.ok() && s->status == "complete");
+  }
+  static std::string dir_;
+};
+std::string ReplayTest::dir_;
+
+TEST_F(ReplayTest, CaptureFromReplayHasTheSameChecksums) {
+  for (double speed : {0.0, 1.0}) {
+    const std::string out = dir_ + "/replayed_" + std::to_string(static_cast<int>(speed));
+    auto s = Replay(dir_ + "/recorded", out, speed);
+    ASSERT_TRUE(s.ok()) << s.status().ToString();
+    EXPECT_EQ(s->status, "complete") << s->message;
+    const auto original = VerifiedFramesOnDisk(dir_ + "/recorded");
+    const auto replayed = VerifiedFramesOnDisk(out);
+    ASSERT_EQ(replayed.size(), 38u);
+    for (const auto& [view, r] : original) {
+      EXPECT_EQ(replayed.at(view)["sha256"], r["sha256"]) << "view " << view;
+      EXPECT_EQ(replayed.at(view)["angle_measured_deg"], r["angle_measured_deg"]) << "view " << view;
+    }
+    std::printf("replay at speed %.0f: %.3f s for 38 views\n", speed, s->wall_s);
+  }
+}
+
+TEST_F(ReplayTest, ReplayLeavesTheRecordingUntouchedAndSkipsUnverifiedFrames) {
+  const std::string copy = dir_ + "/damaged";
+  fs::copy(dir_ + "/recorded", copy, fs::copy_options::recursive);
+  const auto journal_before = ReadFileBytes(copy + "/journal.jsonl");
+  // A flipped byte in one frame: that frame no longer verifies and is not served.
+  const std::string victim = copy + "/frames/005_SIM-CAM-LOWER.png";
+  auto bytes = ReadFileBytes(victim);
+  ASSERT_TRUE(bytes.ok());
+  (*bytes)[bytes->size() / 2] ^= 0xff;
+  ASSERT_TRUE(WriteFileAtomic(victim, bytes->data(), bytes->size()).ok());
+  auto s = Replay(copy, dir_ + "/from_damaged", 0);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_EQ(s->status, "incomplete");
+  EXPECT_EQ(s->missing_views, std::vector<int>{5});
+  EXPECT_EQ(*ReadFileBytes(copy + "/journal.jsonl"), *journal_before);
+}
+
+TEST(Replay, RefusesAFolderThatIsNotACapture) {
+  const std::string dir = FreshDir("replay_not_capture");
+  auto s = OpenReplaySource(dir, {});
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("journal.jsonl"), std::string::npos) << s.status().ToString();
+  EXPECT_FALSE(OpenReplaySource(dir, {.speed = -1}).ok());
+}
+
+}  // namespace
+}  // namespace hairrig
