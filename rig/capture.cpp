@@ -667,7 +667,8 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   }
   if (!options.resume) {
     HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text,
-                                                        {{"config_source", config.path},
+                                                        {{"config_source", fs::absolute(config.path).lexically_normal().string()},
+                                                         {"config_dir", config.relative_to},
                                                                             {"subject", options.subject}},
                                                         dataset_options));
   } else {

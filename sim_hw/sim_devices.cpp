@@ -338,7 +338,7 @@ class SimTurntable : public SimDevice<Turntable> {
     switch (fault->kind) {
       case SimFaultKind::kTurntableTimeout: world_->JamMove(); break;
       case SimFaultKind::kTurntableStall: stall_after_s_ = 0.5 * move_s; break;
-      case SimFaultKind::kEstop: world_->ScheduleEstop(0.5 * move_s); break;
+      case SimFaultKind::kEstop: world_->ScheduleEstop(0.2 * move_s); break;
       default: break;
     }
   }
@@ -536,12 +536,35 @@ class SimCamera : public SimDevice<Camera> {
     cv_.notify_all();
   }
 
+  // A late frame (download_timeout fault) is held aside until it is due, so
+  // that it does not hold up the frames behind it.
+  void DeliverDueLateFramesLocked() {
+    const auto now = Clock::now();
+    for (auto it = late_.begin(); it != late_.end();) {
+      if (it->first > now) {
+        ++it;
+        continue;
+      }
+      if (it->second.ok()) it->second->received_time_ns = NowNs();
+      ready_.push_back(std::move(it->second));
+      it = late_.erase(it);
+      cv_.notify_all();
+    }
+  }
+
   void WorkerLoop() {
     for (;;) {
       Job job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
-        cv_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+        for (;;) {
+          DeliverDueLateFramesLocked();
+          if (stopping_ || !jobs_.empty()) break;
+          auto wake = Clock::time_point::max();
+          for (const auto& [due, frame] : late_) wake = std::min(wake, due);
+          if (wake == Clock::time_point::max()) cv_.wait(lock);
+          else cv_.wait_until(lock, wake);
+        }
         if (stopping_) return;
         job = std::move(jobs_.front());
         jobs_.pop_front();
@@ -553,9 +576,13 @@ class SimCamera : public SimDevice<Camera> {
       const double minimum_s =
           (job.settings.exposure_s + scene.camera_readout_s + scene.camera_download_s + job.extra_delay_s) *
           world_->time_scale();
+      const auto due = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(minimum_s));
       std::unique_lock<std::mutex> lock(mutex_);
-      if (cv_.wait_until(lock, t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(minimum_s)),
-                         [this] { return stopping_; })) {
+      if (job.extra_delay_s > 0) {
+        late_.emplace_back(due, std::move(frame));
+        continue;
+      }
+      if (cv_.wait_until(lock, due, [this] { return stopping_; })) {
         return;
       }
       if (frame.ok()) frame->received_time_ns = NowNs();
@@ -619,6 +646,7 @@ class SimCamera : public SimDevice<Camera> {
     if (worker_.joinable()) worker_.join();
     std::lock_guard<std::mutex> lock(mutex_);
     jobs_.clear();
+    late_.clear();
   }
 
   int scene_camera_;
@@ -628,6 +656,7 @@ class SimCamera : public SimDevice<Camera> {
   std::condition_variable cv_;
   std::deque<Job> jobs_;
   std::deque<Result<Frame>> ready_;
+  std::vector<std::pair<Clock::time_point, Result<Frame>>> late_;
   uint64_t sequence_ = 0;
   bool stopping_ = false;
   std::thread worker_;

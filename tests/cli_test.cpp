@@ -46,14 +46,16 @@ TEST(Cli, HelpListsTheCommands) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.output.find("devices"), std::string::npos);
   EXPECT_NE(r.output.find("sim"), std::string::npos);
+  EXPECT_NE(r.output.find("capture"), std::string::npos);
+  EXPECT_NE(r.output.find("replay"), std::string::npos);
 }
 
 TEST(Cli, DevicesOnTheDefaultRigAreHealthyAsJson) {
   const CommandRun r = Hairrig("devices --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
-  EXPECT_EQ(j["total"], 6);
-  EXPECT_EQ(j["healthy"], 6);
+  EXPECT_EQ(j["total"], 7);
+  EXPECT_EQ(j["healthy"], 7);
 }
 
 TEST(Cli, BrokenYamlNamesTheFileAndLine) {
@@ -106,3 +108,80 @@ TEST(Cli, BadArgumentsAreRefused) {
 }
 
 }  // namespace
+
+namespace capture_cli {
+
+namespace fs = std::filesystem;
+
+// The JSON summary is the last line of the output (logs go to stderr before it).
+nlohmann::json LastLineJson(const std::string& output) {
+  const size_t end = output.find_last_not_of('\n');
+  const size_t start = output.rfind('\n', end);
+  return nlohmann::json::parse(output.substr(start == std::string::npos ? 0 : start + 1, end + 1));
+}
+
+std::string FreshPath(const std::string& name) {
+  const std::string path = ::testing::TempDir() + "/cli_" + name;
+  fs::remove_all(path);
+  return path;
+}
+
+// A new user's first capture: only --out, the default (simulated) rig.
+TEST(CliCapture, OutIsTheOnlyFlagANewUserNeeds) {
+  const std::string out = FreshPath("first_capture");
+  const CommandRun r = Hairrig("--log-level warning capture --out " + out + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = LastLineJson(r.output);
+  for (const char* key : {"views_planned", "views_completed", "frames", "bytes", "wall_s", "lower_bound_s", "efficiency"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["views_planned"], 38);
+  EXPECT_EQ(j["views_completed"], 38);
+  EXPECT_EQ(j["frames"], 38);
+  EXPECT_TRUE(fs::exists(out + "/frames/037_SIM-CAM-LOWER.png"));
+}
+
+TEST(CliCapture, SubjectFolderResumeAndReplay) {
+  const std::string root = FreshPath("subjects");
+  const std::string small = "--config tests/data/small_rig.yaml";
+  CommandRun r = Hairrig("--log-level warning capture " + small + " --out " + root + " --subject 'Wig 03' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string capture = root + "/Wig_03";
+  EXPECT_EQ(LastLineJson(r.output)["dir"], fs::absolute(capture).lexically_normal().string());
+  EXPECT_EQ(nlohmann::json::parse(ReadText(capture + "/manifest.json"))["subject"], "Wig 03");
+
+  r = Hairrig("capture " + small + " --out " + root + " --subject 'Wig 03'");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--resume"), std::string::npos) << r.output;
+
+  r = Hairrig("--log-level warning capture --out " + capture + " --resume --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(LastLineJson(r.output)["views_kept"], 38);
+  EXPECT_EQ(LastLineJson(r.output)["frames"], 0);
+
+  r = Hairrig("--log-level warning replay " + capture + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(LastLineJson(r.output)["views_completed"], 38);
+  EXPECT_TRUE(fs::exists(capture + "-replay/manifest.json"));
+}
+
+TEST(CliCapture, UnsafeSubjectsAreRefusedAndNothingIsWritten) {
+  const std::string root = FreshPath("unsafe");
+  for (const std::string subject : {"../x", "/tmp/abs", "$'a\\nb'", "'.hidden'"}) {
+    const CommandRun r =
+        Hairrig("capture --config tests/data/small_rig.yaml --out " + root + " --subject " + subject);
+    EXPECT_EQ(r.exit_code, 1) << subject << ": " << r.output;
+    EXPECT_NE(r.output.find("subject name"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(root));
+}
+
+TEST(CliCapture, ResumeOfAFolderThatIsNoCaptureIsRefused) {
+  const std::string dir = FreshPath("not_a_capture");
+  fs::create_directories(dir);
+  const CommandRun r = Hairrig("capture --out " + dir + " --resume");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("not a capture folder"), std::string::npos) << r.output;
+}
+
+}  // namespace capture_cli
