@@ -12,11 +12,16 @@
 #include <set>
 #include <thread>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "core/file_util.h"
+#include "core/strand_io.h"
 #include "core/log.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
+#include "sim_hw/ground_truth.h"
+#include "sim_hw/view_set.h"
 
 namespace hairrig {
 
@@ -135,8 +140,9 @@ class Sequencer {
   Clock::time_point sweep_start_{}, last_frame_{};
   double lower_bound_s_ = 0;
   double last_download_s_ = 0;
-  int stops_done_ = 0, stops_total_ = 0;
+  std::atomic<int> stops_done_{0}, stops_total_{0};
   int pass_ = 0;
+  std::mutex progress_mutex_;
 };
 
 void Sequencer::RecordFault(const Device* device, const Status& status, const std::string& action, int view) {
@@ -488,6 +494,7 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
       std::lock_guard<std::mutex> lock(mutex_);
       last_frame_ = Clock::now();
     }
+    Progress("stored view " + std::to_string(shot.view), shot.stop);
     if (options_.sink) {
       StoredFrame out{shot.view,
                       shot.stop,
@@ -524,6 +531,7 @@ std::vector<int> Sequencer::MissingViews() const {
 
 void Sequencer::Progress(const std::string& step, int stop) {
   if (!options_.on_progress) return;
+  std::lock_guard<std::mutex> lock(progress_mutex_);
   CaptureProgress p;
   p.views_done = dataset_.VerifiedFrameCount();
   p.views_total = static_cast<int>(plan_.views.size());
@@ -533,7 +541,7 @@ void Sequencer::Progress(const std::string& step, int stop) {
   p.faults = faults_.load();
   if (stops_done_ > 0 && sweep_start_ != Clock::time_point{}) {
     const double per_stop = std::chrono::duration<double>(Clock::now() - sweep_start_).count() / stops_done_;
-    p.eta_s = per_stop * std::max(0, stops_total_ - stops_done_);
+    p.eta_s = per_stop * std::max(0, stops_total_.load() - stops_done_.load());
   }
   options_.on_progress(p);
 }
@@ -542,7 +550,7 @@ void Sequencer::RunPass(const std::vector<int>& views, int pass) {
   pass_ = pass;
   std::map<int, std::vector<int>> by_stop;
   for (int v : views) by_stop[plan_.views[static_cast<size_t>(v)].stop].push_back(v);
-  stops_total_ = stops_done_ + static_cast<int>(by_stop.size());
+  stops_total_ = stops_done_.load() + static_cast<int>(by_stop.size());
   if (pass > 1) {
     (void)dataset_.Append({{"event", "reshoot_pass"}, {"pass", pass}, {"views", views}});
     Progress("re-shooting " + std::to_string(views.size()) + " views", by_stop.begin()->first);
@@ -551,6 +559,7 @@ void Sequencer::RunPass(const std::vector<int>& views, int pass) {
     if (!ShootStop(plan_.stops[static_cast<size_t>(stop)], stop_views)) break;
     ++stops_done_;
   }
+  Progress("waiting for the last frames", static_cast<int>(plan_.stops.size()) - 1);
   WaitCollectorsIdle();
 }
 
@@ -607,6 +616,42 @@ CaptureSummary Sequencer::Run() {
   (void)dataset_.WriteManifest(summary.status);
   if (options_.sink) options_.sink->OnCaptureFinished();
   return summary;
+}
+
+// <capture>/ground_truth/: what the simulated rig really was, per planned view.
+Status WriteGroundTruth(const SimWorld& world, const CapturePlan& plan, const std::string& capture_dir) {
+  const Scene& scene = WorldRenderer(world).scene();
+  std::vector<ViewGroundTruth> truths;
+  for (const PlannedView& v : plan.views) {
+    const int camera = scene.FindCamera(v.camera_serial);
+    if (camera < 0) continue;
+    const PlannedStop& stop = plan.stops[static_cast<size_t>(v.stop)];
+    truths.push_back(MakeViewGroundTruth(scene, v.index, v.stop, camera, stop.angle_deg));
+  }
+  const std::string dir = capture_dir + "/ground_truth";
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return IoError(dir + ": cannot create (" + ec.message() + ")");
+  HR_RETURN_IF_ERROR(WriteFileAtomic(dir + "/ground_truth.json", GroundTruthJson(scene, truths)));
+  return WriteStrands(dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm());
+}
+
+// <capture>/contact_sheet.png from the verified frames, in plan order.
+Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan) {
+  std::vector<cv::Mat> thumbs;
+  std::vector<std::string> labels;
+  for (const auto& r : dataset.VerifiedFrames()) {
+    cv::Mat image = cv::imread(dataset.dir() + "/" + r.at("file").get<std::string>(), cv::IMREAD_REDUCED_COLOR_4);
+    if (image.empty()) continue;
+    thumbs.push_back(image);
+    labels.push_back(r.at("file").get<std::string>().substr(7));
+  }
+  if (thumbs.empty()) return Status::Ok();
+  const int columns = std::max<int>(1, static_cast<int>(plan.views.size() / std::max<size_t>(1, plan.stops.size())) * 4);
+  const cv::Mat sheet = MakeContactSheet(thumbs, labels, columns, 240);
+  std::vector<uint8_t> png;
+  if (!cv::imencode(".png", sheet, png)) return Internal("contact sheet: PNG encoding failed");
+  return WriteFileAtomic(dataset.dir() + "/contact_sheet.png", png.data(), png.size());
 }
 
 std::string ReadText(const std::string& path) {
@@ -694,9 +739,11 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
     }
   }
   HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
+  if (rig->sim_world) HR_RETURN_IF_ERROR(WriteGroundTruth(*rig->sim_world, plan, dataset->dir()));
   Sequencer sequencer(*rig, plan, policies, *dataset, options);
   CaptureSummary summary = sequencer.Run();
   rig->devices.CloseAll();
+  if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   summary.dir = dataset->dir();
   return summary;
 }

@@ -312,6 +312,13 @@ bool CaptureDataset::HasVerifiedFrame(int view) const {
   return verified_.count(view) > 0;
 }
 
+std::vector<nlohmann::json> CaptureDataset::VerifiedFrames() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<nlohmann::json> out;
+  for (const auto& [view, r] : verified_) out.push_back(r);
+  return out;
+}
+
 int CaptureDataset::VerifiedFrameCount() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return static_cast<int>(verified_.size());

@@ -100,6 +100,8 @@ class CaptureDataset {
   Result<StoredFrameInfo> StoreFrame(const Frame& frame, const FrameContext& context);
 
   bool HasVerifiedFrame(int view) const;
+  // frame_stored records of the verified frames, in view order.
+  std::vector<nlohmann::json> VerifiedFrames() const;
   int VerifiedFrameCount() const;
   uint64_t BytesStored() const;  // of verified frames
   // Free bytes on the capture's file system (0 once a simulated disk is full).

@@ -26,12 +26,12 @@ std::function<void(const CaptureProgress&)> ProgressPrinter() {
   const bool terminal = ::isatty(STDERR_FILENO) != 0;
   return [terminal](const CaptureProgress& p) {
     char line[256];
-    std::snprintf(line, sizeof line, "view %d of %d | stop %d of %d | %s | ETA %.0f s | faults %d", p.views_done,
-                  p.views_total, p.stop + 1, p.stops_total, p.step.c_str(), p.eta_s, p.faults);
+    std::snprintf(line, sizeof line, "%d of %d views stored | stop %d of %d | %s | ETA %.0f s | faults %d",
+                  p.views_done, p.views_total, p.stop + 1, p.stops_total, p.step.c_str(), p.eta_s, p.faults);
     if (terminal) {
       std::fprintf(stderr, "\r\033[K%s", line);
       std::fflush(stderr);
-    } else if (p.step.rfind("moving", 0) == 0 || p.step.rfind("re-shooting", 0) == 0) {
+    } else if (p.step.rfind("stored", 0) == 0 || p.step.rfind("re-shooting", 0) == 0) {
       LogInfo(line);
     }
   };

@@ -7,14 +7,18 @@ namespace hairrig {
 int NumViews(const Scene& scene) { return scene.turntable_stops * static_cast<int>(scene.cameras.size()); }
 
 ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view) {
-  ViewGroundTruth g;
   const int cams = static_cast<int>(scene.cameras.size());
+  return MakeViewGroundTruth(scene, view, view / cams, view % cams, scene.StopAngleDeg(view / cams));
+}
+
+ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int camera_index, double turntable_deg) {
+  ViewGroundTruth g;
   g.view = view;
-  g.stop = view / cams;
-  g.camera_index = view % cams;
+  g.stop = stop;
+  g.camera_index = camera_index;
   const SceneCamera& cam = scene.cameras[static_cast<size_t>(g.camera_index)];
   g.camera_serial = cam.serial;
-  g.turntable_deg = scene.StopAngleDeg(g.stop);
+  g.turntable_deg = turntable_deg;
   g.intrinsics = cam.intrinsics;
   g.cam_from_world = cam.cam_from_world;
   g.world_from_turntable = WorldFromTurntable(g.turntable_deg);

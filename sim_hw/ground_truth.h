@@ -28,6 +28,8 @@ struct ViewGroundTruth {
 // The view numbering of the default plan: at each stop every camera shoots.
 int NumViews(const Scene& scene);
 ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view);
+// Any plan: the view's camera (index into scene.cameras) at a turntable angle.
+ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int camera_index, double turntable_deg);
 
 // JSON text: {"simulation_only": true, "scene": ..., "turntable_from_box": ..., "views": [...]}.
 std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views);
