@@ -104,7 +104,7 @@ class Sequencer {
   Status SetLights(const std::map<std::string, double>& levels);
   void AllLightsOff();
   Status EnsureCameraReady(CameraSlot& slot);
-  Status ReopenCamera(Camera& camera);
+  Status PrepareCamera(Camera& camera);
   void WaitCollectorsIdle();
 
   // --- collection --------------------------------------------------------------
@@ -211,7 +211,7 @@ Status Sequencer::Setup() {
     HR_RETURN_IF_ERROR(rig_.devices.turntable->Home(Ms(policies_.move_timeout_s)));
   }
   for (const auto& c : rig_.devices.cameras) {
-    HR_RETURN_IF_ERROR(ReopenCamera(*c));
+    HR_RETURN_IF_ERROR(PrepareCamera(*c));
     CameraSlot& slot = slots_[c->info().serial];
     slot.camera = c.get();
   }
@@ -222,8 +222,9 @@ Status Sequencer::Setup() {
   return Status::Ok();
 }
 
-// Configure and arm (after Open); the trigger source follows the config's trigger_line.
-Status Sequencer::ReopenCamera(Camera& camera) {
+// Opens the camera if it is closed or faulted, then configures and arms it; the
+// trigger source follows the config's trigger_line.
+Status Sequencer::PrepareCamera(Camera& camera) {
   if (camera.state() == DeviceState::kClosed || camera.state() == DeviceState::kFaulted) {
     (void)camera.Close();
     HR_RETURN_IF_ERROR(camera.Open());
@@ -331,7 +332,7 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
   Status s;
   for (int attempt = 1; attempt <= policies_.camera.attempts; ++attempt) {
     SleepS(policies_.camera.BackoffBefore(attempt));
-    s = ReopenCamera(*slot.camera);
+    s = PrepareCamera(*slot.camera);
     if (s.ok()) break;
     RecordFault(slot.camera, s,
                 attempt < policies_.camera.attempts ? "reopen again after back-off" : "skip its views until the next pass");

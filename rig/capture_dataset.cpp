@@ -1,6 +1,7 @@
 #include "rig/capture_dataset.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -78,6 +79,10 @@ Status CaptureDataset::OpenJournal() {
   const std::string path = dir_ + "/" + kJournal;
   journal_fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (journal_fd_ < 0) return IoError(path + ": cannot open for appending (" + std::strerror(errno) + ")");
+  // One writer per capture: a second hairrig on the same folder is refused.
+  if (::flock(journal_fd_, LOCK_EX | LOCK_NB) != 0) {
+    return FailedPrecondition(dir_ + " is being written by another hairrig process; wait for it to finish");
+  }
   return Status::Ok();
 }
 

@@ -10,6 +10,7 @@
 
 #include "core/file_util.h"
 #include "core/sha256.h"
+#include "drivers/always_present_device.h"
 #include <nlohmann/json.hpp>
 
 namespace hairrig {
@@ -156,18 +157,10 @@ int ReplayFrameCount(const ReplaySource& source) { return static_cast<int>(sourc
 namespace {
 
 template <typename Base>
-class ReplayDevice : public Base {
+class ReplayDevice : public AlwaysPresentDevice<Base> {
  public:
-  ReplayDevice(DeviceInfo info, std::shared_ptr<ReplaySource> source) : Base(std::move(info)), source_(std::move(source)) {}
-  Status Open() override {
-    this->SetState(DeviceState::kReady);
-    return Status::Ok();
-  }
-  Status Close() override {
-    this->SetState(DeviceState::kClosed);
-    return Status::Ok();
-  }
-  Status HealthCheck() override { return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"); }
+  ReplayDevice(DeviceInfo info, std::shared_ptr<ReplaySource> source)
+      : AlwaysPresentDevice<Base>(std::move(info)), source_(std::move(source)) {}
 
  protected:
   std::shared_ptr<ReplaySource> source_;

@@ -9,6 +9,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "drivers/always_present_device.h"
+
 namespace hairrig {
 
 using Clock = std::chrono::steady_clock;
@@ -222,18 +224,10 @@ namespace {
 
 // Shared open/close/health behaviour of the simulated devices.
 template <typename Base>
-class SimDevice : public Base {
+class SimDevice : public AlwaysPresentDevice<Base> {
  public:
-  SimDevice(DeviceInfo info, std::shared_ptr<SimWorld> world) : Base(std::move(info)), world_(std::move(world)) {}
-  Status Open() override {
-    this->SetState(DeviceState::kReady);
-    return Status::Ok();
-  }
-  Status Close() override {
-    this->SetState(DeviceState::kClosed);
-    return Status::Ok();
-  }
-  Status HealthCheck() override { return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"); }
+  SimDevice(DeviceInfo info, std::shared_ptr<SimWorld> world)
+      : AlwaysPresentDevice<Base>(std::move(info)), world_(std::move(world)) {}
   double time_scale() const override { return world_->time_scale(); }
 
  protected:
