@@ -458,8 +458,13 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
       return false;
     }
   }
+  // A camera delivers its frames one after another: when earlier frames are
+  // still coming out, this one's transfer starts only now.
+  const Clock::time_point deadline =
+      std::max(shot.deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                                                 ExpectedFrameWallS(camera) + policies_.frame_timeout_s)));
   for (;;) {
-    const double left_s = std::chrono::duration<double>(shot.deadline - Clock::now()).count();
+    const double left_s = std::chrono::duration<double>(deadline - Clock::now()).count();
     Result<Frame> frame = left_s > 0 ? camera.WaitFrame(Ms(left_s))
                                      : Result<Frame>(Timeout(camera.Describe() + ": no frame for view " +
                                                              std::to_string(shot.view) + " in time"));
@@ -702,7 +707,10 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   // Space for the whole plan, checked before anything is written.
   std::vector<int> all_views;
   for (const PlannedView& v : plan.views) all_views.push_back(v.index);
-  const std::string probe_dir = options.resume ? options.out_dir : fs::absolute(options.out_dir).parent_path().string();
+  // The file system the capture will land on: the nearest folder that exists.
+  fs::path probe = fs::absolute(options.out_dir);
+  while (!fs::exists(probe) && probe.has_parent_path() && probe != probe.parent_path()) probe = probe.parent_path();
+  const std::string probe_dir = probe.string();
   std::error_code ec;
   const fs::space_info space = fs::space(probe_dir, ec);
   const double needed = EstimatedBytes(plan, rig->devices, all_views) + policies.min_free_mb * 1e6;

@@ -93,7 +93,8 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string
     return FailedPrecondition(dir + " already exists: choose a new --out folder, or add --resume to continue it");
   }
   const fs::path parent = fs::absolute(dir).parent_path();
-  if (!fs::is_directory(parent, ec)) return NotFound(parent.string() + ": the parent folder of the capture does not exist");
+  fs::create_directories(parent, ec);
+  if (!fs::is_directory(parent, ec)) return IoError(parent.string() + ": cannot create the folder to hold the capture");
   if (!fs::create_directory(dir, ec) || !fs::create_directory(fs::path(dir) / "frames", ec)) {
     return IoError(dir + ": cannot create the capture folder (" + ec.message() + ")");
   }

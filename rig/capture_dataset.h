@@ -68,8 +68,8 @@ struct ResumeReport {
 
 class CaptureDataset {
  public:
-  // Creates `dir` (its parent must exist; AlreadyExists-like FailedPrecondition
-  // if `dir` exists) with the config snapshot and an empty journal.
+  // Creates `dir` (and its parents; FailedPrecondition if `dir` exists) with
+  // the config snapshot, capture.json and an empty journal.
   static Result<std::unique_ptr<CaptureDataset>> Create(const std::string& dir, const std::string& config_text,
                                                         nlohmann::json metadata, const DatasetOptions& options);
   // Opens an interrupted (or finished) capture: drops a journal record cut

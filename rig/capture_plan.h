@@ -54,7 +54,8 @@ struct CapturePolicies {
   RetryPolicy camera{3, 0.2, 2.0};     // reopen a camera, re-shoot a view
   RetryPolicy turntable{2, 0.5, 2.0};  // re-command a move that timed out
   RetryPolicy light{3, 0.1, 2.0};
-  double frame_timeout_s = 20;      // wall seconds beyond the frame's expected arrival
+  double frame_timeout_s = 20;      // wall seconds a frame may be late: beyond exposure + readout + download
+                                    // after its trigger, or after the camera's previous frame when frames queue
   double move_timeout_s = 60;       // wall seconds beyond the move's expected duration
   double min_free_mb = 200;         // keep at least this much free on the capture's disk
   int png_compression = 1;          // 0-9 for raw frames stored as PNG
