@@ -11,6 +11,7 @@
 #include "core/file_util.h"
 #include "core/sha256.h"
 #include "drivers/always_present_device.h"
+#include "drivers/trigger_bus.h"
 #include <nlohmann/json.hpp>
 
 namespace hairrig {
@@ -84,30 +85,11 @@ class ReplaySource {
   }
   double Scaled(double recorded_s) const { return options.speed > 0 ? recorded_s / options.speed : 0; }
 
-  // Trigger lines: cameras listening on a line.
-  int Subscribe(const std::string& line, std::function<void()> fn) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    listeners_[line][++next_id_] = std::move(fn);
-    return next_id_;
-  }
-  void Unsubscribe(const std::string& line, int id) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    listeners_[line].erase(id);
-  }
-  void Fire(const std::string& line) {
-    std::vector<std::function<void()>> fns;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (auto& [id, fn] : listeners_[line]) fns.push_back(fn);
-    }
-    for (auto& fn : fns) fn();
-  }
+  TriggerBus triggers;  // cameras armed for a line listen here
 
  private:
   mutable std::mutex mutex_;
   double target_deg_ = 0;
-  std::map<std::string, std::map<int, std::function<void()>>> listeners_;
-  int next_id_ = 0;
 };
 
 Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir, const ReplayOptions& options) {
@@ -241,11 +223,11 @@ class ReplayTriggerLine : public ReplayDevice<TriggerLine> {
   using ReplayDevice::ReplayDevice;
   Status Pulse(std::chrono::microseconds) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
-    source_->Fire(info().name);
+    source_->triggers.Fire(info().name);
     return Status::Ok();
   }
   Status Set(bool active) override {
-    if (active) source_->Fire(info().name);
+    if (active) source_->triggers.Fire(info().name);
     return Status::Ok();
   }
 };
@@ -277,7 +259,7 @@ class ReplayCamera : public ReplayDevice<Camera> {
     Unsubscribe();
     if (settings_.trigger == TriggerSource::kLine) {
       line_ = settings_.trigger_line;
-      subscription_ = source_->Subscribe(line_, [this] { OnTrigger(); });
+      subscription_ = source_->triggers.Subscribe(line_, [this] { OnTrigger(); });
     }
     SetState(DeviceState::kBusy);
     return Status::Ok();
@@ -345,7 +327,7 @@ class ReplayCamera : public ReplayDevice<Camera> {
     cv_.notify_all();
   }
   void Unsubscribe() {
-    if (subscription_ != 0) source_->Unsubscribe(line_, subscription_);
+    if (subscription_ != 0) source_->triggers.Unsubscribe(line_, subscription_);
     subscription_ = 0;
   }
 

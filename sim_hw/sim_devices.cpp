@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "drivers/always_present_device.h"
+#include "drivers/trigger_bus.h"
 
 namespace hairrig {
 
@@ -168,24 +169,7 @@ class SimWorld {
   }
 
   // --- trigger lines ----------------------------------------------------
-  using TriggerFn = std::function<void()>;
-  int Subscribe(const std::string& line, TriggerFn fn) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    subscribers_[line][++next_subscription_] = std::move(fn);
-    return next_subscription_;
-  }
-  void Unsubscribe(const std::string& line, int id) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    subscribers_[line].erase(id);
-  }
-  void FireLine(const std::string& line) {
-    std::vector<TriggerFn> fns;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (auto& [id, fn] : subscribers_[line]) fns.push_back(fn);
-    }
-    for (auto& fn : fns) fn();
-  }
+  TriggerBus& triggers() { return triggers_; }
 
  private:
   double AngleLocked() const {
@@ -200,8 +184,7 @@ class SimWorld {
   MotionProfile move_profile_;
   Clock::time_point move_start_ = Clock::now();
   std::map<std::string, double> light_levels_;
-  std::map<std::string, std::map<int, TriggerFn>> subscribers_;
-  int next_subscription_ = 0;
+  TriggerBus triggers_;
   bool stuck_ = false;
   std::map<std::string, int> event_counts_;
   std::map<std::string, InputFn> input_callbacks_;
@@ -374,13 +357,13 @@ class SimTriggerLine : public SimDevice<TriggerLine> {
   Status Pulse(std::chrono::microseconds width) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
     if (width.count() <= 0) return InvalidArgument(Describe() + ": pulse width must be positive");
-    world_->FireLine(info().name);  // cameras latch on the rising edge
+    world_->triggers().Fire(info().name);  // cameras latch on the rising edge
     std::this_thread::sleep_for(width);
     return Status::Ok();
   }
   Status Set(bool active) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Set"));
-    if (active && !active_) world_->FireLine(info().name);
+    if (active && !active_) world_->triggers().Fire(info().name);
     active_ = active;
     return Status::Ok();
   }
@@ -466,7 +449,7 @@ class SimCamera : public SimDevice<Camera> {
     worker_ = std::thread([this] { WorkerLoop(); });
     if (settings_.trigger == TriggerSource::kLine) {
       subscribed_line_ = settings_.trigger_line;
-      subscription_ = world_->Subscribe(subscribed_line_, [this] { OnTrigger(); });
+      subscription_ = world_->triggers().Subscribe(subscribed_line_, [this] { OnTrigger(); });
     }
     SetState(DeviceState::kBusy);
     return Status::Ok();
@@ -629,7 +612,7 @@ class SimCamera : public SimDevice<Camera> {
 
   void StopWorker() {
     if (subscription_ != 0) {
-      world_->Unsubscribe(subscribed_line_, subscription_);
+      world_->triggers().Unsubscribe(subscribed_line_, subscription_);
       subscription_ = 0;
     }
     {
