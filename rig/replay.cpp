@@ -45,8 +45,11 @@ struct RecordedStop {
   double seconds_since_previous = 0;  // recorded wall time from the previous stop's arrival
 };
 
+using LightState = std::map<std::string, double>;  // light name -> level
+
 struct RecordedFrame {
   std::string path;
+  LightState lights;  // the panels when it was shot (from its view_planned record)
   std::string extension;
   double commanded_deg = 0;
   double exposure_s = 0;
@@ -70,16 +73,26 @@ class ReplaySource {
     std::lock_guard<std::mutex> lock(mutex_);
     return target_deg_;
   }
+  void SetLight(const std::string& name, double level) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    lights_[name] = level;
+  }
+  LightState Lights() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return lights_;
+  }
   const RecordedStop* FindStop(double commanded_deg) const {
     for (const RecordedStop& s : stops) {
       if (SameAngle(s.commanded_deg, commanded_deg)) return &s;
     }
     return nullptr;
   }
-  const RecordedFrame* FindFrame(const std::string& serial, double commanded_deg) const {
+  // The frame of `serial` shot at that angle under that light state (a plan may
+  // shoot one angle under several light states).
+  const RecordedFrame* FindFrame(const std::string& serial, double commanded_deg, const LightState& lights) const {
     const auto range = frames.equal_range(serial);
     for (auto it = range.first; it != range.second; ++it) {
-      if (SameAngle(it->second.commanded_deg, commanded_deg)) return &it->second;
+      if (SameAngle(it->second.commanded_deg, commanded_deg) && SameLights(it->second.lights, lights)) return &it->second;
     }
     return nullptr;
   }
@@ -88,8 +101,17 @@ class ReplaySource {
   TriggerBus triggers;  // cameras armed for a line listen here
 
  private:
+  static bool SameLights(const LightState& recorded, const LightState& now) {
+    for (const auto& [name, level] : recorded) {
+      const auto it = now.find(name);
+      if (std::abs((it == now.end() ? 0.0 : it->second) - level) > 1e-6) return false;
+    }
+    return true;
+  }
+
   mutable std::mutex mutex_;
   double target_deg_ = 0;
+  LightState lights_;
 };
 
 Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir, const ReplayOptions& options) {
@@ -101,6 +123,7 @@ Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& captur
   auto source = std::make_shared<ReplaySource>();
   source->options = options;
   double previous_arrival = 0;
+  std::map<int, LightState> view_lights;
   size_t start = 0;
   for (size_t i = 0; i < bytes.size(); ++i) {
     if (bytes[i] != '\n') continue;
@@ -117,13 +140,15 @@ Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& captur
       if (!source->FindStop(stop.commanded_deg)) source->stops.push_back(stop);
     } else if (event == "session_start") {
       previous_arrival = 0;
+    } else if (event == "view_planned") {
+      view_lights[r.at("view").get<int>()] = r.value("lights", LightState{});
     } else if (event == "frame_stored") {
       const std::string file = r.at("file").get<std::string>();
       const std::string path = capture_dir + "/" + file;
       auto sha = Sha256OfFile(path);
       if (!sha.ok() || *sha != r.at("sha256").get<std::string>()) continue;  // not verified: not served
       const std::string serial = r.at("serial").get<std::string>();
-      RecordedFrame f{path, FileExtension(file), r.at("angle_commanded_deg").get<double>(), r.value("exposure_s", 0.0),
+      RecordedFrame f{path, view_lights[r.at("view").get<int>()], FileExtension(file), r.at("angle_commanded_deg").get<double>(), r.value("exposure_s", 0.0),
                       r.value("gain_db", 0.0),
                       1e-9 * static_cast<double>(r.value("received_time_ns", int64_t{0}) - r.value("trigger_time_ns", int64_t{0}))};
       source->frames.emplace(serial, f);
@@ -210,6 +235,7 @@ class ReplayLight : public ReplayDevice<Light> {
   Status SetLevel(double level) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetLevel"));
     level_ = level;
+    source_->SetLight(info().name, level);
     return Status::Ok();
   }
   Result<bool> IsOn() override { return level_ > 0; }
@@ -290,7 +316,7 @@ class ReplayCamera : public ReplayDevice<Camera> {
     std::this_thread::sleep_until(next.ready);
     if (!next.frame) {
       return NotFound(Describe() + ": the recording has no frame of this camera at " + std::to_string(next.angle_deg) +
-                      " deg");
+                      " deg under the current light state");
     }
     HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(next.frame->path));
     Frame f;
@@ -317,7 +343,7 @@ class ReplayCamera : public ReplayDevice<Camera> {
   void OnTrigger() {
     Pending p;
     p.angle_deg = source_->Target();
-    p.frame = source_->FindFrame(info().serial, p.angle_deg);
+    p.frame = source_->FindFrame(info().serial, p.angle_deg, source_->Lights());
     p.trigger_ns = NowNs();
     const double delay = p.frame ? source_->Scaled(p.frame->download_s) : 0;
     p.ready = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay));

@@ -75,6 +75,25 @@ TEST_F(ReplayTest, ReplayLeavesTheRecordingUntouchedAndSkipsUnverifiedFrames) {
   EXPECT_EQ(*ReadFileBytes(copy + "/journal.jsonl"), *journal_before);
 }
 
+// One angle shot under two light states: each replayed view gets its own frame.
+TEST(Replay, SameAngleUnderTwoLightStates) {
+  const std::string dir = FreshDir("replay_lights");
+  CaptureOptions o;
+  o.config_path = WriteSmallRig(dir, {{"plan", "plan:\n  views:\n"
+                                               "    - {angle_deg: 30, camera: upper, lights: {top: 1, bottom: 0}}\n"
+                                               "    - {angle_deg: 30, camera: upper, lights: {top: 0, bottom: 1}}\n"}});
+  o.out_dir = dir + "/recorded";
+  auto recorded = RunCapture(o);
+  ASSERT_TRUE(recorded.ok() && recorded->status == "complete");
+  const auto original = VerifiedFramesOnDisk(o.out_dir);
+  ASSERT_NE(original.at(0)["sha256"], original.at(1)["sha256"]) << "the two light states should give different frames";
+  auto s = Replay(o.out_dir, dir + "/replayed", 0);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_EQ(s->status, "complete") << s->message;
+  const auto replayed = VerifiedFramesOnDisk(dir + "/replayed");
+  for (int view : {0, 1}) EXPECT_EQ(replayed.at(view)["sha256"], original.at(view)["sha256"]) << "view " << view;
+}
+
 TEST(Replay, RefusesAFolderThatIsNotACapture) {
   const std::string dir = FreshDir("replay_not_capture");
   auto s = OpenReplaySource(dir, {});
