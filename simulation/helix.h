@@ -1,0 +1,49 @@
+// One element of a piecewise-helical strand (Bao & Qi 2017, Sec. V-C): a helix
+// given by its start point, its unit tangent there, its Darboux vector and its
+// length. Millimetres; the Darboux vector is in radians per millimetre.
+//
+//   r(s) = p0 + tau_bar s Omega_bar + sin(w s)/w (t0 - tau_bar Omega_bar)
+//             - (1 - cos(w s))/w (t0 x Omega_bar)                        (Eq. 8)
+//   t(s) = t0 rotated about Omega_bar by w s
+//
+// with w = |Omega|, Omega_bar = Omega / w, tau_bar = <t0, Omega_bar>; the
+// curvature is k = sqrt(w^2 - tau^2) and the torsion tau = w tau_bar (Eq. 6-7).
+// w = 0 is a straight element.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "core/status.h"
+
+namespace hairrig {
+
+struct HelixElement {
+  Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d start_tangent = Eigen::Vector3d::UnitZ();  // unit
+  Eigen::Vector3d darboux_per_mm = Eigen::Vector3d::Zero();  // Omega
+  double length_mm = 0;
+
+  Eigen::Vector3d PointAt(double s_mm) const;
+  Eigen::Vector3d TangentAt(double s_mm) const;
+  double curvature_per_mm() const;
+  double torsion_per_mm() const;
+};
+
+// Builds the element from curvature, torsion and length at a start point with
+// a start tangent and principal normal (unit, orthogonal to the tangent).
+HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm, const Eigen::Vector3d& tangent,
+                                       const Eigen::Vector3d& normal, double curvature_per_mm, double torsion_per_mm,
+                                       double length_mm);
+
+// The helix through p0 with tangent t0 that reaches p1 with tangent t1
+// (interpolation of two points and two tangents, Sec. V-C after ref. [38]).
+// The pair must be co-helical (Eq. 3, <p1 - p0, t1 - t0> = 0, relative to
+// |p1 - p0|); of the helices that fit, the one whose length is closest to
+// `preferred_length_mm` is returned (the shortest when it is 0). Equal
+// tangents give a straight element when the chord is along them.
+// InvalidArgument names the violated condition (coincident points, tangents
+// not unit, not co-helical, no helix found).
+Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0, const Eigen::Vector3d& p1,
+                                  const Eigen::Vector3d& t1, double preferred_length_mm = 0);
+
+}  // namespace hairrig
