@@ -1,0 +1,184 @@
+#include "simulation/floating_tangents.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+
+#include "simulation/strand_spline.h"
+
+namespace hairrig {
+
+namespace {
+constexpr double kStraightTangentGap = 1e-9;  // |t_{i+1} - t_i| below this: a straight element
+constexpr double kRadToDeg = 57.29577951308232;
+}  // namespace
+
+bool FloatingTangentsOptions::IsValid(std::string* why) const {
+  if (min_elements < 1 || max_elements < min_elements) {
+    *why = "element counts need 1 <= min_elements <= max_elements";
+  } else if (!adaptive && fixed_elements < 1) {
+    *why = "fixed_elements must be at least 1";
+  } else if (!(min_length_mm > 0) || !(max_length_mm > min_length_mm)) {
+    *why = "lengths need 0 < min_length_mm < max_length_mm";
+  } else if (error_samples_per_element < 2) {
+    *why = "error_samples_per_element must be at least 2";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+double PiecewiseHelix::length_mm() const {
+  double total = 0;
+  for (const auto& e : elements) total += e.length_mm;
+  return total;
+}
+
+std::vector<Eigen::Vector3d> PiecewiseHelix::Sample(double step_mm) const {
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& e : elements) {
+    const int n = std::max(1, static_cast<int>(std::ceil(e.length_mm / step_mm)));
+    for (int k = out.empty() ? 0 : 1; k <= n; ++k) out.push_back(e.PointAt(e.length_mm * k / n));
+  }
+  return out;
+}
+
+// Sec. V-A: N_min below L_min, N_max above L_max, else Algorithm 2.
+int AdaptiveElementCount(const StrandSpline& spline, const FloatingTangentsOptions& o) {
+  const double length = spline.length_mm();
+  if (length < o.min_length_mm) return o.min_elements;
+  if (length > o.max_length_mm) return o.max_elements;
+  const int initial = (o.min_elements + o.max_elements) / 2;
+  int n = initial;
+  Eigen::Vector3d previous = spline.TangentAt(0);
+  for (int i = 1; i <= initial; ++i) {
+    const Eigen::Vector3d t = spline.TangentAt(length * i / initial);
+    const double inner = previous.dot(t);
+    if (inner <= 0) ++n;
+    if (inner > 0.95) --n;
+    previous = t;
+  }
+  return std::clamp(n, o.min_elements, o.max_elements);
+}
+
+namespace {
+
+// Sec. V-B, Eqs. 4-5: p*_i = p*_0 + sum_{j<i} D_j a_j with D_j a basis of the
+// plane normal to t_{j+1} - t_j (the direction t_j itself when the tangents
+// are equal, which keeps that element straight). Linear least squares in
+// (p*_0, a_0, ..., a_{N-1}).
+std::vector<Eigen::Vector3d> RelaxBreakPoints(const std::vector<Eigen::Vector3d>& p,
+                                              const std::vector<Eigen::Vector3d>& t, bool anchor_root) {
+  const int n = static_cast<int>(p.size()) - 1;
+  std::vector<Eigen::MatrixXd> basis(static_cast<size_t>(n));
+  int unknowns = 3;
+  for (int j = 0; j < n; ++j) {
+    const Eigen::Vector3d dt = t[static_cast<size_t>(j + 1)] - t[static_cast<size_t>(j)];
+    if (dt.norm() < kStraightTangentGap) {
+      basis[static_cast<size_t>(j)] = t[static_cast<size_t>(j)];
+    } else {
+      const Eigen::Vector3d normal = dt.normalized();
+      Eigen::Vector3d v0 = (t[static_cast<size_t>(j)] + t[static_cast<size_t>(j + 1)]);
+      v0 = v0.norm() > 1e-9 ? v0.normalized() : normal.unitOrthogonal();
+      v0 = (v0 - v0.dot(normal) * normal).normalized();
+      Eigen::Matrix<double, 3, 2> d;
+      d << v0, normal.cross(v0);
+      basis[static_cast<size_t>(j)] = d;
+    }
+    unknowns += static_cast<int>(basis[static_cast<size_t>(j)].cols());
+  }
+  const int first = anchor_root ? 0 : 1;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(3 * (n + 1 - first), unknowns);
+  Eigen::VectorXd b(3 * (n + 1 - first));
+  for (int i = first; i <= n; ++i) {
+    const int row = 3 * (i - first);
+    a.block<3, 3>(row, 0).setIdentity();
+    int col = 3;
+    for (int j = 0; j < n; ++j) {
+      const auto& d = basis[static_cast<size_t>(j)];
+      if (j < i) a.block(row, col, 3, d.cols()) = d;
+      col += static_cast<int>(d.cols());
+    }
+    b.segment<3>(row) = p[static_cast<size_t>(i)];
+  }
+  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
+  std::vector<Eigen::Vector3d> relaxed{x.head<3>()};
+  int col = 3;
+  for (int j = 0; j < n; ++j) {
+    const auto& d = basis[static_cast<size_t>(j)];
+    relaxed.push_back(relaxed.back() + d * x.segment(col, d.cols()));
+    col += static_cast<int>(d.cols());
+  }
+  return relaxed;
+}
+
+}  // namespace
+
+void DistanceToCurve(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& curve,
+                     double* mean_mm, double* max_mm) {
+  double sum = 0, worst = 0;
+  for (const auto& q : points) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k + 1 < curve.size(); ++k) {
+      const Eigen::Vector3d seg = curve[k + 1] - curve[k];
+      const double len2 = seg.squaredNorm();
+      const double u = len2 > 0 ? std::clamp((q - curve[k]).dot(seg) / len2, 0.0, 1.0) : 0.0;
+      best = std::min(best, (curve[k] + u * seg - q).norm());
+    }
+    if (curve.size() == 1) best = (curve[0] - q).norm();
+    sum += best;
+    worst = std::max(worst, best);
+  }
+  *mean_mm = points.empty() ? 0 : sum / static_cast<double>(points.size());
+  *max_mm = worst;
+}
+
+Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
+                                           const FloatingTangentsOptions& options, StrandFitSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) return InvalidArgument("floating tangents options: " + why);
+  HR_ASSIGN_OR_RETURN(StrandSpline spline, StrandSpline::Create(points_mm));
+  const int n = options.adaptive ? AdaptiveElementCount(spline, options) : options.fixed_elements;
+  const double length = spline.length_mm();
+  std::vector<Eigen::Vector3d> p, t;
+  for (int i = 0; i <= n; ++i) {
+    p.push_back(spline.PointAt(length * i / n));
+    t.push_back(spline.TangentAt(length * i / n));
+  }
+  const std::vector<Eigen::Vector3d> relaxed = RelaxBreakPoints(p, t, options.anchor_root);
+  PiecewiseHelix model;
+  StrandFitSummary s;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d chord = relaxed[static_cast<size_t>(i + 1)] - relaxed[static_cast<size_t>(i)];
+    const Eigen::Vector3d dt = t[static_cast<size_t>(i + 1)] - t[static_cast<size_t>(i)];
+    if (chord.norm() > 0) s.max_cohelical_residual = std::max(s.max_cohelical_residual, std::abs(chord.dot(dt)) / chord.norm());
+    auto element = HelixThrough(relaxed[static_cast<size_t>(i)], t[static_cast<size_t>(i)],
+                                relaxed[static_cast<size_t>(i + 1)], t[static_cast<size_t>(i + 1)], length / n);
+    if (!element.ok()) {
+      return Internal("floating tangents: element " + std::to_string(i) + " of " + std::to_string(n) + ": " +
+                      element.status().message());
+    }
+    model.elements.push_back(*element);
+  }
+  for (int i = 0; i + 1 < n; ++i) {
+    const auto& e = model.elements[static_cast<size_t>(i)];
+    const double c = std::clamp(e.TangentAt(e.length_mm).dot(model.elements[static_cast<size_t>(i + 1)].start_tangent), -1.0, 1.0);
+    s.max_g1_defect_deg = std::max(s.max_g1_defect_deg, std::acos(c) * kRadToDeg);
+  }
+  s.elements = n;
+  s.strand_length_mm = length;
+  std::vector<Eigen::Vector3d> curve;
+  for (const auto& e : model.elements) {
+    for (int k = curve.empty() ? 0 : 1; k <= options.error_samples_per_element; ++k) {
+      curve.push_back(e.PointAt(e.length_mm * k / options.error_samples_per_element));
+    }
+  }
+  DistanceToCurve(spline.points(), curve, &s.mean_error_mm, &s.max_error_mm);
+  if (summary) *summary = s;
+  return model;
+}
+
+}  // namespace hairrig

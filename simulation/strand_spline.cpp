@@ -1,0 +1,97 @@
+#include "simulation/strand_spline.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hairrig {
+
+namespace {
+constexpr int kSamplesPerSegment = 32;
+}
+
+Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& points_mm) {
+  StrandSpline s;
+  for (const auto& p : points_mm) {
+    if (!p.allFinite()) return InvalidArgument("strand has a point that is not a finite number");
+    if (s.points_.empty() || (p - s.points_.back()).norm() > 1e-9) s.points_.push_back(p);
+  }
+  if (s.points_.size() < 2) return InvalidArgument("strand has fewer than 2 distinct points (zero length)");
+  const int n = static_cast<int>(s.points_.size());
+  // Catmull-Rom tangents scaled by the neighbouring chord lengths (C1 at joints).
+  std::vector<Eigen::Vector3d> tangent(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const auto& prev = s.points_[static_cast<size_t>(std::max(0, i - 1))];
+    const auto& next = s.points_[static_cast<size_t>(std::min(n - 1, i + 1))];
+    tangent[static_cast<size_t>(i)] = (next - prev).normalized();
+  }
+  for (int i = 0; i + 1 < n; ++i) {
+    const auto& p0 = s.points_[static_cast<size_t>(i)];
+    const auto& p1 = s.points_[static_cast<size_t>(i + 1)];
+    const double chord = (p1 - p0).norm();
+    s.control_.push_back(p0);
+    s.control_.push_back(p0 + chord / 3 * tangent[static_cast<size_t>(i)]);
+    s.control_.push_back(p1 - chord / 3 * tangent[static_cast<size_t>(i + 1)]);
+  }
+  s.cumulative_mm_.push_back(0);
+  s.table_u_.push_back(0);
+  Eigen::Vector3d last = s.points_[0];
+  for (int seg = 0; seg + 1 < n; ++seg) {
+    for (int k = 1; k <= kSamplesPerSegment; ++k) {
+      const double u = static_cast<double>(k) / kSamplesPerSegment;
+      const Eigen::Vector3d p = s.Bezier(seg, u);
+      s.cumulative_mm_.push_back(s.cumulative_mm_.back() + (p - last).norm());
+      s.table_u_.push_back(seg + u);
+      last = p;
+    }
+  }
+  return s;
+}
+
+Eigen::Vector3d StrandSpline::Bezier(int segment, double u) const {
+  const size_t i = static_cast<size_t>(3 * segment);
+  const Eigen::Vector3d& a = control_[i];
+  const Eigen::Vector3d& b = control_[i + 1];
+  const Eigen::Vector3d& c = control_[i + 2];
+  const Eigen::Vector3d& d = points_[static_cast<size_t>(segment + 1)];
+  const double v = 1 - u;
+  return v * v * v * a + 3 * v * v * u * b + 3 * v * u * u * c + u * u * u * d;
+}
+
+Eigen::Vector3d StrandSpline::BezierDerivative(int segment, double u) const {
+  const size_t i = static_cast<size_t>(3 * segment);
+  const Eigen::Vector3d& a = control_[i];
+  const Eigen::Vector3d& b = control_[i + 1];
+  const Eigen::Vector3d& c = control_[i + 2];
+  const Eigen::Vector3d& d = points_[static_cast<size_t>(segment + 1)];
+  const double v = 1 - u;
+  return 3 * v * v * (b - a) + 6 * v * u * (c - b) + 3 * u * u * (d - c);
+}
+
+void StrandSpline::Locate(double s, int* segment, double* u) const {
+  s = std::clamp(s, 0.0, length_mm());
+  const auto it = std::upper_bound(cumulative_mm_.begin(), cumulative_mm_.end(), s);
+  const size_t hi = std::min<size_t>(static_cast<size_t>(it - cumulative_mm_.begin()), cumulative_mm_.size() - 1);
+  const size_t lo = hi == 0 ? 0 : hi - 1;
+  const double span = cumulative_mm_[hi] - cumulative_mm_[lo];
+  const double f = span > 0 ? (s - cumulative_mm_[lo]) / span : 0;
+  const double x = table_u_[lo] + f * (table_u_[hi] - table_u_[lo]);
+  const int last_segment = static_cast<int>(points_.size()) - 2;
+  *segment = std::min(static_cast<int>(std::floor(x)), last_segment);
+  *u = x - *segment;
+}
+
+Eigen::Vector3d StrandSpline::PointAt(double s) const {
+  int segment;
+  double u;
+  Locate(s, &segment, &u);
+  return Bezier(segment, u);
+}
+
+Eigen::Vector3d StrandSpline::TangentAt(double s) const {
+  int segment;
+  double u;
+  Locate(s, &segment, &u);
+  return BezierDerivative(segment, u).normalized();
+}
+
+}  // namespace hairrig

@@ -1,0 +1,38 @@
+// A strand as a smooth curve: a C1 cubic Bezier spline through its points
+// (Catmull-Rom tangents, chord-length parameterised), evaluated by arc length.
+// The spline approximation step of Bao & Qi 2017, Algorithm 1, line 2.
+// Millimetres.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/status.h"
+
+namespace hairrig {
+
+class StrandSpline {
+ public:
+  // InvalidArgument for fewer than 2 points, non-finite points, or a strand of
+  // zero length. Consecutive duplicate points are dropped.
+  static Result<StrandSpline> Create(const std::vector<Eigen::Vector3d>& points_mm);
+
+  double length_mm() const { return cumulative_mm_.back(); }
+  Eigen::Vector3d PointAt(double s_mm) const;
+  Eigen::Vector3d TangentAt(double s_mm) const;  // unit
+  const std::vector<Eigen::Vector3d>& points() const { return points_; }
+
+ private:
+  // Segment index and Bezier parameter u in [0, 1] at arc length s.
+  void Locate(double s_mm, int* segment, double* u) const;
+  Eigen::Vector3d Bezier(int segment, double u) const;
+  Eigen::Vector3d BezierDerivative(int segment, double u) const;
+
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<Eigen::Vector3d> control_;  // 3 per segment: p_i, c1, c2 (p_{i+1} is the next start)
+  std::vector<double> cumulative_mm_;     // arc length at each table sample
+  std::vector<double> table_u_;           // segment + u at each table sample
+};
+
+}  // namespace hairrig
