@@ -1,18 +1,16 @@
 #include "simulation/floating_tangents.h"
 
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <Eigen/Dense>
-#include <Eigen/Geometry>
 
 #include "simulation/strand_spline.h"
 
 namespace hairrig {
 
 namespace {
-constexpr double kStraightTangentGap = 1e-9;  // |t_{i+1} - t_i| below this: a straight element
 constexpr double kRadToDeg = 57.29577951308232;
 }  // namespace
 
@@ -71,7 +69,8 @@ namespace {
 // are equal, which keeps that element straight). Linear least squares in
 // (p*_0, a_0, ..., a_{N-1}).
 std::vector<Eigen::Vector3d> RelaxBreakPoints(const std::vector<Eigen::Vector3d>& p,
-                                              const std::vector<Eigen::Vector3d>& t, bool anchor_root) {
+                                              const std::vector<Eigen::Vector3d>& t,
+                                              bool anchor_root) {
   const int n = static_cast<int>(p.size()) - 1;
   std::vector<Eigen::MatrixXd> basis(static_cast<size_t>(n));
   int unknowns = 3;
@@ -117,8 +116,8 @@ std::vector<Eigen::Vector3d> RelaxBreakPoints(const std::vector<Eigen::Vector3d>
 
 }  // namespace
 
-void DistanceToCurve(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& curve,
-                     double* mean_mm, double* max_mm) {
+void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
+                     const std::vector<Eigen::Vector3d>& curve, double* mean_mm, double* max_mm) {
   double sum = 0, worst = 0;
   for (const auto& q : points) {
     double best = std::numeric_limits<double>::infinity();
@@ -137,7 +136,8 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points, const std::vect
 }
 
 Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
-                                           const FloatingTangentsOptions& options, StrandFitSummary* summary) {
+                                           const FloatingTangentsOptions& options,
+                                           StrandFitSummary* summary) {
   std::string why;
   if (!options.IsValid(&why)) return InvalidArgument("floating tangents options: " + why);
   HR_ASSIGN_OR_RETURN(StrandSpline spline, StrandSpline::Create(points_mm));
@@ -152,20 +152,26 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
   PiecewiseHelix model;
   StrandFitSummary s;
   for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d chord = relaxed[static_cast<size_t>(i + 1)] - relaxed[static_cast<size_t>(i)];
+    const Eigen::Vector3d chord =
+        relaxed[static_cast<size_t>(i + 1)] - relaxed[static_cast<size_t>(i)];
     const Eigen::Vector3d dt = t[static_cast<size_t>(i + 1)] - t[static_cast<size_t>(i)];
-    if (chord.norm() > 0) s.max_cohelical_residual = std::max(s.max_cohelical_residual, std::abs(chord.dot(dt)) / chord.norm());
+    if (chord.norm() > 0)
+      s.max_cohelical_residual =
+          std::max(s.max_cohelical_residual, std::abs(chord.dot(dt)) / chord.norm());
     auto element = HelixThrough(relaxed[static_cast<size_t>(i)], t[static_cast<size_t>(i)],
-                                relaxed[static_cast<size_t>(i + 1)], t[static_cast<size_t>(i + 1)], length / n);
+                                relaxed[static_cast<size_t>(i + 1)], t[static_cast<size_t>(i + 1)],
+                                length / n);
     if (!element.ok()) {
-      return Internal("floating tangents: element " + std::to_string(i) + " of " + std::to_string(n) + ": " +
-                      element.status().message());
+      return Internal("floating tangents: element " + std::to_string(i) + " of " +
+                      std::to_string(n) + ": " + element.status().message());
     }
     model.elements.push_back(*element);
   }
   for (int i = 0; i + 1 < n; ++i) {
     const auto& e = model.elements[static_cast<size_t>(i)];
-    const double c = std::clamp(e.TangentAt(e.length_mm).dot(model.elements[static_cast<size_t>(i + 1)].start_tangent), -1.0, 1.0);
+    const double c = std::clamp(
+        e.TangentAt(e.length_mm).dot(model.elements[static_cast<size_t>(i + 1)].start_tangent),
+        -1.0, 1.0);
     s.max_g1_defect_deg = std::max(s.max_g1_defect_deg, std::acos(c) * kRadToDeg);
   }
   s.elements = n;

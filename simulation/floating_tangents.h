@@ -11,9 +11,8 @@
 // per pair (Sec. V-C, Eq. 8).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/status.h"
 #include "simulation/helix.h"
@@ -23,12 +22,12 @@ namespace hairrig {
 class StrandSpline;
 
 struct FloatingTangentsOptions {
-  bool adaptive = true;         // Algorithm 2; false: `fixed_elements` for every strand
-  int fixed_elements = 15;      // the paper's fixed-N comparison (Table 2)
-  int min_elements = 3;         // N_min, Table 3
-  int max_elements = 25;        // N_max, Table 3
-  double min_length_mm = 50;    // L_min = 5 cm, Table 3
-  double max_length_mm = 800;   // L_max = 80 cm, Table 3
+  bool adaptive = true;        // Algorithm 2; false: `fixed_elements` for every strand
+  int fixed_elements = 15;     // the paper's fixed-N comparison (Table 2)
+  int min_elements = 3;        // N_min, Table 3
+  int max_elements = 25;       // N_max, Table 3
+  double min_length_mm = 50;   // L_min = 5 cm, Table 3
+  double max_length_mm = 800;  // L_max = 80 cm, Table 3
   // Ours: the root's own residual is in the least squares, so the fitted strand
   // starts at the scalp. false: Eq. 5 as printed (sum from i = 1).
   bool anchor_root = true;
@@ -46,10 +45,11 @@ struct PiecewiseHelix {
 struct StrandFitSummary {
   int elements = 0;
   double strand_length_mm = 0;
-  double mean_error_mm = 0;        // input points to the helical curve
+  double mean_error_mm = 0;  // input points to the helical curve
   double max_error_mm = 0;
-  double max_g1_defect_deg = 0;    // angle between tangents at joints
-  double max_cohelical_residual = 0;  // |<p*_{i+1} - p*_i, t_{i+1} - t_i>| / |p*_{i+1} - p*_i|, Eq. 4
+  double max_g1_defect_deg = 0;  // angle between tangents at joints
+  double max_cohelical_residual =
+      0;  // |<p*_{i+1} - p*_i, t_{i+1} - t_i>| / |p*_{i+1} - p*_i|, Eq. 4
 };
 
 // Algorithm 2 (with L_min / L_max of Sec. V-A), clamped to [N_min, N_max].
@@ -58,10 +58,11 @@ int AdaptiveElementCount(const StrandSpline& spline, const FloatingTangentsOptio
 // Fits one strand. InvalidArgument for bad options, fewer than 2 distinct
 // points, NaNs; Internal if no helix joins a relaxed pair (named by index).
 Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
-                                           const FloatingTangentsOptions& options, StrandFitSummary* summary = nullptr);
+                                           const FloatingTangentsOptions& options,
+                                           StrandFitSummary* summary = nullptr);
 
 // Distances from each point to the polyline through `curve`: mean and max.
-void DistanceToCurve(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& curve,
-                     double* mean_mm, double* max_mm);
+void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
+                     const std::vector<Eigen::Vector3d>& curve, double* mean_mm, double* max_mm);
 
 }  // namespace hairrig

@@ -1,10 +1,10 @@
 #include "simulation/floating_tangents.h"
 
-#include <cmath>
-#include <filesystem>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <filesystem>
 
 #include "core/strand_io.h"
 #include "simulation/strand_spline.h"
@@ -31,7 +31,9 @@ TEST(StrandSpline, ArcLengthMatchesTheCurve) {
   auto spline = StrandSpline::Create(p);
   ASSERT_TRUE(spline.ok());
   EXPECT_NEAR(spline->length_mm(), 50 * M_PI, 0.01);
-  EXPECT_NEAR((spline->PointAt(spline->length_mm() / 2) - Eigen::Vector3d(100 / std::sqrt(2), 100 / std::sqrt(2), 0)).norm(),
+  EXPECT_NEAR((spline->PointAt(spline->length_mm() / 2) -
+               Eigen::Vector3d(100 / std::sqrt(2), 100 / std::sqrt(2), 0))
+                  .norm(),
               0, 0.01);
   EXPECT_NEAR(spline->TangentAt(0).dot(Eigen::Vector3d::UnitY()), 1, 1e-3);
   EXPECT_FALSE(StrandSpline::Create({{0, 0, 0}, {0, 0, 0}}).ok()) << "zero length";
@@ -48,7 +50,8 @@ TEST(FloatingTangents, HelicalStrandIsFollowedClosely) {
   EXPECT_LT(s.max_cohelical_residual, 1e-9);
   EXPECT_NEAR(model->length_mm(), s.strand_length_mm, 0.01 * s.strand_length_mm);
   for (const auto& e : model->elements) {
-    EXPECT_NEAR(e.curvature_per_mm(), 5 / (25 + std::pow(14 / (2 * M_PI), 2)), 0.01) << "curl curvature r/(r^2+c^2)";
+    EXPECT_NEAR(e.curvature_per_mm(), 5 / (25 + std::pow(14 / (2 * M_PI), 2)), 0.01)
+        << "curl curvature r/(r^2+c^2)";
   }
 }
 
@@ -85,7 +88,8 @@ TEST(FloatingTangents, RealStrandsFitAdaptiveAndFixed) {
     int fitted = 0, elements = 0;
     for (size_t k = 0; k < strands->num_strands(); ++k) {
       std::vector<Eigen::Vector3d> p;
-      for (size_t i = offsets[k]; i < offsets[k + 1]; ++i) p.push_back(strands->points_mm[i].cast<double>());
+      for (size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+        p.push_back(strands->points_mm[i].cast<double>());
       StrandFitSummary s;
       auto model = FitFloatingTangents(p, o, &s);
       ASSERT_TRUE(model.ok()) << "strand " << k << ": " << model.status().ToString();
@@ -95,9 +99,11 @@ TEST(FloatingTangents, RealStrandsFitAdaptiveAndFixed) {
       elements += s.elements;
       ++fitted;
     }
-    std::printf("Bangs_100 %s: %d strands, %.2f elements per strand, mean error %.3f mm, max %.3f mm, G1 %.2e deg\n",
-                adaptive ? "adaptive N" : "fixed N=15", fitted, static_cast<double>(elements) / fitted, mean_sum / fitted,
-                worst, g1);
+    std::printf(
+        "Bangs_100 %s: %d strands, %.2f elements per strand, mean error %.3f mm, max %.3f mm, G1 "
+        "%.2e deg\n",
+        adaptive ? "adaptive N" : "fixed N=15", fitted, static_cast<double>(elements) / fitted,
+        mean_sum / fitted, worst, g1);
     // Measured: adaptive (Table 3 parameters; these gently curved bangs get
     // N_min = 3) 1.03 mm mean, 10.6 mm max; fixed N = 15: 0.094 mm, 1.11 mm.
     EXPECT_LT(mean_sum / fitted, adaptive ? 1.5 : 0.15);

@@ -83,6 +83,96 @@ AxisCandidate EvaluateAxis(const Eigen::Vector3d& axis, const Eigen::Vector3d& t
   return c;
 }
 
+// The helices through (p0, t0) and (p1, t1): their axis lies in the plane
+// normal to t1 - t0, axis(phi) = cos(phi) e1 + sin(phi) e2, and must make the
+// scaled chord g parallel to p1 - p0 (both lie in that plane, so this is one
+// scalar equation in phi). Roots are bracketed on a scan of phi, refined by
+// bisection and kept only if the helix really ends at (p1, t1).
+class HelixSearch {
+ public:
+  HelixSearch(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0, const Eigen::Vector3d& p1,
+              const Eigen::Vector3d& t1)
+      : p0_(p0), t0_(t0), p1_(p1), t1_(t1), chord_(p1 - p0), chord_len_(chord_.norm()) {
+    n_ = (t1 - t0).normalized();
+    Eigen::Vector3d e1 = t0 + t1;
+    if (e1.norm() < 1e-9) e1 = n_.unitOrthogonal();
+    e1_ = (e1 - e1.dot(n_) * n_).normalized();
+    e2_ = n_.cross(e1_);
+  }
+
+  // Helices of more whole turns join the same ends: they are tried while their
+  // length can still come closer to the preferred one.
+  bool Run(int samples, double preferred_length_mm, HelixElement* best) {
+    constexpr int kMaxTurns = 64;
+    double best_score = std::numeric_limits<double>::infinity();
+    bool found = false;
+    for (int turns = 0; turns <= kMaxTurns; ++turns) {
+      double shortest = std::numeric_limits<double>::infinity();
+      double phi_a = 0, f_a = Residual(phi_a, turns, nullptr);
+      for (int i = 1; i <= samples; ++i) {
+        const double phi_b = kTwoPi * i / samples;
+        const double f_b = Residual(phi_b, turns, nullptr);
+        HelixElement candidate;
+        if (std::isfinite(f_a) && std::isfinite(f_b) && (f_a == 0 || f_a * f_b < 0) &&
+            Refine(phi_a, phi_b, f_a, turns, &candidate)) {
+          shortest = std::min(shortest, candidate.length_mm);
+          const double score = preferred_length_mm > 0
+                                   ? std::abs(candidate.length_mm - preferred_length_mm)
+                                   : candidate.length_mm;
+          if (score < best_score) {
+            best_score = score;
+            *best = candidate;
+            found = true;
+          }
+        }
+        phi_a = phi_b;
+        f_a = f_b;
+      }
+      if (found && !(preferred_length_mm > 0 && shortest < preferred_length_mm)) break;
+    }
+    return found;
+  }
+
+ private:
+  double Residual(double phi, int turns, AxisCandidate* out) const {
+    const AxisCandidate c =
+        EvaluateAxis(std::cos(phi) * e1_ + std::sin(phi) * e2_, t0_, t1_, turns);
+    if (out) *out = c;
+    if (!c.valid) return std::numeric_limits<double>::quiet_NaN();
+    return n_.dot(c.scaled_chord.cross(chord_)) / chord_len_;
+  }
+
+  // Bisection on [lo, hi]; true with the helix if the root is a real one (a
+  // sign change across a jump of theta is not).
+  bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
+    for (int it = 0; it < 100 && hi - lo > 1e-16; ++it) {
+      const double m = 0.5 * (lo + hi);
+      const double f_m = Residual(m, turns, nullptr);
+      if (!std::isfinite(f_m)) return false;
+      if ((f_m < 0) == (f_lo < 0)) {
+        lo = m;
+        f_lo = f_m;
+      } else {
+        hi = m;
+      }
+    }
+    AxisCandidate root;
+    Residual(0.5 * (lo + hi), turns, &root);
+    if (!root.valid || root.scaled_chord.dot(chord_) <= 0) return false;
+    const double w = root.scaled_chord.norm() / chord_len_;
+    out->start_mm = p0_;
+    out->start_tangent = t0_;
+    out->darboux_per_mm = w * root.axis;
+    out->length_mm = root.theta / w;
+    return (out->PointAt(out->length_mm) - p1_).norm() < 1e-7 * chord_len_ &&
+           (out->TangentAt(out->length_mm) - t1_).norm() < 1e-7;
+  }
+
+  Eigen::Vector3d p0_, t0_, p1_, t1_, chord_;
+  double chord_len_;
+  Eigen::Vector3d n_, e1_, e2_;
+};
+
 }  // namespace
 
 Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
@@ -99,8 +189,8 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
   HelixElement h;
   h.start_mm = p0;
   h.start_tangent = t0;
-  if (dt.norm() < 1e-12) {
-    if (chord.normalized().dot(t0) < 1 - 1e-12) {
+  if (dt.norm() < kStraightTangentGap) {
+    if (chord.normalized().dot(t0) < 1 - kStraightTangentGap) {
       return InvalidArgument(
           "helix: equal tangents but the chord is not along them (needs a full turn)");
     }
@@ -111,75 +201,11 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
     return InvalidArgument("helix: the points and tangents are not co-helical (Eq. 3 residual " +
                            std::to_string(chord.dot(dt) / (chord_len * dt.norm())) + ")");
   }
-  // The axis lies in the plane normal to t1 - t0: axis(phi) = cos(phi) e1 + sin(phi) e2.
-  const Eigen::Vector3d n = dt.normalized();
-  Eigen::Vector3d e1 = t0 + t1;
-  if (e1.norm() < 1e-9) e1 = n.unitOrthogonal();
-  e1 = (e1 - e1.dot(n) * n).normalized();
-  const Eigen::Vector3d e2 = n.cross(e1);
-  auto axis_at = [&](double phi) {
-    return Eigen::Vector3d(std::cos(phi) * e1 + std::sin(phi) * e2);
-  };
-  // g(phi) must be parallel to the chord: both lie in the plane normal to n.
-  int turns = 0;
-  auto parallel_residual = [&](double phi, AxisCandidate* out) {
-    *out = EvaluateAxis(axis_at(phi), t0, t1, turns);
-    if (!out->valid) return std::numeric_limits<double>::quiet_NaN();
-    return n.dot(out->scaled_chord.cross(chord)) / chord_len;
-  };
-  // Helices of more whole turns join the same ends: try them while their
-  // length can still be closer to the preferred one.
-  constexpr int kSamples = 720;
-  constexpr int kMaxTurns = 64;
-  double best_score = std::numeric_limits<double>::infinity();
+  HelixSearch search(p0, t0, p1, t1);
   bool found = false;
-  for (turns = 0; turns <= kMaxTurns; ++turns) {
-    double shortest_this_turn = std::numeric_limits<double>::infinity();
-    AxisCandidate a, b, mid;
-    double phi_a = 0, f_a = parallel_residual(phi_a, &a);
-    for (int i = 1; i <= kSamples; ++i) {
-      const double phi_b = kTwoPi * i / kSamples;
-      const double f_b = parallel_residual(phi_b, &b);
-      if (std::isfinite(f_a) && std::isfinite(f_b) && (f_a == 0 || f_a * f_b < 0)) {
-        double lo = phi_a, hi = phi_b, f_lo = f_a;
-        for (int it = 0; it < 100 && hi - lo > 1e-16; ++it) {
-          const double m = 0.5 * (lo + hi);
-          const double f_m = parallel_residual(m, &mid);
-          if (!std::isfinite(f_m)) break;
-          if ((f_m < 0) == (f_lo < 0)) {
-            lo = m;
-            f_lo = f_m;
-          } else {
-            hi = m;
-          }
-        }
-        AxisCandidate root;
-        parallel_residual(0.5 * (lo + hi), &root);
-        if (root.valid && root.scaled_chord.dot(chord) > 0) {
-          HelixElement candidate = h;
-          const double w = root.scaled_chord.norm() / chord_len;
-          candidate.darboux_per_mm = w * root.axis;
-          candidate.length_mm = root.theta / w;
-          // A sign change across a jump of theta is no root: check the end.
-          const bool reaches =
-              (candidate.PointAt(candidate.length_mm) - p1).norm() < 1e-7 * chord_len &&
-              (candidate.TangentAt(candidate.length_mm) - t1).norm() < 1e-7;
-          const double score = preferred_length_mm > 0
-                                   ? std::abs(candidate.length_mm - preferred_length_mm)
-                                   : candidate.length_mm;
-          if (reaches) shortest_this_turn = std::min(shortest_this_turn, candidate.length_mm);
-          if (reaches && score < best_score) {
-            best_score = score;
-            h = candidate;
-            found = true;
-          }
-        }
-      }
-      phi_a = phi_b;
-      f_a = f_b;
-    }
-    // More turns only make longer helices.
-    if (found && !(preferred_length_mm > 0 && shortest_this_turn < preferred_length_mm)) break;
+  for (int samples : {90, 720}) {  // a finer scan only when the coarse one misses a root
+    found = search.Run(samples, preferred_length_mm, &h);
+    if (found) break;
   }
   if (!found) return InvalidArgument("helix: no helix joins the two points with these tangents");
   return h;

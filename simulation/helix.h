@@ -17,6 +17,9 @@
 
 namespace hairrig {
 
+// Unit tangents closer than this are equal: the element between them is straight.
+constexpr double kStraightTangentGap = 1e-9;
+
 struct HelixElement {
   Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d start_tangent = Eigen::Vector3d::UnitZ();  // unit
@@ -31,9 +34,10 @@ struct HelixElement {
 
 // Builds the element from curvature, torsion and length at a start point with
 // a start tangent and principal normal (unit, orthogonal to the tangent).
-HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm, const Eigen::Vector3d& tangent,
-                                       const Eigen::Vector3d& normal, double curvature_per_mm, double torsion_per_mm,
-                                       double length_mm);
+HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,
+                                       const Eigen::Vector3d& tangent,
+                                       const Eigen::Vector3d& normal, double curvature_per_mm,
+                                       double torsion_per_mm, double length_mm);
 
 // The helix through p0 with tangent t0 that reaches p1 with tangent t1
 // (interpolation of two points and two tangents, Sec. V-C after ref. [38]).
@@ -43,7 +47,8 @@ HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm, const Ei
 // tangents give a straight element when the chord is along them.
 // InvalidArgument names the violated condition (coincident points, tangents
 // not unit, not co-helical, no helix found).
-Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0, const Eigen::Vector3d& p1,
-                                  const Eigen::Vector3d& t1, double preferred_length_mm = 0);
+Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
+                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1,
+                                  double preferred_length_mm = 0);
 
 }  // namespace hairrig

@@ -1,16 +1,17 @@
 #include "simulation/helix.h"
 
-#include <cmath>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
 
 namespace hairrig {
 namespace {
 
 HelixElement Reference(double k, double tau, double length) {
   return HelixFromCurvatureTorsion({1, 2, 3}, Eigen::Vector3d(0.3, -0.2, 1).normalized(),
-                                   Eigen::Vector3d(0.3, -0.2, 1).normalized().unitOrthogonal(), k, tau, length);
+                                   Eigen::Vector3d(0.3, -0.2, 1).normalized().unitOrthogonal(), k,
+                                   tau, length);
 }
 
 // Eq. 8 against the definition: r' = t, |t| = 1, |r''| = k.
@@ -33,15 +34,17 @@ TEST(Helix, ExactHelixIsRecoveredFromItsEndsToOnePartPerMillion) {
   struct Case {
     double k, tau, length;
   };
-  for (const Case c : {Case{0.05, 0.02, 60}, Case{0.05, -0.02, 60}, Case{0.2, 0.1, 25}, Case{0.002, 0.001, 300},
-                       Case{0.1, 0.0, 40}, Case{0.15, 0.3, 30}, Case{0.08, 0.01, 70},
-                       Case{0.18, 0.07, 200}}) {  // the last: a curl of about six turns
+  for (const Case c :
+       {Case{0.05, 0.02, 60}, Case{0.05, -0.02, 60}, Case{0.2, 0.1, 25}, Case{0.002, 0.001, 300},
+        Case{0.1, 0.0, 40}, Case{0.15, 0.3, 30}, Case{0.08, 0.01, 70},
+        Case{0.18, 0.07, 200}}) {  // the last: a curl of about six turns
     const HelixElement truth = Reference(c.k, c.tau, c.length);
-    auto fitted = HelixThrough(truth.start_mm, truth.start_tangent, truth.PointAt(c.length), truth.TangentAt(c.length),
-                               c.length);
+    auto fitted = HelixThrough(truth.start_mm, truth.start_tangent, truth.PointAt(c.length),
+                               truth.TangentAt(c.length), c.length);
     ASSERT_TRUE(fitted.ok()) << fitted.status().ToString() << " k " << c.k << " tau " << c.tau;
     EXPECT_NEAR(fitted->curvature_per_mm(), c.k, 1e-6 * c.k) << "k " << c.k << " tau " << c.tau;
-    EXPECT_NEAR(fitted->torsion_per_mm(), c.tau, 1e-6 * std::max(std::abs(c.tau), c.k)) << "k " << c.k;
+    EXPECT_NEAR(fitted->torsion_per_mm(), c.tau, 1e-6 * std::max(std::abs(c.tau), c.k))
+        << "k " << c.k;
     EXPECT_NEAR(fitted->length_mm, c.length, 1e-6 * c.length) << "k " << c.k << " tau " << c.tau;
   }
 }
@@ -52,8 +55,10 @@ TEST(Helix, StraightAndImpossibleCases) {
   ASSERT_TRUE(straight.ok());
   EXPECT_DOUBLE_EQ(straight->length_mm, 10);
   EXPECT_DOUBLE_EQ(straight->curvature_per_mm(), 0);
-  EXPECT_FALSE(HelixThrough({0, 0, 0}, t, {0, 10, 0}, t).ok()) << "equal tangents, chord across them";
-  EXPECT_FALSE(HelixThrough({0, 0, 0}, t, {0, 0, 0}, Eigen::Vector3d::UnitY()).ok()) << "coincident points";
+  EXPECT_FALSE(HelixThrough({0, 0, 0}, t, {0, 10, 0}, t).ok())
+      << "equal tangents, chord across them";
+  EXPECT_FALSE(HelixThrough({0, 0, 0}, t, {0, 0, 0}, Eigen::Vector3d::UnitY()).ok())
+      << "coincident points";
   auto not_cohelical = HelixThrough({0, 0, 0}, t, {1, 2, 0}, Eigen::Vector3d::UnitY());
   ASSERT_FALSE(not_cohelical.ok());
   EXPECT_NE(not_cohelical.status().message().find("co-helical"), std::string::npos);

@@ -15,7 +15,8 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
     if (!p.allFinite()) return InvalidArgument("strand has a point that is not a finite number");
     if (s.points_.empty() || (p - s.points_.back()).norm() > 1e-9) s.points_.push_back(p);
   }
-  if (s.points_.size() < 2) return InvalidArgument("strand has fewer than 2 distinct points (zero length)");
+  if (s.points_.size() < 2)
+    return InvalidArgument("strand has fewer than 2 distinct points (zero length)");
   const int n = static_cast<int>(s.points_.size());
   // Catmull-Rom tangents scaled by the neighbouring chord lengths (C1 at joints).
   std::vector<Eigen::Vector3d> tangent(static_cast<size_t>(n));
@@ -70,7 +71,8 @@ Eigen::Vector3d StrandSpline::BezierDerivative(int segment, double u) const {
 void StrandSpline::Locate(double s, int* segment, double* u) const {
   s = std::clamp(s, 0.0, length_mm());
   const auto it = std::upper_bound(cumulative_mm_.begin(), cumulative_mm_.end(), s);
-  const size_t hi = std::min<size_t>(static_cast<size_t>(it - cumulative_mm_.begin()), cumulative_mm_.size() - 1);
+  const size_t hi =
+      std::min<size_t>(static_cast<size_t>(it - cumulative_mm_.begin()), cumulative_mm_.size() - 1);
   const size_t lo = hi == 0 ? 0 : hi - 1;
   const double span = cumulative_mm_[hi] - cumulative_mm_[lo];
   const double f = span > 0 ? (s - cumulative_mm_[lo]) / span : 0;

@@ -4,9 +4,8 @@
 // Millimetres.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/status.h"
 
