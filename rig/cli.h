@@ -35,5 +35,6 @@ void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   AddDevicesCommand(app, common, dispatch);
   AddCaptureCommand(app, common, dispatch);
   AddReplayCommand(app, common, dispatch);
+  AddFitCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -182,6 +183,40 @@ TEST(CliCapture, ResumeOfAFolderThatIsNoCaptureIsRefused) {
   const CommandRun r = Hairrig("capture --out " + dir + " --resume");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("not a capture folder"), std::string::npos) << r.output;
+}
+
+// Twelve curls as an ASCII PLY strand file (vertex + strand element).
+std::string CurlsPly() {
+  std::string text = "ply\nformat ascii 1.0\nelement vertex 480\nproperty float x\nproperty float y\n"
+                     "property float z\nelement strand 12\nproperty ushort nsegs\nend_header\n";
+  for (int s = 0; s < 12; ++s) {
+    for (int k = 0; k < 40; ++k) {
+      const double a = 0.3 * k;
+      text += std::to_string(20 * (s % 4) + 5 * std::cos(a)) + " " + std::to_string(20 * (s / 4) + 5 * std::sin(a)) +
+              " " + std::to_string(-0.8 * k) + "\n";
+    }
+  }
+  for (int s = 0; s < 12; ++s) text += "39\n";
+  return TempFile("curls.ply", text);
+}
+
+TEST(CliFit, FitsStrandsAndRefusesBadInput) {
+  const std::string strands = CurlsPly();
+  const std::string out = FreshPath("model.json");
+  CommandRun r = Hairrig("fit " + strands + " --out " + out + " --guides 4 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = LastLineJson(r.output);
+  EXPECT_EQ(j["guides"], 4);
+  EXPECT_LT(j["mean_error_mm"].get<double>(), 0.5);
+  EXPECT_LT(j["max_g1_defect_deg"].get<double>(), 1e-3);
+  EXPECT_TRUE(fs::exists(out));
+  r = Hairrig("fit " + strands + " --out " + out + " --guides 1000");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("more than the 12 strands"), std::string::npos) << r.output;
+  const std::string broken = TempFile("broken.hair", "not a hair file");
+  r = Hairrig("fit " + broken + " --out " + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("broken.hair"), std::string::npos) << r.output;
 }
 
 }  // namespace capture_cli

@@ -1,0 +1,75 @@
+#include "simulation/helix_model.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "core/file_util.h"
+
+namespace hairrig {
+namespace {
+
+StrandSet Curls() {
+  StrandSet set;
+  for (int s = 0; s < 12; ++s) {
+    std::vector<Eigen::Vector3f> p;
+    for (int k = 0; k < 80; ++k) {
+      const float a = 0.25f * static_cast<float>(k);
+      p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a), 20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
+                     -0.6f * static_cast<float>(k));
+    }
+    set.AddStrand(p);
+  }
+  return set;
+}
+
+TEST(HelixModel, FitWriteReadRoundTrip) {
+  FitOptions o;
+  o.guides.num_guides = 4;
+  FitSummary s;
+  auto model = FitHairModel(Curls(), o, &s);
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  EXPECT_EQ(s.guides, 4);
+  EXPECT_LT(s.mean_error_mm, 0.5);
+  const std::string path = ::testing::TempDir() + "/model.json";
+  ASSERT_TRUE(WriteHelixModel(path, *model, s).ok());
+  auto read = ReadHelixModel(path);
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  ASSERT_EQ(read->guides.size(), model->guides.size());
+  for (size_t g = 0; g < read->guides.size(); ++g) {
+    const auto& a = model->guides[g].elements.back();
+    const auto& b = read->guides[g].elements.back();
+    EXPECT_NEAR((a.PointAt(a.length_mm) - b.PointAt(b.length_mm)).norm(), 0, 1e-9);
+  }
+}
+
+TEST(HelixModel, BadModelsAreRefusedWithTheReason) {
+  const std::string dir = ::testing::TempDir();
+  ASSERT_TRUE(WriteFileAtomic(dir + "/v2.json", R"({"format": "hairrig-helix-model", "version": 2, "guides": []})").ok());
+  auto r = ReadHelixModel(dir + "/v2.json");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("version 2"), std::string::npos) << r.status().ToString();
+  ASSERT_TRUE(WriteFileAtomic(dir + "/nan.json", R"({"format": "hairrig-helix-model", "version": 1, "guides":
+      [{"strand": 0, "elements": [{"start_mm": [0, 0, 0], "start_tangent": [1, 0, 0],
+        "darboux_per_mm": [0, 0, 0], "length_mm": -1}]}]})")
+                  .ok());
+  r = ReadHelixModel(dir + "/nan.json");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("guides[0].elements[0]"), std::string::npos) << r.status().ToString();
+  ASSERT_TRUE(WriteFileAtomic(dir + "/other.json", "{\"hello\": 1}").ok());
+  EXPECT_FALSE(ReadHelixModel(dir + "/other.json").ok());
+}
+
+TEST(HelixModel, DegenerateStrandsAreNamed) {
+  StrandSet set = Curls();
+  set.AddStrand({{0, 0, 0}, {0, 0, 0}, {0, 0, 0}});  // zero length
+  FitOptions o;
+  o.guides.num_guides = 13;  // every strand a guide
+  auto model = FitHairModel(set, o, nullptr);
+  ASSERT_FALSE(model.ok());
+  EXPECT_NE(model.status().ToString().find("strand 12"), std::string::npos) << model.status().ToString();
+}
+
+}  // namespace
+}  // namespace hairrig
