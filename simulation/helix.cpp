@@ -56,65 +56,49 @@ HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,
 
 namespace {
 
-// For a candidate axis of the helix (unit, orthogonal to t1 - t0): the
-// rotation angle theta in (0, 2 pi] about it that takes t0 to t1, and
-// g = w * (p1 - p0), the chord of the helix scaled by its angular rate.
-struct AxisCandidate {
-  Eigen::Vector3d axis;
-  double theta = 0;
-  Eigen::Vector3d scaled_chord;
-  bool valid = false;
-};
-
-AxisCandidate EvaluateAxis(const Eigen::Vector3d& axis, const Eigen::Vector3d& t0,
-                           const Eigen::Vector3d& t1, int extra_turns) {
-  AxisCandidate c;
-  c.axis = axis;
-  const double tau_bar = t0.dot(axis);
-  const Eigen::Vector3d u0 = t0 - tau_bar * axis;
-  const Eigen::Vector3d u1 = t1 - t1.dot(axis) * axis;
-  if (u0.norm() < 1e-12) return c;  // the tangent is along the axis: no rotation to speak of
-  c.theta = std::atan2(axis.dot(u0.cross(u1)), u0.dot(u1));
-  if (c.theta <= 0) c.theta += kTwoPi;
-  c.theta += kTwoPi * extra_turns;
-  c.scaled_chord =
-      tau_bar * c.theta * axis + std::sin(c.theta) * u0 - (1 - std::cos(c.theta)) * t0.cross(axis);
-  c.valid = true;
-  return c;
-}
-
-// The helices through (p0, t0) and (p1, t1): their axis lies in the plane
-// normal to t1 - t0, axis(phi) = cos(phi) e1 + sin(phi) e2, and must make the
-// scaled chord g parallel to p1 - p0 (both lie in that plane, so this is one
-// scalar equation in phi). Roots are bracketed on a scan of phi, refined by
-// bisection and kept only if the helix really ends at (p1, t1).
+// The helices through (p0, t0) and (p1, t1), reduced to one scalar equation.
+// In the plane P normal to n = (t1 - t0) / |t1 - t0| (it holds the axis, the
+// chord and m = (t0 + t1) / 2), take e1 along m (M = |m|), e2 = n x e1, and
+// the axis at angle phi: a = cos(phi) e1 + sin(phi) e2, a_perp = sin(phi) e1 -
+// cos(phi) e2. With t0 = m - c n, t1 = m + c n (c = |t1 - t0| / 2):
+//   tau_bar = M cos(phi);
+//   the rotation about a taking t0 to t1 turns by theta = 2 atan(c / (M |sin phi|))
+//   when sin(phi) < 0, else by 2 pi minus that (plus 2 pi per extra turn);
+//   Eq. 8 at s = L gives the chord scaled by w: g = M theta cos(phi) a - 2 c a_perp.
+// g must be parallel to the chord d = |d| (cos psi e1 + sin psi e2):
+//   f(phi) = M theta cos(phi) sin(psi - phi) - 2 c cos(psi - phi) = 0, g.d > 0,
+// and then w = |g| / |d|, L = theta / w. f is continuous in phi; its roots are
+// bracketed on a scan and refined by bisection.
 class HelixSearch {
  public:
   HelixSearch(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0, const Eigen::Vector3d& p1,
               const Eigen::Vector3d& t1)
-      : p0_(p0), t0_(t0), p1_(p1), t1_(t1), chord_(p1 - p0), chord_len_(chord_.norm()) {
-    n_ = (t1 - t0).normalized();
-    Eigen::Vector3d e1 = t0 + t1;
-    if (e1.norm() < 1e-9) e1 = n_.unitOrthogonal();
-    e1_ = (e1 - e1.dot(n_) * n_).normalized();
-    e2_ = n_.cross(e1_);
+      : p0_(p0), t0_(t0), p1_(p1), t1_(t1) {
+    const Eigen::Vector3d n = (t1 - t0).normalized();
+    const Eigen::Vector3d m = 0.5 * (t0 + t1);
+    c_ = 0.5 * (t1 - t0).norm();
+    m_ = m.norm();
+    e1_ = m_ > 1e-12 ? Eigen::Vector3d(m / m_) : n.unitOrthogonal();
+    e2_ = n.cross(e1_);
+    const Eigen::Vector3d d = p1 - p0;
+    chord_len_ = d.norm();
+    psi_ = std::atan2(d.dot(e2_), d.dot(e1_));
   }
 
-  // Helices of more whole turns join the same ends: they are tried while their
-  // length can still come closer to the preferred one.
-  bool Run(int samples, double preferred_length_mm, HelixElement* best) {
+  // Helices of more whole turns join the same ends: they are tried while none
+  // so far is within 2 % of the preferred length and longer ones may still be.
+  bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
     constexpr int kMaxTurns = 64;
     double best_score = std::numeric_limits<double>::infinity();
     bool found = false;
     for (int turns = 0; turns <= kMaxTurns; ++turns) {
       double shortest = std::numeric_limits<double>::infinity();
-      double phi_a = 0, f_a = Residual(phi_a, turns, nullptr);
+      double phi_a = 0, f_a = F(phi_a, turns);
       for (int i = 1; i <= samples; ++i) {
         const double phi_b = kTwoPi * i / samples;
-        const double f_b = Residual(phi_b, turns, nullptr);
+        const double f_b = F(phi_b, turns);
         HelixElement candidate;
-        if (std::isfinite(f_a) && std::isfinite(f_b) && (f_a == 0 || f_a * f_b < 0) &&
-            Refine(phi_a, phi_b, f_a, turns, &candidate)) {
+        if ((f_a == 0 || f_a * f_b < 0) && Refine(phi_a, phi_b, f_a, turns, &candidate)) {
           shortest = std::min(shortest, candidate.length_mm);
           const double score = preferred_length_mm > 0
                                    ? std::abs(candidate.length_mm - preferred_length_mm)
@@ -128,49 +112,54 @@ class HelixSearch {
         phi_a = phi_b;
         f_a = f_b;
       }
-      if (found && !(preferred_length_mm > 0 && shortest < preferred_length_mm)) break;
+      // Fewer turns win unless more turns come much closer to the preferred
+      // length (a tight coil along the chord can match any length).
+      const bool close_enough = best_score <= 0.02 * preferred_length_mm;
+      if (found && (close_enough || !(preferred_length_mm > 0 && shortest < preferred_length_mm))) break;
     }
     return found;
   }
 
  private:
-  double Residual(double phi, int turns, AxisCandidate* out) const {
-    const AxisCandidate c =
-        EvaluateAxis(std::cos(phi) * e1_ + std::sin(phi) * e2_, t0_, t1_, turns);
-    if (out) *out = c;
-    if (!c.valid) return std::numeric_limits<double>::quiet_NaN();
-    return n_.dot(c.scaled_chord.cross(chord_)) / chord_len_;
+  double Theta(double phi, int turns) const {
+    const double half = std::atan2(c_, m_ * std::abs(std::sin(phi)));
+    return (std::sin(phi) < 0 ? 2 * half : kTwoPi - 2 * half) + kTwoPi * turns;
+  }
+  double F(double phi, int turns) const {
+    return m_ * Theta(phi, turns) * std::cos(phi) * std::sin(psi_ - phi) -
+           2 * c_ * std::cos(psi_ - phi);
   }
 
-  // Bisection on [lo, hi]; true with the helix if the root is a real one (a
-  // sign change across a jump of theta is not).
+  // Bisection on [lo, hi]; true with the helix if g points along the chord and
+  // the helix really ends at (p1, t1).
   bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
-    for (int it = 0; it < 100 && hi - lo > 1e-16; ++it) {
-      const double m = 0.5 * (lo + hi);
-      const double f_m = Residual(m, turns, nullptr);
-      if (!std::isfinite(f_m)) return false;
-      if ((f_m < 0) == (f_lo < 0)) {
-        lo = m;
-        f_lo = f_m;
+    for (int it = 0; it < 80 && hi - lo > 1e-15; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      const double f_mid = F(mid, turns);
+      if ((f_mid < 0) == (f_lo < 0)) {
+        lo = mid;
+        f_lo = f_mid;
       } else {
-        hi = m;
+        hi = mid;
       }
     }
-    AxisCandidate root;
-    Residual(0.5 * (lo + hi), turns, &root);
-    if (!root.valid || root.scaled_chord.dot(chord_) <= 0) return false;
-    const double w = root.scaled_chord.norm() / chord_len_;
+    const double phi = 0.5 * (lo + hi);
+    const double theta = Theta(phi, turns);
+    const double axial = m_ * theta * std::cos(phi);
+    if (axial * std::cos(psi_ - phi) + 2 * c_ * std::sin(psi_ - phi) <= 0)
+      return false;  // g against the chord
+    const double w = std::hypot(axial, 2 * c_) / chord_len_;
     out->start_mm = p0_;
     out->start_tangent = t0_;
-    out->darboux_per_mm = w * root.axis;
-    out->length_mm = root.theta / w;
+    out->darboux_per_mm = w * (std::cos(phi) * e1_ + std::sin(phi) * e2_);
+    out->length_mm = theta / w;
     return (out->PointAt(out->length_mm) - p1_).norm() < 1e-7 * chord_len_ &&
            (out->TangentAt(out->length_mm) - t1_).norm() < 1e-7;
   }
 
-  Eigen::Vector3d p0_, t0_, p1_, t1_, chord_;
-  double chord_len_;
-  Eigen::Vector3d n_, e1_, e2_;
+  Eigen::Vector3d p0_, t0_, p1_, t1_;
+  Eigen::Vector3d e1_, e2_;
+  double c_ = 0, m_ = 0, psi_ = 0, chord_len_ = 0;
 };
 
 }  // namespace
@@ -203,7 +192,7 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
   }
   HelixSearch search(p0, t0, p1, t1);
   bool found = false;
-  for (int samples : {90, 720}) {  // a finer scan only when the coarse one misses a root
+  for (int samples : {48, 720}) {  // a finer scan only when the coarse one misses a root
     found = search.Run(samples, preferred_length_mm, &h);
     if (found) break;
   }
