@@ -16,6 +16,7 @@ struct FitArgs {
   double target_rms_mm = 5;
   int fixed_elements = 0;
   bool paper_root = false;
+  double target_error_mm = 0.05;
 };
 
 Result<nlohmann::json> RunFit(const FitArgs& a) {
@@ -32,6 +33,7 @@ Result<nlohmann::json> RunFit(const FitArgs& a) {
     options.fitting.fixed_elements = a.fixed_elements;
   }
   options.fitting.anchor_root = !a.paper_root;
+  options.fitting.target_mean_error_mm = a.target_error_mm;
   FitSummary s;
   HR_ASSIGN_OR_RETURN(HelixModel model, FitHairModel(strands, options, &s));
   model.source = a.strands;
@@ -70,6 +72,10 @@ void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
       ->capture_default_str();
   cmd->add_option("--fixed-n", args->fixed_elements, "fixed element count per guide (the paper's N=15 baseline)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--target-error", args->target_error_mm,
+                  "grow N past Algorithm 2 until the mean fit error is below this (mm); 0: Algorithm 2 alone (paper)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_flag("--paper-root", args->paper_root, "relax the root too (Eq. 5 as printed) instead of anchoring it");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {

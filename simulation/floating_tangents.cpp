@@ -21,6 +21,8 @@ bool FloatingTangentsOptions::IsValid(std::string* why) const {
     *why = "fixed_elements must be at least 1";
   } else if (!(min_length_mm > 0) || !(max_length_mm > min_length_mm)) {
     *why = "lengths need 0 < min_length_mm < max_length_mm";
+  } else if (!(target_mean_error_mm >= 0)) {
+    *why = "target_mean_error_mm must be 0 (off) or positive";
   } else if (error_samples_per_element < 2) {
     *why = "error_samples_per_element must be at least 2";
   } else {
@@ -135,13 +137,12 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
   *max_mm = worst;
 }
 
-Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
+namespace {
+
+// Algorithm 1, lines 4-8, for a given element count.
+Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
                                            const FloatingTangentsOptions& options,
                                            StrandFitSummary* summary) {
-  std::string why;
-  if (!options.IsValid(&why)) return InvalidArgument("floating tangents options: " + why);
-  HR_ASSIGN_OR_RETURN(StrandSpline spline, StrandSpline::Create(points_mm));
-  const int n = options.adaptive ? AdaptiveElementCount(spline, options) : options.fixed_elements;
   const double length = spline.length_mm();
   std::vector<Eigen::Vector3d> p, t;
   for (int i = 0; i <= n; ++i) {
@@ -183,6 +184,27 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     }
   }
   DistanceToCurve(spline.points(), curve, &s.mean_error_mm, &s.max_error_mm);
+  *summary = s;
+  return model;
+}
+
+}  // namespace
+
+Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
+                                           const FloatingTangentsOptions& options,
+                                           StrandFitSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) return InvalidArgument("floating tangents options: " + why);
+  HR_ASSIGN_OR_RETURN(StrandSpline spline, StrandSpline::Create(points_mm));
+  int n = options.adaptive ? AdaptiveElementCount(spline, options) : options.fixed_elements;
+  StrandFitSummary s;
+  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, &s));
+  // Ours beside Algorithm 2: more elements while the fit error exceeds the target.
+  while (options.adaptive && options.target_mean_error_mm > 0 &&
+         s.mean_error_mm > options.target_mean_error_mm && n < options.max_elements) {
+    n = std::min(options.max_elements, n + std::max(1, n / 2));
+    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, n, options, &s));
+  }
   if (summary) *summary = s;
   return model;
 }

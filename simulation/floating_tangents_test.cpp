@@ -81,15 +81,24 @@ TEST(FloatingTangents, RealStrandsFitAdaptiveAndFixed) {
   auto strands = ReadStrands(path);
   ASSERT_TRUE(strands.ok()) << strands.status().ToString();
   const auto offsets = strands->Offsets();
-  for (bool adaptive : {true, false}) {
+  struct Variant {
+    const char* name;
+    bool adaptive;
+    double target_mm;
+  };
+  double mean_of[3] = {0, 0, 0};
+  int v = 0;
+  for (const Variant variant : {Variant{"adaptive N, Algorithm 2 (paper)", true, 0.0},
+                                Variant{"adaptive N, error target 0.05 mm (ours)", true, 0.05},
+                                Variant{"fixed N = 15 (Table 2 baseline)", false, 0.0}}) {
     FloatingTangentsOptions o;
-    o.adaptive = adaptive;
+    o.adaptive = variant.adaptive;
+    o.target_mean_error_mm = variant.target_mm;
     double mean_sum = 0, worst = 0, g1 = 0;
     int fitted = 0, elements = 0;
     for (size_t k = 0; k < strands->num_strands(); ++k) {
       std::vector<Eigen::Vector3d> p;
-      for (size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-        p.push_back(strands->points_mm[i].cast<double>());
+      for (size_t i = offsets[k]; i < offsets[k + 1]; ++i) p.push_back(strands->points_mm[i].cast<double>());
       StrandFitSummary s;
       auto model = FitFloatingTangents(p, o, &s);
       ASSERT_TRUE(model.ok()) << "strand " << k << ": " << model.status().ToString();
@@ -99,17 +108,16 @@ TEST(FloatingTangents, RealStrandsFitAdaptiveAndFixed) {
       elements += s.elements;
       ++fitted;
     }
-    std::printf(
-        "Bangs_100 %s: %d strands, %.2f elements per strand, mean error %.3f mm, max %.3f mm, G1 "
-        "%.2e deg\n",
-        adaptive ? "adaptive N" : "fixed N=15", fitted, static_cast<double>(elements) / fitted,
-        mean_sum / fitted, worst, g1);
-    // Measured: adaptive (Table 3 parameters; these gently curved bangs get
-    // N_min = 3) 0.89 mm mean, 10.6 mm max; fixed N = 15: 0.054 mm, 1.11 mm.
-    EXPECT_LT(mean_sum / fitted, adaptive ? 1.3 : 0.1);
-    EXPECT_LT(worst, adaptive ? 15.0 : 2.0);
+    std::printf("Bangs_100, %s: %.2f elements per strand, mean error %.3f mm, max %.3f mm, G1 %.1e deg\n",
+                variant.name, static_cast<double>(elements) / fitted, mean_sum / fitted, worst, g1);
+    mean_of[v++] = mean_sum / fitted;
     EXPECT_LT(g1, 1e-3);
   }
+  // Measured: paper 0.89 mm (these gently curved bangs get N_min = 3), ours
+  // 0.039 mm, fixed N = 15 0.054 mm.
+  EXPECT_LT(mean_of[0], 1.3);
+  EXPECT_LE(mean_of[1], mean_of[2]) << "ours is no worse than the fixed-N baseline";
+  EXPECT_LT(mean_of[2], 0.1);
 }
 
 }  // namespace
