@@ -1,6 +1,7 @@
 #include "simulation/strand_spline.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace hairrig {
@@ -48,22 +49,19 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
   return s;
 }
 
-Eigen::Vector3d StrandSpline::Bezier(int segment, double u) const {
+std::array<Eigen::Vector3d, 4> StrandSpline::Controls(int segment) const {
   const size_t i = static_cast<size_t>(3 * segment);
-  const Eigen::Vector3d& a = control_[i];
-  const Eigen::Vector3d& b = control_[i + 1];
-  const Eigen::Vector3d& c = control_[i + 2];
-  const Eigen::Vector3d& d = points_[static_cast<size_t>(segment + 1)];
+  return {control_[i], control_[i + 1], control_[i + 2], points_[static_cast<size_t>(segment + 1)]};
+}
+
+Eigen::Vector3d StrandSpline::Bezier(int segment, double u) const {
+  const auto [a, b, c, d] = Controls(segment);
   const double v = 1 - u;
   return v * v * v * a + 3 * v * v * u * b + 3 * v * u * u * c + u * u * u * d;
 }
 
 Eigen::Vector3d StrandSpline::BezierDerivative(int segment, double u) const {
-  const size_t i = static_cast<size_t>(3 * segment);
-  const Eigen::Vector3d& a = control_[i];
-  const Eigen::Vector3d& b = control_[i + 1];
-  const Eigen::Vector3d& c = control_[i + 2];
-  const Eigen::Vector3d& d = points_[static_cast<size_t>(segment + 1)];
+  const auto [a, b, c, d] = Controls(segment);
   const double v = 1 - u;
   return 3 * v * v * (b - a) + 6 * v * u * (c - b) + 3 * u * u * (d - c);
 }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "core/status.h"
@@ -25,6 +26,7 @@ class StrandSpline {
  private:
   // Segment index and Bezier parameter u in [0, 1] at arc length s.
   void Locate(double s_mm, int* segment, double* u) const;
+  std::array<Eigen::Vector3d, 4> Controls(int segment) const;  // the segment's Bezier control points
   Eigen::Vector3d Bezier(int segment, double u) const;
   Eigen::Vector3d BezierDerivative(int segment, double u) const;
 
