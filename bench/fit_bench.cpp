@@ -60,6 +60,7 @@ void Compare(const std::string& name, const StrandSet& strands) {
 }  // namespace
 
 int main() {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
   std::printf("%-26s %-22s %6s %9s %10s %12s %11s\n", "strands", "method", "count", "time_s", "elements", "mean_err_mm",
               "max_err_mm");
   for (WigStyle style : {WigStyle::kStraight, WigStyle::kCurly}) {

@@ -115,7 +115,8 @@ class HelixSearch {
       // Fewer turns win unless more turns come much closer to the preferred
       // length (a tight coil along the chord can match any length).
       const bool close_enough = best_score <= 0.02 * preferred_length_mm;
-      if (found && (close_enough || !(preferred_length_mm > 0 && shortest < preferred_length_mm))) break;
+      if (found && (close_enough || !(preferred_length_mm > 0 && shortest < preferred_length_mm)))
+        break;
     }
     return found;
   }
@@ -130,17 +131,34 @@ class HelixSearch {
            2 * c_ * std::cos(psi_ - phi);
   }
 
-  // Bisection on [lo, hi]; true with the helix if g points along the chord and
+  // The root on [lo, hi]; true with the helix if g points along the chord and
   // the helix really ends at (p1, t1).
   bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
-    for (int it = 0; it < 80 && hi - lo > 1e-15; ++it) {
-      const double mid = 0.5 * (lo + hi);
+    // Regula falsi with the Illinois modification: bracketed like bisection,
+    // superlinear near a simple root.
+    double f_hi = F(hi, turns);
+    int same_side = 0;
+    for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
+      double mid = f_hi != f_lo ? (lo * f_hi - hi * f_lo) / (f_hi - f_lo) : 0.5 * (lo + hi);
+      if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
       const double f_mid = F(mid, turns);
+      if (f_mid == 0) {
+        lo = hi = mid;
+        break;
+      }
       if ((f_mid < 0) == (f_lo < 0)) {
         lo = mid;
         f_lo = f_mid;
+        if (++same_side >= 2) f_hi *= 0.5;
       } else {
         hi = mid;
+        f_hi = f_mid;
+        same_side = same_side > 0 ? -1 : same_side - 1;
+        if (same_side <= -2) f_lo *= 0.5;
+      }
+      if (std::abs(f_mid) < 1e-15 * (m_ + c_)) {
+        lo = hi = mid;
+        break;
       }
     }
     const double phi = 0.5 * (lo + hi);
