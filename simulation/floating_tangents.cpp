@@ -122,14 +122,15 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
                      const std::vector<Eigen::Vector3d>& curve, double* mean_mm, double* max_mm) {
   double sum = 0, worst = 0;
   for (const auto& q : points) {
-    double best = std::numeric_limits<double>::infinity();
+    double best2 = (curve[0] - q).squaredNorm();
     for (size_t k = 0; k + 1 < curve.size(); ++k) {
       const Eigen::Vector3d seg = curve[k + 1] - curve[k];
+      const Eigen::Vector3d to_q = q - curve[k];
       const double len2 = seg.squaredNorm();
-      const double u = len2 > 0 ? std::clamp((q - curve[k]).dot(seg) / len2, 0.0, 1.0) : 0.0;
-      best = std::min(best, (curve[k] + u * seg - q).norm());
+      const double u = len2 > 0 ? std::clamp(to_q.dot(seg) / len2, 0.0, 1.0) : 0.0;
+      best2 = std::min(best2, (to_q - u * seg).squaredNorm());
     }
-    if (curve.size() == 1) best = (curve[0] - q).norm();
+    const double best = std::sqrt(best2);
     sum += best;
     worst = std::max(worst, best);
   }

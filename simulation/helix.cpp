@@ -85,23 +85,26 @@ class HelixSearch {
     psi_ = std::atan2(d.dot(e2_), d.dot(e1_));
   }
 
-  // Helices of more whole turns join the same ends: they are tried while none
-  // so far is within 2 % of the preferred length and longer ones may still be.
+  // Helices of more whole turns join the same ends (a tight coil along the
+  // chord can match almost any length). Each extra turn costs kTurnPenalty of
+  // the preferred length in the score, so the search stops as soon as no
+  // helix of more turns can beat the best one so far.
   bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
     constexpr int kMaxTurns = 64;
+    constexpr double kTurnPenalty = 0.02;
     double best_score = std::numeric_limits<double>::infinity();
     bool found = false;
     for (int turns = 0; turns <= kMaxTurns; ++turns) {
-      double shortest = std::numeric_limits<double>::infinity();
+      const double turn_cost = kTurnPenalty * turns * preferred_length_mm;
+      if (found && (preferred_length_mm <= 0 || turn_cost >= best_score)) break;
       double phi_a = 0, f_a = F(phi_a, turns);
       for (int i = 1; i <= samples; ++i) {
         const double phi_b = kTwoPi * i / samples;
         const double f_b = F(phi_b, turns);
         HelixElement candidate;
         if ((f_a == 0 || f_a * f_b < 0) && Refine(phi_a, phi_b, f_a, turns, &candidate)) {
-          shortest = std::min(shortest, candidate.length_mm);
           const double score = preferred_length_mm > 0
-                                   ? std::abs(candidate.length_mm - preferred_length_mm)
+                                   ? std::abs(candidate.length_mm - preferred_length_mm) + turn_cost
                                    : candidate.length_mm;
           if (score < best_score) {
             best_score = score;
@@ -112,11 +115,6 @@ class HelixSearch {
         phi_a = phi_b;
         f_a = f_b;
       }
-      // Fewer turns win unless more turns come much closer to the preferred
-      // length (a tight coil along the chord can match any length).
-      const bool close_enough = best_score <= 0.02 * preferred_length_mm;
-      if (found && (close_enough || !(preferred_length_mm > 0 && shortest < preferred_length_mm)))
-        break;
     }
     return found;
   }
