@@ -118,17 +118,59 @@ std::vector<Eigen::Vector3d> RelaxBreakPoints(const std::vector<Eigen::Vector3d>
 
 }  // namespace
 
+namespace {
+
+// Squared distance from q to the polyline segments [first, last) of `curve`.
+double SquaredDistanceToSegments(const Eigen::Vector3d& q,
+                                 const std::vector<Eigen::Vector3d>& curve, size_t first,
+                                 size_t last, double best2) {
+  for (size_t k = first; k < last; ++k) {
+    const Eigen::Vector3d seg = curve[k + 1] - curve[k];
+    const Eigen::Vector3d to_q = q - curve[k];
+    const double len2 = seg.squaredNorm();
+    const double u = len2 > 0 ? std::clamp(to_q.dot(seg) / len2, 0.0, 1.0) : 0.0;
+    best2 = std::min(best2, (to_q - u * seg).squaredNorm());
+  }
+  return best2;
+}
+
+}  // namespace
+
+// Exact, with pruning: the curve is cut into blocks of segments, each with a
+// bounding sphere; a block is scanned only if its sphere can hold a point
+// nearer than the best so far. The block at the point's own arc-length
+// fraction is scanned first, so most others are pruned.
 void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
                      const std::vector<Eigen::Vector3d>& curve, double* mean_mm, double* max_mm) {
+  constexpr size_t kBlock = 16;
+  const size_t segments = curve.size() > 1 ? curve.size() - 1 : 0;
+  std::vector<Eigen::Vector3d> centers;
+  std::vector<double> radii;
+  for (size_t first = 0; first < segments; first += kBlock) {
+    const size_t last = std::min(segments, first + kBlock);
+    Eigen::Vector3d center = Eigen::Vector3d::Zero();
+    for (size_t k = first; k <= last; ++k) center += curve[k];
+    center /= static_cast<double>(last - first + 1);
+    double radius = 0;
+    for (size_t k = first; k <= last; ++k) radius = std::max(radius, (curve[k] - center).norm());
+    centers.push_back(center);
+    radii.push_back(radius);
+  }
   double sum = 0, worst = 0;
-  for (const auto& q : points) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& q = points[i];
     double best2 = (curve[0] - q).squaredNorm();
-    for (size_t k = 0; k + 1 < curve.size(); ++k) {
-      const Eigen::Vector3d seg = curve[k + 1] - curve[k];
-      const Eigen::Vector3d to_q = q - curve[k];
-      const double len2 = seg.squaredNorm();
-      const double u = len2 > 0 ? std::clamp(to_q.dot(seg) / len2, 0.0, 1.0) : 0.0;
-      best2 = std::min(best2, (to_q - u * seg).squaredNorm());
+    if (!centers.empty()) {
+      const size_t guess =
+          std::min(centers.size() - 1, i * centers.size() / std::max<size_t>(1, points.size()));
+      best2 = SquaredDistanceToSegments(q, curve, guess * kBlock,
+                                        std::min(segments, guess * kBlock + kBlock), best2);
+      for (size_t b = 0; b < centers.size(); ++b) {
+        const double gap = (q - centers[b]).norm() - radii[b];
+        if (b == guess || (gap > 0 && gap * gap >= best2)) continue;
+        best2 = SquaredDistanceToSegments(q, curve, b * kBlock,
+                                          std::min(segments, b * kBlock + kBlock), best2);
+      }
     }
     const double best = std::sqrt(best2);
     sum += best;

@@ -4,7 +4,9 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
+#include <random>
 
 #include "core/strand_io.h"
 #include "simulation/strand_spline.h"
@@ -64,6 +66,30 @@ TEST(FloatingTangents, StraightStrandGetsTheMinimumOfStraightElements) {
   EXPECT_EQ(s.elements, 3);
   EXPECT_LT(s.max_error_mm, 1e-9);
   for (const auto& e : model->elements) EXPECT_EQ(e.curvature_per_mm(), 0);
+}
+
+// The pruned distance equals a brute-force one.
+TEST(FloatingTangents, DistanceToCurveIsExact) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-50, 50);
+  std::vector<Eigen::Vector3d> curve, points;
+  for (int i = 0; i < 300; ++i) curve.emplace_back(u(rng) * 0.1 + i, u(rng) * 0.1, std::sin(i * 0.1) * 20);
+  for (int i = 0; i < 80; ++i) points.emplace_back(u(rng) + 150, u(rng), u(rng));
+  double mean = 0, max = 0;
+  DistanceToCurve(points, curve, &mean, &max);
+  double brute_sum = 0, brute_max = 0;
+  for (const auto& q : points) {
+    double best = 1e300;
+    for (size_t k = 0; k + 1 < curve.size(); ++k) {
+      const Eigen::Vector3d seg = curve[k + 1] - curve[k];
+      const double t = std::clamp((q - curve[k]).dot(seg) / seg.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (curve[k] + t * seg - q).norm());
+    }
+    brute_sum += best;
+    brute_max = std::max(brute_max, best);
+  }
+  EXPECT_NEAR(mean, brute_sum / static_cast<double>(points.size()), 1e-12);
+  EXPECT_NEAR(max, brute_max, 1e-12);
 }
 
 TEST(FloatingTangents, BadInputIsRefused) {
