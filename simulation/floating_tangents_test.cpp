@@ -3,12 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <cmath>
 #include <algorithm>
-#include <filesystem>
+#include <cmath>
 #include <random>
 
-#include "core/strand_io.h"
 #include "simulation/strand_spline.h"
 
 namespace hairrig {
@@ -73,7 +71,8 @@ TEST(FloatingTangents, DistanceToCurveIsExact) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-50, 50);
   std::vector<Eigen::Vector3d> curve, points;
-  for (int i = 0; i < 300; ++i) curve.emplace_back(u(rng) * 0.1 + i, u(rng) * 0.1, std::sin(i * 0.1) * 20);
+  for (int i = 0; i < 300; ++i)
+    curve.emplace_back(u(rng) * 0.1 + i, u(rng) * 0.1, std::sin(i * 0.1) * 20);
   for (int i = 0; i < 80; ++i) points.emplace_back(u(rng) + 150, u(rng), u(rng));
   double mean = 0, max = 0;
   DistanceToCurve(points, curve, &mean, &max);
@@ -97,53 +96,6 @@ TEST(FloatingTangents, BadInputIsRefused) {
   FloatingTangentsOptions bad;
   bad.max_elements = 0;
   EXPECT_FALSE(FitFloatingTangents(HelixPoints(5, 14, 1, 50), bad).ok());
-}
-
-// Real strands (CT2Hair bangs, ../shared): every strand fits, G1 by
-// construction, with the paper's adaptive N and with the fixed N = 15 baseline.
-TEST(FloatingTangents, RealStrandsFitAdaptiveAndFixed) {
-  const std::string path = "../shared/data/strands/Bangs_100.hair";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent beside the repository";
-  auto strands = ReadStrands(path);
-  ASSERT_TRUE(strands.ok()) << strands.status().ToString();
-  const auto offsets = strands->Offsets();
-  struct Variant {
-    const char* name;
-    bool adaptive;
-    double target_mm;
-  };
-  double mean_of[3] = {0, 0, 0};
-  int v = 0;
-  for (const Variant variant : {Variant{"adaptive N, Algorithm 2 (paper)", true, 0.0},
-                                Variant{"adaptive N, error target 0.05 mm (ours)", true, 0.05},
-                                Variant{"fixed N = 15 (Table 2 baseline)", false, 0.0}}) {
-    FloatingTangentsOptions o;
-    o.adaptive = variant.adaptive;
-    o.target_mean_error_mm = variant.target_mm;
-    double mean_sum = 0, worst = 0, g1 = 0;
-    int fitted = 0, elements = 0;
-    for (size_t k = 0; k < strands->num_strands(); ++k) {
-      std::vector<Eigen::Vector3d> p;
-      for (size_t i = offsets[k]; i < offsets[k + 1]; ++i) p.push_back(strands->points_mm[i].cast<double>());
-      StrandFitSummary s;
-      auto model = FitFloatingTangents(p, o, &s);
-      ASSERT_TRUE(model.ok()) << "strand " << k << ": " << model.status().ToString();
-      mean_sum += s.mean_error_mm;
-      worst = std::max(worst, s.max_error_mm);
-      g1 = std::max(g1, s.max_g1_defect_deg);
-      elements += s.elements;
-      ++fitted;
-    }
-    std::printf("Bangs_100, %s: %.2f elements per strand, mean error %.3f mm, max %.3f mm, G1 %.1e deg\n",
-                variant.name, static_cast<double>(elements) / fitted, mean_sum / fitted, worst, g1);
-    mean_of[v++] = mean_sum / fitted;
-    EXPECT_LT(g1, 1e-3);
-  }
-  // Measured: paper 0.82 mm (these gently curved bangs get N_min = 3), ours
-  // 0.039 mm, fixed N = 15 0.053 mm.
-  EXPECT_LT(mean_of[0], 1.3);
-  EXPECT_LE(mean_of[1], mean_of[2]) << "ours is no worse than the fixed-N baseline";
-  EXPECT_LT(mean_of[2], 0.1);
 }
 
 }  // namespace
