@@ -10,7 +10,6 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -26,12 +25,13 @@ namespace fs = std::filesystem;
 std::string UtcNow() {
   const auto now = std::chrono::system_clock::now();
   const std::time_t t = std::chrono::system_clock::to_time_t(now);
-  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  const auto ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
   std::tm tm{};
   gmtime_r(&t, &tm);
   char text[64];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
-                tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
   return text;
 }
 
@@ -60,13 +60,37 @@ Result<std::string> Quarantine(const std::string& dir, const fs::path& file) {
   std::error_code ec;
   fs::create_directories(q, ec);
   fs::path target = q / file.filename();
-  for (int n = 1; fs::exists(target); ++n) target = q / (file.filename().string() + "." + std::to_string(n));
+  for (int n = 1; fs::exists(target); ++n)
+    target = q / (file.filename().string() + "." + std::to_string(n));
   fs::rename(file, target, ec);
   if (ec) return IoError(file.string() + ": cannot move it to quarantine/ (" + ec.message() + ")");
   return target.string();
 }
 
 }  // namespace
+
+Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path,
+                                                       size_t* cut_short_bytes) {
+  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(journal_path));
+  std::vector<nlohmann::json> records;
+  size_t line_start = 0;
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    if (bytes[i] != '\n') continue;
+    nlohmann::json record =
+        nlohmann::json::parse(bytes.begin() + static_cast<long>(line_start),
+                              bytes.begin() + static_cast<long>(i), nullptr, false);
+    if (record.is_discarded() || !record.is_object()) {
+      return CorruptData(
+          journal_path + ": line " + std::to_string(records.size() + 1) +
+          " is not a JSON record and is not the last one; the journal was altered. Keep a copy, "
+          "then remove that line by hand");
+    }
+    records.push_back(std::move(record));
+    line_start = i + 1;
+  }
+  if (cut_short_bytes) *cut_short_bytes = bytes.size() - line_start;
+  return records;
+}
 
 CaptureDataset::CaptureDataset(std::string dir, DatasetOptions options)
     : dir_(std::move(dir)), options_(options) {}
@@ -78,27 +102,34 @@ CaptureDataset::~CaptureDataset() {
 Status CaptureDataset::OpenJournal() {
   const std::string path = dir_ + "/" + kJournal;
   journal_fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (journal_fd_ < 0) return IoError(path + ": cannot open for appending (" + std::strerror(errno) + ")");
+  if (journal_fd_ < 0)
+    return IoError(path + ": cannot open for appending (" + std::strerror(errno) + ")");
   // One writer per capture: a second hairrig on the same folder is refused.
   if (::flock(journal_fd_, LOCK_EX | LOCK_NB) != 0) {
-    return FailedPrecondition(dir_ + " is being written by another hairrig process; wait for it to finish");
+    return FailedPrecondition(
+        dir_ + " is being written by another hairrig process; wait for it to finish");
   }
   return Status::Ok();
 }
 
-Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string& dir, const std::string& config_text,
-                                                               nlohmann::json metadata, const DatasetOptions& options) {
+Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string& dir,
+                                                               const std::string& config_text,
+                                                               nlohmann::json metadata,
+                                                               const DatasetOptions& options) {
   std::error_code ec;
   if (fs::exists(dir, ec)) {
-    return FailedPrecondition(dir + " already exists: choose a new --out folder, or add --resume to continue it");
+    return FailedPrecondition(
+        dir + " already exists: choose a new --out folder, or add --resume to continue it");
   }
   const fs::path parent = fs::absolute(dir).parent_path();
   fs::create_directories(parent, ec);
-  if (!fs::is_directory(parent, ec)) return IoError(parent.string() + ": cannot create the folder to hold the capture");
+  if (!fs::is_directory(parent, ec))
+    return IoError(parent.string() + ": cannot create the folder to hold the capture");
   if (!fs::create_directory(dir, ec) || !fs::create_directory(fs::path(dir) / "frames", ec)) {
     return IoError(dir + ": cannot create the capture folder (" + ec.message() + ")");
   }
-  auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
+  auto dataset = std::unique_ptr<CaptureDataset>(
+      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
   HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text));
   metadata["format"] = "hairrig-capture";
   metadata["version"] = 1;
@@ -117,12 +148,15 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(const std:
   if (!fs::is_regular_file(fs::path(dir) / kJournal, ec)) {
     return NotFound(dir + " is not a capture folder (no " + kJournal + "): nothing to resume");
   }
-  auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
+  auto dataset = std::unique_ptr<CaptureDataset>(
+      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
   const std::string metadata_path = dataset->dir_ + "/" + kMetadata;
   HR_ASSIGN_OR_RETURN(std::vector<uint8_t> metadata, ReadFileBytes(metadata_path));
   dataset->metadata_ = nlohmann::json::parse(metadata.begin(), metadata.end(), nullptr, false);
-  if (!dataset->metadata_.is_object() || dataset->metadata_.value("format", "") != "hairrig-capture") {
-    return CorruptData(metadata_path + " is not a hairrig capture description: was the folder made by hairrig?");
+  if (!dataset->metadata_.is_object() ||
+      dataset->metadata_.value("format", "") != "hairrig-capture") {
+    return CorruptData(metadata_path +
+                       " is not a hairrig capture description: was the folder made by hairrig?");
   }
   ResumeReport local;
   HR_RETURN_IF_ERROR(dataset->Repair(report ? report : &local));
@@ -133,23 +167,12 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(const std:
 // clears out what no record vouches for.
 Status CaptureDataset::Repair(ResumeReport* report) {
   const std::string journal_path = dir_ + "/" + kJournal;
-  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(journal_path));
-  size_t good_end = 0, line_start = 0;
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    if (bytes[i] != '\n') continue;
-    const std::string line(bytes.begin() + static_cast<long>(line_start), bytes.begin() + static_cast<long>(i));
-    nlohmann::json record = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
-    if (record.is_discarded() || !record.is_object()) {
-      return CorruptData(journal_path + ": line " + std::to_string(records_.size() + 1) +
-                         " is not a JSON record and is not the last one; the journal was altered. Keep a copy, "
-                         "then remove that line by hand to resume");
-    }
-    records_.push_back(std::move(record));
-    good_end = line_start = i + 1;
-  }
-  report->journal_bytes_dropped = bytes.size() - good_end;
-  if (report->journal_bytes_dropped > 0 && ::truncate(journal_path.c_str(), static_cast<off_t>(good_end)) != 0) {
-    return IoError(journal_path + ": cannot cut the interrupted record (" + std::strerror(errno) + ")");
+  HR_ASSIGN_OR_RETURN(records_, ReadJournalRecords(journal_path, &report->journal_bytes_dropped));
+  if (report->journal_bytes_dropped > 0 &&
+      ::truncate(journal_path.c_str(), static_cast<off_t>(fs::file_size(journal_path) -
+                                                          report->journal_bytes_dropped)) != 0) {
+    return IoError(journal_path + ": cannot cut the interrupted record (" + std::strerror(errno) +
+                   ")");
   }
   HR_RETURN_IF_ERROR(OpenJournal());
   for (const auto& r : records_) {
@@ -169,7 +192,8 @@ Status CaptureDataset::Repair(ResumeReport* report) {
   std::map<std::string, int> file_to_view;
   for (const auto& [view, r] : claimed) {
     const std::string path = dir_ + "/" + r.at("file").get<std::string>();
-    if (!PathIsInside(path, dir_)) return CorruptData(dir_ + "/" + kJournal + ": frame file outside the capture folder");
+    if (!PathIsInside(path, dir_))
+      return CorruptData(dir_ + "/" + kJournal + ": frame file outside the capture folder");
     auto sha = Sha256OfFile(path);
     if (sha.ok() && *sha == r.at("sha256").get<std::string>()) {
       verified_[view] = r;
@@ -189,13 +213,15 @@ Status CaptureDataset::Repair(ResumeReport* report) {
     HR_ASSIGN_OR_RETURN(std::string moved, Quarantine(dir_, entry.path()));
     const std::string why = "no journal record vouches for it (or its checksum does not match)";
     report->quarantined.push_back(name + ": " + why);
-    HR_RETURN_IF_ERROR(AppendLocked({{"event", "file_quarantined"},
-                                     {"file", "frames/" + name},
-                                     {"moved_to", fs::path(moved).lexically_relative(dir_).string()},
-                                     {"why", why}}));
+    HR_RETURN_IF_ERROR(
+        AppendLocked({{"event", "file_quarantined"},
+                      {"file", "frames/" + name},
+                      {"moved_to", fs::path(moved).lexically_relative(dir_).string()},
+                      {"why", why}}));
   }
   for (const auto& entry : fs::directory_iterator(dir_)) {
-    if (entry.path().filename().string().find(".tmp.") != std::string::npos) fs::remove(entry.path());
+    if (entry.path().filename().string().find(".tmp.") != std::string::npos)
+      fs::remove(entry.path());
   }
   return Status::Ok();
 }
@@ -219,43 +245,56 @@ Status CaptureDataset::AppendLocked(nlohmann::json record) {
   HR_RETURN_IF_ERROR(WriteAll(journal_fd_, line.data(), half, what));
   CrashPoint("journal_half_written");
   HR_RETURN_IF_ERROR(WriteAll(journal_fd_, line.data() + half, line.size() - half, what));
-  if (::fdatasync(journal_fd_) != 0) return IoError(what + ": fsync failed (" + std::strerror(errno) + ")");
+  if (::fdatasync(journal_fd_) != 0)
+    return IoError(what + ": fsync failed (" + std::strerror(errno) + ")");
   ++next_seq_;
   records_.push_back(std::move(record));
   return Status::Ok();
 }
 
-Result<std::vector<uint8_t>> CaptureDataset::EncodeForStorage(const Frame& frame, const FrameContext& context,
-                                                              cv::Mat* image, std::string* extension) const {
-  const std::string who = "view " + std::to_string(context.view) + " from camera " + frame.camera_serial;
+Result<std::vector<uint8_t>> CaptureDataset::EncodeForStorage(const Frame& frame,
+                                                              const FrameContext& context,
+                                                              cv::Mat* image,
+                                                              std::string* extension) const {
+  const std::string who =
+      "view " + std::to_string(context.view) + " from camera " + frame.camera_serial;
   const bool size_known = context.expected_width_px > 0 && context.expected_height_px > 0;
   if (frame.format == PixelFormat::kEncoded) {
     const std::string ext = FileNamePart(frame.encoding);
     *image = cv::imdecode(frame.data, cv::IMREAD_UNCHANGED);
-    if (image->empty()) return CorruptData(who + ": the " + ext + " file does not decode (" + std::to_string(frame.data.size()) + " bytes)");
-    if (size_known && (image->cols != context.expected_width_px || image->rows != context.expected_height_px)) {
-      return CorruptData(who + ": decodes to " + std::to_string(image->cols) + "x" + std::to_string(image->rows) +
-                         ", expected " + std::to_string(context.expected_width_px) + "x" +
+    if (image->empty())
+      return CorruptData(who + ": the " + ext + " file does not decode (" +
+                         std::to_string(frame.data.size()) + " bytes)");
+    if (size_known &&
+        (image->cols != context.expected_width_px || image->rows != context.expected_height_px)) {
+      return CorruptData(who + ": decodes to " + std::to_string(image->cols) + "x" +
+                         std::to_string(image->rows) + ", expected " +
+                         std::to_string(context.expected_width_px) + "x" +
                          std::to_string(context.expected_height_px));
     }
     *extension = ext;
     return frame.data;
   }
   if (frame.width_px <= 0 || frame.height_px <= 0 || frame.data.size() != frame.ExpectedBytes()) {
-    return CorruptData(who + ": " + std::to_string(frame.data.size()) + " bytes for a " + std::to_string(frame.width_px) +
-                       "x" + std::to_string(frame.height_px) + " " + PixelFormatName(frame.format) + " frame (expected " +
+    return CorruptData(who + ": " + std::to_string(frame.data.size()) + " bytes for a " +
+                       std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) +
+                       " " + PixelFormatName(frame.format) + " frame (expected " +
                        std::to_string(frame.ExpectedBytes()) + ")");
   }
-  if (size_known && (frame.width_px != context.expected_width_px || frame.height_px != context.expected_height_px)) {
-    return CorruptData(who + ": frame is " + std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) +
-                       ", the camera's sensor is " + std::to_string(context.expected_width_px) + "x" +
+  if (size_known && (frame.width_px != context.expected_width_px ||
+                     frame.height_px != context.expected_height_px)) {
+    return CorruptData(who + ": frame is " + std::to_string(frame.width_px) + "x" +
+                       std::to_string(frame.height_px) + ", the camera's sensor is " +
+                       std::to_string(context.expected_width_px) + "x" +
                        std::to_string(context.expected_height_px));
   }
   const int channels = BytesPerPixel(frame.format);
   const cv::Mat raw(frame.height_px, frame.width_px, channels == 3 ? CV_8UC3 : CV_8UC1,
                     const_cast<uint8_t*>(frame.data.data()));
-  if (frame.format == PixelFormat::kRgb8) cv::cvtColor(raw, *image, cv::COLOR_RGB2BGR);
-  else *image = raw.clone();
+  if (frame.format == PixelFormat::kRgb8)
+    cv::cvtColor(raw, *image, cv::COLOR_RGB2BGR);
+  else
+    *image = raw.clone();
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", *image, png, {cv::IMWRITE_PNG_COMPRESSION, options_.png_compression})) {
     return Internal(who + ": PNG encoding failed");
@@ -264,24 +303,30 @@ Result<std::vector<uint8_t>> CaptureDataset::EncodeForStorage(const Frame& frame
   return png;
 }
 
-Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame, const FrameContext& context) {
+Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
+                                                   const FrameContext& context) {
   if (HasVerifiedFrame(context.view)) {
-    return FailedPrecondition("view " + std::to_string(context.view) + " already has a verified frame; it is kept");
+    return FailedPrecondition("view " + std::to_string(context.view) +
+                              " already has a verified frame; it is kept");
   }
   StoredFrameInfo info;
   std::string extension;
-  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, EncodeForStorage(frame, context, &info.image, &extension));
+  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
+                      EncodeForStorage(frame, context, &info.image, &extension));
   const std::string sha = Sha256Hex(bytes.data(), bytes.size());
   char name[32];
   std::snprintf(name, sizeof name, "%03d_", context.view);
-  const std::string file = "frames/" + std::string(name) + FileNamePart(frame.camera_serial) + "." + extension;
+  const std::string file =
+      "frames/" + std::string(name) + FileNamePart(frame.camera_serial) + "." + extension;
   info.path = dir_ + "/" + file;
-  if (!PathIsInside(info.path, dir_)) return Internal(info.path + ": frame path outside the capture folder");
+  if (!PathIsInside(info.path, dir_))
+    return Internal(info.path + ": frame path outside the capture folder");
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (options_.simulated_full_after_frames >= 0 && frames_written_ >= options_.simulated_full_after_frames) {
-      return IoError(dir_ + ": no space left on device (simulated disk full) while writing " + file +
-                     ": free space, then run the capture again with --resume");
+    if (options_.simulated_full_after_frames >= 0 &&
+        frames_written_ >= options_.simulated_full_after_frames) {
+      return IoError(dir_ + ": no space left on device (simulated disk full) while writing " +
+                     file + ": free space, then run the capture again with --resume");
     }
     ++frames_written_;
   }
@@ -340,14 +385,18 @@ uint64_t CaptureDataset::BytesStored() const {
 Result<uint64_t> CaptureDataset::FreeBytes() const {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (options_.simulated_full_after_frames >= 0 && frames_written_ >= options_.simulated_full_after_frames) return 0;
+    if (options_.simulated_full_after_frames >= 0 &&
+        frames_written_ >= options_.simulated_full_after_frames)
+      return 0;
   }
   struct statvfs st {};
-  if (::statvfs(dir_.c_str(), &st) != 0) return IoError(dir_ + ": cannot read the free space (" + std::strerror(errno) + ")");
+  if (::statvfs(dir_.c_str(), &st) != 0)
+    return IoError(dir_ + ": cannot read the free space (" + std::strerror(errno) + ")");
   return static_cast<uint64_t>(st.f_bavail) * st.f_frsize;
 }
 
-void CaptureDataset::SetPlanSummary(int views_planned, const std::string& subject, const std::string& rig_name) {
+void CaptureDataset::SetPlanSummary(int views_planned, const std::string& subject,
+                                    const std::string& rig_name) {
   std::lock_guard<std::mutex> lock(mutex_);
   views_planned_ = views_planned;
   subject_ = subject;
@@ -365,8 +414,13 @@ Status CaptureDataset::WriteManifestLocked(const std::string& status) {
   uint64_t bytes = 0;
   int faults = 0, sessions = 0;
   for (const auto& [view, r] : verified_) {
-    frames.push_back({{"view", view}, {"serial", r["serial"]}, {"camera", r["camera"]}, {"file", r["file"]},
-                      {"bytes", r["bytes"]}, {"sha256", r["sha256"]}, {"stop", r["stop"]},
+    frames.push_back({{"view", view},
+                      {"serial", r["serial"]},
+                      {"camera", r["camera"]},
+                      {"file", r["file"]},
+                      {"bytes", r["bytes"]},
+                      {"sha256", r["sha256"]},
+                      {"stop", r["stop"]},
                       {"angle_measured_deg", r["angle_measured_deg"]}});
     bytes += r.at("bytes").get<uint64_t>();
   }

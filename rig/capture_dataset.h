@@ -133,6 +133,12 @@ class CaptureDataset {
   std::string subject_, rig_name_, last_status_ = "in_progress";
 };
 
+// The records of a capture's journal.jsonl, read only. A last line without its
+// newline (a record cut short by an interruption) is left out and its size is
+// put in *cut_short_bytes; a complete line that is not a JSON object is
+// CorruptData naming the file and line.
+Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path, size_t* cut_short_bytes = nullptr);
+
 // Current UTC time as ISO 8601 with milliseconds ("2026-11-22T10:04:05.123Z").
 std::string UtcNow();
 

@@ -12,7 +12,7 @@
 #include "core/sha256.h"
 #include "drivers/always_present_device.h"
 #include "drivers/trigger_bus.h"
-#include <nlohmann/json.hpp>
+#include "rig/capture_dataset.h"
 
 namespace hairrig {
 
@@ -20,15 +20,16 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
+      .count();
 }
 
 // Milliseconds since the epoch of a journal time stamp ("...T10:04:05.123Z").
 double UtcSeconds(const std::string& text) {
   std::tm tm{};
   int ms = 0;
-  if (std::sscanf(text.c_str(), "%d-%d-%dT%d:%d:%d.%dZ", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
-                  &tm.tm_sec, &ms) != 7) {
+  if (std::sscanf(text.c_str(), "%d-%d-%dT%d:%d:%d.%dZ", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
+                  &tm.tm_hour, &tm.tm_min, &tm.tm_sec, &ms) != 7) {
     return 0;
   }
   tm.tm_year -= 1900;
@@ -89,14 +90,19 @@ class ReplaySource {
   }
   // The frame of `serial` shot at that angle under that light state (a plan may
   // shoot one angle under several light states).
-  const RecordedFrame* FindFrame(const std::string& serial, double commanded_deg, const LightState& lights) const {
+  const RecordedFrame* FindFrame(const std::string& serial, double commanded_deg,
+                                 const LightState& lights) const {
     const auto range = frames.equal_range(serial);
     for (auto it = range.first; it != range.second; ++it) {
-      if (SameAngle(it->second.commanded_deg, commanded_deg) && SameLights(it->second.lights, lights)) return &it->second;
+      if (SameAngle(it->second.commanded_deg, commanded_deg) &&
+          SameLights(it->second.lights, lights))
+        return &it->second;
     }
     return nullptr;
   }
-  double Scaled(double recorded_s) const { return options.speed > 0 ? recorded_s / options.speed : 0; }
+  double Scaled(double recorded_s) const {
+    return options.speed > 0 ? recorded_s / options.speed : 0;
+  }
 
   TriggerBus triggers;  // cameras armed for a line listen here
 
@@ -114,23 +120,19 @@ class ReplaySource {
   LightState lights_;
 };
 
-Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir, const ReplayOptions& options) {
+Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir,
+                                                       const ReplayOptions& options) {
   if (!(options.speed >= 0) || !std::isfinite(options.speed)) {
     return InvalidArgument("replay speed must be 0 (as fast as possible) or a positive factor");
   }
   // Read-only: the recorded folder is never modified (OpenForResume would repair it).
-  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(capture_dir + "/journal.jsonl"));
+  HR_ASSIGN_OR_RETURN(std::vector<nlohmann::json> records,
+                      ReadJournalRecords(capture_dir + "/journal.jsonl"));
   auto source = std::make_shared<ReplaySource>();
   source->options = options;
   double previous_arrival = 0;
   std::map<int, LightState> view_lights;
-  size_t start = 0;
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    if (bytes[i] != '\n') continue;
-    const auto r = nlohmann::json::parse(bytes.begin() + static_cast<long>(start), bytes.begin() + static_cast<long>(i),
-                                         nullptr, false);
-    start = i + 1;
-    if (r.is_discarded() || !r.is_object()) continue;
+  for (const nlohmann::json& r : records) {
     const std::string event = r.value("event", "");
     if (event == "position_reached") {
       const double t = UtcSeconds(r.value("time_utc", ""));
@@ -146,16 +148,23 @@ Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& captur
       const std::string file = r.at("file").get<std::string>();
       const std::string path = capture_dir + "/" + file;
       auto sha = Sha256OfFile(path);
-      if (!sha.ok() || *sha != r.at("sha256").get<std::string>()) continue;  // not verified: not served
+      if (!sha.ok() || *sha != r.at("sha256").get<std::string>())
+        continue;  // not verified: not served
       const std::string serial = r.at("serial").get<std::string>();
-      RecordedFrame f{path, view_lights[r.at("view").get<int>()], FileExtension(file), r.at("angle_commanded_deg").get<double>(), r.value("exposure_s", 0.0),
+      RecordedFrame f{path,
+                      view_lights[r.at("view").get<int>()],
+                      FileExtension(file),
+                      r.at("angle_commanded_deg").get<double>(),
+                      r.value("exposure_s", 0.0),
                       r.value("gain_db", 0.0),
-                      1e-9 * static_cast<double>(r.value("received_time_ns", int64_t{0}) - r.value("trigger_time_ns", int64_t{0}))};
+                      1e-9 * static_cast<double>(r.value("received_time_ns", int64_t{0}) -
+                                                 r.value("trigger_time_ns", int64_t{0}))};
       source->frames.emplace(serial, f);
       source->sizes[serial] = {r.value("width_px", 0), r.value("height_px", 0)};
     }
   }
-  if (source->frames.empty()) return NotFound(capture_dir + ": the capture has no verified frames to replay");
+  if (source->frames.empty())
+    return NotFound(capture_dir + ": the capture has no verified frames to replay");
   return source;
 }
 
@@ -177,7 +186,11 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
  public:
   using ReplayDevice::ReplayDevice;
   TurntableCapabilities capabilities() const override {
-    return {.max_speed_deg_s = 3600, .max_accel_deg_s2 = 36000, .resolution_deg = 1e-6, .can_home = true, .settle_s = 0};
+    return {.max_speed_deg_s = 3600,
+            .max_accel_deg_s2 = 36000,
+            .resolution_deg = 1e-6,
+            .can_home = true,
+            .settle_s = 0};
   }
   Status Home(std::chrono::milliseconds) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Home"));
@@ -194,8 +207,9 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
     }
     source_->SetTarget(target_deg);
     position_deg_ = stop->measured_deg;
-    arrival_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                  std::chrono::duration<double>(source_->Scaled(stop->seconds_since_previous)));
+    arrival_ = Clock::now() +
+               std::chrono::duration_cast<Clock::duration>(
+                   std::chrono::duration<double>(source_->Scaled(stop->seconds_since_previous)));
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
@@ -211,7 +225,8 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
   }
   Status WaitInPosition(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
-    if (arrival_ > Clock::now() + timeout) return Timeout(Describe() + ": recorded move is longer than the timeout");
+    if (arrival_ > Clock::now() + timeout)
+      return Timeout(Describe() + ": recorded move is longer than the timeout");
     std::this_thread::sleep_until(arrival_);
     SetState(DeviceState::kReady);
     return Status::Ok();
@@ -272,8 +287,14 @@ class ReplayCamera : public ReplayDevice<Camera> {
   CameraCapabilities capabilities() const override {
     const auto it = source_->sizes.find(info().serial);
     const auto size = it == source_->sizes.end() ? std::pair<int, int>{0, 0} : it->second;
-    return {.width_px = size.first, .height_px = size.second, .formats = {PixelFormat::kEncoded},
-            .min_exposure_s = 0, .max_exposure_s = 3600, .line_trigger = true, .readout_s = 0, .download_s = 0};
+    return {.width_px = size.first,
+            .height_px = size.second,
+            .formats = {PixelFormat::kEncoded},
+            .min_exposure_s = 0,
+            .max_exposure_s = 3600,
+            .line_trigger = true,
+            .readout_s = 0,
+            .download_s = 0};
   }
   Status Configure(const CaptureSettings& settings) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
@@ -315,8 +336,8 @@ class ReplayCamera : public ReplayDevice<Camera> {
     }
     std::this_thread::sleep_until(next.ready);
     if (!next.frame) {
-      return NotFound(Describe() + ": the recording has no frame of this camera at " + std::to_string(next.angle_deg) +
-                      " deg under the current light state");
+      return NotFound(Describe() + ": the recording has no frame of this camera at " +
+                      std::to_string(next.angle_deg) + " deg under the current light state");
     }
     HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(next.frame->path));
     Frame f;
@@ -346,7 +367,8 @@ class ReplayCamera : public ReplayDevice<Camera> {
     p.frame = source_->FindFrame(info().serial, p.angle_deg, source_->Lights());
     p.trigger_ns = NowNs();
     const double delay = p.frame ? source_->Scaled(p.frame->download_s) : 0;
-    p.ready = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay));
+    p.ready = Clock::now() +
+              std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay));
     std::lock_guard<std::mutex> lock(mutex_);
     p.sequence = sequence_++;
     pending_.push_back(p);
@@ -367,19 +389,24 @@ class ReplayCamera : public ReplayDevice<Camera> {
 };
 
 template <typename Interface, typename Impl>
-void AddReplay(DeviceRegistry* registry, DeviceKind kind, const std::string& model, std::shared_ptr<ReplaySource> source) {
-  registry->AddBackend<Interface>(kind, "replay", [source, model](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
-    return std::unique_ptr<Interface>(std::make_unique<Impl>(c.Info(model), source));
-  });
+void AddReplay(DeviceRegistry* registry, DeviceKind kind, const std::string& model,
+               std::shared_ptr<ReplaySource> source) {
+  registry->AddBackend<Interface>(
+      kind, "replay", [source, model](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
+        return std::unique_ptr<Interface>(std::make_unique<Impl>(c.Info(model), source));
+      });
 }
 
 }  // namespace
 
 void RegisterReplayBackends(DeviceRegistry* registry, std::shared_ptr<ReplaySource> source) {
-  AddReplay<Turntable, ReplayTurntable>(registry, DeviceKind::kTurntable, "replayed turntable", source);
+  AddReplay<Turntable, ReplayTurntable>(registry, DeviceKind::kTurntable, "replayed turntable",
+                                        source);
   AddReplay<Light, ReplayLight>(registry, DeviceKind::kLight, "replayed LED panel", source);
-  AddReplay<TriggerLine, ReplayTriggerLine>(registry, DeviceKind::kTriggerLine, "replayed trigger line", source);
-  AddReplay<InputLine, ReplayInputLine>(registry, DeviceKind::kInputLine, "replayed input line", source);
+  AddReplay<TriggerLine, ReplayTriggerLine>(registry, DeviceKind::kTriggerLine,
+                                            "replayed trigger line", source);
+  AddReplay<InputLine, ReplayInputLine>(registry, DeviceKind::kInputLine, "replayed input line",
+                                        source);
   AddReplay<Camera, ReplayCamera>(registry, DeviceKind::kCamera, "replayed camera", source);
 }
 
