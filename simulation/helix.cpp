@@ -11,13 +11,16 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586476925;
 }
 
+Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& omega, double s) {
+  const double w = omega.norm();
+  if (w < 1e-15) return s * t0;
+  const Eigen::Vector3d axis = omega / w;
+  const double tau_bar = t0.dot(axis);
+  return tau_bar * s * axis + std::sin(w * s) / w * (t0 - tau_bar * axis) - (1 - std::cos(w * s)) / w * t0.cross(axis);
+}
+
 Eigen::Vector3d HelixElement::PointAt(double s) const {
-  const double w = darboux_per_mm.norm();
-  if (w < 1e-15) return start_mm + s * start_tangent;
-  const Eigen::Vector3d axis = darboux_per_mm / w;
-  const double tau_bar = start_tangent.dot(axis);
-  return start_mm + tau_bar * s * axis + std::sin(w * s) / w * (start_tangent - tau_bar * axis) -
-         (1 - std::cos(w * s)) / w * start_tangent.cross(axis);
+  return start_mm + HelixOffset(start_tangent, darboux_per_mm, s);
 }
 
 Eigen::Vector3d HelixElement::TangentAt(double s) const {

@@ -32,6 +32,10 @@ struct HelixElement {
   double torsion_per_mm() const;
 };
 
+// r(s) - p0 of Eq. 8 for a unit start tangent t0 and Darboux vector omega:
+// any length unit, omega in radians per that unit (the dynamics use metres).
+Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& omega, double s);
+
 // Builds the element from curvature, torsion and length at a start point with
 // a start tangent and principal normal (unit, orthogonal to the tangent).
 HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,

@@ -1,0 +1,144 @@
+// Super-helix dynamics (Bao & Qi 2017, Sec. VI, Eqs. 9-11; Bertails et al.
+// 2006, ref. [3]). The Lagrangian equations of motion (Eq. 9) of one strand in
+// its generalised coordinates q (simulation/super_helix.h):
+//
+//   M(q) q'' + M_dot-terms + D q' + K (q - q^0) = Q(q, q')
+//
+// with M = int rho S J^T J + rho J_w^T I J_w ds (translational and rotational
+// kinetic energy, T_t and T_r), K = diag(C^H L_Q) (potential V), D = mu K
+// (dissipation D), Q = int J^T F ds with F = rho S g + F^c - nu r' (Eq. 10).
+// The integrals are Gauss-Legendre quadratures per element; J = dr/dq is exact
+// up to a central difference inside each element, and the velocity terms
+// (J_dot q') come from a second difference of the centreline along q'.
+//
+// Time step (Eq. 11 and ours):
+//   (M + theta h D + theta^2 h^2 K) dv = h [Q - K (q - q^0) - D v - theta h K v]
+//   v+ = v + dv,  q+ = q + h (v + theta dv)
+// theta = 1 is the paper's linearly implicit Euler step (Eq. 11, dissipative);
+// theta = 1/2 is the trapezoidal rule (ours, for energy-conserving runs: the
+// velocity terms stay explicit, so it needs a small step, 1/4000 s keeps a
+// swinging strand's energy within 0.4 % over 10 s, and it is only
+// conditionally stable when high modes are strongly excited). K
+// includes the contact stiffness, D the air drag and contact friction, so
+// both are implicit. The linear system is solved by conjugate gradient (as the
+// paper) or by a dense Cholesky factorisation.
+//
+// The simulation frame is the head's: the roots are fixed in it, the head
+// may move in the world (head-shake), and the fictitious forces of that motion
+// are part of F.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/status.h"
+#include "simulation/super_helix.h"
+
+namespace hairrig {
+
+enum class TimeIntegrator { kImplicitEuler, kTrapezoidal };
+enum class LinearSolver { kConjugateGradient, kCholesky };
+
+// An ellipsoid in the simulation (head) frame, metres.
+struct HeadEllipsoid {
+  Eigen::Vector3d center_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d radii_m = Eigen::Vector3d::Ones();
+  // Signed distance estimate (first order in the ellipsoid's implicit
+  // function) and outward normal.
+  double Distance(const Eigen::Vector3d& p, Eigen::Vector3d* normal) const;
+};
+
+struct DynamicsOptions {
+  double time_step_s = 1.0 / 240;
+  TimeIntegrator integrator = TimeIntegrator::kImplicitEuler;
+  LinearSolver solver = LinearSolver::kConjugateGradient;
+  double cg_relative_tolerance = 1e-10;
+  int quadrature_points = 3;        // Gauss-Legendre points per element (1-5)
+  double air_drag = 1e-4;           // nu of Eq. 10, N s / m^2 (force per length per velocity)
+  bool use_head = false;
+  HeadEllipsoid head;
+  double contact_margin_m = 0.5e-3;     // hair keeps this far from the head
+  double contact_stiffness = 50;        // N / m^2: force per length per metre of penetration
+  double contact_friction = 2e-3;       // viscous friction along the head, N s / m^2
+  bool IsValid(std::string* why) const;
+};
+
+// What the world does to the strands at one instant, in the simulation frame.
+struct Environment {
+  Eigen::Vector3d gravity_m_s2{0, 0, -9.81};
+  // Air velocity relative to the frame's origin (wind minus the frame's motion).
+  Eigen::Vector3d air_velocity_m_s = Eigen::Vector3d::Zero();
+  // Motion of the simulation frame in the world, expressed in the frame:
+  // acceleration of its origin, angular velocity and acceleration.
+  Eigen::Vector3d frame_acceleration_m_s2 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d frame_angular_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d frame_angular_acceleration = Eigen::Vector3d::Zero();
+};
+
+struct StrandState {
+  Eigen::VectorXd q;  // rad/m
+  Eigen::VectorXd v;  // q', rad/(m s)
+};
+
+struct StepReport {
+  int solver_iterations = 0;
+  int contacts = 0;  // quadrature points in contact with the head
+};
+
+struct StrandEnergy {
+  double kinetic_j = 0;
+  double elastic_j = 0;
+  double gravity_j = 0;  // relative to the root's height
+  double total() const { return kinetic_j + elastic_j + gravity_j; }
+};
+
+// One strand's equations of motion. Not thread-safe (holds work buffers); use
+// one per thread or per strand.
+class SuperHelixDynamics {
+ public:
+  SuperHelixDynamics(const SuperHelix& strand, const HairMaterial& material, const DynamicsOptions& options);
+
+  // Advances `state` by one time step. FailedPrecondition if the state is not
+  // finite after the step (the state is left unchanged).
+  Status Step(const Environment& environment, StrandState* state, StepReport* report = nullptr);
+
+  // Generalised forces Q of gravity and contact at rest (q' = 0).
+  Eigen::VectorXd StaticForces(const Environment& environment, const Eigen::VectorXd& q);
+  Eigen::VectorXd ElasticForces(const Eigen::VectorXd& q) const;  // -K (q - q^0)
+  const Eigen::VectorXd& StiffnessDiagonal() const { return stiffness_; }
+
+  StrandEnergy Energy(const Environment& environment, const StrandState& state);
+
+  const SuperHelix& strand() const { return strand_; }
+  SuperHelix& mutable_strand() { return strand_; }
+
+ private:
+  struct Sample {
+    int element = 0;
+    double s = 0;       // arc length within the element
+    double weight = 0;  // quadrature weight, m
+  };
+  void Evaluate(const Eigen::VectorXd& q, bool with_jacobians);
+  std::vector<Eigen::Vector3d> SamplePositions(const Eigen::VectorXd& q) const;
+  // Force per unit length at a point at rest (gravity, frame motion, wind, contact).
+  Eigen::Vector3d StaticForce(const Environment& environment, const Eigen::Vector3d& position) const;
+  Eigen::MatrixXd MassMatrix() const;
+  // out += weight * J_i^T metric J_i over the columns the sample depends on.
+  void AddProjected(int i, double weight, const Eigen::Matrix3d& metric, Eigen::MatrixXd* out) const;
+  int SolveLinear(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
+
+  SuperHelix strand_;
+  HairMaterial material_;
+  DynamicsOptions options_;
+  Eigen::VectorXd stiffness_;  // diagonal of K
+  std::vector<Sample> samples_;
+  // Filled by Evaluate(): per sample, its position and the translational and
+  // rotational Jacobians (3 x 3N, zero beyond its element).
+  std::vector<Eigen::Vector3d> positions_;
+  std::vector<Eigen::Matrix3d> frames_;
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> jacobian_;
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> angular_jacobian_;
+};
+
+}  // namespace hairrig
