@@ -193,12 +193,13 @@ Eigen::MatrixXd SuperHelixDynamics::MassMatrix() const {
 Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, const Eigen::Vector3d& r) const {
   const double rho_s = material_.LinearDensity();
   const Eigen::Vector3d& w = env.frame_angular_velocity;
+  const Eigen::Vector3d arm = r - env.pivot_m;
   // Gravity and the fictitious forces of the frame's motion (all but Coriolis).
   const Eigen::Vector3d frame_acceleration =
-      env.frame_acceleration_m_s2 + env.frame_angular_acceleration.cross(r) + w.cross(w.cross(r));
+      env.frame_acceleration_m_s2 + env.frame_angular_acceleration.cross(arm) + w.cross(w.cross(arm));
   Eigen::Vector3d force = rho_s * (env.gravity_m_s2 - frame_acceleration);
   // Air drag toward the air's velocity relative to the moving frame at r (Eq. 10).
-  force += options_.air_drag * (env.air_velocity_m_s - w.cross(r));
+  force += options_.air_drag * (env.air_velocity_m_s - w.cross(arm));
   if (options_.use_head) {
     Eigen::Vector3d normal;
     const double distance = options_.head.Distance(r, &normal);

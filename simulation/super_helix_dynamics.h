@@ -67,10 +67,12 @@ struct DynamicsOptions {
 // What the world does to the strands at one instant, in the simulation frame.
 struct Environment {
   Eigen::Vector3d gravity_m_s2{0, 0, -9.81};
-  // Air velocity relative to the frame's origin (wind minus the frame's motion).
+  // Air velocity relative to the frame at the pivot (wind minus the pivot's motion).
   Eigen::Vector3d air_velocity_m_s = Eigen::Vector3d::Zero();
-  // Motion of the simulation frame in the world, expressed in the frame:
-  // acceleration of its origin, angular velocity and acceleration.
+  // Motion of the simulation frame in the world, expressed in the frame: the
+  // pivot (a point of the frame the rotation is about), its acceleration, and
+  // the frame's angular velocity and acceleration.
+  Eigen::Vector3d pivot_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d frame_acceleration_m_s2 = Eigen::Vector3d::Zero();
   Eigen::Vector3d frame_angular_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d frame_angular_acceleration = Eigen::Vector3d::Zero();

@@ -1,0 +1,151 @@
+#include "simulation/guide_interpolation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include <Eigen/Dense>
+
+namespace hairrig {
+
+namespace {
+
+// Arc-length fraction of every point of a curve (0 at the root, 1 at the tip).
+template <typename Point>
+std::vector<double> ArcFractions(const Point* points, size_t count) {
+  std::vector<double> f(count, 0.0);
+  for (size_t i = 1; i < count; ++i) f[i] = f[i - 1] + (points[i] - points[i - 1]).template cast<double>().norm();
+  const double total = count > 1 ? f.back() : 0.0;
+  for (double& x : f) x = total > 0 ? x / total : 0.0;
+  return f;
+}
+
+// Where arc-length fraction u falls on a curve: between points index - 1 and
+// index, `blend` of the way (index 0: the root itself).
+void Locate(const std::vector<double>& fractions, double u, int* index, double* blend) {
+  const auto it = std::upper_bound(fractions.begin(), fractions.end(), u);
+  if (it == fractions.begin()) {
+    *index = 1;
+    *blend = 0;
+    return;
+  }
+  if (it == fractions.end()) {
+    *index = static_cast<int>(fractions.size()) - 1;
+    *blend = 1;
+    return;
+  }
+  const size_t i = static_cast<size_t>(it - fractions.begin());
+  const double span = fractions[i] - fractions[i - 1];
+  *index = static_cast<int>(i);
+  *blend = span > 0 ? (u - fractions[i - 1]) / span : 0.0;
+}
+
+Eigen::Vector3d Blend(const std::vector<Eigen::Vector3d>& curve, int index, double blend) {
+  return (1 - blend) * curve[static_cast<size_t>(index) - 1] + blend * curve[static_cast<size_t>(index)];
+}
+
+// min |sum w_k (g_k - p)|^2 + beta sum d_k^2 w_k^2 s.t. sum w_k = 1 (KKT system).
+Eigen::VectorXd ConstrainedWeights(const std::vector<Eigen::Vector3d>& candidates, const Eigen::Vector3d& p,
+                                   double beta) {
+  const int k = static_cast<int>(candidates.size());
+  Eigen::MatrixXd b(3, k);
+  for (int i = 0; i < k; ++i) b.col(i) = candidates[static_cast<size_t>(i)] - p;
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(k + 1, k + 1);
+  kkt.topLeftCorner(k, k) = b.transpose() * b;
+  const double scale = std::max(1e-12, kkt.topLeftCorner(k, k).diagonal().maxCoeff());
+  for (int i = 0; i < k; ++i) kkt(i, i) += beta * b.col(i).squaredNorm() + 1e-9 * scale;
+  kkt.block(0, k, k, 1).setOnes();
+  kkt.block(k, 0, 1, k).setOnes();
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k + 1);
+  rhs[k] = 1;
+  return kkt.colPivHouseholderQr().solve(rhs).head(k);
+}
+
+}  // namespace
+
+Result<GuideInterpolation> GuideInterpolation::Build(const StrandSet& full_rest,
+                                                     const std::vector<std::vector<Eigen::Vector3d>>& guides_rest,
+                                                     const GuideInterpolationOptions& options) {
+  if (options.guides_per_strand < 1 || options.guides_per_strand > 8) {
+    return InvalidArgument("guide interpolation: guides_per_strand must lie in 1..8");
+  }
+  if (!(options.regularisation >= 0) || !std::isfinite(options.regularisation)) {
+    return InvalidArgument("guide interpolation: regularisation must be finite and >= 0");
+  }
+  if (guides_rest.empty()) return InvalidArgument("guide interpolation: no guide");
+  HR_RETURN_IF_ERROR(full_rest.Validate());
+  GuideInterpolation out;
+  out.rest_ = full_rest;
+  out.guides_rest_ = guides_rest;
+  std::vector<std::vector<double>> guide_fractions;
+  for (size_t g = 0; g < guides_rest.size(); ++g) {
+    const auto& curve = guides_rest[g];
+    if (curve.size() < 2) return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " has < 2 points");
+    for (const auto& p : curve) {
+      if (!p.allFinite()) return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " is not finite");
+    }
+    guide_fractions.push_back(ArcFractions(curve.data(), curve.size()));
+  }
+  const int k = std::min<int>(options.guides_per_strand, static_cast<int>(guides_rest.size()));
+  out.per_particle_ = k;
+  const std::vector<size_t> offsets = full_rest.Offsets();
+  out.particles_.resize(full_rest.num_points());
+  std::vector<int> order(guides_rest.size());
+  double squared_error = 0;
+  for (size_t s = 0; s < full_rest.num_strands(); ++s) {
+    const Eigen::Vector3d root = full_rest.points_mm[offsets[s]].cast<double>();
+    std::iota(order.begin(), order.end(), 0);
+    std::partial_sort(order.begin(), order.begin() + k, order.end(), [&](int a, int b) {
+      return (guides_rest[static_cast<size_t>(a)][0] - root).squaredNorm() <
+             (guides_rest[static_cast<size_t>(b)][0] - root).squaredNorm();
+    });
+    const std::vector<double> fractions = ArcFractions(&full_rest.points_mm[offsets[s]], offsets[s + 1] - offsets[s]);
+    for (size_t i = offsets[s]; i < offsets[s + 1]; ++i) {
+      Particle& particle = out.particles_[i];
+      std::vector<Eigen::Vector3d> candidates;
+      for (int j = 0; j < k; ++j) {
+        const size_t g = static_cast<size_t>(order[static_cast<size_t>(j)]);
+        particle.guides[j] = static_cast<int>(g);
+        Locate(guide_fractions[g], fractions[i - offsets[s]], &particle.segment[j], &particle.blend[j]);
+        candidates.push_back(Blend(guides_rest[g], particle.segment[j], particle.blend[j]));
+      }
+      const Eigen::Vector3d p = full_rest.points_mm[i].cast<double>();
+      const Eigen::VectorXd w = ConstrainedWeights(candidates, p, options.regularisation);
+      Eigen::Vector3d fit = Eigen::Vector3d::Zero();
+      for (int j = 0; j < k; ++j) {
+        particle.weights[j] = w[j];
+        fit += w[j] * candidates[static_cast<size_t>(j)];
+      }
+      squared_error += (fit - p).squaredNorm();
+    }
+  }
+  out.rest_fit_rms_mm_ = std::sqrt(squared_error / static_cast<double>(std::max<size_t>(1, full_rest.num_points())));
+  return out;
+}
+
+Result<StrandSet> GuideInterpolation::Apply(const std::vector<std::vector<Eigen::Vector3d>>& guides_now) const {
+  if (guides_now.size() != guides_rest_.size()) {
+    return InvalidArgument("guide interpolation: " + std::to_string(guides_now.size()) + " guides given, " +
+                           std::to_string(guides_rest_.size()) + " at rest");
+  }
+  for (size_t g = 0; g < guides_now.size(); ++g) {
+    if (guides_now[g].size() != guides_rest_[g].size()) {
+      return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " changed its point count");
+    }
+  }
+  StrandSet out = rest_;
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    const Particle& particle = particles_[i];
+    Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
+    for (int j = 0; j < per_particle_; ++j) {
+      const size_t g = static_cast<size_t>(particle.guides[j]);
+      displacement += particle.weights[j] * (Blend(guides_now[g], particle.segment[j], particle.blend[j]) -
+                                             Blend(guides_rest_[g], particle.segment[j], particle.blend[j]));
+    }
+    out.points_mm[i] += displacement.cast<float>();
+  }
+  return out;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,178 @@
+#include "simulation/hair_simulation.h"
+
+#include <cmath>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "simulation/guide_interpolation.h"
+#include "simulation/helix.h"
+
+namespace hairrig {
+namespace {
+
+// Guides rooted on the upper half of a head ball (centre origin, radius
+// 80 mm), leaving it outward then curving down: a small hairstyle in mm, z up.
+HelixModel SmallHairstyle(int guides) {
+  HelixModel model;
+  for (int g = 0; g < guides; ++g) {
+    const double azimuth = 2 * 3.14159265358979 * g / guides;
+    const Eigen::Vector3d out(std::cos(azimuth), std::sin(azimuth), 0.3);
+    Eigen::Vector3d p = 81.0 * out.normalized();
+    Eigen::Vector3d t = out.normalized();
+    PiecewiseHelix guide;
+    for (int e = 0; e < 6; ++e) {
+      const Eigen::Vector3d normal = (Eigen::Vector3d(0, 0, -1) - t.dot(Eigen::Vector3d(0, 0, -1)) * t).normalized();
+      const HelixElement h = HelixFromCurvatureTorsion(p, t, normal, e < 3 ? 0.02 : 0.002, 0.001, 20);
+      guide.elements.push_back(h);
+      p = h.PointAt(h.length_mm);
+      t = h.TangentAt(h.length_mm);
+    }
+    model.guides.push_back(guide);
+    model.guide_strands.push_back(g);
+  }
+  return model;
+}
+
+HairSimulationOptions WithHead() {
+  HairSimulationOptions o;
+  o.has_head = true;
+  o.head_center_mm = Eigen::Vector3d::Zero();
+  o.head_radii_mm = Eigen::Vector3d(80, 80, 80);
+  return o;
+}
+
+double MaxTipMove(const std::vector<std::vector<Eigen::Vector3d>>& a, const std::vector<std::vector<Eigen::Vector3d>>& b) {
+  double worst = 0;
+  for (size_t g = 0; g < a.size(); ++g) worst = std::max(worst, (a[g].back() - b[g].back()).norm());
+  return worst;
+}
+
+TEST(HairSimulation, FittedStyleHoldsStillUnderGravity) {
+  auto sim = HairSimulation::Create(SmallHairstyle(8), WithHead());
+  ASSERT_TRUE(sim.ok()) << sim.status().ToString();
+  const auto start = (*sim)->GuideCurves(4);
+  ASSERT_TRUE((*sim)->Advance(1.0).ok());
+  EXPECT_LT(MaxTipMove(start, (*sim)->GuideCurves(4)), 0.5);  // mm
+  EXPECT_GT((*sim)->stats().max_inverse_statics_change, 0);
+
+  HairSimulationOptions sagging = WithHead();
+  sagging.inverse_statics = false;
+  auto sag = HairSimulation::Create(SmallHairstyle(8), sagging);
+  ASSERT_TRUE(sag.ok());
+  ASSERT_TRUE((*sag)->Advance(1.0).ok());
+  EXPECT_GT(MaxTipMove(start, (*sag)->GuideCurves(4)), 5.0);
+}
+
+TEST(HairSimulation, HeadShakeCarriesRootsAndSwingsTips) {
+  HairSimulationOptions o = WithHead();
+  o.scenario = Scenario::kHeadShake;
+  auto sim = HairSimulation::Create(SmallHairstyle(6), o);
+  ASSERT_TRUE(sim.ok());
+  const auto start = (*sim)->GuideCurves(4);
+  ASSERT_TRUE((*sim)->Advance(0.8).ok());
+  const auto now = (*sim)->GuideCurves(4);
+  const Eigen::Matrix3d turn = (*sim)->head_rotation();
+  EXPECT_GT(Eigen::AngleAxisd(turn).angle(), 0.05);
+  for (size_t g = 0; g < now.size(); ++g) {
+    EXPECT_LT((now[g][0] - turn * start[g][0]).norm(), 1e-6) << "roots ride on the head";
+  }
+  // The tips lag behind the head: they are not where a rigid turn puts them.
+  double lag = 0;
+  for (size_t g = 0; g < now.size(); ++g) lag = std::max(lag, (now[g].back() - turn * start[g].back()).norm());
+  EXPECT_GT(lag, 2.0);
+}
+
+TEST(HairSimulation, WindBlowsDownwind) {
+  HairSimulationOptions o = WithHead();
+  o.scenario = Scenario::kWind;
+  o.wind_m_s = Eigen::Vector3d(3, 0, 0);
+  auto sim = HairSimulation::Create(SmallHairstyle(8), o);
+  ASSERT_TRUE(sim.ok());
+  const auto start = (*sim)->GuideCurves(4);
+  ASSERT_TRUE((*sim)->Advance(1.5).ok());
+  const auto now = (*sim)->GuideCurves(4);
+  double mean_dx = 0;
+  for (size_t g = 0; g < now.size(); ++g) mean_dx += (now[g].back() - start[g].back()).x() / static_cast<double>(now.size());
+  EXPECT_GT(mean_dx, 2.0);
+}
+
+TEST(HairSimulation, ThreadCountDoesNotChangeTheResult) {
+  std::vector<std::vector<Eigen::Vector3d>> curves[2];
+  for (int threads : {1, 2}) {
+    HairSimulationOptions o = WithHead();
+    o.scenario = Scenario::kHeadShake;
+    o.threads = threads;
+    auto sim = HairSimulation::Create(SmallHairstyle(5), o);
+    ASSERT_TRUE(sim.ok());
+    ASSERT_TRUE((*sim)->Advance(0.3).ok());
+    curves[threads - 1] = (*sim)->GuideCurves(2);
+  }
+  EXPECT_EQ(MaxTipMove(curves[0], curves[1]), 0.0);
+}
+
+TEST(HairSimulation, BadInputIsNamed) {
+  auto empty = HairSimulation::Create(HelixModel{}, HairSimulationOptions{});
+  ASSERT_FALSE(empty.ok());
+  EXPECT_NE(empty.status().message().find("no guide"), std::string::npos);
+  HairSimulationOptions o;
+  o.dynamics.time_step_s = -1;
+  auto bad = HairSimulation::Create(SmallHairstyle(2), o);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("time_step_s"), std::string::npos);
+  EXPECT_FALSE(ParseScenario("tornado").ok());
+  EXPECT_EQ(*ParseScenario("head-shake"), Scenario::kHeadShake);
+}
+
+std::vector<std::vector<Eigen::Vector3d>> Sampled(const HelixModel& model) {
+  std::vector<std::vector<Eigen::Vector3d>> out;
+  for (const auto& g : model.guides) out.push_back(g.Sample(5.0));
+  return out;
+}
+
+TEST(GuideInterpolation, RestIsExactAndMotionFollowsGuides) {
+  const HelixModel model = SmallHairstyle(8);
+  const auto guides = Sampled(model);
+  // Full strands: the guides themselves and strands between neighbours.
+  StrandSet full;
+  for (size_t g = 0; g < guides.size(); ++g) {
+    std::vector<Eigen::Vector3f> own, between;
+    const auto& next = guides[(g + 1) % guides.size()];
+    for (size_t i = 0; i < guides[g].size(); ++i) {
+      own.push_back(guides[g][i].cast<float>());
+      between.push_back((0.5 * (guides[g][i] + next[std::min(i, next.size() - 1)])).cast<float>());
+    }
+    full.AddStrand(own);
+    full.AddStrand(between);
+  }
+  auto interp = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
+  ASSERT_TRUE(interp.ok()) << interp.status().ToString();
+  auto at_rest = interp->Apply(guides);
+  ASSERT_TRUE(at_rest.ok());
+  for (size_t i = 0; i < full.num_points(); ++i) EXPECT_EQ(at_rest->points_mm[i], full.points_mm[i]);
+
+  // Translate every guide: every particle translates with them (weights sum to 1).
+  auto moved = guides;
+  for (auto& curve : moved) {
+    for (auto& p : curve) p += Eigen::Vector3d(3, -2, 1);
+  }
+  auto shifted = interp->Apply(moved);
+  ASSERT_TRUE(shifted.ok());
+  for (size_t i = 0; i < full.num_points(); ++i) {
+    EXPECT_LT((shifted->points_mm[i] - full.points_mm[i] - Eigen::Vector3f(3, -2, 1)).norm(), 1e-4);
+  }
+  // Bend one guide: the strand that is that guide follows it exactly.
+  moved = guides;
+  for (auto& p : moved[2]) p += Eigen::Vector3d(0, 0, -0.1 * (p - moved[2][0]).norm());
+  auto bent = interp->Apply(moved);
+  ASSERT_TRUE(bent.ok());
+  const auto offsets = full.Offsets();
+  for (size_t i = offsets[4]; i < offsets[5]; ++i) {
+    EXPECT_LT((bent->points_mm[i].cast<double>() - moved[2][i - offsets[4]]).norm(), 1e-3);
+  }
+  moved.pop_back();
+  EXPECT_FALSE(interp->Apply(moved).ok());
+}
+
+}  // namespace
+}  // namespace hairrig
