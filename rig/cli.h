@@ -36,5 +36,6 @@ void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   AddCaptureCommand(app, common, dispatch);
   AddReplayCommand(app, common, dispatch);
   AddFitCommand(app, common, dispatch);
+  AddSimulateCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);

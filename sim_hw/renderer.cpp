@@ -461,6 +461,7 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Renderer::~Renderer() = default;
 const Scene& Renderer::scene() const { return impl_->scene; }
 const StrandSet& Renderer::strands_turntable_mm() const { return impl_->strands; }
+void Renderer::SetStrands(StrandSet strands_turntable_mm) { impl_->strands = std::move(strands_turntable_mm); }
 
 Result<std::unique_ptr<Renderer>> Renderer::Create(const Scene& scene) {
   auto impl = std::make_unique<Impl>();

@@ -54,6 +54,9 @@ class Renderer {
 
   const Scene& scene() const;
   const StrandSet& strands_turntable_mm() const;  // the wig, turntable frame
+  // Replaces the wig (turntable frame, mm), e.g. with a simulated frame of it.
+  // Not safe while another thread renders.
+  void SetStrands(StrandSet strands_turntable_mm);
 
   // OutOfRange for a camera index outside the scene; InvalidArgument for light
   // levels of the wrong count or outside 0..1. Thread-safe (const).
