@@ -35,7 +35,7 @@ struct SimulateArgs {
   std::vector<double> up{0, 0, 1};
   int preview_every = 1;
   bool guides_only = false;
-  std::string solver = "cg";
+  std::string solver = "cholesky";
 };
 
 constexpr int kPointsPerElement = 4;

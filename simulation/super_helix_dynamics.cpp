@@ -102,8 +102,10 @@ SuperHelixDynamics::SuperHelixDynamics(const SuperHelix& strand, const HairMater
   for (int e = 0; e < n; ++e) {
     const double length = strand_.lengths_m[static_cast<size_t>(e)];
     stiffness_.segment<3>(3 * e) = length * c;  // V = 1/2 int H^T C^H H ds, H constant per element
+    first_sample_.push_back(static_cast<int>(samples_.size()));
     for (size_t k = 0; k < nodes.size(); ++k) samples_.push_back({e, nodes[k] * length, weights[k] * length});
   }
+  first_sample_.push_back(static_cast<int>(samples_.size()));
 }
 
 // Positions of the quadrature points, without Jacobians.
@@ -120,74 +122,153 @@ std::vector<Eigen::Vector3d> SuperHelixDynamics::SamplePositions(const Eigen::Ve
 
 // Positions, material frames and Jacobians of the quadrature points. A change
 // of element P's coordinates moves the end of P by dX_P and turns it by the
-// world rotation dTheta_P; everything beyond P follows rigidly:
-//   J_P(r) = dX_P - [r - x_end(P)]x dTheta_P,   J_w,P = dTheta_P.
-// Inside its own element the point moves by frame * d offset / d omega and
-// turns by frame(s) s J_r(s omega).
-void SuperHelixDynamics::Evaluate(const Eigen::VectorXd& q, bool with_jacobians) {
+// world rotation B_P; everything beyond P follows rigidly:
+//   dr/dq_P = dX_P - [r - x_end(P)]x B_P = C_P - [r]x B_P,  C_P = dX_P + [x_end(P)]x B_P,
+// and its frame turns by B_P. Inside its own element a point moves by
+// frame * d offset / d omega and turns by frame(s) s J_r(s omega).
+void SuperHelixDynamics::Evaluate(const Eigen::VectorXd& q) {
   const int n = strand_.num_elements();
-  const int dofs = 3 * n;
   const std::vector<ElementFrame> frames = ElementFrames(strand_, q);
-  std::vector<Eigen::Matrix3d> end_move(static_cast<size_t>(n)), end_turn(static_cast<size_t>(n));
-  if (with_jacobians) {
-    for (int e = 0; e < n; ++e) {
-      const Eigen::Vector3d omega = q.segment<3>(3 * e);
-      const double length = strand_.lengths_m[static_cast<size_t>(e)];
-      end_move[static_cast<size_t>(e)] = frames[static_cast<size_t>(e)].frame * OffsetJacobian(omega, length, length);
-      end_turn[static_cast<size_t>(e)] =
-          frames[static_cast<size_t>(e) + 1].frame * (length * RightJacobianSO3(length * omega));
-    }
-  }
+  move_.resize(static_cast<size_t>(n));
+  turn_.resize(static_cast<size_t>(n));
   const size_t count = samples_.size();
   positions_.resize(count);
   frames_.resize(count);
-  jacobian_.resize(count);
-  angular_jacobian_.resize(count);
-  for (size_t i = 0; i < count; ++i) {
-    const Sample& sample = samples_[i];
-    const int e = sample.element;
+  local_jacobian_.resize(count);
+  local_angular_jacobian_.resize(count);
+  for (int e = 0; e < n; ++e) {
+    const size_t ue = static_cast<size_t>(e);
     const Eigen::Vector3d omega = q.segment<3>(3 * e);
-    const ElementFrame& start = frames[static_cast<size_t>(e)];
-    positions_[i] = start.start_m + start.frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, sample.s);
-    frames_[i] = start.frame * RotationFromVector(sample.s * omega);
-    if (!with_jacobians) continue;
-    auto& j = jacobian_[i];
-    auto& jw = angular_jacobian_[i];
-    j.setZero(3, dofs);
-    jw.setZero(3, dofs);
-    for (int p = 0; p < e; ++p) {
-      const Eigen::Vector3d lever = positions_[i] - frames[static_cast<size_t>(p) + 1].start_m;
-      j.middleCols<3>(3 * p) = end_move[static_cast<size_t>(p)] - Skew(lever) * end_turn[static_cast<size_t>(p)];
-      jw.middleCols<3>(3 * p) = end_turn[static_cast<size_t>(p)];
+    const double length = strand_.lengths_m[ue];
+    const ElementFrame& start = frames[ue];
+    turn_[ue] = frames[ue + 1].frame * (length * RightJacobianSO3(length * omega));
+    move_[ue] = start.frame * OffsetJacobian(omega, length, length) + Skew(frames[ue + 1].start_m) * turn_[ue];
+    for (int i = first_sample_[ue]; i < first_sample_[ue + 1]; ++i) {
+      const size_t ui = static_cast<size_t>(i);
+      const double s = samples_[ui].s;
+      positions_[ui] = start.start_m + start.frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, s);
+      frames_[ui] = start.frame * RotationFromVector(s * omega);
+      local_jacobian_[ui] = start.frame * OffsetJacobian(omega, s, length);
+      local_angular_jacobian_[ui] = frames_[ui] * (s * RightJacobianSO3(s * omega));
     }
-    j.middleCols<3>(3 * e) = start.frame * OffsetJacobian(omega, sample.s, strand_.lengths_m[static_cast<size_t>(e)]);
-    jw.middleCols<3>(3 * e) = frames_[i] * (sample.s * RightJacobianSO3(sample.s * omega));
   }
 }
 
 void SuperHelixDynamics::AddProjected(int i, double weight, const Eigen::Matrix3d& metric, Eigen::MatrixXd* out) const {
-  const int cols = 3 * (samples_[static_cast<size_t>(i)].element + 1);
-  const auto j = jacobian_[static_cast<size_t>(i)].leftCols(cols);
+  const size_t ui = static_cast<size_t>(i);
+  const int e = samples_[ui].element;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> j(3, 3 * (e + 1));
+  const Eigen::Matrix3d lever = Skew(positions_[ui]);
+  for (int p = 0; p < e; ++p) {
+    j.middleCols<3>(3 * p) = move_[static_cast<size_t>(p)] - lever * turn_[static_cast<size_t>(p)];
+  }
+  j.middleCols<3>(3 * e) = local_jacobian_[ui];
+  const int cols = 3 * (e + 1);
   out->topLeftCorner(cols, cols).noalias() += weight * (j.transpose() * (metric * j));
 }
 
 // T_t = 1/2 int rho S |r'|^2 and T_r = 1/2 int rho w^T I w (Sec. VI; the
 // paper's K in T_r read as the frame's angular velocity w, with its inertia I).
-Eigen::MatrixXd SuperHelixDynamics::MassMatrix() const {
-  const int dofs = strand_.num_dofs();
-  const double rho_s = material_.LinearDensity();
+// Block (p, q), p < q, sums over the points beyond q, where both Jacobians are
+// rigid (C - [r]x B), and over q's own points. With the moments of the points
+// beyond q, m0 = int 1, m1 = int r, m2 = int [r]x^T [r]x, W = int rho I_world,
+// and P = int J_q, Q = int [r]x J_q, V = int rho I_world J_w,q over q's points:
+//   T_pq = C_p^T (m0 C_q - [m1]x B_q + P) + B_p^T ([m1]x C_q + m2 B_q + Q),
+//   R_pq = B_p^T (W B_q + V),
+// so assembling M costs O(N^2) 3 x 3 products instead of O(N^2) per point.
+void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational, Eigen::MatrixXd* rotational) const {
+  const int n = strand_.num_elements();
   const Eigen::Vector3d inertia = material_.density_kg_m3 * material_.SecondMoments();
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(dofs, dofs);
-  for (size_t i = 0; i < samples_.size(); ++i) {
-    const int cols = 3 * (samples_[i].element + 1);
-    const double w = samples_[i].weight;
-    const auto j = jacobian_[i].leftCols(cols);
-    const auto jw = angular_jacobian_[i].leftCols(cols);
-    const Eigen::Matrix3d world_inertia = frames_[i] * inertia.asDiagonal() * frames_[i].transpose();
-    m.topLeftCorner(cols, cols).noalias() += (w * rho_s) * (j.transpose() * j);
-    m.topLeftCorner(cols, cols).noalias() += w * (jw.transpose() * (world_inertia * jw));
+  translational->setZero(3 * n, 3 * n);
+  rotational->setZero(3 * n, 3 * n);
+  double m0 = 0;
+  Eigen::Vector3d m1 = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d m2 = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d w_beyond = Eigen::Matrix3d::Zero();
+  for (int q = n - 1; q >= 0; --q) {
+    const size_t uq = static_cast<size_t>(q);
+    Eigen::Matrix3d p_sum = Eigen::Matrix3d::Zero(), q_sum = Eigen::Matrix3d::Zero(), v_sum = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d t_own = Eigen::Matrix3d::Zero(), r_own = Eigen::Matrix3d::Zero(), w_own = Eigen::Matrix3d::Zero();
+    double m0_own = 0;
+    Eigen::Vector3d m1_own = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d m2_own = Eigen::Matrix3d::Zero();
+    for (int i = first_sample_[uq]; i < first_sample_[uq + 1]; ++i) {
+      const size_t ui = static_cast<size_t>(i);
+      const double w = samples_[ui].weight;
+      const Eigen::Vector3d& r = positions_[ui];
+      const Eigen::Matrix3d& j = local_jacobian_[ui];
+      const Eigen::Matrix3d& jw = local_angular_jacobian_[ui];
+      const Eigen::Matrix3d world_inertia = frames_[ui] * inertia.asDiagonal() * frames_[ui].transpose();
+      p_sum += w * j;
+      q_sum += w * Skew(r) * j;
+      v_sum += w * world_inertia * jw;
+      t_own += w * j.transpose() * j;
+      r_own += w * jw.transpose() * world_inertia * jw;
+      m0_own += w;
+      m1_own += w * r;
+      m2_own += w * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+      w_own += w * world_inertia;
+    }
+    const Eigen::Matrix3d& b = turn_[uq];
+    const Eigen::Matrix3d& c = move_[uq];
+    const Eigen::Matrix3d g_beyond = m0 * c - Skew(m1) * b;
+    const Eigen::Matrix3d h_beyond = Skew(m1) * c + m2 * b;
+    translational->block<3, 3>(3 * q, 3 * q) = c.transpose() * g_beyond + b.transpose() * h_beyond + t_own;
+    rotational->block<3, 3>(3 * q, 3 * q) = b.transpose() * w_beyond * b + r_own;
+    const Eigen::Matrix3d g = g_beyond + p_sum;
+    const Eigen::Matrix3d h = h_beyond + q_sum;
+    const Eigen::Matrix3d k = w_beyond * b + v_sum;
+    for (int p = 0; p < q; ++p) {
+      const size_t up = static_cast<size_t>(p);
+      const Eigen::Matrix3d t_pq = move_[up].transpose() * g + turn_[up].transpose() * h;
+      const Eigen::Matrix3d r_pq = turn_[up].transpose() * k;
+      translational->block<3, 3>(3 * p, 3 * q) = t_pq;
+      translational->block<3, 3>(3 * q, 3 * p) = t_pq.transpose();
+      rotational->block<3, 3>(3 * p, 3 * q) = r_pq;
+      rotational->block<3, 3>(3 * q, 3 * p) = r_pq.transpose();
+    }
+    m0 += m0_own;
+    m1 += m1_own;
+    m2 += m2_own;
+    w_beyond += w_own;
   }
-  return m;
+}
+
+// Q_p = C_p^T int F + B_p^T int r x F over the points beyond p, plus p's own points.
+Eigen::VectorXd SuperHelixDynamics::GeneralisedForce(const std::vector<Eigen::Vector3d>& force_per_m) const {
+  const int n = strand_.num_elements();
+  Eigen::VectorXd f(3 * n);
+  Eigen::Vector3d force_beyond = Eigen::Vector3d::Zero(), torque_beyond = Eigen::Vector3d::Zero();
+  for (int q = n - 1; q >= 0; --q) {
+    const size_t uq = static_cast<size_t>(q);
+    Eigen::Vector3d own = move_[uq].transpose() * force_beyond + turn_[uq].transpose() * torque_beyond;
+    for (int i = first_sample_[uq]; i < first_sample_[uq + 1]; ++i) {
+      const size_t ui = static_cast<size_t>(i);
+      const Eigen::Vector3d weighted = samples_[ui].weight * force_per_m[ui];
+      own += local_jacobian_[ui].transpose() * weighted;
+      force_beyond += weighted;
+      torque_beyond += positions_[ui].cross(weighted);
+    }
+    f.segment<3>(3 * q) = own;
+  }
+  return f;
+}
+
+// r' = sum over earlier elements of (C_p q'_p + (B_p q'_p) x r), plus the own element's term.
+std::vector<Eigen::Vector3d> SuperHelixDynamics::SampleVelocities(const Eigen::VectorXd& v) const {
+  std::vector<Eigen::Vector3d> out(samples_.size());
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
+  for (int e = 0; e < strand_.num_elements(); ++e) {
+    const size_t ue = static_cast<size_t>(e);
+    const Eigen::Vector3d ve = v.segment<3>(3 * e);
+    for (int i = first_sample_[ue]; i < first_sample_[ue + 1]; ++i) {
+      const size_t ui = static_cast<size_t>(i);
+      out[ui] = linear + angular.cross(positions_[ui]) + local_jacobian_[ui] * ve;
+    }
+    linear += move_[ue] * ve;
+    angular += turn_[ue] * ve;
+  }
+  return out;
 }
 
 Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, const Eigen::Vector3d& r) const {
@@ -211,13 +292,10 @@ Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, const Ei
 }
 
 Eigen::VectorXd SuperHelixDynamics::StaticForces(const Environment& environment, const Eigen::VectorXd& q) {
-  Evaluate(q, true);
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(strand_.num_dofs());
-  for (size_t i = 0; i < samples_.size(); ++i) {
-    f.noalias() += samples_[i].weight *
-                   (jacobian_[i].transpose() * StaticForce(environment, positions_[i]));
-  }
-  return f;
+  Evaluate(q);
+  std::vector<Eigen::Vector3d> forces(samples_.size());
+  for (size_t i = 0; i < samples_.size(); ++i) forces[i] = StaticForce(environment, positions_[i]);
+  return GeneralisedForce(forces);
 }
 
 Eigen::VectorXd SuperHelixDynamics::ElasticForces(const Eigen::VectorXd& q) const {
@@ -231,12 +309,18 @@ int SuperHelixDynamics::SolveLinear(const Eigen::MatrixXd& a, const Eigen::Vecto
     return 1;
   }
   const Eigen::VectorXd inverse_diagonal = a.diagonal().cwiseInverse();
-  x->setZero(b.size());
-  Eigen::VectorXd r = b;
+  // Warm start from the previous step's velocity change: successive steps differ little.
+  if (previous_dv_.size() == b.size()) {
+    *x = previous_dv_;
+  } else {
+    x->setZero(b.size());
+  }
+  Eigen::VectorXd r = b - a * *x;
   Eigen::VectorXd z = inverse_diagonal.cwiseProduct(r);
   Eigen::VectorXd p = z;
   double rz = r.dot(z);
-  const double target = options_.cg_relative_tolerance * options_.cg_relative_tolerance * rz;
+  const double b_norm = b.dot(inverse_diagonal.cwiseProduct(b));
+  const double target = options_.cg_relative_tolerance * options_.cg_relative_tolerance * b_norm;
   const int max_iterations = 4 * static_cast<int>(b.size()) + 20;
   int iteration = 0;
   while (iteration < max_iterations && rz > target && rz > 0) {
@@ -259,7 +343,6 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
   const double rho_s = material_.LinearDensity();
   const Eigen::VectorXd& q = state->q;
   const Eigen::VectorXd& v = state->v;
-  const int dofs = strand_.num_dofs();
 
   // J_dot q' at every sample: the second difference of the centreline along q'.
   std::vector<Eigen::Vector3d> velocity_acceleration(samples_.size(), Eigen::Vector3d::Zero());
@@ -273,30 +356,31 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
       velocity_acceleration[i] = (plus[i] - 2 * mid[i] + minus[i]) / (eps * eps);
     }
   }
-  Evaluate(q, true);
-  const Eigen::MatrixXd mass = MassMatrix();
+  Evaluate(q);
+  Eigen::MatrixXd translational, rotational;
+  KineticMetrics(&translational, &rotational);
+  const Eigen::MatrixXd mass = rho_s * translational + rotational;
   Eigen::MatrixXd stiffness = stiffness_.asDiagonal();
-  Eigen::MatrixXd damping = (material_.internal_friction_s * stiffness_).asDiagonal();
-  Eigen::VectorXd force = Eigen::VectorXd::Zero(dofs);
+  Eigen::MatrixXd damping = options_.air_drag * translational;  // drag -nu r', implicit
+  damping.diagonal() += material_.internal_friction_s * stiffness_;
+  const std::vector<Eigen::Vector3d> velocities = SampleVelocities(v);
+  std::vector<Eigen::Vector3d> forces(samples_.size());
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   int contacts = 0;
   for (size_t i = 0; i < samples_.size(); ++i) {
-    const int index = static_cast<int>(i);
-    const double w = samples_[i].weight;
-    const Eigen::Vector3d velocity = jacobian_[i] * v;
-    Eigen::Vector3d f = StaticForce(env, positions_[i]);
-    f -= rho_s * (velocity_acceleration[i] + 2 * env.frame_angular_velocity.cross(velocity));
-    force.noalias() += w * (jacobian_[i].transpose() * f);
-    AddProjected(index, w * options_.air_drag, identity, &damping);
+    forces[i] = StaticForce(env, positions_[i]) -
+                rho_s * (velocity_acceleration[i] + 2 * env.frame_angular_velocity.cross(velocities[i]));
     if (!options_.use_head) continue;
     Eigen::Vector3d normal;
     if (options_.head.Distance(positions_[i], &normal) < options_.contact_margin_m) {
       ++contacts;
       const Eigen::Matrix3d nn = normal * normal.transpose();
-      AddProjected(index, w * options_.contact_stiffness, nn, &stiffness);
-      AddProjected(index, w * options_.contact_friction, identity - nn, &damping);
+      const double w = samples_[i].weight;
+      AddProjected(static_cast<int>(i), w * options_.contact_stiffness, nn, &stiffness);
+      AddProjected(static_cast<int>(i), w * options_.contact_friction, identity - nn, &damping);
     }
   }
+  const Eigen::VectorXd force = GeneralisedForce(forces);
   const Eigen::MatrixXd system = mass + (theta * h) * damping + (theta * theta * h * h) * stiffness;
   const Eigen::VectorXd rhs =
       h * (force + ElasticForces(q) - damping * v - (theta * h) * (stiffness * v));
@@ -306,6 +390,7 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
     return FailedPrecondition("super-helix step: the linear solve gave a non-finite velocity (time step " +
                               std::to_string(h) + " s too large or a degenerate strand)");
   }
+  previous_dv_ = dv;
   state->q += h * (v + theta * dv);
   state->v += dv;
   if (report) {
@@ -316,9 +401,11 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
 }
 
 StrandEnergy SuperHelixDynamics::Energy(const Environment& env, const StrandState& state) {
-  Evaluate(state.q, true);
+  Evaluate(state.q);
+  Eigen::MatrixXd translational, rotational;
+  KineticMetrics(&translational, &rotational);
   StrandEnergy energy;
-  energy.kinetic_j = 0.5 * state.v.dot(MassMatrix() * state.v);
+  energy.kinetic_j = 0.5 * state.v.dot((material_.LinearDensity() * translational + rotational) * state.v);
   const Eigen::VectorXd strain = state.q - strand_.rest_q;
   energy.elastic_j = 0.5 * strain.dot(stiffness_.cwiseProduct(strain));
   const double rho_s = material_.LinearDensity();
