@@ -219,4 +219,45 @@ TEST(CliFit, FitsStrandsAndRefusesBadInput) {
   EXPECT_NE(r.output.find("broken.hair"), std::string::npos) << r.output;
 }
 
+TEST(CliSimulate, WritesFramesPreviewsAndSummaryAndRefusesBadInput) {
+  const std::string strands = CurlsPly();
+  const std::string model = FreshPath("sim_model.json");
+  ASSERT_EQ(Hairrig("fit " + strands + " --out " + model + " --guides 4").exit_code, 0);
+  const std::string out = FreshPath("sim_out");
+  CommandRun r = Hairrig("simulate " + model + " --out " + out +
+                         " --scenario wind --seconds 0.2 --fps 10 --no-head --preview-every 2 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = LastLineJson(r.output);
+  EXPECT_EQ(j["frames"], 3);
+  EXPECT_EQ(j["guides"], 4);
+  EXPECT_EQ(j["strands"], 12) << "every strand of the source, interpolated from the guides";
+  EXPECT_GT(j["max_tip_move_mm"].get<double>(), 0.0);
+  for (const char* f : {"frames/frame_0000.hair", "frames/frame_0002.hair", "previews/frame_0000.png",
+                        "previews/frame_0002.png", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  }
+  EXPECT_FALSE(fs::exists(out + "/previews/frame_0001.png"));
+
+  r = Hairrig("simulate " + model + " --out " + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
+  r = Hairrig("simulate " + model + " --out " + FreshPath("sim_bad") + " --scenario tornado");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("unknown scenario 'tornado'"), std::string::npos) << r.output;
+
+  nlohmann::json doc = nlohmann::json::parse(ReadText(model));
+  doc["version"] = 99;
+  const std::string old_version = TempFile("old_model.json", doc.dump());
+  r = Hairrig("simulate " + old_version + " --out " + FreshPath("sim_old"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("model version 99"), std::string::npos) << r.output;
+
+  doc = nlohmann::json::parse(ReadText(model));
+  doc["guides"][0]["elements"][0]["length_mm"] = -1;
+  const std::string degenerate = TempFile("degenerate_model.json", doc.dump());
+  r = Hairrig("simulate " + degenerate + " --out " + FreshPath("sim_degenerate"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("guides[0].elements[0]"), std::string::npos) << r.output;
+}
+
 }  // namespace capture_cli
