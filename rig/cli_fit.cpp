@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <filesystem>
 
 #include <CLI/CLI.hpp>
 
@@ -34,6 +35,10 @@ Result<nlohmann::json> RunFit(const FitArgs& a) {
   }
   options.fitting.anchor_root = !a.paper_root;
   options.fitting.target_mean_error_mm = a.target_error_mm;
+  const std::filesystem::path parent = std::filesystem::path(a.out).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  if (ec) return IoError(parent.string() + ": cannot create the folder for --out (" + ec.message() + ")");
   FitSummary s;
   HR_ASSIGN_OR_RETURN(HelixModel model, FitHairModel(strands, options, &s));
   model.source = a.strands;
