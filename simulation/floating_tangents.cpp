@@ -66,13 +66,67 @@ int AdaptiveElementCount(const StrandSpline& spline, const FloatingTangentsOptio
 
 namespace {
 
-// Sec. V-B, Eqs. 4-5: p*_i = p*_0 + sum_{j<i} D_j a_j with D_j a basis of the
-// plane normal to t_{j+1} - t_j (the direction t_j itself when the tangents
-// are equal, which keeps that element straight). Linear least squares in
-// (p*_0, a_0, ..., a_{N-1}).
+// Sec. V-B, Eqs. 4-5: each pair of consecutive break points must be
+// co-helical, (p*_{j+1} - p*_j) . (t_{j+1} - t_j) = 0 (Eq. 3); when the
+// tangents are equal the element must be straight, so the chord has no
+// component across t_j (two conditions).
+struct CohelicalCondition {
+  int element = 0;
+  Eigen::Vector3d normal;  // the chord's component along it must vanish
+};
+
+std::vector<CohelicalCondition> CohelicalConditions(const std::vector<Eigen::Vector3d>& t) {
+  std::vector<CohelicalCondition> rows;
+  for (int j = 0; j + 1 < static_cast<int>(t.size()); ++j) {
+    const Eigen::Vector3d dt = t[static_cast<size_t>(j + 1)] - t[static_cast<size_t>(j)];
+    if (dt.norm() < kStraightTangentGap) {
+      const Eigen::Vector3d u = t[static_cast<size_t>(j)].unitOrthogonal();
+      rows.push_back({j, u});
+      rows.push_back({j, t[static_cast<size_t>(j)].cross(u).normalized()});
+    } else {
+      rows.push_back({j, dt.normalized()});
+    }
+  }
+  return rows;
+}
+
+// Ours (anchor_root): min sum_{i >= 0} |p*_i - p_i|^2 under the conditions C p* = 0
+// is the orthogonal projection p* = p - C^T (C C^T)^-1 C p. Each condition
+// touches two neighbouring points, so C C^T is banded and small (one or two
+// rows per element): O(N) to build, a tiny dense Cholesky to solve.
+std::vector<Eigen::Vector3d> ProjectOntoCohelical(const std::vector<Eigen::Vector3d>& p,
+                                                  const std::vector<Eigen::Vector3d>& t) {
+  const std::vector<CohelicalCondition> rows = CohelicalConditions(t);
+  const int m = static_cast<int>(rows.size());
+  Eigen::MatrixXd cct = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd cp(m);
+  for (int r = 0; r < m; ++r) {
+    const CohelicalCondition& a = rows[static_cast<size_t>(r)];
+    cp[r] = a.normal.dot(p[static_cast<size_t>(a.element) + 1] - p[static_cast<size_t>(a.element)]);
+    for (int q = r; q < m && rows[static_cast<size_t>(q)].element <= a.element + 1; ++q) {
+      const CohelicalCondition& b = rows[static_cast<size_t>(q)];
+      const double dot = a.normal.dot(b.normal);
+      cct(r, q) = cct(q, r) = b.element == a.element ? 2 * dot : -dot;
+    }
+  }
+  const Eigen::VectorXd lambda = cct.ldlt().solve(cp);
+  std::vector<Eigen::Vector3d> relaxed = p;
+  for (int r = 0; r < m; ++r) {
+    const CohelicalCondition& a = rows[static_cast<size_t>(r)];
+    relaxed[static_cast<size_t>(a.element) + 1] -= lambda[r] * a.normal;
+    relaxed[static_cast<size_t>(a.element)] += lambda[r] * a.normal;
+  }
+  return relaxed;
+}
+
+// Eq. 5 as printed (the sum from i = 1, p*_0 free): p*_i = p*_0 + sum_{j<i}
+// D_j a_j with D_j a basis of the plane normal to t_{j+1} - t_j (the direction
+// t_j itself when the tangents are equal), a linear least-squares solve in
+// (p*_0, a_0, ..., a_{N-1}); the minimum-norm choice fixes the free p*_0.
 std::vector<Eigen::Vector3d> RelaxBreakPoints(const std::vector<Eigen::Vector3d>& p,
                                               const std::vector<Eigen::Vector3d>& t,
                                               bool anchor_root) {
+  if (anchor_root) return ProjectOntoCohelical(p, t);
   const int n = static_cast<int>(p.size()) - 1;
   std::vector<Eigen::MatrixXd> basis(static_cast<size_t>(n));
   int unknowns = 3;

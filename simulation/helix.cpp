@@ -9,6 +9,8 @@ namespace hairrig {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586476925;
+constexpr int kCoarseScan = 48;  // samples of the axis angle on [0, 2 pi]
+constexpr int kFineScan = 720;
 }
 
 Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& omega, double s) {
@@ -86,6 +88,8 @@ class HelixSearch {
     const Eigen::Vector3d d = p1 - p0;
     chord_len_ = d.norm();
     psi_ = std::atan2(d.dot(e2_), d.dot(e1_));
+    sin_psi_ = std::sin(psi_);
+    cos_psi_ = std::cos(psi_);
   }
 
   // Helices of more whole turns join the same ends (a tight coil along the
@@ -95,17 +99,32 @@ class HelixSearch {
   bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
     constexpr int kMaxTurns = 64;
     constexpr double kTurnPenalty = 0.02;
+    // The scan's angles, their sines and cosines and theta without extra
+    // turns, computed once for all turns: one atan2 per sample.
+    const ScanAngles& angles = ScanAngles::For(samples);
+    const std::vector<double>& phi = angles.phi;
+    const size_t count = phi.size();
+    // F is affine in theta: F = slope * theta - offset at each scanned angle.
+    std::vector<double> slope(count), theta0(count), offset(count);
+    for (size_t k = 0; k < count; ++k) {
+      const double sin_phi = angles.sin_phi[k], cos_phi = angles.cos_phi[k];
+      theta0[k] = ThetaFromSin(sin_phi, 0);
+      offset[k] = -FromSinCos(sin_phi, cos_phi, 0);
+      slope[k] = FromSinCos(sin_phi, cos_phi, 1) + offset[k];
+    }
     double best_score = std::numeric_limits<double>::infinity();
     bool found = false;
     for (int turns = 0; turns <= kMaxTurns; ++turns) {
       const double turn_cost = kTurnPenalty * turns * preferred_length_mm;
       if (found && (preferred_length_mm <= 0 || turn_cost >= best_score)) break;
-      double phi_a = 0, f_a = F(phi_a, turns);
+      auto f_at = [&](size_t k) { return slope[k] * (theta0[k] + kTwoPi * turns) - offset[k]; };
+      double f_a = f_at(0);
       for (int i = 1; i <= samples; ++i) {
-        const double phi_b = kTwoPi * i / samples;
-        const double f_b = F(phi_b, turns);
+        const double f_b = f_at(static_cast<size_t>(i));
         HelixElement candidate;
-        if ((f_a == 0 || f_a * f_b < 0) && Refine(phi_a, phi_b, f_a, turns, &candidate)) {
+        const bool bracket = f_a == 0 || f_a * f_b < 0;
+        if (bracket && CanBeat(angles, theta0, static_cast<size_t>(i), turns, preferred_length_mm, best_score - turn_cost) &&
+            Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, turns, &candidate)) {
           const double score = preferred_length_mm > 0
                                    ? std::abs(candidate.length_mm - preferred_length_mm) + turn_cost
                                    : candidate.length_mm;
@@ -115,7 +134,6 @@ class HelixSearch {
             found = true;
           }
         }
-        phi_a = phi_b;
         f_a = f_b;
       }
     }
@@ -123,13 +141,52 @@ class HelixSearch {
   }
 
  private:
-  double Theta(double phi, int turns) const {
-    const double half = std::atan2(c_, m_ * std::abs(std::sin(phi)));
-    return (std::sin(phi) < 0 ? 2 * half : kTwoPi - 2 * half) + kTwoPi * turns;
+  struct ScanAngles;
+  // Whether a root between samples k - 1 and k can score below `budget`: the
+  // helix length L = theta |d| / |g| at the two ends bounds it (L varies
+  // slowly and monotonically across a bracket of the coarse scan).
+  bool CanBeat(const ScanAngles& angles, const std::vector<double>& theta0, size_t k, int turns,
+               double preferred_length_mm, double budget) const {
+    if (preferred_length_mm <= 0 || !std::isfinite(budget)) return true;
+    auto length = [&](size_t j) {
+      const double theta = theta0[j] + kTwoPi * turns;
+      return theta * chord_len_ / std::hypot(m_ * theta * angles.cos_phi[j], 2 * c_);
+    };
+    const double lo = std::min(length(k - 1), length(k)), hi = std::max(length(k - 1), length(k));
+    const double miss = preferred_length_mm < lo ? lo - preferred_length_mm
+                        : preferred_length_mm > hi ? preferred_length_mm - hi
+                                                   : 0.0;
+    return miss < budget * 1.5 + 1e-9 * preferred_length_mm;
   }
+  // The scan's angles with their sines and cosines, for the two scan densities.
+  struct ScanAngles {
+    std::vector<double> phi, sin_phi, cos_phi;
+    static const ScanAngles& For(int samples) {
+      static const ScanAngles coarse(kCoarseScan), fine(kFineScan);
+      return samples == kCoarseScan ? coarse : fine;
+    }
+    explicit ScanAngles(int samples) {
+      for (int i = 0; i <= samples; ++i) {
+        phi.push_back(kTwoPi * i / samples);
+        sin_phi.push_back(std::sin(phi.back()));
+        cos_phi.push_back(std::cos(phi.back()));
+      }
+    }
+  };
+  double ThetaFromSin(double sin_phi, int turns) const {
+    const double half = std::atan2(c_, m_ * std::abs(sin_phi));
+    return (sin_phi < 0 ? 2 * half : kTwoPi - 2 * half) + kTwoPi * turns;
+  }
+  double Theta(double phi, int turns) const { return ThetaFromSin(std::sin(phi), turns); }
+  // One sine and cosine of phi; those of psi - phi follow from psi's.
   double F(double phi, int turns) const {
-    return m_ * Theta(phi, turns) * std::cos(phi) * std::sin(psi_ - phi) -
-           2 * c_ * std::cos(psi_ - phi);
+    const double sin_phi = std::sin(phi), cos_phi = std::cos(phi);
+    return FromSinCos(sin_phi, cos_phi, ThetaFromSin(sin_phi, turns));
+  }
+  double FromSinCos(double sin_phi, double cos_phi, double theta) const {
+    const double sin_rel = sin_psi_ * cos_phi - cos_psi_ * sin_phi;  // sin(psi - phi)
+    const double cos_rel = cos_psi_ * cos_phi + sin_psi_ * sin_phi;
+    return m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
   }
 
   // The root on [lo, hi]; true with the helix if g points along the chord and
@@ -179,6 +236,7 @@ class HelixSearch {
   Eigen::Vector3d p0_, t0_, p1_, t1_;
   Eigen::Vector3d e1_, e2_;
   double c_ = 0, m_ = 0, psi_ = 0, chord_len_ = 0;
+  double sin_psi_ = 0, cos_psi_ = 1;
 };
 
 }  // namespace
@@ -211,7 +269,7 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
   }
   HelixSearch search(p0, t0, p1, t1);
   bool found = false;
-  for (int samples : {48, 720}) {  // a finer scan only when the coarse one misses a root
+  for (int samples : {kCoarseScan, kFineScan}) {  // a finer scan only when the coarse one misses a root
     found = search.Run(samples, preferred_length_mm, &h);
     if (found) break;
   }
