@@ -31,8 +31,9 @@ struct FloatingTangentsOptions {
   // Ours: the root's own residual is in the least squares, so the fitted strand
   // starts at the scalp. false: Eq. 5 as printed (sum from i = 1).
   bool anchor_root = true;
-  // Ours: after Algorithm 2, N grows (by half, up to N_max) while the mean fit
-  // error exceeds this (mm). 0: Algorithm 2 alone, as in the paper.
+  // Ours: after Algorithm 2, N grows (to the N an N^-3 error law predicts, by
+  // at least a quarter, up to N_max) while the mean fit error exceeds this
+  // (mm). 0: Algorithm 2 alone, as in the paper.
   double target_mean_error_mm = 0.05;
   int error_samples_per_element = 24;  // for the fit error
   bool IsValid(std::string* why) const;

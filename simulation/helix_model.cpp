@@ -1,6 +1,8 @@
 #include "simulation/helix_model.h"
 
+#include <algorithm>
 #include <chrono>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -34,16 +36,30 @@ Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& opti
   s.guides = static_cast<int>(selection.guide_strands.size());
   s.guide_rms_mm = selection.rms_error_mm;
   const auto offsets = strands.Offsets();
-  double error_sum = 0, elements = 0;
-  for (int g : selection.guide_strands) {
+  // Guides are fitted independently: spread over threads, gathered in order.
+  const size_t count = selection.guide_strands.size();
+  std::vector<Result<PiecewiseHelix>> fitted(count, Result<PiecewiseHelix>(Internal("not fitted")));
+  std::vector<StrandFitSummary> fits(count);
+  auto fit_range = [&](size_t begin, size_t end) {
     std::vector<Eigen::Vector3d> points;
-    for (size_t i = offsets[static_cast<size_t>(g)]; i < offsets[static_cast<size_t>(g) + 1]; ++i) {
-      points.push_back(strands.points_mm[i].cast<double>());
+    for (size_t k = begin; k < end; ++k) {
+      const size_t g = static_cast<size_t>(selection.guide_strands[k]);
+      points.clear();
+      for (size_t i = offsets[g]; i < offsets[g + 1]; ++i) points.push_back(strands.points_mm[i].cast<double>());
+      fitted[k] = FitFloatingTangents(points, options.fitting, &fits[k]);
     }
-    StrandFitSummary fit;
-    auto helix = FitFloatingTangents(points, options.fitting, &fit);
-    if (!helix.ok()) return helix.status().WithContext("strand " + std::to_string(g));
-    model.guides.push_back(std::move(helix).value());
+  };
+  size_t threads = options.threads > 0 ? static_cast<size_t>(options.threads) : std::thread::hardware_concurrency();
+  threads = std::clamp<size_t>(threads, 1, std::max<size_t>(1, count / 8));
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(fit_range, count * t / threads, count * (t + 1) / threads);
+  fit_range(0, count / threads);
+  for (std::thread& thread : pool) thread.join();
+  double error_sum = 0, elements = 0;
+  for (size_t k = 0; k < count; ++k) {
+    if (!fitted[k].ok()) return fitted[k].status().WithContext("strand " + std::to_string(selection.guide_strands[k]));
+    model.guides.push_back(std::move(fitted[k]).value());
+    const StrandFitSummary& fit = fits[k];
     error_sum += fit.mean_error_mm;
     elements += fit.elements;
     s.max_error_mm = std::max(s.max_error_mm, fit.max_error_mm);

@@ -20,6 +20,7 @@ namespace hairrig {
 struct FitOptions {
   GuideOptions guides;
   FloatingTangentsOptions fitting;
+  int threads = 0;  // guides fitted in parallel; 0: one thread per core
 };
 
 struct FitSummary {
