@@ -1,0 +1,62 @@
+// Per-view pose initialisation (calibration/view_pose.h) on rendered views of
+// the default scene against the simulated rig's ground truth: detection,
+// matching to etc/calib-box.yaml, SQPnP + RANSAC + refinement, each view alone.
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "calibration/view_pose.h"
+#include "sim_hw/ground_truth.h"
+#include "sim_hw/renderer.h"
+
+namespace hairrig {
+namespace {
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+TEST(RenderedViewPose, EveryViewIsInitialisedCloseToTheTruth) {
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  ASSERT_TRUE(scene.ok()) << scene.status().ToString();
+  auto renderer = Renderer::Create(*scene);
+  ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
+  auto detector = TagDetector::Create({});
+  ASSERT_TRUE(detector.ok());
+  const int cameras = static_cast<int>(scene->cameras.size());
+  std::vector<double> rotation_deg, centre_mm, rms_px;
+  for (int stop : {0, 5, 11}) {
+    for (int cam = 0; cam < cameras; ++cam) {
+      const int view = stop * cameras + cam;
+      const ViewGroundTruth truth = MakeViewGroundTruth(*scene, view);
+      RenderOptions options;
+      options.noise_seed = static_cast<uint64_t>(view);
+      auto rendered = (*renderer)->Render(cam, scene->StopAngleDeg(stop), options);
+      ASSERT_TRUE(rendered.ok());
+      auto detections = (*detector)->Detect(rendered->image);
+      ASSERT_TRUE(detections.ok());
+      const ViewObservations observations = MatchToBox(*detections, scene->box);
+      auto pose = EstimateViewPose(observations, truth.intrinsics);
+      ASSERT_TRUE(pose.ok()) << "view " << view << ": " << pose.status().ToString();
+      const Rigid3d& estimate = pose->cam_from_box;
+      rotation_deg.push_back(estimate.rotation.angularDistance(truth.cam_from_box.rotation) * 180 / 3.14159265358979);
+      centre_mm.push_back((estimate.Inverse().translation - truth.cam_from_box.Inverse().translation).norm());
+      rms_px.push_back(pose->rms_px);
+      std::printf("view %2d: %d tags, %zu left out, rotation %.4f deg, centre %.3f mm, RMS %.3f px\n", view,
+                  pose->tags_used, pose->rejected.size(), rotation_deg.back(), centre_mm.back(), rms_px.back());
+    }
+  }
+  // Measured: rotation median 0.007 deg, max 0.033; centre median 0.10 mm,
+  // max 0.47 (views of one face); RMS 0.07-0.11 px.
+  EXPECT_LT(Median(rotation_deg), 0.02);
+  EXPECT_LT(*std::max_element(rotation_deg.begin(), rotation_deg.end()), 0.08);
+  EXPECT_LT(Median(centre_mm), 0.3);
+  EXPECT_LT(*std::max_element(centre_mm.begin(), centre_mm.end()), 1.0);
+  EXPECT_LT(*std::max_element(rms_px.begin(), rms_px.end()), 0.25);
+}
+
+}  // namespace
+}  // namespace hairrig
