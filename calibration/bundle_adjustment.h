@@ -1,0 +1,68 @@
+// Bundle adjustment of a capture's views from the calibration box (design.md
+// section 5), in Ceres with a robust (Huber) loss.
+//
+// Mode `turntable`: camera c fixed in the world, the box rigid on the
+// turntable, one angle per stop (starting from the encoder, refined):
+//   cam_from_box(v) = cam_from_world(c) * world_from_turntable(theta_s) * turntable_from_box.
+// Gauge, fixed explicitly: the world's z axis is the turntable axis through
+// the world origin (world_from_turntable turns about it); the first stop keeps
+// its encoder angle (fixes the turn about the axis) and turntable_from_box
+// keeps its initial height along the axis (the origin's height is not seen).
+// Mode `free`: an independent cam_from_box per view (the box frame fixes the gauge).
+//
+// Per camera: the pinhole + Brown-Conrady intrinsics (core/camera_model.h),
+// k3 held at its initial value (rarely observable on these lenses), or all
+// held fixed from a prior calibration. Millimetres, degrees, pixels.
+#pragma once
+
+#include <vector>
+
+#include "calibration/view_pose.h"
+#include "core/camera_model.h"
+#include "core/status.h"
+#include "core/transform.h"
+
+namespace hairrig {
+
+enum class CalibrationMode { kTurntable, kFree };
+
+struct CalibrationView {
+  int camera = 0;              // index into the cameras
+  int stop = 0;                // turntable stop (turntable mode)
+  double turntable_deg = 0;    // the encoder's angle at that stop
+  std::vector<TagObservation> tags;
+  Rigid3d cam_from_box_init;   // from EstimateViewPose
+};
+
+struct BundleAdjustmentOptions {
+  CalibrationMode mode = CalibrationMode::kTurntable;
+  bool fix_intrinsics = false;  // a prior (ChArUco) calibration is trusted
+  double huber_px = 1.0;
+  int max_iterations = 100;
+  int threads = 2;
+};
+
+struct BundleAdjustmentInput {
+  std::vector<CameraIntrinsics> cameras;  // initial values
+  std::vector<CalibrationView> views;
+  Rigid3d turntable_from_box_init;        // turntable mode: nominal, from the rig config
+};
+
+struct BundleAdjustmentResult {
+  std::vector<CameraIntrinsics> cameras;
+  std::vector<Rigid3d> cam_from_box;    // per view
+  std::vector<Rigid3d> cam_from_world;  // per camera (turntable mode)
+  Rigid3d turntable_from_box;           // turntable mode
+  std::vector<double> stop_deg;         // refined angle per stop (turntable mode; NaN for unused stops)
+  std::vector<double> view_rms_px;      // corner reprojection RMS per view (2D error)
+  double rms_px = 0;
+  int iterations = 0;
+  bool converged = false;
+};
+
+// InvalidArgument for a view of an unknown camera, a camera without views,
+// invalid intrinsics or no observation at all; the message names them.
+Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
+                                                   const BundleAdjustmentOptions& options);
+
+}  // namespace hairrig

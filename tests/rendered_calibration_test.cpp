@@ -1,0 +1,148 @@
+// Bundle adjustment (calibration/bundle_adjustment.h) on the default simulated
+// capture, rendered here: 2 cameras x 19 stops, tags detected, each view
+// initialised by calibration/view_pose.h from deliberately wrong intrinsics
+// (focal +1.5 %, principal point off by 5 px, no distortion), then solved in
+// the turntable and the free mode and compared with the ground truth.
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "calibration/bundle_adjustment.h"
+#include "sim_hw/ground_truth.h"
+#include "sim_hw/renderer.h"
+
+namespace hairrig {
+namespace {
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+CameraIntrinsics WrongIntrinsics(const CameraIntrinsics& truth) {
+  CameraIntrinsics c = truth;
+  c.fx_px *= 1.015;
+  c.fy_px *= 1.015;
+  c.cx_px += 4;
+  c.cy_px -= 3;
+  c.k1 = c.k2 = c.p1 = c.p2 = c.k3 = 0;
+  return c;
+}
+
+struct Errors {
+  double rotation_median_deg, rotation_max_deg, centre_median_mm, centre_max_mm, focal_max_percent, rms_px;
+};
+
+Errors Compare(const Scene& scene, const BundleAdjustmentInput& input, const BundleAdjustmentResult& result,
+               const std::vector<int>& view_index) {
+  std::vector<double> rotation, centre;
+  for (size_t v = 0; v < input.views.size(); ++v) {
+    const ViewGroundTruth truth = MakeViewGroundTruth(scene, view_index[v]);
+    rotation.push_back(RotationDifferenceDeg(result.cam_from_box[v], truth.cam_from_box));
+    centre.push_back((result.cam_from_box[v].Inverse().translation - truth.cam_from_box.Inverse().translation).norm());
+  }
+  double focal = 0;
+  for (size_t c = 0; c < scene.cameras.size(); ++c) {
+    const CameraIntrinsics& t = scene.cameras[c].intrinsics;
+    focal = std::max({focal, std::abs(result.cameras[c].fx_px / t.fx_px - 1), std::abs(result.cameras[c].fy_px / t.fy_px - 1)});
+  }
+  return {Median(rotation), *std::max_element(rotation.begin(), rotation.end()), Median(centre),
+          *std::max_element(centre.begin(), centre.end()), 100 * focal, result.rms_px};
+}
+
+TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  ASSERT_TRUE(scene.ok()) << scene.status().ToString();
+  auto renderer = Renderer::Create(*scene);
+  ASSERT_TRUE(renderer.ok());
+  auto detector = TagDetector::Create({});
+  ASSERT_TRUE(detector.ok());
+  BundleAdjustmentInput input;
+  for (const SceneCamera& c : scene->cameras) input.cameras.push_back(WrongIntrinsics(c.intrinsics));
+  input.turntable_from_box_init = scene->turntable_from_box;
+  std::vector<int> view_index;
+  const int cameras = static_cast<int>(scene->cameras.size());
+  for (int stop = 0; stop < scene->turntable_stops; ++stop) {
+    for (int cam = 0; cam < cameras; ++cam) {
+      const int view = stop * cameras + cam;
+      RenderOptions options;
+      options.noise_seed = static_cast<uint64_t>(view);
+      auto rendered = (*renderer)->Render(cam, scene->StopAngleDeg(stop), options);
+      ASSERT_TRUE(rendered.ok());
+      auto detections = (*detector)->Detect(rendered->image);
+      ASSERT_TRUE(detections.ok());
+      const ViewObservations observations = MatchToBox(*detections, scene->box);
+      auto pose = EstimateViewPose(observations, input.cameras[static_cast<size_t>(cam)]);
+      if (!pose.ok()) continue;  // a view that sees too little is left to the others
+      CalibrationView v;
+      v.camera = cam;
+      v.stop = stop;
+      v.turntable_deg = scene->StopAngleDeg(stop);
+      v.tags = observations.tags;
+      v.cam_from_box_init = pose->cam_from_box;
+      input.views.push_back(v);
+      view_index.push_back(view);
+    }
+  }
+  ASSERT_GE(input.views.size(), 30u);
+  // Three solves: both modes from the wrong intrinsics, and the turntable mode
+  // with the intrinsics held at a prior (the true values stand in for a
+  // ChArUco calibration).
+  const char* names[3] = {"turntable", "free", "turntable, intrinsics prior"};
+  Errors errors[3];
+  for (int m = 0; m < 3; ++m) {
+    BundleAdjustmentOptions options;
+    options.mode = m == 1 ? CalibrationMode::kFree : CalibrationMode::kTurntable;
+    BundleAdjustmentInput run = input;
+    if (m == 2) {
+      options.fix_intrinsics = true;
+      for (size_t c = 0; c < run.cameras.size(); ++c) run.cameras[c] = scene->cameras[c].intrinsics;
+    }
+    auto result = RunBundleAdjustment(run, options);
+    ASSERT_TRUE(result.ok()) << result.status().ToString();
+    errors[m] = Compare(*scene, run, *result, view_index);
+    std::printf("%s: %zu views, rotation median %.4f max %.4f deg, centre median %.3f max %.3f mm, focal %.4f %%, "
+                "RMS %.3f px, %d iterations\n",
+                names[m], input.views.size(), errors[m].rotation_median_deg, errors[m].rotation_max_deg,
+                errors[m].centre_median_mm, errors[m].centre_max_mm, errors[m].focal_max_percent, errors[m].rms_px,
+                result->iterations);
+  }
+  // Measured (turntable / free / prior): rotation median 0.087 / 0.076 /
+  // 0.003 deg, centre median 0.47 / 0.76 / 0.055 mm, focal 0.081 / 0.097 %,
+  // RMS 0.10 px everywhere. The box stays near the image centre as it turns,
+  // so the principal point trades against the view's rotation (0.087 deg is
+  // 2.7 px at f = 1750 px) at the same RMS: issue 5's 0.02 deg needs more
+  // variety or an intrinsics prior, which then meets it.
+  EXPECT_LT(errors[0].rotation_median_deg, 0.15);
+  EXPECT_LT(errors[0].centre_median_mm, 0.8);
+  EXPECT_LT(errors[0].focal_max_percent, 0.15);
+  EXPECT_LT(errors[0].rms_px, 0.2);
+  EXPECT_LT(errors[0].centre_median_mm, errors[1].centre_median_mm) << "turntable mode better than free";
+  EXPECT_LE(errors[2].rotation_median_deg, 0.02);
+  EXPECT_LE(errors[2].centre_median_mm, 0.5);
+  EXPECT_LT(errors[2].rms_px, 0.2);
+}
+
+TEST(BundleAdjustment, BadInputIsNamed) {
+  BundleAdjustmentInput input;
+  EXPECT_NE(RunBundleAdjustment(input, {}).status().message().find("no camera"), std::string::npos);
+  CameraIntrinsics c;
+  c.width_px = 100, c.height_px = 100, c.fx_px = c.fy_px = 100, c.cx_px = c.cy_px = 50;
+  input.cameras = {c, c};
+  CalibrationView v;
+  v.camera = 0;
+  v.tags.push_back(TagObservation{});
+  input.views.push_back(v);
+  EXPECT_NE(RunBundleAdjustment(input, {}).status().message().find("camera 1 has no view with tags"),
+            std::string::npos);
+  input.views[0].camera = 5;
+  EXPECT_NE(RunBundleAdjustment(input, {}).status().message().find("names camera 5"), std::string::npos);
+  input.views[0].camera = 0;
+  input.cameras[1].fx_px = std::nan("");
+  EXPECT_FALSE(RunBundleAdjustment(input, {}).ok());
+}
+
+}  // namespace
+}  // namespace hairrig
