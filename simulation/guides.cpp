@@ -124,16 +124,15 @@ Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions
   ChooseGuide(f, o.samples, &clusters[0]);
   const int wanted = o.num_guides > 0 ? o.num_guides : std::min(o.max_guides, n);
   while (static_cast<int>(clusters.size()) < wanted) {
+    // With a target: stop once the RMS distance of all strands to their guides meets it.
+    if (o.num_guides == 0) {
+      double total = 0;
+      for (const auto& c : clusters) total += c.sum_squared;
+      if (std::sqrt(total / n) <= o.target_rms_mm) break;
+    }
     // The cluster that contributes most error is split next.
     auto worst = std::max_element(clusters.begin(), clusters.end(),
                                   [](const Cluster& x, const Cluster& y) { return x.sum_squared < y.sum_squared; });
-    if (o.num_guides == 0) {
-      double max_rms = 0;
-      for (const auto& c : clusters) max_rms = std::max(max_rms, c.Rms());
-      if (max_rms <= o.target_rms_mm) break;
-      worst = std::max_element(clusters.begin(), clusters.end(),
-                               [](const Cluster& x, const Cluster& y) { return x.Rms() < y.Rms(); });
-    }
     if (worst->members.size() < 2) break;
     auto [a, b] = Split(f, *worst, o);
     *worst = std::move(a);

@@ -4,9 +4,9 @@
 // Strands are resampled to `samples` points at equal arc length from the root;
 // the distance between two strands is the RMS distance of corresponding
 // samples (mm). Clustering is divisive: starting from one cluster, the cluster
-// with the largest spread is split in two (2-means, seeded by its two most
-// distant members) until there are K clusters or every cluster's RMS distance
-// to its guide is within the target. The guide of a cluster is the member
+// that contributes most error is split in two (2-means, seeded by its two most
+// distant members) until there are K clusters or the RMS distance of all
+// strands to their guides is within the target. The guide of a cluster is the member
 // nearest to the cluster mean.
 #pragma once
 
