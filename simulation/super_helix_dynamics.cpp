@@ -344,6 +344,7 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
   const Eigen::VectorXd& q = state->q;
   const Eigen::VectorXd& v = state->v;
 
+  Evaluate(q);
   // J_dot q' at every sample: the second difference of the centreline along q'.
   std::vector<Eigen::Vector3d> velocity_acceleration(samples_.size(), Eigen::Vector3d::Zero());
   const double speed = v.norm();
@@ -351,12 +352,10 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
     const double eps = 1e-4 / (speed * std::max(strand_.length_m(), 1e-6));
     const std::vector<Eigen::Vector3d> plus = SamplePositions(q + eps * v);
     const std::vector<Eigen::Vector3d> minus = SamplePositions(q - eps * v);
-    const std::vector<Eigen::Vector3d> mid = SamplePositions(q);
     for (size_t i = 0; i < samples_.size(); ++i) {
-      velocity_acceleration[i] = (plus[i] - 2 * mid[i] + minus[i]) / (eps * eps);
+      velocity_acceleration[i] = (plus[i] - 2 * positions_[i] + minus[i]) / (eps * eps);
     }
   }
-  Evaluate(q);
   Eigen::MatrixXd translational, rotational;
   KineticMetrics(&translational, &rotational);
   const Eigen::MatrixXd mass = rho_s * translational + rotational;
