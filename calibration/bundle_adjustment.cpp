@@ -214,6 +214,29 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     total_corners += corners;
   }
   result.rms_px = std::sqrt(total_sq / static_cast<double>(total_corners));
+  const double dof = 2.0 * static_cast<double>(total_corners) - summary.num_effective_parameters;
+  result.residual_sigma_px = dof > 0 ? std::sqrt(total_sq / dof) : NAN;
+  result.intrinsics_stddev.assign(input.cameras.size(), {});
+  if (!options.fix_intrinsics && dof > 0) {
+    // Covariance of the intrinsics (the gauge is fixed, so it exists); a
+    // rank-deficient problem leaves the standard deviations at NaN.
+    ceres::Covariance::Options covariance_options;
+    covariance_options.algorithm_type = ceres::DENSE_SVD;
+    covariance_options.null_space_rank = -1;
+    ceres::Covariance covariance(covariance_options);
+    std::vector<std::pair<const double*, const double*>> blocks;
+    for (const auto& intr : intrinsics) blocks.emplace_back(intr.data(), intr.data());
+    const bool ok = covariance.Compute(blocks, &problem);
+    for (size_t c = 0; c < intrinsics.size(); ++c) {
+      double block[CameraIntrinsics::kNumParams * CameraIntrinsics::kNumParams];
+      const bool have = ok && covariance.GetCovarianceBlock(intrinsics[c].data(), intrinsics[c].data(), block);
+      for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
+        result.intrinsics_stddev[c][static_cast<size_t>(i)] =
+            have ? result.residual_sigma_px * std::sqrt(std::max(0.0, block[i * CameraIntrinsics::kNumParams + i]))
+                 : NAN;
+      }
+    }
+  }
   return result;
 }
 

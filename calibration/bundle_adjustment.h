@@ -15,6 +15,7 @@
 // held fixed from a prior calibration. Millimetres, degrees, pixels.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "calibration/view_pose.h"
@@ -56,6 +57,11 @@ struct BundleAdjustmentResult {
   std::vector<double> stop_deg;         // refined angle per stop (turntable mode; NaN for unused stops)
   std::vector<double> view_rms_px;      // corner reprojection RMS per view (2D error)
   double rms_px = 0;
+  // Standard deviations of each camera's intrinsics (kParamNames order; 0 for
+  // held parameters) from the covariance of the estimate, with the residuals'
+  // own variance (residual_sigma_px, per coordinate) as the noise model.
+  std::vector<std::array<double, CameraIntrinsics::kNumParams>> intrinsics_stddev;
+  double residual_sigma_px = 0;
   int iterations = 0;
   bool converged = false;
 };
