@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "calibration/bundle_adjustment.h"
+#include "calibration/turntable_axis.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
 
@@ -88,6 +89,20 @@ TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
     }
   }
   ASSERT_GE(input.views.size(), 30u);
+  // The axis from the circle the camera centres trace, instead of the nominal box pose.
+  auto axis = FitTurntableAxis(input.views, scene->turntable_from_box.translation.z());
+  ASSERT_TRUE(axis.ok()) << axis.status().ToString();
+  const Eigen::Vector3d axis_true = scene->turntable_from_box.Inverse().rotation * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d axis_fit = axis->turntable_from_box.Inverse().rotation * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d point_true = scene->turntable_from_box.Inverse().translation;
+  const Eigen::Vector3d point_fit = axis->turntable_from_box.Inverse().translation;
+  const double axis_deg = std::acos(std::clamp(axis_true.dot(axis_fit), -1.0, 1.0)) * 180 / 3.14159265358979;
+  const double axis_offset_mm = ((point_fit - point_true) - (point_fit - point_true).dot(axis_true) * axis_true).norm();
+  std::printf("turntable axis from camera %d's circle (radius %.1f mm, RMS %.3f mm): direction %.4f deg, offset %.3f mm\n",
+              axis->camera, axis->radius_mm, axis->circle_rms_mm, axis_deg, axis_offset_mm);
+  EXPECT_LT(axis_deg, 0.2);
+  EXPECT_LT(axis_offset_mm, 2.0);
+  input.turntable_from_box_init = axis->turntable_from_box;
   // Three solves: both modes from the wrong intrinsics, and the turntable mode
   // with the intrinsics held at a prior (the true values stand in for a
   // ChArUco calibration).
