@@ -6,6 +6,11 @@ if(HAIRRIG_WERROR)
 endif()
 if(HAIRRIG_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  # Under AddressSanitizer Eigen switches to its own aligned malloc, while the
+  # uninstrumented libceres frees Eigen buffers with plain free(): one Eigen
+  # instantiation allocates, the other frees (ASan: bad-free in BDCSVD). malloc
+  # is 16-byte aligned here, so Eigen may use it directly, as libceres does.
+  add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
