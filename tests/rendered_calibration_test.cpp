@@ -14,6 +14,7 @@
 #include "calibration/turntable_axis.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
+#include "tests/support/rendered_observations.h"
 
 namespace hairrig {
 namespace {
@@ -69,20 +70,15 @@ TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
   for (int stop = 0; stop < scene->turntable_stops; ++stop) {
     for (int cam = 0; cam < cameras; ++cam) {
       const int view = stop * cameras + cam;
-      RenderOptions options;
-      options.noise_seed = static_cast<uint64_t>(view);
-      auto rendered = (*renderer)->Render(cam, scene->StopAngleDeg(stop), options);
-      ASSERT_TRUE(rendered.ok());
-      auto detections = (*detector)->Detect(rendered->image);
-      ASSERT_TRUE(detections.ok());
-      const ViewObservations observations = MatchToBox(*detections, scene->box);
-      auto pose = EstimateViewPose(observations, input.cameras[static_cast<size_t>(cam)]);
+      auto observations = RenderedObservations(**renderer, **detector, cam, stop);
+      ASSERT_TRUE(observations.ok()) << observations.status().ToString();
+      auto pose = EstimateViewPose(*observations, input.cameras[static_cast<size_t>(cam)]);
       if (!pose.ok()) continue;  // a view that sees too little is left to the others
       CalibrationView v;
       v.camera = cam;
       v.stop = stop;
       v.turntable_deg = scene->StopAngleDeg(stop);
-      v.tags = observations.tags;
+      v.tags = observations->tags;
       v.cam_from_box_init = pose->cam_from_box;
       input.views.push_back(v);
       view_index.push_back(view);

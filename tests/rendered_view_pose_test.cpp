@@ -10,6 +10,7 @@
 #include "calibration/view_pose.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
+#include "tests/support/rendered_observations.h"
 
 namespace hairrig {
 namespace {
@@ -32,14 +33,9 @@ TEST(RenderedViewPose, EveryViewIsInitialisedCloseToTheTruth) {
     for (int cam = 0; cam < cameras; ++cam) {
       const int view = stop * cameras + cam;
       const ViewGroundTruth truth = MakeViewGroundTruth(*scene, view);
-      RenderOptions options;
-      options.noise_seed = static_cast<uint64_t>(view);
-      auto rendered = (*renderer)->Render(cam, scene->StopAngleDeg(stop), options);
-      ASSERT_TRUE(rendered.ok());
-      auto detections = (*detector)->Detect(rendered->image);
-      ASSERT_TRUE(detections.ok());
-      const ViewObservations observations = MatchToBox(*detections, scene->box);
-      auto pose = EstimateViewPose(observations, truth.intrinsics);
+      auto observations = RenderedObservations(**renderer, **detector, cam, stop);
+      ASSERT_TRUE(observations.ok()) << observations.status().ToString();
+      auto pose = EstimateViewPose(*observations, truth.intrinsics);
       ASSERT_TRUE(pose.ok()) << "view " << view << ": " << pose.status().ToString();
       const Rigid3d& estimate = pose->cam_from_box;
       rotation_deg.push_back(estimate.rotation.angularDistance(truth.cam_from_box.rotation) * 180 / 3.14159265358979);
