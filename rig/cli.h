@@ -37,5 +37,7 @@ void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
 void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   AddReplayCommand(app, common, dispatch);
   AddFitCommand(app, common, dispatch);
   AddSimulateCommand(app, common, dispatch);
+  AddCalibrateCommand(app, common, dispatch);
+  AddEvalCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);

@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/geometry_json.h"
+
 namespace hairrig {
 
 int NumViews(const Scene& scene) { return scene.turntable_stops * static_cast<int>(scene.cameras.size()); }
@@ -26,17 +28,6 @@ ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int 
   return g;
 }
 
-namespace {
-nlohmann::json PoseJson(const Rigid3d& t) {
-  const auto& q = t.rotation;
-  nlohmann::json m = nlohmann::json::array();
-  const auto mat = t.ToMatrix3x4();
-  for (int r = 0; r < 3; ++r) m.push_back({mat(r, 0), mat(r, 1), mat(r, 2), mat(r, 3)});
-  return {{"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}},
-          {"translation_mm", {t.translation.x(), t.translation.y(), t.translation.z()}},
-          {"matrix_3x4", m}};
-}
-}  // namespace
 
 std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views) {
   nlohmann::json root;
@@ -44,7 +35,7 @@ std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTrut
   root["note"] = "Ground truth of the simulated rig. a_from_b maps frame b to frame a; mm, deg; "
                  "pixel (0,0) is the centre of the top-left pixel.";
   root["scene"] = scene.path;
-  root["turntable_from_box"] = PoseJson(scene.turntable_from_box);
+  root["turntable_from_box"] = PoseToJson(scene.turntable_from_box);
   root["views"] = nlohmann::json::array();
   for (const ViewGroundTruth& g : views) {
     nlohmann::json v;
@@ -52,15 +43,10 @@ std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTrut
     v["stop"] = g.stop;
     v["camera_serial"] = g.camera_serial;
     v["turntable_deg"] = g.turntable_deg;
-    nlohmann::json intr;
-    const auto p = g.intrinsics.ToParams();
-    for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) intr[CameraIntrinsics::kParamNames[i]] = p[i];
-    intr["width_px"] = g.intrinsics.width_px;
-    intr["height_px"] = g.intrinsics.height_px;
-    v["intrinsics"] = intr;
-    v["cam_from_world"] = PoseJson(g.cam_from_world);
-    v["world_from_turntable"] = PoseJson(g.world_from_turntable);
-    v["cam_from_box"] = PoseJson(g.cam_from_box);
+    v["intrinsics"] = IntrinsicsToJson(g.intrinsics);
+    v["cam_from_world"] = PoseToJson(g.cam_from_world);
+    v["world_from_turntable"] = PoseToJson(g.world_from_turntable);
+    v["cam_from_box"] = PoseToJson(g.cam_from_box);
     v["tags"] = nlohmann::json::array();
     for (const TagTruth& t : g.tags) {
       if (!t.in_image || t.facing_deg <= 0) continue;

@@ -1,6 +1,5 @@
 // The hairrig command line as a user meets it: clear errors with non-zero exit
 // codes on bad input, JSON summaries with --json, files where it says.
-#include <sys/wait.h>
 
 #include <array>
 #include <cmath>
@@ -11,25 +10,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/command_run.h"
+
 namespace {
 
-struct CommandRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-CommandRun Hairrig(const std::string& args) {
-  const std::string cmd = std::string(HAIRRIG_BIN) + " " + args + " 2>&1";
-  CommandRun run;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return run;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
-  const int status = pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using hairrig_test::CommandRun;
+using hairrig_test::Hairrig;
+using hairrig_test::LastLineJson;
 
 std::string TempFile(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + "/" + name;
@@ -115,12 +102,6 @@ namespace capture_cli {
 namespace fs = std::filesystem;
 
 // The JSON summary is the last line of the output (logs go to stderr before it).
-nlohmann::json LastLineJson(const std::string& output) {
-  const size_t end = output.find_last_not_of('\n');
-  const size_t start = output.rfind('\n', end);
-  return nlohmann::json::parse(output.substr(start == std::string::npos ? 0 : start + 1, end + 1));
-}
-
 std::string FreshPath(const std::string& name) {
   const std::string path = ::testing::TempDir() + "/cli_" + name;
   fs::remove_all(path);

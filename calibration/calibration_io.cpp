@@ -1,0 +1,204 @@
+#include "calibration/calibration_io.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core/persistence.hpp>
+
+#include "core/file_util.h"
+#include "core/geometry_json.h"
+#include "core/json_file.h"
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+
+Rigid3d ObjectFromBox(const CaptureCalibration& result) {
+  return result.mode == CalibrationMode::kTurntable ? result.turntable_from_box : Rigid3d();
+}
+
+namespace {
+
+const char* ModeName(CalibrationMode mode) { return mode == CalibrationMode::kTurntable ? "turntable" : "free"; }
+
+nlohmann::json CalibrationJson(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
+  nlohmann::json root;
+  root["format"] = "hairrig-calibration";
+  root["version"] = 1;
+  root["mode"] = ModeName(result.mode);
+  root["note"] = "a_from_b maps frame b to frame a; mm, px; pixel (0,0) is the centre of the top-left pixel. "
+                 "Object frame: turntable in turntable mode, box in free mode.";
+  root["rms_px"] = result.rms_px;
+  root["residual_sigma_px"] = result.residual_sigma_px;
+  root["converged"] = result.converged;
+  root["iterations"] = result.iterations;
+  if (result.mode == CalibrationMode::kTurntable) root["turntable_from_box"] = PoseToJson(result.turntable_from_box);
+  root["cameras"] = nlohmann::json::array();
+  for (size_t c = 0; c < input.cameras.size(); ++c) {
+    const CameraCalibration& cam = result.cameras[c];
+    nlohmann::json j{{"name", input.cameras[c].name}, {"serial", input.cameras[c].serial}, {"solved", cam.solved}};
+    if (!cam.solved) {
+      j["failure"] = cam.failure;
+    } else {
+      j["intrinsics"] = IntrinsicsToJson(cam.intrinsics);
+      j["intrinsics_initial"] = IntrinsicsToJson(cam.initial);
+      j["intrinsics_source"] = cam.intrinsics_source;
+      nlohmann::json sd;
+      for (int k = 0; k < CameraIntrinsics::kNumParams; ++k)
+        sd[CameraIntrinsics::kParamNames[static_cast<size_t>(k)]] = cam.intrinsics_stddev[static_cast<size_t>(k)];
+      j["intrinsics_stddev"] = sd;
+      if (result.mode == CalibrationMode::kTurntable) j["cam_from_world"] = PoseToJson(cam.cam_from_world);
+    }
+    root["cameras"].push_back(j);
+  }
+  root["views"] = nlohmann::json::array();
+  const Rigid3d box_from_object = ObjectFromBox(result).Inverse();
+  for (size_t f = 0; f < input.frames.size(); ++f) {
+    const CalibrationFrame& in = input.frames[f];
+    const FrameCalibration& frame = result.frames[f];
+    nlohmann::json j{{"view", in.view},      {"camera", in.camera},         {"frame", in.name},
+                     {"stop", in.stop},      {"turntable_deg", in.turntable_deg}, {"solved", frame.solved},
+                     {"tags_detected", frame.tags_detected}, {"tags_used", frame.tags.size()}};
+    if (frame.solved) {
+      j["cam_from_box"] = PoseToJson(frame.cam_from_box);
+      j["cam_from_box_initial"] = PoseToJson(frame.cam_from_box_init);
+      j["cam_from_object"] = PoseToJson(frame.cam_from_box * box_from_object);
+      j["rms_px"] = frame.rms_px;
+    } else {
+      j["failure"] = frame.failure;
+    }
+    nlohmann::json rejected = nlohmann::json::array();
+    for (const RejectedTag& r : frame.rejected) rejected.push_back({{"id", r.id}, {"reason", r.reason}});
+    j["rejected_tags"] = rejected;
+    root["views"].push_back(j);
+  }
+  return root;
+}
+
+std::string OpenCvYaml(const CameraIntrinsics& c) {
+  cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+  fs << "image_width" << c.width_px << "image_height" << c.height_px;
+  fs << "camera_matrix" << (cv::Mat_<double>(3, 3) << c.fx_px, 0, c.cx_px, 0, c.fy_px, c.cy_px, 0, 0, 1);
+  fs << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << c.k1, c.k2, c.p1, c.p2, c.k3);
+  return fs.releaseAndGetString();
+}
+
+// COLMAP's text model (colmap.github.io/format.html): camera ids from 1, model
+// OPENCV (fx fy cx cy k1 k2 p1 p2); an image line QW QX QY QZ TX TY TZ
+// CAMERA_ID NAME with cam_from_object, then an empty line of 2D points.
+void ColmapText(const CaptureCalibrationInput& input, const CaptureCalibration& result, std::string* cameras,
+                std::string* images) {
+  std::ostringstream cams, imgs;
+  cams.precision(17);
+  imgs.precision(17);
+  cams << "# Camera list: CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[] (written by hairrig calibrate)\n";
+  for (size_t c = 0; c < result.cameras.size(); ++c) {
+    if (!result.cameras[c].solved) continue;
+    const CameraIntrinsics& k = result.cameras[c].intrinsics;
+    cams << c + 1 << " OPENCV " << k.width_px << " " << k.height_px << " " << k.fx_px << " " << k.fy_px << " "
+         << k.cx_px << " " << k.cy_px << " " << k.k1 << " " << k.k2 << " " << k.p1 << " " << k.p2 << "\n";
+  }
+  imgs << "# Image list: IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME, then POINTS2D (none)\n"
+       << "# Images are in the capture's frames/ folder; poses are cam_from_object in mm.\n";
+  const Rigid3d box_from_object = ObjectFromBox(result).Inverse();
+  int id = 1;
+  for (size_t f = 0; f < input.frames.size(); ++f) {
+    if (!result.frames[f].solved) continue;
+    const Rigid3d pose = result.frames[f].cam_from_box * box_from_object;
+    const Eigen::Quaterniond& q = pose.rotation;
+    imgs << id++ << " " << q.w() << " " << q.x() << " " << q.y() << " " << q.z() << " " << pose.translation.x() << " "
+         << pose.translation.y() << " " << pose.translation.z() << " " << input.frames[f].camera + 1 << " "
+         << fs::path(input.frames[f].name).filename().string() << "\n\n";
+  }
+  *cameras = cams.str();
+  *images = imgs.str();
+}
+
+Status CreateFolder(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return IoError(dir.string() + ": cannot create the folder (" + ec.message() + ")");
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status WriteCalibration(const std::string& dir, const CaptureCalibrationInput& input,
+                        const CaptureCalibration& result) {
+  const fs::path root(dir);
+  HR_RETURN_IF_ERROR(CreateFolder(root / "opencv"));
+  HR_RETURN_IF_ERROR(CreateFolder(root / "colmap"));
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "calibration.json").string(), CalibrationJson(input, result).dump(1)));
+  for (size_t c = 0; c < input.cameras.size(); ++c) {
+    if (!result.cameras[c].solved) continue;
+    const std::string file = (root / "opencv" / (input.cameras[c].serial + ".yaml")).string();
+    HR_RETURN_IF_ERROR(WriteFileAtomic(file, OpenCvYaml(result.cameras[c].intrinsics)));
+  }
+  std::string cameras, images;
+  ColmapText(input, result, &cameras, &images);
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "colmap" / "cameras.txt").string(), cameras));
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "colmap" / "images.txt").string(), images));
+  return WriteFileAtomic((root / "colmap" / "points3D.txt").string(),
+                         std::string("# 3D point list: none (poses from the calibration box)\n"));
+}
+
+Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
+  HR_ASSIGN_OR_RETURN(nlohmann::json root,
+                      ReadJsonFile(calibration_json, "run `hairrig calibrate` on the capture first"));
+  const std::string& file = calibration_json;
+  if (root.value("format", "") != "hairrig-calibration" || root.value("version", 0) != 1)
+    return CorruptData(file + ": not a hairrig calibration of version 1");
+  if (!root.contains("cameras") || !root["cameras"].is_array() || !root.contains("views") || !root["views"].is_array())
+    return CorruptData(file + ": cameras and views must be arrays");
+  StoredCalibration out;
+  out.mode = root.value("mode", "");
+  out.rms_px = root.value("rms_px", 0.0);
+  for (size_t c = 0; c < root["cameras"].size(); ++c) {
+    const nlohmann::json& j = root["cameras"][c];
+    StoredCalibration::Camera camera;
+    camera.name = j.value("name", "");
+    camera.serial = j.value("serial", "");
+    if (j.value("solved", false)) {
+      auto intrinsics = IntrinsicsFromJson(j.value("intrinsics", nlohmann::json()),
+                                           file + ": cameras[" + std::to_string(c) + "].intrinsics");
+      if (!intrinsics.ok()) return CorruptData(intrinsics.status().message());
+      camera.intrinsics = *intrinsics;
+      auto initial = IntrinsicsFromJson(j.value("intrinsics_initial", nlohmann::json()),
+                                        file + ": cameras[" + std::to_string(c) + "].intrinsics_initial");
+      if (!initial.ok()) return CorruptData(initial.status().message());
+      camera.initial = *initial;
+      camera.intrinsics_source = j.value("intrinsics_source", "");
+      camera.solved = true;
+    }
+    out.cameras.push_back(camera);
+  }
+  for (size_t v = 0; v < root["views"].size(); ++v) {
+    const nlohmann::json& j = root["views"][v];
+    const std::string where = file + ": views[" + std::to_string(v) + "]";
+    StoredCalibration::View view;
+    if (!j.contains("view") || !j["view"].is_number_integer() || !j.contains("camera") ||
+        !j["camera"].is_number_integer())
+      return CorruptData(where + ": view and camera must be integers");
+    view.view = j["view"].get<int>();
+    view.camera = j["camera"].get<int>();
+    if (view.camera < 0 || view.camera >= static_cast<int>(out.cameras.size()))
+      return CorruptData(where + ": camera " + std::to_string(view.camera) + " is not in cameras");
+    view.frame = j.value("frame", "");
+    view.solved = j.value("solved", false);
+    if (view.solved) {
+      auto pose = PoseFromJson(j.value("cam_from_box", nlohmann::json()), where + ".cam_from_box");
+      if (!pose.ok()) return CorruptData(pose.status().message());
+      view.cam_from_box = *pose;
+      auto initial = PoseFromJson(j.value("cam_from_box_initial", nlohmann::json()), where + ".cam_from_box_initial");
+      if (!initial.ok()) return CorruptData(initial.status().message());
+      view.cam_from_box_initial = *initial;
+      view.rms_px = j.value("rms_px", 0.0);
+    }
+    out.views.push_back(view);
+  }
+  return out;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,58 @@
+// A capture's calibration on disk (<capture>/calibration/, design.md sections
+// 4-5), written by `hairrig calibrate` and read by later stages:
+//
+//   calibration.json        the project's own: per camera the intrinsics (and
+//                           their standard deviations), per frame cam_from_box,
+//                           cam_from_turntable and the RMS, or why it failed
+//   opencv/<serial>.yaml    OpenCV FileStorage: camera_matrix, distortion_coefficients
+//                           (k1 k2 p1 p2 k3), image_width, image_height
+//   colmap/cameras.txt, images.txt, points3D.txt (empty): model OPENCV, poses
+//                           cam_from_turntable (the frame the hair is fixed in;
+//                           cam_from_box in free mode), so COLMAP and OpenMVS
+//                           accept the capture
+//
+// Frames as in core/transform.h; mm and px.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "calibration/capture_calibration.h"
+
+namespace hairrig {
+
+// The frame views are exported in: turntable in turntable mode, else box.
+Rigid3d ObjectFromBox(const CaptureCalibration& result);
+
+// Writes every file above under `dir` (created), each atomically. IoError names the file.
+Status WriteCalibration(const std::string& dir, const CaptureCalibrationInput& input,
+                        const CaptureCalibration& result);
+
+// What calibration.json holds, as later stages and `hairrig eval` read it.
+struct StoredCalibration {
+  struct Camera {
+    std::string name, serial;
+    bool solved = false;
+    CameraIntrinsics intrinsics;
+    CameraIntrinsics initial;       // before the bundle adjustment
+    std::string intrinsics_source;  // "views": initial is OpenCV's calibrateCamera
+  };
+  struct View {
+    int view = 0;
+    int camera = 0;  // index into cameras
+    std::string frame;
+    bool solved = false;
+    Rigid3d cam_from_box;
+    Rigid3d cam_from_box_initial;  // the per-view PnP before the bundle adjustment
+    double rms_px = 0;
+  };
+  std::string mode;
+  std::vector<Camera> cameras;
+  std::vector<View> views;
+  double rms_px = 0;
+};
+
+// CorruptData names the file and field for anything missing, mistyped or not finite.
+Result<StoredCalibration> ReadCalibration(const std::string& calibration_json);
+
+}  // namespace hairrig

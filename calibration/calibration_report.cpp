@@ -1,0 +1,191 @@
+#include "calibration/calibration_report.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/file_util.h"
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kOutlierFactor = 3.0;
+constexpr double kOutlierFloorPx = 0.5;
+constexpr double kFailedRmsPx = 2.0;
+
+double MedianSolvedRms(const CaptureCalibration& result) {
+  std::vector<double> rms;
+  for (const FrameCalibration& f : result.frames)
+    if (f.solved) rms.push_back(f.rms_px);
+  if (rms.empty()) return 0;
+  std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
+  return rms[rms.size() / 2];
+}
+
+double OutlierThreshold(const CaptureCalibration& result) {
+  return std::max(kOutlierFactor * MedianSolvedRms(result), kOutlierFloorPx);
+}
+
+std::string Format(const char* format, double a, double b = 0) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, format, a, b);
+  return buffer;
+}
+
+}  // namespace
+
+CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
+  CalibrationVerdict verdict;
+  const double threshold = OutlierThreshold(result);
+  size_t solved = 0;
+  for (size_t f = 0; f < result.frames.size(); ++f) {
+    const FrameCalibration& frame = result.frames[f];
+    solved += frame.solved;
+    if (!frame.solved) {
+      verdict.views_to_check.push_back(static_cast<int>(f));
+      verdict.reasons.push_back("view " + input.frames[f].name + " not solved: " + frame.failure);
+    } else if (frame.rms_px > threshold) {
+      verdict.views_to_check.push_back(static_cast<int>(f));
+      verdict.reasons.push_back("view " + input.frames[f].name +
+                                Format(" has RMS %.2f px (outlier threshold %.2f px)", frame.rms_px, threshold));
+    }
+  }
+  for (size_t c = 0; c < result.cameras.size(); ++c)
+    if (!result.cameras[c].solved) verdict.reasons.push_back("camera " + input.cameras[c].name + " not solved: " + result.cameras[c].failure);
+  if (!verdict.reasons.empty()) verdict.level = CalibrationVerdict::Level::kCheck;
+  if (2 * solved < result.frames.size()) {
+    verdict.level = CalibrationVerdict::Level::kFailed;
+    verdict.reasons.insert(verdict.reasons.begin(), std::to_string(solved) + " of " +
+                                                        std::to_string(result.frames.size()) + " views solved");
+  }
+  if (result.rms_px > kFailedRmsPx) {
+    verdict.level = CalibrationVerdict::Level::kFailed;
+    verdict.reasons.insert(verdict.reasons.begin(), Format("overall RMS %.2f px is above %.1f px", result.rms_px, kFailedRmsPx));
+  }
+  return verdict;
+}
+
+namespace {
+
+cv::Mat RmsBarChart(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
+  const int bar = 16, left = 60, bottom = 40, top = 30, height = 300;
+  const int width = left + bar * static_cast<int>(result.frames.size()) + 20;
+  cv::Mat chart(height + top + bottom, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  const double threshold = OutlierThreshold(result);
+  double top_px = threshold * 1.2;
+  for (const FrameCalibration& f : result.frames) top_px = std::max(top_px, f.rms_px * 1.1);
+  auto y_of = [&](double px) { return top + height - static_cast<int>(height * px / top_px); };
+  for (int tick = 0; tick <= 4; ++tick) {
+    const double px = top_px * tick / 4;
+    cv::line(chart, {left - 4, y_of(px)}, {width - 10, y_of(px)}, cv::Scalar(220, 220, 220));
+    cv::putText(chart, Format("%.2f", px), {4, y_of(px) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0));
+  }
+  cv::line(chart, {left, y_of(threshold)}, {width - 10, y_of(threshold)}, cv::Scalar(0, 0, 200), 1, cv::LINE_AA);
+  for (size_t f = 0; f < result.frames.size(); ++f) {
+    const FrameCalibration& frame = result.frames[f];
+    const int x = left + bar * static_cast<int>(f);
+    const bool bad = !frame.solved || frame.rms_px > threshold;
+    const cv::Scalar colour = bad ? cv::Scalar(40, 40, 220) : cv::Scalar(180, 120, 40);
+    const int y = frame.solved ? y_of(frame.rms_px) : top;
+    cv::rectangle(chart, {x + 2, y}, {x + bar - 2, top + height}, colour, frame.solved ? cv::FILLED : 2);
+    if (f % 2 == 0)
+      cv::putText(chart, std::to_string(input.frames[f].view), {x, top + height + 14}, cv::FONT_HERSHEY_SIMPLEX, 0.35,
+                  cv::Scalar(0, 0, 0));
+  }
+  cv::putText(chart, "reprojection RMS per view (px); red line: outlier threshold; hollow: not solved", {left, 18},
+              cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+  cv::putText(chart, "view", {width / 2, top + height + 32}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+  return chart;
+}
+
+Status DrawResiduals(const std::string& path, const cv::Mat& image, const CameraIntrinsics& camera,
+                     const FrameCalibration& frame) {
+  cv::Mat shown;
+  cv::resize(image, shown, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+  for (const TagObservation& tag : frame.tags) {
+    for (size_t k = 0; k < 4; ++k) {
+      const Eigen::Vector2d seen = tag.corners_px[k];
+      const Eigen::Vector2d predicted = Project(camera, frame.cam_from_box * tag.corners_box_mm[k]);
+      const Eigen::Vector2d tip = seen + kResidualScale * (predicted - seen);
+      cv::circle(shown, {static_cast<int>(seen.x() / 2), static_cast<int>(seen.y() / 2)}, 2, cv::Scalar(0, 255, 0), 1,
+                 cv::LINE_AA);
+      cv::line(shown, {static_cast<int>(seen.x() / 2), static_cast<int>(seen.y() / 2)},
+               {static_cast<int>(tip.x() / 2), static_cast<int>(tip.y() / 2)}, cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
+    }
+  }
+  cv::putText(shown, Format("RMS %.3f px; residuals x %.0f", frame.rms_px, kResidualScale), {10, 24},
+              cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 2);
+  std::vector<uint8_t> bytes;
+  if (!cv::imencode(".jpg", shown, bytes, {cv::IMWRITE_JPEG_QUALITY, 85}))
+    return IoError(path + ": cannot encode the residual image");
+  return WriteFileAtomic(path, bytes.data(), bytes.size());
+}
+
+std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibration& result,
+                       const CalibrationVerdict& verdict) {
+  std::ostringstream out;
+  out << "verdict: " << verdict.name() << "\n";
+  for (const std::string& reason : verdict.reasons) out << "  - " << reason << "\n";
+  out << "\nmode " << (result.mode == CalibrationMode::kTurntable ? "turntable" : "free")
+      << Format(", overall RMS %.3f px, residual sigma %.3f px", result.rms_px, result.residual_sigma_px)
+      << ", " << result.iterations << " iterations" << (result.converged ? "" : " (NOT converged)") << "\n";
+  out << Format("time: detection %.2f s, initialisation %.2f s", result.detect_s, result.init_s)
+      << Format(", bundle adjustment %.2f s\n\ncameras:\n", result.solve_s);
+  for (size_t c = 0; c < result.cameras.size(); ++c) {
+    const CameraCalibration& cam = result.cameras[c];
+    out << "  " << input.cameras[c].name << " (" << input.cameras[c].serial << "): ";
+    if (!cam.solved) {
+      out << "NOT SOLVED: " << cam.failure << "\n";
+      continue;
+    }
+    const auto params = cam.intrinsics.ToParams();
+    out << "start from " << cam.intrinsics_source << "\n";
+    for (size_t k = 0; k < params.size(); ++k)
+      out << "    " << CameraIntrinsics::kParamNames[k] << Format(" = %.6g +- %.3g\n", params[k], cam.intrinsics_stddev[k]);
+  }
+  out << "\nviews (RMS px, tags used / detected):\n";
+  for (size_t f = 0; f < result.frames.size(); ++f) {
+    const FrameCalibration& frame = result.frames[f];
+    out << "  " << input.frames[f].name << ": ";
+    if (frame.solved)
+      out << Format("%.3f px, ", frame.rms_px) << frame.tags.size() << " / " << frame.tags_detected;
+    else
+      out << "NOT SOLVED: " << frame.failure;
+    for (const RejectedTag& r : frame.rejected) out << "; tag " << r.id << " left out: " << r.reason;
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace
+
+Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
+                              const CaptureCalibration& result, const CalibrationVerdict& verdict) {
+  const fs::path root(dir);
+  std::error_code ec;
+  fs::create_directories(root / "residuals", ec);
+  if (ec) return IoError((root / "residuals").string() + ": cannot create the folder (" + ec.message() + ")");
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
+  std::vector<uint8_t> png;
+  cv::imencode(".png", RmsBarChart(input, result), png);
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "view_rms.png").string(), png.data(), png.size()));
+  for (size_t f = 0; f < result.frames.size(); ++f) {
+    const FrameCalibration& frame = result.frames[f];
+    if (!frame.solved) continue;
+    const cv::Mat image = cv::imread(input.frames[f].path, cv::IMREAD_COLOR);
+    if (image.empty()) return IoError(input.frames[f].path + ": cannot be read for the residual image");
+    const std::string name = fs::path(input.frames[f].name).stem().string() + ".jpg";
+    HR_RETURN_IF_ERROR(DrawResiduals((root / "residuals" / name).string(), image,
+                                     result.cameras[static_cast<size_t>(input.frames[f].camera)].intrinsics, frame));
+  }
+  return Status::Ok();
+}
+
+}  // namespace hairrig

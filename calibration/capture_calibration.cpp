@@ -1,0 +1,241 @@
+#include "calibration/capture_calibration.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "calibration/intrinsics_from_views.h"
+#include "calibration/turntable_axis.h"
+
+namespace hairrig {
+
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Status ValidateInput(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options) {
+  if (input.cameras.empty()) return InvalidArgument("calibration: no camera");
+  if (input.frames.empty()) return InvalidArgument("calibration: no frame to calibrate from");
+  if (input.box.tags.empty()) return InvalidArgument("calibration: the box model has no tag");
+  for (const CalibrationCamera& camera : input.cameras) {
+    if (options.fix_intrinsics && !camera.nominal)
+      return InvalidArgument("calibration: intrinsics are to be held fixed but camera " + camera.name +
+                             " has no prior values");
+    if (camera.nominal) {
+      const Status valid = camera.nominal->Validate();
+      if (!valid.ok()) return InvalidArgument("calibration: camera " + camera.name + ": " + valid.message());
+    }
+  }
+  for (const CalibrationFrame& frame : input.frames) {
+    if (frame.camera < 0 || frame.camera >= static_cast<int>(input.cameras.size()))
+      return InvalidArgument("calibration: frame " + frame.name + " names camera " + std::to_string(frame.camera) +
+                             " of " + std::to_string(input.cameras.size()));
+    if (!std::isfinite(frame.turntable_deg))
+      return InvalidArgument("calibration: frame " + frame.name + " has no finite turntable angle");
+  }
+  if (options.mode == CalibrationMode::kTurntable && !std::isfinite(input.box_height_mm))
+    return InvalidArgument("calibration: the box height is not a finite number");
+  return Status::Ok();
+}
+
+// Step 2a: every camera's starting intrinsics.
+void InitialiseIntrinsics(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options,
+                          const std::vector<ViewObservations>& observations, CaptureCalibration* out) {
+  for (size_t c = 0; c < input.cameras.size(); ++c) {
+    const CalibrationCamera& camera = input.cameras[c];
+    CameraCalibration& result = out->cameras[c];
+    if (camera.nominal) {
+      result.initial = *camera.nominal;
+      result.intrinsics_source = options.fix_intrinsics ? "prior" : "nominal";
+      result.solved = true;
+      continue;
+    }
+    std::vector<const ViewObservations*> views;
+    for (size_t f = 0; f < input.frames.size(); ++f)
+      if (input.frames[f].camera == static_cast<int>(c)) views.push_back(&observations[f]);
+    auto solved = SolveIntrinsicsFromViews(views, input.box, camera.width_px, camera.height_px);
+    if (!solved.ok()) {
+      result.failure = solved.status().message();
+      continue;
+    }
+    result.initial = solved->intrinsics;
+    result.intrinsics_source = "views";
+    result.solved = true;
+  }
+}
+
+// Step 2b: a pose per frame from its camera's starting intrinsics.
+void InitialisePoses(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options,
+                     const std::vector<ViewObservations>& observations, CaptureCalibration* out) {
+  for (size_t f = 0; f < input.frames.size(); ++f) {
+    FrameCalibration& frame = out->frames[f];
+    if (!frame.failure.empty()) continue;  // unreadable
+    const CameraCalibration& camera = out->cameras[static_cast<size_t>(input.frames[f].camera)];
+    frame.tags = observations[f].tags;
+    frame.rejected = observations[f].rejected;
+    if (!camera.solved) {
+      frame.failure = "camera " + input.cameras[static_cast<size_t>(input.frames[f].camera)].name +
+                      " has no starting intrinsics";
+      continue;
+    }
+    auto pose = EstimateViewPose(observations[f], camera.initial, options.pose);
+    if (!pose.ok()) {
+      frame.failure = pose.status().message();
+      continue;
+    }
+    frame.rejected = pose->rejected;
+    frame.cam_from_box_init = pose->cam_from_box;
+    frame.init_rms_px = pose->rms_px;
+    frame.solved = true;
+  }
+}
+
+struct SolveMap {
+  std::vector<int> camera_of;     // bundle-adjustment camera -> input camera
+  std::vector<int> ba_camera;     // input camera -> bundle-adjustment camera, -1 if left out
+  std::vector<size_t> frame_of;   // bundle-adjustment view -> input frame
+};
+
+// The bundle adjustment's input from the solved frames; cameras without one are named and left out.
+BundleAdjustmentInput BuildAdjustmentInput(const CaptureCalibrationInput& input, CaptureCalibration* out,
+                                           SolveMap* map) {
+  BundleAdjustmentInput ba;
+  map->ba_camera.assign(input.cameras.size(), -1);
+  for (size_t c = 0; c < input.cameras.size(); ++c) {
+    CameraCalibration& camera = out->cameras[c];
+    bool has_view = false;
+    for (size_t f = 0; f < input.frames.size(); ++f)
+      has_view |= out->frames[f].solved && input.frames[f].camera == static_cast<int>(c);
+    if (camera.solved && !has_view) {
+      camera.solved = false;
+      camera.failure = "no view of this camera could be solved";
+    }
+    if (!camera.solved) continue;
+    map->ba_camera[c] = static_cast<int>(ba.cameras.size());
+    map->camera_of.push_back(static_cast<int>(c));
+    ba.cameras.push_back(camera.initial);
+  }
+  for (size_t f = 0; f < input.frames.size(); ++f) {
+    const FrameCalibration& frame = out->frames[f];
+    if (!frame.solved) continue;
+    CalibrationView view;
+    view.camera = map->ba_camera[static_cast<size_t>(input.frames[f].camera)];
+    view.stop = input.frames[f].stop;
+    view.turntable_deg = input.frames[f].turntable_deg;
+    view.tags = frame.tags;
+    view.cam_from_box_init = frame.cam_from_box_init;
+    ba.views.push_back(std::move(view));
+    map->frame_of.push_back(f);
+  }
+  return ba;
+}
+
+void CopySolution(const BundleAdjustmentResult& solution, const SolveMap& map, CaptureCalibration* out) {
+  for (size_t k = 0; k < map.camera_of.size(); ++k) {
+    CameraCalibration& camera = out->cameras[static_cast<size_t>(map.camera_of[k])];
+    camera.intrinsics = solution.cameras[k];
+    if (k < solution.intrinsics_stddev.size()) camera.intrinsics_stddev = solution.intrinsics_stddev[k];
+    if (k < solution.cam_from_world.size()) camera.cam_from_world = solution.cam_from_world[k];
+  }
+  for (size_t v = 0; v < map.frame_of.size(); ++v) {
+    FrameCalibration& frame = out->frames[map.frame_of[v]];
+    frame.cam_from_box = solution.cam_from_box[v];
+    frame.rms_px = solution.view_rms_px[v];
+  }
+  out->turntable_from_box = solution.turntable_from_box;
+  out->rms_px = solution.rms_px;
+  out->residual_sigma_px = solution.residual_sigma_px;
+  out->iterations = solution.iterations;
+  out->converged = solution.converged;
+}
+
+}  // namespace
+
+std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames, const CalibBox& box,
+                                           const TagDetectorOptions& detector, int threads,
+                                           std::vector<std::string>* failures) {
+  std::vector<ViewObservations> observations(frames.size());
+  failures->assign(frames.size(), "");
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    auto tag_detector = TagDetector::Create(detector);
+    for (size_t f = next++; f < frames.size(); f = next++) {
+      if (!tag_detector.ok()) {
+        (*failures)[f] = tag_detector.status().message();
+        continue;
+      }
+      const cv::Mat image = cv::imread(frames[f].path, cv::IMREAD_GRAYSCALE);
+      if (image.empty()) {
+        (*failures)[f] = frames[f].path + ": cannot be read as an image (missing or corrupt)";
+        continue;
+      }
+      auto detections = (*tag_detector)->Detect(image);
+      if (!detections.ok()) {
+        (*failures)[f] = frames[f].path + ": " + detections.status().message();
+        continue;
+      }
+      observations[f] = MatchToBox(*detections, box);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& thread : pool) thread.join();
+  return observations;
+}
+
+Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input,
+                                            const CaptureCalibrationOptions& options) {
+  HR_RETURN_IF_ERROR(ValidateInput(input, options));
+  CaptureCalibration out;
+  out.mode = options.mode;
+  out.cameras.resize(input.cameras.size());
+  out.frames.resize(input.frames.size());
+  auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> unreadable;
+  const std::vector<ViewObservations> observations =
+      DetectFrames(input.frames, input.box, options.detector, std::max(1, options.threads), &unreadable);
+  for (size_t f = 0; f < input.frames.size(); ++f) {
+    out.frames[f].failure = unreadable[f];
+    out.frames[f].tags_detected = static_cast<int>(observations[f].tags.size() + observations[f].rejected.size());
+  }
+  out.detect_s = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  InitialiseIntrinsics(input, options, observations, &out);
+  InitialisePoses(input, options, observations, &out);
+  SolveMap map;
+  BundleAdjustmentInput ba = BuildAdjustmentInput(input, &out, &map);
+  if (ba.cameras.empty()) {
+    std::string why;
+    for (size_t c = 0; c < input.cameras.size(); ++c)
+      why += (why.empty() ? "" : "; ") + input.cameras[c].name + ": " + out.cameras[c].failure;
+    return FailedPrecondition("calibration: no camera can be solved (" + why + ")");
+  }
+  if (options.mode == CalibrationMode::kTurntable) {
+    auto axis = FitTurntableAxis(ba.views, input.box_height_mm);
+    if (!axis.ok())
+      return FailedPrecondition("calibration: " + axis.status().message() +
+                                "; for a capture without turntable motion use --mode free");
+    ba.turntable_from_box_init = axis->turntable_from_box;
+  }
+  out.init_s = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  BundleAdjustmentOptions ba_options;
+  ba_options.mode = options.mode;
+  ba_options.fix_intrinsics = options.fix_intrinsics;
+  ba_options.huber_px = options.huber_px;
+  ba_options.threads = std::max(1, options.threads);
+  HR_ASSIGN_OR_RETURN(BundleAdjustmentResult solution, RunBundleAdjustment(ba, ba_options));
+  CopySolution(solution, map, &out);
+  out.solve_s = SecondsSince(start);
+  return out;
+}
+
+}  // namespace hairrig

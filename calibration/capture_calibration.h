@@ -1,0 +1,107 @@
+// A capture's calibration end to end (issue 5): tags detected on every frame
+// in parallel, matched to the box, intrinsics initialised (nominal values, a
+// prior, or the views themselves), a pose per view, the turntable axis from
+// the camera centres' circle, then the bundle adjustment. Frames that cannot
+// be used are named with the reason and the rest is still solved; a camera
+// whose views all fail is named and left out.
+//
+// The library sees image files and numbers, never a device or a rig config;
+// rig/ builds the input from a capture folder. Frames as in
+// calibration/bundle_adjustment.h; millimetres, degrees, pixels.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/bundle_adjustment.h"
+#include "calibration/view_pose.h"
+#include "core/calib_box.h"
+
+namespace hairrig {
+
+struct CalibrationCamera {
+  std::string name;
+  std::string serial;
+  int width_px = 0, height_px = 0;
+  // Starting values (the lens and sensor data sheet), or the prior when
+  // CaptureCalibrationOptions::fix_intrinsics; solved from the views when absent.
+  std::optional<CameraIntrinsics> nominal;
+};
+
+struct CalibrationFrame {
+  std::string path;      // image file to read
+  std::string name;      // as the capture names it (frames/000_SERIAL.png)
+  int view = 0;
+  int camera = 0;        // index into CaptureCalibrationInput::cameras
+  int stop = 0;
+  double turntable_deg = 0;  // measured by the encoder
+};
+
+struct CaptureCalibrationInput {
+  std::vector<CalibrationCamera> cameras;
+  std::vector<CalibrationFrame> frames;
+  CalibBox box;
+  // Height of the box origin along the turntable axis (turntable mode): the
+  // cameras cannot see it, the rig config gives it.
+  double box_height_mm = 0;
+};
+
+struct CaptureCalibrationOptions {
+  CalibrationMode mode = CalibrationMode::kTurntable;
+  bool fix_intrinsics = false;  // hold every camera at its `nominal` (a prior calibration)
+  int threads = 2;              // detection and Ceres
+  TagDetectorOptions detector;
+  ViewPoseOptions pose;
+  double huber_px = 1.0;
+};
+
+struct FrameCalibration {
+  bool solved = false;
+  std::string failure;            // why not, when !solved
+  int tags_detected = 0;
+  std::vector<TagObservation> tags;   // matched to the box (the bundle adjustment's input)
+  std::vector<RejectedTag> rejected;
+  Rigid3d cam_from_box_init;      // the per-view PnP (the OpenCV-only pose)
+  Rigid3d cam_from_box;           // solved
+  double init_rms_px = 0;
+  double rms_px = 0;              // corner reprojection RMS after the bundle adjustment
+};
+
+struct CameraCalibration {
+  bool solved = false;
+  std::string failure;
+  std::string intrinsics_source;  // "nominal", "prior" or "views"
+  CameraIntrinsics initial;       // before the bundle adjustment (the OpenCV-only intrinsics when "views")
+  CameraIntrinsics intrinsics;    // solved
+  std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
+  Rigid3d cam_from_world;         // turntable mode
+};
+
+struct CaptureCalibration {
+  CalibrationMode mode = CalibrationMode::kTurntable;
+  std::vector<CameraCalibration> cameras;
+  std::vector<FrameCalibration> frames;  // in input order
+  Rigid3d turntable_from_box;            // turntable mode
+  double rms_px = 0;
+  double residual_sigma_px = 0;
+  int iterations = 0;
+  bool converged = false;
+  double detect_s = 0, init_s = 0, solve_s = 0;  // wall time of each step
+};
+
+// Tags of every frame, matched to the box, over `threads` threads. A frame
+// that cannot be read gives an empty observation with the reason in
+// `failures` (same order as frames; empty string for success).
+std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames, const CalibBox& box,
+                                           const TagDetectorOptions& detector, int threads,
+                                           std::vector<std::string>* failures);
+
+// FailedPrecondition when nothing can be solved (no camera with usable views,
+// no turntable axis in turntable mode: the message says what to try);
+// InvalidArgument for bad input (no frames, a frame of an unknown camera,
+// fix_intrinsics without values, invalid nominal intrinsics, a NaN angle).
+Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input,
+                                            const CaptureCalibrationOptions& options);
+
+}  // namespace hairrig

@@ -1,0 +1,30 @@
+// A camera's intrinsics from its own views of the calibration box, with no
+// starting guess (issue 5, step 2): every box face seen with two or more tags
+// in a view is a planar target, and OpenCV's calibrateCamera (Zhang's method,
+// then Levenberg-Marquardt) solves pinhole + k1, k2, p1, p2 from them, k3
+// held at 0. This is also the OpenCV-only baseline's intrinsics.
+#pragma once
+
+#include <vector>
+
+#include "calibration/view_pose.h"
+#include "core/calib_box.h"
+#include "core/camera_model.h"
+#include "core/status.h"
+
+namespace hairrig {
+
+struct IntrinsicsFromViews {
+  CameraIntrinsics intrinsics;
+  int planes = 0;       // (view, face) pairs used
+  double rms_px = 0;    // calibrateCamera's reprojection RMS
+};
+
+// `views` are one camera's matched observations. FailedPrecondition when fewer
+// than `min_planes` (view, face) pairs have 2 or more tags (the message says
+// how many were found and what to do); InvalidArgument for a bad image size.
+Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(const std::vector<const ViewObservations*>& views,
+                                                     const CalibBox& box, int width_px, int height_px,
+                                                     int min_planes = 4);
+
+}  // namespace hairrig

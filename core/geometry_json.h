@@ -1,0 +1,29 @@
+// JSON forms of the geometry types, shared by every file that stores poses or
+// intrinsics (ground truth, calibration.json). Frames as in core/transform.h;
+// millimetres and pixels.
+//
+//   pose:       {"quaternion_wxyz": [w,x,y,z], "translation_mm": [x,y,z], "matrix_3x4": [[..],[..],[..]]}
+//   intrinsics: {"width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "p1", "p2", "k3"}
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "core/camera_model.h"
+#include "core/status.h"
+#include "core/transform.h"
+
+namespace hairrig {
+
+nlohmann::json PoseToJson(const Rigid3d& a_from_b);
+// Reads the quaternion and translation (the matrix is for people reading the
+// file). InvalidArgument names `where` (file and field) when a member is
+// missing, not a number, not finite, or the quaternion is far from unit.
+Result<Rigid3d> PoseFromJson(const nlohmann::json& j, const std::string& where);
+
+nlohmann::json IntrinsicsToJson(const CameraIntrinsics& camera);
+// InvalidArgument names `where` and the member; the result is Validate()d.
+Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::string& where);
+
+}  // namespace hairrig

@@ -1,0 +1,117 @@
+#include "rig/capture_calibration_input.h"
+
+#include <filesystem>
+#include <map>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/json_file.h"
+#include "rig/rig_config.h"
+#include "rig/safe_names.h"
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Cameras from the config snapshot, each with its image size from its first frame.
+Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::map<std::string, int>* by_serial) {
+  const ConfigNode nominal = config.root.OptionalChild("calibration").OptionalChild("cameras");
+  for (const ConfigNode& cam : config.root.Child("devices").Items("cameras")) {
+    CalibrationCamera camera;
+    camera.name = cam.String("name");
+    camera.serial = cam.String("serial");
+    if (nominal.IsMap() && nominal.Has(camera.name)) {
+      const ConfigNode k = nominal.Child(camera.name);
+      CameraIntrinsics intrinsics;
+      intrinsics.fx_px = k.Number("fx_px", {.min = 1});
+      intrinsics.fy_px = k.Number("fy_px", {.min = 1});
+      intrinsics.cx_px = k.Number("cx_px");
+      intrinsics.cy_px = k.Number("cy_px");
+      intrinsics.k1 = k.Number("k1", 0.0);
+      intrinsics.k2 = k.Number("k2", 0.0);
+      intrinsics.p1 = k.Number("p1", 0.0);
+      intrinsics.p2 = k.Number("p2", 0.0);
+      intrinsics.k3 = k.Number("k3", 0.0);
+      camera.nominal = intrinsics;  // the size is filled in from the frames
+    }
+    (*by_serial)[camera.serial] = static_cast<int>(input->cameras.size());
+    input->cameras.push_back(camera);
+  }
+  return config.root.status();
+}
+
+Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest, const std::string& manifest_path,
+                 const std::map<std::string, int>& by_serial, CaptureCalibrationInput* input) {
+  if (!manifest.contains("frames") || !manifest["frames"].is_array())
+    return CorruptData(manifest_path + ": frames is missing or not an array");
+  for (size_t i = 0; i < manifest["frames"].size(); ++i) {
+    const nlohmann::json& f = manifest["frames"][i];
+    const std::string where = manifest_path + ": frames[" + std::to_string(i) + "]";
+    if (!f.contains("file") || !f["file"].is_string() || !f.contains("serial") || !f["serial"].is_string() ||
+        !f.contains("view") || !f["view"].is_number_integer() || !f.contains("stop") || !f["stop"].is_number_integer() ||
+        !f.contains("angle_measured_deg") || !f["angle_measured_deg"].is_number())
+      return CorruptData(where + ": needs file, serial, view, stop and angle_measured_deg");
+    CalibrationFrame frame;
+    frame.name = f["file"].get<std::string>();
+    frame.path = (fs::path(capture_dir) / frame.name).lexically_normal().string();
+    if (!PathIsInside(frame.path, capture_dir))
+      return CorruptData(where + ": file " + frame.name + " is outside the capture folder; the manifest is damaged");
+    const auto camera = by_serial.find(f["serial"].get<std::string>());
+    if (camera == by_serial.end())
+      return CorruptData(where + ": camera serial " + f["serial"].get<std::string>() + " is not in rig.yaml");
+    frame.camera = camera->second;
+    frame.view = f["view"].get<int>();
+    frame.stop = f["stop"].get<int>();
+    frame.turntable_deg = f["angle_measured_deg"].get<double>();
+    input->frames.push_back(frame);
+  }
+  return Status::Ok();
+}
+
+// Image sizes from each camera's first frame (header only would do; one read per camera).
+Status FillImageSizes(CaptureCalibrationInput* input) {
+  for (size_t c = 0; c < input->cameras.size(); ++c) {
+    CalibrationCamera& camera = input->cameras[c];
+    for (const CalibrationFrame& frame : input->frames) {
+      if (frame.camera != static_cast<int>(c)) continue;
+      const cv::Mat image = cv::imread(frame.path, cv::IMREAD_UNCHANGED);
+      if (image.empty()) continue;  // the calibration names the unreadable frame
+      camera.width_px = image.cols;
+      camera.height_px = image.rows;
+      break;
+    }
+    if (camera.nominal) {
+      camera.nominal->width_px = camera.width_px;
+      camera.nominal->height_px = camera.height_px;
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {
+  const std::string manifest_path = (fs::path(capture_dir) / "manifest.json").string();
+  HR_ASSIGN_OR_RETURN(nlohmann::json manifest, ReadJsonFile(manifest_path, "is this a capture folder?"));
+  HR_ASSIGN_OR_RETURN(nlohmann::json metadata, ReadJsonFile((fs::path(capture_dir) / "capture.json").string(),
+                                                            "is this a capture folder?"));
+  HR_ASSIGN_OR_RETURN(RigConfig config, LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(),
+                                                      metadata.value("config_dir", "")));
+  const ConfigNode section = config.root.Child("calibration");
+  section.AllowOnlyKeys({"box", "box_height_mm", "cameras"});
+  const std::string box_file = section.String("box");
+  CaptureCalibrationInput input;
+  input.box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
+  HR_RETURN_IF_ERROR(config.root.status());
+  HR_ASSIGN_OR_RETURN(input.box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
+  std::map<std::string, int> by_serial;
+  HR_RETURN_IF_ERROR(AddCameras(config, &input, &by_serial));
+  HR_RETURN_IF_ERROR(AddFrames(capture_dir, manifest, manifest_path, by_serial, &input));
+  HR_RETURN_IF_ERROR(FillImageSizes(&input));
+  return input;
+}
+
+}  // namespace hairrig

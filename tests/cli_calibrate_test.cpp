@@ -1,0 +1,114 @@
+// `hairrig calibrate` and `hairrig eval calibration` on a capture of the
+// default simulated rig, as a rig technician runs them: every output file,
+// accuracy against the ground truth, the OpenCV-only start beside the bundle
+// adjustment, the two modes, and bad input (no capture, a frame outside the
+// capture folder, a corrupt frame, a capture not yet calibrated).
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "tests/support/command_run.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using hairrig_test::CommandRun;
+using hairrig_test::Hairrig;
+using hairrig_test::LastLineJson;
+
+class CliCalibrate : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    capture_ = ::testing::TempDir() + "/cli_calibrate_capture";
+    fs::remove_all(capture_);
+    const CommandRun r = Hairrig("--log-level warning capture --out " + capture_ + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static std::string capture_;
+};
+std::string CliCalibrate::capture_;
+
+double Median(const nlohmann::json& e, const char* key) { return e[key]["median"].get<double>(); }
+double Max(const nlohmann::json& e, const char* key) { return e[key]["max"].get<double>(); }
+
+TEST_F(CliCalibrate, BothModesWriteEveryOutputAndMeetTheGroundTruth) {
+  CommandRun r = Hairrig("eval calibration " + capture_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("run `hairrig calibrate`"), std::string::npos) << r.output;
+
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --mode free --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = Hairrig("eval calibration " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json free_mode = LastLineJson(r.output);
+
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json summary = LastLineJson(r.output);
+  EXPECT_EQ(summary["verdict"], "good") << summary.dump();
+  EXPECT_EQ(summary["views_solved"], 38);
+  const std::string out = capture_ + "/calibration";
+  for (const char* file : {"calibration.json", "opencv/SIM-CAM-UPPER.yaml", "opencv/SIM-CAM-LOWER.yaml",
+                           "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt", "report/report.txt",
+                           "report/view_rms.png", "report/residuals/000_SIM-CAM-UPPER.jpg"})
+    EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
+
+  r = Hairrig("eval calibration " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json eval = LastLineJson(r.output);
+  EXPECT_EQ(eval["views_compared"], 38);
+  const nlohmann::json& ours = eval["solved"];
+  const nlohmann::json& opencv = eval["initial"];
+  std::printf("turntable: rotation %.4f deg, centre %.3f mm, focal %.4f %%, RMS %.3f px\n",
+              Median(ours, "rotation_deg"), Median(ours, "camera_centre_mm"), Max(ours, "focal_percent"),
+              Median(ours, "reprojection_rms_px"));
+  std::printf("free:      rotation %.4f deg, centre %.3f mm, focal %.4f %%\n", Median(free_mode["solved"], "rotation_deg"),
+              Median(free_mode["solved"], "camera_centre_mm"), Max(free_mode["solved"], "focal_percent"));
+  std::printf("OpenCV-only (calibrateCamera + PnP): rotation %.4f deg, centre %.3f mm, focal %.4f %%\n",
+              Median(opencv, "rotation_deg"), Median(opencv, "camera_centre_mm"), Max(opencv, "focal_percent"));
+  // Measured: rotation 0.078 deg, centre 0.35 mm, focal 0.047 %, RMS 0.09 px;
+  // the OpenCV-only start 0.17 deg, 1.05 mm, 0.13 %. The principal point is
+  // the weak parameter (see tests/rendered_calibration_test.cpp).
+  EXPECT_LT(Median(ours, "rotation_deg"), 0.15);
+  EXPECT_LT(Median(ours, "camera_centre_mm"), 0.6);
+  EXPECT_LT(Max(ours, "focal_percent"), 0.1);
+  EXPECT_LT(Median(ours, "reprojection_rms_px"), 0.2);
+  EXPECT_GT(Median(opencv, "camera_centre_mm"), 2 * Median(ours, "camera_centre_mm"));
+  EXPECT_GT(Median(opencv, "rotation_deg"), 1.5 * Median(ours, "rotation_deg"));
+  EXPECT_LT(Median(ours, "camera_centre_mm"), Median(free_mode["solved"], "camera_centre_mm"));
+}
+
+TEST_F(CliCalibrate, BadInputIsNamed) {
+  CommandRun r = Hairrig("calibrate " + ::testing::TempDir());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("manifest.json"), std::string::npos) << r.output;
+
+  // A manifest that points outside the capture folder.
+  const std::string fake = ::testing::TempDir() + "/cli_calibrate_fake";
+  fs::remove_all(fake);
+  fs::create_directories(fake);
+  fs::copy_file(capture_ + "/rig.yaml", fake + "/rig.yaml");
+  fs::copy_file(capture_ + "/capture.json", fake + "/capture.json");
+  std::ofstream(fake + "/manifest.json")
+      << R"({"frames": [{"file": "../../etc/passwd", "serial": "SIM-CAM-UPPER", "view": 0, "stop": 0,
+                          "angle_measured_deg": 0}]})";
+  r = Hairrig("calibrate " + fake);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("outside the capture folder"), std::string::npos) << r.output;
+
+  // A corrupt frame: named, the rest still solved.
+  const std::string damaged = ::testing::TempDir() + "/cli_calibrate_damaged";
+  fs::remove_all(damaged);
+  fs::copy(capture_, damaged, fs::copy_options::recursive);
+  fs::remove_all(damaged + "/calibration");
+  std::ofstream(damaged + "/frames/005_SIM-CAM-LOWER.png", std::ios::trunc) << "not a png";
+  r = Hairrig("--log-level warning calibrate " + damaged + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json summary = LastLineJson(r.output);
+  EXPECT_EQ(summary["verdict"], "check these views");
+  EXPECT_EQ(summary["views_solved"], 37);
+  EXPECT_NE(summary["reasons"].dump().find("005_SIM-CAM-LOWER.png"), std::string::npos) << summary.dump();
+}
+
+}  // namespace
