@@ -72,7 +72,7 @@ Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest,
 }
 
 // Image sizes from each camera's first frame (header only would do; one read per camera).
-Status FillImageSizes(CaptureCalibrationInput* input) {
+void FillImageSizes(CaptureCalibrationInput* input) {
   for (size_t c = 0; c < input->cameras.size(); ++c) {
     CalibrationCamera& camera = input->cameras[c];
     for (const CalibrationFrame& frame : input->frames) {
@@ -88,7 +88,6 @@ Status FillImageSizes(CaptureCalibrationInput* input) {
       camera.nominal->height_px = camera.height_px;
     }
   }
-  return Status::Ok();
 }
 
 }  // namespace
@@ -110,7 +109,7 @@ Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& c
   std::map<std::string, int> by_serial;
   HR_RETURN_IF_ERROR(AddCameras(config, &input, &by_serial));
   HR_RETURN_IF_ERROR(AddFrames(capture_dir, manifest, manifest_path, by_serial, &input));
-  HR_RETURN_IF_ERROR(FillImageSizes(&input));
+  FillImageSizes(&input);
   return input;
 }
 
