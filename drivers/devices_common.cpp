@@ -1,4 +1,5 @@
 #include <cmath>
+#include <cstdio>
 
 #include "drivers/camera.h"
 #include "drivers/turntable.h"
@@ -8,6 +9,26 @@ namespace hairrig {
 Status Turntable::MoveTo(double target_deg, const MotionProfile& profile, std::chrono::milliseconds timeout) {
   HR_RETURN_IF_ERROR(StartMove(target_deg, profile));
   return WaitInPosition(timeout);
+}
+
+Status CheckMoveRequest(const std::string& device, double target_deg, const MotionProfile& p,
+                        const TurntableCapabilities& caps) {
+  if (!std::isfinite(target_deg)) return InvalidArgument(device + ": target angle is not a finite number");
+  if (!(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s)) {
+    return OutOfRange(device + ": speed " + std::to_string(p.speed_deg_s) + " deg/s outside (0, " +
+                      std::to_string(caps.max_speed_deg_s) + "]");
+  }
+  if (!(p.accel_deg_s2 > 0 && p.accel_deg_s2 <= caps.max_accel_deg_s2)) {
+    return OutOfRange(device + ": acceleration " + std::to_string(p.accel_deg_s2) + " deg/s^2 outside (0, " +
+                      std::to_string(caps.max_accel_deg_s2) + "]");
+  }
+  return Status::Ok();
+}
+
+std::string DegreesText(double deg) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f deg", deg);
+  return text;
 }
 
 double MoveDurationS(double distance_deg, const MotionProfile& profile) {

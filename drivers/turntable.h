@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <string>
 
 #include "drivers/device.h"
 
@@ -34,6 +35,13 @@ struct TurntableStatus {
   bool homed = false;
   bool fault = false;
 };
+
+// Ok, or InvalidArgument / OutOfRange naming `device` when the target is not
+// finite or the profile is outside `caps` (a driver checks before commanding).
+Status CheckMoveRequest(const std::string& device, double target_deg, const MotionProfile& profile,
+                        const TurntableCapabilities& caps);
+// "12.345 deg", for messages.
+std::string DegreesText(double deg);
 
 class Turntable : public Device {
  public:

@@ -11,6 +11,7 @@
 
 #include "drivers/always_present_device.h"
 #include "drivers/trigger_bus.h"
+#include "sim_hw/sim_turntable_controller.h"
 
 namespace hairrig {
 
@@ -40,7 +41,9 @@ double TrapezoidPosition(double distance, const MotionProfile& p, double t) {
 class SimWorld {
  public:
   SimWorld(std::unique_ptr<Renderer> renderer, SimWorldOptions options)
-      : renderer_(std::move(renderer)), options_(std::move(options)) {
+      : renderer_(std::move(renderer)),
+        options_(std::move(options)),
+        turntable_controller_(std::make_unique<SimTurntableController>(*this)) {
     for (const SceneLight& l : renderer_->scene().lights) light_levels_[l.name] = 0.0;
   }
   ~SimWorld() {
@@ -171,6 +174,8 @@ class SimWorld {
   // --- trigger lines ----------------------------------------------------
   TriggerBus& triggers() { return triggers_; }
 
+  SimTurntableController& turntable_controller() { return *turntable_controller_; }
+
  private:
   double AngleLocked() const {
     return move_start_deg_ + TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_,
@@ -190,6 +195,7 @@ class SimWorld {
   std::map<std::string, InputFn> input_callbacks_;
   bool input_active_ = false;
   std::thread estop_timer_;
+  std::unique_ptr<SimTurntableController> turntable_controller_;
 };
 
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options) {
@@ -202,6 +208,110 @@ Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWo
 const Renderer& WorldRenderer(const SimWorld& world) { return world.renderer(); }
 double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); }
 int WorldDiskFullAfterFrames(const SimWorld& world) { return world.DiskFullAfterFrames(); }
+SimTurntableController& WorldTurntableController(SimWorld& world) { return world.turntable_controller(); }
+
+// --- the turntable controller ------------------------------------------------
+
+const char* TurntableFaultCodeName(TurntableFaultCode code) {
+  switch (code) {
+    case TurntableFaultCode::kNone: return "no fault";
+    case TurntableFaultCode::kStall: return "a stall (following error)";
+    case TurntableFaultCode::kLimit: return "a move beyond the speed or acceleration limits";
+  }
+  return "an unknown fault";
+}
+
+TurntableCapabilities SimTurntableController::capabilities() const {
+  return {.max_speed_deg_s = 90,
+          .max_accel_deg_s2 = 360,
+          .resolution_deg = 0.001,
+          .can_home = true,
+          .settle_s = world_.scene().turntable_settle_s};
+}
+
+double SimTurntableController::time_scale() const { return world_.time_scale(); }
+
+TurntableFaultCode SimTurntableController::StartMove(double target_deg, const MotionProfile& p) {
+  const TurntableCapabilities caps = capabilities();
+  double estop_after_s = -1;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!std::isfinite(target_deg) || !(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s) ||
+        !(p.accel_deg_s2 > 0 && p.accel_deg_s2 <= caps.max_accel_deg_s2)) {
+      fault_ = TurntableFaultCode::kLimit;
+      return fault_;
+    }
+    estop_after_s = StartMoveLocked(target_deg, p);
+    homing_ = false;
+  }
+  // Outside the lock: the e-stop's handlers may call Stop().
+  if (estop_after_s >= 0) world_.ScheduleEstop(estop_after_s);
+  return TurntableFaultCode::kNone;
+}
+
+void SimTurntableController::StartHome() {
+  double estop_after_s = -1;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    estop_after_s =
+        StartMoveLocked(0.0, {world_.scene().turntable_speed_deg_s, world_.scene().turntable_accel_deg_s2});
+    homing_ = true;
+  }
+  if (estop_after_s >= 0) world_.ScheduleEstop(estop_after_s);
+}
+
+double SimTurntableController::StartMoveLocked(double target_deg, const MotionProfile& p) {
+  const double move_s = MoveDurationS(target_deg - world_.AngleDeg(), p);
+  world_.StartMove(target_deg, p);
+  target_deg_ = target_deg;
+  stall_after_s_ = -1;
+  move_start_ = Clock::now();
+  const SimFault* fault = world_.NextEventFault(
+      "", {SimFaultKind::kTurntableTimeout, SimFaultKind::kTurntableStall, SimFaultKind::kEstop});
+  if (!fault) return -1;
+  switch (fault->kind) {
+    case SimFaultKind::kTurntableTimeout: world_.JamMove(); break;
+    case SimFaultKind::kTurntableStall: stall_after_s_ = 0.5 * move_s; break;
+    case SimFaultKind::kEstop: return 0.2 * move_s;
+    default: break;
+  }
+  return -1;
+}
+
+void SimTurntableController::Stop() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  world_.StopMotion();
+  homing_ = false;
+  stall_after_s_ = -1;
+}
+
+void SimTurntableController::ClearFault() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  fault_ = TurntableFaultCode::kNone;
+}
+
+TurntableControllerStatus SimTurntableController::Poll() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stall_after_s_ >= 0 && world_.SimSecondsSince(move_start_) >= stall_after_s_) {
+    world_.StopMotion();
+    fault_ = TurntableFaultCode::kStall;
+    stall_after_s_ = -1;
+    homing_ = false;
+  }
+  TurntableControllerStatus s;
+  s.position_deg = world_.AngleDeg();
+  s.target_deg = target_deg_;
+  s.fault = fault_;
+  const bool ok = fault_ == TurntableFaultCode::kNone;
+  s.in_position = ok && world_.SecondsToInPosition() <= 0;
+  s.moving = ok && world_.MotionSecondsLeft() > 0;
+  if (homing_ && s.in_position) {
+    homed_ = true;
+    homing_ = false;
+  }
+  s.homed = homed_;
+  return s;
+}
 
 namespace {
 
@@ -219,50 +329,37 @@ class SimDevice : public AlwaysPresentDevice<Base> {
 
 class SimTurntable : public SimDevice<Turntable> {
  public:
-  using SimDevice::SimDevice;
-  TurntableCapabilities capabilities() const override {
-    return {.max_speed_deg_s = 90,
-            .max_accel_deg_s2 = 360,
-            .resolution_deg = 0.001,
-            .can_home = true,
-            .settle_s = world_->scene().turntable_settle_s};
-  }
+  SimTurntable(DeviceInfo info, std::shared_ptr<SimWorld> world)
+      : SimDevice(std::move(info), world), controller_(world->turntable_controller()) {}
+  TurntableCapabilities capabilities() const override { return controller_.capabilities(); }
   Status Home(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(StartMove(0.0, {world_->scene().turntable_speed_deg_s, world_->scene().turntable_accel_deg_s2}));
-    HR_RETURN_IF_ERROR(WaitInPosition(timeout));
-    homed_ = true;
-    return Status::Ok();
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
+    controller_.StartHome();
+    target_deg_ = 0;
+    stopped_ = false;
+    SetState(DeviceState::kBusy);
+    return WaitInPosition(timeout);
   }
   Status StartMove(double target_deg, const MotionProfile& p) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
-    const auto caps = capabilities();
-    if (!std::isfinite(target_deg)) return InvalidArgument(Describe() + ": target angle is not a finite number");
-    if (!(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s)) {
-      return OutOfRange(Describe() + ": speed " + std::to_string(p.speed_deg_s) + " deg/s outside (0, " +
-                        std::to_string(caps.max_speed_deg_s) + "]");
-    }
-    if (!(p.accel_deg_s2 > 0 && p.accel_deg_s2 <= caps.max_accel_deg_s2)) {
-      return OutOfRange(Describe() + ": acceleration " + std::to_string(p.accel_deg_s2) + " deg/s^2 outside (0, " +
-                        std::to_string(caps.max_accel_deg_s2) + "]");
-    }
-    const double move_s = MoveDurationS(target_deg - world_->AngleDeg(), p);
-    world_->StartMove(target_deg, p);
+    HR_RETURN_IF_ERROR(CheckMoveRequest(Describe(), target_deg, p, capabilities()));
+    controller_.ClearFault();
+    const TurntableFaultCode refused = controller_.StartMove(target_deg, p);
+    if (refused != TurntableFaultCode::kNone) return Fault(DeviceFault(TurntableFaultCodeName(refused)));
     target_deg_ = target_deg;
     stopped_ = false;
-    stall_after_s_ = -1;
-    InjectMoveFault(move_s);
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
   Result<TurntableStatus> ReadStatus() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
-    TurntableStatus s;
-    s.position_deg = world_->AngleDeg();
-    s.target_deg = target_deg_;
-    s.fault = state() == DeviceState::kFaulted;
-    s.in_position = !s.fault && world_->SecondsToInPosition() <= 0;
-    s.moving = !s.fault && world_->MotionSecondsLeft() > 0;
-    s.homed = homed_;
+    const TurntableControllerStatus c = controller_.Poll();
+    TurntableStatus s{.position_deg = c.position_deg,
+                      .target_deg = target_deg_,
+                      .moving = c.moving,
+                      .in_position = c.in_position,
+                      .homed = c.homed,
+                      .fault = c.fault != TurntableFaultCode::kNone};
     if (s.in_position && state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return s;
   }
@@ -272,59 +369,35 @@ class SimTurntable : public SimDevice<Turntable> {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
     const auto deadline = Clock::now() + timeout;
     for (;;) {
-      if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + Deg(target_deg_));
-      if (stall_after_s_ >= 0 && world_->SimSecondsSince(move_start_) >= stall_after_s_) {
-        world_->StopMotion();
-        return Fault(DeviceFault("the controller reports a stall (following error) at " + Deg(world_->AngleDeg()) +
-                                 " on the way to " + Deg(target_deg_) +
+      if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + DegreesText(target_deg_));
+      const TurntableControllerStatus c = controller_.Poll();
+      if (c.fault != TurntableFaultCode::kNone) {
+        return Fault(DeviceFault(std::string("the controller reports ") + TurntableFaultCodeName(c.fault) + " at " +
+                                 DegreesText(c.position_deg) + " on the way to " + DegreesText(target_deg_) +
                                  ": check that nothing blocks the platform, then home it again"));
       }
-      const double left_real_s = world_->SecondsToInPosition() * world_->time_scale();
-      if (left_real_s <= 0) break;
+      if (c.in_position) break;
       if (Clock::now() >= deadline) {
-        return Timeout(Describe() + ": not in position at " + Deg(target_deg_) + " within " +
-                       std::to_string(timeout.count()) + " ms (now at " + Deg(world_->AngleDeg()) + ")");
+        return Timeout(Describe() + ": not in position at " + DegreesText(target_deg_) + " within " +
+                       std::to_string(timeout.count()) + " ms (now at " + DegreesText(c.position_deg) + ")");
       }
-      const auto step = std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(2));
-      std::this_thread::sleep_for(std::min<Clock::duration>(
-          step, std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(left_real_s))));
+      std::this_thread::sleep_for(std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(2)));
     }
     SetState(DeviceState::kReady);
     return Status::Ok();
   }
   Status Stop() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
-    world_->StopMotion();
+    controller_.Stop();
     stopped_ = true;
     if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
 
  private:
-  static std::string Deg(double deg) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.3f deg", deg);
-    return text;
-  }
-
-  void InjectMoveFault(double move_s) {
-    move_start_ = Clock::now();
-    const SimFault* fault = world_->NextEventFault(
-        "", {SimFaultKind::kTurntableTimeout, SimFaultKind::kTurntableStall, SimFaultKind::kEstop});
-    if (!fault) return;
-    switch (fault->kind) {
-      case SimFaultKind::kTurntableTimeout: world_->JamMove(); break;
-      case SimFaultKind::kTurntableStall: stall_after_s_ = 0.5 * move_s; break;
-      case SimFaultKind::kEstop: world_->ScheduleEstop(0.2 * move_s); break;
-      default: break;
-    }
-  }
-
+  SimTurntableController& controller_;
   double target_deg_ = 0;
-  bool homed_ = false;
   std::atomic<bool> stopped_{false};
-  double stall_after_s_ = -1;  // device seconds into the move; < 0: no stall
-  Clock::time_point move_start_ = Clock::now();
 };
 
 class SimLight : public SimDevice<Light> {

@@ -40,6 +40,10 @@ double WorldTurntableAngleDeg(const SimWorld& world);  // measured angle now
 // Number of stored frames after which the simulated disk is full (a
 // `disk_full` fault); -1 when no such fault is configured.
 int WorldDiskFullAfterFrames(const SimWorld& world);
+// The world's turntable controller (sim_hw/sim_turntable_controller.h), which
+// the `sim` turntable and the simulated Modbus controller drive.
+class SimTurntableController;
+SimTurntableController& WorldTurntableController(SimWorld& world);
 
 // Registers the `sim` backend of every device kind; devices built from it act on `world`.
 void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world);
