@@ -1,0 +1,212 @@
+#include "drivers/modbus_turntable.h"
+
+#include <atomic>
+#include <thread>
+
+namespace hairrig {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+bool Bit(uint16_t word, int bit) { return ((word >> bit) & 1u) != 0; }
+
+class ModbusTurntable : public Turntable {
+ public:
+  ModbusTurntable(const DeviceInfo& info, ModbusTurntableOptions options)
+      : Turntable(info), options_(std::move(options)), link_(options_.endpoint) {}
+
+  const ModbusLink& link() const { return link_; }
+  double time_scale() const override { return options_.time_scale; }
+
+  TurntableCapabilities capabilities() const override {
+    return {.max_speed_deg_s = options_.map.max_speed_deg_s,
+            .max_accel_deg_s2 = options_.map.max_accel_deg_s2,
+            .resolution_deg = 1.0 / options_.map.counts_per_degree,
+            .can_home = true,
+            .settle_s = options_.map.settle_s};
+  }
+
+  Status Open() override {
+    HR_RETURN_IF_ERROR(Fail(link_.Connect()));
+    HR_RETURN_IF_ERROR(CheckSerial());
+    HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
+    if (Bit(r.status, options_.map.bit_fault)) {
+      HR_RETURN_IF_ERROR(Fail(Command(options_.map.cmd_clear_fault)));
+    }
+    SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+
+  Status Close() override {
+    link_.Disconnect();
+    SetState(DeviceState::kClosed);
+    return Status::Ok();
+  }
+
+  Status HealthCheck() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+    return ReadRegisters().status();
+  }
+
+  Status Home(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
+    HR_RETURN_IF_ERROR(Fail(Command(options_.map.cmd_home)));
+    target_deg_ = 0;
+    stopped_ = false;
+    SetState(DeviceState::kBusy);
+    return Wait(timeout, /*need_homed=*/true);
+  }
+
+  Status StartMove(double target_deg, const MotionProfile& p) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+    HR_RETURN_IF_ERROR(CheckMoveRequest(Describe(), target_deg, p, capabilities()));
+    const ModbusRegisterMap& m = options_.map;
+    auto target = DegreesToCounts(target_deg, m);
+    if (!target.ok()) return target.status().WithContext(Describe());
+    std::vector<uint16_t> words(8, 0);
+    EncodeInt32(target.value(), m.word_order, &words[0]);
+    EncodeInt32(static_cast<int32_t>(std::lround(p.speed_deg_s * m.counts_per_degree)), m.word_order, &words[2]);
+    EncodeInt32(static_cast<int32_t>(std::lround(p.accel_deg_s2 * m.counts_per_degree)), m.word_order, &words[4]);
+    HR_RETURN_IF_ERROR(Fail(WritePair(m.target, &words[0])));
+    HR_RETURN_IF_ERROR(Fail(WritePair(m.speed, &words[2])));
+    HR_RETURN_IF_ERROR(Fail(WritePair(m.accel, &words[4])));
+    HR_RETURN_IF_ERROR(Fail(Command(m.cmd_move_absolute)));
+    target_deg_ = target_deg;
+    stopped_ = false;
+    SetState(DeviceState::kBusy);
+    return Status::Ok();
+  }
+
+  Result<TurntableStatus> ReadStatus() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
+    HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
+    const ModbusRegisterMap& m = options_.map;
+    TurntableStatus s{.position_deg = CountsToDegrees(r.position, m),
+                      .target_deg = target_deg_,
+                      .moving = Bit(r.status, m.bit_moving),
+                      .in_position = Bit(r.status, m.bit_in_position),
+                      .homed = Bit(r.status, m.bit_homed),
+                      .fault = Bit(r.status, m.bit_fault)};
+    if (s.in_position && !s.fault && state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    return s;
+  }
+
+  Status WaitInPosition(std::chrono::milliseconds timeout) override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+    return Wait(timeout, /*need_homed=*/false);
+  }
+
+  Status Stop() override {
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
+    stopped_ = true;
+    HR_RETURN_IF_ERROR(Command(options_.map.cmd_stop).WithContext(Describe() + ": stop"));
+    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+
+ private:
+  struct Registers {
+    uint16_t status = 0;
+    uint16_t fault_code = 0;
+    int32_t position = 0;
+  };
+
+  // Marks the device faulted on an I/O failure, passing success through.
+  Status Fail(const Status& s) { return s.ok() ? s : Fault(s); }
+
+  Status Command(uint16_t code) { return link_.Write(options_.map.command, {code}); }
+  Status WritePair(int address, const uint16_t* pair) { return link_.Write(address, {pair[0], pair[1]}); }
+
+  Result<Registers> ReadRegisters() {
+    const ModbusRegisterMap& m = options_.map;
+    const int start = m.StatusBlockStart();
+    auto block = link_.Read(start, m.StatusBlockCount());
+    if (!block.ok()) return Fault(block.status());
+    const std::vector<uint16_t>& b = block.value();
+    Registers r;
+    r.status = b[static_cast<size_t>(m.status - start)];
+    r.fault_code = b[static_cast<size_t>(m.fault_code - start)];
+    r.position = DecodeInt32(&b[static_cast<size_t>(m.position - start)], m.word_order);
+    return r;
+  }
+
+  Status CheckSerial() {
+    auto words = link_.Read(options_.map.serial, options_.map.serial_registers);
+    if (!words.ok()) return Fault(words.status());
+    const std::string found = DecodeAscii(words.value().data(), options_.map.serial_registers);
+    if (found == info().serial) return Status::Ok();
+    link_.Disconnect();
+    return Fault(Unavailable("the controller at " + options_.endpoint.Describe() + " reports serial '" + found +
+                             "', not '" + info().serial +
+                             "': check the address (or the cable) and the serial in the rig config"));
+  }
+
+  // Polls the status registers until in position (and homed when asked).
+  Status Wait(std::chrono::milliseconds timeout, bool need_homed) {
+    const auto deadline = Clock::now() + timeout;
+    const ModbusRegisterMap& m = options_.map;
+    for (;;) {
+      if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + DegreesText(target_deg_));
+      HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
+      const double at_deg = CountsToDegrees(r.position, m);
+      if (Bit(r.status, m.bit_fault)) {
+        return Fault(DeviceFault("the controller reports fault code " + std::to_string(r.fault_code) + " at " +
+                                 DegreesText(at_deg) + " on the way to " + DegreesText(target_deg_) +
+                                 " (reference profile: 1 stall, 2 limits): check that nothing blocks the platform, "
+                                 "then home it again"));
+      }
+      const bool done = Bit(r.status, m.bit_in_position) && !Bit(r.status, m.bit_moving) &&
+                        (!need_homed || Bit(r.status, m.bit_homed));
+      if (done) break;
+      if (Clock::now() >= deadline) {
+        return Timeout(Describe() + ": not in position at " + DegreesText(target_deg_) + " within " +
+                       std::to_string(timeout.count()) + " ms (now at " + DegreesText(at_deg) + ")");
+      }
+      std::this_thread::sleep_for(
+          std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(options_.poll_ms)));
+    }
+    SetState(DeviceState::kReady);
+    return Status::Ok();
+  }
+
+  ModbusTurntableOptions options_;
+  ModbusLink link_;
+  double target_deg_ = 0;
+  std::atomic<bool> stopped_{false};
+};
+
+}  // namespace
+
+Result<ModbusTurntableOptions> ParseModbusTurntableOptions(const ConfigNode& device) {
+  device.AllowOnlyKeys({"name", "backend", "serial", "transport", "host", "port", "device", "baud", "parity",
+                        "data_bits", "stop_bits", "slave_id", "timeout_ms", "retries", "poll_ms", "registers",
+                        "counts_per_degree", "word_order", "commands", "status_bits", "limits"});
+  ModbusTurntableOptions options;
+  HR_ASSIGN_OR_RETURN(options.endpoint, ParseModbusEndpoint(device));
+  HR_ASSIGN_OR_RETURN(options.map, ParseModbusRegisterMap(device));
+  options.poll_ms = device.Integer("poll_ms", options.poll_ms, {.min = 1, .max = 1000});
+  if (!device.ok()) return device.status();
+  return options;
+}
+
+std::unique_ptr<Turntable> MakeModbusTurntable(const DeviceInfo& info, ModbusTurntableOptions options) {
+  return std::make_unique<ModbusTurntable>(info, std::move(options));
+}
+
+ModbusLinkStats ModbusTurntableLinkStats(const Turntable& turntable) {
+  const auto* modbus = dynamic_cast<const ModbusTurntable*>(&turntable);
+  return modbus != nullptr ? modbus->link().stats() : ModbusLinkStats{};
+}
+
+void RegisterModbusTurntableBackend(DeviceRegistry* registry, ModbusOptionsHook hook) {
+  registry->AddBackend<Turntable>(
+      DeviceKind::kTurntable, "modbus", [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
+        HR_ASSIGN_OR_RETURN(ModbusTurntableOptions options, ParseModbusTurntableOptions(c.node));
+        if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        return MakeModbusTurntable(c.Info("Modbus turntable controller (" + options.endpoint.Describe() + ")"),
+                                   std::move(options));
+      });
+}
+
+}  // namespace hairrig
