@@ -1,5 +1,8 @@
 #include "rig/rig_config.h"
 
+#include "drivers/modbus_turntable.h"
+#include "sim_hw/sim_turntable_controller.h"
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -47,11 +50,49 @@ Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& rela
   return config;
 }
 
+namespace {
+
+// Points a modbus turntable whose host (TCP) or device (RTU) is "sim" at a
+// controller simulated by this rig's world.
+Status ServeSimulatedController(Rig* rig, const DeviceConfig& config, ModbusTurntableOptions* options) {
+  ModbusEndpoint& e = options->endpoint;
+  const bool tcp = e.transport == ModbusEndpoint::Transport::kTcp;
+  if ((tcp ? e.host : e.device) != "sim") return Status::Ok();
+  if (!rig->sim_world) {
+    return InvalidArgument(config.node.Where() + ": " + (tcp ? "host" : "device") +
+                           " 'sim' needs the rig config's sim section (the simulated world the controller drives)");
+  }
+  const SimTurntableController& controller = WorldTurntableController(*rig->sim_world);
+  const TurntableCapabilities caps = controller.capabilities();
+  options->map.max_speed_deg_s = caps.max_speed_deg_s;
+  options->map.max_accel_deg_s2 = caps.max_accel_deg_s2;
+  options->map.settle_s = caps.settle_s;
+  options->time_scale = controller.time_scale();
+  const ModbusServerOptions server_options{options->map, config.serial, e.slave_id};
+  auto server = tcp ? ModbusTurntableServer::StartTcp(rig->sim_world, server_options)
+                    : ModbusTurntableServer::StartRtu(rig->sim_world, server_options);
+  if (!server.ok()) return server.status();
+  if (tcp) {
+    e.host = (*server)->host();
+    e.port = (*server)->port();
+  } else {
+    e.device = (*server)->device_path();
+  }
+  rig->sim_servers.push_back(std::move(server).value());
+  return Status::Ok();
+}
+
+}  // namespace
+
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& build) {
   auto rig = std::make_unique<Rig>();
   rig->config = config;
   DeviceRegistry registry;
   if (build.register_backends) build.register_backends(&registry);
+  Rig* raw = rig.get();
+  RegisterModbusTurntableBackend(&registry, [raw](const DeviceConfig& c, ModbusTurntableOptions* options) {
+    return ServeSimulatedController(raw, c, options);
+  });
   if (build.simulate && !config.sim_scene_path.empty()) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));
     SimWorldOptions options;

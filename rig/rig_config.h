@@ -8,6 +8,7 @@
 
 #include "core/config.h"
 #include "drivers/registry.h"
+#include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/sim_devices.h"
 
 namespace hairrig {
@@ -35,6 +36,9 @@ Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& rela
 struct Rig {
   RigConfig config;
   std::shared_ptr<SimWorld> sim_world;  // set when the config has a sim section
+  // Protocol-level simulators this rig talks to (declared before `devices`,
+  // so they outlive the devices connected to them).
+  std::vector<std::unique_ptr<ModbusTurntableServer>> sim_servers;
   DeviceSet devices;
   // Camera name -> the trigger line it is wired to (devices.cameras[].trigger_line);
   // cameras without one are triggered in software.
@@ -49,7 +53,9 @@ struct RigBuildOptions {
 };
 
 // Builds every device (closed). The sim backend is available when the config
-// has a `sim` section.
+// has a `sim` section; so is a simulated peer for the real backends: a
+// `modbus` turntable with `host: sim` (TCP) or `device: sim` (RTU) talks to a
+// simulated controller this rig serves on loopback or a pseudo-terminal.
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

@@ -26,9 +26,31 @@ double MeanDn(const Frame& f) {
   return std::accumulate(f.data.begin(), f.data.end(), 0.0) / static_cast<double>(f.data.size());
 }
 
-TEST(SimDevices, TurntableReachesItsTargetAfterTheProfileAndSettle) {
-  auto rig = OpenDefaultRig();
+// A rig built from a config text whose sim scene is etc/scenes/default.yaml.
+std::unique_ptr<Rig> OpenRigFromText(const std::string& devices_yaml) {
+  auto root = ConfigNode::LoadString("name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n" + devices_yaml,
+                                     "etc/test-rig.yaml");
+  EXPECT_TRUE(root.ok()) << root.status().ToString();
+  RigConfig config;
+  config.path = "etc/test-rig.yaml";
+  config.sim_scene_path = "etc/scenes/default.yaml";
+  config.root = *root;
+  auto rig = BuildRig(config);
+  EXPECT_TRUE(rig.ok()) << rig.status().ToString();
+  EXPECT_TRUE((*rig)->devices.OpenAll().ok());
+  return std::move(rig).value();
+}
+
+// The in-process `sim` turntable, and the default rig's (the `modbus` driver
+// talking to the simulated controller), behave alike.
+class SimTurntableTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(SimTurntableTest, ReachesItsTargetAfterTheProfileAndSettle) {
+  auto rig = GetParam() == "default" ? OpenDefaultRig()
+                                     : OpenRigFromText("  turntable: {name: t, backend: sim, serial: SIM-TT-0001}\n"
+                                                       "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n");
   Turntable& tt = *rig->devices.turntable;
+  EXPECT_EQ(tt.info().backend, GetParam() == "default" ? "modbus" : "sim");
   ASSERT_TRUE(tt.Home(milliseconds(5000)).ok());
   ASSERT_TRUE(tt.StartMove(90.0, {30.0, 60.0}).ok());
   auto moving = tt.ReadStatus();
@@ -44,6 +66,8 @@ TEST(SimDevices, TurntableReachesItsTargetAfterTheProfileAndSettle) {
   ASSERT_TRUE(tt.StartMove(0.0, {30.0, 60.0}).ok());
   EXPECT_EQ(tt.WaitInPosition(milliseconds(1)).code(), StatusCode::kTimeout);
 }
+
+INSTANTIATE_TEST_SUITE_P(Backends, SimTurntableTest, ::testing::Values("default", "sim"));
 
 TEST(SimDevices, OneTriggerPulseExposesEveryCameraOnTheLineAtOnce) {
   auto rig = OpenDefaultRig();
@@ -113,6 +137,21 @@ TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
   ASSERT_FALSE(rig.ok());
   EXPECT_NE(rig.status().message().find("no camera with serial 'NOPE'"), std::string::npos) << rig.status().ToString();
   EXPECT_NE(rig.status().message().find("devices.cameras[0]"), std::string::npos) << rig.status().ToString();
+}
+
+TEST(SimDevices, ASimulatedModbusControllerNeedsTheSimSection) {
+  auto root = ConfigNode::LoadString(
+      "name: t\ndevices:\n  turntable: {name: t, backend: modbus, serial: TT-1, host: sim}\n"
+      "  cameras: [{name: c, backend: sim, serial: C}]\n",
+      "etc/test-rig.yaml");
+  ASSERT_TRUE(root.ok());
+  RigConfig config;
+  config.path = "etc/test-rig.yaml";
+  config.root = *root;
+  auto rig = BuildRig(config);
+  ASSERT_FALSE(rig.ok());
+  EXPECT_NE(rig.status().message().find("host 'sim' needs the rig config's sim section"), std::string::npos)
+      << rig.status().ToString();
 }
 
 }  // namespace
