@@ -1,3 +1,6 @@
+#include <pthread.h>
+#include <signal.h>
+
 #include <cstdio>
 #include <filesystem>
 
@@ -8,6 +11,7 @@
 #include "rig/cli.h"
 #include "rig/rig_config.h"
 #include "sim_hw/ground_truth.h"
+#include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/view_set.h"
 
 namespace hairrig {
@@ -76,6 +80,87 @@ Result<nlohmann::json> RenderAll(const RenderArgs& a) {
                         {"seconds_per_view", s.wall_s / std::max(1, s.views)}};
 }
 
+struct ServeArgs {
+  std::string scene;
+  std::string serial = "SIM-TT-0001";
+  int modbus_port = 0;
+  int slave_id = 1;
+  double time_scale = 1.0;
+  bool rtu = true;
+};
+
+// How an outside tool reaches each simulator, printed when they are up.
+void PrintEndpoints(const ModbusTurntableServer& tcp, const ModbusTurntableServer* rtu, const ServeArgs& a) {
+  std::printf("simulated turntable controller %s (register map: etc/rig-example.yaml)\n", a.serial.c_str());
+  std::printf("  %s\n    try: mbpoll -m tcp -p %d -a %d -0 -1 -t 4:int -B -r 10 127.0.0.1   (position, counts)\n",
+              tcp.Describe().c_str(), tcp.port(), a.slave_id);
+  if (rtu != nullptr) {
+    std::printf("  %s\n    try: mbpoll -m rtu -b 115200 -P none -a %d -0 -1 -t 4 -r 1 %s   (status bits)\n",
+                rtu->Describe().c_str(), a.slave_id, rtu->device_path().c_str());
+  }
+  std::printf("Ctrl-C stops.\n");
+  std::fflush(stdout);
+}
+
+// Runs the protocol-level simulators until SIGINT or SIGTERM.
+Result<nlohmann::json> Serve(const ServeArgs& a) {
+  std::string path = a.scene;
+  if (path.empty()) {
+    HR_ASSIGN_OR_RETURN(path, EtcPath("scenes/default.yaml"));
+  }
+  HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(path));
+  SimWorldOptions world_options;
+  world_options.time_scale = a.time_scale;
+  HR_ASSIGN_OR_RETURN(std::shared_ptr<SimWorld> world, CreateSimWorld(scene, world_options));
+  // Blocked before the servers' threads start, so that only sigwait sees them.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  const ModbusServerOptions modbus{ModbusRegisterMap{}, a.serial, a.slave_id};
+  HR_ASSIGN_OR_RETURN(auto tcp, ModbusTurntableServer::StartTcp(world, modbus, "127.0.0.1", a.modbus_port));
+  std::unique_ptr<ModbusTurntableServer> rtu;
+  if (a.rtu) {
+    HR_ASSIGN_OR_RETURN(rtu, ModbusTurntableServer::StartRtu(world, modbus));
+  }
+  PrintEndpoints(*tcp, rtu.get(), a);
+  int signal = 0;
+  sigwait(&stop_signals, &signal);
+  tcp->Stop();
+  if (rtu) rtu->Stop();
+  pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);
+  nlohmann::json servers = nlohmann::json::array();
+  for (const ModbusTurntableServer* s : {tcp.get(), rtu.get()}) {
+    if (s != nullptr) servers.push_back({{"endpoint", s->Describe()}, {"requests_served", s->requests_served()}});
+  }
+  return nlohmann::json{{"stopped_by", signal == SIGINT ? "SIGINT" : "SIGTERM"}, {"modbus", servers}};
+}
+
+void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
+  auto* serve = sim.add_subcommand("serve", "Run the protocol-level simulators for outside tools until Ctrl-C");
+  auto args = std::make_shared<ServeArgs>();
+  serve->add_option("--scene", args->scene, "scene file (default: etc/scenes/default.yaml)");
+  serve->add_option("--serial", args->serial, "the simulated turntable controller's serial number");
+  serve->add_option("--modbus-port", args->modbus_port, "Modbus TCP port on 127.0.0.1 (default: a free one)")
+      ->check(CLI::Range(0, 65535));
+  serve->add_option("--slave-id", args->slave_id, "Modbus unit id")->check(CLI::Range(1, 247));
+  serve->add_option("--time-scale", args->time_scale, "device seconds x this = wall seconds (default 1: real time)")
+      ->check(CLI::PositiveNumber);
+  serve->add_flag("!--no-rtu", args->rtu, "do not serve Modbus RTU on a pseudo-terminal");
+  serve->add_flag("--json", common.json, "print the closing summary as one JSON object");
+  serve->callback([args, &dispatch] {
+    dispatch.action = [args]() { return Serve(*args); };
+    dispatch.print_human = [](const nlohmann::json& j) {
+      std::printf("stopped (%s)\n", j["stopped_by"].get<std::string>().c_str());
+      for (const auto& s : j["modbus"]) {
+        std::printf("  %s: %ld requests served\n", s["endpoint"].get<std::string>().c_str(),
+                    s["requests_served"].get<long>());
+      }
+    };
+  });
+}
+
 }  // namespace
 
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
@@ -91,6 +176,7 @@ void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   render->add_flag("--no-noise", args->no_noise, "render without sensor noise");
   render->add_option("--threads", args->threads, "render threads for --all")->check(CLI::Range(1, 64));
   render->add_flag("--json", common.json, "print the summary as one JSON object");
+  AddServeCommand(*sim, common, dispatch);
   render->callback([args, &dispatch] {
     if (!args->all && args->view < 0) throw CLI::ValidationError("sim render", "give --view N or --all");
     dispatch.action = [args]() { return args->all ? RenderAll(*args) : RenderOne(*args); };

@@ -1,7 +1,13 @@
 // The hairrig command line as a user meets it: clear errors with non-zero exit
 // codes on bad input, JSON summaries with --json, files where it says.
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -93,6 +99,40 @@ TEST(Cli, BadArgumentsAreRefused) {
   EXPECT_NE(Hairrig("sim render --out /tmp/x.png").exit_code, 0);
   EXPECT_NE(Hairrig("sim render --view 1 --out /tmp/x.txt").exit_code, 0);
   EXPECT_NE(Hairrig("frobnicate").exit_code, 0);
+}
+
+// `hairrig sim serve` runs the simulated Modbus controller for outside tools
+// until Ctrl-C, and says how to reach it.
+TEST(Cli, SimServeAnswersMbpollUntilCtrlC) {
+  const std::string log = ::testing::TempDir() + "/sim_serve.out";
+  std::filesystem::remove(log);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen(log.c_str(), "w", stdout);
+    execl(HAIRRIG_BIN, HAIRRIG_BIN, "sim", "serve", "--no-rtu", "--time-scale", "0.01", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  std::string port;
+  for (int i = 0; i < 600 && port.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const std::string text = ReadText(log);
+    const size_t at = text.find("127.0.0.1:");
+    const size_t end = text.find(' ', at);
+    if (at != std::string::npos && end != std::string::npos) port = text.substr(at + 10, end - at - 10);
+  }
+  ASSERT_FALSE(port.empty()) << "no endpoint printed:\n" << ReadText(log);
+  const std::string mbpoll = "mbpoll -m tcp -p " + port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
+  EXPECT_EQ(std::system(mbpoll.c_str()), 0) << mbpoll;
+  kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const std::string text = ReadText(log);
+  EXPECT_NE(text.find("try: mbpoll -m tcp -p " + port), std::string::npos) << text;
+  EXPECT_NE(text.find("stopped (SIGINT)"), std::string::npos) << text;
+  EXPECT_NE(text.find(": 1 requests served"), std::string::npos) << text;
 }
 
 }  // namespace
