@@ -204,8 +204,8 @@ void RegisterModbusTurntableBackend(DeviceRegistry* registry, ModbusOptionsHook 
       DeviceKind::kTurntable, "modbus", [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
         HR_ASSIGN_OR_RETURN(ModbusTurntableOptions options, ParseModbusTurntableOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
-        return MakeModbusTurntable(c.Info("Modbus turntable controller (" + options.endpoint.Describe() + ")"),
-                                   std::move(options));
+        const DeviceInfo info = c.Info("Modbus turntable controller (" + options.endpoint.Describe() + ")");
+        return MakeModbusTurntable(info, std::move(options));
       });
 }
 

@@ -139,6 +139,17 @@ TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
   EXPECT_NE(rig.status().message().find("devices.cameras[0]"), std::string::npos) << rig.status().ToString();
 }
 
+// etc/rig-example.yaml documents a real rig; it must stay a valid config.
+TEST(SimDevices, TheExampleRealRigConfigBuilds) {
+  auto config = LoadRigConfig("etc/rig-example.yaml");
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  auto rig = BuildRig(*config);
+  ASSERT_TRUE(rig.ok()) << rig.status().ToString();
+  const DeviceInfo& tt = (*rig)->devices.turntable->info();
+  EXPECT_EQ(tt.backend, "modbus");
+  EXPECT_NE(tt.model.find("tcp 192.168.10.20:502 unit 1"), std::string::npos) << tt.model;
+}
+
 TEST(SimDevices, ASimulatedModbusControllerNeedsTheSimSection) {
   auto root = ConfigNode::LoadString(
       "name: t\ndevices:\n  turntable: {name: t, backend: modbus, serial: TT-1, host: sim}\n"
