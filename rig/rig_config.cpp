@@ -1,5 +1,6 @@
 #include "rig/rig_config.h"
 
+#include "drivers/gpio_devices.h"
 #include "drivers/modbus_turntable.h"
 #include "sim_hw/sim_turntable_controller.h"
 
@@ -89,6 +90,7 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
   rig->config = config;
   DeviceRegistry registry;
   if (build.register_backends) build.register_backends(&registry);
+  RegisterGpioBackends(&registry, MakeLibgpiodProvider());
   Rig* raw = rig.get();
   RegisterModbusTurntableBackend(&registry, [raw](const DeviceConfig& c, ModbusTurntableOptions* options) {
     return ServeSimulatedController(raw, c, options);

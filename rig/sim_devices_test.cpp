@@ -148,6 +148,8 @@ TEST(SimDevices, TheExampleRealRigConfigBuilds) {
   const DeviceInfo& tt = (*rig)->devices.turntable->info();
   EXPECT_EQ(tt.backend, "modbus");
   EXPECT_NE(tt.model.find("tcp 192.168.10.20:502 unit 1"), std::string::npos) << tt.model;
+  EXPECT_EQ((*rig)->devices.lights[0]->info().backend, "gpiod");
+  EXPECT_NE((*rig)->devices.input_lines[0]->info().model.find("line 23 of pinctrl-bcm2711"), std::string::npos);
 }
 
 TEST(SimDevices, ASimulatedModbusControllerNeedsTheSimSection) {
