@@ -1,7 +1,9 @@
 #include <cmath>
 #include <cstdio>
+#include <thread>
 
 #include "drivers/camera.h"
+#include "drivers/polled_turntable.h"
 #include "drivers/turntable.h"
 
 namespace hairrig {
@@ -29,6 +31,41 @@ std::string DegreesText(double deg) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3f deg", deg);
   return text;
+}
+
+void PolledTurntable::MoveStarted(double target_deg) {
+  target_deg_ = target_deg;
+  stopped_ = false;
+  SetState(DeviceState::kBusy);
+}
+
+void PolledTurntable::StopRequested() { stopped_ = true; }
+
+void PolledTurntable::StopDone() {
+  if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+}
+
+Status PolledTurntable::WaitUntilDone(std::chrono::milliseconds timeout, std::chrono::milliseconds period,
+                                      const std::function<Result<MotionPoll>()>& poll) {
+  using Clock = std::chrono::steady_clock;
+  const auto deadline = Clock::now() + timeout;
+  for (;;) {
+    if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + DegreesText(target_deg_));
+    HR_ASSIGN_OR_RETURN(const MotionPoll p, poll());
+    if (p.fault) {
+      return Fault(DeviceFault("the controller reports " + *p.fault + " at " + DegreesText(p.position_deg) +
+                               " on the way to " + DegreesText(target_deg_) +
+                               ": check that nothing blocks the platform, then home it again"));
+    }
+    if (p.done) break;
+    if (Clock::now() >= deadline) {
+      return Timeout(Describe() + ": not in position at " + DegreesText(target_deg_) + " within " +
+                     std::to_string(timeout.count()) + " ms (now at " + DegreesText(p.position_deg) + ")");
+    }
+    std::this_thread::sleep_for(std::min<Clock::duration>(deadline - Clock::now(), period));
+  }
+  SetState(DeviceState::kReady);
+  return Status::Ok();
 }
 
 double MoveDurationS(double distance_deg, const MotionProfile& profile) {

@@ -1,20 +1,17 @@
 #include "drivers/modbus_turntable.h"
 
-#include <atomic>
-#include <thread>
+#include "drivers/polled_turntable.h"
 
 namespace hairrig {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 bool Bit(uint16_t word, int bit) { return ((word >> bit) & 1u) != 0; }
 
-class ModbusTurntable : public Turntable {
+class ModbusTurntable : public PolledTurntable {
  public:
   ModbusTurntable(const DeviceInfo& info, ModbusTurntableOptions options)
-      : Turntable(info), options_(std::move(options)), link_(options_.endpoint) {}
+      : PolledTurntable(info), options_(std::move(options)), link_(options_.endpoint) {}
 
   const ModbusLink& link() const { return link_; }
   double time_scale() const override { return options_.time_scale; }
@@ -52,9 +49,7 @@ class ModbusTurntable : public Turntable {
   Status Home(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
     HR_RETURN_IF_ERROR(Fail(Command(options_.map.cmd_home)));
-    target_deg_ = 0;
-    stopped_ = false;
-    SetState(DeviceState::kBusy);
+    MoveStarted(0);
     return Wait(timeout, /*need_homed=*/true);
   }
 
@@ -72,9 +67,7 @@ class ModbusTurntable : public Turntable {
     HR_RETURN_IF_ERROR(Fail(WritePair(m.speed, &words[2])));
     HR_RETURN_IF_ERROR(Fail(WritePair(m.accel, &words[4])));
     HR_RETURN_IF_ERROR(Fail(Command(m.cmd_move_absolute)));
-    target_deg_ = target_deg;
-    stopped_ = false;
-    SetState(DeviceState::kBusy);
+    MoveStarted(target_deg);
     return Status::Ok();
   }
 
@@ -83,7 +76,7 @@ class ModbusTurntable : public Turntable {
     HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
     const ModbusRegisterMap& m = options_.map;
     TurntableStatus s{.position_deg = CountsToDegrees(r.position, m),
-                      .target_deg = target_deg_,
+                      .target_deg = target_deg(),
                       .moving = Bit(r.status, m.bit_moving),
                       .in_position = Bit(r.status, m.bit_in_position),
                       .homed = Bit(r.status, m.bit_homed),
@@ -99,9 +92,9 @@ class ModbusTurntable : public Turntable {
 
   Status Stop() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
-    stopped_ = true;
+    StopRequested();
     HR_RETURN_IF_ERROR(Command(options_.map.cmd_stop).WithContext(Describe() + ": stop"));
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    StopDone();
     return Status::Ok();
   }
 
@@ -144,36 +137,22 @@ class ModbusTurntable : public Turntable {
 
   // Polls the status registers until in position (and homed when asked).
   Status Wait(std::chrono::milliseconds timeout, bool need_homed) {
-    const auto deadline = Clock::now() + timeout;
     const ModbusRegisterMap& m = options_.map;
-    for (;;) {
-      if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + DegreesText(target_deg_));
+    return WaitUntilDone(timeout, std::chrono::milliseconds(options_.poll_ms), [&]() -> Result<MotionPoll> {
       HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
-      const double at_deg = CountsToDegrees(r.position, m);
+      MotionPoll p;
+      p.position_deg = CountsToDegrees(r.position, m);
       if (Bit(r.status, m.bit_fault)) {
-        return Fault(DeviceFault("the controller reports fault code " + std::to_string(r.fault_code) + " at " +
-                                 DegreesText(at_deg) + " on the way to " + DegreesText(target_deg_) +
-                                 " (reference profile: 1 stall, 2 limits): check that nothing blocks the platform, "
-                                 "then home it again"));
+        p.fault = "fault code " + std::to_string(r.fault_code) + " (reference profile: 1 stall, 2 limits)";
       }
-      const bool done = Bit(r.status, m.bit_in_position) && !Bit(r.status, m.bit_moving) &&
-                        (!need_homed || Bit(r.status, m.bit_homed));
-      if (done) break;
-      if (Clock::now() >= deadline) {
-        return Timeout(Describe() + ": not in position at " + DegreesText(target_deg_) + " within " +
-                       std::to_string(timeout.count()) + " ms (now at " + DegreesText(at_deg) + ")");
-      }
-      std::this_thread::sleep_for(
-          std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(options_.poll_ms)));
-    }
-    SetState(DeviceState::kReady);
-    return Status::Ok();
+      p.done = Bit(r.status, m.bit_in_position) && !Bit(r.status, m.bit_moving) &&
+               (!need_homed || Bit(r.status, m.bit_homed));
+      return p;
+    });
   }
 
   ModbusTurntableOptions options_;
   ModbusLink link_;
-  double target_deg_ = 0;
-  std::atomic<bool> stopped_{false};
 };
 
 }  // namespace

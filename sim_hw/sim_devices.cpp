@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "drivers/always_present_device.h"
+#include "drivers/polled_turntable.h"
 #include "drivers/trigger_bus.h"
 #include "sim_hw/sim_turntable_controller.h"
 
@@ -327,7 +328,7 @@ class SimDevice : public AlwaysPresentDevice<Base> {
   std::shared_ptr<SimWorld> world_;
 };
 
-class SimTurntable : public SimDevice<Turntable> {
+class SimTurntable : public SimDevice<PolledTurntable> {
  public:
   SimTurntable(DeviceInfo info, std::shared_ptr<SimWorld> world)
       : SimDevice(std::move(info), world), controller_(world->turntable_controller()) {}
@@ -335,9 +336,7 @@ class SimTurntable : public SimDevice<Turntable> {
   Status Home(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
     controller_.StartHome();
-    target_deg_ = 0;
-    stopped_ = false;
-    SetState(DeviceState::kBusy);
+    MoveStarted(0);
     return WaitInPosition(timeout);
   }
   Status StartMove(double target_deg, const MotionProfile& p) override {
@@ -346,16 +345,14 @@ class SimTurntable : public SimDevice<Turntable> {
     controller_.ClearFault();
     const TurntableFaultCode refused = controller_.StartMove(target_deg, p);
     if (refused != TurntableFaultCode::kNone) return Fault(DeviceFault(TurntableFaultCodeName(refused)));
-    target_deg_ = target_deg;
-    stopped_ = false;
-    SetState(DeviceState::kBusy);
+    MoveStarted(target_deg);
     return Status::Ok();
   }
   Result<TurntableStatus> ReadStatus() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
     const TurntableControllerStatus c = controller_.Poll();
     TurntableStatus s{.position_deg = c.position_deg,
-                      .target_deg = target_deg_,
+                      .target_deg = target_deg(),
                       .moving = c.moving,
                       .in_position = c.in_position,
                       .homed = c.homed,
@@ -367,37 +364,23 @@ class SimTurntable : public SimDevice<Turntable> {
   // another thread (an e-stop) ends the wait at once.
   Status WaitInPosition(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
-    const auto deadline = Clock::now() + timeout;
-    for (;;) {
-      if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + DegreesText(target_deg_));
+    return WaitUntilDone(timeout, std::chrono::milliseconds(2), [this]() -> Result<MotionPoll> {
       const TurntableControllerStatus c = controller_.Poll();
-      if (c.fault != TurntableFaultCode::kNone) {
-        return Fault(DeviceFault(std::string("the controller reports ") + TurntableFaultCodeName(c.fault) + " at " +
-                                 DegreesText(c.position_deg) + " on the way to " + DegreesText(target_deg_) +
-                                 ": check that nothing blocks the platform, then home it again"));
-      }
-      if (c.in_position) break;
-      if (Clock::now() >= deadline) {
-        return Timeout(Describe() + ": not in position at " + DegreesText(target_deg_) + " within " +
-                       std::to_string(timeout.count()) + " ms (now at " + DegreesText(c.position_deg) + ")");
-      }
-      std::this_thread::sleep_for(std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(2)));
-    }
-    SetState(DeviceState::kReady);
-    return Status::Ok();
+      MotionPoll p{.position_deg = c.position_deg, .done = c.in_position, .fault = std::nullopt};
+      if (c.fault != TurntableFaultCode::kNone) p.fault = TurntableFaultCodeName(c.fault);
+      return p;
+    });
   }
   Status Stop() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
     controller_.Stop();
-    stopped_ = true;
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+    StopRequested();
+    StopDone();
     return Status::Ok();
   }
 
  private:
   SimTurntableController& controller_;
-  double target_deg_ = 0;
-  std::atomic<bool> stopped_{false};
 };
 
 class SimLight : public SimDevice<Light> {
