@@ -292,6 +292,13 @@ std::vector<ConfigNode> ConfigNode::Items(std::string_view key) const {
   return OptionalItems(key);
 }
 
+std::vector<std::string> ConfigNode::Keys() const {
+  std::vector<std::string> keys;
+  if (!impl_->node.IsMap()) return keys;
+  for (const auto& kv : impl_->node) keys.push_back(kv.first.Scalar());
+  return keys;
+}
+
 void ConfigNode::AllowOnlyKeys(std::initializer_list<const char*> allowed) const {
   if (!impl_->node.IsMap()) return;
   for (const auto& kv : impl_->node) {

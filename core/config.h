@@ -68,6 +68,8 @@ class ConfigNode {
   std::vector<ConfigNode> Items(std::string_view key) const;  // required sequence of maps
   std::vector<ConfigNode> OptionalItems(std::string_view key) const;
 
+  // The keys of this map, in file order; empty for a non-map.
+  std::vector<std::string> Keys() const;
   // Records an error for any key of this map not in `allowed` (catches typos).
   void AllowOnlyKeys(std::initializer_list<const char*> allowed) const;
   // Records an error at this node's field `key` (or the node itself for "").

@@ -48,6 +48,13 @@ TEST(Config, ItemsCarryTheirIndexInThePath) {
   EXPECT_NE(root->status().message().find("cams[1].w"), std::string::npos) << root->status().message();
 }
 
+TEST(Config, KeysComeInFileOrder) {
+  auto root = ConfigNode::LoadString("settings: {iso: 100, aperture: 8, imageformat: RAW}\nx: 1\n", "f.yaml");
+  ASSERT_TRUE(root.ok());
+  EXPECT_EQ(root->Child("settings").Keys(), (std::vector<std::string>{"iso", "aperture", "imageformat"}));
+  EXPECT_TRUE(root->OptionalChild("absent").Keys().empty());
+}
+
 TEST(Config, MissingFileIsNotFound) {
   auto root = ConfigNode::LoadFile("/nonexistent/rig.yaml");
   EXPECT_EQ(root.status().code(), StatusCode::kNotFound);

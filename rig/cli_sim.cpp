@@ -12,6 +12,8 @@
 #include "rig/rig_config.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/modbus_turntable_server.h"
+#include "sim_hw/sim_dslr_protocol.h"
+#include "sim_hw/sim_dslr_server.h"
 #include "sim_hw/view_set.h"
 
 namespace hairrig {
@@ -87,6 +89,7 @@ struct ServeArgs {
   int slave_id = 1;
   double time_scale = 1.0;
   bool rtu = true;
+  bool dslr = true;
 };
 
 // How an outside tool reaches each simulator, printed when they are up.
@@ -98,8 +101,15 @@ void PrintEndpoints(const ModbusTurntableServer& tcp, const ModbusTurntableServe
     std::printf("  %s\n    try: mbpoll -m rtu -b 115200 -P none -a %d -0 -1 -t 4 -r 1 %s   (status bits)\n",
                 rtu->Describe().c_str(), a.slave_id, rtu->device_path().c_str());
   }
-  std::printf("Ctrl-C stops.\n");
-  std::fflush(stdout);
+}
+
+void PrintDslrs(const std::vector<std::unique_ptr<SimDslrServer>>& dslrs, const std::string& camlibs) {
+  if (dslrs.empty()) return;
+  std::printf("simulated DSLRs (libgphoto2 camlib in %s)\n  export CAMLIBS=%s\n", camlibs.c_str(), camlibs.c_str());
+  for (const auto& d : dslrs) {
+    std::printf("  %s\n    try: gphoto2 --camera '%s' --port %s --capture-image-and-download\n",
+                d->Describe().c_str(), sim_dslr::kModel, d->port().c_str());
+  }
 }
 
 // Runs the protocol-level simulators until SIGINT or SIGTERM.
@@ -124,17 +134,39 @@ Result<nlohmann::json> Serve(const ServeArgs& a) {
   if (a.rtu) {
     HR_ASSIGN_OR_RETURN(rtu, ModbusTurntableServer::StartRtu(world, modbus));
   }
+  // One simulated DSLR per scene camera, rendering that camera's view.
+  std::vector<std::unique_ptr<SimDslrServer>> dslrs;
+  std::string camlibs;
+  if (a.dslr) {
+    HR_ASSIGN_OR_RETURN(camlibs, SimDslrCamlibFolder());
+    for (size_t i = 0; i < scene.cameras.size(); ++i) {
+      SimDslrOptions options;
+      options.serial = scene.cameras[i].serial;
+      options.scene_camera = static_cast<int>(i);
+      HR_ASSIGN_OR_RETURN(auto server, SimDslrServer::Start(world, options));
+      dslrs.push_back(std::move(server));
+    }
+  }
   PrintEndpoints(*tcp, rtu.get(), a);
+  PrintDslrs(dslrs, camlibs);
+  std::printf("Ctrl-C stops.\n");
+  std::fflush(stdout);
   int signal = 0;
   sigwait(&stop_signals, &signal);
   tcp->Stop();
   if (rtu) rtu->Stop();
+  nlohmann::json cameras = nlohmann::json::array();
+  for (const auto& d : dslrs) {
+    d->Stop();
+    cameras.push_back({{"serial", d->serial()}, {"port", d->port()}, {"shots", d->shots()}});
+  }
   pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);
   nlohmann::json servers = nlohmann::json::array();
   for (const ModbusTurntableServer* s : {tcp.get(), rtu.get()}) {
     if (s != nullptr) servers.push_back({{"endpoint", s->Describe()}, {"requests_served", s->requests_served()}});
   }
-  return nlohmann::json{{"stopped_by", signal == SIGINT ? "SIGINT" : "SIGTERM"}, {"modbus", servers}};
+  return nlohmann::json{
+      {"stopped_by", signal == SIGINT ? "SIGINT" : "SIGTERM"}, {"modbus", servers}, {"dslr", cameras}};
 }
 
 void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
@@ -148,6 +180,7 @@ void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
   serve->add_option("--time-scale", args->time_scale, "device seconds x this = wall seconds (default 1: real time)")
       ->check(CLI::PositiveNumber);
   serve->add_flag("!--no-rtu", args->rtu, "do not serve Modbus RTU on a pseudo-terminal");
+  serve->add_flag("!--no-dslr", args->dslr, "do not serve the simulated DSLRs (one per scene camera)");
   serve->add_flag("--json", common.json, "print the closing summary as one JSON object");
   serve->callback([args, &dispatch] {
     dispatch.action = [args]() { return Serve(*args); };
@@ -156,6 +189,10 @@ void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
       for (const auto& s : j["modbus"]) {
         std::printf("  %s: %ld requests served\n", s["endpoint"].get<std::string>().c_str(),
                     s["requests_served"].get<long>());
+      }
+      for (const auto& d : j["dslr"]) {
+        std::printf("  simulated DSLR %s at %s: %d shots\n", d["serial"].get<std::string>().c_str(),
+                    d["port"].get<std::string>().c_str(), d["shots"].get<int>());
       }
     };
   });

@@ -1,7 +1,10 @@
 #include "rig/rig_config.h"
 
+#include "drivers/gphoto2_camera.h"
 #include "drivers/gpio_devices.h"
 #include "drivers/modbus_turntable.h"
+#include "sim_hw/sim_dslr_protocol.h"
+#include "sim_hw/sim_dslr_server.h"
 #include "sim_hw/sim_turntable_controller.h"
 
 #include <cstdlib>
@@ -79,7 +82,39 @@ Status ServeSimulatedController(Rig* rig, const DeviceConfig& config, ModbusTurn
   } else {
     e.device = (*server)->device_path();
   }
-  rig->sim_servers.push_back(std::move(server).value());
+  rig->sim_modbus_servers.push_back(std::move(server).value());
+  return Status::Ok();
+}
+
+// Points a gphoto2 camera whose port is "sim" at a simulated DSLR this rig
+// serves, rendering the scene camera with the device's serial.
+Status ServeSimulatedDslr(Rig* rig, const DeviceConfig& config, Gphoto2CameraOptions* options) {
+  if (options->port != "sim") return Status::Ok();
+  if (!rig->sim_world) {
+    return InvalidArgument(config.node.Where() +
+                           ": port 'sim' needs the rig config's sim section (the simulated world the camera renders)");
+  }
+  const Scene& scene = WorldRenderer(*rig->sim_world).scene();
+  const int index = scene.FindCamera(config.serial);
+  if (index < 0) {
+    return NotFound(config.node.Where() + ": the simulated scene (" + scene.path + ") has no camera with serial '" +
+                    config.serial + "'");
+  }
+  HR_RETURN_IF_ERROR(ExportSimDslrCamlibs());
+  SimDslrOptions server_options;
+  server_options.serial = config.serial;
+  server_options.scene_camera = index;
+  server_options.trigger_line = config.node.String("trigger_line", "");
+  HR_ASSIGN_OR_RETURN(auto server, SimDslrServer::Start(rig->sim_world, server_options));
+  const SceneCamera& camera = scene.cameras[static_cast<size_t>(index)];
+  options->port = server->port();
+  options->model = sim_dslr::kModel;
+  options->width_px = camera.intrinsics.width_px;
+  options->height_px = camera.intrinsics.height_px;
+  options->readout_s = scene.camera_readout_s;
+  options->download_s = scene.camera_download_s;
+  options->time_scale = WorldTimeScale(*rig->sim_world);
+  rig->sim_dslr_servers.push_back(std::move(server));
   return Status::Ok();
 }
 
@@ -94,6 +129,9 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
   Rig* raw = rig.get();
   RegisterModbusTurntableBackend(&registry, [raw](const DeviceConfig& c, ModbusTurntableOptions* options) {
     return ServeSimulatedController(raw, c, options);
+  });
+  RegisterGphoto2Backend(&registry, [raw](const DeviceConfig& c, Gphoto2CameraOptions* options) {
+    return ServeSimulatedDslr(raw, c, options);
   });
   if (build.simulate && !config.sim_scene_path.empty()) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));

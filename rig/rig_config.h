@@ -9,6 +9,7 @@
 #include "core/config.h"
 #include "drivers/registry.h"
 #include "sim_hw/modbus_turntable_server.h"
+#include "sim_hw/sim_dslr_server.h"
 #include "sim_hw/sim_devices.h"
 
 namespace hairrig {
@@ -38,7 +39,8 @@ struct Rig {
   std::shared_ptr<SimWorld> sim_world;  // set when the config has a sim section
   // Protocol-level simulators this rig talks to (declared before `devices`,
   // so they outlive the devices connected to them).
-  std::vector<std::unique_ptr<ModbusTurntableServer>> sim_servers;
+  std::vector<std::unique_ptr<ModbusTurntableServer>> sim_modbus_servers;
+  std::vector<std::unique_ptr<SimDslrServer>> sim_dslr_servers;
   DeviceSet devices;
   // Camera name -> the trigger line it is wired to (devices.cameras[].trigger_line);
   // cameras without one are triggered in software.
@@ -55,7 +57,10 @@ struct RigBuildOptions {
 // Builds every device (closed). The sim backend is available when the config
 // has a `sim` section; so is a simulated peer for the real backends: a
 // `modbus` turntable with `host: sim` (TCP) or `device: sim` (RTU) talks to a
-// simulated controller this rig serves on loopback or a pseudo-terminal.
+// simulated controller this rig serves on loopback or a pseudo-terminal, and a
+// `gphoto2` camera with `port: sim` is a simulated DSLR (sim_hw/sim_dslr_server.h)
+// rendering the scene camera with its serial, reached through the project's
+// camlib (CAMLIBS is set for this process).
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

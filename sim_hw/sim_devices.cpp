@@ -207,9 +207,36 @@ Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWo
   return std::make_shared<SimWorld>(std::move(renderer), options);
 }
 const Renderer& WorldRenderer(const SimWorld& world) { return world.renderer(); }
+double WorldTimeScale(const SimWorld& world) { return world.time_scale(); }
 double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); }
 int WorldDiskFullAfterFrames(const SimWorld& world) { return world.DiskFullAfterFrames(); }
 SimTurntableController& WorldTurntableController(SimWorld& world) { return world.turntable_controller(); }
+TriggerBus& WorldTriggers(SimWorld& world) { return world.triggers(); }
+
+WorldExposure ExposeWorldNow(const SimWorld& world) {
+  return {world.AngleDeg(), world.LightLevels(), NowNs()};
+}
+
+Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
+                                    double exposure_s, double gain_db, uint64_t noise_seed) {
+  RenderOptions o;
+  o.light_levels = exposure.light_levels;
+  o.exposure_s = exposure_s;
+  o.gain_db = gain_db;
+  o.noise = world.noise();
+  o.noise_seed = noise_seed;
+  HR_ASSIGN_OR_RETURN(RenderedView view, world.renderer().Render(scene_camera, exposure.angle_deg, o));
+  return std::move(view.image);
+}
+
+uint64_t FrameNoiseSeed(const SimWorld& world, const std::string& serial, uint64_t sequence) {
+  return std::hash<std::string>{}(serial) ^ (sequence * 0x9E3779B97F4A7C15ull) ^ world.scene().seed;
+}
+
+const SimFault* NextCameraFault(SimWorld& world, const std::string& serial) {
+  return world.NextEventFault(serial,
+                              {SimFaultKind::kDropFrame, SimFaultKind::kCameraGone, SimFaultKind::kDownloadTimeout});
+}
 
 // --- the turntable controller ------------------------------------------------
 
@@ -541,19 +568,16 @@ class SimCamera : public SimDevice<Camera> {
  private:
   struct Job {
     uint64_t sequence;
-    double angle_deg;
-    std::vector<double> lights;
+    WorldExposure exposure;
     CaptureSettings settings;
-    int64_t trigger_ns;
     double extra_delay_s = 0;  // download_timeout fault, device seconds
   };
 
   void OnTrigger() {
     if (gone_) return;
     // The exposure sees the world as it is now; rendering and transfer come after.
-    Job job{0, world_->AngleDeg(), world_->LightLevels(), settings_, NowNs()};
-    const SimFault* fault = world_->NextEventFault(
-        info().serial, {SimFaultKind::kDropFrame, SimFaultKind::kCameraGone, SimFaultKind::kDownloadTimeout});
+    Job job{0, ExposeWorldNow(*world_), settings_};
+    const SimFault* fault = NextCameraFault(*world_, info().serial);
     std::lock_guard<std::mutex> lock(mutex_);
     job.sequence = sequence_++;
     if (fault && fault->kind == SimFaultKind::kDropFrame) return;
@@ -625,19 +649,15 @@ class SimCamera : public SimDevice<Camera> {
   }
 
   Result<Frame> RenderFrame(const Job& job) const {
-    RenderOptions o;
-    o.light_levels = job.lights;
-    o.exposure_s = job.settings.exposure_s;
-    o.gain_db = job.settings.gain_db;
-    o.noise = world_->noise();
-    o.noise_seed = std::hash<std::string>{}(info().serial) ^ (job.sequence * 0x9E3779B97F4A7C15ull) ^ world_->scene().seed;
-    HR_ASSIGN_OR_RETURN(RenderedView view, world_->renderer().Render(scene_camera_, job.angle_deg, o));
+    HR_ASSIGN_OR_RETURN(cv::Mat image,
+                        RenderWorldExposure(*world_, scene_camera_, job.exposure, job.settings.exposure_s,
+                                            job.settings.gain_db, FrameNoiseSeed(*world_, info().serial, job.sequence)));
     cv::Mat out;
     switch (job.settings.format) {
-      case PixelFormat::kBgr8: out = view.image; break;
-      case PixelFormat::kRgb8: cv::cvtColor(view.image, out, cv::COLOR_BGR2RGB); break;
-      case PixelFormat::kMono8: cv::cvtColor(view.image, out, cv::COLOR_BGR2GRAY); break;
-      case PixelFormat::kBayerRG8: out = ToBayerRG(view.image); break;
+      case PixelFormat::kBgr8: out = image; break;
+      case PixelFormat::kRgb8: cv::cvtColor(image, out, cv::COLOR_BGR2RGB); break;
+      case PixelFormat::kMono8: cv::cvtColor(image, out, cv::COLOR_BGR2GRAY); break;
+      case PixelFormat::kBayerRG8: out = ToBayerRG(image); break;
       case PixelFormat::kEncoded: return Internal("encoded output is not simulated");
     }
     Frame f;
@@ -649,7 +669,7 @@ class SimCamera : public SimDevice<Camera> {
     f.data.assign(out.datastart, out.dataend);
     f.exposure_s = job.settings.exposure_s;
     f.gain_db = job.settings.gain_db;
-    f.trigger_time_ns = job.trigger_ns;
+    f.trigger_time_ns = job.exposure.trigger_ns;
     return f;
   }
 

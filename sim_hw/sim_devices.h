@@ -20,6 +20,7 @@
 #include <memory>
 
 #include "drivers/registry.h"
+#include "drivers/trigger_bus.h"
 #include "sim_hw/renderer.h"
 #include "sim_hw/sim_faults.h"
 
@@ -36,6 +37,7 @@ struct SimWorldOptions {
 // Creates the world (renderer included) for `scene`.
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options);
 const Renderer& WorldRenderer(const SimWorld& world);
+double WorldTimeScale(const SimWorld& world);  // wall seconds per simulated second
 double WorldTurntableAngleDeg(const SimWorld& world);  // measured angle now
 // Number of stored frames after which the simulated disk is full (a
 // `disk_full` fault); -1 when no such fault is configured.
@@ -44,6 +46,27 @@ int WorldDiskFullAfterFrames(const SimWorld& world);
 // the `sim` turntable and the simulated Modbus controller drive.
 class SimTurntableController;
 SimTurntableController& WorldTurntableController(SimWorld& world);
+
+// What a camera triggered now sees: the turntable angle and light levels at
+// the start of its exposure (steady-clock time `trigger_ns`).
+struct WorldExposure {
+  double angle_deg = 0;
+  std::vector<double> light_levels;
+  int64_t trigger_ns = 0;
+};
+WorldExposure ExposeWorldNow(const SimWorld& world);
+// Renders scene camera `scene_camera` for `exposure` as 8-bit BGR, with the
+// world's noise setting; the same seed gives the same noise.
+Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
+                                    double exposure_s, double gain_db, uint64_t noise_seed);
+// Noise seed of frame `sequence` of camera `serial`: distinct per camera and frame.
+uint64_t FrameNoiseSeed(const SimWorld& world, const std::string& serial, uint64_t sequence);
+// The world's software trigger lines: simulated trigger lines pulse them and
+// simulated cameras armed for a line listen on them.
+TriggerBus& WorldTriggers(SimWorld& world);
+// Counts one more trigger of camera `serial` and returns the configured
+// camera fault (drop_frame, camera_gone, download_timeout) that hits it, or nullptr.
+const SimFault* NextCameraFault(SimWorld& world, const std::string& serial);
 
 // Registers the `sim` backend of every device kind; devices built from it act on `world`.
 void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world);

@@ -1,0 +1,355 @@
+// The `gphoto2` camera backend against the simulated DSLR, through the
+// unmodified libgphoto2 loading the project's camlib (CAMLIBS); and the
+// simulated DSLR against an independent client, the `gphoto2` command.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "drivers/gphoto2_camera.h"
+#include "drivers/light.h"
+#include "sim_hw/scene.h"
+#include "sim_hw/sim_devices.h"
+#include "sim_hw/sim_dslr_protocol.h"
+#include "sim_hw/sim_dslr_server.h"
+
+namespace hairrig {
+namespace {
+
+using std::chrono::milliseconds;
+constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
+constexpr char kSerial[] = "SIM-CAM-UPPER";
+
+std::shared_ptr<SimWorld> MakeWorld(std::vector<SimFault> faults = {}) {
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
+  SimWorldOptions options;
+  options.time_scale = 0.01;
+  options.noise = false;
+  options.faults = std::move(faults);
+  auto world = CreateSimWorld(*scene, options);
+  EXPECT_TRUE(world.ok()) << world.status().ToString();
+  return std::move(world).value();
+}
+
+struct Bench {
+  std::shared_ptr<SimWorld> world;
+  std::vector<std::unique_ptr<Device>> lights;  // the scene's panels, switched on so that the views are lit
+  std::unique_ptr<SimDslrServer> server;
+  std::unique_ptr<Camera> camera;
+};
+
+Gphoto2CameraOptions ClientOptions(const SimDslrServer& server) {
+  Gphoto2CameraOptions o;
+  o.port = server.port();
+  o.model = sim_dslr::kModel;
+  o.width_px = 1200;
+  o.height_px = 1600;
+  o.time_scale = 0.01;
+  o.busy_backoff_s = 0.5;  // x time_scale
+  return o;
+}
+
+Bench StartBench(std::vector<SimFault> faults = {}, const std::string& trigger_line = "",
+                 Gphoto2CameraOptions* override_options = nullptr) {
+  Bench b;
+  b.world = MakeWorld(std::move(faults));
+  DeviceRegistry registry;
+  RegisterSimBackends(&registry, b.world);
+  for (const char* name : {"top", "bottom"}) {
+    auto node = ConfigNode::LoadString(std::string("{name: ") + name + ", backend: sim, serial: L}", "lights");
+    auto light = registry.Create({DeviceKind::kLight, name, "sim", "L", *node});
+    EXPECT_TRUE(light.ok()) << light.status().ToString();
+    if (!light.ok()) continue;
+    EXPECT_TRUE((*light)->Open().ok());
+    EXPECT_TRUE(static_cast<Light&>(**light).SetOn(true).ok());
+    b.lights.push_back(std::move(light).value());
+  }
+  EXPECT_TRUE(ExportSimDslrCamlibs().ok());
+  SimDslrOptions options;
+  options.serial = kSerial;
+  options.scene_camera = 0;
+  options.trigger_line = trigger_line;
+  options.reply_timeout_ms = 500;
+  auto server = SimDslrServer::Start(b.world, options);
+  EXPECT_TRUE(server.ok()) << server.status().ToString();
+  b.server = std::move(server).value();
+  Gphoto2CameraOptions client = override_options ? *override_options : ClientOptions(*b.server);
+  client.port = b.server->port();
+  b.camera = MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"}, client);
+  return b;
+}
+
+Result<Frame> ShootOnce(Camera& camera, double exposure_s = 0.02, double gain_db = 0) {
+  CaptureSettings s;
+  s.exposure_s = exposure_s;
+  s.gain_db = gain_db;
+  HR_RETURN_IF_ERROR(camera.Configure(s));
+  HR_RETURN_IF_ERROR(camera.Arm());
+  HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
+  return camera.WaitFrame(kFrameWait);
+}
+
+// PSNR of two 8-bit images of one size, in dB.
+double Psnr(const cv::Mat& a, const cv::Mat& b) {
+  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
+  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12));
+}
+
+TEST(Gphoto2Camera, OpensBySerialShootsAndDownloadsTheRenderedView) {
+  Bench b = StartBench();
+  ASSERT_TRUE(b.camera->Open().ok());
+  ASSERT_TRUE(b.camera->HealthCheck().ok());
+  const WorldExposure exposure = ExposeWorldNow(*b.world);
+  auto frame = ShootOnce(*b.camera, 0.02, 6.0);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_EQ(frame->format, PixelFormat::kEncoded);
+  EXPECT_EQ(frame->encoding, "jpg");
+  EXPECT_EQ(frame->camera_serial, kSerial);
+  EXPECT_NEAR(frame->exposure_s, 0.02, 1e-9);  // "1/50" is a choice
+  EXPECT_GE(frame->trigger_time_ns, exposure.trigger_ns);
+  EXPECT_GT(frame->received_time_ns, frame->trigger_time_ns);
+  const cv::Mat decoded = cv::imdecode(frame->data, cv::IMREAD_COLOR);
+  ASSERT_EQ(decoded.cols, 1200);
+  ASSERT_EQ(decoded.rows, 1600);
+  // The JPEG is the scene camera's view at gain 6 dB (ISO 200): compare with a direct render.
+  auto reference = RenderWorldExposure(*b.world, 0, exposure, 0.02, 20 * std::log10(2.0), 0);
+  ASSERT_TRUE(reference.ok());
+  EXPECT_GT(Psnr(decoded, *reference), 35.0);
+  auto darker = RenderWorldExposure(*b.world, 0, exposure, 0.02, 0.0, 0);
+  EXPECT_LT(Psnr(decoded, *darker), Psnr(decoded, *reference) - 6.0);
+  EXPECT_GT(cv::mean(decoded)[1], 20.0);  // lit, not a black frame
+  EXPECT_EQ(b.server->shots(), 1);
+}
+
+TEST(Gphoto2Camera, SecondShotIsNumberedOnAndTheCardIsEmptiedAfterDownload) {
+  Gphoto2CameraOptions o;
+  Bench b = StartBench({}, "", nullptr);
+  o = ClientOptions(*b.server);
+  o.settings = {{"capturetarget", "Memory card"}, {"imageformat", "Large Normal JPEG"}};
+  b.camera = MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"}, o);
+  ASSERT_TRUE(b.camera->Open().ok());
+  CaptureSettings s;
+  ASSERT_TRUE(b.camera->Configure(s).ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
+  ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
+  ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
+  auto first = b.camera->WaitFrame(kFrameWait);
+  auto second = b.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(first.ok() && second.ok());
+  EXPECT_EQ(first->sequence, 0u);
+  EXPECT_EQ(second->sequence, 1u);
+  EXPECT_LE(first->trigger_time_ns, second->trigger_time_ns);
+  EXPECT_EQ(b.server->shots(), 2);
+  // Deleted after download even on the memory card: a third wait finds nothing.
+  EXPECT_EQ(b.camera->WaitFrame(milliseconds(200)).status().code(), StatusCode::kTimeout);
+}
+
+TEST(Gphoto2Camera, SettingsOutsideTheChoicesAreRefusedWithTheChoices) {
+  Bench b = StartBench();
+  Gphoto2CameraOptions o = ClientOptions(*b.server);
+  o.settings = {{"iso", "300"}};
+  auto bad = MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"}, o);
+  Status s = bad->Open();
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << s.ToString();
+  EXPECT_NE(s.message().find("settings.iso"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("100, 200, 400"), std::string::npos) << s.message();
+  bad.reset();  // releases the camera
+
+  o.settings = {{"whitebalance", "Daylight"}};
+  auto unknown = MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"}, o);
+  s = unknown->Open();
+  EXPECT_NE(s.message().find("no setting named 'whitebalance'"), std::string::npos) << s.message();
+}
+
+TEST(Gphoto2Camera, AnotherSerialAtThePortIsRefusedNamingBoth) {
+  Bench b = StartBench();
+  auto other = MakeGphoto2Camera({DeviceKind::kCamera, "lower", "gphoto2", "SIM-CAM-LOWER", "test DSLR"},
+                                 ClientOptions(*b.server));
+  const Status s = other->Open();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable);
+  EXPECT_NE(s.message().find("SIM-CAM-UPPER"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("SIM-CAM-LOWER"), std::string::npos) << s.message();
+}
+
+TEST(Gphoto2Camera, ALinePulseFiresTheShutterAndTheFileArrivesAsAnEvent) {
+  Bench b = StartBench({}, "trig0");
+  ASSERT_TRUE(b.camera->Open().ok());
+  CaptureSettings s;
+  s.trigger = TriggerSource::kLine;
+  s.trigger_line = "trig0";
+  ASSERT_TRUE(b.camera->Configure(s).ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
+  EXPECT_EQ(b.camera->WaitFrame(milliseconds(100)).status().code(), StatusCode::kTimeout);
+  WorldTriggers(*b.world).Fire("trig0");
+  auto frame = b.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_FALSE(frame->data.empty());
+  EXPECT_LE(frame->trigger_time_ns, frame->received_time_ns);
+}
+
+TEST(Gphoto2Camera, ABusyCameraIsRetriedThenReportedBusy) {
+  Bench b = StartBench();
+  ASSERT_TRUE(b.camera->Open().ok());
+  b.server->InjectFault(SimDslrServer::Fault::kBusy, 2);
+  auto frame = ShootOnce(*b.camera);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();  // third attempt succeeds
+
+  b.server->InjectFault(SimDslrServer::Fault::kBusy, 3);
+  const Status s = b.camera->SoftwareTrigger();
+  EXPECT_EQ(s.code(), StatusCode::kDeviceFault) << s.ToString();
+  EXPECT_NE(s.message().find("busy"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("3 attempts"), std::string::npos) << s.message();
+  EXPECT_TRUE(b.camera->SoftwareTrigger().ok());  // still usable
+}
+
+TEST(Gphoto2Camera, NoReplyIsATimeoutAndTheCameraStaysUsable) {
+  Bench b = StartBench();
+  ASSERT_TRUE(b.camera->Open().ok());
+  ASSERT_TRUE(b.camera->Configure({}).ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
+  b.server->InjectFault(SimDslrServer::Fault::kNoReply, 1);
+  const Status s = b.camera->SoftwareTrigger();
+  EXPECT_EQ(s.code(), StatusCode::kTimeout) << s.ToString();
+  EXPECT_NE(s.message().find("did not answer"), std::string::npos) << s.message();
+  EXPECT_EQ(b.camera->state(), DeviceState::kBusy);
+  ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
+  EXPECT_TRUE(b.camera->WaitFrame(kFrameWait).ok());
+}
+
+TEST(Gphoto2Camera, ACameraHeldByAnotherClientIsReportedClaimed) {
+  Bench b = StartBench();
+  ASSERT_TRUE(b.camera->Open().ok());
+  auto second = MakeGphoto2Camera({DeviceKind::kCamera, "upper2", "gphoto2", kSerial, "test DSLR"},
+                                  ClientOptions(*b.server));
+  Status s = second->Open();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("claimed by process"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("another process holds the camera"), std::string::npos) << s.message();
+  ASSERT_TRUE(b.camera->Close().ok());
+  EXPECT_TRUE(second->Open().ok());  // released by the first
+}
+
+TEST(Gphoto2Camera, ADroppedCameraFaultsAndReopensWhenItIsBack) {
+  // At its 2nd shot the body drops off the bus and stays away for 1 connection attempt.
+  Bench b = StartBench({SimFault{SimFaultKind::kCameraGone, kSerial, 2, 1, 0.0}});
+  ASSERT_TRUE(b.camera->Open().ok());
+  ASSERT_TRUE(ShootOnce(*b.camera).ok());
+  Status s = b.camera->SoftwareTrigger();
+  if (s.ok()) s = b.camera->WaitFrame(kFrameWait).status();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("dropped off the bus"), std::string::npos) << s.message();
+  EXPECT_EQ(b.camera->state(), DeviceState::kFaulted);
+  s = b.camera->Open();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  ASSERT_TRUE(b.camera->Open().ok());
+  EXPECT_TRUE(ShootOnce(*b.camera).ok());
+}
+
+TEST(Gphoto2Camera, ACablePulledMidRequestFaultsAndReopens) {
+  Bench b = StartBench();
+  ASSERT_TRUE(b.camera->Open().ok());
+  b.server->InjectFault(SimDslrServer::Fault::kDisconnect, 1);
+  auto frame = ShootOnce(*b.camera);
+  ASSERT_FALSE(frame.ok());
+  EXPECT_EQ(frame.status().code(), StatusCode::kUnavailable) << frame.status().ToString();
+  ASSERT_TRUE(b.camera->Open().ok());
+  EXPECT_TRUE(ShootOnce(*b.camera).ok());
+}
+
+TEST(Gphoto2Camera, NoCameraAtThePortSaysWhatToStart) {
+  Bench b = StartBench();
+  b.server->Stop();
+  const Status s = b.camera->Open();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("sim serve"), std::string::npos) << s.message();
+}
+
+TEST(Gphoto2Camera, ConfigErrorsNameTheField) {
+  auto root = ConfigNode::LoadString("{name: c, backend: gphoto2, serial: X, port: 'disk:/tmp/x', sttings: {}}",
+                                     "rig.yaml");
+  ASSERT_TRUE(root.ok());
+  auto parsed = ParseGphoto2CameraOptions(*root);
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_NE(parsed.status().message().find("sttings"), std::string::npos) << parsed.status().message();
+  root = ConfigNode::LoadString("{name: c, backend: gphoto2, serial: X, port: 'disk:/tmp/x'}", "rig.yaml");
+  parsed = ParseGphoto2CameraOptions(*root);
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_NE(parsed.status().message().find("model"), std::string::npos) << parsed.status().message();
+}
+
+// --- the gphoto2 command against the simulated DSLR ---------------------------
+
+std::optional<std::string> RunGphoto2(const std::string& args) {
+  auto folder = SimDslrCamlibFolder();
+  if (!folder.ok()) return std::nullopt;
+  const std::string command = "CAMLIBS='" + *folder + "' gphoto2 " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return std::nullopt;
+  std::string out;
+  char buf[4096];
+  size_t n = 0;
+  while ((n = fread(buf, 1, sizeof(buf), pipe)) > 0) out.append(buf, n);
+  if (pclose(pipe) != 0) {
+    ADD_FAILURE() << "gphoto2 " << args << " failed:\n" << out;
+    return std::nullopt;
+  }
+  return out;
+}
+
+class Gphoto2Command : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::system("command -v gphoto2 >/dev/null 2>&1") != 0) {
+      GTEST_FAIL() << "the gphoto2 command is not installed: run scripts/install-deps";
+    }
+    bench_ = StartBench();
+    target_ = "--camera '" + std::string(sim_dslr::kModel) + "' --port " + bench_.server->port() + " ";
+  }
+  Bench bench_;
+  std::string target_;
+};
+
+TEST_F(Gphoto2Command, ListsTheSimulatedModel) {
+  auto out = RunGphoto2("--list-cameras");
+  ASSERT_TRUE(out);
+  EXPECT_NE(out->find(sim_dslr::kModel), std::string::npos);
+  // The system camlibs are linked beside it, so real bodies stay known.
+  EXPECT_NE(out->find("Canon EOS 5D Mark IV"), std::string::npos);
+}
+
+TEST_F(Gphoto2Command, CapturesAndDownloadsAJpegOfTheView) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hairrig-gphoto2-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "shot.jpg").string();
+  auto out = RunGphoto2(target_ + "--capture-image-and-download --force-overwrite --filename " + file);
+  ASSERT_TRUE(out);
+  const cv::Mat image = cv::imread(file, cv::IMREAD_COLOR);
+  EXPECT_EQ(image.cols, 1200) << *out;
+  EXPECT_EQ(image.rows, 1600) << *out;
+  EXPECT_EQ(bench_.server->shots(), 1);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(Gphoto2Command, SetConfigIsReadBackByGetConfig) {
+  ASSERT_TRUE(RunGphoto2(target_ + "--set-config iso=800 --set-config shutterspeed=1/100"));
+  auto iso = RunGphoto2(target_ + "--get-config iso");
+  ASSERT_TRUE(iso);
+  EXPECT_NE(iso->find("Current: 800"), std::string::npos) << *iso;
+  auto serial = RunGphoto2(target_ + "--get-config serialnumber");
+  ASSERT_TRUE(serial);
+  EXPECT_NE(serial->find(std::string("Current: ") + kSerial), std::string::npos) << *serial;
+  // The value refused by the camera is refused by the command too.
+  const std::string refused = "CAMLIBS='" + *SimDslrCamlibFolder() + "' gphoto2 " + target_ +
+                              "--set-config iso=123 >/dev/null 2>&1";
+  EXPECT_NE(std::system(refused.c_str()), 0);
+}
+
+}  // namespace
+}  // namespace hairrig
