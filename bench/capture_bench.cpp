@@ -39,9 +39,9 @@ std::string TempDir(const std::string& name) {
 }
 
 int Efficiency() {
-  std::printf("# capture efficiency, default plan on the default simulated rig (etc/rig.yaml)\n");
+  std::printf("# capture efficiency, default plan on the default simulated rig (etc/sim-rig.yaml)\n");
   std::printf("%-11s %8s %10s %14s %11s\n", "time_scale", "views", "wall_s", "lower_bound_s", "efficiency");
-  std::ifstream in("etc/rig.yaml");
+  std::ifstream in("etc/sim-rig.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), {});
   for (double scale : {1.0, 0.5}) {
     const std::string dir = TempDir("efficiency");

@@ -1,9 +1,9 @@
 // Reading YAML configuration with errors that name the file, line and field.
 //
-//   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile("etc/rig.yaml"));
+//   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile("etc/sim-rig.yaml"));
 //   double fx = root.Child("camera").Number("fx_px", {.min = 1});
 //   if (!root.ok()) return root.status();
-//     -> "etc/rig.yaml:12:7: field 'camera.fx_px': expected a number >= 1, got 'abc'"
+//     -> "etc/sim-rig.yaml:12:7: field 'camera.fx_px': expected a number >= 1, got 'abc'"
 //
 // Accessors never throw and never abort: a missing or malformed field records
 // the first error in state shared by every node of the document and returns a

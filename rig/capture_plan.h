@@ -1,5 +1,5 @@
 // The capture plan and its policies, read from the rig config's `plan`,
-// `retries` and `storage` sections (etc/rig.yaml documents every field).
+// `retries` and `storage` sections (etc/sim-rig.yaml documents every field).
 //
 // A plan is a list of views; a view is one camera's frame at one turntable
 // stop under one light state. Views that share the stop's angle and light

@@ -77,7 +77,7 @@ void PrintCaptureSummary(const nlohmann::json& j) {
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto* cmd = app.add_subcommand("capture", "Run the capture plan (38 views by default) into a new capture folder");
   auto args = std::make_shared<CaptureArgs>();
-  cmd->add_option("--config", args->config, "rig config (default: etc/rig.yaml, the simulated rig)");
+  cmd->add_option("--config", args->config, "rig config (default: etc/sim-rig.yaml, the simulated rig)");
   cmd->add_option("--out", args->out, "capture folder; must not exist unless --resume (with --subject: the folder of captures)")
       ->required();
   cmd->add_option("--subject", args->subject, "subject or wig name; the capture goes to OUT/<subject>");

@@ -59,7 +59,7 @@ void PrintDevices(const nlohmann::json& j) {
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto* cmd = app.add_subcommand("devices", "List the configured devices with serial, backend and state, and health-check them");
   auto config = std::make_shared<std::string>();
-  cmd->add_option("--config", *config, "rig config (default: etc/rig.yaml, the simulated rig)");
+  cmd->add_option("--config", *config, "rig config (default: etc/sim-rig.yaml, the simulated rig)");
   cmd->add_flag("--json", common.json, "print the result as one JSON object");
   cmd->callback([config, &dispatch] {
     dispatch.action = [config] { return RunDevices(*config); };

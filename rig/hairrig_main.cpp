@@ -10,7 +10,7 @@ int main(int argc, char** argv) {
   using namespace hairrig;
   CLI::App app{
       "hairrig: capture rig control and hair pipeline.\n"
-      "With no --config, the rig is the simulated one in etc/ (etc/rig.yaml)."};
+      "With no --config, the rig is the simulated one in etc/ (etc/sim-rig.yaml)."};
   app.require_subcommand(1);
   CommonOptions common;
   app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")->capture_default_str();

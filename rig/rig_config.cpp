@@ -28,7 +28,7 @@ Result<std::string> EtcPath(const std::string& relative) {
   return NotFound("cannot find " + relative + " (tried " + tried + "); set HAIRRIG_ETC to the project's etc/ folder");
 }
 
-Result<std::string> DefaultRigConfigPath() { return EtcPath("rig.yaml"); }
+Result<std::string> DefaultRigConfigPath() { return EtcPath("sim-rig.yaml"); }
 
 Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& relative_to) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));

@@ -1,4 +1,4 @@
-// The rig config (etc/rig.yaml and its kin) and the devices built from it.
+// The rig config (etc/sim-rig.yaml and its kin) and the devices built from it.
 #pragma once
 
 #include <functional>
@@ -23,7 +23,7 @@ struct RigConfig {
   ConfigNode root;             // the whole document
 };
 
-// Finds etc/rig.yaml: $HAIRRIG_ETC, then the etc/ of the source tree this
+// Finds etc/sim-rig.yaml: $HAIRRIG_ETC, then the etc/ of the source tree this
 // binary was built from, then ./etc. NotFound names the places tried.
 Result<std::string> DefaultRigConfigPath();
 // Resolves a path given relative to the project's etc/ folder ("scenes/default.yaml").

@@ -1,8 +1,10 @@
-// The simulated devices behind the driver interfaces, built from etc/rig.yaml
+// The simulated devices behind the driver interfaces, built from etc/sim-rig.yaml
 // as the CLI builds them.
 #include <numeric>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "rig/rig_config.h"
 
@@ -14,7 +16,7 @@ using std::chrono::milliseconds;
 constexpr milliseconds kFrameWait{180000};
 
 std::unique_ptr<Rig> OpenDefaultRig() {
-  auto config = LoadRigConfig("etc/rig.yaml");
+  auto config = LoadRigConfig("etc/sim-rig.yaml");
   EXPECT_TRUE(config.ok()) << config.status().ToString();
   auto rig = BuildRig(*config);
   EXPECT_TRUE(rig.ok()) << rig.status().ToString();
@@ -22,7 +24,9 @@ std::unique_ptr<Rig> OpenDefaultRig() {
   return std::move(rig).value();
 }
 
+// Mean grey level; an encoded frame (the gphoto2 camera's JPEG) is decoded first.
 double MeanDn(const Frame& f) {
+  if (f.format == PixelFormat::kEncoded) return cv::mean(cv::imdecode(f.data, cv::IMREAD_GRAYSCALE))[0];
   return std::accumulate(f.data.begin(), f.data.end(), 0.0) / static_cast<double>(f.data.size());
 }
 
@@ -86,7 +90,12 @@ TEST(SimDevices, OneTriggerPulseExposesEveryCameraOnTheLineAtOnce) {
     auto frame = cam->WaitFrame(kFrameWait);
     ASSERT_TRUE(frame.ok()) << frame.status().ToString();
     EXPECT_EQ(frame->camera_serial, cam->info().serial);
-    EXPECT_EQ(frame->data.size(), frame->ExpectedBytes());
+    if (frame->format == PixelFormat::kEncoded) {
+      EXPECT_EQ(cam->info().backend, "gphoto2");  // the body's JPEG
+      EXPECT_EQ(cv::imdecode(frame->data, cv::IMREAD_GRAYSCALE).cols, 1200);
+    } else {
+      EXPECT_EQ(frame->data.size(), frame->ExpectedBytes());
+    }
     EXPECT_EQ(frame->width_px, 1200);
     EXPECT_GT(MeanDn(*frame), 20.0);
     // Nothing more was triggered.
@@ -114,7 +123,7 @@ TEST(SimDevices, LightsOffGiveADarkFrame) {
 }
 
 TEST(SimDevices, CallsInTheWrongStateExplainTheRemedy) {
-  auto config = LoadRigConfig("etc/rig.yaml");
+  auto config = LoadRigConfig("etc/sim-rig.yaml");
   auto rig = BuildRig(*config);
   ASSERT_TRUE(rig.ok());
   Camera& cam = *(*rig)->devices.cameras[0];

@@ -76,7 +76,7 @@ Bench StartBench(std::vector<SimFault> faults = {}, const std::string& trigger_l
   options.serial = kSerial;
   options.scene_camera = 0;
   options.trigger_line = trigger_line;
-  options.reply_timeout_ms = 500;
+  options.reply_timeout_ms = 3000;  // rendering a view under a loaded test run takes up to ~1 s
   auto server = SimDslrServer::Start(b.world, options);
   EXPECT_TRUE(server.ok()) << server.status().ToString();
   b.server = std::move(server).value();
