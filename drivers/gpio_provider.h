@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/status.h"
 
@@ -63,5 +64,14 @@ class GpioProvider {
 
 // The real provider: the kernel's GPIO character devices through libgpiod 1.6.
 std::shared_ptr<GpioProvider> MakeLibgpiodProvider();
+
+// A GPIO chip of this machine's kernel (for `hairrig devices --discover`).
+struct GpioChipInfo {
+  std::string name;   // "gpiochip0"
+  std::string label;  // "pinctrl-bcm2711": what a config's `chip` should name
+  int lines = 0;
+};
+// The chips libgpiod finds under /dev; empty where the kernel has no GPIO.
+std::vector<GpioChipInfo> ListGpioChips();
 
 }  // namespace hairrig

@@ -131,4 +131,15 @@ class LibgpiodProvider : public GpioProvider {
 
 std::shared_ptr<GpioProvider> MakeLibgpiodProvider() { return std::make_shared<LibgpiodProvider>(); }
 
+std::vector<GpioChipInfo> ListGpioChips() {
+  std::vector<GpioChipInfo> chips;
+  gpiod_chip_iter* iter = gpiod_chip_iter_new();
+  if (iter == nullptr) return chips;  // no /dev/gpiochip*
+  for (gpiod_chip* chip = gpiod_chip_iter_next(iter); chip != nullptr; chip = gpiod_chip_iter_next(iter)) {
+    chips.push_back({gpiod_chip_name(chip), gpiod_chip_label(chip), static_cast<int>(gpiod_chip_num_lines(chip))});
+  }
+  gpiod_chip_iter_free(iter);
+  return chips;
+}
+
 }  // namespace hairrig

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "rig/cli.h"
+#include "rig/device_discovery.h"
 #include "rig/rig_config.h"
 
 namespace hairrig {
@@ -42,6 +43,13 @@ Result<nlohmann::json> RunDevices(const std::string& config_path) {
   return out;
 }
 
+Result<nlohmann::json> RunDiscover() {
+  const Discovery discovery = DiscoverDevices();
+  nlohmann::json out = DiscoveryToJson(discovery);
+  out["text"] = DiscoveryText(discovery);
+  return out;
+}
+
 void PrintDevices(const nlohmann::json& j) {
   std::printf("rig: %s (%s)\n", j["rig"].get<std::string>().c_str(), j["config"].get<std::string>().c_str());
   std::printf("%-10s %-13s %-8s %-16s %-8s %s\n", "NAME", "KIND", "BACKEND", "SERIAL", "STATE", "HEALTH");
@@ -59,9 +67,19 @@ void PrintDevices(const nlohmann::json& j) {
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto* cmd = app.add_subcommand("devices", "List the configured devices with serial, backend and state, and health-check them");
   auto config = std::make_shared<std::string>();
-  cmd->add_option("--config", *config, "rig config (default: etc/sim-rig.yaml, the simulated rig)");
+  auto discover = std::make_shared<bool>(false);
+  auto* config_option =
+      cmd->add_option("--config", *config, "rig config (default: etc/sim-rig.yaml, the simulated rig)");
+  cmd->add_flag("--discover", *discover,
+                "find the real devices connected to this machine and print each with its serial and a config snippet")
+      ->excludes(config_option);
   cmd->add_flag("--json", common.json, "print the result as one JSON object");
-  cmd->callback([config, &dispatch] {
+  cmd->callback([config, discover, &dispatch] {
+    if (*discover) {
+      dispatch.action = [] { return RunDiscover(); };
+      dispatch.print_human = [](const nlohmann::json& j) { std::fputs(j["text"].get<std::string>().c_str(), stdout); };
+      return;
+    }
     dispatch.action = [config] { return RunDevices(*config); };
     dispatch.print_human = PrintDevices;
   });

@@ -12,6 +12,7 @@
 #include "rig/rig_config.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/modbus_turntable_server.h"
+#include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_dslr_protocol.h"
 #include "sim_hw/sim_dslr_server.h"
 #include "sim_hw/view_set.h"
@@ -90,6 +91,7 @@ struct ServeArgs {
   double time_scale = 1.0;
   bool rtu = true;
   bool dslr = true;
+  bool gige = true;
 };
 
 // How an outside tool reaches each simulator, printed when they are up.
@@ -101,6 +103,13 @@ void PrintEndpoints(const ModbusTurntableServer& tcp, const ModbusTurntableServe
     std::printf("  %s\n    try: mbpoll -m rtu -b 115200 -P none -a %d -0 -1 -t 4 -r 1 %s   (status bits)\n",
                 rtu->Describe().c_str(), a.slave_id, rtu->device_path().c_str());
   }
+}
+
+void PrintGigE(const SimGigECamera* gige) {
+  if (gige == nullptr) return;
+  std::printf("simulated GigE Vision camera (Aravis' fake, rendering the view)\n  %s\n"
+              "    try: arv-tool-0.8 -a %s control DeviceSerialNumber Width Height PixelFormat\n",
+              gige->Describe().c_str(), gige->address().c_str());
 }
 
 void PrintDslrs(const std::vector<std::unique_ptr<SimDslrServer>>& dslrs, const std::string& camlibs) {
@@ -147,14 +156,26 @@ Result<nlohmann::json> Serve(const ServeArgs& a) {
       dslrs.push_back(std::move(server));
     }
   }
+  // The GigE fake takes 127.0.0.1:3956, so only one camera: the scene's last.
+  std::unique_ptr<SimGigECamera> gige;
+  if (a.gige && !scene.cameras.empty()) {
+    const int index = static_cast<int>(scene.cameras.size()) - 1;
+    HR_ASSIGN_OR_RETURN(gige, SimGigECamera::Start(world, {scene.cameras.back().serial, index, "", true}));
+  }
   PrintEndpoints(*tcp, rtu.get(), a);
   PrintDslrs(dslrs, camlibs);
+  PrintGigE(gige.get());
   std::printf("Ctrl-C stops.\n");
   std::fflush(stdout);
   int signal = 0;
   sigwait(&stop_signals, &signal);
   tcp->Stop();
   if (rtu) rtu->Stop();
+  nlohmann::json gige_summary = nullptr;
+  if (gige) {
+    gige_summary = {{"serial", gige->serial()}, {"address", gige->address()}, {"frames", gige->frames_rendered()}};
+    gige.reset();
+  }
   nlohmann::json cameras = nlohmann::json::array();
   for (const auto& d : dslrs) {
     d->Stop();
@@ -166,7 +187,8 @@ Result<nlohmann::json> Serve(const ServeArgs& a) {
     if (s != nullptr) servers.push_back({{"endpoint", s->Describe()}, {"requests_served", s->requests_served()}});
   }
   return nlohmann::json{
-      {"stopped_by", signal == SIGINT ? "SIGINT" : "SIGTERM"}, {"modbus", servers}, {"dslr", cameras}};
+      {"stopped_by", signal == SIGINT ? "SIGINT" : "SIGTERM"}, {"modbus", servers}, {"dslr", cameras},
+      {"gige", gige_summary}};
 }
 
 void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
@@ -181,6 +203,8 @@ void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
       ->check(CLI::PositiveNumber);
   serve->add_flag("!--no-rtu", args->rtu, "do not serve Modbus RTU on a pseudo-terminal");
   serve->add_flag("!--no-dslr", args->dslr, "do not serve the simulated DSLRs (one per scene camera)");
+  serve->add_flag("!--no-gige", args->gige,
+                  "do not serve the simulated GigE Vision camera (the scene's last camera, on 127.0.0.1:3956)");
   serve->add_flag("--json", common.json, "print the closing summary as one JSON object");
   serve->callback([args, &dispatch] {
     dispatch.action = [args]() { return Serve(*args); };
@@ -189,6 +213,10 @@ void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
       for (const auto& s : j["modbus"]) {
         std::printf("  %s: %ld requests served\n", s["endpoint"].get<std::string>().c_str(),
                     s["requests_served"].get<long>());
+      }
+      if (!j["gige"].is_null()) {
+        std::printf("  simulated GigE Vision camera %s at %s: %d frames\n", j["gige"]["serial"].get<std::string>().c_str(),
+                    j["gige"]["address"].get<std::string>().c_str(), j["gige"]["frames"].get<int>());
       }
       for (const auto& d : j["dslr"]) {
         std::printf("  simulated DSLR %s at %s: %d shots\n", d["serial"].get<std::string>().c_str(),

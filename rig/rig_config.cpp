@@ -1,5 +1,6 @@
 #include "rig/rig_config.h"
 
+#include "drivers/aravis_camera.h"
 #include "drivers/gphoto2_camera.h"
 #include "drivers/gpio_devices.h"
 #include "drivers/modbus_turntable.h"
@@ -86,20 +87,27 @@ Status ServeSimulatedController(Rig* rig, const DeviceConfig& config, ModbusTurn
   return Status::Ok();
 }
 
-// Points a gphoto2 camera whose port is "sim" at a simulated DSLR this rig
-// serves, rendering the scene camera with the device's serial.
-Status ServeSimulatedDslr(Rig* rig, const DeviceConfig& config, Gphoto2CameraOptions* options) {
-  if (options->port != "sim") return Status::Ok();
-  if (!rig->sim_world) {
-    return InvalidArgument(config.node.Where() +
-                           ": port 'sim' needs the rig config's sim section (the simulated world the camera renders)");
+// The scene camera a simulated peer of device `config` renders: the one with its serial.
+Result<int> SimSceneCamera(const Rig& rig, const DeviceConfig& config, const std::string& field) {
+  if (!rig.sim_world) {
+    return InvalidArgument(config.node.Where() + ": " + field +
+                           " 'sim' needs the rig config's sim section (the simulated world the camera renders)");
   }
-  const Scene& scene = WorldRenderer(*rig->sim_world).scene();
+  const Scene& scene = WorldRenderer(*rig.sim_world).scene();
   const int index = scene.FindCamera(config.serial);
   if (index < 0) {
     return NotFound(config.node.Where() + ": the simulated scene (" + scene.path + ") has no camera with serial '" +
                     config.serial + "'");
   }
+  return index;
+}
+
+// Points a gphoto2 camera whose port is "sim" at a simulated DSLR this rig
+// serves, rendering the scene camera with the device's serial.
+Status ServeSimulatedDslr(Rig* rig, const DeviceConfig& config, Gphoto2CameraOptions* options) {
+  if (options->port != "sim") return Status::Ok();
+  HR_ASSIGN_OR_RETURN(const int index, SimSceneCamera(*rig, config, "port"));
+  const Scene& scene = WorldRenderer(*rig->sim_world).scene();
   HR_RETURN_IF_ERROR(ExportSimDslrCamlibs());
   SimDslrOptions server_options;
   server_options.serial = config.serial;
@@ -118,6 +126,27 @@ Status ServeSimulatedDslr(Rig* rig, const DeviceConfig& config, Gphoto2CameraOpt
   return Status::Ok();
 }
 
+// Points an aravis camera whose address is "sim" at Aravis' in-process fake
+// camera, fed with the scene camera with the device's serial.
+Status ServeSimulatedAravisCamera(Rig* rig, const DeviceConfig& config, AravisCameraOptions* options) {
+  if (options->address != "sim") return Status::Ok();
+  HR_ASSIGN_OR_RETURN(const int index, SimSceneCamera(*rig, config, "address"));
+  const Scene& scene = WorldRenderer(*rig->sim_world).scene();
+  const SimAravisOptions feed_options{config.serial, index, config.node.String("trigger_line", "")};
+  auto feed = std::make_unique<SimAravisFeed>(rig->sim_world, feed_options);
+  SimAravisFeed* raw = feed.get();
+  options->connect = [raw, feed_options]() { return OpenSimAravisCamera(*raw, feed_options); };
+  options->address.clear();
+  const SceneCamera& camera = scene.cameras[static_cast<size_t>(index)];
+  options->width_px = camera.intrinsics.width_px;
+  options->height_px = camera.intrinsics.height_px;
+  options->readout_s = scene.camera_readout_s;
+  options->download_s = scene.camera_download_s;
+  options->time_scale = WorldTimeScale(*rig->sim_world);
+  rig->sim_aravis_feeds.push_back(std::move(feed));
+  return Status::Ok();
+}
+
 }  // namespace
 
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& build) {
@@ -132,6 +161,9 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
   });
   RegisterGphoto2Backend(&registry, [raw](const DeviceConfig& c, Gphoto2CameraOptions* options) {
     return ServeSimulatedDslr(raw, c, options);
+  });
+  RegisterAravisBackend(&registry, [raw](const DeviceConfig& c, AravisCameraOptions* options) {
+    return ServeSimulatedAravisCamera(raw, c, options);
   });
   if (build.simulate && !config.sim_scene_path.empty()) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));

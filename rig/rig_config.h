@@ -9,6 +9,7 @@
 #include "core/config.h"
 #include "drivers/registry.h"
 #include "sim_hw/modbus_turntable_server.h"
+#include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_dslr_server.h"
 #include "sim_hw/sim_devices.h"
 
@@ -41,6 +42,7 @@ struct Rig {
   // so they outlive the devices connected to them).
   std::vector<std::unique_ptr<ModbusTurntableServer>> sim_modbus_servers;
   std::vector<std::unique_ptr<SimDslrServer>> sim_dslr_servers;
+  std::vector<std::unique_ptr<SimAravisFeed>> sim_aravis_feeds;
   DeviceSet devices;
   // Camera name -> the trigger line it is wired to (devices.cameras[].trigger_line);
   // cameras without one are triggered in software.
@@ -60,7 +62,8 @@ struct RigBuildOptions {
 // simulated controller this rig serves on loopback or a pseudo-terminal, and a
 // `gphoto2` camera with `port: sim` is a simulated DSLR (sim_hw/sim_dslr_server.h)
 // rendering the scene camera with its serial, reached through the project's
-// camlib (CAMLIBS is set for this process).
+// camlib (CAMLIBS is set for this process), and an `aravis` camera with
+// `address: sim` is Aravis' in-process fake camera rendering that scene camera.
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

@@ -159,6 +159,8 @@ TEST(SimDevices, TheExampleRealRigConfigBuilds) {
   EXPECT_NE(tt.model.find("tcp 192.168.10.20:502 unit 1"), std::string::npos) << tt.model;
   EXPECT_EQ((*rig)->devices.lights[0]->info().backend, "gpiod");
   EXPECT_NE((*rig)->devices.input_lines[0]->info().model.find("line 23 of pinctrl-bcm2711"), std::string::npos);
+  EXPECT_EQ((*rig)->devices.cameras[0]->info().backend, "gphoto2");
+  EXPECT_EQ((*rig)->devices.cameras[1]->info().backend, "aravis");
 }
 
 TEST(SimDevices, ASimulatedModbusControllerNeedsTheSimSection) {

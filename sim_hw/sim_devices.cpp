@@ -229,6 +229,18 @@ Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, con
   return std::move(view.image);
 }
 
+cv::Mat MosaicRGGB(const cv::Mat& bgr) {
+  cv::Mat bayer(bgr.rows, bgr.cols, CV_8UC1);
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+      const int channel = (y % 2 == 0) ? (x % 2 == 0 ? 2 : 1) : (x % 2 == 0 ? 1 : 0);
+      bayer.at<uint8_t>(y, x) = p[channel];
+    }
+  }
+  return bayer;
+}
+
 uint64_t FrameNoiseSeed(const SimWorld& world, const std::string& serial, uint64_t sequence) {
   return std::hash<std::string>{}(serial) ^ (sequence * 0x9E3779B97F4A7C15ull) ^ world.scene().seed;
 }
@@ -657,7 +669,7 @@ class SimCamera : public SimDevice<Camera> {
       case PixelFormat::kBgr8: out = image; break;
       case PixelFormat::kRgb8: cv::cvtColor(image, out, cv::COLOR_BGR2RGB); break;
       case PixelFormat::kMono8: cv::cvtColor(image, out, cv::COLOR_BGR2GRAY); break;
-      case PixelFormat::kBayerRG8: out = ToBayerRG(image); break;
+      case PixelFormat::kBayerRG8: out = MosaicRGGB(image); break;
       case PixelFormat::kEncoded: return Internal("encoded output is not simulated");
     }
     Frame f;
@@ -671,19 +683,6 @@ class SimCamera : public SimDevice<Camera> {
     f.gain_db = job.settings.gain_db;
     f.trigger_time_ns = job.exposure.trigger_ns;
     return f;
-  }
-
-  // RGGB mosaic of a BGR image.
-  static cv::Mat ToBayerRG(const cv::Mat& bgr) {
-    cv::Mat bayer(bgr.rows, bgr.cols, CV_8UC1);
-    for (int y = 0; y < bgr.rows; ++y) {
-      for (int x = 0; x < bgr.cols; ++x) {
-        const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
-        const int channel = (y % 2 == 0) ? (x % 2 == 0 ? 2 : 1) : (x % 2 == 0 ? 1 : 0);
-        bayer.at<uint8_t>(y, x) = p[channel];
-      }
-    }
-    return bayer;
   }
 
   void StopWorker() {

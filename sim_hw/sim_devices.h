@@ -59,6 +59,8 @@ WorldExposure ExposeWorldNow(const SimWorld& world);
 // world's noise setting; the same seed gives the same noise.
 Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
                                     double exposure_s, double gain_db, uint64_t noise_seed);
+// The RGGB Bayer mosaic a colour sensor would record of an 8-bit BGR image.
+cv::Mat MosaicRGGB(const cv::Mat& bgr);
 // Noise seed of frame `sequence` of camera `serial`: distinct per camera and frame.
 uint64_t FrameNoiseSeed(const SimWorld& world, const std::string& serial, uint64_t sequence);
 // The world's software trigger lines: simulated trigger lines pulse them and

@@ -52,6 +52,20 @@ TEST(Cli, DevicesOnTheDefaultRigAreHealthyAsJson) {
   EXPECT_EQ(j["healthy"], 7);
 }
 
+// What is found depends on the machine (none on CI); either way the command
+// succeeds, and an empty search says so plainly.
+TEST(Cli, DiscoverListsRealDevicesOrSaysThereAreNone) {
+  const CommandRun r = Hairrig("devices --discover --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = LastLineJson(r.output);
+  EXPECT_EQ(j["found"].get<size_t>(), j["devices"].size());
+  for (const auto& d : j["devices"]) EXPECT_NE(d["snippet"].get<std::string>().find("backend: "), std::string::npos);
+  if (j["found"] == 0) {
+    EXPECT_NE(j["text"].get<std::string>().find("No devices found"), std::string::npos) << r.output;
+  }
+  EXPECT_NE(Hairrig("devices --discover --config etc/sim-rig.yaml").exit_code, 0);
+}
+
 TEST(Cli, BrokenYamlNamesTheFileAndLine) {
   const std::string path = TempFile("broken.yaml", "name: x\ndevices: [1, 2\n");
   const CommandRun r = Hairrig("devices --config " + path);
@@ -103,7 +117,9 @@ TEST(Cli, BadArgumentsAreRefused) {
 
 // `hairrig sim serve` runs the simulated Modbus controller for outside tools
 // until Ctrl-C, and says how to reach it.
-TEST(Cli, SimServeAnswersMbpollUntilCtrlC) {
+// Serves the Modbus controller, the DSLRs and the GigE Vision camera; outside
+// tools (mbpoll, Aravis' arv-camera-test) reach them until Ctrl-C.
+TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
   const std::string log = ::testing::TempDir() + "/sim_serve.out";
   std::filesystem::remove(log);
   const pid_t pid = fork();
@@ -124,6 +140,14 @@ TEST(Cli, SimServeAnswersMbpollUntilCtrlC) {
   ASSERT_FALSE(port.empty()) << "no endpoint printed:\n" << ReadText(log);
   const std::string mbpoll = "mbpoll -m tcp -p " + port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
   EXPECT_EQ(std::system(mbpoll.c_str()), 0) << mbpoll;
+  // Aravis' own test client streams from the GigE fake for 4 s (then SIGINT, which it handles).
+  const std::string arv_log = ::testing::TempDir() + "/arv_camera_test.out";
+  const std::string arv = "timeout -s INT 4 arv-camera-test-0.8 -n 127.0.0.1 > " + arv_log + " 2>&1";
+  std::system(arv.c_str());
+  const std::string arv_text = ReadText(arv_log);
+  EXPECT_NE(arv_text.find("device serial number   = SIM-CAM-LOWER"), std::string::npos) << arv_text;
+  EXPECT_NE(arv_text.find("image width            = 1200"), std::string::npos) << arv_text;
+  EXPECT_NE(arv_text.find("n_completed_buffers"), std::string::npos) << arv_text;
   kill(pid, SIGINT);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
@@ -133,6 +157,10 @@ TEST(Cli, SimServeAnswersMbpollUntilCtrlC) {
   EXPECT_NE(text.find("try: mbpoll -m tcp -p " + port), std::string::npos) << text;
   EXPECT_NE(text.find("stopped (SIGINT)"), std::string::npos) << text;
   EXPECT_NE(text.find(": 1 requests served"), std::string::npos) << text;
+  EXPECT_NE(text.find("try: gphoto2 --camera 'Hairrig Simulated DSLR' --port disk:"), std::string::npos) << text;
+  EXPECT_NE(text.find("export CAMLIBS="), std::string::npos) << text;
+  EXPECT_EQ(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: 0 frames"), std::string::npos) << text;
+  EXPECT_NE(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: "), std::string::npos) << text;
 }
 
 }  // namespace

@@ -1,0 +1,245 @@
+// The `aravis` camera backend against Aravis' own fake camera fed with the
+// rendered world: in-process (ArvFakeDevice) and as a GigE Vision camera on
+// 127.0.0.1, over real GVCP/GVSP packets.
+#include <cmath>
+#include <memory>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/config.h"
+#include "drivers/aravis_camera.h"
+#include "drivers/light.h"
+#include "sim_hw/scene.h"
+#include "sim_hw/sim_aravis.h"
+#include "sim_hw/sim_devices.h"
+
+namespace hairrig {
+namespace {
+
+using std::chrono::milliseconds;
+constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
+constexpr char kSerial[] = "SIM-CAM-LOWER";
+constexpr int kSceneCamera = 1;
+
+struct World {
+  std::shared_ptr<SimWorld> world;
+  std::vector<std::unique_ptr<Device>> lights;  // switched on so that the views are lit
+};
+
+World MakeWorld() {
+  World w;
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
+  SimWorldOptions options;
+  options.time_scale = 0.01;
+  options.noise = false;
+  w.world = CreateSimWorld(*scene, options).value();
+  DeviceRegistry registry;
+  RegisterSimBackends(&registry, w.world);
+  for (const SceneLight& l : scene->lights) {
+    auto node = ConfigNode::LoadString("{name: " + l.name + ", backend: sim, serial: L}", "lights");
+    auto light = registry.Create({DeviceKind::kLight, l.name, "sim", "L", *node});
+    EXPECT_TRUE(light.ok() && (*light)->Open().ok() && static_cast<Light&>(**light).SetOn(true).ok());
+    if (light.ok()) w.lights.push_back(std::move(light).value());
+  }
+  return w;
+}
+
+AravisCameraOptions BaseOptions() {
+  AravisCameraOptions o;
+  o.width_px = 1200;
+  o.height_px = 1600;
+  o.time_scale = 0.01;
+  return o;
+}
+
+struct InProcess {
+  World w;
+  std::unique_ptr<SimAravisFeed> feed;
+  std::unique_ptr<Camera> camera;
+};
+
+// The backend on Aravis' in-process fake with serial `fake_serial`, configured for `device_serial`.
+InProcess StartInProcess(const std::string& trigger_line = "", const std::string& fake_serial = kSerial,
+                         const std::string& device_serial = kSerial) {
+  InProcess p;
+  p.w = MakeWorld();
+  const SimAravisOptions feed_options{fake_serial, kSceneCamera, trigger_line};
+  p.feed = std::make_unique<SimAravisFeed>(p.w.world, feed_options);
+  AravisCameraOptions o = BaseOptions();
+  SimAravisFeed* feed = p.feed.get();
+  o.connect = [feed, feed_options]() { return OpenSimAravisCamera(*feed, feed_options); };
+  p.camera = MakeAravisCamera({DeviceKind::kCamera, "lower", "aravis", device_serial, "test"}, o);
+  return p;
+}
+
+Result<Frame> Shoot(Camera& camera, PixelFormat format) {
+  CaptureSettings s;
+  s.format = format;
+  s.exposure_s = 0.02;
+  HR_RETURN_IF_ERROR(camera.Configure(s));
+  HR_RETURN_IF_ERROR(camera.Arm());
+  HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
+  auto frame = camera.WaitFrame(kFrameWait);
+  HR_RETURN_IF_ERROR(camera.Disarm());
+  return frame;
+}
+
+double Psnr(const cv::Mat& a, const cv::Mat& b) {
+  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
+  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12));
+}
+
+cv::Mat Reference(const World& w) {
+  return RenderWorldExposure(*w.world, kSceneCamera, ExposeWorldNow(*w.world), 0.02, 0, 0).value();
+}
+
+TEST(AravisCamera, DeliversTheRenderedViewInEachPixelFormat) {
+  InProcess p = StartInProcess();
+  ASSERT_TRUE(p.camera->Open().ok());
+  ASSERT_TRUE(p.camera->HealthCheck().ok());
+  EXPECT_EQ(p.camera->capabilities().width_px, 1200);
+  const cv::Mat reference = Reference(p.w);
+
+  auto rgb = Shoot(*p.camera, PixelFormat::kRgb8);
+  ASSERT_TRUE(rgb.ok()) << rgb.status().ToString();
+  ASSERT_EQ(rgb->data.size(), rgb->ExpectedBytes());
+  cv::Mat bgr;
+  cv::cvtColor(cv::Mat(1600, 1200, CV_8UC3, rgb->data.data()), bgr, cv::COLOR_RGB2BGR);
+  EXPECT_GT(Psnr(bgr, reference), 40.0);
+  EXPECT_GT(cv::mean(bgr)[1], 20.0);  // lit, not black
+
+  auto mono = Shoot(*p.camera, PixelFormat::kMono8);
+  ASSERT_TRUE(mono.ok()) << mono.status().ToString();
+  cv::Mat grey;
+  cv::cvtColor(reference, grey, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(Psnr(cv::Mat(1600, 1200, CV_8UC1, mono->data.data()), grey), 40.0);
+
+  auto bayer = Shoot(*p.camera, PixelFormat::kBayerRG8);
+  ASSERT_TRUE(bayer.ok()) << bayer.status().ToString();
+  EXPECT_GT(Psnr(cv::Mat(1600, 1200, CV_8UC1, bayer->data.data()), MosaicRGGB(reference)), 40.0);
+
+  const AravisStreamStats stats = AravisCameraStreamStats(*p.camera);
+  EXPECT_EQ(stats.completed, 1u);  // of the last stream
+  EXPECT_EQ(stats.failures, 0u);
+}
+
+TEST(AravisCamera, FramesComeInTriggerOrderWithTheirTriggerTimes) {
+  InProcess p = StartInProcess();
+  ASSERT_TRUE(p.camera->Open().ok());
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  ASSERT_TRUE(p.camera->Configure(s).ok());
+  ASSERT_TRUE(p.camera->Arm().ok());
+  int64_t last_trigger = 0;
+  for (uint64_t i = 0; i < 3; ++i) {
+    ASSERT_TRUE(p.camera->SoftwareTrigger().ok());
+    auto frame = p.camera->WaitFrame(kFrameWait);
+    ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+    EXPECT_EQ(frame->sequence, i);
+    EXPECT_GT(frame->trigger_time_ns, last_trigger);
+    EXPECT_GE(frame->received_time_ns, frame->trigger_time_ns);
+    last_trigger = frame->trigger_time_ns;
+  }
+  EXPECT_EQ(p.camera->WaitFrame(milliseconds(100)).status().code(), StatusCode::kTimeout);
+  EXPECT_EQ(AravisCameraStreamStats(*p.camera).completed, 3u);
+}
+
+TEST(AravisCamera, InLine0ModeOnlyAPulseOnTheWiredLineTakesAFrame) {
+  InProcess p = StartInProcess("trig0");
+  ASSERT_TRUE(p.camera->Open().ok());
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  s.trigger = TriggerSource::kLine;
+  s.trigger_line = "trig0";
+  ASSERT_TRUE(p.camera->Configure(s).ok());
+  ASSERT_TRUE(p.camera->Arm().ok());
+  EXPECT_EQ(p.camera->WaitFrame(milliseconds(200)).status().code(), StatusCode::kTimeout);
+  WorldTriggers(*p.w.world).Fire("trig1");  // another line
+  EXPECT_EQ(p.camera->WaitFrame(milliseconds(200)).status().code(), StatusCode::kTimeout);
+  WorldTriggers(*p.w.world).Fire("trig0");
+  auto frame = p.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_EQ(p.feed->frames_rendered(), 1);
+}
+
+TEST(AravisCamera, AnotherSerialIsRefusedNamingBoth) {
+  InProcess p = StartInProcess("", "SIM-CAM-UPPER", kSerial);
+  const Status s = p.camera->Open();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("SIM-CAM-UPPER"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find(kSerial), std::string::npos) << s.message();
+  EXPECT_EQ(p.camera->state(), DeviceState::kFaulted);
+}
+
+TEST(AravisCamera, SettingsOutsideTheCameraAreRefused) {
+  InProcess p = StartInProcess();
+  ASSERT_TRUE(p.camera->Open().ok());
+  CaptureSettings s;
+  s.exposure_s = 1e6;
+  EXPECT_EQ(p.camera->Configure(s).code(), StatusCode::kOutOfRange);
+  s.exposure_s = 0.02;
+  s.format = PixelFormat::kEncoded;
+  EXPECT_EQ(p.camera->Configure(s).code(), StatusCode::kOutOfRange);
+
+  AravisCameraOptions o = BaseOptions();
+  o.width_px = 100000;
+  InProcess big = StartInProcess();
+  const SimAravisOptions feed_options{kSerial, kSceneCamera, ""};
+  SimAravisFeed* feed = big.feed.get();
+  o.connect = [feed, feed_options]() { return OpenSimAravisCamera(*feed, feed_options); };
+  auto camera = MakeAravisCamera({DeviceKind::kCamera, "lower", "aravis", kSerial, "test"}, o);
+  const Status open = camera->Open();
+  EXPECT_EQ(open.code(), StatusCode::kOutOfRange) << open.ToString();
+  EXPECT_NE(open.message().find("exceeds the sensor"), std::string::npos) << open.message();
+}
+
+TEST(AravisCamera, ASerialNoInterfaceHasIsUnavailable) {
+  auto camera = MakeAravisCamera({DeviceKind::kCamera, "x", "aravis", "NO-SUCH-CAMERA", "test"}, BaseOptions());
+  const Status s = camera->Open();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("not found on any Aravis interface"), std::string::npos) << s.message();
+}
+
+TEST(AravisCamera, ConfigErrorsNameTheField) {
+  auto root = ConfigNode::LoadString("{name: c, backend: aravis, serial: X, buffers: 1}", "rig.yaml");
+  auto parsed = ParseAravisCameraOptions(*root);
+  ASSERT_FALSE(parsed.ok());
+  EXPECT_NE(parsed.status().message().find("buffers"), std::string::npos) << parsed.status().message();
+}
+
+// Over GigE Vision on loopback: real UDP streaming through Aravis' GigE fake.
+TEST(AravisGigE, StreamsRenderedFramesOverLoopbackWithoutLoss) {
+  World w = MakeWorld();
+  auto gige = SimGigECamera::Start(w.world, {kSerial, kSceneCamera, ""});
+  ASSERT_TRUE(gige.ok()) << gige.status().ToString();
+  AravisCameraOptions o = BaseOptions();
+  o.address = (*gige)->address();
+  auto camera = MakeAravisCamera({DeviceKind::kCamera, "lower", "aravis", kSerial, "test"}, o);
+  ASSERT_TRUE(camera->Open().ok());
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  s.exposure_s = 0.02;
+  ASSERT_TRUE(camera->Configure(s).ok());
+  ASSERT_TRUE(camera->Arm().ok());
+  const cv::Mat reference = Reference(w);
+  cv::Mat grey;
+  cv::cvtColor(reference, grey, cv::COLOR_BGR2GRAY);
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(camera->SoftwareTrigger().ok());
+    auto frame = camera->WaitFrame(kFrameWait);
+    ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+    EXPECT_GT(Psnr(cv::Mat(1600, 1200, CV_8UC1, frame->data.data()), grey), 40.0);
+  }
+  const AravisStreamStats stats = AravisCameraStreamStats(*camera);
+  EXPECT_EQ(stats.completed, 4u);
+  EXPECT_EQ(stats.failures, 0u);
+  EXPECT_EQ(stats.missing_packets, 0u);
+  ASSERT_TRUE(camera->Disarm().ok());
+  EXPECT_EQ((*gige)->frames_rendered(), 4);
+}
+
+}  // namespace
+}  // namespace hairrig
