@@ -12,9 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "core/config.h"
 #include "drivers/aravis_camera.h"
-#include "drivers/light.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_devices.h"
@@ -68,20 +66,14 @@ int Main(int frames) {
   SimWorldOptions world_options;
   world_options.time_scale = 1e-4;
   auto world = CreateSimWorld(*scene, world_options).value();
-  DeviceRegistry registry;
-  RegisterSimBackends(&registry, world);
-  std::vector<std::unique_ptr<Device>> lights;
   for (const SceneLight& l : scene->lights) {
-    auto node = ConfigNode::LoadString("{name: " + l.name + ", backend: sim, serial: L}", "bench");
-    auto light = registry.Create({DeviceKind::kLight, l.name, "sim", "L", *node});
-    if (!light.ok() || !(*light)->Open().ok() || !static_cast<Light&>(**light).SetOn(true).ok()) return 1;
-    lights.push_back(std::move(light).value());
+    if (!SetWorldLightLevel(*world, l.name, 1.0).ok()) return 1;
   }
   const std::string serial = scene->cameras[1].serial;
   AravisCameraOptions o;
-  o.width_px = scene->cameras[1].intrinsics.width_px;
-  o.height_px = scene->cameras[1].intrinsics.height_px;
-  std::printf("# aravis backend, %dx%d, %d software-triggered frames each\n", o.width_px, o.height_px, frames);
+  o.nominal.width_px = scene->cameras[1].intrinsics.width_px;
+  o.nominal.height_px = scene->cameras[1].intrinsics.height_px;
+  std::printf("# aravis backend, %dx%d, %d software-triggered frames each\n", o.nominal.width_px, o.nominal.height_px, frames);
   const DeviceInfo info{DeviceKind::kCamera, "bench", "aravis", serial, "bench"};
   {
     auto gige = SimGigECamera::Start(world, {serial, 1, "", /*render=*/false});

@@ -13,9 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "core/config.h"
 #include "drivers/gphoto2_camera.h"
-#include "drivers/light.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_dslr_protocol.h"
@@ -42,14 +40,8 @@ int Run(int shots) {
   SimWorldOptions world_options;
   world_options.time_scale = 1e-4;
   auto world = CreateSimWorld(*scene, world_options).value();
-  DeviceRegistry registry;
-  RegisterSimBackends(&registry, world);
-  std::vector<std::unique_ptr<Device>> lights;
   for (const SceneLight& l : scene->lights) {
-    auto node = ConfigNode::LoadString("{name: " + l.name + ", backend: sim, serial: L}", "bench");
-    auto light = registry.Create({DeviceKind::kLight, l.name, "sim", "L", *node});
-    if (!light.ok() || !(*light)->Open().ok() || !static_cast<Light&>(**light).SetOn(true).ok()) return 1;
-    lights.push_back(std::move(light).value());
+    if (!SetWorldLightLevel(*world, l.name, 1.0).ok()) return 1;
   }
   if (Status s = ExportSimDslrCamlibs(); !s.ok()) {
     std::fprintf(stderr, "%s\n", s.ToString().c_str());
@@ -61,7 +53,7 @@ int Run(int shots) {
   Gphoto2CameraOptions o;
   o.port = server->port();
   o.model = sim_dslr::kModel;
-  o.time_scale = 1e-4;
+  o.nominal.time_scale = 1e-4;
   auto camera = MakeGphoto2Camera({DeviceKind::kCamera, "bench", "gphoto2", server_options.serial, "bench"}, o);
   const auto open_start = Clock::now();
   if (Status s = camera->Open(); !s.ok()) {

@@ -5,21 +5,15 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <deque>
 #include <mutex>
 
 #include <opencv2/imgproc.hpp>
 
 #include "core/config.h"
+#include "drivers/camera_support.h"
 
 namespace hairrig {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 // Takes a GError's message (and frees it); "" for none.
 std::string TakeError(GError*& error) {
@@ -51,7 +45,7 @@ class AravisCamera : public Camera {
   AravisCamera(DeviceInfo info, AravisCameraOptions options) : Camera(std::move(info)), options_(std::move(options)) {}
   ~AravisCamera() override { (void)Close(); }
 
-  double time_scale() const override { return options_.time_scale; }
+  double time_scale() const override { return options_.nominal.time_scale; }
 
   CameraCapabilities capabilities() const override {
     return {.width_px = width_px_,
@@ -60,8 +54,8 @@ class AravisCamera : public Camera {
             .min_exposure_s = min_exposure_s_,
             .max_exposure_s = max_exposure_s_,
             .line_trigger = true,
-            .readout_s = options_.readout_s,
-            .download_s = options_.download_s};
+            .readout_s = options_.nominal.readout_s,
+            .download_s = options_.nominal.download_s};
   }
 
   Status Open() override {
@@ -76,8 +70,8 @@ class AravisCamera : public Camera {
     int sensor_w = 0, sensor_h = 0;
     arv_camera_get_sensor_size(camera, &sensor_w, &sensor_h, &error);
     if (error) return FailOpen(IoError("reading the sensor size: " + TakeError(error)));
-    width_px_ = options_.width_px > 0 ? options_.width_px : sensor_w;
-    height_px_ = options_.height_px > 0 ? options_.height_px : sensor_h;
+    width_px_ = options_.nominal.width_px > 0 ? options_.nominal.width_px : sensor_w;
+    height_px_ = options_.nominal.height_px > 0 ? options_.nominal.height_px : sensor_h;
     if (width_px_ > sensor_w || height_px_ > sensor_h) {
       return FailOpen(OutOfRange("the region " + std::to_string(width_px_) + "x" + std::to_string(height_px_) +
                                  " exceeds the sensor's " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h)));
@@ -120,10 +114,7 @@ class AravisCamera : public Camera {
 
   Status Configure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
-    if (!(s.exposure_s >= min_exposure_s_ && s.exposure_s <= max_exposure_s_)) {
-      return OutOfRange(Describe() + ": exposure_s " + std::to_string(s.exposure_s) + " outside the camera's " +
-                        std::to_string(min_exposure_s_) + " - " + std::to_string(max_exposure_s_) + " s");
-    }
+    HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     if (s.format == PixelFormat::kEncoded) return OutOfRange(Describe() + ": delivers raw frames only");
     std::lock_guard<std::mutex> lock(mutex_);
     ArvCamera* camera = camera_.get();
@@ -165,7 +156,7 @@ class AravisCamera : public Camera {
       return Fault(IoError("starting acquisition: " + TakeError(error)));
     }
     sequence_ = 0;
-    triggers_ns_.clear();
+    triggers_.Clear();
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
@@ -187,11 +178,11 @@ class AravisCamera : public Camera {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
     std::lock_guard<std::mutex> lock(mutex_);
     if (gone_) return Fault(Unavailable("lost its control channel; reopen it"));
-    const int64_t t = NowNs();
+    const int64_t t = SteadyNowNs();
     GError* error = nullptr;
     arv_camera_software_trigger(camera_.get(), &error);
     if (error) return Fault(Unavailable("sending TriggerSoftware: " + TakeError(error)));
-    triggers_ns_.push_back(t);
+    triggers_.Sent(t);
     return Status::Ok();
   }
 
@@ -317,8 +308,8 @@ class AravisCamera : public Camera {
     frame.format = settings_.format;
     frame.exposure_s = settings_.exposure_s;
     frame.gain_db = settings_.gain_db;
-    frame.received_time_ns = NowNs();
-    frame.trigger_time_ns = TriggerTimeLocked(frame.received_time_ns);
+    frame.received_time_ns = SteadyNowNs();
+    frame.trigger_time_ns = triggers_.ForFrame(frame.received_time_ns, options_.nominal.LatencyWallS(settings_.exposure_s));
     const cv::Mat wire(h, w, WireBytesPerPixel(f) == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(data));
     cv::Mat out;
     if (wire_.debayer) {
@@ -331,16 +322,6 @@ class AravisCamera : public Camera {
     }
     frame.data.assign(out.datastart, out.dataend);
     return frame;
-  }
-
-  int64_t TriggerTimeLocked(int64_t received_ns) {
-    if (settings_.trigger == TriggerSource::kSoftware && !triggers_ns_.empty()) {
-      const int64_t t = triggers_ns_.front();
-      triggers_ns_.pop_front();
-      return t;
-    }
-    const double latency_s = (settings_.exposure_s + options_.readout_s + options_.download_s) * options_.time_scale;
-    return received_ns - static_cast<int64_t>(latency_s * 1e9);
   }
 
   AravisStreamStats StatsLocked() const {
@@ -372,7 +353,7 @@ class AravisCamera : public Camera {
   double min_exposure_s_ = 0;
   double max_exposure_s_ = 0;
   uint64_t sequence_ = 0;
-  std::deque<int64_t> triggers_ns_;
+  TriggerTimes triggers_;
   AravisStreamStats last_stats_;
 };
 
@@ -383,13 +364,10 @@ Result<AravisCameraOptions> ParseAravisCameraOptions(const ConfigNode& device) {
                         "trigger_line", "trigger_source", "readout_s", "download_s"});
   AravisCameraOptions o;
   o.address = device.String("address", "");
-  o.width_px = device.Integer("width_px", 0, {.min = 0, .max = 100000});
-  o.height_px = device.Integer("height_px", 0, {.min = 0, .max = 100000});
+  o.nominal = ReadCameraNominal(device, o.nominal);
   o.buffers = device.Integer("buffers", o.buffers, {.min = 2, .max = 256});
   o.packet_size = device.Integer("packet_size", 0, {.min = 0, .max = 16384});
   o.trigger_source = device.String("trigger_source", o.trigger_source);
-  o.readout_s = device.Number("readout_s", o.readout_s, {.min = 0, .max = 60});
-  o.download_s = device.Number("download_s", o.download_s, {.min = 0, .max = 60});
   if (!device.ok()) return device.status();
   return o;
 }

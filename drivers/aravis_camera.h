@@ -35,6 +35,7 @@
 #include <string>
 
 #include "drivers/camera.h"
+#include "drivers/camera_support.h"
 #include "drivers/registry.h"
 
 typedef struct _ArvCamera ArvCamera;
@@ -43,14 +44,11 @@ namespace hairrig {
 
 struct AravisCameraOptions {
   std::string address;
-  int width_px = 0;  // 0: the sensor's
-  int height_px = 0;
+  // width_px, height_px (0: the sensor's), readout_s (0.01), download_s (0.05)
+  CameraNominal nominal{0, 0, 0.01, 0.05, 1.0};
   int buffers = 8;
   int packet_size = 0;  // 0: negotiated
   std::string trigger_source = "Line0";
-  double readout_s = 0.01;   // nominal, for the capture's time budget
-  double download_s = 0.05;
-  double time_scale = 1.0;   // wall s per device s; a simulated camera sets its own
   // Opens the camera instead of the search by address or serial (a
   // simulated rig opens Aravis' in-process fake camera); the serial is still
   // checked. The device takes the returned reference.

@@ -3,10 +3,33 @@
 #include <thread>
 
 #include "drivers/camera.h"
+#include "drivers/camera_support.h"
+#include "core/config.h"
 #include "drivers/polled_turntable.h"
 #include "drivers/turntable.h"
 
 namespace hairrig {
+
+int64_t SteadyNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& defaults) {
+  CameraNominal n = defaults;
+  n.width_px = device.Integer("width_px", defaults.width_px, {.min = 0, .max = 100000});
+  n.height_px = device.Integer("height_px", defaults.height_px, {.min = 0, .max = 100000});
+  n.readout_s = device.Number("readout_s", defaults.readout_s, {.min = 0, .max = 60});
+  n.download_s = device.Number("download_s", defaults.download_s, {.min = 0, .max = 600});
+  return n;
+}
+
+Status CheckExposure(const Camera& camera, const CameraCapabilities& caps, double exposure_s) {
+  if (exposure_s >= caps.min_exposure_s && exposure_s <= caps.max_exposure_s) return Status::Ok();
+  return OutOfRange(camera.Describe() + ": exposure_s " + std::to_string(exposure_s) + " outside the camera's " +
+                    std::to_string(caps.min_exposure_s) + " - " + std::to_string(caps.max_exposure_s) + " s");
+}
 
 Status Turntable::MoveTo(double target_deg, const MotionProfile& profile, std::chrono::milliseconds timeout) {
   HR_RETURN_IF_ERROR(StartMove(target_deg, profile));

@@ -6,21 +6,17 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <deque>
 #include <mutex>
 #include <thread>
 
 #include "core/config.h"
 #include "core/log.h"
+#include "drivers/camera_support.h"
 
 namespace hairrig {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 // --- libgphoto2 handles ------------------------------------------------------
 
@@ -309,17 +305,17 @@ class Gphoto2Camera : public Camera {
       : Camera(std::move(info)), options_(std::move(options)) {}
   ~Gphoto2Camera() override { (void)Close(); }
 
-  double time_scale() const override { return options_.time_scale; }
+  double time_scale() const override { return options_.nominal.time_scale; }
 
   CameraCapabilities capabilities() const override {
-    return {.width_px = options_.width_px,
-            .height_px = options_.height_px,
+    return {.width_px = options_.nominal.width_px,
+            .height_px = options_.nominal.height_px,
             .formats = {PixelFormat::kEncoded},
             .min_exposure_s = min_exposure_s_,
             .max_exposure_s = max_exposure_s_,
             .line_trigger = true,
-            .readout_s = options_.readout_s,
-            .download_s = options_.download_s};
+            .readout_s = options_.nominal.readout_s,
+            .download_s = options_.nominal.download_s};
   }
 
   Status Open() override {
@@ -355,10 +351,7 @@ class Gphoto2Camera : public Camera {
 
   Status Configure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
-    if (!(s.exposure_s >= min_exposure_s_ && s.exposure_s <= max_exposure_s_)) {
-      return OutOfRange(Describe() + ": exposure_s " + std::to_string(s.exposure_s) + " outside the camera's " +
-                        std::to_string(min_exposure_s_) + " - " + std::to_string(max_exposure_s_) + " s");
-    }
+    HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     std::lock_guard<std::mutex> lock(mutex_);
     const std::string shutter = NearestChoice(session_->ChoicesOf("shutterspeed"), s.exposure_s, ShutterSeconds);
     if (!shutter.empty()) HR_RETURN_IF_ERROR(FaultIfGone(session_->WriteSetting("shutterspeed", shutter)));
@@ -374,7 +367,7 @@ class Gphoto2Camera : public Camera {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
     std::lock_guard<std::mutex> lock(mutex_);
     sequence_ = 0;
-    triggers_ns_.clear();
+    triggers_.Clear();
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
@@ -387,11 +380,11 @@ class Gphoto2Camera : public Camera {
   Status SoftwareTrigger() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
     std::lock_guard<std::mutex> lock(mutex_);
-    const int64_t t = NowNs();
+    const int64_t t = SteadyNowNs();
     HR_RETURN_IF_ERROR(FaultIfGone(Retrying("trigger", [this] {
       return gp_camera_trigger_capture(session_->camera(), session_->context());
     })));
-    triggers_ns_.push_back(t);
+    triggers_.Sent(t);
     return Status::Ok();
   }
 
@@ -483,7 +476,7 @@ class Gphoto2Camera : public Camera {
     for (int attempt = 1;; ++attempt) {
       r = call();
       if (r != GP_ERROR_CAMERA_BUSY || attempt >= options_.busy_attempts) break;
-      std::this_thread::sleep_for(std::chrono::duration<double>(options_.busy_backoff_s * options_.time_scale));
+      std::this_thread::sleep_for(std::chrono::duration<double>(options_.busy_backoff_s * options_.nominal.time_scale));
     }
     Status s = session_->Check(r, Describe() + ": " + what);
     if (r == GP_ERROR_CAMERA_BUSY) return DeviceFault(s.message() + " (" + std::to_string(options_.busy_attempts) +
@@ -519,10 +512,10 @@ class Gphoto2Camera : public Camera {
     f.data.assign(bytes, bytes + size);
     f.exposure_s = exposure_s_;
     f.gain_db = settings_.gain_db;
-    f.received_time_ns = NowNs();
-    f.width_px = options_.width_px;
-    f.height_px = options_.height_px;
-    f.trigger_time_ns = TriggerTimeLocked(f.received_time_ns);
+    f.received_time_ns = SteadyNowNs();
+    f.width_px = options_.nominal.width_px;
+    f.height_px = options_.nominal.height_px;
+    f.trigger_time_ns = triggers_.ForFrame(f.received_time_ns, options_.nominal.LatencyWallS(exposure_s_));
     if (!options_.keep_on_camera) {
       // The shot is safe on the host; a body that already dropped it (RAM target) answers not found.
       const int r = gp_camera_file_delete(session_->camera(), path.folder, path.name, session_->context());
@@ -532,17 +525,6 @@ class Gphoto2Camera : public Camera {
       }
     }
     return f;
-  }
-
-  // The software trigger this file answers, or for a line trigger an estimate.
-  int64_t TriggerTimeLocked(int64_t received_ns) {
-    if (!triggers_ns_.empty()) {
-      const int64_t t = triggers_ns_.front();
-      triggers_ns_.pop_front();
-      return t;
-    }
-    const double latency_s = (exposure_s_ + options_.readout_s + options_.download_s) * options_.time_scale;
-    return received_ns - static_cast<int64_t>(latency_s * 1e9);
   }
 
   static std::string Extension(const std::string& name) {
@@ -560,7 +542,7 @@ class Gphoto2Camera : public Camera {
   double min_exposure_s_ = 1.0 / 8000;
   double max_exposure_s_ = 30;
   uint64_t sequence_ = 0;
-  std::deque<int64_t> triggers_ns_;
+  TriggerTimes triggers_;
 };
 
 }  // namespace
@@ -574,10 +556,7 @@ Result<Gphoto2CameraOptions> ParseGphoto2CameraOptions(const ConfigNode& device)
   const ConfigNode settings = device.OptionalChild("settings");
   for (const std::string& key : settings.Keys()) o.settings.emplace_back(key, settings.String(key));
   o.keep_on_camera = device.Bool("keep_on_camera", false);
-  o.width_px = device.Integer("width_px", 0, {.min = 0, .max = 100000});
-  o.height_px = device.Integer("height_px", 0, {.min = 0, .max = 100000});
-  o.readout_s = device.Number("readout_s", o.readout_s, {.min = 0, .max = 60});
-  o.download_s = device.Number("download_s", o.download_s, {.min = 0, .max = 600});
+  o.nominal = ReadCameraNominal(device, o.nominal);
   if (o.port.rfind("disk:", 0) == 0 && o.model.empty()) {
     device.Fail("model", "a camera on a disk: port needs its model (libgphoto2 cannot detect it there)");
   }

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "drivers/camera.h"
+#include "drivers/camera_support.h"
 #include "drivers/registry.h"
 
 namespace hairrig {
@@ -51,13 +52,9 @@ struct Gphoto2CameraOptions {
   std::string model;
   std::vector<std::pair<std::string, std::string>> settings;  // in config order
   bool keep_on_camera = false;
-  int width_px = 0;
-  int height_px = 0;
-  double readout_s = 0.2;
-  double download_s = 1.0;
+  CameraNominal nominal;  // width_px, height_px, readout_s (0.2), download_s (1.0)
   int busy_attempts = 3;
   double busy_backoff_s = 0.2;
-  double time_scale = 1.0;  // wall s per device s; a simulated body sets its own
 };
 
 Result<Gphoto2CameraOptions> ParseGphoto2CameraOptions(const ConfigNode& device);

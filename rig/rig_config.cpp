@@ -102,26 +102,28 @@ Result<int> SimSceneCamera(const Rig& rig, const DeviceConfig& config, const std
   return index;
 }
 
+// The simulated camera's size and timings, as a real unit's config gives them.
+CameraNominal SceneCameraNominal(const SimWorld& world, int index) {
+  const Scene& scene = WorldRenderer(world).scene();
+  const SceneCamera& camera = scene.cameras[static_cast<size_t>(index)];
+  return {camera.intrinsics.width_px, camera.intrinsics.height_px, scene.camera_readout_s, scene.camera_download_s,
+          WorldTimeScale(world)};
+}
+
 // Points a gphoto2 camera whose port is "sim" at a simulated DSLR this rig
 // serves, rendering the scene camera with the device's serial.
 Status ServeSimulatedDslr(Rig* rig, const DeviceConfig& config, Gphoto2CameraOptions* options) {
   if (options->port != "sim") return Status::Ok();
   HR_ASSIGN_OR_RETURN(const int index, SimSceneCamera(*rig, config, "port"));
-  const Scene& scene = WorldRenderer(*rig->sim_world).scene();
   HR_RETURN_IF_ERROR(ExportSimDslrCamlibs());
   SimDslrOptions server_options;
   server_options.serial = config.serial;
   server_options.scene_camera = index;
   server_options.trigger_line = config.node.String("trigger_line", "");
   HR_ASSIGN_OR_RETURN(auto server, SimDslrServer::Start(rig->sim_world, server_options));
-  const SceneCamera& camera = scene.cameras[static_cast<size_t>(index)];
   options->port = server->port();
   options->model = sim_dslr::kModel;
-  options->width_px = camera.intrinsics.width_px;
-  options->height_px = camera.intrinsics.height_px;
-  options->readout_s = scene.camera_readout_s;
-  options->download_s = scene.camera_download_s;
-  options->time_scale = WorldTimeScale(*rig->sim_world);
+  options->nominal = SceneCameraNominal(*rig->sim_world, index);
   rig->sim_dslr_servers.push_back(std::move(server));
   return Status::Ok();
 }
@@ -131,18 +133,12 @@ Status ServeSimulatedDslr(Rig* rig, const DeviceConfig& config, Gphoto2CameraOpt
 Status ServeSimulatedAravisCamera(Rig* rig, const DeviceConfig& config, AravisCameraOptions* options) {
   if (options->address != "sim") return Status::Ok();
   HR_ASSIGN_OR_RETURN(const int index, SimSceneCamera(*rig, config, "address"));
-  const Scene& scene = WorldRenderer(*rig->sim_world).scene();
   const SimAravisOptions feed_options{config.serial, index, config.node.String("trigger_line", "")};
   auto feed = std::make_unique<SimAravisFeed>(rig->sim_world, feed_options);
   SimAravisFeed* raw = feed.get();
   options->connect = [raw, feed_options]() { return OpenSimAravisCamera(*raw, feed_options); };
   options->address.clear();
-  const SceneCamera& camera = scene.cameras[static_cast<size_t>(index)];
-  options->width_px = camera.intrinsics.width_px;
-  options->height_px = camera.intrinsics.height_px;
-  options->readout_s = scene.camera_readout_s;
-  options->download_s = scene.camera_download_s;
-  options->time_scale = WorldTimeScale(*rig->sim_world);
+  options->nominal = SceneCameraNominal(*rig->sim_world, index);
   rig->sim_aravis_feeds.push_back(std::move(feed));
   return Status::Ok();
 }

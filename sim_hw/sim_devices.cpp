@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "drivers/always_present_device.h"
+#include "drivers/camera_support.h"
 #include "drivers/polled_turntable.h"
 #include "drivers/trigger_bus.h"
 #include "sim_hw/sim_turntable_controller.h"
@@ -212,6 +213,9 @@ double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); 
 int WorldDiskFullAfterFrames(const SimWorld& world) { return world.DiskFullAfterFrames(); }
 SimTurntableController& WorldTurntableController(SimWorld& world) { return world.turntable_controller(); }
 TriggerBus& WorldTriggers(SimWorld& world) { return world.triggers(); }
+Status SetWorldLightLevel(SimWorld& world, const std::string& light, double level) {
+  return world.SetLightLevel(light, level);
+}
 
 WorldExposure ExposeWorldNow(const SimWorld& world) {
   return {world.AngleDeg(), world.LightLevels(), NowNs()};
@@ -505,9 +509,7 @@ class SimCamera : public SimDevice<Camera> {
   Status Configure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
     const auto caps = capabilities();
-    if (!(s.exposure_s >= caps.min_exposure_s && s.exposure_s <= caps.max_exposure_s)) {
-      return OutOfRange(Describe() + ": exposure_s " + std::to_string(s.exposure_s) + " outside the camera's range");
-    }
+    HR_RETURN_IF_ERROR(CheckExposure(*this, caps, s.exposure_s));
     if (s.format == PixelFormat::kEncoded) return OutOfRange(Describe() + ": delivers raw frames only");
     if (s.trigger == TriggerSource::kLine && s.trigger_line.empty()) {
       return InvalidArgument(Describe() + ": line trigger needs a trigger_line");

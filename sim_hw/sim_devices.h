@@ -47,6 +47,11 @@ int WorldDiskFullAfterFrames(const SimWorld& world);
 class SimTurntableController;
 SimTurntableController& WorldTurntableController(SimWorld& world);
 
+// Sets a scene light's level (0..1) as a simulated panel does; NotFound for
+// a light the scene lacks. For tests and benchmarks that need a lit world
+// without building light devices.
+Status SetWorldLightLevel(SimWorld& world, const std::string& light, double level);
+
 // What a camera triggered now sees: the turntable angle and light levels at
 // the start of its exposure (steady-clock time `trigger_ns`).
 struct WorldExposure {

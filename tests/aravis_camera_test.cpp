@@ -10,10 +10,10 @@
 
 #include "core/config.h"
 #include "drivers/aravis_camera.h"
-#include "drivers/light.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_devices.h"
+#include "tests/support/sim_world.h"
 
 namespace hairrig {
 namespace {
@@ -24,34 +24,16 @@ constexpr char kSerial[] = "SIM-CAM-LOWER";
 constexpr int kSceneCamera = 1;
 
 struct World {
-  std::shared_ptr<SimWorld> world;
-  std::vector<std::unique_ptr<Device>> lights;  // switched on so that the views are lit
+  std::shared_ptr<SimWorld> world;  // with its panels on, so that the views are lit
 };
 
-World MakeWorld() {
-  World w;
-  auto scene = LoadScene("etc/scenes/default.yaml");
-  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
-  SimWorldOptions options;
-  options.time_scale = 0.01;
-  options.noise = false;
-  w.world = CreateSimWorld(*scene, options).value();
-  DeviceRegistry registry;
-  RegisterSimBackends(&registry, w.world);
-  for (const SceneLight& l : scene->lights) {
-    auto node = ConfigNode::LoadString("{name: " + l.name + ", backend: sim, serial: L}", "lights");
-    auto light = registry.Create({DeviceKind::kLight, l.name, "sim", "L", *node});
-    EXPECT_TRUE(light.ok() && (*light)->Open().ok() && static_cast<Light&>(**light).SetOn(true).ok());
-    if (light.ok()) w.lights.push_back(std::move(light).value());
-  }
-  return w;
-}
+World MakeWorld() { return {hairrig_test::MakeSimWorld({}, /*lights_on=*/true)}; }
 
 AravisCameraOptions BaseOptions() {
   AravisCameraOptions o;
-  o.width_px = 1200;
-  o.height_px = 1600;
-  o.time_scale = 0.01;
+  o.nominal.width_px = 1200;
+  o.nominal.height_px = 1600;
+  o.nominal.time_scale = 0.01;
   return o;
 }
 
@@ -185,7 +167,7 @@ TEST(AravisCamera, SettingsOutsideTheCameraAreRefused) {
   EXPECT_EQ(p.camera->Configure(s).code(), StatusCode::kOutOfRange);
 
   AravisCameraOptions o = BaseOptions();
-  o.width_px = 100000;
+  o.nominal.width_px = 100000;
   InProcess big = StartInProcess();
   const SimAravisOptions feed_options{kSerial, kSceneCamera, ""};
   SimAravisFeed* feed = big.feed.get();

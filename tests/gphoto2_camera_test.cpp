@@ -13,11 +13,11 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "drivers/gphoto2_camera.h"
-#include "drivers/light.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_dslr_protocol.h"
 #include "sim_hw/sim_dslr_server.h"
+#include "tests/support/sim_world.h"
 
 namespace hairrig {
 namespace {
@@ -26,21 +26,9 @@ using std::chrono::milliseconds;
 constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
 constexpr char kSerial[] = "SIM-CAM-UPPER";
 
-std::shared_ptr<SimWorld> MakeWorld(std::vector<SimFault> faults = {}) {
-  auto scene = LoadScene("etc/scenes/default.yaml");
-  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
-  SimWorldOptions options;
-  options.time_scale = 0.01;
-  options.noise = false;
-  options.faults = std::move(faults);
-  auto world = CreateSimWorld(*scene, options);
-  EXPECT_TRUE(world.ok()) << world.status().ToString();
-  return std::move(world).value();
-}
 
 struct Bench {
-  std::shared_ptr<SimWorld> world;
-  std::vector<std::unique_ptr<Device>> lights;  // the scene's panels, switched on so that the views are lit
+  std::shared_ptr<SimWorld> world;  // with its panels on, so that the views are lit
   std::unique_ptr<SimDslrServer> server;
   std::unique_ptr<Camera> camera;
 };
@@ -49,9 +37,9 @@ Gphoto2CameraOptions ClientOptions(const SimDslrServer& server) {
   Gphoto2CameraOptions o;
   o.port = server.port();
   o.model = sim_dslr::kModel;
-  o.width_px = 1200;
-  o.height_px = 1600;
-  o.time_scale = 0.01;
+  o.nominal.width_px = 1200;
+  o.nominal.height_px = 1600;
+  o.nominal.time_scale = 0.01;
   o.busy_backoff_s = 0.5;  // x time_scale
   return o;
 }
@@ -59,18 +47,7 @@ Gphoto2CameraOptions ClientOptions(const SimDslrServer& server) {
 Bench StartBench(std::vector<SimFault> faults = {}, const std::string& trigger_line = "",
                  Gphoto2CameraOptions* override_options = nullptr) {
   Bench b;
-  b.world = MakeWorld(std::move(faults));
-  DeviceRegistry registry;
-  RegisterSimBackends(&registry, b.world);
-  for (const char* name : {"top", "bottom"}) {
-    auto node = ConfigNode::LoadString(std::string("{name: ") + name + ", backend: sim, serial: L}", "lights");
-    auto light = registry.Create({DeviceKind::kLight, name, "sim", "L", *node});
-    EXPECT_TRUE(light.ok()) << light.status().ToString();
-    if (!light.ok()) continue;
-    EXPECT_TRUE((*light)->Open().ok());
-    EXPECT_TRUE(static_cast<Light&>(**light).SetOn(true).ok());
-    b.lights.push_back(std::move(light).value());
-  }
+  b.world = hairrig_test::MakeSimWorld(std::move(faults), /*lights_on=*/true);
   EXPECT_TRUE(ExportSimDslrCamlibs().ok());
   SimDslrOptions options;
   options.serial = kSerial;

@@ -10,6 +10,7 @@
 #include "drivers/modbus_turntable.h"
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/scene.h"
+#include "tests/support/sim_world.h"
 
 namespace hairrig {
 namespace {
@@ -20,15 +21,7 @@ const MotionProfile kProfile{60.0, 240.0};
 constexpr char kSerial[] = "SIM-TT-0001";
 
 std::shared_ptr<SimWorld> MakeWorld(std::vector<SimFault> faults = {}) {
-  auto scene = LoadScene("etc/scenes/default.yaml");
-  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
-  SimWorldOptions options;
-  options.time_scale = 0.01;
-  options.noise = false;
-  options.faults = std::move(faults);
-  auto world = CreateSimWorld(*scene, options);
-  EXPECT_TRUE(world.ok()) << world.status().ToString();
-  return std::move(world).value();
+  return hairrig_test::MakeSimWorld(std::move(faults));
 }
 
 enum class Transport { kTcp, kRtu };

@@ -1,0 +1,34 @@
+// Test helper: the simulated world of etc/scenes/default.yaml, noise-free and
+// 100x faster than real time, optionally with its panels on. Header-only;
+// run from the repository root (as ctest does).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sim_hw/scene.h"
+#include "sim_hw/sim_devices.h"
+
+namespace hairrig_test {
+
+inline std::shared_ptr<hairrig::SimWorld> MakeSimWorld(std::vector<hairrig::SimFault> faults = {},
+                                                       bool lights_on = false) {
+  auto scene = hairrig::LoadScene("etc/scenes/default.yaml");
+  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
+  hairrig::SimWorldOptions options;
+  options.time_scale = 0.01;
+  options.noise = false;
+  options.faults = std::move(faults);
+  auto world = hairrig::CreateSimWorld(*scene, options);
+  EXPECT_TRUE(world.ok()) << world.status().ToString();
+  if (lights_on) {
+    for (const hairrig::SceneLight& l : scene->lights) {
+      EXPECT_TRUE(hairrig::SetWorldLightLevel(**world, l.name, 1.0).ok());
+    }
+  }
+  return std::move(world).value();
+}
+
+}  // namespace hairrig_test
