@@ -403,7 +403,7 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
   for (const std::string& name : lines) {
     for (const auto& l : rig_.devices.trigger_lines) {
       if (l->info().name != name) continue;
-      if (const Status s = l->Pulse(std::chrono::microseconds(100)); !s.ok()) RecordFault(l.get(), s, "re-shoot later");
+      if (const Status s = l->Pulse(plan_.trigger_pulse); !s.ok()) RecordFault(l.get(), s, "re-shoot later");
     }
   }
   double exposure_wall_s = 0;

@@ -78,11 +78,12 @@ Result<CapturePlan> ReadCapturePlan(const ConfigNode& root, const DeviceSet& dev
   for (const auto& light : devices.lights) all_on[light->info().name] = 1.0;
   // An absent section reads as an empty one: every field takes its default.
   if (node.IsMap()) node.AllowOnlyKeys({"stops", "angles_deg", "cameras", "lights", "views", "speed_deg_s", "accel_deg_s2", "home",
-                      "exposure_s", "gain_db", "pixel_format"});
+                      "exposure_s", "gain_db", "pixel_format", "trigger_pulse_us"});
   plan.motion.speed_deg_s = node.Number("speed_deg_s", 30, {.min = 0.01, .max = 3600});
   plan.motion.accel_deg_s2 = node.Number("accel_deg_s2", 60, {.min = 0.01, .max = 36000});
   plan.home_first = node.Bool("home", true);
   plan.camera_settings = ReadCameraSettings(node);
+  plan.trigger_pulse = std::chrono::microseconds(node.Integer("trigger_pulse_us", 100, {.min = 1, .max = 1000000}));
   const std::map<std::string, double> lights = ReadLightLevels(node, "lights", devices, all_on);
   if (node.Has("views")) {
     for (const ConfigNode& v : node.Items("views")) {

@@ -8,6 +8,8 @@
 // camera, the numbering the simulated rig's ground truth uses.
 #pragma once
 
+#include <chrono>
+
 #include <map>
 #include <string>
 #include <vector>
@@ -39,6 +41,10 @@ struct CapturePlan {
   MotionProfile motion;
   bool home_first = true;
   CaptureSettings camera_settings;  // exposure, gain and format for every camera
+  // Width of each pulse on a trigger line (plan field trigger_pulse_us): long
+  // enough for the slowest input on the line (opto-isolated camera inputs
+  // want tens of microseconds; a DSLR's wired remote, tens of milliseconds).
+  std::chrono::microseconds trigger_pulse{100};
 };
 
 // Attempts with exponential back-off: try, wait backoff_s, try, wait

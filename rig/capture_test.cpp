@@ -130,6 +130,19 @@ TEST(Capture, BrokenConfigCreatesNothing) {
   EXPECT_FALSE(fs::exists(o.out_dir));
 }
 
+TEST(Capture, TriggerPulseWidthIsAPlanField) {
+  const std::string dir = FreshDir("capture_pulse");
+  CaptureOptions o;
+  o.config_path = WriteSmallRig(dir, {{"plan", "plan: {trigger_pulse_us: 0}\n"}});
+  o.out_dir = dir + "/c";
+  auto s = RunCapture(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("plan.trigger_pulse_us"), std::string::npos) << s.status().ToString();
+  const CaptureSummary ok = Capture(WriteSmallRig(dir, {{"plan", "plan: {stops: 2, trigger_pulse_us: 20000}\n"}}),
+                                    dir + "/c2");
+  EXPECT_EQ(ok.status, "complete");
+}
+
 TEST(Capture, ExplicitViewsPlan) {
   const std::string dir = FreshDir("capture_views");
   const std::string plan =
