@@ -1,5 +1,5 @@
-// Finds V4L2 video-capture devices (/dev/video*) for `hairrig devices
-// --discover`; the v4l2 camera backend itself is not built yet.
+// Finds V4L2 video-capture devices (/dev/video*): for `hairrig devices
+// --discover` and for the v4l2 backend's search by serial.
 #pragma once
 
 #include <string>
@@ -16,7 +16,10 @@ struct V4l2Detected {
   std::string error;     // why the node could not be queried (permissions...)
 };
 
+class V4l2Io;
+
 // Video-capture nodes only (a UVC camera's metadata node is left out).
-std::vector<V4l2Detected> DetectV4l2Cameras();
+std::vector<V4l2Detected> DetectV4l2Cameras(V4l2Io& io);
+std::vector<V4l2Detected> DetectV4l2Cameras();  // through the system calls
 
 }  // namespace hairrig

@@ -36,8 +36,9 @@ void AddCameras(const DeviceFinders& finders, Discovery* d) {
   n = 0;
   for (const V4l2Detected& c : finders.v4l2()) {
     std::string note = c.error;
-    if (note.empty()) note = "the v4l2 backend is not built yet: use it once it lands";
-    if (c.error.empty() && c.serial.empty()) note += "; this camera reports no serial";
+    if (c.error.empty() && c.serial.empty()) {
+      note = "this camera reports no USB serial: the v4l2 backend needs one to tell cameras apart";
+    }
     d->devices.push_back({"cameras", "v4l2", (c.card.empty() ? c.path : c.card + " at " + c.path + " (" + c.bus_info + ")"),
                           c.serial,
                           "- {name: uvc" + std::to_string(++n) + ", backend: v4l2, serial: " + Quoted(c.serial) + "}",

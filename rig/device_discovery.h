@@ -33,7 +33,7 @@ struct DiscoveredDevice {
 struct DeviceFinders {
   std::function<Result<std::vector<Gphoto2Detected>>()> gphoto2 = DetectGphoto2Cameras;
   std::function<std::vector<AravisDetected>()> aravis = DetectAravisCameras;
-  std::function<std::vector<V4l2Detected>()> v4l2 = DetectV4l2Cameras;
+  std::function<std::vector<V4l2Detected>()> v4l2 = [] { return DetectV4l2Cameras(); };
   std::function<std::vector<GpioChipInfo>()> gpio = ListGpioChips;
   std::function<std::vector<UsbRelayDetected>()> relays = DetectUsbRelays;
 };

@@ -43,7 +43,7 @@ TEST(DeviceDiscovery, EachDeviceComesWithItsSerialAndASnippetToPaste) {
   EXPECT_EQ(d.devices[0].snippet, "- {name: dslr1, backend: gphoto2, serial: \"0320\\\"21\"}");
   EXPECT_EQ(d.devices[1].snippet, "- {name: camera1, backend: aravis, serial: \"22104387\"}");
   EXPECT_EQ(d.devices[1].what, "Basler acA2440-20gc (GigEVision, 192.168.10.31)");
-  EXPECT_NE(d.devices[2].note.find("not built yet"), std::string::npos);
+  EXPECT_EQ(d.devices[2].snippet, "- {name: uvc1, backend: v4l2, serial: \"A1B2\"}");
   EXPECT_NE(d.devices[3].snippet.find("chip: \"pinctrl-bcm2711\""), std::string::npos);
   EXPECT_NE(d.devices[4].what.find("2 channels"), std::string::npos);
   const std::string text = DiscoveryText(d);

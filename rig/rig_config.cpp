@@ -3,10 +3,12 @@
 #include "drivers/aravis_camera.h"
 #include "drivers/gphoto2_camera.h"
 #include "drivers/gpio_devices.h"
+#include "drivers/v4l2_camera.h"
 #include "drivers/modbus_turntable.h"
 #include "sim_hw/sim_dslr_protocol.h"
 #include "sim_hw/sim_dslr_server.h"
 #include "sim_hw/sim_turntable_controller.h"
+#include "sim_hw/sim_v4l2.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -143,6 +145,20 @@ Status ServeSimulatedAravisCamera(Rig* rig, const DeviceConfig& config, AravisCa
   return Status::Ok();
 }
 
+// Points a v4l2 camera whose device is "sim" at a fake UVC camera showing
+// the scene camera with the device's serial, behind the backend's system-call layer.
+Status ServeSimulatedUvcCamera(Rig* rig, const DeviceConfig& config, V4l2CameraOptions* options) {
+  if (options->device != "sim") return Status::Ok();
+  HR_ASSIGN_OR_RETURN(const int index, SimSceneCamera(*rig, config, "device"));
+  SimV4l2Options fake;
+  fake.serial = config.serial;
+  fake.scene_camera = index;
+  options->io = std::make_shared<SimV4l2Device>(rig->sim_world, fake);
+  options->device = fake.node;
+  options->nominal = SceneCameraNominal(*rig->sim_world, index);
+  return Status::Ok();
+}
+
 }  // namespace
 
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& build) {
@@ -160,6 +176,9 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
   });
   RegisterAravisBackend(&registry, [raw](const DeviceConfig& c, AravisCameraOptions* options) {
     return ServeSimulatedAravisCamera(raw, c, options);
+  });
+  RegisterV4l2Backend(&registry, [raw](const DeviceConfig& c, V4l2CameraOptions* options) {
+    return ServeSimulatedUvcCamera(raw, c, options);
   });
   if (build.simulate && !config.sim_scene_path.empty()) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));

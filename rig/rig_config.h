@@ -63,7 +63,9 @@ struct RigBuildOptions {
 // `gphoto2` camera with `port: sim` is a simulated DSLR (sim_hw/sim_dslr_server.h)
 // rendering the scene camera with its serial, reached through the project's
 // camlib (CAMLIBS is set for this process), and an `aravis` camera with
-// `address: sim` is Aravis' in-process fake camera rendering that scene camera.
+// `address: sim` is Aravis' in-process fake camera rendering that scene
+// camera, and a `v4l2` camera with `device: sim` a fake UVC camera behind the
+// backend's system-call layer (sim_hw/sim_v4l2.h).
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

@@ -148,6 +148,21 @@ TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
   EXPECT_NE(rig.status().message().find("devices.cameras[0]"), std::string::npos) << rig.status().ToString();
 }
 
+// `device: sim` gives a v4l2 camera a fake UVC camera behind its system-call layer.
+TEST(SimDevices, AUvcCameraOnTheSimulatedRig) {
+  auto rig = OpenRigFromText("  cameras: [{name: uvc, backend: v4l2, serial: SIM-CAM-LOWER, device: sim}]\n");
+  Camera& cam = *rig->devices.cameras[0];
+  EXPECT_EQ(cam.capabilities().width_px, 1200);  // the scene camera's size
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  ASSERT_TRUE(cam.Configure(s).ok());
+  ASSERT_TRUE(cam.Arm().ok());
+  ASSERT_TRUE(cam.SoftwareTrigger().ok());
+  auto frame = cam.WaitFrame(kFrameWait);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_EQ(frame->data.size(), frame->ExpectedBytes());
+}
+
 // etc/rig-example.yaml documents a real rig; it must stay a valid config.
 TEST(SimDevices, TheExampleRealRigConfigBuilds) {
   auto config = LoadRigConfig("etc/rig-example.yaml");
