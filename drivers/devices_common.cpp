@@ -4,11 +4,20 @@
 
 #include "drivers/camera.h"
 #include "drivers/camera_support.h"
+#include "drivers/light.h"
 #include "core/config.h"
 #include "drivers/polled_turntable.h"
 #include "drivers/turntable.h"
 
 namespace hairrig {
+
+Result<bool> OnOffFromLevel(const Light& light, double level, const std::string& what) {
+  if (level == 0.0 || level == 1.0) return level == 1.0;
+  if (level >= 0 && level <= 1) {
+    return FailedPrecondition(light.Describe() + ": " + what + " is on or off; level must be 0 or 1");
+  }
+  return OutOfRange(light.Describe() + ": level must be within 0..1");
+}
 
 int64_t SteadyNowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -65,12 +65,8 @@ class GpioLight : public GpioDevice<Light, GpioOutputLine> {
     return Status::Ok();
   }
   Status SetLevel(double level) override {
-    if (level != 0.0 && level != 1.0) {
-      return (level >= 0 && level <= 1)
-                 ? FailedPrecondition(Describe() + ": a GPIO-switched panel is on or off; level must be 0 or 1")
-                 : OutOfRange(Describe() + ": level must be within 0..1");
-    }
-    return SetOn(level == 1.0);
+    HR_ASSIGN_OR_RETURN(const bool on, OnOffFromLevel(*this, level, "a GPIO-switched panel"));
+    return SetOn(on);
   }
   Result<bool> IsOn() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsOn"));

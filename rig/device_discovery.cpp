@@ -59,12 +59,11 @@ void AddLinesAndRelays(const DeviceFinders& finders, Discovery* d) {
   for (const UsbRelayDetected& r : finders.relays()) {
     const std::string what = (r.product.empty() ? std::string("USB relay board") : r.product) + " at USB port " +
                              r.port_path + (r.channels ? ", " + std::to_string(r.channels) + " channels" : "");
-    std::string note = r.error;
-    if (note.empty()) note = "the usbrelay backend (which reads the board's own id) is not built yet";
-    d->devices.push_back({"lights", "usbrelay", what, "",
-                          "- {name: relay" + std::to_string(++n) + ", backend: usbrelay, usb_port: " +
-                              Quoted(r.port_path) + ", channel: 1}",
-                          note});
+    d->devices.push_back({"lights", "usbrelay", what, r.board_id,
+                          "- {name: relay" + std::to_string(++n) + ", backend: usbrelay, serial: PANEL-TOP-01, board: " +
+                              Quoted(r.board_id) + ", channel: 1}",
+                          r.error.empty() ? "serial is the panel's asset tag; pick the channel it is wired to"
+                                          : r.error});
   }
 }
 

@@ -15,6 +15,7 @@
 #include "drivers/aravis_camera.h"
 #include "drivers/gphoto2_camera.h"
 #include "drivers/gpio_provider.h"
+#include "drivers/usb_relay.h"
 #include "drivers/usb_relay_discovery.h"
 #include "drivers/uvc_discovery.h"
 
@@ -35,7 +36,7 @@ struct DeviceFinders {
   std::function<std::vector<AravisDetected>()> aravis = DetectAravisCameras;
   std::function<std::vector<V4l2Detected>()> v4l2 = [] { return DetectV4l2Cameras(); };
   std::function<std::vector<GpioChipInfo>()> gpio = ListGpioChips;
-  std::function<std::vector<UsbRelayDetected>()> relays = DetectUsbRelays;
+  std::function<std::vector<UsbRelayDetected>()> relays = [] { return DetectUsbRelays(); };
 };
 
 struct Discovery {

@@ -37,7 +37,7 @@ TEST(DeviceDiscovery, EachDeviceComesWithItsSerialAndASnippetToPaste) {
   };
   f.v4l2 = [] { return std::vector<V4l2Detected>{{"/dev/video0", "C920", "uvcvideo", "usb-1", "A1B2", ""}}; };
   f.gpio = [] { return std::vector<GpioChipInfo>{{"gpiochip0", "pinctrl-bcm2711", 58}}; };
-  f.relays = [] { return std::vector<UsbRelayDetected>{{"1-2.3", "USBRelay2", 2, ""}}; };
+  f.relays = [] { return std::vector<UsbRelayDetected>{{"1-2.3", "USBRelay2", 2, "QAAMZ", ""}}; };
   const Discovery d = DiscoverDevices(f);
   ASSERT_EQ(d.devices.size(), 5u);
   EXPECT_EQ(d.devices[0].snippet, "- {name: dslr1, backend: gphoto2, serial: \"0320\\\"21\"}");
@@ -46,6 +46,7 @@ TEST(DeviceDiscovery, EachDeviceComesWithItsSerialAndASnippetToPaste) {
   EXPECT_EQ(d.devices[2].snippet, "- {name: uvc1, backend: v4l2, serial: \"A1B2\"}");
   EXPECT_NE(d.devices[3].snippet.find("chip: \"pinctrl-bcm2711\""), std::string::npos);
   EXPECT_NE(d.devices[4].what.find("2 channels"), std::string::npos);
+  EXPECT_EQ(d.devices[4].snippet, "- {name: relay1, backend: usbrelay, serial: PANEL-TOP-01, board: \"QAAMZ\", channel: 1}");
   const std::string text = DiscoveryText(d);
   EXPECT_NE(text.find("found 5 device(s)"), std::string::npos) << text;
   EXPECT_NE(text.find("serial: 22104387"), std::string::npos) << text;
@@ -67,7 +68,8 @@ TEST(DeviceDiscovery, AFailingSourceIsNamedAndTheOthersStillRun) {
 
 TEST(DeviceDiscovery, RelayChannelsComeFromTheProductName) {
   EXPECT_EQ(UsbRelayChannels("USBRelay2"), 2);
-  EXPECT_EQ(UsbRelayChannels("USBRelay16"), 16);
+  EXPECT_EQ(UsbRelayChannels("USBRelay8"), 8);
+  EXPECT_EQ(UsbRelayChannels("USBRelay16"), 0);  // no such board: 8 channels at most
   EXPECT_EQ(UsbRelayChannels("USBasp"), 0);
   EXPECT_EQ(UsbRelayChannels("USBRelay"), 0);
 }

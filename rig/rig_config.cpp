@@ -3,6 +3,7 @@
 #include "drivers/aravis_camera.h"
 #include "drivers/gphoto2_camera.h"
 #include "drivers/gpio_devices.h"
+#include "drivers/usb_relay.h"
 #include "drivers/v4l2_camera.h"
 #include "drivers/modbus_turntable.h"
 #include "sim_hw/sim_dslr_protocol.h"
@@ -159,6 +160,21 @@ Status ServeSimulatedUvcCamera(Rig* rig, const DeviceConfig& config, V4l2CameraO
   return Status::Ok();
 }
 
+// Gives a usbrelay light with `bus: sim` a simulated board with its board
+// id (8 channels), its channel powering the scene light `light` (default: the device's name).
+Status ServeSimulatedRelay(Rig* rig, const DeviceConfig& config, UsbRelayLightOptions* options) {
+  if (!options->simulated) return Status::Ok();
+  if (!rig->sim_world) return Status::Ok();  // the backend names the missing sim section
+  if (!rig->sim_relay_bus) rig->sim_relay_bus = std::make_shared<SimUsbRelayBus>(rig->sim_world);
+  // One board per id; each light adds its channel to the board's wiring.
+  SimRelayBoard board{"sim-" + options->board_id, options->board_id, 8, {}};
+  const std::string light = options->sim_light.empty() ? config.name : options->sim_light;
+  if (!rig->sim_relay_bus->HasBoard(board.board_id)) HR_RETURN_IF_ERROR(rig->sim_relay_bus->AddBoard(board));
+  HR_RETURN_IF_ERROR(rig->sim_relay_bus->Wire(board.port_path, options->channel, light));
+  options->bus = rig->sim_relay_bus;
+  return Status::Ok();
+}
+
 }  // namespace
 
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& build) {
@@ -179,6 +195,9 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
   });
   RegisterV4l2Backend(&registry, [raw](const DeviceConfig& c, V4l2CameraOptions* options) {
     return ServeSimulatedUvcCamera(raw, c, options);
+  });
+  RegisterUsbRelayBackend(&registry, [raw](const DeviceConfig& c, UsbRelayLightOptions* options) {
+    return ServeSimulatedRelay(raw, c, options);
   });
   if (build.simulate && !config.sim_scene_path.empty()) {
     HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(config.sim_scene_path));

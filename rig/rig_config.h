@@ -11,6 +11,7 @@
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_dslr_server.h"
+#include "sim_hw/sim_usb_relay.h"
 #include "sim_hw/sim_devices.h"
 
 namespace hairrig {
@@ -43,6 +44,7 @@ struct Rig {
   std::vector<std::unique_ptr<ModbusTurntableServer>> sim_modbus_servers;
   std::vector<std::unique_ptr<SimDslrServer>> sim_dslr_servers;
   std::vector<std::unique_ptr<SimAravisFeed>> sim_aravis_feeds;
+  std::shared_ptr<SimUsbRelayBus> sim_relay_bus;  // the boards of `usbrelay` lights with bus: sim
   DeviceSet devices;
   // Camera name -> the trigger line it is wired to (devices.cameras[].trigger_line);
   // cameras without one are triggered in software.
@@ -64,8 +66,9 @@ struct RigBuildOptions {
 // rendering the scene camera with its serial, reached through the project's
 // camlib (CAMLIBS is set for this process), and an `aravis` camera with
 // `address: sim` is Aravis' in-process fake camera rendering that scene
-// camera, and a `v4l2` camera with `device: sim` a fake UVC camera behind the
-// backend's system-call layer (sim_hw/sim_v4l2.h).
+// camera, a `v4l2` camera with `device: sim` a fake UVC camera behind the
+// backend's system-call layer (sim_hw/sim_v4l2.h), and a `usbrelay` light with
+// `bus: sim` a channel of a simulated relay board powering its scene light.
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

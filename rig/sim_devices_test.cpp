@@ -163,6 +163,28 @@ TEST(SimDevices, AUvcCameraOnTheSimulatedRig) {
   EXPECT_EQ(frame->data.size(), frame->ExpectedBytes());
 }
 
+// `bus: sim` gives a usbrelay light a simulated board whose channel powers the scene light.
+TEST(SimDevices, RelaySwitchedPanelsLightTheView) {
+  auto rig = OpenRigFromText(
+      "  lights:\n"
+      "    - {name: top, backend: usbrelay, serial: PANEL-1, board: RLY01, channel: 1, bus: sim}\n"
+      "    - {name: lower_panel, backend: usbrelay, serial: PANEL-2, board: RLY01, channel: 2, bus: sim, light: bottom}\n"
+      "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n");
+  Camera& cam = *rig->devices.cameras[0];
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  ASSERT_TRUE(cam.Configure(s).ok());
+  ASSERT_TRUE(cam.Arm().ok());
+  ASSERT_TRUE(cam.SoftwareTrigger().ok());
+  auto dark = cam.WaitFrame(kFrameWait);
+  for (auto& light : rig->devices.lights) ASSERT_TRUE(light->SetOn(true).ok());
+  ASSERT_TRUE(cam.SoftwareTrigger().ok());
+  auto lit = cam.WaitFrame(kFrameWait);
+  ASSERT_TRUE(dark.ok() && lit.ok());
+  EXPECT_LT(MeanDn(*dark), 2.0);
+  EXPECT_GT(MeanDn(*lit), 20.0);
+}
+
 // etc/rig-example.yaml documents a real rig; it must stay a valid config.
 TEST(SimDevices, TheExampleRealRigConfigBuilds) {
   auto config = LoadRigConfig("etc/rig-example.yaml");
