@@ -42,8 +42,8 @@ class LibusbRelayBus : public UsbRelayBus {
         const std::string product = reinterpret_cast<const char*>(text);
         // 16c0:05df is V-USB's shared id: only boards naming themselves USBRelayN are relays.
         if (UsbRelayChannels(product) > 0) boards.push_back({PortPath(device), product});
-      } else if (!handle) {
-        boards.push_back({PortPath(device), ""});  // cannot open: listed so that the error is seen
+      } else {
+        boards.push_back({PortPath(device), ""});  // unreadable: listed, so that its error is seen
       }
       return false;
     });

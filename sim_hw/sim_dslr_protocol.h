@@ -32,6 +32,10 @@ namespace hairrig::sim_dslr {
 // The camlib's model name: what `gphoto2 --list-cameras` shows.
 inline constexpr const char* kModel = "Hairrig Simulated DSLR";
 inline constexpr const char* kSocketName = "camera.sock";
+// pid.codes' test id (https://pid.codes/1209/0001/), which the camlib claims
+// for USB detection of a simulated body.
+inline constexpr int kUsbVendorId = 0x1209;
+inline constexpr int kUsbProductId = 0x0001;
 inline constexpr const char* kStorageFolder = "/store_00010001";
 inline constexpr const char* kImageFolder = "/store_00010001/DCIM/100HRSIM";
 

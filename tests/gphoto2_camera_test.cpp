@@ -263,21 +263,26 @@ TEST(Gphoto2Camera, ConfigErrorsNameTheField) {
 
 // --- the gphoto2 command against the simulated DSLR ---------------------------
 
-std::optional<std::string> RunGphoto2(const std::string& args) {
-  auto folder = SimDslrCamlibFolder();
-  if (!folder.ok()) return std::nullopt;
-  const std::string command = "CAMLIBS='" + *folder + "' gphoto2 " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
+// Runs `command` through the shell; its output, or nullopt (and a failure) when it failed.
+std::optional<std::string> RunShell(const std::string& command) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
   if (pipe == nullptr) return std::nullopt;
   std::string out;
   char buf[4096];
   size_t n = 0;
   while ((n = fread(buf, 1, sizeof(buf), pipe)) > 0) out.append(buf, n);
   if (pclose(pipe) != 0) {
-    ADD_FAILURE() << "gphoto2 " << args << " failed:\n" << out;
+    ADD_FAILURE() << command << " failed:\n" << out;
     return std::nullopt;
   }
   return out;
+}
+
+// The unmodified gphoto2 with the simulated DSLR's camlib folder as CAMLIBS.
+std::optional<std::string> RunGphoto2(const std::string& args, const std::string& wrapper = "") {
+  auto folder = SimDslrCamlibFolder();
+  if (!folder.ok()) return std::nullopt;
+  return RunShell(wrapper + "env CAMLIBS='" + *folder + "' gphoto2 " + args);
 }
 
 class Gphoto2Command : public ::testing::Test {
@@ -299,6 +304,24 @@ TEST_F(Gphoto2Command, ListsTheSimulatedModel) {
   EXPECT_NE(out->find(sim_dslr::kModel), std::string::npos);
   // The system camlibs are linked beside it, so real bodies stay known.
   EXPECT_NE(out->find("Canon EOS 5D Mark IV"), std::string::npos);
+}
+
+// libgphoto2 auto-detects USB cameras only. umockdev enumerates a USB device
+// with the id the simulated body's camlib claims (tests/data/sim_dslr_usb.umockdev:
+// sysfs attributes and descriptors, written for this test), and the unmodified
+// gphoto2 lists the simulated model on it.
+TEST_F(Gphoto2Command, AutoDetectListsTheSimulatedBodyOnAUsbBus) {
+  if (std::system("command -v umockdev-run >/dev/null 2>&1") != 0) {
+    GTEST_FAIL() << "umockdev-run is not installed: run scripts/install-deps";
+  }
+  auto out = RunGphoto2("--auto-detect", "umockdev-run -d tests/data/sim_dslr_usb.umockdev -- ");
+  ASSERT_TRUE(out);
+  EXPECT_NE(out->find(std::string(sim_dslr::kModel) + " "), std::string::npos) << *out;
+  EXPECT_NE(out->find("usb:001,002"), std::string::npos) << *out;
+  // Without the USB device, nothing is detected.
+  auto plain = RunGphoto2("--auto-detect");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->find(sim_dslr::kModel), std::string::npos) << *plain;
 }
 
 TEST_F(Gphoto2Command, CapturesAndDownloadsAJpegOfTheView) {
@@ -323,7 +346,7 @@ TEST_F(Gphoto2Command, SetConfigIsReadBackByGetConfig) {
   ASSERT_TRUE(serial);
   EXPECT_NE(serial->find(std::string("Current: ") + kSerial), std::string::npos) << *serial;
   // The value refused by the camera is refused by the command too.
-  const std::string refused = "CAMLIBS='" + *SimDslrCamlibFolder() + "' gphoto2 " + target_ +
+  const std::string refused = "env CAMLIBS='" + *SimDslrCamlibFolder() + "' gphoto2 " + target_ +
                               "--set-config iso=123 >/dev/null 2>&1";
   EXPECT_NE(std::system(refused.c_str()), 0);
 }

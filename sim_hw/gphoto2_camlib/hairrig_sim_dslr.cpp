@@ -335,7 +335,13 @@ int camera_abilities(CameraAbilitiesList* list) {
   CopyText(a.model, sizeof(a.model), proto::kModel);
   CopyText(a.id, sizeof(a.id), "hairrig-sim-dslr");
   a.status = GP_DRIVER_STATUS_TESTING;
-  a.port = GP_PORT_DISK;
+  // Its camera lives on a disk: port (the folder of its socket). It also
+  // claims the pid.codes test id 1209:0001, so that libgphoto2's USB
+  // auto-detection lists it where a USB device with that id is enumerated
+  // (the tests give one through umockdev); it is not opened over USB.
+  a.port = static_cast<GPPortType>(GP_PORT_DISK | GP_PORT_USB);
+  a.usb_vendor = proto::kUsbVendorId;
+  a.usb_product = proto::kUsbProductId;
   a.operations = static_cast<CameraOperation>(GP_OPERATION_CAPTURE_IMAGE | GP_OPERATION_TRIGGER_CAPTURE |
                                               GP_OPERATION_CONFIG);
   a.file_operations = GP_FILE_OPERATION_DELETE;
