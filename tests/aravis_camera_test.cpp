@@ -13,10 +13,14 @@
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_devices.h"
+#include "tests/support/camera_checks.h"
 #include "tests/support/sim_world.h"
 
 namespace hairrig {
 namespace {
+
+using hairrig_test::Psnr;
+using hairrig_test::ShootOnce;
 
 using std::chrono::milliseconds;
 constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
@@ -57,22 +61,7 @@ InProcess StartInProcess(const std::string& trigger_line = "", const std::string
   return p;
 }
 
-Result<Frame> Shoot(Camera& camera, PixelFormat format) {
-  CaptureSettings s;
-  s.format = format;
-  s.exposure_s = 0.02;
-  HR_RETURN_IF_ERROR(camera.Configure(s));
-  HR_RETURN_IF_ERROR(camera.Arm());
-  HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
-  auto frame = camera.WaitFrame(kFrameWait);
-  HR_RETURN_IF_ERROR(camera.Disarm());
-  return frame;
-}
 
-double Psnr(const cv::Mat& a, const cv::Mat& b) {
-  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
-  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12));
-}
 
 cv::Mat Reference(const World& w) {
   return RenderWorldExposure(*w.world, kSceneCamera, ExposeWorldNow(*w.world), 0.02, 0, 0).value();
@@ -85,7 +74,7 @@ TEST(AravisCamera, DeliversTheRenderedViewInEachPixelFormat) {
   EXPECT_EQ(p.camera->capabilities().width_px, 1200);
   const cv::Mat reference = Reference(p.w);
 
-  auto rgb = Shoot(*p.camera, PixelFormat::kRgb8);
+  auto rgb = ShootOnce(*p.camera, PixelFormat::kRgb8);
   ASSERT_TRUE(rgb.ok()) << rgb.status().ToString();
   ASSERT_EQ(rgb->data.size(), rgb->ExpectedBytes());
   cv::Mat bgr;
@@ -93,13 +82,13 @@ TEST(AravisCamera, DeliversTheRenderedViewInEachPixelFormat) {
   EXPECT_GT(Psnr(bgr, reference), 40.0);
   EXPECT_GT(cv::mean(bgr)[1], 20.0);  // lit, not black
 
-  auto mono = Shoot(*p.camera, PixelFormat::kMono8);
+  auto mono = ShootOnce(*p.camera, PixelFormat::kMono8);
   ASSERT_TRUE(mono.ok()) << mono.status().ToString();
   cv::Mat grey;
   cv::cvtColor(reference, grey, cv::COLOR_BGR2GRAY);
   EXPECT_GT(Psnr(cv::Mat(1600, 1200, CV_8UC1, mono->data.data()), grey), 40.0);
 
-  auto bayer = Shoot(*p.camera, PixelFormat::kBayerRG8);
+  auto bayer = ShootOnce(*p.camera, PixelFormat::kBayerRG8);
   ASSERT_TRUE(bayer.ok()) << bayer.status().ToString();
   EXPECT_GT(Psnr(cv::Mat(1600, 1200, CV_8UC1, bayer->data.data()), MosaicRGGB(reference)), 40.0);
 

@@ -17,15 +17,18 @@
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_dslr_protocol.h"
 #include "sim_hw/sim_dslr_server.h"
+#include "tests/support/camera_checks.h"
 #include "tests/support/sim_world.h"
 
 namespace hairrig {
 namespace {
 
+using hairrig_test::Psnr;
+using hairrig_test::ShootOnce;
+
 using std::chrono::milliseconds;
 constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
 constexpr char kSerial[] = "SIM-CAM-UPPER";
-
 
 struct Bench {
   std::shared_ptr<SimWorld> world;  // with its panels on, so that the views are lit
@@ -63,28 +66,14 @@ Bench StartBench(std::vector<SimFault> faults = {}, const std::string& trigger_l
   return b;
 }
 
-Result<Frame> ShootOnce(Camera& camera, double exposure_s = 0.02, double gain_db = 0) {
-  CaptureSettings s;
-  s.exposure_s = exposure_s;
-  s.gain_db = gain_db;
-  HR_RETURN_IF_ERROR(camera.Configure(s));
-  HR_RETURN_IF_ERROR(camera.Arm());
-  HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
-  return camera.WaitFrame(kFrameWait);
-}
 
-// PSNR of two 8-bit images of one size, in dB.
-double Psnr(const cv::Mat& a, const cv::Mat& b) {
-  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
-  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12));
-}
 
 TEST(Gphoto2Camera, OpensBySerialShootsAndDownloadsTheRenderedView) {
   Bench b = StartBench();
   ASSERT_TRUE(b.camera->Open().ok());
   ASSERT_TRUE(b.camera->HealthCheck().ok());
   const WorldExposure exposure = ExposeWorldNow(*b.world);
-  auto frame = ShootOnce(*b.camera, 0.02, 6.0);
+  auto frame = ShootOnce(*b.camera, PixelFormat::kRgb8, 0.02, 6.0);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   EXPECT_EQ(frame->format, PixelFormat::kEncoded);
   EXPECT_EQ(frame->encoding, "jpg");
@@ -175,9 +164,10 @@ TEST(Gphoto2Camera, ABusyCameraIsRetriedThenReportedBusy) {
   Bench b = StartBench();
   ASSERT_TRUE(b.camera->Open().ok());
   b.server->InjectFault(SimDslrServer::Fault::kBusy, 2);
-  auto frame = ShootOnce(*b.camera);
+  auto frame = ShootOnce(*b.camera, PixelFormat::kRgb8);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();  // third attempt succeeds
 
+  ASSERT_TRUE(b.camera->Arm().ok());
   b.server->InjectFault(SimDslrServer::Fault::kBusy, 3);
   const Status s = b.camera->SoftwareTrigger();
   EXPECT_EQ(s.code(), StatusCode::kDeviceFault) << s.ToString();
@@ -217,7 +207,8 @@ TEST(Gphoto2Camera, ADroppedCameraFaultsAndReopensWhenItIsBack) {
   // At its 2nd shot the body drops off the bus and stays away for 1 connection attempt.
   Bench b = StartBench({SimFault{SimFaultKind::kCameraGone, kSerial, 2, 1, 0.0}});
   ASSERT_TRUE(b.camera->Open().ok());
-  ASSERT_TRUE(ShootOnce(*b.camera).ok());
+  ASSERT_TRUE(ShootOnce(*b.camera, PixelFormat::kRgb8).ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
   Status s = b.camera->SoftwareTrigger();
   if (s.ok()) s = b.camera->WaitFrame(kFrameWait).status();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
@@ -226,18 +217,18 @@ TEST(Gphoto2Camera, ADroppedCameraFaultsAndReopensWhenItIsBack) {
   s = b.camera->Open();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
   ASSERT_TRUE(b.camera->Open().ok());
-  EXPECT_TRUE(ShootOnce(*b.camera).ok());
+  EXPECT_TRUE(ShootOnce(*b.camera, PixelFormat::kRgb8).ok());
 }
 
 TEST(Gphoto2Camera, ACablePulledMidRequestFaultsAndReopens) {
   Bench b = StartBench();
   ASSERT_TRUE(b.camera->Open().ok());
   b.server->InjectFault(SimDslrServer::Fault::kDisconnect, 1);
-  auto frame = ShootOnce(*b.camera);
+  auto frame = ShootOnce(*b.camera, PixelFormat::kRgb8);
   ASSERT_FALSE(frame.ok());
   EXPECT_EQ(frame.status().code(), StatusCode::kUnavailable) << frame.status().ToString();
   ASSERT_TRUE(b.camera->Open().ok());
-  EXPECT_TRUE(ShootOnce(*b.camera).ok());
+  EXPECT_TRUE(ShootOnce(*b.camera, PixelFormat::kRgb8).ok());
 }
 
 TEST(Gphoto2Camera, NoCameraAtThePortSaysWhatToStart) {

@@ -14,10 +14,14 @@
 #include "drivers/v4l2_camera.h"
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_v4l2.h"
+#include "tests/support/camera_checks.h"
 #include "tests/support/sim_world.h"
 
 namespace hairrig {
 namespace {
+
+using hairrig_test::Psnr;
+using hairrig_test::ShootOnce;
 
 using std::chrono::milliseconds;
 constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
@@ -41,22 +45,7 @@ Bench Start(V4l2Wire wire = V4l2Wire::kAuto, const std::string& device_serial = 
   return b;
 }
 
-Result<Frame> Shoot(Camera& camera, PixelFormat format) {
-  CaptureSettings s;
-  s.format = format;
-  s.exposure_s = 0.02;
-  HR_RETURN_IF_ERROR(camera.Configure(s));
-  HR_RETURN_IF_ERROR(camera.Arm());
-  HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
-  auto frame = camera.WaitFrame(kFrameWait);
-  (void)camera.Disarm();
-  return frame;
-}
 
-double Psnr(const cv::Mat& a, const cv::Mat& b) {
-  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
-  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12));
-}
 
 cv::Mat Reference(const Bench& b) {
   return RenderWorldExposure(*b.world, 0, ExposeWorldNow(*b.world), 0.02, 0, 0).value();
@@ -66,7 +55,7 @@ TEST(V4l2Camera, MjpegFramesAreTheRenderedView) {
   Bench b = Start();
   ASSERT_TRUE(b.camera->Open().ok());
   ASSERT_TRUE(b.camera->HealthCheck().ok());
-  auto frame = Shoot(*b.camera, PixelFormat::kRgb8);
+  auto frame = ShootOnce(*b.camera, PixelFormat::kRgb8);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   ASSERT_EQ(frame->data.size(), frame->ExpectedBytes());
   cv::Mat bgr;
@@ -78,7 +67,7 @@ TEST(V4l2Camera, MjpegFramesAreTheRenderedView) {
 TEST(V4l2Camera, YuyvFramesAreConvertedToGrey) {
   Bench b = Start(V4l2Wire::kYuyv);
   ASSERT_TRUE(b.camera->Open().ok());
-  auto frame = Shoot(*b.camera, PixelFormat::kMono8);
+  auto frame = ShootOnce(*b.camera, PixelFormat::kMono8);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   cv::Mat grey;
   cv::cvtColor(Reference(b), grey, cv::COLOR_BGR2GRAY);
@@ -151,7 +140,7 @@ TEST(V4l2Camera, AnUnpluggedCameraFaultsAndReopensWhenBack) {
   EXPECT_EQ(b.camera->Open().code(), StatusCode::kUnavailable);  // still unplugged
   b.fake->Replug();
   ASSERT_TRUE(b.camera->Open().ok());
-  EXPECT_TRUE(Shoot(*b.camera, PixelFormat::kRgb8).ok());
+  EXPECT_TRUE(ShootOnce(*b.camera, PixelFormat::kRgb8).ok());
 }
 
 TEST(V4l2Camera, ACorruptFrameIsReportedAndTheNextOneIsFine) {

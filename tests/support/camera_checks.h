@@ -1,0 +1,36 @@
+// Test helpers for camera backends: one software-triggered shot, and the
+// PSNR between a delivered frame and the world rendered directly. Header-only.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <opencv2/core.hpp>
+
+#include "drivers/camera.h"
+
+namespace hairrig_test {
+
+// Configure, Arm, SoftwareTrigger, WaitFrame, Disarm.
+inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera, hairrig::PixelFormat format,
+                                                 double exposure_s = 0.02, double gain_db = 0) {
+  hairrig::CaptureSettings s;
+  s.format = format;
+  s.exposure_s = exposure_s;
+  s.gain_db = gain_db;
+  HR_RETURN_IF_ERROR(camera.Configure(s));
+  HR_RETURN_IF_ERROR(camera.Arm());
+  HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
+  auto frame = camera.WaitFrame(std::chrono::seconds(20));  // a liveness bound, not a speed check
+  (void)camera.Disarm();
+  return frame;
+}
+
+// Peak signal-to-noise ratio of two 8-bit images of one size, in dB.
+inline double Psnr(const cv::Mat& a, const cv::Mat& b) {
+  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
+  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, 1e-12));
+}
+
+}  // namespace hairrig_test
