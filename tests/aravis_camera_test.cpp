@@ -210,6 +210,11 @@ TEST(AravisGigE, StreamsRenderedFramesOverLoopbackWithoutLoss) {
   EXPECT_EQ(stats.missing_packets, 0u);
   ASSERT_TRUE(camera->Disarm().ok());
   EXPECT_EQ((*gige)->frames_rendered(), 4);
+  ASSERT_TRUE(camera->Close().ok());
+  // Without an address the camera is found by its serial on Aravis' interfaces.
+  auto by_serial = MakeAravisCamera({DeviceKind::kCamera, "lower", "aravis", kSerial, "test"}, BaseOptions());
+  const Status found = by_serial->Open();
+  EXPECT_TRUE(found.ok()) << found.ToString();
 }
 
 }  // namespace
