@@ -55,7 +55,11 @@ TEST(Cli, DevicesOnTheDefaultRigAreHealthyAsJson) {
 // What is found depends on the machine (none on CI); either way the command
 // succeeds, and an empty search says so plainly.
 TEST(Cli, DiscoverListsRealDevicesOrSaysThereAreNone) {
-  const CommandRun r = Hairrig("devices --discover --json");
+  // In a sanitizer build: libgphoto2 2.5.30's USB port driver leaks a 0-byte
+  // allocation per camera model it searches for when no USB device exists,
+  // from a module it has unloaded by exit, so no LSan suppression can name
+  // it (tests/lsan.supp). Leak checking is off for this one command.
+  const CommandRun r = Hairrig("devices --discover --json", "ASAN_OPTIONS=detect_leaks=0 ");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = LastLineJson(r.output);
   EXPECT_EQ(j["found"].get<size_t>(), j["devices"].size());

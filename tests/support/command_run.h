@@ -17,8 +17,9 @@ struct CommandRun {
   std::string output;  // stdout and stderr
 };
 
-inline CommandRun Hairrig(const std::string& args) {
-  const std::string cmd = std::string(HAIRRIG_BIN) + " " + args + " 2>&1";
+// `env` is prefixed to the command line ("NAME=value ").
+inline CommandRun Hairrig(const std::string& args, const std::string& env = "") {
+  const std::string cmd = env + std::string(HAIRRIG_BIN) + " " + args + " 2>&1";
   CommandRun run;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return run;

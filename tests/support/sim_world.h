@@ -1,9 +1,11 @@
-// Test helper: the simulated world of etc/scenes/default.yaml, noise-free and
-// 100x faster than real time, optionally with its panels on. Header-only;
+// Test helper: the simulated world of etc/scenes/default.yaml (or another
+// scene), noise-free and 100x faster than real time, optionally with its
+// panels on. Header-only;
 // run from the repository root (as ctest does).
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -14,8 +16,9 @@
 namespace hairrig_test {
 
 inline std::shared_ptr<hairrig::SimWorld> MakeSimWorld(std::vector<hairrig::SimFault> faults = {},
-                                                       bool lights_on = false) {
-  auto scene = hairrig::LoadScene("etc/scenes/default.yaml");
+                                                       bool lights_on = false,
+                                                       const std::string& scene_path = "etc/scenes/default.yaml") {
+  auto scene = hairrig::LoadScene(scene_path);
   EXPECT_TRUE(scene.ok()) << scene.status().ToString();
   hairrig::SimWorldOptions options;
   options.time_scale = 0.01;
