@@ -79,7 +79,7 @@ class Gphoto2Catalog {
       return IoError("libgphoto2: cannot load its camera drivers or port drivers (CAMLIBS=" + key +
                      "); is libgphoto2 installed (scripts/install-deps)?");
     }
-    catalog = std::move(fresh);  // an older catalog is kept alive by nobody: cameras copied what they needed
+    catalog = std::move(fresh);  // frees the previous one: open cameras hold copies of what they use
     loaded_for = key;
     return catalog.get();
   }
