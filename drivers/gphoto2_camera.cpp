@@ -172,13 +172,18 @@ class Gphoto2Session {
   }
 
   Status Check(int result, const std::string& what) {
+    last_result_ = result;
     if (result >= GP_OK) return Status::Ok();
     return Gphoto2Status(result, what, context_.TakeError());
   }
 
+  // The libgphoto2 result of the last Check(): tells a busy body from other faults.
+  int last_result() const { return last_result_; }
+
   Result<WidgetPtr> GetSetting(const std::string& name) {
     CameraWidget* widget = nullptr;
     const int r = gp_camera_get_single_config(camera_, name.c_str(), &widget, context_.get());
+    last_result_ = r;
     if (r == GP_ERROR_BAD_PARAMETERS || r == GP_ERROR_NOT_SUPPORTED) {
       return NotFound("the camera has no setting named '" + name + "' (`gphoto2 --list-config` lists them)");
     }
@@ -251,6 +256,7 @@ class Gphoto2Session {
   Gphoto2Context context_;
   std::string model_;
   std::string port_;
+  int last_result_ = GP_OK;
 };
 
 Result<std::vector<std::pair<std::string, std::string>>> AutoDetect() {
@@ -329,6 +335,9 @@ class Gphoto2Camera : public Camera {
         return Fault(InvalidArgument("settings." + name + ": " + s.message()));
       }
     }
+    // Read once per Open: Configure picks from them for every capture.
+    shutter_choices_ = session_->ChoicesOf("shutterspeed");
+    iso_choices_ = session_->ChoicesOf("iso");
     ReadExposureRange();
     SetState(DeviceState::kReady);
     return Status::Ok();
@@ -353,11 +362,11 @@ class Gphoto2Camera : public Camera {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
     HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string shutter = NearestChoice(session_->ChoicesOf("shutterspeed"), s.exposure_s, ShutterSeconds);
-    if (!shutter.empty()) HR_RETURN_IF_ERROR(FaultIfGone(session_->WriteSetting("shutterspeed", shutter)));
+    const std::string shutter = NearestChoice(shutter_choices_, s.exposure_s, ShutterSeconds);
+    if (!shutter.empty()) HR_RETURN_IF_ERROR(WriteSettingRetrying("shutterspeed", shutter));
     const std::string iso =
-        NearestChoice(session_->ChoicesOf("iso"), 100.0 * std::pow(10.0, s.gain_db / 20.0), IsoValue);
-    if (!iso.empty()) HR_RETURN_IF_ERROR(FaultIfGone(session_->WriteSetting("iso", iso)));
+        NearestChoice(iso_choices_, 100.0 * std::pow(10.0, s.gain_db / 20.0), IsoValue);
+    if (!iso.empty()) HR_RETURN_IF_ERROR(WriteSettingRetrying("iso", iso));
     settings_ = s;
     exposure_s_ = shutter.empty() ? s.exposure_s : ShutterSeconds(shutter);
     return Status::Ok();
@@ -382,7 +391,7 @@ class Gphoto2Camera : public Camera {
     std::lock_guard<std::mutex> lock(mutex_);
     const int64_t t = SteadyNowNs();
     HR_RETURN_IF_ERROR(FaultIfGone(Retrying("trigger", [this] {
-      return gp_camera_trigger_capture(session_->camera(), session_->context());
+      return session_->Check(gp_camera_trigger_capture(session_->camera(), session_->context()), "trigger_capture");
     })));
     triggers_.Sent(t);
     return Status::Ok();
@@ -455,7 +464,7 @@ class Gphoto2Camera : public Camera {
     min_exposure_s_ = 1.0 / 8000;
     max_exposure_s_ = 30;
     double lo = INFINITY, hi = 0;
-    for (const std::string& c : session_->ChoicesOf("shutterspeed")) {
+    for (const std::string& c : shutter_choices_) {
       const double v = ShutterSeconds(c);
       if (v > 0) {
         lo = std::min(lo, v);
@@ -469,19 +478,25 @@ class Gphoto2Camera : public Camera {
     }
   }
 
-  // Retries a call the camera answered busy, as a user retries after the body finishes focusing.
+  // Retries a call the camera answered busy, as a user retries after the body finishes focusing. `call`
+  // returns the Status of one session request; busy is told by the session's last libgphoto2 result.
   template <typename Call>
   Status Retrying(const std::string& what, Call call) {
-    int r = GP_OK;
+    Status s;
     for (int attempt = 1;; ++attempt) {
-      r = call();
-      if (r != GP_ERROR_CAMERA_BUSY || attempt >= options_.busy_attempts) break;
+      s = call();
+      if (s.ok() || session_->last_result() != GP_ERROR_CAMERA_BUSY) break;
+      if (attempt >= options_.busy_attempts) {
+        return DeviceFault(Describe() + ": " + what + ": " + s.message() + " (" +
+                           std::to_string(options_.busy_attempts) + " attempts)");
+      }
       std::this_thread::sleep_for(std::chrono::duration<double>(options_.busy_backoff_s * options_.nominal.time_scale));
     }
-    Status s = session_->Check(r, Describe() + ": " + what);
-    if (r == GP_ERROR_CAMERA_BUSY) return DeviceFault(s.message() + " (" + std::to_string(options_.busy_attempts) +
-                                                      " attempts)");
-    return s;
+    return s.ok() ? s : Status(s.code(), Describe() + ": " + what + ": " + s.message());
+  }
+
+  Status WriteSettingRetrying(const std::string& name, const std::string& value) {
+    return FaultIfGone(Retrying("setting " + name, [&] { return session_->WriteSetting(name, value); }));
   }
 
   // A camera that went away is faulted (Open() reconnects); other errors leave it usable.
@@ -498,8 +513,9 @@ class Gphoto2Camera : public Camera {
     std::unique_ptr<CameraFile, FileDeleter> file(raw_file);
     const std::string where = std::string(path.folder) + "/" + path.name;
     HR_RETURN_IF_ERROR(FaultIfGone(Retrying("downloading " + where, [&] {
-      return gp_camera_file_get(session_->camera(), path.folder, path.name, GP_FILE_TYPE_NORMAL, file.get(),
-                                session_->context());
+      return session_->Check(gp_camera_file_get(session_->camera(), path.folder, path.name, GP_FILE_TYPE_NORMAL,
+                                                file.get(), session_->context()),
+                             "get_file");
     })));
     const char* bytes = nullptr;
     unsigned long size = 0;
@@ -541,6 +557,8 @@ class Gphoto2Camera : public Camera {
   double exposure_s_ = 0;
   double min_exposure_s_ = 1.0 / 8000;
   double max_exposure_s_ = 30;
+  std::vector<std::string> shutter_choices_;  // of the open body
+  std::vector<std::string> iso_choices_;
   uint64_t sequence_ = 0;
   TriggerTimes triggers_;
 };

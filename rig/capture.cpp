@@ -17,6 +17,7 @@
 #include "core/file_util.h"
 #include "core/strand_io.h"
 #include "core/log.h"
+#include "drivers/camera_support.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
@@ -47,9 +48,6 @@ nlohmann::json CaptureSummary::ToJson() const {
 
 namespace {
 
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 void SleepS(double seconds) {
   if (seconds > 0) std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
 }
@@ -398,7 +396,7 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
     const auto it = rig_.camera_trigger_lines.find(slot->camera->info().name);
     if (it != rig_.camera_trigger_lines.end() && !it->second.empty()) lines.insert(it->second);
   }
-  const int64_t trigger_ns = NowNs();
+  const int64_t trigger_ns = SteadyNowNs();
   const Clock::time_point trigger_time = Clock::now();
   for (const std::string& name : lines) {
     for (const auto& l : rig_.devices.trigger_lines) {

@@ -119,25 +119,24 @@ TEST(Capture, RefusesAnExistingFolderWithoutResume) {
   EXPECT_NE(s.status().message().find("--resume"), std::string::npos) << s.status().ToString();
 }
 
-TEST(Capture, BrokenConfigCreatesNothing) {
-  const std::string dir = FreshDir("capture_bad_config");
+// A capture with `plan` is refused naming `field`, and creates nothing.
+void ExpectPlanRefused(const std::string& dir, const std::string& plan, const std::string& field) {
   CaptureOptions o;
-  o.config_path = WriteSmallRig(dir, {{"plan", "plan: {stops: 0}\n"}});
+  o.config_path = WriteSmallRig(dir, {{"plan", plan}});
   o.out_dir = dir + "/c";
   auto s = RunCapture(o);
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.status().message().find("plan.stops"), std::string::npos) << s.status().ToString();
+  EXPECT_NE(s.status().message().find(field), std::string::npos) << s.status().ToString();
   EXPECT_FALSE(fs::exists(o.out_dir));
+}
+
+TEST(Capture, BrokenConfigCreatesNothing) {
+  ExpectPlanRefused(FreshDir("capture_bad_config"), "plan: {stops: 0}\n", "plan.stops");
 }
 
 TEST(Capture, TriggerPulseWidthIsAPlanField) {
   const std::string dir = FreshDir("capture_pulse");
-  CaptureOptions o;
-  o.config_path = WriteSmallRig(dir, {{"plan", "plan: {trigger_pulse_us: 0}\n"}});
-  o.out_dir = dir + "/c";
-  auto s = RunCapture(o);
-  ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.status().message().find("plan.trigger_pulse_us"), std::string::npos) << s.status().ToString();
+  ExpectPlanRefused(dir, "plan: {trigger_pulse_us: 0}\n", "plan.trigger_pulse_us");
   const CaptureSummary ok = Capture(WriteSmallRig(dir, {{"plan", "plan: {stops: 2, trigger_pulse_us: 20000}\n"}}),
                                     dir + "/c2");
   EXPECT_EQ(ok.status, "complete");

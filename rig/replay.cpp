@@ -11,6 +11,7 @@
 #include "core/file_util.h"
 #include "core/sha256.h"
 #include "drivers/always_present_device.h"
+#include "drivers/camera_support.h"
 #include "drivers/trigger_bus.h"
 #include "rig/capture_dataset.h"
 
@@ -19,10 +20,6 @@ namespace hairrig {
 using Clock = std::chrono::steady_clock;
 
 namespace {
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
-      .count();
-}
 
 // Milliseconds since the epoch of a journal time stamp ("...T10:04:05.123Z").
 double UtcSeconds(const std::string& text) {
@@ -349,7 +346,7 @@ class ReplayCamera : public ReplayDevice<Camera> {
     f.exposure_s = next.frame->exposure_s;
     f.gain_db = next.frame->gain_db;
     f.trigger_time_ns = next.trigger_ns;
-    f.received_time_ns = NowNs();
+    f.received_time_ns = SteadyNowNs();
     return f;
   }
 
@@ -365,7 +362,7 @@ class ReplayCamera : public ReplayDevice<Camera> {
     Pending p;
     p.angle_deg = source_->Target();
     p.frame = source_->FindFrame(info().serial, p.angle_deg, source_->Lights());
-    p.trigger_ns = NowNs();
+    p.trigger_ns = SteadyNowNs();
     const double delay = p.frame ? source_->Scaled(p.frame->download_s) : 0;
     p.ready = Clock::now() +
               std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay));

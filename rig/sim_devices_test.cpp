@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "rig/rig_config.h"
+#include "tests/support/camera_checks.h"
 
 namespace hairrig {
 namespace {
@@ -153,12 +154,7 @@ TEST(SimDevices, AUvcCameraOnTheSimulatedRig) {
   auto rig = OpenRigFromText("  cameras: [{name: uvc, backend: v4l2, serial: SIM-CAM-LOWER, device: sim}]\n");
   Camera& cam = *rig->devices.cameras[0];
   EXPECT_EQ(cam.capabilities().width_px, 1200);  // the scene camera's size
-  CaptureSettings s;
-  s.format = PixelFormat::kMono8;
-  ASSERT_TRUE(cam.Configure(s).ok());
-  ASSERT_TRUE(cam.Arm().ok());
-  ASSERT_TRUE(cam.SoftwareTrigger().ok());
-  auto frame = cam.WaitFrame(kFrameWait);
+  auto frame = hairrig_test::ShootOnce(cam, PixelFormat::kMono8);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   EXPECT_EQ(frame->data.size(), frame->ExpectedBytes());
 }
@@ -171,15 +167,9 @@ TEST(SimDevices, RelaySwitchedPanelsLightTheView) {
       "    - {name: lower_panel, backend: usbrelay, serial: PANEL-2, board: RLY01, channel: 2, bus: sim, light: bottom}\n"
       "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n");
   Camera& cam = *rig->devices.cameras[0];
-  CaptureSettings s;
-  s.format = PixelFormat::kMono8;
-  ASSERT_TRUE(cam.Configure(s).ok());
-  ASSERT_TRUE(cam.Arm().ok());
-  ASSERT_TRUE(cam.SoftwareTrigger().ok());
-  auto dark = cam.WaitFrame(kFrameWait);
+  auto dark = hairrig_test::ShootOnce(cam, PixelFormat::kMono8);
   for (auto& light : rig->devices.lights) ASSERT_TRUE(light->SetOn(true).ok());
-  ASSERT_TRUE(cam.SoftwareTrigger().ok());
-  auto lit = cam.WaitFrame(kFrameWait);
+  auto lit = hairrig_test::ShootOnce(cam, PixelFormat::kMono8);
   ASSERT_TRUE(dark.ok() && lit.ok());
   EXPECT_LT(MeanDn(*dark), 2.0);
   EXPECT_GT(MeanDn(*lit), 20.0);

@@ -20,9 +20,6 @@ namespace hairrig {
 using Clock = std::chrono::steady_clock;
 
 namespace {
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 // Trapezoidal (or triangular) move: position after `t` seconds of a move of
 // `distance` deg at the given speed and acceleration; duration in *duration_s.
@@ -218,7 +215,7 @@ Status SetWorldLightLevel(SimWorld& world, const std::string& light, double leve
 }
 
 WorldExposure ExposeWorldNow(const SimWorld& world) {
-  return {world.AngleDeg(), world.LightLevels(), NowNs()};
+  return {world.AngleDeg(), world.LightLevels(), SteadyNowNs()};
 }
 
 Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
@@ -616,7 +613,7 @@ class SimCamera : public SimDevice<Camera> {
         ++it;
         continue;
       }
-      if (it->second.ok()) it->second->received_time_ns = NowNs();
+      if (it->second.ok()) it->second->received_time_ns = SteadyNowNs();
       ready_.push_back(std::move(it->second));
       it = late_.erase(it);
       cv_.notify_all();
@@ -656,7 +653,7 @@ class SimCamera : public SimDevice<Camera> {
       if (cv_.wait_until(lock, due, [this] { return stopping_; })) {
         return;
       }
-      if (frame.ok()) frame->received_time_ns = NowNs();
+      if (frame.ok()) frame->received_time_ns = SteadyNowNs();
       ready_.push_back(std::move(frame));
       cv_.notify_all();
     }

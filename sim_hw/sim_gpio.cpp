@@ -4,13 +4,11 @@
 #include <condition_variable>
 #include <deque>
 
+#include "drivers/camera_support.h"
+
 namespace hairrig {
 
 namespace {
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 }  // namespace
 
 struct SimGpioProvider::Line {
@@ -41,7 +39,7 @@ class SimGpioHandle : public GpioOutputLine, public GpioInputLine {
     const bool level = active != line_->active_low;
     if (level != line_->level) {
       line_->level = level;
-      line_->transitions.push_back({level, NowNs()});
+      line_->transitions.push_back({level, SteadyNowNs()});
     }
     return Status::Ok();
   }
@@ -98,7 +96,7 @@ Result<SimGpioProvider::Line*> SimGpioProvider::Claim(const GpioLineRequest& r, 
     line.events.clear();
     if (output) {
       const bool level = r.initial_active != r.active_low;
-      if (level != line.level) line.transitions.push_back({level, NowNs()});
+      if (level != line.level) line.transitions.push_back({level, SteadyNowNs()});
       line.level = level;
     }
     return &line;
@@ -163,7 +161,7 @@ Status SimGpioProvider::DriveInput(const std::string& chip, int offset, bool lev
   }
   if (level == line->level) return Status::Ok();
   line->level = level;
-  const int64_t now = NowNs();
+  const int64_t now = SteadyNowNs();
   line->transitions.push_back({level, now});
   if (!line->consumer.empty()) {
     line->events.push_back({level != line->active_low, now});
