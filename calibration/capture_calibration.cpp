@@ -1,14 +1,13 @@
 #include "calibration/capture_calibration.h"
 
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <thread>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "calibration/intrinsics_from_views.h"
 #include "calibration/turntable_axis.h"
+#include "core/parallel.h"
 
 namespace hairrig {
 
@@ -161,31 +160,26 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
                                            std::vector<std::string>* failures) {
   std::vector<ViewObservations> observations(frames.size());
   failures->assign(frames.size(), "");
-  std::atomic<size_t> next{0};
-  auto work = [&] {
+  ParallelFor(frames.size(), threads, [&] {
     auto tag_detector = TagDetector::Create(detector);
-    for (size_t f = next++; f < frames.size(); f = next++) {
+    return [&, tag_detector = std::move(tag_detector)](size_t f) {
       if (!tag_detector.ok()) {
         (*failures)[f] = tag_detector.status().message();
-        continue;
+        return;
       }
       const cv::Mat image = cv::imread(frames[f].path, cv::IMREAD_GRAYSCALE);
       if (image.empty()) {
         (*failures)[f] = frames[f].path + ": cannot be read as an image (missing or corrupt)";
-        continue;
+        return;
       }
       auto detections = (*tag_detector)->Detect(image);
       if (!detections.ok()) {
         (*failures)[f] = frames[f].path + ": " + detections.status().message();
-        continue;
+        return;
       }
       observations[f] = MatchToBox(*detections, box);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (std::thread& thread : pool) thread.join();
+    };
+  });
   return observations;
 }
 

@@ -35,6 +35,15 @@ void AddFacePlanes(const ViewObservations& view, const CalibBox& box,
 
 }  // namespace
 
+CameraIntrinsics IntrinsicsFromOpenCv(const cv::Mat& camera_matrix, const cv::Mat& distortion, int width_px,
+                                      int height_px) {
+  const auto d = [&](int i) { return i < static_cast<int>(distortion.total()) ? distortion.at<double>(i) : 0.0; };
+  const double params[CameraIntrinsics::kNumParams] = {
+      camera_matrix.at<double>(0, 0), camera_matrix.at<double>(1, 1), camera_matrix.at<double>(0, 2),
+      camera_matrix.at<double>(1, 2), d(0), d(1), d(2), d(3), d(4)};
+  return CameraIntrinsics::FromParams(params, width_px, height_px);
+}
+
 Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(const std::vector<const ViewObservations*>& views,
                                                      const CalibBox& box, int width_px, int height_px,
                                                      int min_planes) {
@@ -56,11 +65,7 @@ Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(const std::vector<const Vie
   IntrinsicsFromViews out;
   out.rms_px = cv::calibrateCamera(object, image, cv::Size(width_px, height_px), camera_matrix, distortion, rvecs,
                                    tvecs, flags);
-  const double params[CameraIntrinsics::kNumParams] = {
-      camera_matrix.at<double>(0, 0), camera_matrix.at<double>(1, 1), camera_matrix.at<double>(0, 2),
-      camera_matrix.at<double>(1, 2), distortion.at<double>(0), distortion.at<double>(1),
-      distortion.at<double>(2), distortion.at<double>(3), 0.0};
-  out.intrinsics = CameraIntrinsics::FromParams(params, width_px, height_px);
+  out.intrinsics = IntrinsicsFromOpenCv(camera_matrix, distortion, width_px, height_px);
   out.planes = static_cast<int>(object.size());
   const Status valid = out.intrinsics.Validate();
   if (!valid.ok()) return FailedPrecondition("intrinsics from views: the solution is not usable: " + valid.message());

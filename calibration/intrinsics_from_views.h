@@ -7,12 +7,19 @@
 
 #include <vector>
 
+#include <opencv2/core/mat.hpp>
+
 #include "calibration/view_pose.h"
 #include "core/calib_box.h"
 #include "core/camera_model.h"
 #include "core/status.h"
 
 namespace hairrig {
+
+// OpenCV's 3 x 3 camera matrix and distortion vector (k1 k2 p1 p2 [k3], CV_64F)
+// as intrinsics; a missing k3 is 0.
+CameraIntrinsics IntrinsicsFromOpenCv(const cv::Mat& camera_matrix, const cv::Mat& distortion, int width_px,
+                                      int height_px);
 
 struct IntrinsicsFromViews {
   CameraIntrinsics intrinsics;

@@ -1,0 +1,47 @@
+// Views of a ChArUco board held in front of one simulated camera, as a
+// technician records them to calibrate that camera's intrinsics alone
+// (issue 5, item 4), with the ground truth of every chessboard corner.
+//
+// The board is ray-cast per pixel through the inverse of the camera's lens
+// model and its pattern edges are integrated with stratified samples, as the
+// scene renderer does for the AprilTag box (sim_hw/renderer.h), so corners
+// land where the camera model projects them. Board frame as in
+// core/charuco_board.h; millimetres, pixels in the OpenCV convention.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core/mat.hpp>
+
+#include "core/charuco_board.h"
+#include "core/status.h"
+#include "core/transform.h"
+#include "sim_hw/scene.h"
+
+namespace hairrig {
+
+struct ChArUcoView {
+  cv::Mat image;  // CV_8UC3, BGR
+  Rigid3d cam_from_board;
+  std::vector<Eigen::Vector2d> corners_px;  // projection of every chessboard corner, by ChArUco id
+  std::vector<bool> corner_in_image;        // at least 4 px inside the image
+};
+
+// `count` poses spread over the image: the board at 0.9-1.5 times the
+// distance at which it would fill the image's width, tilted 10-40 degrees
+// about a random in-plane axis and rolled up to 25 degrees, with at least 60 %
+// of its corners in the image. Reproducible from `seed`.
+std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChArUcoBoard& board, int count,
+                                       uint64_t seed);
+
+// The view `camera` records of `board` at `cam_from_board` in front of a grey
+// wall, exposed at the camera's nominal exposure with its sensor noise
+// (reproducible from `noise_seed`; none when !noise). InvalidArgument when the
+// board is behind the camera or seen from its back; an error when the lens
+// model cannot be inverted over the image.
+Result<ChArUcoView> RenderChArUcoView(const SceneCamera& camera, const ChArUcoBoard& board,
+                                      const Rigid3d& cam_from_board, bool noise, uint64_t noise_seed);
+
+}  // namespace hairrig
