@@ -21,6 +21,19 @@ Rigid3d ObjectFromBox(const CaptureCalibration& result) {
 
 namespace {
 
+nlohmann::json StddevJson(const std::array<double, CameraIntrinsics::kNumParams>& stddev) {
+  nlohmann::json sd;
+  for (size_t k = 0; k < stddev.size(); ++k) sd[CameraIntrinsics::kParamNames[k]] = stddev[k];
+  return sd;
+}
+
+std::array<double, CameraIntrinsics::kNumParams> StddevFromJson(const nlohmann::json& j) {
+  std::array<double, CameraIntrinsics::kNumParams> sd{};
+  if (!j.is_object()) return sd;
+  for (size_t k = 0; k < sd.size(); ++k) sd[k] = j.value(CameraIntrinsics::kParamNames[k], 0.0);
+  return sd;
+}
+
 const char* ModeName(CalibrationMode mode) { return mode == CalibrationMode::kTurntable ? "turntable" : "free"; }
 
 nlohmann::json CalibrationJson(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
@@ -45,10 +58,7 @@ nlohmann::json CalibrationJson(const CaptureCalibrationInput& input, const Captu
       j["intrinsics"] = IntrinsicsToJson(cam.intrinsics);
       j["intrinsics_initial"] = IntrinsicsToJson(cam.initial);
       j["intrinsics_source"] = cam.intrinsics_source;
-      nlohmann::json sd;
-      for (int k = 0; k < CameraIntrinsics::kNumParams; ++k)
-        sd[CameraIntrinsics::kParamNames[static_cast<size_t>(k)]] = cam.intrinsics_stddev[static_cast<size_t>(k)];
-      j["intrinsics_stddev"] = sd;
+      j["intrinsics_stddev"] = StddevJson(cam.intrinsics_stddev);
       if (result.mode == CalibrationMode::kTurntable) j["cam_from_world"] = PoseToJson(cam.cam_from_world);
     }
     root["cameras"].push_back(j);
@@ -170,6 +180,7 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
       if (!initial.ok()) return CorruptData(initial.status().message());
       camera.initial = *initial;
       camera.intrinsics_source = j.value("intrinsics_source", "");
+      camera.intrinsics_stddev = StddevFromJson(j.value("intrinsics_stddev", nlohmann::json()));
       camera.solved = true;
     }
     out.cameras.push_back(camera);
@@ -199,6 +210,51 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
     out.views.push_back(view);
   }
   return out;
+}
+
+Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, const std::string& board,
+                           const ChArUcoCalibration& result) {
+  nlohmann::json root{{"format", "hairrig-intrinsics"},
+                      {"version", 1},
+                      {"serial", serial},
+                      {"board", board},
+                      {"intrinsics", IntrinsicsToJson(result.intrinsics)},
+                      {"intrinsics_stddev", StddevJson(result.stddev)},
+                      {"rms_px", result.rms_px},
+                      {"images_used", result.images_used}};
+  root["images"] = nlohmann::json::array();
+  for (const ChArUcoImage& image : result.images) {
+    nlohmann::json j{{"path", image.path}, {"used", image.used}, {"markers", image.markers}, {"corners", image.corners}};
+    if (image.used) j["rms_px"] = image.rms_px;
+    if (!image.failure.empty()) j["failure"] = image.failure;
+    root["images"].push_back(j);
+  }
+  return WriteFileAtomic(path, root.dump(1));
+}
+
+Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& path) {
+  HR_ASSIGN_OR_RETURN(nlohmann::json root,
+                      ReadJsonFile(path, "give a calibration.json or a file from `hairrig calibrate-intrinsics`"));
+  std::vector<IntrinsicsPrior> priors;
+  if (root.value("format", "") == "hairrig-intrinsics") {
+    if (root.value("version", 0) != 1) return CorruptData(path + ": hairrig-intrinsics of an unknown version");
+    IntrinsicsPrior prior;
+    prior.serial = root.value("serial", "");
+    if (prior.serial.empty()) return CorruptData(path + ": serial is missing");
+    auto intrinsics = IntrinsicsFromJson(root.value("intrinsics", nlohmann::json()), path + ": intrinsics");
+    if (!intrinsics.ok()) return CorruptData(intrinsics.status().message());
+    prior.intrinsics = *intrinsics;
+    prior.stddev = StddevFromJson(root.value("intrinsics_stddev", nlohmann::json()));
+    prior.source = path;
+    priors.push_back(prior);
+    return priors;
+  }
+  HR_ASSIGN_OR_RETURN(StoredCalibration calibration, ReadCalibration(path));
+  for (const StoredCalibration::Camera& camera : calibration.cameras) {
+    if (!camera.solved) continue;
+    priors.push_back({camera.serial, camera.intrinsics, camera.intrinsics_stddev, path});
+  }
+  return priors;
 }
 
 }  // namespace hairrig

@@ -14,10 +14,12 @@
 // Frames as in core/transform.h; mm and px.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
 #include "calibration/capture_calibration.h"
+#include "calibration/charuco_intrinsics.h"
 
 namespace hairrig {
 
@@ -36,6 +38,7 @@ struct StoredCalibration {
     CameraIntrinsics intrinsics;
     CameraIntrinsics initial;       // before the bundle adjustment
     std::string intrinsics_source;  // "views": initial is OpenCV's calibrateCamera
+    std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
   };
   struct View {
     int view = 0;
@@ -54,5 +57,25 @@ struct StoredCalibration {
 
 // CorruptData names the file and field for anything missing, mistyped or not finite.
 Result<StoredCalibration> ReadCalibration(const std::string& calibration_json);
+
+// One camera's intrinsics from a ChArUco calibration (`hairrig
+// calibrate-intrinsics`), as a file `hairrig calibrate --intrinsics` accepts:
+// format "hairrig-intrinsics", the camera's serial, the board file, the
+// intrinsics with their standard deviations and the per-image results.
+// Written atomically; IoError names the file.
+Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, const std::string& board,
+                           const ChArUcoCalibration& result);
+
+// Intrinsics to hold fixed in a box calibration, by camera serial.
+struct IntrinsicsPrior {
+  std::string serial;
+  CameraIntrinsics intrinsics;
+  std::array<double, CameraIntrinsics::kNumParams> stddev{};
+  std::string source;  // the file
+};
+
+// The priors a file gives: one from a hairrig-intrinsics file, every solved
+// camera from a calibration.json. CorruptData names the file and field.
+Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& path);
 
 }  // namespace hairrig

@@ -1,10 +1,16 @@
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 
 #include <CLI/CLI.hpp>
 
 #include "calibration/calibration_io.h"
 #include "calibration/calibration_report.h"
+#include "calibration/charuco_intrinsics.h"
+#include "core/charuco_board.h"
+#include "core/geometry_json.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/cli.h"
 
@@ -14,24 +20,30 @@ namespace {
 struct CalibrateArgs {
   std::string dir;
   std::string mode = "turntable";
-  std::string prior;  // calibration.json whose intrinsics are held fixed
+  std::vector<std::string> priors;  // files whose intrinsics are held fixed
   int threads = 2;
 };
 
-// Holds every camera at the intrinsics a prior calibration gives for its serial.
-Status ApplyPrior(const std::string& prior_path, CaptureCalibrationInput* input) {
-  HR_ASSIGN_OR_RETURN(StoredCalibration prior, ReadCalibration(prior_path));
+// Holds every camera at the intrinsics the prior files give for its serial
+// (a later file wins for a serial given twice).
+Status ApplyPriors(const std::vector<std::string>& prior_paths, CaptureCalibrationInput* input) {
+  std::map<std::string, IntrinsicsPrior> by_serial;
+  for (const std::string& path : prior_paths) {
+    HR_ASSIGN_OR_RETURN(std::vector<IntrinsicsPrior> priors, ReadIntrinsicsPriors(path));
+    for (IntrinsicsPrior& prior : priors) by_serial[prior.serial] = std::move(prior);
+  }
   for (CalibrationCamera& camera : input->cameras) {
-    const StoredCalibration::Camera* match = nullptr;
-    for (const StoredCalibration::Camera& c : prior.cameras)
-      if (c.serial == camera.serial && c.solved) match = &c;
-    if (!match) return InvalidArgument("--intrinsics " + prior_path + " has no solved camera with serial " + camera.serial);
-    if (match->intrinsics.width_px != camera.width_px || match->intrinsics.height_px != camera.height_px)
-      return InvalidArgument("--intrinsics " + prior_path + ": camera " + camera.serial + " was calibrated at " +
-                             std::to_string(match->intrinsics.width_px) + " x " +
-                             std::to_string(match->intrinsics.height_px) + " px, the capture's frames are " +
+    const auto match = by_serial.find(camera.serial);
+    if (match == by_serial.end())
+      return InvalidArgument("--intrinsics: no file gives camera " + camera.serial +
+                             "; calibrate it with `hairrig calibrate-intrinsics` and pass that file too");
+    const IntrinsicsPrior& prior = match->second;
+    if (prior.intrinsics.width_px != camera.width_px || prior.intrinsics.height_px != camera.height_px)
+      return InvalidArgument("--intrinsics " + prior.source + ": camera " + camera.serial + " was calibrated at " +
+                             std::to_string(prior.intrinsics.width_px) + " x " +
+                             std::to_string(prior.intrinsics.height_px) + " px, the capture's frames are " +
                              std::to_string(camera.width_px) + " x " + std::to_string(camera.height_px));
-    camera.nominal = match->intrinsics;
+    camera.nominal = prior.intrinsics;
   }
   return Status::Ok();
 }
@@ -41,8 +53,8 @@ Result<nlohmann::json> RunCalibrate(const CalibrateArgs& a) {
   CaptureCalibrationOptions options;
   options.mode = a.mode == "free" ? CalibrationMode::kFree : CalibrationMode::kTurntable;
   options.threads = a.threads;
-  if (!a.prior.empty()) {
-    HR_RETURN_IF_ERROR(ApplyPrior(a.prior, &input));
+  if (!a.priors.empty()) {
+    HR_RETURN_IF_ERROR(ApplyPriors(a.priors, &input));
     options.fix_intrinsics = true;
   }
   HR_ASSIGN_OR_RETURN(CaptureCalibration result, CalibrateCapture(input, options));
@@ -76,6 +88,87 @@ void PrintCalibrate(const nlohmann::json& j) {
   std::printf("  report: %s\n", j["report"].get<std::string>().c_str());
 }
 
+struct IntrinsicsArgs {
+  std::string dir;
+  std::string board;
+  std::string serial;
+  std::string out;  // default DIR/intrinsics.json
+  bool free_k3 = false;
+  int threads = 2;
+};
+
+// The images of a folder, by name: .png, .jpg, .jpeg, .tif, .tiff.
+std::vector<std::string> ImagesIn(const std::string& dir) {
+  std::vector<std::string> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff"))
+      paths.push_back(entry.path().string());
+  }
+  std::sort(paths.begin(), paths.end());
+  return paths;
+}
+
+Result<nlohmann::json> RunCalibrateIntrinsics(const IntrinsicsArgs& a) {
+  HR_ASSIGN_OR_RETURN(ChArUcoBoard board, LoadChArUcoBoard(a.board));
+  const std::vector<std::string> images = ImagesIn(a.dir);
+  if (images.empty())
+    return InvalidArgument(a.dir + ": no images (.png, .jpg, .tif) of the ChArUco board in this folder");
+  ChArUcoCalibrationOptions options;
+  options.fix_k3 = !a.free_k3;
+  options.threads = a.threads;
+  HR_ASSIGN_OR_RETURN(ChArUcoCalibration result, CalibrateIntrinsicsFromChArUco(images, board, options));
+  const std::string out = a.out.empty() ? (std::filesystem::path(a.dir) / "intrinsics.json").string() : a.out;
+  HR_RETURN_IF_ERROR(WriteIntrinsicsFile(out, a.serial, a.board, result));
+  nlohmann::json j{{"out", out},
+                   {"serial", a.serial},
+                   {"images", images.size()},
+                   {"images_used", result.images_used},
+                   {"rms_px", result.rms_px},
+                   {"intrinsics", IntrinsicsToJson(result.intrinsics)},
+                   {"left_out", nlohmann::json::array()}};
+  for (size_t k = 0; k < result.stddev.size(); ++k)
+    j["intrinsics_stddev"][CameraIntrinsics::kParamNames[k]] = result.stddev[k];
+  for (const ChArUcoImage& image : result.images)
+    if (!image.used) j["left_out"].push_back(image.path + ": " + image.failure);
+  return j;
+}
+
+void PrintCalibrateIntrinsics(const nlohmann::json& j) {
+  const auto& k = j["intrinsics"];
+  const auto& sd = j["intrinsics_stddev"];
+  std::printf("intrinsics of %s from %d of %d images, RMS %.3f px -> %s\n", j["serial"].get<std::string>().c_str(),
+              j["images_used"].get<int>(), j["images"].get<int>(), j["rms_px"].get<double>(),
+              j["out"].get<std::string>().c_str());
+  for (const char* name : {"fx_px", "fy_px", "cx_px", "cy_px"})
+    std::printf("  %-6s %10.3f +- %.3f\n", name, k[name].get<double>(), sd[name].get<double>());
+  for (const char* name : {"k1", "k2", "p1", "p2", "k3"})
+    std::printf("  %-6s %10.6f +- %.6f\n", name, k[name].get<double>(), sd[name].get<double>());
+  for (const auto& line : j["left_out"]) std::printf("  left out: %s\n", line.get<std::string>().c_str());
+  std::printf("  use it: hairrig calibrate CAPTURE --intrinsics %s [--intrinsics OTHER_CAMERA.json]\n",
+              j["out"].get<std::string>().c_str());
+}
+
+void AddCalibrateIntrinsicsCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
+  auto* cmd = app.add_subcommand("calibrate-intrinsics",
+                                 "One camera's intrinsics from images of a ChArUco board (writes DIR/intrinsics.json)");
+  auto args = std::make_shared<IntrinsicsArgs>();
+  cmd->add_option("DIR", args->dir, "a folder of the camera's images of the board")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--board", args->board, "the ChArUco board file (e.g. etc/charuco-board.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--serial", args->serial, "the camera's serial, as in the rig config")->required();
+  cmd->add_option("--out", args->out, "output file (default DIR/intrinsics.json)");
+  cmd->add_flag("--free-k3", args->free_k3, "solve k3 too (wide-angle lenses; needs views up to the image corners)");
+  cmd->add_option("--threads", args->threads, "detection threads")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_flag("--json", common.json, "print the summary as one JSON object");
+  cmd->callback([args, &dispatch] {
+    dispatch.action = [args] { return RunCalibrateIntrinsics(*args); };
+    dispatch.print_human = PrintCalibrateIntrinsics;
+  });
+}
+
 }  // namespace
 
 void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
@@ -84,8 +177,9 @@ void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatc
   cmd->add_option("DIR", args->dir, "a capture folder made by `hairrig capture`")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("--mode", args->mode, "turntable: cameras fixed, box turning (default); free: a pose per view")
       ->check(CLI::IsMember({"turntable", "free"}));
-  cmd->add_option("--intrinsics", args->prior,
-                  "a calibration.json whose intrinsics (matched by camera serial) are held fixed")
+  cmd->add_option("--intrinsics", args->priors,
+                  "intrinsics held fixed, matched by camera serial: files from `calibrate-intrinsics` (one per "
+                  "camera) or a calibration.json; repeat for several")
       ->check(CLI::ExistingFile);
   cmd->add_option("--threads", args->threads, "detection and solver threads")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
@@ -94,6 +188,7 @@ void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatc
     dispatch.print_human = PrintCalibrate;
     dispatch.exit_code = [](const nlohmann::json& j) { return j["verdict"] == "failed" ? 3 : 0; };
   });
+  AddCalibrateIntrinsicsCommand(app, common, dispatch);
 }
 
 }  // namespace hairrig

@@ -1,5 +1,5 @@
 // `hairrig eval <stage> DIR`: a stage's output against the simulated rig's
-// ground truth (<capture>/ground_truth/). Stages: calibration.
+// ground truth (<capture>/ground_truth/). Stages: calibration, intrinsics.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -128,6 +128,48 @@ void PrintEval(const nlohmann::json& j) {
   PrintErrors(("initial (" + j["initial_source"].get<std::string>() + "):").c_str(), j["initial"]);
 }
 
+// DIR/intrinsics.json (calibrate-intrinsics) against DIR/ground_truth.json (sim charuco).
+Result<nlohmann::json> EvalIntrinsics(const std::string& dir) {
+  const std::string truth_path = (fs::path(dir) / "ground_truth.json").string();
+  HR_ASSIGN_OR_RETURN(nlohmann::json truth,
+                      ReadJsonFile(truth_path, "only image sets from `hairrig sim charuco` have a ground truth"));
+  if (truth.value("format", "") != "hairrig-charuco-truth")
+    return CorruptData(truth_path + ": not a ChArUco ground truth (format hairrig-charuco-truth)");
+  HR_ASSIGN_OR_RETURN(CameraIntrinsics k_true,
+                      IntrinsicsFromJson(truth.value("intrinsics", nlohmann::json()), truth_path + ": intrinsics"));
+  const std::string solved_path = (fs::path(dir) / "intrinsics.json").string();
+  HR_ASSIGN_OR_RETURN(std::vector<IntrinsicsPrior> solved, ReadIntrinsicsPriors(solved_path));
+  if (solved.size() != 1) return CorruptData(solved_path + ": not the result of `hairrig calibrate-intrinsics`");
+  const auto t = k_true.ToParams(), e = solved[0].intrinsics.ToParams();
+  nlohmann::json params;
+  double worst_sigma = 0;
+  for (size_t p = 0; p < t.size(); ++p) {
+    const double sd = solved[0].stddev[p];
+    const double sigmas = sd > 0 ? (e[p] - t[p]) / sd : 0;
+    worst_sigma = std::max(worst_sigma, std::abs(sigmas));
+    params[CameraIntrinsics::kParamNames[p]] = {{"truth", t[p]}, {"solved", e[p]}, {"error", e[p] - t[p]},
+                                                {"stddev", sd}, {"error_in_stddev", sigmas}};
+  }
+  return nlohmann::json{{"stage", "intrinsics"},
+                        {"dir", dir},
+                        {"serial", solved[0].serial},
+                        {"focal_percent", 100 * std::max(std::abs(e[0] / t[0] - 1), std::abs(e[1] / t[1] - 1))},
+                        {"principal_point_px", std::hypot(e[2] - t[2], e[3] - t[3])},
+                        {"worst_error_in_stddev", worst_sigma},
+                        {"params", params}};
+}
+
+void PrintEvalIntrinsics(const nlohmann::json& j) {
+  std::printf("intrinsics of %s in %s against the ground truth: focal %.4f %%, principal point %.3f px, worst "
+              "parameter %.2f sd off\n",
+              j["serial"].get<std::string>().c_str(), j["dir"].get<std::string>().c_str(),
+              j["focal_percent"].get<double>(), j["principal_point_px"].get<double>(),
+              j["worst_error_in_stddev"].get<double>());
+  for (const auto& [name, p] : j["params"].items())
+    std::printf("  %-6s truth %12.6f solved %12.6f error %+10.3g (%+.2f sd)\n", name.c_str(), p["truth"].get<double>(),
+                p["solved"].get<double>(), p["error"].get<double>(), p["error_in_stddev"].get<double>());
+}
+
 }  // namespace
 
 void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
@@ -140,6 +182,16 @@ void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   calibration->callback([dir, &dispatch] {
     dispatch.action = [dir] { return EvalCalibration(*dir); };
     dispatch.print_human = PrintEval;
+  });
+  auto* intrinsics = cmd->add_subcommand("intrinsics", "errors of DIR/intrinsics.json (calibrate-intrinsics) "
+                                                       "against DIR/ground_truth.json (sim charuco)");
+  intrinsics->add_option("DIR", *dir, "a folder from `hairrig sim charuco`, calibrated")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  intrinsics->add_flag("--json", common.json, "print the summary as one JSON object");
+  intrinsics->callback([dir, &dispatch] {
+    dispatch.action = [dir] { return EvalIntrinsics(*dir); };
+    dispatch.print_human = PrintEvalIntrinsics;
   });
 }
 

@@ -7,9 +7,12 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/charuco_board.h"
 #include "core/file_util.h"
+#include "core/parallel.h"
 #include "rig/cli.h"
 #include "rig/rig_config.h"
+#include "sim_hw/charuco_views.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/sim_aravis.h"
@@ -81,6 +84,79 @@ Result<nlohmann::json> RenderAll(const RenderArgs& a) {
                         {"strands", renderer->strands_turntable_mm().num_strands()},
                         {"wall_s", s.wall_s},
                         {"seconds_per_view", s.wall_s / std::max(1, s.views)}};
+}
+
+struct ChArUcoArgs {
+  std::string scene;
+  std::string board;
+  std::string out;
+  std::vector<std::string> serials;  // empty: every camera of the scene
+  int views = 25;
+  uint64_t seed = 1;
+  int threads = 2;
+};
+
+// One folder per camera of what a technician records for calibrate-intrinsics.
+Result<nlohmann::json> RenderChArUco(const ChArUcoArgs& a) {
+  std::string scene_path = a.scene, board_path = a.board;
+  if (scene_path.empty()) {
+    HR_ASSIGN_OR_RETURN(scene_path, EtcPath("scenes/default.yaml"));
+  }
+  if (board_path.empty()) {
+    HR_ASSIGN_OR_RETURN(board_path, EtcPath("charuco-board.yaml"));
+  }
+  HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(scene_path));
+  HR_ASSIGN_OR_RETURN(ChArUcoBoard board, LoadChArUcoBoard(board_path));
+  std::vector<int> cameras;
+  for (const std::string& serial : a.serials) {
+    const int index = scene.FindCamera(serial);
+    if (index < 0) return NotFound("--camera " + serial + " is not a camera of " + scene_path);
+    cameras.push_back(index);
+  }
+  if (cameras.empty())
+    for (size_t c = 0; c < scene.cameras.size(); ++c) cameras.push_back(static_cast<int>(c));
+  std::vector<Result<ChArUcoSetSummary>> sets(cameras.size(), Status::Ok());
+  ParallelFor(cameras.size(), a.threads, [&] {
+    return [&](size_t i) {
+      const SceneCamera& camera = scene.cameras[static_cast<size_t>(cameras[i])];
+      sets[i] = WriteChArUcoSet(scene, cameras[i], board, a.views, a.seed + static_cast<uint64_t>(cameras[i]),
+                                (std::filesystem::path(a.out) / camera.serial).string());
+    };
+  });
+  nlohmann::json out{{"out", a.out}, {"board", board_path}, {"cameras", nlohmann::json::array()}};
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    HR_RETURN_IF_ERROR(sets[i].status());
+    out["cameras"].push_back({{"serial", scene.cameras[static_cast<size_t>(cameras[i])].serial},
+                              {"dir", sets[i]->dir},
+                              {"images", sets[i]->images.size()},
+                              {"ground_truth", sets[i]->ground_truth}});
+  }
+  return out;
+}
+
+void AddChArUcoCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
+  auto* cmd = sim.add_subcommand("charuco", "Render what a technician records to calibrate each camera's intrinsics "
+                                            "alone: a ChArUco board held in front of it (OUT/<serial>/)");
+  auto args = std::make_shared<ChArUcoArgs>();
+  cmd->add_option("--out", args->out, "output folder")->required();
+  cmd->add_option("--scene", args->scene, "scene file (default: etc/scenes/default.yaml)");
+  cmd->add_option("--board", args->board, "ChArUco board file (default: etc/charuco-board.yaml)");
+  cmd->add_option("--camera", args->serials, "only this camera (serial); repeat for several");
+  cmd->add_option("--views", args->views, "images per camera")->check(CLI::Range(1, 500))->capture_default_str();
+  cmd->add_option("--seed", args->seed, "board poses and sensor noise")->capture_default_str();
+  cmd->add_option("--threads", args->threads, "cameras rendered at once")->check(CLI::Range(1, 64));
+  cmd->add_flag("--json", common.json, "print the summary as one JSON object");
+  cmd->callback([args, &dispatch] {
+    dispatch.action = [args] { return RenderChArUco(*args); };
+    dispatch.print_human = [](const nlohmann::json& j) {
+      for (const auto& c : j["cameras"])
+        std::printf("%s: %d images of the board in %s (ground truth: %s)\n  calibrate: hairrig calibrate-intrinsics %s "
+                    "--board %s --serial %s\n",
+                    c["serial"].get<std::string>().c_str(), c["images"].get<int>(), c["dir"].get<std::string>().c_str(),
+                    c["ground_truth"].get<std::string>().c_str(), c["dir"].get<std::string>().c_str(),
+                    j["board"].get<std::string>().c_str(), c["serial"].get<std::string>().c_str());
+    };
+  });
 }
 
 struct ServeArgs {
@@ -242,6 +318,7 @@ void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   render->add_option("--threads", args->threads, "render threads for --all")->check(CLI::Range(1, 64));
   render->add_flag("--json", common.json, "print the summary as one JSON object");
   AddServeCommand(*sim, common, dispatch);
+  AddChArUcoCommand(*sim, common, dispatch);
   render->callback([args, &dispatch] {
     if (!args->all && args->view < 0) throw CLI::ValidationError("sim render", "give --view N or --all");
     dispatch.action = [args]() { return args->all ? RenderAll(*args) : RenderOne(*args); };

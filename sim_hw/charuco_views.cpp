@@ -2,10 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <random>
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
+#include "core/file_util.h"
+#include "core/geometry_json.h"
 #include "sim_hw/render_support.h"
 
 namespace hairrig {
@@ -156,6 +162,38 @@ Result<ChArUcoView> RenderChArUcoView(const SceneCamera& camera, const ChArUcoBo
     view.corner_in_image.push_back(in_front && uv.x() >= 4 && uv.y() >= 4 && uv.x() <= width - 5 && uv.y() <= height - 5);
   }
   return view;
+}
+
+Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, const ChArUcoBoard& board, int views,
+                                          uint64_t seed, const std::string& dir) {
+  if (camera_index < 0 || camera_index >= static_cast<int>(scene.cameras.size()))
+    return OutOfRange("camera " + std::to_string(camera_index) + " is not in scene " + scene.path);
+  const SceneCamera& camera = scene.cameras[static_cast<size_t>(camera_index)];
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return IoError(dir + ": cannot create the folder: " + ec.message());
+  ChArUcoSetSummary summary;
+  summary.dir = dir;
+  nlohmann::json truth{{"format", "hairrig-charuco-truth"},
+                       {"version", 1},
+                       {"serial", camera.serial},
+                       {"intrinsics", IntrinsicsToJson(camera.intrinsics)}};
+  truth["images"] = nlohmann::json::array();
+  const std::vector<Rigid3d> poses = ChArUcoBoardPoses(camera.intrinsics, board, views, seed);
+  for (size_t i = 0; i < poses.size(); ++i) {
+    HR_ASSIGN_OR_RETURN(ChArUcoView view, RenderChArUcoView(camera, board, poses[i], true, seed * 1000003ull + i));
+    char name[32];
+    std::snprintf(name, sizeof(name), "view_%03zu.png", i);
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    std::vector<uint8_t> png;
+    if (!cv::imencode(".png", view.image, png)) return IoError(path + ": PNG encoding failed");
+    HR_RETURN_IF_ERROR(WriteFileAtomic(path, png.data(), png.size()));
+    summary.images.push_back(path);
+    truth["images"].push_back({{"image", name}, {"cam_from_board", PoseToJson(poses[i])}});
+  }
+  summary.ground_truth = (std::filesystem::path(dir) / "ground_truth.json").string();
+  HR_RETURN_IF_ERROR(WriteFileAtomic(summary.ground_truth, truth.dump(1)));
+  return summary;
 }
 
 }  // namespace hairrig

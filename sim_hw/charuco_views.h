@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,5 +44,19 @@ std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChA
 // model cannot be inverted over the image.
 Result<ChArUcoView> RenderChArUcoView(const SceneCamera& camera, const ChArUcoBoard& board,
                                       const Rigid3d& cam_from_board, bool noise, uint64_t noise_seed);
+
+struct ChArUcoSetSummary {
+  std::string dir;
+  std::string ground_truth;  // dir/ground_truth.json
+  std::vector<std::string> images;
+};
+
+// What a technician records for one camera, written to `dir` (created):
+// view_NNN.png for `views` poses of ChArUcoBoardPoses, and ground_truth.json
+// (format "hairrig-charuco-truth": the camera's serial and true intrinsics,
+// cam_from_board per image) for `hairrig eval intrinsics`. OutOfRange for a
+// camera index outside the scene; IoError names the file it cannot write.
+Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, const ChArUcoBoard& board, int views,
+                                          uint64_t seed, const std::string& dir);
 
 }  // namespace hairrig
