@@ -2,10 +2,12 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <string>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
+#include <Eigen/Geometry>
 
 namespace hairrig {
 
@@ -54,6 +56,27 @@ struct TurntableCorner {
   }
 };
 
+// A Gaussian prior on a camera's intrinsics: (k - k_prior) / sd, scaled by
+// the corner noise (*sigma_px) so that it weighs like the corner residuals,
+// whose variance the covariance is scaled by. Held parameters (sd 0) give 0.
+struct IntrinsicsPrior {
+  std::array<double, CameraIntrinsics::kNumParams> prior;
+  std::array<double, CameraIntrinsics::kNumParams> inverse_sd;
+  const double* sigma_px;
+  template <typename T>
+  bool operator()(const T* intrinsics, T* residual) const {
+    for (int i = 0; i < CameraIntrinsics::kNumParams; ++i)
+      residual[i] = (intrinsics[i] - T(prior[static_cast<size_t>(i)])) * T(inverse_sd[static_cast<size_t>(i)] * *sigma_px);
+    return true;
+  }
+};
+
+bool HasStddev(const std::array<double, CameraIntrinsics::kNumParams>& sd) {
+  for (double v : sd)
+    if (v > 0) return true;
+  return false;
+}
+
 // A pose as Ceres parameter blocks: quaternion (Eigen order x, y, z, w) and translation.
 struct PoseBlock {
   double q[4];
@@ -65,6 +88,136 @@ struct PoseBlock {
   }
   Rigid3d ToRigid() const { return Rigid3d(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(t[0], t[1], t[2])); }
 };
+
+// Every parameter block of the problem.
+struct Blocks {
+  bool turntable = false;
+  std::vector<std::array<double, CameraIntrinsics::kNumParams>> intrinsics;  // per camera
+  std::vector<PoseBlock> view_poses;      // free mode, per view
+  PoseBlock turntable_from_box;           // turntable mode
+  std::vector<PoseBlock> cam_from_world;  // turntable mode, per camera
+  std::map<int, double> stop_rad;         // turntable mode, per stop
+
+  Rigid3d CamFromBox(const CalibrationView& v, size_t view_index) const {
+    if (!turntable) return view_poses[view_index].ToRigid();
+    return cam_from_world[static_cast<size_t>(v.camera)].ToRigid() * WorldFromTurntable(stop_rad.at(v.stop) / kDegToRad) *
+           turntable_from_box.ToRigid();
+  }
+
+  // The blocks (pointer, ambient size) a view's pose and projections depend on.
+  std::vector<std::pair<double*, int>> Of(const CalibrationView& v, size_t view_index) {
+    std::vector<std::pair<double*, int>> out{{intrinsics[static_cast<size_t>(v.camera)].data(), CameraIntrinsics::kNumParams}};
+    if (!turntable) {
+      out.insert(out.end(), {{view_poses[view_index].q, 4}, {view_poses[view_index].t, 3}});
+      return out;
+    }
+    PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
+    out.insert(out.end(), {{cw.q, 4}, {cw.t, 3}, {&stop_rad.at(v.stop), 1}, {turntable_from_box.q, 4}, {turntable_from_box.t, 3}});
+    return out;
+  }
+};
+
+// Sum of the squared corner reprojection errors of one view (px^2).
+double ViewSquaredError(const Blocks& blocks, const CalibrationView& v, size_t view_index) {
+  const Rigid3d pose = blocks.CamFromBox(v, view_index);
+  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)].data(), 1, 1);
+  double sq = 0;
+  for (const TagObservation& tag : v.tags)
+    for (size_t i = 0; i < 4; ++i) sq += (Project(k, pose * tag.corners_box_mm[i]) - tag.corners_px[i]).squaredNorm();
+  return sq;
+}
+
+// The corner residuals' standard deviation per coordinate (px) for
+// `effective_parameters` estimated; NaN without redundancy.
+double CornerResidualSigma(const Blocks& blocks, const BundleAdjustmentInput& input, int effective_parameters) {
+  double sq = 0, corners = 0;
+  for (size_t vi = 0; vi < input.views.size(); ++vi) {
+    sq += ViewSquaredError(blocks, input.views[vi], vi);
+    corners += 4.0 * static_cast<double>(input.views[vi].tags.size());
+  }
+  const double dof = 2.0 * corners - effective_parameters;
+  return dof > 0 ? std::sqrt(sq / dof) : NAN;
+}
+
+// What a view's blocks predict: the rotation vector taking `reference` to the
+// current cam_from_box (rad), the camera centre in the box frame (mm) and the
+// projections of the view's observed corners (px).
+Eigen::VectorXd Predict(const Blocks& blocks, const CalibrationView& v, size_t view_index, const Rigid3d& reference) {
+  const Rigid3d pose = blocks.CamFromBox(v, view_index);
+  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)].data(), 1, 1);
+  Eigen::VectorXd out(6 + 8 * static_cast<Eigen::Index>(v.tags.size()));
+  const Eigen::AngleAxisd delta(pose.rotation * reference.rotation.conjugate());
+  out.head<3>() = delta.angle() * delta.axis();
+  out.segment<3>(3) = pose.Inverse().translation;
+  Eigen::Index row = 6;
+  for (const TagObservation& tag : v.tags) {
+    for (const Eigen::Vector3d& corner : tag.corners_box_mm) {
+      out.segment<2>(row) = Project(k, pose * corner);
+      row += 2;
+    }
+  }
+  return out;
+}
+
+// ViewUncertainty of every view from the covariance of the estimate (in the
+// ambient coordinates of the blocks; a held block contributes nothing),
+// propagated through Predict by central differences and scaled by the
+// residuals' variance.
+std::vector<ViewUncertainty> ViewUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdjustmentInput& input,
+                                               double sigma_px) {
+  std::vector<ViewUncertainty> out(input.views.size());
+  if (!std::isfinite(sigma_px)) return out;
+  std::vector<std::vector<std::pair<double*, int>>> view_blocks(input.views.size());
+  std::set<std::pair<const double*, const double*>> pairs;
+  for (size_t vi = 0; vi < input.views.size(); ++vi) {
+    for (const auto& block : blocks.Of(input.views[vi], vi)) {
+      if (problem.HasParameterBlock(block.first) && !problem.IsParameterBlockConstant(block.first))
+        view_blocks[vi].push_back(block);
+    }
+    for (const auto& a : view_blocks[vi])
+      for (const auto& b : view_blocks[vi]) pairs.emplace(std::min(a.first, b.first), std::max(a.first, b.first));
+  }
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::DENSE_SVD;
+  options.null_space_rank = -1;
+  ceres::Covariance covariance(options);
+  if (!covariance.Compute(std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem))
+    return out;
+  for (size_t vi = 0; vi < input.views.size(); ++vi) {
+    const CalibrationView& v = input.views[vi];
+    if (v.tags.empty()) continue;
+    std::vector<const double*> pointers;
+    int n = 0;
+    for (const auto& block : view_blocks[vi]) pointers.push_back(block.first), n += block.second;
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> cov(n, n);
+    if (!covariance.GetCovarianceMatrix(pointers, cov.data())) continue;
+    const Rigid3d reference = blocks.CamFromBox(v, vi);
+    Eigen::MatrixXd jacobian(6 + 8 * static_cast<Eigen::Index>(v.tags.size()), n);
+    int column = 0;
+    for (const auto& [data, size] : view_blocks[vi]) {
+      for (int i = 0; i < size; ++i, ++column) {
+        const double saved = data[i];
+        const double h = 1e-6 * std::max(1.0, std::abs(saved));
+        data[i] = saved + h;
+        const Eigen::VectorXd plus = Predict(blocks, v, vi, reference);
+        data[i] = saved - h;
+        const Eigen::VectorXd minus = Predict(blocks, v, vi, reference);
+        data[i] = saved;
+        jacobian.col(column) = (plus - minus) / (2 * h);
+      }
+    }
+    const Eigen::MatrixXd predicted = sigma_px * sigma_px * jacobian * cov * jacobian.transpose();
+    ViewUncertainty& u = out[vi];
+    u.rotation_cov_rad2 = predicted.block<3, 3>(0, 0);
+    u.centre_cov_mm2 = predicted.block<3, 3>(3, 3);
+    u.rotation_sd_deg = std::sqrt(std::max(0.0, u.rotation_cov_rad2.trace())) / kDegToRad;
+    u.centre_sd_mm = std::sqrt(std::max(0.0, u.centre_cov_mm2.trace()));
+    const Eigen::Index corners = 4 * static_cast<Eigen::Index>(v.tags.size());
+    u.projection_sd_px = std::sqrt(std::max(0.0, predicted.bottomRightCorner(2 * corners, 2 * corners).trace() /
+                                                     static_cast<double>(corners)));
+  }
+  return out;
+}
 
 Status ValidateInput(const BundleAdjustmentInput& input) {
   if (input.cameras.empty()) return InvalidArgument("bundle adjustment: no camera");
@@ -103,15 +256,19 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   HR_RETURN_IF_ERROR(ValidateInput(input));
   const bool turntable = options.mode == CalibrationMode::kTurntable;
   ceres::Problem problem;
-  std::vector<std::array<double, CameraIntrinsics::kNumParams>> intrinsics;
-  for (const CameraIntrinsics& c : input.cameras) intrinsics.push_back(c.ToParams());
-  std::vector<PoseBlock> view_poses;
-  for (const CalibrationView& v : input.views) view_poses.emplace_back(v.cam_from_box_init);
+  Blocks b;
+  b.turntable = turntable;
+  for (const CameraIntrinsics& c : input.cameras) b.intrinsics.push_back(c.ToParams());
+  for (const CalibrationView& v : input.views) b.view_poses.emplace_back(v.cam_from_box_init);
 
   // Turntable mode: cameras from their best-observed view, angles from the encoder.
-  PoseBlock turntable_from_box(input.turntable_from_box_init);
-  std::vector<PoseBlock> cam_from_world(input.cameras.size());
-  std::map<int, double> stop_rad;
+  b.turntable_from_box = PoseBlock(input.turntable_from_box_init);
+  b.cam_from_world.resize(input.cameras.size());
+  auto& intrinsics = b.intrinsics;
+  auto& view_poses = b.view_poses;
+  auto& turntable_from_box = b.turntable_from_box;
+  auto& cam_from_world = b.cam_from_world;
+  auto& stop_rad = b.stop_rad;
   if (turntable) {
     std::vector<size_t> best_tags(input.cameras.size(), 0);
     for (const CalibrationView& v : input.views) {
@@ -144,12 +301,30 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     }
   }
   // Manifolds and the gauge.
-  for (auto& intr : intrinsics) {
-    if (!problem.HasParameterBlock(intr.data())) continue;
-    if (options.fix_intrinsics) {
-      problem.SetParameterBlockConstant(intr.data());
+  double prior_sigma_px = 1.0;  // the corner noise the prior weighs against; updated after a first solve
+  bool soft_prior = false;
+  for (size_t c = 0; c < intrinsics.size(); ++c) {
+    double* intr = intrinsics[c].data();
+    if (!problem.HasParameterBlock(intr)) continue;
+    const bool has_sd = c < input.prior_stddev.size() && HasStddev(input.prior_stddev[c]);
+    if (!options.fix_intrinsics) {
+      problem.SetManifold(intr, new ceres::SubsetManifold(CameraIntrinsics::kNumParams, {8}));  // k3 held
+    } else if (options.hard_prior || !has_sd) {
+      problem.SetParameterBlockConstant(intr);
     } else {
-      problem.SetManifold(intr.data(), new ceres::SubsetManifold(CameraIntrinsics::kNumParams, {8}));  // k3 held
+      IntrinsicsPrior prior{intrinsics[c], {}, &prior_sigma_px};
+      std::vector<int> held;
+      for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
+        const double sd = input.prior_stddev[c][static_cast<size_t>(i)];
+        prior.inverse_sd[static_cast<size_t>(i)] = sd > 0 ? 1.0 / sd : 0.0;
+        if (!(sd > 0)) held.push_back(i);
+      }
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<IntrinsicsPrior, CameraIntrinsics::kNumParams, CameraIntrinsics::kNumParams>(
+              new IntrinsicsPrior(prior)),
+          nullptr, intr);
+      if (!held.empty()) problem.SetManifold(intr, new ceres::SubsetManifold(CameraIntrinsics::kNumParams, held));
+      soft_prior = true;
     }
   }
   if (turntable) {
@@ -174,6 +349,11 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   solver.gradient_tolerance = 1e-14;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
+  if (soft_prior && summary.IsSolutionUsable()) {
+    // Weigh the prior against the corner noise actually found, and solve again.
+    prior_sigma_px = CornerResidualSigma(b, input, summary.num_effective_parameters);
+    ceres::Solve(solver, &problem, &summary);
+  }
   if (!summary.IsSolutionUsable()) {
     return FailedPrecondition("bundle adjustment did not converge: " + summary.message);
   }
@@ -196,28 +376,18 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   size_t total_corners = 0;
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
     const CalibrationView& v = input.views[vi];
-    const Rigid3d pose = turntable ? result.cam_from_world[static_cast<size_t>(v.camera)] *
-                                         WorldFromTurntable(result.stop_deg[static_cast<size_t>(v.stop)]) *
-                                         result.turntable_from_box
-                                   : view_poses[vi].ToRigid();
-    result.cam_from_box.push_back(pose);
-    double sq = 0;
-    for (const TagObservation& tag : v.tags) {
-      for (size_t k = 0; k < 4; ++k) {
-        sq += (Project(result.cameras[static_cast<size_t>(v.camera)], pose * tag.corners_box_mm[k]) - tag.corners_px[k])
-                  .squaredNorm();
-      }
-    }
+    result.cam_from_box.push_back(b.CamFromBox(v, vi));
+    const double sq = ViewSquaredError(b, v, vi);
     const size_t corners = 4 * v.tags.size();
     result.view_rms_px.push_back(corners ? std::sqrt(sq / static_cast<double>(corners)) : NAN);
     total_sq += sq;
     total_corners += corners;
   }
   result.rms_px = std::sqrt(total_sq / static_cast<double>(total_corners));
+  result.residual_sigma_px = CornerResidualSigma(b, input, summary.num_effective_parameters);
   const double dof = 2.0 * static_cast<double>(total_corners) - summary.num_effective_parameters;
-  result.residual_sigma_px = dof > 0 ? std::sqrt(total_sq / dof) : NAN;
   result.intrinsics_stddev.assign(input.cameras.size(), {});
-  if (!options.fix_intrinsics && dof > 0) {
+  if ((!options.fix_intrinsics || soft_prior) && dof > 0) {
     // Covariance of the intrinsics (the gauge is fixed, so it exists); a
     // rank-deficient problem leaves the standard deviations at NaN.
     ceres::Covariance::Options covariance_options;
@@ -225,11 +395,13 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     covariance_options.null_space_rank = -1;
     ceres::Covariance covariance(covariance_options);
     std::vector<std::pair<const double*, const double*>> blocks;
-    for (const auto& intr : intrinsics) blocks.emplace_back(intr.data(), intr.data());
+    for (const auto& intr : intrinsics)
+      if (problem.HasParameterBlock(intr.data()) && !problem.IsParameterBlockConstant(intr.data()))
+        blocks.emplace_back(intr.data(), intr.data());
     const bool ok = covariance.Compute(blocks, &problem);
     for (size_t c = 0; c < intrinsics.size(); ++c) {
       double block[CameraIntrinsics::kNumParams * CameraIntrinsics::kNumParams];
-      const bool have = ok && covariance.GetCovarianceBlock(intrinsics[c].data(), intrinsics[c].data(), block);
+      const bool have = ok && !problem.IsParameterBlockConstant(intrinsics[c].data()) && covariance.GetCovarianceBlock(intrinsics[c].data(), intrinsics[c].data(), block);
       for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
         result.intrinsics_stddev[c][static_cast<size_t>(i)] =
             have ? result.residual_sigma_px * std::sqrt(std::max(0.0, block[i * CameraIntrinsics::kNumParams + i]))
@@ -237,6 +409,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
       }
     }
   }
+  result.view_uncertainty = ViewUncertainties(problem, b, input, result.residual_sigma_px);
   return result;
 }
 

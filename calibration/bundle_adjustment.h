@@ -16,7 +16,10 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "calibration/view_pose.h"
 #include "core/camera_model.h"
@@ -37,7 +40,13 @@ struct CalibrationView {
 
 struct BundleAdjustmentOptions {
   CalibrationMode mode = CalibrationMode::kTurntable;
-  bool fix_intrinsics = false;  // a prior (ChArUco) calibration is trusted
+  // A prior (ChArUco) calibration is trusted: the cameras stay at their
+  // initial intrinsics. A camera whose prior states standard deviations
+  // (BundleAdjustmentInput::prior_stddev) is held by a Gaussian prior with
+  // them unless hard_prior, so that the prior's own uncertainty enters the
+  // covariance; parameters with a zero standard deviation are held exactly.
+  bool fix_intrinsics = false;
+  bool hard_prior = false;
   double huber_px = 1.0;
   int max_iterations = 100;
   int threads = 2;
@@ -47,6 +56,24 @@ struct BundleAdjustmentInput {
   std::vector<CameraIntrinsics> cameras;  // initial values
   std::vector<CalibrationView> views;
   Rigid3d turntable_from_box_init;        // turntable mode: nominal, from the rig config
+  // Per camera (empty, or one per camera): standard deviations of the prior
+  // intrinsics (kParamNames order); all zero = no stated uncertainty.
+  std::vector<std::array<double, CameraIntrinsics::kNumParams>> prior_stddev;
+};
+
+// What the covariance of the estimate predicts for one view's errors, as the
+// root of the expected squared error (the trace of the covariance): of
+// cam_from_box's rotation (deg), of the camera centre in the box frame (mm),
+// and of the projection of the view's observed corners (px, RMS over them).
+// The covariances themselves are in radians^2 (rotation vector of
+// estimate-to-truth, camera frame) and mm^2. NaN when the covariance is rank
+// deficient. A held (prior) intrinsics block contributes nothing.
+struct ViewUncertainty {
+  double rotation_sd_deg = NAN;
+  double centre_sd_mm = NAN;
+  double projection_sd_px = NAN;
+  Eigen::Matrix3d rotation_cov_rad2 = Eigen::Matrix3d::Constant(NAN);
+  Eigen::Matrix3d centre_cov_mm2 = Eigen::Matrix3d::Constant(NAN);
 };
 
 struct BundleAdjustmentResult {
@@ -61,6 +88,7 @@ struct BundleAdjustmentResult {
   // held parameters) from the covariance of the estimate, with the residuals'
   // own variance (residual_sigma_px, per coordinate) as the noise model.
   std::vector<std::array<double, CameraIntrinsics::kNumParams>> intrinsics_stddev;
+  std::vector<ViewUncertainty> view_uncertainty;  // per view
   double residual_sigma_px = 0;
   int iterations = 0;
   bool converged = false;

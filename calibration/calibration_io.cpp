@@ -1,5 +1,6 @@
 #include "calibration/calibration_io.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -25,6 +26,41 @@ nlohmann::json StddevJson(const std::array<double, CameraIntrinsics::kNumParams>
   nlohmann::json sd;
   for (size_t k = 0; k < stddev.size(); ++k) sd[CameraIntrinsics::kParamNames[k]] = stddev[k];
   return sd;
+}
+
+// NaN (a rank-deficient covariance) is written as null.
+nlohmann::json UncertaintyJson(const ViewUncertainty& u) {
+  const auto finite = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  const auto matrix = [&](const Eigen::Matrix3d& m) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 3; ++r) rows.push_back({finite(m(r, 0)), finite(m(r, 1)), finite(m(r, 2))});
+    return rows;
+  };
+  return {{"rotation_sd_deg", finite(u.rotation_sd_deg)},
+          {"centre_sd_mm", finite(u.centre_sd_mm)},
+          {"projection_sd_px", finite(u.projection_sd_px)},
+          {"rotation_cov_rad2", matrix(u.rotation_cov_rad2)},
+          {"centre_cov_mm2", matrix(u.centre_cov_mm2)}};
+}
+
+ViewUncertainty UncertaintyFromJson(const nlohmann::json& j) {
+  ViewUncertainty u;
+  if (!j.is_object()) return u;
+  const auto number = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
+  const auto matrix = [&](const nlohmann::json& rows, Eigen::Matrix3d* m) {
+    if (!rows.is_array() || rows.size() != 3) return;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        (*m)(r, c) = rows[static_cast<size_t>(r)].is_array() && rows[static_cast<size_t>(r)].size() == 3
+                         ? number(rows[static_cast<size_t>(r)][static_cast<size_t>(c)])
+                         : NAN;
+  };
+  u.rotation_sd_deg = number(j.value("rotation_sd_deg", nlohmann::json()));
+  u.centre_sd_mm = number(j.value("centre_sd_mm", nlohmann::json()));
+  u.projection_sd_px = number(j.value("projection_sd_px", nlohmann::json()));
+  matrix(j.value("rotation_cov_rad2", nlohmann::json()), &u.rotation_cov_rad2);
+  matrix(j.value("centre_cov_mm2", nlohmann::json()), &u.centre_cov_mm2);
+  return u;
 }
 
 std::array<double, CameraIntrinsics::kNumParams> StddevFromJson(const nlohmann::json& j) {
@@ -76,6 +112,14 @@ nlohmann::json CalibrationJson(const CaptureCalibrationInput& input, const Captu
       j["cam_from_box_initial"] = PoseToJson(frame.cam_from_box_init);
       j["cam_from_object"] = PoseToJson(frame.cam_from_box * box_from_object);
       j["rms_px"] = frame.rms_px;
+      j["uncertainty"] = UncertaintyJson(frame.uncertainty);
+      nlohmann::json tags = nlohmann::json::array();
+      for (const TagObservation& tag : frame.tags) {
+        nlohmann::json corners = nlohmann::json::array();
+        for (const Eigen::Vector2d& c : tag.corners_px) corners.push_back({c.x(), c.y()});
+        tags.push_back({{"id", tag.id}, {"corners_px", corners}});
+      }
+      j["tags"] = tags;
     } else {
       j["failure"] = frame.failure;
     }
@@ -206,6 +250,21 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
       if (!initial.ok()) return CorruptData(initial.status().message());
       view.cam_from_box_initial = *initial;
       view.rms_px = j.value("rms_px", 0.0);
+      view.uncertainty = UncertaintyFromJson(j.value("uncertainty", nlohmann::json()));
+      for (const nlohmann::json& tag : j.value("tags", nlohmann::json::array())) {
+        StoredCalibration::Tag t;
+        t.id = tag.value("id", -1);
+        const nlohmann::json corners = tag.value("corners_px", nlohmann::json::array());
+        if (t.id < 0 || !corners.is_array() || corners.size() != 4)
+          return CorruptData(where + ".tags: each tag needs an id and 4 corners_px");
+        for (size_t k = 0; k < 4; ++k) {
+          if (!corners[k].is_array() || corners[k].size() != 2 || !corners[k][0].is_number() || !corners[k][1].is_number())
+            return CorruptData(where + ".tags: corner " + std::to_string(k) + " of tag " + std::to_string(t.id) +
+                               " is not [u, v]");
+          t.corners_px[k] = {corners[k][0].get<double>(), corners[k][1].get<double>()};
+        }
+        view.tags.push_back(t);
+      }
     }
     out.views.push_back(view);
   }

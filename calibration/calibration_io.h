@@ -40,6 +40,10 @@ struct StoredCalibration {
     std::string intrinsics_source;  // "views": initial is OpenCV's calibrateCamera
     std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
   };
+  struct Tag {
+    int id = -1;
+    std::array<Eigen::Vector2d, 4> corners_px;  // as detected (kTagCornerSigns order)
+  };
   struct View {
     int view = 0;
     int camera = 0;  // index into cameras
@@ -48,6 +52,8 @@ struct StoredCalibration {
     Rigid3d cam_from_box;
     Rigid3d cam_from_box_initial;  // the per-view PnP before the bundle adjustment
     double rms_px = 0;
+    ViewUncertainty uncertainty;  // NaN where calibration.json has none
+    std::vector<Tag> tags;        // the detections the bundle adjustment used
   };
   std::string mode;
   std::vector<Camera> cameras;

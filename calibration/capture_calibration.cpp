@@ -118,6 +118,7 @@ BundleAdjustmentInput BuildAdjustmentInput(const CaptureCalibrationInput& input,
     map->ba_camera[c] = static_cast<int>(ba.cameras.size());
     map->camera_of.push_back(static_cast<int>(c));
     ba.cameras.push_back(camera.initial);
+    ba.prior_stddev.push_back(input.cameras[c].nominal_stddev);
   }
   for (size_t f = 0; f < input.frames.size(); ++f) {
     const FrameCalibration& frame = out->frames[f];
@@ -145,6 +146,7 @@ void CopySolution(const BundleAdjustmentResult& solution, const SolveMap& map, C
     FrameCalibration& frame = out->frames[map.frame_of[v]];
     frame.cam_from_box = solution.cam_from_box[v];
     frame.rms_px = solution.view_rms_px[v];
+    frame.uncertainty = solution.view_uncertainty[v];
   }
   out->turntable_from_box = solution.turntable_from_box;
   out->rms_px = solution.rms_px;
@@ -224,6 +226,7 @@ Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input
   BundleAdjustmentOptions ba_options;
   ba_options.mode = options.mode;
   ba_options.fix_intrinsics = options.fix_intrinsics;
+  ba_options.hard_prior = options.hard_prior;
   ba_options.huber_px = options.huber_px;
   ba_options.threads = std::max(1, options.threads);
   HR_ASSIGN_OR_RETURN(BundleAdjustmentResult solution, RunBundleAdjustment(ba, ba_options));

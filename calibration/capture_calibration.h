@@ -27,6 +27,9 @@ struct CalibrationCamera {
   // Starting values (the lens and sensor data sheet), or the prior when
   // CaptureCalibrationOptions::fix_intrinsics; solved from the views when absent.
   std::optional<CameraIntrinsics> nominal;
+  // Standard deviations of a prior's values (kParamNames order; all 0 when
+  // unknown): with fix_intrinsics they hold the camera by a Gaussian prior.
+  std::array<double, CameraIntrinsics::kNumParams> nominal_stddev{};
 };
 
 struct CalibrationFrame {
@@ -50,6 +53,7 @@ struct CaptureCalibrationInput {
 struct CaptureCalibrationOptions {
   CalibrationMode mode = CalibrationMode::kTurntable;
   bool fix_intrinsics = false;  // hold every camera at its `nominal` (a prior calibration)
+  bool hard_prior = false;      // ... exactly, ignoring nominal_stddev (BundleAdjustmentOptions::hard_prior)
   int threads = 2;              // detection and Ceres
   TagDetectorOptions detector;
   ViewPoseOptions pose;
@@ -66,6 +70,7 @@ struct FrameCalibration {
   Rigid3d cam_from_box;           // solved
   double init_rms_px = 0;
   double rms_px = 0;              // corner reprojection RMS after the bundle adjustment
+  ViewUncertainty uncertainty;    // predicted by the covariance of the estimate
 };
 
 struct CameraCalibration {

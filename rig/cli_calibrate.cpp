@@ -21,6 +21,7 @@ struct CalibrateArgs {
   std::string dir;
   std::string mode = "turntable";
   std::vector<std::string> priors;  // files whose intrinsics are held fixed
+  bool hard_prior = false;
   int threads = 2;
 };
 
@@ -44,6 +45,7 @@ Status ApplyPriors(const std::vector<std::string>& prior_paths, CaptureCalibrati
                              std::to_string(prior.intrinsics.height_px) + " px, the capture's frames are " +
                              std::to_string(camera.width_px) + " x " + std::to_string(camera.height_px));
     camera.nominal = prior.intrinsics;
+    camera.nominal_stddev = prior.stddev;
   }
   return Status::Ok();
 }
@@ -56,6 +58,7 @@ Result<nlohmann::json> RunCalibrate(const CalibrateArgs& a) {
   if (!a.priors.empty()) {
     HR_RETURN_IF_ERROR(ApplyPriors(a.priors, &input));
     options.fix_intrinsics = true;
+    options.hard_prior = a.hard_prior;
   }
   HR_ASSIGN_OR_RETURN(CaptureCalibration result, CalibrateCapture(input, options));
   const std::string out_dir = (std::filesystem::path(a.dir) / "calibration").string();
@@ -181,6 +184,9 @@ void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatc
                   "intrinsics held fixed, matched by camera serial: files from `calibrate-intrinsics` (one per "
                   "camera) or a calibration.json; repeat for several")
       ->check(CLI::ExistingFile);
+  cmd->add_flag("--hard-prior", args->hard_prior,
+                "hold the --intrinsics exactly instead of by a Gaussian prior with their standard deviations "
+                "(then their uncertainty is missing from the poses')");
   cmd->add_option("--threads", args->threads, "detection and solver threads")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {

@@ -1,16 +1,19 @@
 // `hairrig eval <stage> DIR`: a stage's output against the simulated rig's
 // ground truth (<capture>/ground_truth/). Stages: calibration, intrinsics.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
 
 #include "calibration/calibration_io.h"
 #include "core/geometry_json.h"
 #include "core/json_file.h"
+#include "rig/capture_calibration_input.h"
 #include "rig/cli.h"
 
 namespace hairrig {
@@ -22,6 +25,7 @@ struct TruthView {
   std::string serial;
   CameraIntrinsics intrinsics;
   Rigid3d cam_from_box;
+  std::map<int, std::array<Eigen::Vector2d, 4>> tag_corners_px;  // true projections, by tag id (CornerNoise)
 };
 
 Result<std::map<int, TruthView>> ReadGroundTruthViews(const std::string& capture_dir) {
@@ -85,6 +89,65 @@ nlohmann::json PoseErrors(const StoredCalibration& calibration, const std::map<i
           {"principal_point_px", principal.ToJson()}};
 }
 
+// Observed errors against the errors the covariance predicts, over the
+// solved views: sqrt(sum error^2 / sum predicted sd^2) for the rotation and the
+// camera centre (1 when the stated uncertainty is right), and the Mahalanobis
+// form sqrt(mean(e' C^-1 e) / 3).
+nlohmann::json UncertaintyCheck(const StoredCalibration& calibration, const std::map<int, TruthView>& truth) {
+  double rot_sq = 0, rot_pred = 0, centre_sq = 0, centre_pred = 0, mahal_rot = 0, mahal_centre = 0;
+  int n = 0;
+  for (const StoredCalibration::View& view : calibration.views) {
+    const auto t = truth.find(view.view);
+    const ViewUncertainty& u = view.uncertainty;
+    if (!view.solved || t == truth.end() || !std::isfinite(u.rotation_sd_deg) || !std::isfinite(u.centre_sd_mm) ||
+        !u.rotation_cov_rad2.allFinite() || !u.centre_cov_mm2.allFinite())
+      continue;
+    const Eigen::AngleAxisd d(view.cam_from_box.rotation * t->second.cam_from_box.rotation.conjugate());
+    const Eigen::Vector3d e_rot = d.angle() * d.axis();
+    const Eigen::Vector3d e_centre =
+        view.cam_from_box.Inverse().translation - t->second.cam_from_box.Inverse().translation;
+    rot_sq += e_rot.squaredNorm();
+    rot_pred += u.rotation_cov_rad2.trace();
+    centre_sq += e_centre.squaredNorm();
+    centre_pred += u.centre_cov_mm2.trace();
+    mahal_rot += e_rot.dot(u.rotation_cov_rad2.ldlt().solve(e_rot));
+    mahal_centre += e_centre.dot(u.centre_cov_mm2.ldlt().solve(e_centre));
+    ++n;
+  }
+  if (n == 0) return {{"views", 0}};
+  return {{"views", n},
+          {"rotation_ratio", std::sqrt(rot_sq / rot_pred)},
+          {"centre_ratio", std::sqrt(centre_sq / centre_pred)},
+          {"rotation_mahalanobis_ratio", std::sqrt(mahal_rot / (3.0 * n))},
+          {"centre_mahalanobis_ratio", std::sqrt(mahal_centre / (3.0 * n))}};
+}
+
+// RMS distance (px, per corner) of the used detections from the true
+// projections of the box's tag corners: the corner noise of these frames,
+// which the reprojection RMS is compared with.
+nlohmann::json CornerNoise(const StoredCalibration& calibration, std::map<int, TruthView> truth, const CalibBox& box) {
+  for (auto& [view, t] : truth) {
+    for (const BoxTag& tag : box.tags) {
+      std::array<Eigen::Vector2d, 4> corners;
+      for (size_t k = 0; k < 4; ++k) corners[k] = Project(t.intrinsics, t.cam_from_box * tag.corners_box_mm[k]);
+      t.tag_corners_px[tag.id] = corners;
+    }
+  }
+  double sq = 0;
+  int corners = 0;
+  for (const StoredCalibration::View& view : calibration.views) {
+    const auto t = truth.find(view.view);
+    if (!view.solved || t == truth.end()) continue;
+    for (const StoredCalibration::Tag& tag : view.tags) {
+      const auto true_tag = t->second.tag_corners_px.find(tag.id);
+      if (true_tag == t->second.tag_corners_px.end()) continue;
+      for (size_t k = 0; k < 4; ++k) sq += (tag.corners_px[k] - true_tag->second[k]).squaredNorm(), ++corners;
+    }
+  }
+  if (corners == 0) return nullptr;
+  return std::sqrt(sq / corners);
+}
+
 Result<nlohmann::json> EvalCalibration(const std::string& dir) {
   HR_ASSIGN_OR_RETURN(StoredCalibration calibration,
                       ReadCalibration((fs::path(dir) / "calibration" / "calibration.json").string()));
@@ -101,6 +164,12 @@ Result<nlohmann::json> EvalCalibration(const std::string& dir) {
   for (const auto& v : calibration.views)
     if (v.solved) rms.values.push_back(v.rms_px);
   out["solved"]["reprojection_rms_px"] = rms.ToJson();
+  HR_ASSIGN_OR_RETURN(CaptureCalibrationInput input, LoadCaptureCalibrationInput(dir));
+  out["corner_noise_px"] = CornerNoise(calibration, truth, input.box);
+  out["overall_rms_px"] = calibration.rms_px;
+  if (out["corner_noise_px"].is_number())
+    out["rms_over_corner_noise"] = calibration.rms_px / out["corner_noise_px"].get<double>();
+  out["uncertainty"] = UncertaintyCheck(calibration, truth);
   out["views_compared"] = compared;
   out["views"] = calibration.views.size();
   if (compared == 0) return FailedPrecondition(dir + ": no solved view has a ground truth to compare with");
@@ -126,6 +195,16 @@ void PrintEval(const nlohmann::json& j) {
               j["mode"].get<std::string>().c_str(), j["views_compared"].get<int>(), j["views"].get<int>());
   PrintErrors("bundle adjustment:", j["solved"]);
   PrintErrors(("initial (" + j["initial_source"].get<std::string>() + "):").c_str(), j["initial"]);
+  if (j.contains("rms_over_corner_noise"))
+    std::printf("  reprojection RMS %.4f px against corner noise %.4f px (detections vs truth): %.2fx\n",
+                j["overall_rms_px"].get<double>(), j["corner_noise_px"].get<double>(),
+                j["rms_over_corner_noise"].get<double>());
+  const nlohmann::json& u = j["uncertainty"];
+  if (u.value("views", 0) > 0)
+    std::printf("  observed / predicted error (1 = the stated uncertainty is right), %d views: rotation %.2f, "
+                "centre %.2f (Mahalanobis %.2f, %.2f)\n",
+                u["views"].get<int>(), u["rotation_ratio"].get<double>(), u["centre_ratio"].get<double>(),
+                u["rotation_mahalanobis_ratio"].get<double>(), u["centre_mahalanobis_ratio"].get<double>());
 }
 
 // DIR/intrinsics.json (calibrate-intrinsics) against DIR/ground_truth.json (sim charuco).
