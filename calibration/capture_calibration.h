@@ -39,6 +39,9 @@ struct CalibrationFrame {
   int camera = 0;        // index into CaptureCalibrationInput::cameras
   int stop = 0;
   double turntable_deg = 0;  // measured by the encoder
+  // Tags already detected and matched (during the capture, through the frame
+  // sink): the image is then not read again.
+  std::optional<ViewObservations> observations;
 };
 
 struct CaptureCalibrationInput {
@@ -95,9 +98,10 @@ struct CaptureCalibration {
   double detect_s = 0, init_s = 0, solve_s = 0;  // wall time of each step
 };
 
-// Tags of every frame, matched to the box, over `threads` threads. A frame
-// that cannot be read gives an empty observation with the reason in
-// `failures` (same order as frames; empty string for success).
+// Tags of every frame, matched to the box, over `threads` threads; a frame
+// with `observations` keeps them. A frame that cannot be read gives an empty
+// observation with the reason in `failures` (same order as frames; empty
+// string for success).
 std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames, const CalibBox& box,
                                            const TagDetectorOptions& detector, int threads,
                                            std::vector<std::string>* failures);

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "calibration/calibration_io.h"
+#include "calibration/uncertainty_check.h"
 #include "core/geometry_json.h"
 #include "core/json_file.h"
 #include "rig/capture_calibration_input.h"
@@ -89,37 +90,21 @@ nlohmann::json PoseErrors(const StoredCalibration& calibration, const std::map<i
           {"principal_point_px", principal.ToJson()}};
 }
 
-// Observed errors against the errors the covariance predicts, over the
-// solved views: sqrt(sum error^2 / sum predicted sd^2) for the rotation and the
-// camera centre (1 when the stated uncertainty is right), and the Mahalanobis
-// form sqrt(mean(e' C^-1 e) / 3).
+// Observed errors against the errors the covariance predicts, over the solved views.
 nlohmann::json UncertaintyCheck(const StoredCalibration& calibration, const std::map<int, TruthView>& truth) {
-  double rot_sq = 0, rot_pred = 0, centre_sq = 0, centre_pred = 0, mahal_rot = 0, mahal_centre = 0;
-  int n = 0;
+  std::vector<UncertaintySample> samples;
   for (const StoredCalibration::View& view : calibration.views) {
     const auto t = truth.find(view.view);
-    const ViewUncertainty& u = view.uncertainty;
-    if (!view.solved || t == truth.end() || !std::isfinite(u.rotation_sd_deg) || !std::isfinite(u.centre_sd_mm) ||
-        !u.rotation_cov_rad2.allFinite() || !u.centre_cov_mm2.allFinite())
-      continue;
-    const Eigen::AngleAxisd d(view.cam_from_box.rotation * t->second.cam_from_box.rotation.conjugate());
-    const Eigen::Vector3d e_rot = d.angle() * d.axis();
-    const Eigen::Vector3d e_centre =
-        view.cam_from_box.Inverse().translation - t->second.cam_from_box.Inverse().translation;
-    rot_sq += e_rot.squaredNorm();
-    rot_pred += u.rotation_cov_rad2.trace();
-    centre_sq += e_centre.squaredNorm();
-    centre_pred += u.centre_cov_mm2.trace();
-    mahal_rot += e_rot.dot(u.rotation_cov_rad2.ldlt().solve(e_rot));
-    mahal_centre += e_centre.dot(u.centre_cov_mm2.ldlt().solve(e_centre));
-    ++n;
+    if (view.solved && t != truth.end())
+      samples.push_back(MakeUncertaintySample(view.cam_from_box, t->second.cam_from_box, view.uncertainty));
   }
-  if (n == 0) return {{"views", 0}};
-  return {{"views", n},
-          {"rotation_ratio", std::sqrt(rot_sq / rot_pred)},
-          {"centre_ratio", std::sqrt(centre_sq / centre_pred)},
-          {"rotation_mahalanobis_ratio", std::sqrt(mahal_rot / (3.0 * n))},
-          {"centre_mahalanobis_ratio", std::sqrt(mahal_centre / (3.0 * n))}};
+  const UncertaintyRatios r = ObservedOverPredicted(samples);
+  if (r.views == 0) return {{"views", 0}};
+  return {{"views", r.views},
+          {"rotation_ratio", r.rotation},
+          {"centre_ratio", r.centre},
+          {"rotation_mahalanobis_ratio", r.rotation_mahalanobis},
+          {"centre_mahalanobis_ratio", r.centre_mahalanobis}};
 }
 
 // RMS distance (px, per corner) of the used detections from the true
