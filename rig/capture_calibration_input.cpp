@@ -1,11 +1,13 @@
 #include "rig/capture_calibration_input.h"
 
+#include <chrono>
 #include <filesystem>
 #include <map>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "calibration/calibration_io.h"
 #include "core/json_file.h"
 #include "rig/rig_config.h"
 #include "rig/safe_names.h"
@@ -92,25 +94,84 @@ void FillImageSizes(CaptureCalibrationInput* input) {
 
 }  // namespace
 
-Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {
-  const std::string manifest_path = (fs::path(capture_dir) / "manifest.json").string();
-  HR_ASSIGN_OR_RETURN(nlohmann::json manifest, ReadJsonFile(manifest_path, "is this a capture folder?"));
-  HR_ASSIGN_OR_RETURN(nlohmann::json metadata, ReadJsonFile((fs::path(capture_dir) / "capture.json").string(),
-                                                            "is this a capture folder?"));
-  HR_ASSIGN_OR_RETURN(RigConfig config, LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(),
-                                                      metadata.value("config_dir", "")));
+Status ReadCalibrationSection(const RigConfig& config, CalibBox* box, double* box_height_mm) {
   const ConfigNode section = config.root.Child("calibration");
   section.AllowOnlyKeys({"box", "box_height_mm", "cameras"});
   const std::string box_file = section.String("box");
-  CaptureCalibrationInput input;
-  input.box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
+  *box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
   HR_RETURN_IF_ERROR(config.root.status());
-  HR_ASSIGN_OR_RETURN(input.box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
+  HR_ASSIGN_OR_RETURN(*box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
+  return Status::Ok();
+}
+
+Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
+  HR_ASSIGN_OR_RETURN(nlohmann::json metadata, ReadJsonFile((fs::path(capture_dir) / "capture.json").string(),
+                                                            "is this a capture folder?"));
+  return LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(), metadata.value("config_dir", ""));
+}
+
+Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {
+  const std::string manifest_path = (fs::path(capture_dir) / "manifest.json").string();
+  HR_ASSIGN_OR_RETURN(nlohmann::json manifest, ReadJsonFile(manifest_path, "is this a capture folder?"));
+  HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(capture_dir));
+  CaptureCalibrationInput input;
+  HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &input.box, &input.box_height_mm));
   std::map<std::string, int> by_serial;
   HR_RETURN_IF_ERROR(AddCameras(config, &input, &by_serial));
   HR_RETURN_IF_ERROR(AddFrames(capture_dir, manifest, manifest_path, by_serial, &input));
   FillImageSizes(&input);
   return input;
+}
+
+Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_paths, CaptureCalibrationInput* input) {
+  std::map<std::string, IntrinsicsPrior> by_serial;
+  for (const std::string& path : prior_paths) {
+    HR_ASSIGN_OR_RETURN(std::vector<IntrinsicsPrior> priors, ReadIntrinsicsPriors(path));
+    for (IntrinsicsPrior& prior : priors) by_serial[prior.serial] = std::move(prior);
+  }
+  for (CalibrationCamera& camera : input->cameras) {
+    const auto match = by_serial.find(camera.serial);
+    if (match == by_serial.end())
+      return InvalidArgument("--intrinsics: no file gives camera " + camera.serial +
+                             "; calibrate it with `hairrig calibrate-intrinsics` and pass that file too");
+    const IntrinsicsPrior& prior = match->second;
+    if (prior.intrinsics.width_px != camera.width_px || prior.intrinsics.height_px != camera.height_px)
+      return InvalidArgument("--intrinsics " + prior.source + ": camera " + camera.serial + " was calibrated at " +
+                             std::to_string(prior.intrinsics.width_px) + " x " +
+                             std::to_string(prior.intrinsics.height_px) + " px, the capture's frames are " +
+                             std::to_string(camera.width_px) + " x " + std::to_string(camera.height_px));
+    camera.nominal = prior.intrinsics;
+    camera.nominal_stddev = prior.stddev;
+  }
+  return Status::Ok();
+}
+
+Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, const CalibrateFolderOptions& options) {
+  CalibratedFolder done;
+  HR_ASSIGN_OR_RETURN(done.input, LoadCaptureCalibrationInput(capture_dir));
+  CaptureCalibrationOptions calibration = options.calibration;
+  if (!options.prior_files.empty()) {
+    HR_RETURN_IF_ERROR(ApplyIntrinsicsPriors(options.prior_files, &done.input));
+    calibration.fix_intrinsics = true;
+  }
+  if (options.detected != nullptr) {
+    for (CalibrationFrame& frame : done.input.frames) {
+      std::error_code ec;
+      const std::string key = std::filesystem::weakly_canonical(frame.path, ec).string();
+      const auto found = options.detected->find(ec ? frame.path : key);
+      if (found != options.detected->end()) frame.observations = found->second;
+    }
+  }
+  HR_ASSIGN_OR_RETURN(done.result, CalibrateCapture(done.input, calibration));
+  done.out_dir = (std::filesystem::path(capture_dir) / "calibration").string();
+  const auto write_start = std::chrono::steady_clock::now();
+  HR_RETURN_IF_ERROR(WriteCalibration(done.out_dir, done.input, done.result));
+  done.write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
+  if (options.on_written) options.on_written();
+  done.verdict = JudgeCalibration(done.input, done.result);
+  HR_RETURN_IF_ERROR(WriteCalibrationReport(done.out_dir + "/report", done.input, done.result, done.verdict));
+  done.report_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count() - done.write_s;
+  return done;
 }
 
 }  // namespace hairrig

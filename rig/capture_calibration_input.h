@@ -11,15 +11,54 @@
 //       upper: {fx_px: .., fy_px: .., cx_px: .., cy_px: .., k1: 0, ...}  # else from the views
 #pragma once
 
+#include <functional>
+#include <map>
 #include <string>
+#include <vector>
 
+#include "calibration/calibration_report.h"
 #include "calibration/capture_calibration.h"
+#include "rig/rig_config.h"
 
 namespace hairrig {
+
+// A capture's rig.yaml snapshot, paths relative to the config it was taken from.
+Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir);
+
+// The box model and its height of a rig config's `calibration` section;
+// errors name the file, line and field.
+Status ReadCalibrationSection(const RigConfig& config, CalibBox* box, double* box_height_mm);
 
 // Errors name the file and field: a missing manifest or rig.yaml, a frame
 // file outside the capture folder or missing, an unknown camera, a broken
 // calibration section. Only frames whose checksum the manifest records are used.
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir);
+
+// Holds every camera at the intrinsics the files give for its serial
+// (files from `calibrate-intrinsics` or calibration.json; a later file wins
+// for a serial given twice), with their standard deviations. InvalidArgument
+// names a camera no file gives, or one calibrated at another image size.
+Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_files, CaptureCalibrationInput* input);
+
+struct CalibrateFolderOptions {
+  CaptureCalibrationOptions calibration;
+  std::vector<std::string> prior_files;  // non-empty: intrinsics held (ApplyIntrinsicsPriors)
+  // Tags already detected (TagDetectionSink::WaitForAll), by canonical frame path.
+  const std::map<std::string, ViewObservations>* detected = nullptr;
+  std::function<void()> on_written;  // called once calibration.json and the exports are written
+};
+
+struct CalibratedFolder {
+  std::string out_dir;  // <capture>/calibration
+  CaptureCalibrationInput input;
+  CaptureCalibration result;
+  CalibrationVerdict verdict;
+  double write_s = 0;   // writing calibration.json and the exports
+  double report_s = 0;  // writing the report
+};
+
+// `hairrig calibrate`: loads the capture, solves it and writes
+// <capture>/calibration/ with its report.
+Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, const CalibrateFolderOptions& options);
 
 }  // namespace hairrig

@@ -31,6 +31,11 @@ struct Dispatch {
   std::function<int(const nlohmann::json&)> exit_code;
 };
 
+struct CalibratedFolder;
+// `calibrate`'s summary (also printed by `capture --calibrate`).
+nlohmann::json CalibrationSummaryJson(const CalibratedFolder& done);
+void PrintCalibrationSummary(const nlohmann::json& summary);
+
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);

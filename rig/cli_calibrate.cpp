@@ -2,7 +2,6 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 
 #include <CLI/CLI.hpp>
 
@@ -25,70 +24,48 @@ struct CalibrateArgs {
   int threads = 2;
 };
 
-// Holds every camera at the intrinsics the prior files give for its serial
-// (a later file wins for a serial given twice).
-Status ApplyPriors(const std::vector<std::string>& prior_paths, CaptureCalibrationInput* input) {
-  std::map<std::string, IntrinsicsPrior> by_serial;
-  for (const std::string& path : prior_paths) {
-    HR_ASSIGN_OR_RETURN(std::vector<IntrinsicsPrior> priors, ReadIntrinsicsPriors(path));
-    for (IntrinsicsPrior& prior : priors) by_serial[prior.serial] = std::move(prior);
-  }
-  for (CalibrationCamera& camera : input->cameras) {
-    const auto match = by_serial.find(camera.serial);
-    if (match == by_serial.end())
-      return InvalidArgument("--intrinsics: no file gives camera " + camera.serial +
-                             "; calibrate it with `hairrig calibrate-intrinsics` and pass that file too");
-    const IntrinsicsPrior& prior = match->second;
-    if (prior.intrinsics.width_px != camera.width_px || prior.intrinsics.height_px != camera.height_px)
-      return InvalidArgument("--intrinsics " + prior.source + ": camera " + camera.serial + " was calibrated at " +
-                             std::to_string(prior.intrinsics.width_px) + " x " +
-                             std::to_string(prior.intrinsics.height_px) + " px, the capture's frames are " +
-                             std::to_string(camera.width_px) + " x " + std::to_string(camera.height_px));
-    camera.nominal = prior.intrinsics;
-    camera.nominal_stddev = prior.stddev;
-  }
-  return Status::Ok();
-}
+}  // namespace
 
-Result<nlohmann::json> RunCalibrate(const CalibrateArgs& a) {
-  HR_ASSIGN_OR_RETURN(CaptureCalibrationInput input, LoadCaptureCalibrationInput(a.dir));
-  CaptureCalibrationOptions options;
-  options.mode = a.mode == "free" ? CalibrationMode::kFree : CalibrationMode::kTurntable;
-  options.threads = a.threads;
-  if (!a.priors.empty()) {
-    HR_RETURN_IF_ERROR(ApplyPriors(a.priors, &input));
-    options.fix_intrinsics = true;
-    options.hard_prior = a.hard_prior;
-  }
-  HR_ASSIGN_OR_RETURN(CaptureCalibration result, CalibrateCapture(input, options));
-  const std::string out_dir = (std::filesystem::path(a.dir) / "calibration").string();
-  HR_RETURN_IF_ERROR(WriteCalibration(out_dir, input, result));
-  const CalibrationVerdict verdict = JudgeCalibration(input, result);
-  HR_RETURN_IF_ERROR(WriteCalibrationReport(out_dir + "/report", input, result, verdict));
+nlohmann::json CalibrationSummaryJson(const CalibratedFolder& done) {
   int solved = 0;
-  for (const FrameCalibration& f : result.frames) solved += f.solved;
-  return nlohmann::json{{"dir", out_dir},
-                        {"mode", a.mode},
-                        {"verdict", verdict.name()},
-                        {"reasons", verdict.reasons},
-                        {"views", result.frames.size()},
+  for (const FrameCalibration& f : done.result.frames) solved += f.solved;
+  return nlohmann::json{{"dir", done.out_dir},
+                        {"mode", done.result.mode == CalibrationMode::kFree ? "free" : "turntable"},
+                        {"verdict", done.verdict.name()},
+                        {"reasons", done.verdict.reasons},
+                        {"views", done.result.frames.size()},
                         {"views_solved", solved},
-                        {"rms_px", result.rms_px},
-                        {"converged", result.converged},
-                        {"detect_s", result.detect_s},
-                        {"init_s", result.init_s},
-                        {"solve_s", result.solve_s},
-                        {"report", out_dir + "/report/report.txt"}};
+                        {"rms_px", done.result.rms_px},
+                        {"converged", done.result.converged},
+                        {"detect_s", done.result.detect_s},
+                        {"init_s", done.result.init_s},
+                        {"solve_s", done.result.solve_s},
+                        {"write_s", done.write_s},
+                        {"report_s", done.report_s},
+                        {"report", done.out_dir + "/report/report.txt"}};
 }
 
-void PrintCalibrate(const nlohmann::json& j) {
+void PrintCalibrationSummary(const nlohmann::json& j) {
   std::printf("calibration %s (%s mode): %s\n", j["dir"].get<std::string>().c_str(), j["mode"].get<std::string>().c_str(),
               j["verdict"].get<std::string>().c_str());
   for (const auto& reason : j["reasons"]) std::printf("  - %s\n", reason.get<std::string>().c_str());
-  std::printf("  %d of %d views solved, RMS %.3f px; detection %.2f s, initialisation %.2f s, bundle adjustment %.2f s\n",
+  std::printf("  %d of %d views solved, RMS %.3f px; detection %.2f s, initialisation %.2f s, bundle adjustment %.2f s, "
+              "writing %.2f s + report %.2f s\n",
               j["views_solved"].get<int>(), j["views"].get<int>(), j["rms_px"].get<double>(), j["detect_s"].get<double>(),
-              j["init_s"].get<double>(), j["solve_s"].get<double>());
+              j["init_s"].get<double>(), j["solve_s"].get<double>(), j["write_s"].get<double>(), j["report_s"].get<double>());
   std::printf("  report: %s\n", j["report"].get<std::string>().c_str());
+}
+
+namespace {
+
+Result<nlohmann::json> RunCalibrate(const CalibrateArgs& a) {
+  CalibrateFolderOptions options;
+  options.calibration.mode = a.mode == "free" ? CalibrationMode::kFree : CalibrationMode::kTurntable;
+  options.calibration.threads = a.threads;
+  options.calibration.hard_prior = a.hard_prior;
+  options.prior_files = a.priors;
+  HR_ASSIGN_OR_RETURN(CalibratedFolder done, CalibrateCaptureFolder(a.dir, options));
+  return CalibrationSummaryJson(done);
 }
 
 struct IntrinsicsArgs {
@@ -191,7 +168,7 @@ void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatc
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     dispatch.action = [args] { return RunCalibrate(*args); };
-    dispatch.print_human = PrintCalibrate;
+    dispatch.print_human = PrintCalibrationSummary;
     dispatch.exit_code = [](const nlohmann::json& j) { return j["verdict"] == "failed" ? 3 : 0; };
   });
   AddCalibrateIntrinsicsCommand(app, common, dispatch);

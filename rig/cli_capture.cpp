@@ -5,7 +5,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include "calibration/tag_detection_sink.h"
 #include "core/log.h"
+#include "drivers/camera_support.h"
+#include "rig/capture_calibration_input.h"
 #include "rig/capture.h"
 #include "rig/cli.h"
 #include "rig/rig_config.h"
@@ -19,7 +22,29 @@ struct CaptureArgs {
   std::string out;
   std::string subject;
   bool resume = false;
+  bool calibrate = false;
+  std::vector<std::string> priors;  // --intrinsics for the calibration
 };
+
+// With --calibrate: tags are detected as the frames land, and the capture is
+// calibrated when it completes; the delay from the last frame is reported.
+Result<nlohmann::json> CalibrateAfterCapture(const std::string& dir, const std::vector<std::string>& priors,
+                                             TagDetectionSink& sink) {
+  const std::map<std::string, ViewObservations> detected = sink.WaitForAll();
+  const double detection_backlog_s = static_cast<double>(SteadyNowNs() - sink.last_frame_ns()) * 1e-9;
+  CalibrateFolderOptions options;
+  options.prior_files = priors;
+  options.detected = &detected;
+  int64_t written_ns = 0;
+  options.on_written = [&] { written_ns = SteadyNowNs(); };
+  HR_ASSIGN_OR_RETURN(CalibratedFolder done, CalibrateCaptureFolder(dir, options));
+  nlohmann::json summary = CalibrationSummaryJson(done);
+  summary["frames_detected_during_capture"] = detected.size();
+  summary["detection_backlog_s"] = detection_backlog_s;
+  summary["calibration_after_last_frame_s"] = static_cast<double>(written_ns - sink.last_frame_ns()) * 1e-9;
+  summary["delay_after_last_frame_s"] = static_cast<double>(SteadyNowNs() - sink.last_frame_ns()) * 1e-9;
+  return summary;
+}
 
 // Live one-line display on a terminal; plain log lines otherwise.
 std::function<void(const CaptureProgress&)> ProgressPrinter() {
@@ -57,9 +82,23 @@ Result<nlohmann::json> RunCaptureCommand(const CaptureArgs& a) {
     LogWarning("--config is ignored with --resume: the capture's own rig.yaml snapshot is used");
   }
   options.on_progress = ProgressPrinter();
+  std::unique_ptr<TagDetectionSink> sink;
+  if (a.calibrate) {
+    HR_ASSIGN_OR_RETURN(RigConfig config,
+                        a.resume ? LoadCaptureRigConfig(options.out_dir) : LoadRigConfig(options.config_path));
+    CalibBox box;
+    double height = 0;
+    HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &box, &height));
+    sink = std::make_unique<TagDetectionSink>(box, TagDetectorOptions{}, 2);
+    options.sink = sink.get();
+  }
   HR_ASSIGN_OR_RETURN(CaptureSummary summary, RunCapture(options));
   if (::isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
-  return summary.ToJson();
+  nlohmann::json out = summary.ToJson();
+  if (sink && out["status"] == "complete") {
+    HR_ASSIGN_OR_RETURN(out["calibration"], CalibrateAfterCapture(options.out_dir, a.priors, *sink));
+  }
+  return out;
 }
 
 void PrintCaptureSummary(const nlohmann::json& j) {
@@ -70,6 +109,15 @@ void PrintCaptureSummary(const nlohmann::json& j) {
   std::printf("  sweep %.2f s, physical lower bound %.2f s, efficiency %.3f (setup %.2f s)\n", j["wall_s"].get<double>(),
               j["lower_bound_s"].get<double>(), j["efficiency"].get<double>(), j["setup_s"].get<double>());
   if (!j["message"].get<std::string>().empty()) std::printf("  %s\n", j["message"].get<std::string>().c_str());
+  if (j.contains("calibration")) {
+    PrintCalibrationSummary(j["calibration"]);
+    std::printf("  after the last frame: its detection done %.2f s, calibration.json written %.2f s, report %.2f s "
+                "(%d frames detected during the capture)\n",
+                j["calibration"]["detection_backlog_s"].get<double>(),
+                j["calibration"]["calibration_after_last_frame_s"].get<double>(),
+                j["calibration"]["delay_after_last_frame_s"].get<double>(),
+                j["calibration"]["frames_detected_during_capture"].get<int>());
+  }
 }
 
 }  // namespace
@@ -82,8 +130,13 @@ void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
       ->required();
   cmd->add_option("--subject", args->subject, "subject or wig name; the capture goes to OUT/<subject>");
   cmd->add_flag("--resume", args->resume, "continue an interrupted capture: keep verified frames, shoot the rest");
+  cmd->add_flag("--calibrate", args->calibrate,
+                "detect the box's tags as frames land and calibrate the capture when it completes (as `calibrate`)");
+  cmd->add_option("--intrinsics", args->priors, "with --calibrate: intrinsics held, as `calibrate --intrinsics`")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
+    if (!args->priors.empty() && !args->calibrate) throw CLI::ValidationError("capture", "--intrinsics needs --calibrate");
     dispatch.action = [args] { return RunCaptureCommand(*args); };
     dispatch.print_human = PrintCaptureSummary;
     dispatch.exit_code = [](const nlohmann::json& j) { return j["status"] == "complete" ? 0 : 3; };

@@ -1,0 +1,232 @@
+// Calibration benchmarks (run from the repository root):
+//   build/bench/hairrig_calibration_bench uncertainty [CAPTURES]   (default 20)
+//   build/bench/hairrig_calibration_bench speed
+// uncertainty: CAPTURES rendered captures of the default rig, each with its
+//   own sensor noise, detected and calibrated three ways: intrinsics from the
+//   views, a per-capture ChArUco prior held by its Gaussian (20 rendered board
+//   images per camera, own noise), and the same prior held exactly. Per way:
+//   median rotation / centre error, the observed over predicted error ratios
+//   pooled over every view, the reprojection RMS over the corner noise of the
+//   same detections, and the OpenCV-only baseline (calibrateCamera + PnP)
+//   error over ours.
+// speed: AprilTag detection per view at the default 1200 x 1600 and at 24 MP
+//   (the same scene camera scaled), and the bundle adjustment of 38 views.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "calibration/apriltag_detector.h"
+#include "calibration/capture_calibration.h"
+#include "calibration/charuco_intrinsics.h"
+#include "calibration/uncertainty_check.h"
+#include "core/parallel.h"
+#include "sim_hw/charuco_views.h"
+#include "sim_hw/ground_truth.h"
+#include "sim_hw/renderer.h"
+
+namespace fs = std::filesystem;
+using namespace hairrig;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double Seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// One rendered capture of the default plan, detected in memory.
+CaptureCalibrationInput RenderedCapture(const Renderer& renderer, uint64_t seed, std::vector<ViewGroundTruth>* truths) {
+  const Scene& scene = renderer.scene();
+  CaptureCalibrationInput input;
+  input.box = scene.box;
+  input.box_height_mm = scene.turntable_from_box.translation.z();
+  for (const SceneCamera& camera : scene.cameras) {
+    CalibrationCamera c;
+    c.name = c.serial = camera.serial;
+    c.width_px = camera.intrinsics.width_px;
+    c.height_px = camera.intrinsics.height_px;
+    input.cameras.push_back(c);
+  }
+  const int views = NumViews(scene);
+  input.frames.resize(static_cast<size_t>(views));
+  truths->resize(static_cast<size_t>(views));
+  ParallelFor(static_cast<size_t>(views), 2, [&] {
+    auto detector = TagDetector::Create({});
+    return [&, detector = std::move(detector)](size_t v) {
+      const ViewGroundTruth truth = MakeViewGroundTruth(scene, static_cast<int>(v));
+      RenderOptions options;
+      options.noise_seed = seed * 1000003ull + v;
+      auto view = renderer.Render(truth.camera_index, truth.turntable_deg, options);
+      CalibrationFrame& frame = input.frames[v];
+      frame.name = "view " + std::to_string(v);
+      frame.view = static_cast<int>(v);
+      frame.camera = truth.camera_index;
+      frame.stop = truth.stop;
+      frame.turntable_deg = truth.turntable_deg;
+      frame.observations = ViewObservations();
+      if (view.ok() && detector.ok()) {
+        auto detections = (*detector)->Detect(view->image);
+        if (detections.ok()) frame.observations = MatchToBox(*detections, scene.box);
+      }
+      (*truths)[v] = truth;
+    };
+  });
+  return input;
+}
+
+// Each camera's ChArUco prior from 20 board images with this capture's noise.
+bool AddChArUcoPriors(const Scene& scene, const ChArUcoBoard& board, uint64_t seed, CaptureCalibrationInput* input) {
+  const fs::path dir = fs::temp_directory_path() / "hairrig_bench_charuco";
+  for (size_t c = 0; c < scene.cameras.size(); ++c) {
+    fs::remove_all(dir);
+    auto set = WriteChArUcoSet(scene, static_cast<int>(c), board, 20, seed * 31 + c, dir.string());
+    if (!set.ok()) return false;
+    ChArUcoCalibrationOptions options;
+    auto prior = CalibrateIntrinsicsFromChArUco(set->images, board, options);
+    if (!prior.ok()) return false;
+    input->cameras[c].nominal = prior->intrinsics;
+    input->cameras[c].nominal_stddev = prior->stddev;
+  }
+  fs::remove_all(dir);
+  return true;
+}
+
+struct Way {
+  const char* name;
+  std::vector<UncertaintySample> samples;
+  std::vector<double> rotation_deg, centre_mm, baseline_rotation_deg, baseline_centre_mm, rms_over_noise;
+};
+
+void Score(const CaptureCalibrationInput& input, const CaptureCalibration& result,
+           const std::vector<ViewGroundTruth>& truths, bool has_baseline, Way* way) {
+  double noise_sq = 0;
+  int corners = 0;
+  for (size_t f = 0; f < input.frames.size(); ++f) {
+    const FrameCalibration& frame = result.frames[f];
+    if (!frame.solved) continue;
+    const ViewGroundTruth& t = truths[f];
+    way->samples.push_back(MakeUncertaintySample(frame.cam_from_box, t.cam_from_box, frame.uncertainty));
+    way->rotation_deg.push_back(RotationDifferenceDeg(frame.cam_from_box, t.cam_from_box));
+    way->centre_mm.push_back((frame.cam_from_box.Inverse().translation - t.cam_from_box.Inverse().translation).norm());
+    if (has_baseline) {
+      way->baseline_rotation_deg.push_back(RotationDifferenceDeg(frame.cam_from_box_init, t.cam_from_box));
+      way->baseline_centre_mm.push_back(
+          (frame.cam_from_box_init.Inverse().translation - t.cam_from_box.Inverse().translation).norm());
+    }
+    for (const TagObservation& tag : frame.tags)
+      for (size_t k = 0; k < 4; ++k, ++corners)
+        noise_sq += (tag.corners_px[k] - Project(t.intrinsics, t.cam_from_box * tag.corners_box_mm[k])).squaredNorm();
+  }
+  way->rms_over_noise.push_back(result.rms_px / std::sqrt(noise_sq / corners));
+}
+
+void Report(const Way& way) {
+  const UncertaintyRatios r = ObservedOverPredicted(way.samples);
+  std::printf("%-22s %8.4f %8.3f %7.3f %7.3f %7.3f %7.3f %8.3f", way.name, Median(way.rotation_deg),
+              Median(way.centre_mm), r.rotation, r.centre, r.rotation_mahalanobis, r.centre_mahalanobis,
+              Median(way.rms_over_noise));
+  if (!way.baseline_rotation_deg.empty())
+    std::printf(" %7.1fx %7.1fx", Median(way.baseline_rotation_deg) / Median(way.rotation_deg),
+                Median(way.baseline_centre_mm) / Median(way.centre_mm));
+  std::printf("\n");
+}
+
+int Uncertainty(int captures) {
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  auto board = LoadChArUcoBoard("etc/charuco-board.yaml");
+  if (!scene.ok() || !board.ok()) {
+    std::fprintf(stderr, "run from the repository root (etc/scenes/default.yaml, etc/charuco-board.yaml)\n");
+    return 1;
+  }
+  auto renderer = Renderer::Create(*scene);
+  if (!renderer.ok()) return 1;
+  Way views{"views", {}, {}, {}, {}, {}, {}}, soft{"ChArUco, Gaussian", {}, {}, {}, {}, {}, {}},
+      hard{"ChArUco, held exactly", {}, {}, {}, {}, {}, {}}, free_views{"views, free mode", {}, {}, {}, {}, {}, {}};
+  const auto t0 = Clock::now();
+  for (int seed = 1; seed <= captures; ++seed) {
+    std::vector<ViewGroundTruth> truths;
+    CaptureCalibrationInput input = RenderedCapture(**renderer, static_cast<uint64_t>(seed), &truths);
+    CaptureCalibrationOptions options;
+    auto result = CalibrateCapture(input, options);
+    if (result.ok()) Score(input, *result, truths, true, &views);
+    options.mode = CalibrationMode::kFree;
+    result = CalibrateCapture(input, options);
+    if (result.ok()) Score(input, *result, truths, false, &free_views);
+    options.mode = CalibrationMode::kTurntable;
+    if (!AddChArUcoPriors(*scene, *board, static_cast<uint64_t>(seed), &input)) return 1;
+    options.fix_intrinsics = true;
+    result = CalibrateCapture(input, options);
+    if (result.ok()) Score(input, *result, truths, false, &soft);
+    options.hard_prior = true;
+    result = CalibrateCapture(input, options);
+    if (result.ok()) Score(input, *result, truths, false, &hard);
+    std::fprintf(stderr, "capture %d of %d (%.0f s)\n", seed, captures, Seconds(t0));
+  }
+  std::printf("# %d rendered captures of the default rig (38 views each), errors against the truth\n", captures);
+  std::printf("# ratios: observed / predicted error over all views (1 = stated uncertainty right); "
+              "rms/noise: reprojection RMS over the detections' corner noise (median over captures); "
+              "OpenCV-only: its median error over ours\n");
+  std::printf("%-22s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg", "ctr_mm", "r_rot", "r_ctr",
+              "m_rot", "m_ctr", "rms/noise", "cv_rot", "cv_ctr");
+  for (const Way* way : {&views, &free_views, &soft, &hard}) Report(*way);
+  return 0;
+}
+
+int Speed() {
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  if (!scene.ok()) return 1;
+  std::printf("# AprilTag detection (decimation chosen from the size, 1 thread per view)\n");
+  std::printf("%-14s %8s %10s %8s\n", "image", "MP", "detect_s", "tags");
+  for (double scale : {1.0, std::sqrt(24e6 / (1200.0 * 1600.0))}) {
+    Scene scaled = *scene;
+    for (SceneCamera& camera : scaled.cameras) {
+      CameraIntrinsics& k = camera.intrinsics;
+      k.width_px = static_cast<int>(std::lround(k.width_px * scale));
+      k.height_px = static_cast<int>(std::lround(k.height_px * scale));
+      k.fx_px *= scale, k.fy_px *= scale;
+      k.cx_px = (k.cx_px + 0.5) * scale - 0.5, k.cy_px = (k.cy_px + 0.5) * scale - 0.5;
+    }
+    auto renderer = Renderer::Create(scaled);
+    if (!renderer.ok()) return 1;
+    auto view = (*renderer)->Render(0, 0, {});
+    auto detector = TagDetector::Create({});
+    if (!view.ok() || !detector.ok()) return 1;
+    size_t tags = 0;
+    const int repeats = scale > 1 ? 3 : 10;
+    const auto t0 = Clock::now();
+    for (int i = 0; i < repeats; ++i) tags = (*detector)->Detect(view->image)->size();
+    std::printf("%5d x %-6d %8.1f %10.3f %8zu\n", view->image.cols, view->image.rows,
+                view->image.cols * view->image.rows / 1e6, Seconds(t0) / repeats, tags);
+  }
+  auto renderer = Renderer::Create(*scene);
+  if (!renderer.ok()) return 1;
+  std::vector<ViewGroundTruth> truths;
+  const CaptureCalibrationInput input = RenderedCapture(**renderer, 1, &truths);
+  std::printf("# calibration of 38 detected views (2 threads): initialisation and bundle adjustment\n");
+  for (CalibrationMode mode : {CalibrationMode::kTurntable, CalibrationMode::kFree}) {
+    CaptureCalibrationOptions options;
+    options.mode = mode;
+    auto result = CalibrateCapture(input, options);
+    if (!result.ok()) return 1;
+    std::printf("%-10s init %.3f s, bundle adjustment %.3f s (%d iterations)\n",
+                mode == CalibrationMode::kTurntable ? "turntable" : "free", result->init_s, result->solve_s,
+                result->iterations);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string what = argc > 1 ? argv[1] : "speed";
+  if (what == "uncertainty") return Uncertainty(argc > 2 ? std::atoi(argv[2]) : 20);
+  if (what == "speed") return Speed();
+  std::fprintf(stderr, "usage: %s uncertainty [CAPTURES] | speed\n", argv[0]);
+  return 2;
+}

@@ -1,0 +1,42 @@
+// Tag detection during a capture (issue 5, item 1): a FrameSink that detects
+// and matches the box's tags on each frame as soon as it is stored, on its own
+// worker threads, so that when the last frame lands most of the calibration's
+// detection is done. CalibrationFrame::observations takes the results.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "calibration/apriltag_detector.h"
+#include "calibration/view_pose.h"
+#include "core/calib_box.h"
+#include "core/frame_sink.h"
+
+namespace hairrig {
+
+class TagDetectionSink : public FrameSink {
+ public:
+  // `threads` workers (at least 1), each with its own detector.
+  TagDetectionSink(CalibBox box, TagDetectorOptions detector, int threads);
+  ~TagDetectionSink() override;  // stops the workers; queued frames are dropped
+
+  // Queues the frame (its pixels are shared, not copied); never blocks on detection.
+  void OnFrameStored(const StoredFrame& frame) override;
+
+  // Waits until every queued frame is detected, then returns the matched
+  // tags by the stored file's canonical path. A frame whose detection failed
+  // is absent (the calibration then reads it again and names the fault).
+  std::map<std::string, ViewObservations> WaitForAll();
+
+  // Steady-clock time (ns) the last frame was handed over; 0 before any.
+  int64_t last_frame_ns() const;
+  int frames_detected() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hairrig
