@@ -11,6 +11,7 @@
 //   error over ours.
 // speed: AprilTag detection per view at the default 1200 x 1600 and at 24 MP
 //   (the same scene camera scaled), and the bundle adjustment of 38 views.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -128,7 +129,11 @@ void Score(const CaptureCalibrationInput& input, const CaptureCalibration& resul
 
 void Report(const Way& way) {
   const UncertaintyRatios r = ObservedOverPredicted(way.samples);
-  std::printf("%-22s %8.4f %8.3f %7.3f %7.3f %7.3f %7.3f %8.3f", way.name, Median(way.rotation_deg),
+  std::vector<double> predicted_rotation;
+  for (const UncertaintySample& sample : way.samples) predicted_rotation.push_back(sample.predicted.rotation_sd_deg);
+  std::sort(predicted_rotation.begin(), predicted_rotation.end());
+  std::printf("%-22s %8.4f %8.4f %8.4f %8.3f %7.3f %7.3f %7.3f %7.3f %8.3f", way.name, Median(way.rotation_deg),
+              Median(predicted_rotation), predicted_rotation.empty() ? NAN : predicted_rotation.back(),
               Median(way.centre_mm), r.rotation, r.centre, r.rotation_mahalanobis, r.centre_mahalanobis,
               Median(way.rms_over_noise));
   if (!way.baseline_rotation_deg.empty())
@@ -169,11 +174,12 @@ int Uncertainty(int captures) {
     std::fprintf(stderr, "capture %d of %d (%.0f s)\n", seed, captures, Seconds(t0));
   }
   std::printf("# %d rendered captures of the default rig (38 views each), errors against the truth\n", captures);
+  std::printf("# rot_deg: median rotation error; sd_med, sd_max: predicted rotation sd (deg) over the views\n");
   std::printf("# ratios: observed / predicted error over all views (1 = stated uncertainty right); "
               "rms/noise: reprojection RMS over the detections' corner noise (median over captures); "
               "OpenCV-only: its median error over ours\n");
-  std::printf("%-22s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg", "ctr_mm", "r_rot", "r_ctr",
-              "m_rot", "m_ctr", "rms/noise", "cv_rot", "cv_ctr");
+  std::printf("%-22s %8s %8s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg", "sd_med", "sd_max",
+              "ctr_mm", "r_rot", "r_ctr", "m_rot", "m_ctr", "rms/noise", "cv_rot", "cv_ctr");
   for (const Way* way : {&views, &free_views, &soft, &hard}) Report(*way);
   return 0;
 }

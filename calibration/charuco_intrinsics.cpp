@@ -122,6 +122,7 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std:
       }
       sizes[i] = image.size();
       corners[i] = DetectChArUcoCorners(image, board);
+      out.images[i].detected = corners[i];
       out.images[i].markers = corners[i].markers;
       out.images[i].corners = static_cast<int>(corners[i].ids.size());
       if (out.images[i].corners < options.min_corners)

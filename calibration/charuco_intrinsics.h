@@ -48,6 +48,7 @@ struct ChArUcoImage {
   std::string failure;  // why not, when !used
   int markers = 0, corners = 0;
   double rms_px = 0;    // reprojection RMS of its corners after the solve
+  ChArUcoCorners detected;
 };
 
 struct ChArUcoCalibration {

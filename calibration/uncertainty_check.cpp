@@ -19,23 +19,21 @@ UncertaintySample MakeUncertaintySample(const Rigid3d& estimated_cam_from_box, c
 }
 
 UncertaintyRatios ObservedOverPredicted(const std::vector<UncertaintySample>& samples) {
-  double rot_sq = 0, rot_pred = 0, centre_sq = 0, centre_pred = 0, rot_mahal = 0, centre_mahal = 0;
+  double rot_sq = 0, centre_sq = 0, rot_mahal = 0, centre_mahal = 0;
   UncertaintyRatios r;
   for (const UncertaintySample& s : samples) {
     const Eigen::Matrix3d& c_rot = s.predicted.rotation_cov_rad2;
     const Eigen::Matrix3d& c_centre = s.predicted.centre_cov_mm2;
     if (!c_rot.allFinite() || !c_centre.allFinite() || !(c_rot.trace() > 0) || !(c_centre.trace() > 0)) continue;
-    rot_sq += s.rotation_error_rad.squaredNorm();
-    rot_pred += c_rot.trace();
-    centre_sq += s.centre_error_mm.squaredNorm();
-    centre_pred += c_centre.trace();
+    rot_sq += s.rotation_error_rad.squaredNorm() / c_rot.trace();
+    centre_sq += s.centre_error_mm.squaredNorm() / c_centre.trace();
     rot_mahal += s.rotation_error_rad.dot(c_rot.ldlt().solve(s.rotation_error_rad));
     centre_mahal += s.centre_error_mm.dot(c_centre.ldlt().solve(s.centre_error_mm));
     ++r.views;
   }
   if (r.views == 0) return r;
-  r.rotation = std::sqrt(rot_sq / rot_pred);
-  r.centre = std::sqrt(centre_sq / centre_pred);
+  r.rotation = std::sqrt(rot_sq / r.views);
+  r.centre = std::sqrt(centre_sq / r.views);
   r.rotation_mahalanobis = std::sqrt(rot_mahal / (3.0 * r.views));
   r.centre_mahalanobis = std::sqrt(centre_mahal / (3.0 * r.views));
   return r;

@@ -26,7 +26,9 @@ UncertaintySample MakeUncertaintySample(const Rigid3d& estimated_cam_from_box, c
 
 struct UncertaintyRatios {
   int views = 0;  // samples with a finite covariance
-  // sqrt(sum |error|^2 / sum trace(covariance)): observed RMS over predicted RMS.
+  // sqrt(mean over views of |error|^2 / trace(covariance)): each view's error
+  // over its predicted RMS error, pooled (one badly conditioned view cannot
+  // dominate, as it would in a ratio of sums).
   double rotation = NAN, centre = NAN;
   // sqrt(mean(e' C^-1 e) / 3): the same, weighing each direction by its own uncertainty.
   double rotation_mahalanobis = NAN, centre_mahalanobis = NAN;

@@ -9,6 +9,7 @@
 #include "calibration/calibration_report.h"
 #include "calibration/charuco_intrinsics.h"
 #include "core/charuco_board.h"
+#include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/cli.h"
@@ -75,7 +76,30 @@ struct IntrinsicsArgs {
   std::string out;  // default DIR/intrinsics.json
   bool free_k3 = false;
   int threads = 2;
+  std::string mrcal_corners;  // also write the corners for mrcal-calibrate-cameras
 };
+
+// The used images' corners as mrcal's corners cache (vnl: filename x y level,
+// object_width_n points per row, rows in order, "-" for a corner not found).
+Status WriteMrcalCorners(const std::string& path, const ChArUcoBoard& board, const ChArUcoCalibration& result) {
+  std::string text = "# filename x y level\n";
+  const size_t grid = board.corners_board_mm.size();
+  for (const ChArUcoImage& image : result.images) {
+    if (!image.used) continue;
+    std::vector<const Eigen::Vector2d*> at(grid, nullptr);
+    for (size_t k = 0; k < image.detected.ids.size(); ++k)
+      at[static_cast<size_t>(image.detected.ids[k])] = &image.detected.corners_px[k];
+    for (const Eigen::Vector2d* c : at) {
+      char line[64];
+      if (c)
+        std::snprintf(line, sizeof line, " %.4f %.4f 0\n", c->x(), c->y());
+      else
+        std::snprintf(line, sizeof line, " - - -\n");
+      text += std::filesystem::path(image.path).filename().string() + line;
+    }
+  }
+  return WriteFileAtomic(path, text);
+}
 
 // The images of a folder, by name: .png, .jpg, .jpeg, .tif, .tiff.
 std::vector<std::string> ImagesIn(const std::string& dir) {
@@ -101,6 +125,7 @@ Result<nlohmann::json> RunCalibrateIntrinsics(const IntrinsicsArgs& a) {
   HR_ASSIGN_OR_RETURN(ChArUcoCalibration result, CalibrateIntrinsicsFromChArUco(images, board, options));
   const std::string out = a.out.empty() ? (std::filesystem::path(a.dir) / "intrinsics.json").string() : a.out;
   HR_RETURN_IF_ERROR(WriteIntrinsicsFile(out, a.serial, a.board, result));
+  if (!a.mrcal_corners.empty()) HR_RETURN_IF_ERROR(WriteMrcalCorners(a.mrcal_corners, board, result));
   nlohmann::json j{{"out", out},
                    {"serial", a.serial},
                    {"images", images.size()},
@@ -142,6 +167,8 @@ void AddCalibrateIntrinsicsCommand(CLI::App& app, CommonOptions& common, Dispatc
   cmd->add_option("--out", args->out, "output file (default DIR/intrinsics.json)");
   cmd->add_flag("--free-k3", args->free_k3, "solve k3 too (wide-angle lenses; needs views up to the image corners)");
   cmd->add_option("--threads", args->threads, "detection threads")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--mrcal-corners", args->mrcal_corners,
+                  "also write the used images' corners as mrcal's corners cache (for mrcal-calibrate-cameras)");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     dispatch.action = [args] { return RunCalibrateIntrinsics(*args); };
