@@ -22,6 +22,7 @@
 #include "calibration/capture_calibration.h"
 #include "calibration/charuco_intrinsics.h"
 #include "calibration/uncertainty_check.h"
+#include "tests/support/scene_calibration_input.h"
 #include "core/parallel.h"
 #include "sim_hw/charuco_views.h"
 #include "sim_hw/ground_truth.h"
@@ -44,16 +45,7 @@ double Median(std::vector<double> v) {
 // One rendered capture of the default plan, detected in memory.
 CaptureCalibrationInput RenderedCapture(const Renderer& renderer, uint64_t seed, std::vector<ViewGroundTruth>* truths) {
   const Scene& scene = renderer.scene();
-  CaptureCalibrationInput input;
-  input.box = scene.box;
-  input.box_height_mm = scene.turntable_from_box.translation.z();
-  for (const SceneCamera& camera : scene.cameras) {
-    CalibrationCamera c;
-    c.name = c.serial = camera.serial;
-    c.width_px = camera.intrinsics.width_px;
-    c.height_px = camera.intrinsics.height_px;
-    input.cameras.push_back(c);
-  }
+  CaptureCalibrationInput input = hairrig_test::SceneCalibrationInput(scene);
   const int views = NumViews(scene);
   input.frames.resize(static_cast<size_t>(views));
   truths->resize(static_cast<size_t>(views));

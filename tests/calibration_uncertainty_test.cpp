@@ -12,6 +12,7 @@
 
 #include "calibration/capture_calibration.h"
 #include "calibration/uncertainty_check.h"
+#include "tests/support/scene_calibration_input.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/scene.h"
 
@@ -48,16 +49,7 @@ ViewObservations NoisyObservations(const Scene& scene, const ViewGroundTruth& tr
 
 CaptureCalibrationInput NoisyCapture(const Scene& scene, uint64_t seed) {
   std::mt19937_64 rng(seed);
-  CaptureCalibrationInput input;
-  input.box = scene.box;
-  input.box_height_mm = scene.turntable_from_box.translation.z();
-  for (const SceneCamera& camera : scene.cameras) {
-    CalibrationCamera c;
-    c.name = c.serial = camera.serial;
-    c.width_px = camera.intrinsics.width_px;
-    c.height_px = camera.intrinsics.height_px;
-    input.cameras.push_back(c);
-  }
+  CaptureCalibrationInput input = hairrig_test::SceneCalibrationInput(scene);
   for (int v = 0; v < NumViews(scene); ++v) {
     const ViewGroundTruth truth = MakeViewGroundTruth(scene, v);
     CalibrationFrame frame;
