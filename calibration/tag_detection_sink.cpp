@@ -36,6 +36,7 @@ struct TagDetectionSink::Impl {
   bool stopping = false;
   std::map<std::string, ViewObservations> results;
   std::atomic<int64_t> last_frame_ns{0};
+  std::atomic<int64_t> last_detected_ns{0};
   std::vector<std::thread> workers;
 
   void Work() {
@@ -58,6 +59,7 @@ struct TagDetectionSink::Impl {
       const std::string key = CanonicalPath(frame.path);
       std::lock_guard<std::mutex> lock(mutex);
       if (observations) results[key] = std::move(*observations);
+      last_detected_ns = SteadyNs();
       --busy;
       if (busy == 0 && queue.empty()) idle.notify_all();
     }
@@ -96,6 +98,7 @@ std::map<std::string, ViewObservations> TagDetectionSink::WaitForAll() {
 }
 
 int64_t TagDetectionSink::last_frame_ns() const { return impl_->last_frame_ns; }
+int64_t TagDetectionSink::last_detected_ns() const { return impl_->last_detected_ns; }
 
 int TagDetectionSink::frames_detected() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -32,6 +32,8 @@ class TagDetectionSink : public FrameSink {
 
   // Steady-clock time (ns) the last frame was handed over; 0 before any.
   int64_t last_frame_ns() const;
+  // Steady-clock time (ns) the last detection finished; 0 before any.
+  int64_t last_detected_ns() const;
   int frames_detected() const;
 
  private:

@@ -30,8 +30,9 @@ struct CaptureArgs {
 // calibrated when it completes; the delay from the last frame is reported.
 Result<nlohmann::json> CalibrateAfterCapture(const std::string& dir, const std::vector<std::string>& priors,
                                              TagDetectionSink& sink) {
+  const double capture_closed_s = static_cast<double>(SteadyNowNs() - sink.last_frame_ns()) * 1e-9;
   const std::map<std::string, ViewObservations> detected = sink.WaitForAll();
-  const double detection_backlog_s = static_cast<double>(SteadyNowNs() - sink.last_frame_ns()) * 1e-9;
+  const double detection_backlog_s = static_cast<double>(sink.last_detected_ns() - sink.last_frame_ns()) * 1e-9;
   CalibrateFolderOptions options;
   options.prior_files = priors;
   options.detected = &detected;
@@ -41,6 +42,7 @@ Result<nlohmann::json> CalibrateAfterCapture(const std::string& dir, const std::
   nlohmann::json summary = CalibrationSummaryJson(done);
   summary["frames_detected_during_capture"] = detected.size();
   summary["detection_backlog_s"] = detection_backlog_s;
+  summary["capture_closed_s"] = capture_closed_s;
   summary["calibration_after_last_frame_s"] = static_cast<double>(written_ns - sink.last_frame_ns()) * 1e-9;
   summary["delay_after_last_frame_s"] = static_cast<double>(SteadyNowNs() - sink.last_frame_ns()) * 1e-9;
   return summary;
@@ -111,9 +113,9 @@ void PrintCaptureSummary(const nlohmann::json& j) {
   if (!j["message"].get<std::string>().empty()) std::printf("  %s\n", j["message"].get<std::string>().c_str());
   if (j.contains("calibration")) {
     PrintCalibrationSummary(j["calibration"]);
-    std::printf("  after the last frame: its detection done %.2f s, calibration.json written %.2f s, report %.2f s "
-                "(%d frames detected during the capture)\n",
-                j["calibration"]["detection_backlog_s"].get<double>(),
+    std::printf("  after the last frame: its detection done %.2f s, capture closed (contact sheet, ground truth) "
+                "%.2f s, calibration.json written %.2f s, report %.2f s (%d frames detected during the capture)\n",
+                j["calibration"]["detection_backlog_s"].get<double>(), j["calibration"]["capture_closed_s"].get<double>(),
                 j["calibration"]["calibration_after_last_frame_s"].get<double>(),
                 j["calibration"]["delay_after_last_frame_s"].get<double>(),
                 j["calibration"]["frames_detected_during_capture"].get<int>());
