@@ -12,7 +12,10 @@
 //
 // Per camera: the pinhole + Brown-Conrady intrinsics (core/camera_model.h),
 // k3 held at its initial value (rarely observable on these lenses), or all
-// held fixed from a prior calibration. Millimetres, degrees, pixels.
+// held from a prior calibration (exactly, or by a Gaussian with the prior's
+// standard deviations). The covariance of the estimate gives each camera's
+// intrinsics standard deviations and each view's predicted pose and
+// projection errors (ViewUncertainty). Millimetres, degrees, pixels.
 #pragma once
 
 #include <array>
