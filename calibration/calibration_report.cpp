@@ -151,12 +151,13 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
     for (size_t k = 0; k < params.size(); ++k)
       out << "    " << CameraIntrinsics::kParamNames[k] << Format(" = %.6g +- %.3g\n", params[k], cam.intrinsics_stddev[k]);
   }
-  out << "\nviews (RMS px, tags used / detected):\n";
+  out << "\nviews (RMS px, tags used / detected; predicted error: rotation deg, camera centre mm):\n";
   for (size_t f = 0; f < result.frames.size(); ++f) {
     const FrameCalibration& frame = result.frames[f];
     out << "  " << input.frames[f].name << ": ";
     if (frame.solved)
-      out << Format("%.3f px, ", frame.rms_px) << frame.tags.size() << " / " << frame.tags_detected;
+      out << Format("%.3f px, ", frame.rms_px) << frame.tags.size() << " / " << frame.tags_detected
+          << Format("; +- %.4f deg, %.3f mm", frame.uncertainty.rotation_sd_deg, frame.uncertainty.centre_sd_mm);
     else
       out << "NOT SOLVED: " << frame.failure;
     for (const RejectedTag& r : frame.rejected) out << "; tag " << r.id << " left out: " << r.reason;
