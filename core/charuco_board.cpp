@@ -43,6 +43,8 @@ ChArUcoMarker MakeMarker(const cv::aruco::Dictionary& dictionary, int id, const 
 }  // namespace
 
 bool ChArUcoBoard::IsWhite(double x_mm, double y_mm) const {
+  const Eigen::Vector2d size = size_mm();
+  if (!(x_mm >= 0 && y_mm >= 0 && x_mm < size.x() && y_mm < size.y())) return true;  // the margin (or NaN)
   const int sx = static_cast<int>(std::floor(x_mm / square_mm));
   const int sy = static_cast<int>(std::floor(y_mm / square_mm));
   if (sx < 0 || sy < 0 || sx >= squares_x || sy >= squares_y) return true;  // the print's margin
