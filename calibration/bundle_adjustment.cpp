@@ -159,14 +159,17 @@ Eigen::VectorXd Predict(const Blocks& blocks, const CalibrationView& v, size_t v
   return out;
 }
 
-// ViewUncertainty of every view from the covariance of the estimate (in the
-// ambient coordinates of the blocks; a held block contributes nothing),
-// propagated through Predict by central differences and scaled by the
-// residuals' variance.
-std::vector<ViewUncertainty> ViewUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdjustmentInput& input,
-                                               double sigma_px) {
-  std::vector<ViewUncertainty> out(input.views.size());
-  if (!std::isfinite(sigma_px)) return out;
+// The standard deviations of the estimated intrinsics and the ViewUncertainty
+// of every view, from one covariance of the estimate (in the ambient
+// coordinates of the blocks, scaled by the residuals' variance; a held block
+// contributes nothing and keeps standard deviations of 0). Views are
+// propagated through Predict by central differences. A rank-deficient problem
+// leaves NaN.
+void FillUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdjustmentInput& input,
+                       BundleAdjustmentResult* result) {
+  const double sigma_px = result->residual_sigma_px;
+  if (!std::isfinite(sigma_px)) return;
+  std::vector<ViewUncertainty>& out = result->view_uncertainty;
   std::vector<std::vector<std::pair<double*, int>>> view_blocks(input.views.size());
   std::set<std::pair<const double*, const double*>> pairs;
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
@@ -181,8 +184,18 @@ std::vector<ViewUncertainty> ViewUncertainties(ceres::Problem& problem, Blocks& 
   options.algorithm_type = ceres::DENSE_SVD;
   options.null_space_rank = -1;
   ceres::Covariance covariance(options);
-  if (!covariance.Compute(std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem))
-    return out;
+  const bool ok =
+      covariance.Compute(std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem);
+  for (size_t c = 0; c < blocks.intrinsics.size(); ++c) {
+    const double* intr = blocks.intrinsics[c].data();
+    if (!problem.HasParameterBlock(intr) || problem.IsParameterBlockConstant(intr)) continue;
+    double block[CameraIntrinsics::kNumParams * CameraIntrinsics::kNumParams];
+    const bool have = ok && covariance.GetCovarianceBlock(intr, intr, block);
+    for (int i = 0; i < CameraIntrinsics::kNumParams; ++i)
+      result->intrinsics_stddev[c][static_cast<size_t>(i)] =
+          have ? sigma_px * std::sqrt(std::max(0.0, block[i * CameraIntrinsics::kNumParams + i])) : NAN;
+  }
+  if (!ok) return;
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
     const CalibrationView& v = input.views[vi];
     if (v.tags.empty()) continue;
@@ -216,7 +229,6 @@ std::vector<ViewUncertainty> ViewUncertainties(ceres::Problem& problem, Blocks& 
     u.projection_sd_px = std::sqrt(std::max(0.0, predicted.bottomRightCorner(2 * corners, 2 * corners).trace() /
                                                      static_cast<double>(corners)));
   }
-  return out;
 }
 
 Status ValidateInput(const BundleAdjustmentInput& input) {
@@ -384,32 +396,11 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     total_corners += corners;
   }
   result.rms_px = std::sqrt(total_sq / static_cast<double>(total_corners));
-  result.residual_sigma_px = CornerResidualSigma(b, input, summary.num_effective_parameters);
   const double dof = 2.0 * static_cast<double>(total_corners) - summary.num_effective_parameters;
+  result.residual_sigma_px = dof > 0 ? std::sqrt(total_sq / dof) : NAN;
   result.intrinsics_stddev.assign(input.cameras.size(), {});
-  if ((!options.fix_intrinsics || soft_prior) && dof > 0) {
-    // Covariance of the intrinsics (the gauge is fixed, so it exists); a
-    // rank-deficient problem leaves the standard deviations at NaN.
-    ceres::Covariance::Options covariance_options;
-    covariance_options.algorithm_type = ceres::DENSE_SVD;
-    covariance_options.null_space_rank = -1;
-    ceres::Covariance covariance(covariance_options);
-    std::vector<std::pair<const double*, const double*>> blocks;
-    for (const auto& intr : intrinsics)
-      if (problem.HasParameterBlock(intr.data()) && !problem.IsParameterBlockConstant(intr.data()))
-        blocks.emplace_back(intr.data(), intr.data());
-    const bool ok = covariance.Compute(blocks, &problem);
-    for (size_t c = 0; c < intrinsics.size(); ++c) {
-      double block[CameraIntrinsics::kNumParams * CameraIntrinsics::kNumParams];
-      const bool have = ok && !problem.IsParameterBlockConstant(intrinsics[c].data()) && covariance.GetCovarianceBlock(intrinsics[c].data(), intrinsics[c].data(), block);
-      for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
-        result.intrinsics_stddev[c][static_cast<size_t>(i)] =
-            have ? result.residual_sigma_px * std::sqrt(std::max(0.0, block[i * CameraIntrinsics::kNumParams + i]))
-                 : NAN;
-      }
-    }
-  }
-  result.view_uncertainty = ViewUncertainties(problem, b, input, result.residual_sigma_px);
+  result.view_uncertainty.assign(input.views.size(), {});
+  FillUncertainties(problem, b, input, &result);
   return result;
 }
 

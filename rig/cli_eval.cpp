@@ -1,7 +1,6 @@
 // `hairrig eval <stage> DIR`: a stage's output against the simulated rig's
 // ground truth (<capture>/ground_truth/). Stages: calibration, intrinsics.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,7 +25,6 @@ struct TruthView {
   std::string serial;
   CameraIntrinsics intrinsics;
   Rigid3d cam_from_box;
-  std::map<int, std::array<Eigen::Vector2d, 4>> tag_corners_px;  // true projections, by tag id (CornerNoise)
 };
 
 Result<std::map<int, TruthView>> ReadGroundTruthViews(const std::string& capture_dir) {
@@ -110,23 +108,20 @@ nlohmann::json UncertaintyCheck(const StoredCalibration& calibration, const std:
 // RMS distance (px, per corner) of the used detections from the true
 // projections of the box's tag corners: the corner noise of these frames,
 // which the reprojection RMS is compared with.
-nlohmann::json CornerNoise(const StoredCalibration& calibration, std::map<int, TruthView> truth, const CalibBox& box) {
-  for (auto& [view, t] : truth) {
-    for (const BoxTag& tag : box.tags) {
-      std::array<Eigen::Vector2d, 4> corners;
-      for (size_t k = 0; k < 4; ++k) corners[k] = Project(t.intrinsics, t.cam_from_box * tag.corners_box_mm[k]);
-      t.tag_corners_px[tag.id] = corners;
-    }
-  }
+nlohmann::json CornerNoise(const StoredCalibration& calibration, const std::map<int, TruthView>& truth,
+                           const CalibBox& box) {
   double sq = 0;
   int corners = 0;
   for (const StoredCalibration::View& view : calibration.views) {
     const auto t = truth.find(view.view);
     if (!view.solved || t == truth.end()) continue;
     for (const StoredCalibration::Tag& tag : view.tags) {
-      const auto true_tag = t->second.tag_corners_px.find(tag.id);
-      if (true_tag == t->second.tag_corners_px.end()) continue;
-      for (size_t k = 0; k < 4; ++k) sq += (tag.corners_px[k] - true_tag->second[k]).squaredNorm(), ++corners;
+      const BoxTag* model = box.FindTag(tag.id);
+      if (model == nullptr) continue;
+      for (size_t k = 0; k < 4; ++k, ++corners) {
+        const Eigen::Vector2d truth_px = Project(t->second.intrinsics, t->second.cam_from_box * model->corners_box_mm[k]);
+        sq += (tag.corners_px[k] - truth_px).squaredNorm();
+      }
     }
   }
   if (corners == 0) return nullptr;
@@ -149,8 +144,11 @@ Result<nlohmann::json> EvalCalibration(const std::string& dir) {
   for (const auto& v : calibration.views)
     if (v.solved) rms.values.push_back(v.rms_px);
   out["solved"]["reprojection_rms_px"] = rms.ToJson();
-  HR_ASSIGN_OR_RETURN(CaptureCalibrationInput input, LoadCaptureCalibrationInput(dir));
-  out["corner_noise_px"] = CornerNoise(calibration, truth, input.box);
+  HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(dir));
+  CalibBox box;
+  double box_height_mm = 0;
+  HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &box, &box_height_mm));
+  out["corner_noise_px"] = CornerNoise(calibration, truth, box);
   out["overall_rms_px"] = calibration.rms_px;
   if (out["corner_noise_px"].is_number())
     out["rms_over_corner_noise"] = calibration.rms_px / out["corner_noise_px"].get<double>();

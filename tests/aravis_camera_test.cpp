@@ -19,11 +19,11 @@
 namespace hairrig {
 namespace {
 
+using hairrig_test::kFrameWait;
 using hairrig_test::Psnr;
 using hairrig_test::ShootOnce;
 
 using std::chrono::milliseconds;
-constexpr milliseconds kFrameWait{20000};  // a liveness bound, not a speed check
 constexpr char kSerial[] = "SIM-CAM-LOWER";
 constexpr int kSceneCamera = 1;
 

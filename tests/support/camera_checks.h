@@ -12,6 +12,10 @@
 
 namespace hairrig_test {
 
+// How long a camera test waits for a frame: a liveness bound, not a speed
+// check (sanitizer builds render slowly).
+constexpr std::chrono::milliseconds kFrameWait{20000};
+
 // Configure, Arm, SoftwareTrigger, WaitFrame, Disarm.
 inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera, hairrig::PixelFormat format,
                                                  double exposure_s = 0.02, double gain_db = 0) {
@@ -22,7 +26,7 @@ inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera, hairri
   HR_RETURN_IF_ERROR(camera.Configure(s));
   HR_RETURN_IF_ERROR(camera.Arm());
   HR_RETURN_IF_ERROR(camera.SoftwareTrigger());
-  auto frame = camera.WaitFrame(std::chrono::seconds(20));  // a liveness bound, not a speed check
+  auto frame = camera.WaitFrame(kFrameWait);
   (void)camera.Disarm();
   return frame;
 }
