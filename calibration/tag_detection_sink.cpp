@@ -1,7 +1,6 @@
 #include "calibration/tag_detection_sink.h"
 
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
@@ -10,21 +9,14 @@
 #include <thread>
 #include <vector>
 
+#include "core/clock.h"
+
 namespace hairrig {
-namespace {
-
-int64_t SteadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-std::string CanonicalPath(const std::string& path) {
+std::string DetectionKey(const std::string& frame_path) {
   std::error_code ec;
-  const auto canonical = std::filesystem::weakly_canonical(path, ec);
-  return ec ? path : canonical.string();
+  const auto canonical = std::filesystem::weakly_canonical(frame_path, ec);
+  return ec ? frame_path : canonical.string();
 }
-
-}  // namespace
 
 struct TagDetectionSink::Impl {
   CalibBox box;
@@ -56,10 +48,10 @@ struct TagDetectionSink::Impl {
         auto detections = (*tag_detector)->Detect(frame.image);
         if (detections.ok()) observations = MatchToBox(*detections, box);
       }
-      const std::string key = CanonicalPath(frame.path);
+      const std::string key = DetectionKey(frame.path);
       std::lock_guard<std::mutex> lock(mutex);
       if (observations) results[key] = std::move(*observations);
-      last_detected_ns = SteadyNs();
+      last_detected_ns = SteadyNowNs();
       --busy;
       if (busy == 0 && queue.empty()) idle.notify_all();
     }
@@ -83,7 +75,7 @@ TagDetectionSink::~TagDetectionSink() {
 }
 
 void TagDetectionSink::OnFrameStored(const StoredFrame& frame) {
-  impl_->last_frame_ns = SteadyNs();
+  impl_->last_frame_ns = SteadyNowNs();
   {
     std::lock_guard<std::mutex> lock(impl_->mutex);
     impl_->queue.push_back(frame);
@@ -99,10 +91,5 @@ std::map<std::string, ViewObservations> TagDetectionSink::WaitForAll() {
 
 int64_t TagDetectionSink::last_frame_ns() const { return impl_->last_frame_ns; }
 int64_t TagDetectionSink::last_detected_ns() const { return impl_->last_detected_ns; }
-
-int TagDetectionSink::frames_detected() const {
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  return static_cast<int>(impl_->results.size());
-}
 
 }  // namespace hairrig

@@ -16,6 +16,10 @@
 
 namespace hairrig {
 
+// The key WaitForAll files a frame's detections under: its canonical path
+// (the path itself when it cannot be resolved).
+std::string DetectionKey(const std::string& frame_path);
+
 class TagDetectionSink : public FrameSink {
  public:
   // `threads` workers (at least 1), each with its own detector.
@@ -26,7 +30,7 @@ class TagDetectionSink : public FrameSink {
   void OnFrameStored(const StoredFrame& frame) override;
 
   // Waits until every queued frame is detected, then returns the matched
-  // tags by the stored file's canonical path. A frame whose detection failed
+  // tags by DetectionKey of the stored file. A frame whose detection failed
   // is absent (the calibration then reads it again and names the fault).
   std::map<std::string, ViewObservations> WaitForAll();
 
@@ -34,7 +38,6 @@ class TagDetectionSink : public FrameSink {
   int64_t last_frame_ns() const;
   // Steady-clock time (ns) the last detection finished; 0 before any.
   int64_t last_detected_ns() const;
-  int frames_detected() const;
 
  private:
   struct Impl;

@@ -7,6 +7,7 @@
 #include <deque>
 #include <string>
 
+#include "core/clock.h"
 #include "core/status.h"
 
 namespace hairrig {
@@ -31,8 +32,7 @@ struct CameraNominal {
 // Reads the fields, keeping `defaults` for those absent; errors are recorded on `device`.
 CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& defaults);
 
-// Steady-clock nanoseconds: the clock of Frame::trigger_time_ns and received_time_ns.
-int64_t SteadyNowNs();
+// SteadyNowNs (core/clock.h) is the clock of Frame::trigger_time_ns and received_time_ns.
 
 // OutOfRange naming the camera when `exposure_s` is outside the capabilities' range.
 Status CheckExposure(const Camera& camera, const CameraCapabilities& caps, double exposure_s);

@@ -19,11 +19,6 @@ Result<bool> OnOffFromLevel(const Light& light, double level, const std::string&
   return OutOfRange(light.Describe() + ": level must be within 0..1");
 }
 
-int64_t SteadyNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& defaults) {
   CameraNominal n = defaults;

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "calibration/calibration_io.h"
+#include "calibration/tag_detection_sink.h"
 #include "core/json_file.h"
 #include "rig/rig_config.h"
 #include "rig/safe_names.h"
@@ -156,9 +157,7 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, 
   }
   if (options.detected != nullptr) {
     for (CalibrationFrame& frame : done.input.frames) {
-      std::error_code ec;
-      const std::string key = std::filesystem::weakly_canonical(frame.path, ec).string();
-      const auto found = options.detected->find(ec ? frame.path : key);
+      const auto found = options.detected->find(DetectionKey(frame.path));
       if (found != options.detected->end()) frame.observations = found->second;
     }
   }

@@ -43,7 +43,7 @@ Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_files, Captur
 struct CalibrateFolderOptions {
   CaptureCalibrationOptions calibration;
   std::vector<std::string> prior_files;  // non-empty: intrinsics held (ApplyIntrinsicsPriors)
-  // Tags already detected (TagDetectionSink::WaitForAll), by canonical frame path.
+  // Tags already detected (TagDetectionSink::WaitForAll), by DetectionKey of the frame path.
   const std::map<std::string, ViewObservations>* detected = nullptr;
   std::function<void()> on_written;  // called once calibration.json and the exports are written
 };

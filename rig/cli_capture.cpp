@@ -7,7 +7,7 @@
 
 #include "calibration/tag_detection_sink.h"
 #include "core/log.h"
-#include "drivers/camera_support.h"
+#include "core/clock.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture.h"
 #include "rig/cli.h"

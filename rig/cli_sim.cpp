@@ -115,7 +115,7 @@ Result<nlohmann::json> RenderChArUco(const ChArUcoArgs& a) {
   }
   if (cameras.empty())
     for (size_t c = 0; c < scene.cameras.size(); ++c) cameras.push_back(static_cast<int>(c));
-  std::vector<Result<ChArUcoSetSummary>> sets(cameras.size(), Status::Ok());
+  std::vector<Result<ChArUcoSetSummary>> sets(cameras.size(), Internal("not rendered"));
   ParallelFor(cameras.size(), a.threads, [&] {
     return [&](size_t i) {
       const SceneCamera& camera = scene.cameras[static_cast<size_t>(cameras[i])];
