@@ -4,10 +4,12 @@
 // simulated rig's wig generator), and the real strands of ../shared: the
 // paper's Algorithm 2, ours (Algorithm 2 grown to a 0.05 mm mean error) and the
 // fixed N = 15 baseline. One thread unless the row says otherwise; time for
-// all strands of a row.
+// all strands of a row. An argument keeps only the strand sets whose name
+// contains it (e.g. "curly", "60 cm", ".hair").
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 #include <thread>
 
 #include "core/strand_io.h"
@@ -72,12 +74,17 @@ void Compare(const std::string& name, const StrandSet& strands) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  const std::string only = argc > 1 ? argv[1] : "";
+  auto wanted = [&](const std::string& name) { return name.find(only) != std::string::npos; };
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
   std::printf("%-26s %-22s %6s %9s %10s %12s %11s\n", "strands", "method", "count", "time_s", "elements", "mean_err_mm",
               "max_err_mm");
   for (WigStyle style : {WigStyle::kStraight, WigStyle::kCurly}) {
     for (double length : {250.0, 400.0, 600.0}) {
+      const std::string name = std::string(style == WigStyle::kStraight ? "straight " : "curly ") +
+                               std::to_string(int(length / 10)) + " cm";
+      if (!wanted(name)) continue;
       WigOptions w;
       w.style = style;
       w.num_strands = 5000;
@@ -87,13 +94,16 @@ int main() {
         std::fprintf(stderr, "%s\n", strands.status().ToString().c_str());
         return 1;
       }
-      Compare(std::string(style == WigStyle::kStraight ? "straight " : "curly ") + std::to_string(int(length / 10)) +
-                  " cm",
-              *strands);
+      Compare(name, *strands);
     }
   }
   for (const char* file : {"../shared/data/strands/Bangs_100.hair", "../shared/data/strands/Curly_100.ply"}) {
-    if (!std::filesystem::exists(file)) continue;
+    if (!wanted(file)) continue;
+    if (!std::filesystem::exists(file)) {
+      std::printf("%-26s skipped: %s is absent (the shared data folder beside the project)\n",
+                  std::filesystem::path(file).filename().c_str(), file);
+      continue;
+    }
     auto strands = ReadStrands(file);
     if (strands.ok()) Compare(std::filesystem::path(file).filename().string(), *strands);
   }

@@ -23,8 +23,8 @@ bool FloatingTangentsOptions::IsValid(std::string* why) const {
     *why = "lengths need 0 < min_length_mm < max_length_mm";
   } else if (!(target_mean_error_mm >= 0)) {
     *why = "target_mean_error_mm must be 0 (off) or positive";
-  } else if (error_samples_per_element < 2) {
-    *why = "error_samples_per_element must be at least 2";
+  } else if (!(error_sagitta_mm > 0)) {
+    *why = "error_sagitta_mm must be positive";
   } else {
     return true;
   }
@@ -256,9 +256,13 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
     if (chord.norm() > 0)
       s.max_cohelical_residual =
           std::max(s.max_cohelical_residual, std::abs(chord.dot(dt)) / chord.norm());
+    // The preferred length: the strand's arc between the break points,
+    // stretched as the relaxation stretched their chord.
+    const double original_chord = (p[static_cast<size_t>(i + 1)] - p[static_cast<size_t>(i)]).norm();
+    const double preferred = original_chord > 0 ? length / n * chord.norm() / original_chord : length / n;
     auto element = HelixThrough(relaxed[static_cast<size_t>(i)], t[static_cast<size_t>(i)],
                                 relaxed[static_cast<size_t>(i + 1)], t[static_cast<size_t>(i + 1)],
-                                length / n);
+                                preferred);
     if (!element.ok()) {
       return Internal("floating tangents: element " + std::to_string(i) + " of " +
                       std::to_string(n) + ": " + element.status().message());
@@ -274,11 +278,11 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
   }
   s.elements = n;
   s.strand_length_mm = length;
-  std::vector<Eigen::Vector3d> curve;
+  std::vector<Eigen::Vector3d> curve{model.elements.front().start_mm};
   for (const auto& e : model.elements) {
-    for (int k = curve.empty() ? 0 : 1; k <= options.error_samples_per_element; ++k) {
-      curve.push_back(e.PointAt(e.length_mm * k / options.error_samples_per_element));
-    }
+    // A chord of length h on a curve of curvature k strays k h^2 / 8 from it.
+    const double chords = e.length_mm * std::sqrt(e.curvature_per_mm() / (8 * options.error_sagitta_mm));
+    e.AppendSamples(std::max(2, static_cast<int>(std::ceil(chords))), &curve);
   }
   DistanceToCurve(spline.points(), curve, &s.mean_error_mm, &s.max_error_mm);
   *summary = s;

@@ -35,7 +35,10 @@ struct FloatingTangentsOptions {
   // at least a quarter, up to N_max) while the mean fit error exceeds this
   // (mm). 0: Algorithm 2 alone, as in the paper.
   double target_mean_error_mm = 0.05;
-  int error_samples_per_element = 24;  // for the fit error
+  // The fit error is measured against the helical curve as a polyline whose
+  // chords stray from the curve by at most this (mm): each element gets
+  // length * sqrt(curvature / (8 sagitta)) chords, at least 2.
+  double error_sagitta_mm = 0.002;
   bool IsValid(std::string* why) const;
 };
 

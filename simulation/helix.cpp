@@ -11,6 +11,17 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586476925;
 constexpr int kCoarseScan = 48;  // samples of the axis angle on [0, 2 pi]
 constexpr int kFineScan = 720;
+constexpr int kMaxTurns = 64;
+// Helices of more whole turns join the same ends; each extra turn costs this
+// fraction of the preferred length when they compete (see HelixSearch::Run).
+constexpr double kTurnPenalty = 0.02;
+// The short rotation is taken when its length is within this fraction of the
+// preferred one. Measured (bench/fit_bench.cpp): the fits of the bench's and
+// the real strands are closer to their strands at 10 % than at 2 % (the
+// relaxed chord of a short element differs from the spline's arc by a few
+// per cent, and the scan then chose a coil of the preferred length), and
+// exact helices are recovered as often as by the scan up to 5 %, 99 % at 10 %.
+constexpr double kShortRotationTolerance = 0.02;
 }
 
 Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& omega, double s) {
@@ -23,6 +34,28 @@ Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& om
 
 Eigen::Vector3d HelixElement::PointAt(double s) const {
   return start_mm + HelixOffset(start_tangent, darboux_per_mm, s);
+}
+
+void HelixElement::AppendSamples(int count, std::vector<Eigen::Vector3d>* out) const {
+  const double h = length_mm / count;
+  const double w = darboux_per_mm.norm();
+  if (w < 1e-15) {
+    for (int k = 1; k <= count; ++k) out->push_back(start_mm + (h * k) * start_tangent);
+    return;
+  }
+  // Eq. 8 over one step from any point of the helix: the offset is linear in
+  // the tangent there, and the tangent turns about the axis by w h.
+  const Eigen::Vector3d axis = darboux_per_mm / w;
+  const double sin_step = std::sin(w * h), cos_step = std::cos(w * h);
+  const double tau_bar = start_tangent.dot(axis);  // constant along the helix
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(w * h, axis).toRotationMatrix();
+  Eigen::Vector3d point = start_mm, tangent = start_tangent;
+  for (int k = 1; k <= count; ++k) {
+    point += tau_bar * h * axis + sin_step / w * (tangent - tau_bar * axis) -
+             (1 - cos_step) / w * tangent.cross(axis);
+    tangent = turn * tangent;
+    out->push_back(point);
+  }
 }
 
 Eigen::Vector3d HelixElement::TangentAt(double s) const {
@@ -96,16 +129,17 @@ class HelixSearch {
   // chord can match almost any length). Each extra turn costs kTurnPenalty of
   // the preferred length in the score, so the search stops as soon as no
   // helix of more turns can beat the best one so far.
-  bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
-    constexpr int kMaxTurns = 64;
-    constexpr double kTurnPenalty = 0.02;
+  bool Run(int samples, double preferred_length_mm, HelixElement* best, double* best_score_out) const {
     // The scan's angles, their sines and cosines and theta without extra
     // turns, computed once for all turns: one atan2 per sample.
     const ScanAngles& angles = ScanAngles::For(samples);
     const std::vector<double>& phi = angles.phi;
     const size_t count = phi.size();
     // F is affine in theta: F = slope * theta - offset at each scanned angle.
-    std::vector<double> slope(count), theta0(count), offset(count);
+    thread_local std::vector<double> slope, theta0, offset;
+    slope.resize(count);
+    theta0.resize(count);
+    offset.resize(count);
     for (size_t k = 0; k < count; ++k) {
       const double sin_phi = angles.sin_phi[k], cos_phi = angles.cos_phi[k];
       theta0[k] = ThetaFromSin(sin_phi, 0);
@@ -137,7 +171,33 @@ class HelixSearch {
         f_a = f_b;
       }
     }
+    *best_score_out = best_score;
     return found;
+  }
+
+  // The short rotation: no extra turn, sin(phi) < 0 (phi in (pi, 2 pi)), so
+  // t0 turns to t1 by less than pi. f at pi, 3 pi / 2 and 2 pi brackets it;
+  // Newton starts from the small-angle expansion of f,
+  //   f ~ (2c / |sin phi|) (sin psi - c^2 cos(phi) sin(psi - phi) / (3 M^2 sin^2 phi)),
+  // whose root for small psi is cot(phi) = -3 M^2 sin(psi) / c^2 (a planar
+  // arc, psi = 0, has its axis at 3 pi / 2, along t0 x t1). False when f
+  // does not change sign there (the chord leans too far from t0 + t1 for a
+  // short rotation) or the helix does not check out.
+  bool ShortRotation(HelixElement* out) const {
+    constexpr double kPi = kTwoPi / 2;
+    const double f_pi = FromSinCos(0, -1, kPi), f_mid = FromSinCos(-1, 0, ThetaFromSin(-1, 0));
+    const double f_end = FromSinCos(0, 1, kPi);
+    double lo = kPi, hi = 1.5 * kPi, f_lo = f_pi;
+    if ((f_mid < 0) != (f_end < 0)) {
+      lo = 1.5 * kPi;
+      hi = kTwoPi;
+      f_lo = f_mid;
+    } else if ((f_pi < 0) == (f_mid < 0)) {
+      return false;
+    }
+    const double guess = kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
+    const double start = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
+    return RefineFrom(start, lo, hi, f_lo, 0, out);
   }
 
  private:
@@ -189,37 +249,51 @@ class HelixSearch {
     return m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
   }
 
+ private:
   // The root on [lo, hi]; true with the helix if g points along the chord and
-  // the helix really ends at (p1, t1).
+  // the helix really ends at (p1, t1). Newton's method on f with its analytic
+  // derivative, kept inside the bracket (a bisection step whenever Newton
+  // would leave it): quadratic near a simple root, never lost.
   bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
-    // Regula falsi with the Illinois modification: bracketed like bisection,
-    // superlinear near a simple root.
-    double f_hi = F(hi, turns);
-    int same_side = 0;
-    for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
-      double mid = f_hi != f_lo ? (lo * f_hi - hi * f_lo) / (f_hi - f_lo) : 0.5 * (lo + hi);
-      if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
-      const double f_mid = F(mid, turns);
-      if (f_mid == 0) {
-        lo = hi = mid;
-        break;
-      }
-      if ((f_mid < 0) == (f_lo < 0)) {
-        lo = mid;
-        f_lo = f_mid;
-        if (++same_side >= 2) f_hi *= 0.5;
+    return RefineFrom(0.5 * (lo + hi), lo, hi, f_lo, turns, out);
+  }
+  bool RefineFrom(double phi, double lo, double hi, double f_lo, int turns, HelixElement* out) const {
+    if (f_lo == 0) return Build(lo, turns, out);
+    const bool rising = f_lo < 0;  // f(lo) < 0 < f(hi)
+    for (int it = 0; it < 100; ++it) {
+      double f, df;
+      FAndDerivative(phi, turns, &f, &df);
+      if (std::abs(f) < 1e-15) break;
+      if ((f < 0) == rising) {
+        lo = phi;
       } else {
-        hi = mid;
-        f_hi = f_mid;
-        same_side = same_side > 0 ? -1 : same_side - 1;
-        if (same_side <= -2) f_lo *= 0.5;
+        hi = phi;
       }
-      if (std::abs(f_mid) < 1e-15 * (m_ + c_)) {
-        lo = hi = mid;
-        break;
-      }
+      double next = phi - f / df;
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+      const double step = std::abs(next - phi);
+      phi = next;
+      if (step < 1e-12 || hi - lo < 1e-15) break;
     }
-    const double phi = 0.5 * (lo + hi);
+    return Build(phi, turns, out);
+  }
+
+  // f and df/dphi, with theta' = 2 c M cos(phi) / (M^2 sin^2(phi) + c^2) on
+  // both branches and d/dphi [cos(phi) sin(psi - phi)] = -cos(psi - 2 phi).
+  void FAndDerivative(double phi, int turns, double* f, double* df) const {
+    const double sin_phi = std::sin(phi), cos_phi = std::cos(phi);
+    const double theta = ThetaFromSin(sin_phi, turns);
+    const double sin_rel = sin_psi_ * cos_phi - cos_psi_ * sin_phi;  // sin(psi - phi)
+    const double cos_rel = cos_psi_ * cos_phi + sin_psi_ * sin_phi;
+    const double cos_psi_2phi = cos_rel * cos_phi + sin_rel * sin_phi;
+    const double dtheta = 2 * c_ * m_ * cos_phi / (m_ * m_ * sin_phi * sin_phi + c_ * c_);
+    *f = m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
+    *df = m_ * dtheta * cos_phi * sin_rel - m_ * theta * cos_psi_2phi - 2 * c_ * sin_rel;
+  }
+
+  // The helix of axis angle phi (a root of f); false if g points against the
+  // chord or the helix does not end at (p1, t1).
+  bool Build(double phi, int turns, HelixElement* out) const {
     const double theta = Theta(phi, turns);
     const double axial = m_ * theta * std::cos(phi);
     if (axial * std::cos(psi_ - phi) + 2 * c_ * std::sin(psi_ - phi) <= 0)
@@ -268,9 +342,17 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
                            std::to_string(chord.dot(dt) / (chord_len * dt.norm())) + ")");
   }
   HelixSearch search(p0, t0, p1, t1);
+  // The usual case in fitting, a short element of a smooth strand: the
+  // short rotation, when its length is close to the preferred one; otherwise
+  // the scan (the fine one only when the coarse one misses a root).
+  if (preferred_length_mm > 0 && search.ShortRotation(&h) &&
+      std::abs(h.length_mm - preferred_length_mm) < kShortRotationTolerance * preferred_length_mm) {
+    return h;
+  }
   bool found = false;
-  for (int samples : {kCoarseScan, kFineScan}) {  // a finer scan only when the coarse one misses a root
-    found = search.Run(samples, preferred_length_mm, &h);
+  double score = 0;
+  for (int samples : {kCoarseScan, kFineScan}) {
+    found = search.Run(samples, preferred_length_mm, &h, &score);
     if (found) break;
   }
   if (!found) return InvalidArgument("helix: no helix joins the two points with these tangents");
