@@ -31,6 +31,10 @@ struct FloatingTangentsOptions {
   // Ours: the root's own residual is in the least squares, so the fitted strand
   // starts at the scalp. false: Eq. 5 as printed (sum from i = 1).
   bool anchor_root = true;
+  // Ours, with anchor_root: an element whose relaxed pair only a coil could
+  // join (no short rotation; typical of nearly straight stretches with a
+  // slight S) gets one more condition that makes it a planar arc.
+  bool planar_arcs = true;
   // Ours: after Algorithm 2, N grows (to the N an N^-3 error law predicts, by
   // at least a quarter, up to N_max) while the mean fit error exceeds this
   // (mm). 0: Algorithm 2 alone, as in the paper.

@@ -315,6 +315,17 @@ class HelixSearch {
 
 }  // namespace
 
+bool ShortRotationExists(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0,
+                         const Eigen::Vector3d& t1) {
+  const Eigen::Vector3d sum = t0 + t1, gap = t1 - t0;
+  const double m = 0.5 * sum.norm(), c = 0.5 * gap.norm();
+  if (!(m > 1e-12) || !(c > 0)) return false;
+  const Eigen::Vector3d e1 = sum / (2 * m);
+  const Eigen::Vector3d e2 = (gap / (2 * c)).cross(e1);
+  const double along = chord.dot(e1), across = chord.dot(e2);
+  return along > 0 && std::abs(across) * kTwoPi * m < 4 * c * along;
+}
+
 Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
                                   const Eigen::Vector3d& p1, const Eigen::Vector3d& t1,
                                   double preferred_length_mm) {

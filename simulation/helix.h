@@ -48,6 +48,15 @@ HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,
                                        const Eigen::Vector3d& normal, double curvature_per_mm,
                                        double torsion_per_mm, double length_mm);
 
+// Whether a helix turning t0 into t1 by less than pi, without extra turns
+// (the short rotation), joins two points `chord` apart, the pair being
+// co-helical: the chord must lean from t0 + t1 towards the binormal
+// (t1 - t0) x (t0 + t1) by an angle psi with |tan psi| < 2c / (pi M),
+// c = |t1 - t0| / 2, M = |t0 + t1| / 2 (f of HelixThrough's search then
+// changes sign on the short branch). Unit tangents, any length unit.
+bool ShortRotationExists(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0,
+                         const Eigen::Vector3d& t1);
+
 // The helix through p0 with tangent t0 that reaches p1 with tangent t1
 // (interpolation of two points and two tangents, Sec. V-C after ref. [38]).
 // The pair must be co-helical (Eq. 3, <p1 - p0, t1 - t0> = 0, relative to

@@ -7,7 +7,12 @@
 namespace hairrig {
 
 namespace {
-constexpr int kSamplesPerSegment = 32;
+// The arc-length table has an entry at every quarter of a segment; each
+// quarter's length is the 2-point Gauss-Legendre rule on the speed |B'(u)|
+// (exact for polynomials of degree 3; the speed of a cubic is smooth), and u
+// is linear in arc length within a quarter.
+constexpr int kSamplesPerSegment = 4;
+constexpr double kGaussOffset = 0.2113248654051871;  // (1 - 1/sqrt(3)) / 2
 }
 
 Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& points_mm) {
@@ -36,14 +41,15 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
   }
   s.cumulative_mm_.push_back(0);
   s.table_u_.push_back(0);
-  Eigen::Vector3d last = s.points_[0];
+  constexpr double kStep = 1.0 / kSamplesPerSegment;
   for (int seg = 0; seg + 1 < n; ++seg) {
-    for (int k = 1; k <= kSamplesPerSegment; ++k) {
-      const double u = static_cast<double>(k) / kSamplesPerSegment;
-      const Eigen::Vector3d p = s.Bezier(seg, u);
-      s.cumulative_mm_.push_back(s.cumulative_mm_.back() + (p - last).norm());
-      s.table_u_.push_back(seg + u);
-      last = p;
+    for (int k = 0; k < kSamplesPerSegment; ++k) {
+      const double u0 = k * kStep;
+      const double quarter = 0.5 * kStep *
+                             (s.BezierDerivative(seg, u0 + kGaussOffset * kStep).norm() +
+                              s.BezierDerivative(seg, u0 + (1 - kGaussOffset) * kStep).norm());
+      s.cumulative_mm_.push_back(s.cumulative_mm_.back() + quarter);
+      s.table_u_.push_back(seg + u0 + kStep);
     }
   }
   return s;
