@@ -265,16 +265,21 @@ std::vector<Eigen::Vector3d> RelaxBreakPoints(const std::vector<Eigen::Vector3d>
 
 namespace {
 
-// Squared distance from q to the polyline segments [first, last) of `curve`.
+// Squared distance from q to the polyline segments [first, last) of `curve`,
+// if below best2; `nearest` is then set to that segment.
 double SquaredDistanceToSegments(const Eigen::Vector3d& q,
                                  const std::vector<Eigen::Vector3d>& curve, size_t first,
-                                 size_t last, double best2) {
+                                 size_t last, double best2, size_t* nearest) {
   for (size_t k = first; k < last; ++k) {
     const Eigen::Vector3d seg = curve[k + 1] - curve[k];
     const Eigen::Vector3d to_q = q - curve[k];
     const double len2 = seg.squaredNorm();
     const double u = len2 > 0 ? std::clamp(to_q.dot(seg) / len2, 0.0, 1.0) : 0.0;
-    best2 = std::min(best2, (to_q - u * seg).squaredNorm());
+    const double d2 = (to_q - u * seg).squaredNorm();
+    if (d2 < best2) {
+      best2 = d2;
+      *nearest = k;
+    }
   }
   return best2;
 }
@@ -283,16 +288,20 @@ double SquaredDistanceToSegments(const Eigen::Vector3d& q,
 
 // Exact, with pruning: the curve is cut into blocks of segments, each with a
 // bounding sphere; a block is scanned only if its sphere can hold a point
-// nearer than the best so far. The block at the point's own arc-length
-// fraction is scanned first, so most others are pruned.
+// nearer than the best so far. The points follow the curve, so a few
+// segments around the previous point's nearest one give a close first bound
+// and most blocks are pruned.
 void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
                      const std::vector<Eigen::Vector3d>& curve, double* mean_mm, double* max_mm) {
-  constexpr size_t kBlock = 4;
+  constexpr size_t kWindow = 2;
   const size_t segments = curve.size() > 1 ? curve.size() - 1 : 0;
+  // About sqrt(segments) blocks of sqrt(segments) segments: as many sphere
+  // tests per point as segment tests in a block it cannot prune.
+  const size_t block = std::max<size_t>(4, static_cast<size_t>(std::sqrt(static_cast<double>(segments))));
   std::vector<Eigen::Vector3d> centers;
   std::vector<double> radii;
-  for (size_t first = 0; first < segments; first += kBlock) {
-    const size_t last = std::min(segments, first + kBlock);
+  for (size_t first = 0; first < segments; first += block) {
+    const size_t last = std::min(segments, first + block);
     Eigen::Vector3d center = Eigen::Vector3d::Zero();
     for (size_t k = first; k <= last; ++k) center += curve[k];
     center /= static_cast<double>(last - first + 1);
@@ -302,19 +311,20 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
     radii.push_back(radius);
   }
   double sum = 0, worst = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& q = points[i];
+  size_t nearest = 0;
+  for (const Eigen::Vector3d& q : points) {
     double best2 = (curve[0] - q).squaredNorm();
-    if (!centers.empty()) {
-      const size_t guess =
-          std::min(centers.size() - 1, i * centers.size() / std::max<size_t>(1, points.size()));
-      best2 = SquaredDistanceToSegments(q, curve, guess * kBlock,
-                                        std::min(segments, guess * kBlock + kBlock), best2);
+    if (segments > 0) {
+      const size_t window_first = nearest > kWindow ? nearest - kWindow : 0;
+      const size_t window_last = std::min(segments, nearest + kWindow + 1);
+      best2 = SquaredDistanceToSegments(q, curve, window_first, window_last, best2, &nearest);
+      double best = std::sqrt(best2);
       for (size_t b = 0; b < centers.size(); ++b) {
-        const double gap = (q - centers[b]).norm() - radii[b];
-        if (b == guess || (gap > 0 && gap * gap >= best2)) continue;
-        best2 = SquaredDistanceToSegments(q, curve, b * kBlock,
-                                          std::min(segments, b * kBlock + kBlock), best2);
+        const double reach = radii[b] + best;
+        if ((q - centers[b]).squaredNorm() >= reach * reach) continue;
+        best2 = SquaredDistanceToSegments(q, curve, b * block, std::min(segments, b * block + block), best2,
+                                          &nearest);
+        best = std::sqrt(best2);
       }
     }
     const double best = std::sqrt(best2);
