@@ -403,9 +403,12 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
   s.strand_length_mm = length;
   std::vector<Eigen::Vector3d> curve{model.elements.front().start_mm};
   for (const auto& e : model.elements) {
-    // A chord of length h on a curve of curvature k strays k h^2 / 8 from it.
+    // A chord of length h on a curve of curvature k strays k h^2 / 8 from it
+    // (at most 64 chords per turn about the helix axis, a wild coil's bound).
     const double chords = e.length_mm * std::sqrt(e.curvature_per_mm() / (8 * options.error_sagitta_mm));
-    e.AppendSamples(std::max(2, static_cast<int>(std::ceil(chords))), &curve);
+    const double turns = e.darboux_per_mm.norm() * e.length_mm / (2 * M_PI);
+    const double cap = 64 * std::ceil(std::max(1.0, turns));
+    e.AppendSamples(std::max(2, static_cast<int>(std::ceil(std::min(chords, cap)))), &curve);
   }
   DistanceToCurve(spline.points(), curve, &s.mean_error_mm, &s.max_error_mm);
   *summary = s;

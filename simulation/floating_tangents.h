@@ -31,10 +31,13 @@ struct FloatingTangentsOptions {
   // Ours: the root's own residual is in the least squares, so the fitted strand
   // starts at the scalp. false: Eq. 5 as printed (sum from i = 1).
   bool anchor_root = true;
-  // Ours, with anchor_root: an element whose relaxed pair only a coil could
-  // join (no short rotation; typical of nearly straight stretches with a
-  // slight S) gets one more condition that makes it a planar arc.
-  bool planar_arcs = true;
+  // Ours, with anchor_root: an element the strand crosses with little turning
+  // whose relaxed pair only a coil could join (no short rotation; typical of
+  // nearly straight, slightly S-shaped or noisy stretches) gets one more
+  // condition that makes it a planar arc. Faster (no coil search) and free of
+  // the noise's tiny coils, but the extra condition moves the break points:
+  // off by default (measured side by side in bench/fit_bench.cpp).
+  bool planar_arcs = false;
   // Ours: after Algorithm 2, N grows (to the N an N^-3 error law predicts, by
   // at least a quarter, up to N_max) while the mean fit error exceeds this
   // (mm). 0: Algorithm 2 alone, as in the paper.
@@ -42,7 +45,7 @@ struct FloatingTangentsOptions {
   // The fit error is measured against the helical curve as a polyline whose
   // chords stray from the curve by at most this (mm): each element gets
   // length * sqrt(curvature / (8 sagitta)) chords, at least 2.
-  double error_sagitta_mm = 0.002;
+  double error_sagitta_mm = 0.005;
   bool IsValid(std::string* why) const;
 };
 

@@ -49,6 +49,38 @@ TEST(Helix, ExactHelixIsRecoveredFromItsEndsToOnePartPerMillion) {
   }
 }
 
+TEST(Helix, SamplesByRecurrenceFollowEquation8) {
+  const HelixElement h = Reference(0.15, 0.3, 30);  // more than a turn
+  std::vector<Eigen::Vector3d> samples;
+  h.AppendSamples(90, &samples);
+  ASSERT_EQ(samples.size(), 90u);
+  for (int k = 1; k <= 90; ++k) {
+    EXPECT_NEAR((samples[static_cast<size_t>(k - 1)] - h.PointAt(30.0 * k / 90)).norm(), 0, 1e-12) << k;
+  }
+  HelixElement straight = h;
+  straight.darboux_per_mm.setZero();
+  samples.clear();
+  straight.AppendSamples(3, &samples);
+  EXPECT_NEAR((samples.back() - straight.PointAt(30)).norm(), 0, 1e-12);
+}
+
+// The short rotation exists for a planar arc (chord along t0 + t1) and not
+// when nearly equal tangents meet a chord leaning sideways (only a coil joins
+// them); HelixThrough then returns the arc, not a coil of similar length.
+TEST(Helix, ShortRotationForArcsNotForLeaningChords) {
+  const HelixElement arc = Reference(0.05, 0.0, 20);
+  const Eigen::Vector3d chord = arc.PointAt(20) - arc.start_mm;
+  const Eigen::Vector3d t1 = arc.TangentAt(20);
+  EXPECT_TRUE(ShortRotationExists(chord, arc.start_tangent, t1));
+  auto fitted = HelixThrough(arc.start_mm, arc.start_tangent, arc.PointAt(20), t1, 20.3);
+  ASSERT_TRUE(fitted.ok());
+  EXPECT_NEAR(fitted->torsion_per_mm(), 0, 1e-9);
+  EXPECT_NEAR(fitted->length_mm, 20, 1e-9);
+  const Eigen::Vector3d t = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d tilted = Eigen::Vector3d(1e-4, 0, 1).normalized();
+  EXPECT_FALSE(ShortRotationExists(Eigen::Vector3d(0, 0.01, 10), t, tilted));
+}
+
 TEST(Helix, StraightAndImpossibleCases) {
   const Eigen::Vector3d t = Eigen::Vector3d::UnitX();
   auto straight = HelixThrough({0, 0, 0}, t, {10, 0, 0}, t);
