@@ -147,11 +147,6 @@ class BandCholesky {
 std::vector<Eigen::Vector3d> ProjectOntoConditions(const std::vector<Eigen::Vector3d>& p,
                                                    const std::vector<CohelicalCondition>& rows) {
   const int m = static_cast<int>(rows.size());
-  int bandwidth = 0;
-  for (int r = 0; r < m; ++r) {
-    for (int q = r; q < m && rows[static_cast<size_t>(q)].element <= rows[static_cast<size_t>(r)].element + 1; ++q)
-      bandwidth = std::max(bandwidth, q - r);
-  }
   // Entry (r, q) of C C^T for q >= r within the band; the visitor gets each one.
   auto for_each_entry = [&](auto&& visit) {
     for (int r = 0; r < m; ++r) {
@@ -163,6 +158,8 @@ std::vector<Eigen::Vector3d> ProjectOntoConditions(const std::vector<Eigen::Vect
       }
     }
   };
+  int bandwidth = 0;
+  for_each_entry([&](int r, int q, double) { bandwidth = std::max(bandwidth, q - r); });
   std::vector<double> lambda(static_cast<size_t>(m));
   for (int r = 0; r < m; ++r) {
     const CohelicalCondition& a = rows[static_cast<size_t>(r)];

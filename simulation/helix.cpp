@@ -16,12 +16,9 @@ constexpr int kMaxTurns = 64;
 // fraction of the preferred length when they compete (see HelixSearch::Run).
 constexpr double kTurnPenalty = 0.02;
 // The short rotation is taken when its length is within this fraction of the
-// preferred one. Measured (bench/fit_bench.cpp): the fits of the bench's and
-// the real strands are closer to their strands at 10 % than at 2 % (the
-// relaxed chord of a short element differs from the spline's arc by a few
-// per cent, and the scan then chose a coil of the preferred length), and
-// exact helices are recovered as often as by the scan up to 5 %, 99 % at 10 %.
-constexpr double kShortRotationTolerance = 0.02;
+// preferred one: one turn's penalty, so no helix of more turns could score
+// better. (Looser tolerances let it replace exact multi-turn helices.)
+constexpr double kShortRotationTolerance = kTurnPenalty;
 }
 
 Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& omega, double s) {
@@ -129,7 +126,7 @@ class HelixSearch {
   // chord can match almost any length). Each extra turn costs kTurnPenalty of
   // the preferred length in the score, so the search stops as soon as no
   // helix of more turns can beat the best one so far.
-  bool Run(int samples, double preferred_length_mm, HelixElement* best, double* best_score_out) const {
+  bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
     // The scan's angles, their sines and cosines and theta without extra
     // turns, computed once for all turns: one atan2 per sample.
     const ScanAngles& angles = ScanAngles::For(samples);
@@ -171,7 +168,6 @@ class HelixSearch {
         f_a = f_b;
       }
     }
-    *best_score_out = best_score;
     return found;
   }
 
@@ -238,18 +234,13 @@ class HelixSearch {
     return (sin_phi < 0 ? 2 * half : kTwoPi - 2 * half) + kTwoPi * turns;
   }
   double Theta(double phi, int turns) const { return ThetaFromSin(std::sin(phi), turns); }
-  // One sine and cosine of phi; those of psi - phi follow from psi's.
-  double F(double phi, int turns) const {
-    const double sin_phi = std::sin(phi), cos_phi = std::cos(phi);
-    return FromSinCos(sin_phi, cos_phi, ThetaFromSin(sin_phi, turns));
-  }
+  // f from the sine and cosine of phi; those of psi - phi follow from psi's.
   double FromSinCos(double sin_phi, double cos_phi, double theta) const {
     const double sin_rel = sin_psi_ * cos_phi - cos_psi_ * sin_phi;  // sin(psi - phi)
     const double cos_rel = cos_psi_ * cos_phi + sin_psi_ * sin_phi;
     return m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
   }
 
- private:
   // The root on [lo, hi]; true with the helix if g points along the chord and
   // the helix really ends at (p1, t1). Newton's method on f with its analytic
   // derivative, kept inside the bracket (a bisection step whenever Newton
@@ -361,9 +352,8 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
     return h;
   }
   bool found = false;
-  double score = 0;
   for (int samples : {kCoarseScan, kFineScan}) {
-    found = search.Run(samples, preferred_length_mm, &h, &score);
+    found = search.Run(samples, preferred_length_mm, &h);
     if (found) break;
   }
   if (!found) return InvalidArgument("helix: no helix joins the two points with these tangents");
