@@ -23,6 +23,8 @@ bool FloatingTangentsOptions::IsValid(std::string* why) const {
     *why = "lengths need 0 < min_length_mm < max_length_mm";
   } else if (!(target_mean_error_mm >= 0)) {
     *why = "target_mean_error_mm must be 0 (off) or positive";
+  } else if (!(straight_sagitta_mm >= 0)) {
+    *why = "straight_sagitta_mm must be 0 (off) or positive";
   } else if (!(error_sagitta_mm > 0)) {
     *why = "error_sagitta_mm must be positive";
   } else {
@@ -355,6 +357,24 @@ std::vector<char> GentleElements(const StrandSpline& spline, int n) {
   return gentle;
 }
 
+// Ours (straight_sagitta_mm): a run of elements of length h each whose
+// tangents stay within 8 s / (run length) of the run's first tangent (an
+// arc turning by that angle strays s from its chord) shares that tangent, so
+// its elements are straight. Unit tangents in, unit tangents out.
+void StraightenRuns(double element_length_mm, double sagitta_mm, std::vector<Eigen::Vector3d>* t) {
+  if (!(sagitta_mm > 0)) return;
+  std::vector<Eigen::Vector3d>& tangent = *t;
+  double run_length = 0;
+  for (size_t j = 0; j + 1 < tangent.size(); ++j) {
+    run_length += element_length_mm;
+    if ((tangent[j + 1] - tangent[j]).norm() * run_length < 8 * sagitta_mm) {
+      tangent[j + 1] = tangent[j];
+    } else {
+      run_length = 0;
+    }
+  }
+}
+
 // Algorithm 1, lines 4-8, for a given element count.
 Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
                                            const FloatingTangentsOptions& options,
@@ -365,6 +385,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
     p.push_back(spline.PointAt(length * i / n));
     t.push_back(spline.TangentAt(length * i / n));
   }
+  StraightenRuns(length / n, options.straight_sagitta_mm, &t);
   const std::vector<Eigen::Vector3d> relaxed =
       RelaxBreakPoints(p, t, options.anchor_root, options.planar_arcs ? GentleElements(spline, n) : std::vector<char>{});
   PiecewiseHelix model;

@@ -38,6 +38,13 @@ struct FloatingTangentsOptions {
   // the noise's tiny coils, but the extra condition moves the break points:
   // off by default (measured side by side in bench/fit_bench.cpp).
   bool planar_arcs = false;
+  // Ours: an element over which the strand turns so little that an arc would
+  // stray less than this (mm) from its chord is straight; its end tangent
+  // becomes its start tangent, and a run of such elements shares one tangent
+  // while the run's arc would still stray less than this. Nearly parallel
+  // tangents otherwise admit no short rotation once rounding noise (float
+  // input, ~1e-5 mm) tilts the chord: only a coil would join them. 0: off.
+  double straight_sagitta_mm = 0.001;
   // Ours: after Algorithm 2, N grows (to the N an N^-3 error law predicts, by
   // at least a quarter, up to N_max) while the mean fit error exceeds this
   // (mm). 0: Algorithm 2 alone, as in the paper.

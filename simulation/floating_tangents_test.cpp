@@ -91,6 +91,13 @@ TEST(FloatingTangents, DistanceToCurveIsExact) {
   EXPECT_NEAR(max, brute_max, 1e-12);
 }
 
+// Elements that turn by more than pi: coils.
+int Coils(const PiecewiseHelix& model) {
+  int count = 0;
+  for (const auto& e : model.elements) count += e.darboux_per_mm.norm() * e.length_mm > M_PI;
+  return count;
+}
+
 // A gently bent strand with 0.05 mm of noise: the co-helical pairs of its
 // nearly straight elements lean too far for a short rotation, so the plain
 // relaxation joins many of them by coils (helices turning by more than pi);
@@ -103,21 +110,46 @@ TEST(FloatingTangents, PlanarArcsReplaceTheCoilsOfNoisyStraightStretches) {
     const double a = 0.02 * i;
     p.emplace_back(100 * (1 - std::cos(a)) + noise(rng), noise(rng), -100 * std::sin(a) + noise(rng));
   }
-  auto coils = [](const PiecewiseHelix& model) {
-    int count = 0;
-    for (const auto& e : model.elements) count += e.darboux_per_mm.norm() * e.length_mm > M_PI;
-    return count;
-  };
   FloatingTangentsOptions plain, planar;
   planar.planar_arcs = true;
   StrandFitSummary plain_fit, planar_fit;
   auto with_coils = FitFloatingTangents(p, plain, &plain_fit);
   auto with_arcs = FitFloatingTangents(p, planar, &planar_fit);
   ASSERT_TRUE(with_coils.ok() && with_arcs.ok());
-  EXPECT_GE(coils(*with_coils), 8);
-  EXPECT_LE(coils(*with_arcs), 2);
+  EXPECT_GE(Coils(*with_coils), 8);
+  EXPECT_LE(Coils(*with_arcs), 2);
   EXPECT_LT(planar_fit.max_g1_defect_deg, 1e-4);
   EXPECT_LT(planar_fit.mean_error_mm, 0.5) << "the arcs stay within the noise's reach";
+}
+
+// A strand that leaves the scalp sideways, bends down within 20 mm and then
+// hangs straight, stored in single precision as strand files are: the
+// rounding (~1e-5 mm) tilts the chords of the straight elements a little, and
+// their nearly parallel tangents then admit only coils (a full turn of high
+// torsion per element). Straight runs (the default) make them straight.
+TEST(FloatingTangents, StraightRunsReplaceTheCoilsOfRoundingNoise) {
+  std::vector<Eigen::Vector3d> p;
+  const Eigen::Vector3d root(83.1, -41.7, 112.9), down = Eigen::Vector3d(0.05, 0.02, -1).normalized();
+  Eigen::Vector3d point = root;
+  for (int i = 0; i <= 80; ++i) {
+    const double w = std::exp(-5.0 * i / 8);
+    const Eigen::Vector3d tangent = (w * Eigen::Vector3d::UnitX() + (1 - w) * down).normalized();
+    p.push_back(point.cast<float>().cast<double>());
+    point += 5 * tangent;
+  }
+  FloatingTangentsOptions plain, straight;
+  plain.straight_sagitta_mm = 0;
+  StrandFitSummary plain_fit, straight_fit;
+  auto with_coils = FitFloatingTangents(p, plain, &plain_fit);
+  auto with_runs = FitFloatingTangents(p, straight, &straight_fit);
+  ASSERT_TRUE(with_coils.ok() && with_runs.ok());
+  EXPECT_GE(Coils(*with_coils), 5);
+  EXPECT_EQ(Coils(*with_runs), 0);
+  EXPECT_LT(straight_fit.max_g1_defect_deg, 1e-4);
+  EXPECT_LT(straight_fit.mean_error_mm, plain_fit.mean_error_mm + 0.05);
+  FloatingTangentsOptions bad;
+  bad.straight_sagitta_mm = -1;
+  EXPECT_FALSE(FitFloatingTangents(p, bad).ok());
 }
 
 TEST(FloatingTangents, BadInputIsRefused) {
