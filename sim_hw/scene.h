@@ -27,6 +27,9 @@ enum class WigStyle { kStraight, kWavy, kCurly, kFile };
 struct WigOptions {
   WigStyle style = WigStyle::kWavy;
   int num_strands = 10000;
+  // Strand lengths along the fibre (waves and curls included), uniform in
+  // [min, max]; points about segment_mm apart along it (curly: at least 12
+  // per turn of the curl).
   double min_length_mm = 150;
   double max_length_mm = 260;
   double segment_mm = 5;

@@ -46,6 +46,21 @@ Eigen::Vector3d SampleScalpDirection(const WigOptions& o, std::mt19937_64& rng) 
   }
 }
 
+// Fibre length per unit of centreline length once the style's offset has
+// grown in: a curl of radius r and pitch P winds 2 pi r sideways per P.
+double FibreStretch(const WigOptions& o) {
+  if (o.style != WigStyle::kCurly) return 1.0;
+  return std::hypot(1.0, 2.0 * kPi * o.curl_radius_mm / o.curl_pitch_mm);
+}
+
+// The centreline step: a fibre segment of about segment_mm, and at least
+// kPointsPerCurl points per turn of a curl (fewer alias it into a zigzag).
+double CentrelineStep(const WigOptions& o) {
+  constexpr double kPointsPerCurl = 12;
+  const double step = o.segment_mm / FibreStretch(o);
+  return o.style == WigStyle::kCurly ? std::min(step, o.curl_pitch_mm / kPointsPerCurl) : step;
+}
+
 }  // namespace
 
 Result<StrandSet> GenerateWig(const WigOptions& o, const SceneHead& head) {
@@ -58,17 +73,19 @@ Result<StrandSet> GenerateWig(const WigOptions& o, const SceneHead& head) {
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
   const Eigen::Vector3d down(0, 0, -1);
+  const double stretch = FibreStretch(o), step = CentrelineStep(o);
   StrandSet set;
   set.points_mm.reserve(static_cast<size_t>(o.num_strands) *
-                        static_cast<size_t>(o.max_length_mm / o.segment_mm + 2));
+                        static_cast<size_t>(o.max_length_mm / (step * stretch) + 2));
   std::vector<Eigen::Vector3f> points;
   for (int s = 0; s < o.num_strands; ++s) {
     const Eigen::Vector3d dir = SampleScalpDirection(o, rng);
     const Eigen::Vector3d root = head.center_turntable_mm + dir.cwiseProduct(head.radii_mm);
     const Eigen::Vector3d normal = EllipsoidNormal(root, head);
+    // The fibre's length (along the strand, curls included).
     const double length = o.min_length_mm + (o.max_length_mm - o.min_length_mm) * uniform(rng);
-    const int segments = std::max(2, static_cast<int>(std::ceil(length / o.segment_mm)));
-    const double seg = length / segments;
+    const int segments = std::max(2, static_cast<int>(std::ceil(length / (step * stretch))));
+    const double seg = length / (segments * stretch);
     // Stiffness of the first part of the strand: how far it follows the normal.
     const double lift_mm = 12.0 + 10.0 * uniform(rng);
     const double phase = 2.0 * kPi * uniform(rng);
@@ -76,9 +93,13 @@ Result<StrandSet> GenerateWig(const WigOptions& o, const SceneHead& head) {
     const Eigen::Vector3d jitter = 0.08 * Eigen::Vector3d(gauss(rng), gauss(rng), 0.0);
     Eigen::Vector3d centre = root;
     Eigen::Vector3d previous = root;
+    Eigen::Vector3d last_point = root;
+    double fibre_mm = 0;
     points.clear();
     points.push_back(root.cast<float>());
-    for (int k = 1; k <= segments; ++k) {
+    // The centreline advances by `seg` until the fibre has its length (the
+    // curls' ramp near the root makes it need a few more steps than planned).
+    for (int k = 1; fibre_mm < length && k <= 4 * segments; ++k) {
       const double arc = k * seg;
       const double w = std::exp(-arc / lift_mm);
       Eigen::Vector3d tangent = (w * normal + (1.0 - w) * (down + jitter)).normalized();
@@ -104,7 +125,17 @@ Result<StrandSet> GenerateWig(const WigOptions& o, const SceneHead& head) {
         const double angle = 2.0 * kPi * arc / o.curl_pitch_mm + phase;
         offset = ramp * o.curl_radius_mm * (std::cos(angle) * side + std::sin(angle) * binormal);
       }
-      points.push_back(KeepOutside(centre + offset, head, 0.5).cast<float>());
+      Eigen::Vector3d point = KeepOutside(centre + offset, head, 0.5);
+      const double chord = (point - last_point).norm();
+      if (fibre_mm + chord > length && chord > 0) {
+        // The tip: cut the last segment at the fibre's length, or end at the
+        // previous point when only a sliver of it would remain.
+        if (length - fibre_mm < 0.2 * chord) break;
+        point = last_point + (length - fibre_mm) / chord * (point - last_point);
+      }
+      fibre_mm += (point - last_point).norm();
+      last_point = point;
+      points.push_back(point.cast<float>());
     }
     set.AddStrand(points);
   }

@@ -45,9 +45,11 @@ struct FloatingTangentsOptions {
   // tangents otherwise admit no short rotation once rounding noise (float
   // input, ~1e-5 mm) tilts the chord: only a coil would join them. 0: off.
   double straight_sagitta_mm = 0.001;
-  // Ours: after Algorithm 2, N grows (to the N an N^-3 error law predicts, by
-  // at least a quarter, up to N_max) while the mean fit error exceeds this
-  // (mm). 0: Algorithm 2 alone, as in the paper.
+  // Ours: N starts at Algorithm 2's or at the strand's total turning / 90 deg
+  // if more (Algorithm 2's inner-product test at the spline's own resolution:
+  // its 20 samples miss curls shorter than L / 20), and grows (to the N an
+  // error law e ~ N^-k predicts, by at least a quarter, up to N_max) while
+  // the mean fit error exceeds this (mm). 0: Algorithm 2 alone, as in the paper.
   double target_mean_error_mm = 0.05;
   // The fit error is measured against the helical curve as a polyline whose
   // chords stray from the curve by at most this (mm): each element gets

@@ -11,14 +11,16 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586476925;
 constexpr int kCoarseScan = 48;  // samples of the axis angle on [0, 2 pi]
 constexpr int kFineScan = 720;
+static_assert(kCoarseScan % 4 == 0 && kFineScan % 4 == 0, "ScanAngles folds |sin| by quarters");
 constexpr int kMaxTurns = 64;
 // Helices of more whole turns join the same ends; each extra turn costs this
 // fraction of the preferred length when they compete (see HelixSearch::Run).
 constexpr double kTurnPenalty = 0.02;
-// The short rotation is taken when its length is within this fraction of the
-// preferred one: one turn's penalty, so no helix of more turns could score
-// better. (Looser tolerances let it replace exact multi-turn helices.)
-constexpr double kShortRotationTolerance = kTurnPenalty;
+// A helix with no extra turn (the short or the long rotation) is taken when
+// its length is within this fraction of the preferred one: one turn's
+// penalty, so no helix of more turns could score better. (Looser tolerances
+// let it replace exact multi-turn helices.)
+constexpr double kZeroTurnTolerance = kTurnPenalty;
 }
 
 Eigen::Vector3d HelixOffset(const Eigen::Vector3d& t0, const Eigen::Vector3d& omega, double s) {
@@ -128,7 +130,7 @@ class HelixSearch {
   // helix of more turns can beat the best one so far.
   bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
     // The scan's angles, their sines and cosines and theta without extra
-    // turns, computed once for all turns: one atan2 per sample.
+    // turns, computed once for all turns: one atan2 per distinct |sin phi|.
     const ScanAngles& angles = ScanAngles::For(samples);
     const std::vector<double>& phi = angles.phi;
     const size_t count = phi.size();
@@ -137,9 +139,13 @@ class HelixSearch {
     slope.resize(count);
     theta0.resize(count);
     offset.resize(count);
+    thread_local std::vector<double> half_turn;  // atan2(c, M |sin phi|) per distinct |sin phi|
+    half_turn.resize(angles.abs_sin.size());
+    for (size_t j = 0; j < half_turn.size(); ++j) half_turn[j] = std::atan2(c_, m_ * angles.abs_sin[j]);
     for (size_t k = 0; k < count; ++k) {
       const double sin_phi = angles.sin_phi[k], cos_phi = angles.cos_phi[k];
-      theta0[k] = ThetaFromSin(sin_phi, 0);
+      const double half = half_turn[angles.abs_sin_index[k]];
+      theta0[k] = sin_phi < 0 ? 2 * half : kTwoPi - 2 * half;  // ThetaFromSin(sin_phi, 0)
       offset[k] = -FromSinCos(sin_phi, cos_phi, 0);
       slope[k] = FromSinCos(sin_phi, cos_phi, 1) + offset[k];
     }
@@ -159,7 +165,7 @@ class HelixSearch {
           const double score = preferred_length_mm > 0
                                    ? std::abs(candidate.length_mm - preferred_length_mm) + turn_cost
                                    : candidate.length_mm;
-          if (score < best_score) {
+          if (score < best_score && EndsAtTarget(candidate)) {
             best_score = score;
             *best = candidate;
             found = true;
@@ -171,32 +177,53 @@ class HelixSearch {
     return found;
   }
 
-  // The short rotation: no extra turn, sin(phi) < 0 (phi in (pi, 2 pi)), so
-  // t0 turns to t1 by less than pi. f at pi, 3 pi / 2 and 2 pi brackets it;
-  // Newton starts from the small-angle expansion of f,
+  // The helices with no extra turn, found without the scan. The short
+  // rotation has sin(phi) < 0 (phi in (pi, 2 pi)): t0 turns to t1 by less
+  // than pi. f at pi, 3 pi / 2 and 2 pi brackets it; Newton starts from the
+  // small-angle expansion of f,
   //   f ~ (2c / |sin phi|) (sin psi - c^2 cos(phi) sin(psi - phi) / (3 M^2 sin^2 phi)),
   // whose root for small psi is cot(phi) = -3 M^2 sin(psi) / c^2 (a planar
-  // arc, psi = 0, has its axis at 3 pi / 2, along t0 x t1). False when f
-  // does not change sign there (the chord leans too far from t0 + t1 for a
-  // short rotation) or the helix does not check out.
-  bool ShortRotation(HelixElement* out) const {
-    constexpr double kPi = kTwoPi / 2;
-    const double f_pi = FromSinCos(0, -1, kPi), f_mid = FromSinCos(-1, 0, ThetaFromSin(-1, 0));
-    const double f_end = FromSinCos(0, 1, kPi);
-    double lo = kPi, hi = 1.5 * kPi, f_lo = f_pi;
-    if ((f_mid < 0) != (f_end < 0)) {
-      lo = 1.5 * kPi;
-      hi = kTwoPi;
-      f_lo = f_mid;
-    } else if ((f_pi < 0) == (f_mid < 0)) {
-      return false;
-    }
+  // arc, psi = 0, has its axis at 3 pi / 2, along t0 x t1). The long
+  // rotation has sin(phi) > 0 (phi in (0, pi)): t0 turns to t1 by between
+  // pi and 2 pi (an element over about half a curl or more); f at 0, pi / 2
+  // and pi bracket it, Newton starts mid-bracket. False when f does not
+  // change sign on the half (for the short rotation: the chord leans too far
+  // from t0 + t1) or no helix checks out.
+  bool ShortRotation(double preferred_length_mm, HelixElement* out) const {
     const double guess = kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
-    const double start = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
-    return RefineFrom(start, lo, hi, f_lo, 0, out);
+    return ZeroTurnRoot(-1, guess, preferred_length_mm, out);
+  }
+  bool LongRotation(double preferred_length_mm, HelixElement* out) const {
+    return ZeroTurnRoot(1, -1, preferred_length_mm, out);
   }
 
  private:
+  // The root on the half of the axis angles where sin(phi) has the sign
+  // `side`: (sin, cos) = (0, side), (side, 0), (0, -side) at its start,
+  // middle and end bracket a root in each quarter where f changes sign (f
+  // often has one in each, of which one has g against the chord). Of the
+  // helices found, the one of length closest to `preferred_length_mm`.
+  // Newton starts from `guess` if it is inside the quarter.
+  bool ZeroTurnRoot(double side, double guess, double preferred_length_mm, HelixElement* out) const {
+    constexpr double kPi = kTwoPi / 2;
+    const double first = side < 0 ? kPi : 0;
+    const double f[3] = {FromSinCos(0, side, kPi), FromSinCos(side, 0, ThetaFromSin(side, 0)),
+                         FromSinCos(0, -side, kPi)};
+    bool found = false;
+    for (int quarter = 0; quarter < 2; ++quarter) {
+      if ((f[quarter] < 0) == (f[quarter + 1] < 0)) continue;
+      const double lo = first + quarter * kPi / 2, hi = lo + kPi / 2;
+      const double start = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
+      HelixElement candidate;
+      if (!RefineFrom(start, lo, hi, f[quarter], 0, &candidate) || !EndsAtTarget(candidate)) continue;
+      if (!found || std::abs(candidate.length_mm - preferred_length_mm) < std::abs(out->length_mm - preferred_length_mm)) {
+        *out = candidate;
+        found = true;
+      }
+    }
+    return found;
+  }
+
   struct ScanAngles;
   // Whether a root between samples k - 1 and k can score below `budget`: the
   // helix length L = theta |d| / |g| at the two ends bounds it (L varies
@@ -215,17 +242,24 @@ class HelixSearch {
     return miss < budget * 1.5 + 1e-9 * preferred_length_mm;
   }
   // The scan's angles with their sines and cosines, for the two scan densities.
+  // |sin phi| takes samples / 4 + 1 distinct values on the grid (samples is a
+  // multiple of 4): abs_sin holds them, abs_sin_index maps each angle to its.
   struct ScanAngles {
-    std::vector<double> phi, sin_phi, cos_phi;
+    std::vector<double> phi, sin_phi, cos_phi, abs_sin;
+    std::vector<size_t> abs_sin_index;
     static const ScanAngles& For(int samples) {
       static const ScanAngles coarse(kCoarseScan), fine(kFineScan);
       return samples == kCoarseScan ? coarse : fine;
     }
     explicit ScanAngles(int samples) {
+      const int quarter = samples / 4;
+      for (int j = 0; j <= quarter; ++j) abs_sin.push_back(std::sin(kTwoPi * j / samples));
       for (int i = 0; i <= samples; ++i) {
         phi.push_back(kTwoPi * i / samples);
         sin_phi.push_back(std::sin(phi.back()));
         cos_phi.push_back(std::cos(phi.back()));
+        const int in_half = i % (2 * quarter);  // |sin| has period pi and is even about pi / 2
+        abs_sin_index.push_back(static_cast<size_t>(std::min(in_half, 2 * quarter - in_half)));
       }
     }
   };
@@ -241,8 +275,8 @@ class HelixSearch {
     return m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
   }
 
-  // The root on [lo, hi]; true with the helix if g points along the chord and
-  // the helix really ends at (p1, t1). Newton's method on f with its analytic
+  // The root on [lo, hi]; true with the helix if g points along the chord.
+  // Newton's method on f with its analytic
   // derivative, kept inside the bracket (a bisection step whenever Newton
   // would leave it): quadratic near a simple root, never lost.
   bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
@@ -283,7 +317,7 @@ class HelixSearch {
   }
 
   // The helix of axis angle phi (a root of f); false if g points against the
-  // chord or the helix does not end at (p1, t1).
+  // chord. Whether it really ends at (p1, t1) is EndsAtTarget's check.
   bool Build(double phi, int turns, HelixElement* out) const {
     const double theta = Theta(phi, turns);
     const double axial = m_ * theta * std::cos(phi);
@@ -294,8 +328,11 @@ class HelixSearch {
     out->start_tangent = t0_;
     out->darboux_per_mm = w * (std::cos(phi) * e1_ + std::sin(phi) * e2_);
     out->length_mm = theta / w;
-    return (out->PointAt(out->length_mm) - p1_).norm() < 1e-7 * chord_len_ &&
-           (out->TangentAt(out->length_mm) - t1_).norm() < 1e-7;
+    return true;
+  }
+  bool EndsAtTarget(const HelixElement& h) const {
+    return (h.PointAt(h.length_mm) - p1_).norm() < 1e-7 * chord_len_ &&
+           (h.TangentAt(h.length_mm) - t1_).norm() < 1e-7;
   }
 
   Eigen::Vector3d p0_, t0_, p1_, t1_;
@@ -344,11 +381,15 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
                            std::to_string(chord.dot(dt) / (chord_len * dt.norm())) + ")");
   }
   HelixSearch search(p0, t0, p1, t1);
-  // The usual case in fitting, a short element of a smooth strand: the
-  // short rotation, when its length is close to the preferred one; otherwise
-  // the scan (the fine one only when the coarse one misses a root).
-  if (preferred_length_mm > 0 && search.ShortRotation(&h) &&
-      std::abs(h.length_mm - preferred_length_mm) < kShortRotationTolerance * preferred_length_mm) {
+  // The usual cases in fitting, a short element of a smooth strand or half a
+  // curl: the short or the long rotation, when its length is close to the
+  // preferred one; otherwise the scan (the fine one only when the coarse one
+  // misses a root).
+  auto close_to_preferred = [&](const HelixElement& e) {
+    return std::abs(e.length_mm - preferred_length_mm) < kZeroTurnTolerance * preferred_length_mm;
+  };
+  if (preferred_length_mm > 0 && ((search.ShortRotation(preferred_length_mm, &h) && close_to_preferred(h)) ||
+                                  (search.LongRotation(preferred_length_mm, &h) && close_to_preferred(h)))) {
     return h;
   }
   bool found = false;

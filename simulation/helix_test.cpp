@@ -37,6 +37,7 @@ TEST(Helix, ExactHelixIsRecoveredFromItsEndsToOnePartPerMillion) {
   for (const Case c :
        {Case{0.05, 0.02, 60}, Case{0.05, -0.02, 60}, Case{0.2, 0.1, 25}, Case{0.002, 0.001, 300},
         Case{0.1, 0.0, 40}, Case{0.15, 0.3, 30}, Case{0.08, 0.01, 70},
+        Case{0.15, 0.05, 26}, Case{0.17, 0.06, 33},  // long rotations: 1.3 and 1.9 pi
         Case{0.18, 0.07, 200}}) {  // the last: a curl of about six turns
     const HelixElement truth = Reference(c.k, c.tau, c.length);
     auto fitted = HelixThrough(truth.start_mm, truth.start_tangent, truth.PointAt(c.length),

@@ -30,6 +30,10 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
     const auto& prev = s.points_[static_cast<size_t>(std::max(0, i - 1))];
     const auto& next = s.points_[static_cast<size_t>(std::min(n - 1, i + 1))];
     tangent[static_cast<size_t>(i)] = (next - prev).normalized();
+    if (i > 0) {
+      const double cos_turn = tangent[static_cast<size_t>(i)].dot(tangent[static_cast<size_t>(i - 1)]);
+      s.turning_rad_ += std::acos(std::clamp(cos_turn, -1.0, 1.0));
+    }
   }
   for (int i = 0; i + 1 < n; ++i) {
     const auto& p0 = s.points_[static_cast<size_t>(i)];

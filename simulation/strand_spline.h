@@ -22,6 +22,9 @@ class StrandSpline {
   Eigen::Vector3d PointAt(double s_mm) const;
   Eigen::Vector3d TangentAt(double s_mm) const;  // unit
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
+  // The angle (radians) the tangent turns through along the whole strand,
+  // summed between the tangents at consecutive points.
+  double turning_rad() const { return turning_rad_; }
 
  private:
   // Segment index and Bezier parameter u in [0, 1] at arc length s.
@@ -34,6 +37,7 @@ class StrandSpline {
   std::vector<Eigen::Vector3d> control_;  // 3 per segment: p_i, c1, c2 (p_{i+1} is the next start)
   std::vector<double> cumulative_mm_;     // arc length at each table sample
   std::vector<double> table_u_;           // segment + u at each table sample
+  double turning_rad_ = 0;
 };
 
 }  // namespace hairrig
