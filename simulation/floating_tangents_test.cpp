@@ -152,6 +152,28 @@ TEST(FloatingTangents, StraightRunsReplaceTheCoilsOfRoundingNoise) {
   EXPECT_FALSE(FitFloatingTangents(p, bad).ok());
 }
 
+// A tight curl (radius 2 mm, pitch 5 mm, 14 turns): Algorithm 2's 14 tangent
+// samples are a turn apart and see no curl; ours starts at one element per
+// quarter turn (up to N_max) before any error-driven growth.
+TEST(FloatingTangents, CurlsStartAtAnElementPerQuarterTurn) {
+  const std::vector<Eigen::Vector3d> curl = HelixPoints(2, 5, 14, 700);
+  auto spline = StrandSpline::Create(curl);
+  ASSERT_TRUE(spline.ok());
+  EXPECT_NEAR(spline->turning_rad(), 14 * 2 * M_PI * 2 * M_PI * 2 / std::hypot(2 * M_PI * 2, 5), 0.5)
+      << "the tangent turns by k L = 2 pi r / sqrt((2 pi r)^2 + c^2) per turn";
+  FloatingTangentsOptions paper, ours;
+  paper.target_mean_error_mm = 0;
+  ours.target_mean_error_mm = 1e9;  // no error-driven growth: the starting N alone
+  StrandFitSummary paper_fit, ours_fit;
+  ASSERT_TRUE(FitFloatingTangents(curl, paper, &paper_fit).ok());
+  ASSERT_TRUE(FitFloatingTangents(curl, ours, &ours_fit).ok());
+  EXPECT_EQ(paper_fit.elements, AdaptiveElementCount(*spline, paper));
+  EXPECT_LT(paper_fit.elements, 20);
+  const int quarter_turns = static_cast<int>(std::ceil(spline->turning_rad() / (M_PI / 2)));
+  EXPECT_EQ(ours_fit.elements, std::min(ours.max_elements, std::max(paper_fit.elements, quarter_turns)));
+  EXPECT_GT(ours_fit.elements, paper_fit.elements);
+}
+
 TEST(FloatingTangents, BadInputIsRefused) {
   EXPECT_FALSE(FitFloatingTangents({{0, 0, 0}}, {}).ok());
   FloatingTangentsOptions bad;
