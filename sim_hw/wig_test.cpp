@@ -18,12 +18,17 @@ double MinEllipsoidLevel(const StrandSet& s, const SceneHead& head) {
   return level;
 }
 
+WigOptions StyleOptions(WigStyle style, int num_strands) {
+  WigOptions o;
+  o.style = style;
+  o.num_strands = num_strands;
+  return o;
+}
+
 TEST(Wig, EveryStyleIsSeededHangsDownAndStaysOutsideTheHead) {
   SceneHead head;
   for (WigStyle style : {WigStyle::kStraight, WigStyle::kWavy, WigStyle::kCurly}) {
-    WigOptions o;
-    o.style = style;
-    o.num_strands = 500;
+    WigOptions o = StyleOptions(style, 500);
     auto a = GenerateWig(o, head);
     auto b = GenerateWig(o, head);
     ASSERT_TRUE(a.ok() && b.ok());
@@ -71,9 +76,7 @@ TEST(Wig, CurlyStrandsAreLongerThanTheirSpanAndStraightOnesAreNot) {
 TEST(Wig, StrandsHaveTheirFibreLengthAndCurlsAreSampledFinely) {
   SceneHead head;
   for (WigStyle style : {WigStyle::kStraight, WigStyle::kWavy, WigStyle::kCurly}) {
-    WigOptions o;
-    o.style = style;
-    o.num_strands = 100;
+    WigOptions o = StyleOptions(style, 100);
     o.min_length_mm = 380;
     o.max_length_mm = 400;
     auto s = GenerateWig(o, head);
