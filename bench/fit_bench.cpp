@@ -1,7 +1,8 @@
 // Floating-tangents fitting, side by side (run from the repository root):
 //   build/bench/hairrig_fit_bench
-// 5,000 procedural strands each of 25, 40 and 60 cm, straight and curly (the
-// simulated rig's wig generator), and the real strands of ../shared: the
+// 5,000 procedural strands each of 25, 40 and 60 cm (fibre length), straight
+// and curly (the simulated rig's wig generator; the paper's Table 2 sets are
+// straight 25 cm, curly 40 cm and straight 60 cm), and the real strands of ../shared: the
 // paper's Algorithm 2 (with our relaxation, the element count being what it
 // shows), ours (Algorithm 2 grown to a
 // 0.05 mm mean error, the root anchored), ours with planar arcs where only a
