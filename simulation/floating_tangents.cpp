@@ -317,13 +317,6 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
       const size_t window_first = nearest > kWindow ? nearest - kWindow : 0;
       const size_t window_last = std::min(segments, nearest + kWindow + 1);
       best2 = SquaredDistanceToSegments(q, curve, window_first, window_last, best2, &nearest);
-      // Walk on along the curve while the segments come nearer: the points
-      // are sparser than the curve's samples.
-      while (nearest + 1 < segments) {
-        const size_t before = nearest;
-        best2 = SquaredDistanceToSegments(q, curve, nearest + 1, nearest + 2, best2, &nearest);
-        if (nearest == before) break;
-      }
       double best = std::sqrt(best2);
       for (size_t b = 0; b < centers.size(); ++b) {
         const double reach = radii[b] + best;
@@ -453,7 +446,8 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     // Ours: no element need turn by more than a right angle, the turn at
     // which Algorithm 2 adds an element (<t_i, t_i+1> <= 0).
     constexpr double kRightAngle = M_PI / 2;
-    n = std::clamp(static_cast<int>(std::ceil(spline.turning_rad() / kRightAngle)), n, std::max(n, options.max_elements));
+    const int quarter_turns = static_cast<int>(std::ceil(spline.turning_rad() / kRightAngle));
+    n = std::max(n, std::min(quarter_turns, options.max_elements));
   }
   StrandFitSummary s;
   HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, &s));
