@@ -58,12 +58,25 @@ void HelixElement::AppendSamples(int count, std::vector<Eigen::Vector3d>* out) c
 }
 
 Eigen::Vector3d HelixElement::TangentAt(double s) const {
+  Eigen::Vector3d point, tangent;
+  PointAndTangentAt(s, &point, &tangent);
+  return tangent;
+}
+
+// Eq. 8 and its derivative with one sine and cosine.
+void HelixElement::PointAndTangentAt(double s, Eigen::Vector3d* point, Eigen::Vector3d* tangent) const {
   const double w = darboux_per_mm.norm();
-  if (w < 1e-15) return start_tangent;
+  if (w < 1e-15) {
+    *point = start_mm + s * start_tangent;
+    *tangent = start_tangent;
+    return;
+  }
   const Eigen::Vector3d axis = darboux_per_mm / w;
   const double tau_bar = start_tangent.dot(axis);
-  return start_tangent + (std::cos(w * s) - 1) * (start_tangent - tau_bar * axis) -
-         std::sin(w * s) * start_tangent.cross(axis);
+  const double sin_ws = std::sin(w * s), cos_ws = std::cos(w * s);
+  const Eigen::Vector3d across = start_tangent - tau_bar * axis, t_cross_axis = start_tangent.cross(axis);
+  *point = start_mm + tau_bar * s * axis + sin_ws / w * across - (1 - cos_ws) / w * t_cross_axis;
+  *tangent = start_tangent + (cos_ws - 1) * across - sin_ws * t_cross_axis;
 }
 
 double HelixElement::torsion_per_mm() const {
@@ -93,6 +106,32 @@ HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,
 
 namespace {
 
+// A helix with no extra turn found without the scan, at axis angle phi.
+struct Root {
+  double phi = 0;
+  HelixElement helix;
+};
+// The roots the short and the long rotation found (at most one per quarter).
+struct ZeroTurnRoots {
+  Root root[4];
+  int count = 0;
+  // The one whose length is closest to `preferred_length_mm`; null if none.
+  const Root* Closest(double preferred_length_mm) const {
+    const Root* best = nullptr;
+    for (int i = 0; i < count; ++i) {
+      if (!best || std::abs(root[i].helix.length_mm - preferred_length_mm) <
+                       std::abs(best->helix.length_mm - preferred_length_mm))
+        best = &root[i];
+    }
+    return best;
+  }
+  bool Within(double lo, double hi) const {
+    for (int i = 0; i < count; ++i)
+      if (root[i].phi >= lo && root[i].phi <= hi) return true;
+    return false;
+  }
+};
+
 // The helices through (p0, t0) and (p1, t1), reduced to one scalar equation.
 // In the plane P normal to n = (t1 - t0) / |t1 - t0| (it holds the axis, the
 // chord and m = (t0 + t1) / 2), take e1 along m (M = |m|), e2 = n x e1, and
@@ -119,16 +158,22 @@ class HelixSearch {
     e2_ = n.cross(e1_);
     const Eigen::Vector3d d = p1 - p0;
     chord_len_ = d.norm();
-    psi_ = std::atan2(d.dot(e2_), d.dot(e1_));
-    sin_psi_ = std::sin(psi_);
-    cos_psi_ = std::cos(psi_);
+    // The chord lies in P (the pair is co-helical): its angle psi from e1.
+    const double along = d.dot(e1_), across = d.dot(e2_);
+    const double in_plane = std::sqrt(along * along + across * across);
+    if (in_plane > 0) {
+      cos_psi_ = along / in_plane;
+      sin_psi_ = across / in_plane;
+    }
   }
 
   // Helices of more whole turns join the same ends (a tight coil along the
   // chord can match almost any length). Each extra turn costs kTurnPenalty of
   // the preferred length in the score, so the search stops as soon as no
-  // helix of more turns can beat the best one so far.
-  bool Run(int samples, double preferred_length_mm, HelixElement* best) const {
+  // helix of more turns can beat the best one so far. The `known` roots
+  // start the search as the best so far, and the scan does not refine their
+  // brackets again.
+  bool Run(int samples, double preferred_length_mm, const ZeroTurnRoots& known, HelixElement* best) const {
     // The scan's angles, their sines and cosines and theta without extra
     // turns, computed once for all turns: one atan2 per distinct |sin phi|.
     const ScanAngles& angles = ScanAngles::For(samples);
@@ -151,6 +196,11 @@ class HelixSearch {
     }
     double best_score = std::numeric_limits<double>::infinity();
     bool found = false;
+    if (const Root* closest = known.Closest(preferred_length_mm); closest && preferred_length_mm > 0) {
+      best_score = std::abs(closest->helix.length_mm - preferred_length_mm);
+      *best = closest->helix;
+      found = true;
+    }
     for (int turns = 0; turns <= kMaxTurns; ++turns) {
       const double turn_cost = kTurnPenalty * turns * preferred_length_mm;
       if (found && (preferred_length_mm <= 0 || turn_cost >= best_score)) break;
@@ -159,7 +209,8 @@ class HelixSearch {
       for (int i = 1; i <= samples; ++i) {
         const double f_b = f_at(static_cast<size_t>(i));
         HelixElement candidate;
-        const bool bracket = f_a == 0 || f_a * f_b < 0;
+        const bool bracket = (f_a == 0 || f_a * f_b < 0) &&
+                             !(turns == 0 && known.Within(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)]));
         if (bracket && CanBeat(angles, theta0, static_cast<size_t>(i), turns, preferred_length_mm, best_score - turn_cost) &&
             Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, turns, &candidate)) {
           const double score = preferred_length_mm > 0
@@ -186,42 +237,33 @@ class HelixSearch {
   // arc, psi = 0, has its axis at 3 pi / 2, along t0 x t1). The long
   // rotation has sin(phi) > 0 (phi in (0, pi)): t0 turns to t1 by between
   // pi and 2 pi (an element over about half a curl or more); f at 0, pi / 2
-  // and pi bracket it, Newton starts mid-bracket. False when f does not
-  // change sign on the half (for the short rotation: the chord leans too far
-  // from t0 + t1) or no helix checks out.
-  bool ShortRotation(double preferred_length_mm, HelixElement* out) const {
+  // and pi bracket it, Newton starts mid-bracket. Each adds the helices that
+  // check out to `roots`: none when f does not change sign on the half (for
+  // the short rotation: the chord leans too far from t0 + t1).
+  void ShortRotation(ZeroTurnRoots* roots) const {
     const double guess = kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
-    return ZeroTurnRoot(-1, guess, preferred_length_mm, out);
+    ZeroTurnRoot(-1, guess, roots);
   }
-  bool LongRotation(double preferred_length_mm, HelixElement* out) const {
-    return ZeroTurnRoot(1, -1, preferred_length_mm, out);
-  }
+  void LongRotation(ZeroTurnRoots* roots) const { ZeroTurnRoot(1, -1, roots); }
 
  private:
   // The root on the half of the axis angles where sin(phi) has the sign
   // `side`: (sin, cos) = (0, side), (side, 0), (0, -side) at its start,
   // middle and end bracket a root in each quarter where f changes sign (f
-  // often has one in each, of which one has g against the chord). Of the
-  // helices found, the one of length closest to `preferred_length_mm`.
-  // Newton starts from `guess` if it is inside the quarter.
-  bool ZeroTurnRoot(double side, double guess, double preferred_length_mm, HelixElement* out) const {
+  // often has one in each, of which one has g against the chord). Newton
+  // starts from `guess` if it is inside the quarter.
+  void ZeroTurnRoot(double side, double guess, ZeroTurnRoots* roots) const {
     constexpr double kPi = kTwoPi / 2;
     const double first = side < 0 ? kPi : 0;
     const double f[3] = {FromSinCos(0, side, kPi), FromSinCos(side, 0, ThetaFromSin(side, 0)),
                          FromSinCos(0, -side, kPi)};
-    bool found = false;
     for (int quarter = 0; quarter < 2; ++quarter) {
       if ((f[quarter] < 0) == (f[quarter + 1] < 0)) continue;
       const double lo = first + quarter * kPi / 2, hi = lo + kPi / 2;
-      const double start = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
-      HelixElement candidate;
-      if (!RefineFrom(start, lo, hi, f[quarter], 0, &candidate) || !EndsAtTarget(candidate)) continue;
-      if (!found || std::abs(candidate.length_mm - preferred_length_mm) < std::abs(out->length_mm - preferred_length_mm)) {
-        *out = candidate;
-        found = true;
-      }
+      Root& root = roots->root[roots->count];
+      root.phi = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
+      if (RefineFrom(&root.phi, lo, hi, f[quarter], 0, &root.helix) && EndsAtTarget(root.helix)) ++roots->count;
     }
-    return found;
   }
 
   struct ScanAngles;
@@ -233,7 +275,8 @@ class HelixSearch {
     if (preferred_length_mm <= 0 || !std::isfinite(budget)) return true;
     auto length = [&](size_t j) {
       const double theta = theta0[j] + kTwoPi * turns;
-      return theta * chord_len_ / std::hypot(m_ * theta * angles.cos_phi[j], 2 * c_);
+      const double axial = m_ * theta * angles.cos_phi[j];
+      return theta * chord_len_ / std::sqrt(axial * axial + 4 * c_ * c_);  // |g|: no overflow, |axial| < 500
     };
     const double lo = std::min(length(k - 1), length(k)), hi = std::max(length(k - 1), length(k));
     const double miss = preferred_length_mm < lo ? lo - preferred_length_mm
@@ -267,7 +310,6 @@ class HelixSearch {
     const double half = std::atan2(c_, m_ * std::abs(sin_phi));
     return (sin_phi < 0 ? 2 * half : kTwoPi - 2 * half) + kTwoPi * turns;
   }
-  double Theta(double phi, int turns) const { return ThetaFromSin(std::sin(phi), turns); }
   // f from the sine and cosine of phi; those of psi - phi follow from psi's.
   double FromSinCos(double sin_phi, double cos_phi, double theta) const {
     const double sin_rel = sin_psi_ * cos_phi - cos_psi_ * sin_phi;  // sin(psi - phi)
@@ -275,19 +317,45 @@ class HelixSearch {
     return m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
   }
 
+  // An axis angle with its sine and cosine, the turn theta about it (with
+  // the search's extra turns) and dtheta / dphi, from theta' = 2 c M cos(phi)
+  // / (M^2 sin^2(phi) + c^2) on both branches.
+  struct Axis {
+    double phi, sin, cos, theta, dtheta;
+  };
+  Axis AxisAt(double phi, int turns) const {
+    Axis a{phi, std::sin(phi), std::cos(phi), 0, 0};
+    a.theta = ThetaFromSin(a.sin, turns);
+    a.dtheta = 2 * c_ * m_ * a.cos / (m_ * m_ * a.sin * a.sin + c_ * c_);
+    return a;
+  }
+  // The axis moved by a step below 1e-12 rad: to first order, exact in double
+  // (theta'' < 1e8 for the c > 5e-10 of a helix that is not straight).
+  static Axis MovedSlightly(const Axis& a, double step) {
+    return {a.phi + step, a.sin + a.cos * step, a.cos - a.sin * step, a.theta + a.dtheta * step, a.dtheta};
+  }
+
   // The root on [lo, hi]; true with the helix if g points along the chord.
   // Newton's method on f with its analytic
   // derivative, kept inside the bracket (a bisection step whenever Newton
   // would leave it): quadratic near a simple root, never lost.
   bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
-    return RefineFrom(0.5 * (lo + hi), lo, hi, f_lo, turns, out);
+    double phi = 0.5 * (lo + hi);
+    return RefineFrom(&phi, lo, hi, f_lo, turns, out);
   }
-  bool RefineFrom(double phi, double lo, double hi, double f_lo, int turns, HelixElement* out) const {
-    if (f_lo == 0) return Build(lo, turns, out);
+  // From *phi, which becomes the root.
+  bool RefineFrom(double* root, double lo, double hi, double f_lo, int turns, HelixElement* out) const {
+    constexpr double kTolerance = 1e-12;
+    double& phi = *root;
+    if (f_lo == 0) {
+      phi = lo;
+      return Build(AxisAt(lo, turns), out);
+    }
     const bool rising = f_lo < 0;  // f(lo) < 0 < f(hi)
+    Axis axis = AxisAt(phi, turns);
     for (int it = 0; it < 100; ++it) {
       double f, df;
-      FAndDerivative(phi, turns, &f, &df);
+      FAndDerivative(axis, &f, &df);
       if (std::abs(f) < 1e-15) break;
       if ((f < 0) == rising) {
         lo = phi;
@@ -295,49 +363,48 @@ class HelixSearch {
         hi = phi;
       }
       double next = phi - f / df;
-      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-      const double step = std::abs(next - phi);
+      const bool newton = next > lo && next < hi;
+      if (!newton) next = 0.5 * (lo + hi);
+      const double step = next - phi;
       phi = next;
-      if (step < 1e-12 || hi - lo < 1e-15) break;
+      axis = newton && std::abs(step) < kTolerance ? MovedSlightly(axis, step) : AxisAt(phi, turns);
+      if (std::abs(step) < kTolerance || hi - lo < 1e-15) break;
     }
-    return Build(phi, turns, out);
+    return Build(axis, out);
   }
 
-  // f and df/dphi, with theta' = 2 c M cos(phi) / (M^2 sin^2(phi) + c^2) on
-  // both branches and d/dphi [cos(phi) sin(psi - phi)] = -cos(psi - 2 phi).
-  void FAndDerivative(double phi, int turns, double* f, double* df) const {
-    const double sin_phi = std::sin(phi), cos_phi = std::cos(phi);
-    const double theta = ThetaFromSin(sin_phi, turns);
-    const double sin_rel = sin_psi_ * cos_phi - cos_psi_ * sin_phi;  // sin(psi - phi)
-    const double cos_rel = cos_psi_ * cos_phi + sin_psi_ * sin_phi;
-    const double cos_psi_2phi = cos_rel * cos_phi + sin_rel * sin_phi;
-    const double dtheta = 2 * c_ * m_ * cos_phi / (m_ * m_ * sin_phi * sin_phi + c_ * c_);
-    *f = m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
-    *df = m_ * dtheta * cos_phi * sin_rel - m_ * theta * cos_psi_2phi - 2 * c_ * sin_rel;
+  // f and df/dphi, with d/dphi [cos(phi) sin(psi - phi)] = -cos(psi - 2 phi).
+  void FAndDerivative(const Axis& a, double* f, double* df) const {
+    const double sin_rel = sin_psi_ * a.cos - cos_psi_ * a.sin;  // sin(psi - phi)
+    const double cos_rel = cos_psi_ * a.cos + sin_psi_ * a.sin;
+    const double cos_psi_2phi = cos_rel * a.cos + sin_rel * a.sin;
+    *f = m_ * a.theta * a.cos * sin_rel - 2 * c_ * cos_rel;
+    *df = m_ * a.dtheta * a.cos * sin_rel - m_ * a.theta * cos_psi_2phi - 2 * c_ * sin_rel;
   }
 
-  // The helix of axis angle phi (a root of f); false if g points against the
+  // The helix of axis angle a (a root of f); false if g points against the
   // chord. Whether it really ends at (p1, t1) is EndsAtTarget's check.
-  bool Build(double phi, int turns, HelixElement* out) const {
-    const double theta = Theta(phi, turns);
-    const double axial = m_ * theta * std::cos(phi);
-    if (axial * std::cos(psi_ - phi) + 2 * c_ * std::sin(psi_ - phi) <= 0)
-      return false;  // g against the chord
-    const double w = std::hypot(axial, 2 * c_) / chord_len_;
+  bool Build(const Axis& a, HelixElement* out) const {
+    const double axial = m_ * a.theta * a.cos;
+    const double sin_rel = sin_psi_ * a.cos - cos_psi_ * a.sin;  // sin(psi - phi)
+    const double cos_rel = cos_psi_ * a.cos + sin_psi_ * a.sin;
+    if (axial * cos_rel + 2 * c_ * sin_rel <= 0) return false;  // g against the chord
+    const double w = std::sqrt(axial * axial + 4 * c_ * c_) / chord_len_;  // |g| / |d|
     out->start_mm = p0_;
     out->start_tangent = t0_;
-    out->darboux_per_mm = w * (std::cos(phi) * e1_ + std::sin(phi) * e2_);
-    out->length_mm = theta / w;
+    out->darboux_per_mm = w * (a.cos * e1_ + a.sin * e2_);
+    out->length_mm = a.theta / w;
     return true;
   }
   bool EndsAtTarget(const HelixElement& h) const {
-    return (h.PointAt(h.length_mm) - p1_).norm() < 1e-7 * chord_len_ &&
-           (h.TangentAt(h.length_mm) - t1_).norm() < 1e-7;
+    Eigen::Vector3d end, tangent;
+    h.PointAndTangentAt(h.length_mm, &end, &tangent);
+    return (end - p1_).norm() < 1e-7 * chord_len_ && (tangent - t1_).norm() < 1e-7;
   }
 
   Eigen::Vector3d p0_, t0_, p1_, t1_;
   Eigen::Vector3d e1_, e2_;
-  double c_ = 0, m_ = 0, psi_ = 0, chord_len_ = 0;
+  double c_ = 0, m_ = 0, chord_len_ = 0;
   double sin_psi_ = 0, cos_psi_ = 1;
 };
 
@@ -388,13 +455,16 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
   auto close_to_preferred = [&](const HelixElement& e) {
     return std::abs(e.length_mm - preferred_length_mm) < kZeroTurnTolerance * preferred_length_mm;
   };
-  if (preferred_length_mm > 0 && ((search.ShortRotation(preferred_length_mm, &h) && close_to_preferred(h)) ||
-                                  (search.LongRotation(preferred_length_mm, &h) && close_to_preferred(h)))) {
-    return h;
+  ZeroTurnRoots known;
+  if (preferred_length_mm > 0) {
+    search.ShortRotation(&known);
+    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return root->helix;
+    search.LongRotation(&known);
+    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return root->helix;
   }
   bool found = false;
   for (int samples : {kCoarseScan, kFineScan}) {
-    found = search.Run(samples, preferred_length_mm, &h);
+    found = search.Run(samples, preferred_length_mm, known, &h);
     if (found) break;
   }
   if (!found) return InvalidArgument("helix: no helix joins the two points with these tangents");

@@ -29,6 +29,8 @@ struct HelixElement {
 
   Eigen::Vector3d PointAt(double s_mm) const;
   Eigen::Vector3d TangentAt(double s_mm) const;
+  // Both at once (one sine and cosine).
+  void PointAndTangentAt(double s_mm, Eigen::Vector3d* point_mm, Eigen::Vector3d* tangent) const;
   // Appends the points at s = length k / count, k = 1..count (the start
   // point is not included), by a rotation recurrence: one sine and cosine in
   // all, accurate to about 1e-15 relative per step.
