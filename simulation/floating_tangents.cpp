@@ -375,9 +375,26 @@ void StraightenRuns(double element_length_mm, double sagitta_mm, std::vector<Eig
   }
 }
 
-// Algorithm 1, lines 4-8, for a given element count.
+// The mean and max distance from the strand's points to the helical curve,
+// as a polyline whose chords stray at most `sagitta_mm` from it.
+void MeasureFitError(const StrandSpline& spline, const PiecewiseHelix& model, double sagitta_mm,
+                     StrandFitSummary* s) {
+  std::vector<Eigen::Vector3d> curve{model.elements.front().start_mm};
+  for (const auto& e : model.elements) {
+    // A chord of length h on a curve of curvature k strays k h^2 / 8 from it
+    // (at most 64 chords per turn about the helix axis, a wild coil's bound).
+    const double chords = e.length_mm * std::sqrt(e.curvature_per_mm() / (8 * sagitta_mm));
+    const double turns = e.darboux_per_mm.norm() * e.length_mm / (2 * M_PI);
+    const double cap = 64 * std::ceil(std::max(1.0, turns));
+    e.AppendSamples(std::max(2, static_cast<int>(std::ceil(std::min(chords, cap)))), &curve);
+  }
+  DistanceToCurve(spline.points(), curve, &s->mean_error_mm, &s->max_error_mm);
+}
+
+// Algorithm 1, lines 4-8, for a given element count; the fit error only if
+// `measure_error` (the summary's other figures always).
 Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
-                                           const FloatingTangentsOptions& options,
+                                           const FloatingTangentsOptions& options, bool measure_error,
                                            StrandFitSummary* summary) {
   const double length = spline.length_mm();
   std::vector<Eigen::Vector3d> p, t;
@@ -419,16 +436,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
   }
   s.elements = n;
   s.strand_length_mm = length;
-  std::vector<Eigen::Vector3d> curve{model.elements.front().start_mm};
-  for (const auto& e : model.elements) {
-    // A chord of length h on a curve of curvature k strays k h^2 / 8 from it
-    // (at most 64 chords per turn about the helix axis, a wild coil's bound).
-    const double chords = e.length_mm * std::sqrt(e.curvature_per_mm() / (8 * options.error_sagitta_mm));
-    const double turns = e.darboux_per_mm.norm() * e.length_mm / (2 * M_PI);
-    const double cap = 64 * std::ceil(std::max(1.0, turns));
-    e.AppendSamples(std::max(2, static_cast<int>(std::ceil(std::min(chords, cap)))), &curve);
-  }
-  DistanceToCurve(spline.points(), curve, &s.mean_error_mm, &s.max_error_mm);
+  if (measure_error) MeasureFitError(spline, model, options.error_sagitta_mm, &s);
   *summary = s;
   return model;
 }
@@ -449,21 +457,26 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     const int quarter_turns = static_cast<int>(std::ceil(spline.turning_rad() / kRightAngle));
     n = std::max(n, std::min(quarter_turns, options.max_elements));
   }
+  // The fit error is measured when the caller asks for it or the growth
+  // below needs it.
+  const bool grows = options.adaptive && options.target_mean_error_mm > 0;
+  auto measure_error = [&](int elements) {
+    return summary != nullptr || (grows && elements < options.max_elements);
+  };
   StrandFitSummary s;
-  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, &s));
+  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, measure_error(n), &s));
   // Ours beside Algorithm 2: more elements while the fit error exceeds the
   // target, aimed straight at it by the error law e ~ N^-k. k starts at 2
   // (measured on the bench's strands: 1.9 from N = 3 to 15; a cubic law
   // undershot and cost a third fit) and is then taken from the last two
   // fits, within [1, 4]. N grows by at least a quarter each time.
   double exponent = 2;
-  while (options.adaptive && options.target_mean_error_mm > 0 &&
-         s.mean_error_mm > options.target_mean_error_mm && n < options.max_elements) {
+  while (grows && s.mean_error_mm > options.target_mean_error_mm && n < options.max_elements) {
     const double predicted = n * std::pow(s.mean_error_mm / options.target_mean_error_mm, 1 / exponent);
     const int previous_n = n;
     const double previous_error = s.mean_error_mm;
     n = std::min(options.max_elements, std::max(n + std::max(1, n / 4), static_cast<int>(std::ceil(predicted))));
-    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, n, options, &s));
+    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, n, options, measure_error(n), &s));
     if (s.mean_error_mm > 0 && previous_error > s.mean_error_mm) {
       exponent = std::clamp(std::log(previous_error / s.mean_error_mm) / std::log(static_cast<double>(n) / previous_n),
                             1.0, 4.0);
