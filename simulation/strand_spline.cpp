@@ -35,6 +35,7 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
       s.turning_rad_ += std::acos(std::clamp(cos_turn, -1.0, 1.0));
     }
   }
+  s.control_.reserve(3 * static_cast<size_t>(n - 1));
   for (int i = 0; i + 1 < n; ++i) {
     const auto& p0 = s.points_[static_cast<size_t>(i)];
     const auto& p1 = s.points_[static_cast<size_t>(i + 1)];
@@ -43,15 +44,22 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
     s.control_.push_back(p0 + chord / 3 * tangent[static_cast<size_t>(i)]);
     s.control_.push_back(p1 - chord / 3 * tangent[static_cast<size_t>(i + 1)]);
   }
+  const size_t table_size = static_cast<size_t>(n - 1) * kSamplesPerSegment + 1;
+  s.cumulative_mm_.reserve(table_size);
+  s.table_u_.reserve(table_size);
   s.cumulative_mm_.push_back(0);
   s.table_u_.push_back(0);
   constexpr double kStep = 1.0 / kSamplesPerSegment;
   for (int seg = 0; seg + 1 < n; ++seg) {
+    // B'(u) / 3 = q0 + u (q1 + u q2), from the control polygon's legs d0, d1, d2.
+    const auto [a, b, c, d] = s.Controls(seg);
+    const Eigen::Vector3d d0 = b - a, d1 = c - b, d2 = d - c;
+    const Eigen::Vector3d q1 = 2 * (d1 - d0), q2 = d0 - 2 * d1 + d2;
+    auto speed = [&](double u) { return 3 * (d0 + u * (q1 + u * q2)).norm(); };
     for (int k = 0; k < kSamplesPerSegment; ++k) {
       const double u0 = k * kStep;
-      const double quarter = 0.5 * kStep *
-                             (s.BezierDerivative(seg, u0 + kGaussOffset * kStep).norm() +
-                              s.BezierDerivative(seg, u0 + (1 - kGaussOffset) * kStep).norm());
+      const double quarter =
+          0.5 * kStep * (speed(u0 + kGaussOffset * kStep) + speed(u0 + (1 - kGaussOffset) * kStep));
       s.cumulative_mm_.push_back(s.cumulative_mm_.back() + quarter);
       s.table_u_.push_back(seg + u0 + kStep);
     }
