@@ -391,10 +391,13 @@ void MeasureFitError(const StrandSpline& spline, const PiecewiseHelix& model, do
   DistanceToCurve(spline.points(), curve, &s->mean_error_mm, &s->max_error_mm);
 }
 
-// Algorithm 1, lines 4-8, for a given element count; the fit error only if
-// `measure_error` (the summary's other figures always).
+// What a fit measures besides the model: nothing, the fit error alone (for
+// ours' growth) or everything in StrandFitSummary.
+enum class Measures { kNone, kError, kAll };
+
+// Algorithm 1, lines 4-8, for a given element count.
 Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
-                                           const FloatingTangentsOptions& options, bool measure_error,
+                                           const FloatingTangentsOptions& options, Measures measures,
                                            StrandFitSummary* summary) {
   const double length = spline.length_mm();
   std::vector<Eigen::Vector3d> p, t;
@@ -411,7 +414,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
     const Eigen::Vector3d chord =
         relaxed[static_cast<size_t>(i + 1)] - relaxed[static_cast<size_t>(i)];
     const Eigen::Vector3d dt = t[static_cast<size_t>(i + 1)] - t[static_cast<size_t>(i)];
-    if (chord.norm() > 0)
+    if (measures == Measures::kAll && chord.norm() > 0)
       s.max_cohelical_residual =
           std::max(s.max_cohelical_residual, std::abs(chord.dot(dt)) / chord.norm());
     // The preferred length: the strand's arc between the break points,
@@ -427,7 +430,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
     }
     model.elements.push_back(*element);
   }
-  for (int i = 0; i + 1 < n; ++i) {
+  for (int i = 0; measures == Measures::kAll && i + 1 < n; ++i) {
     const auto& e = model.elements[static_cast<size_t>(i)];
     const double c = std::clamp(
         e.TangentAt(e.length_mm).dot(model.elements[static_cast<size_t>(i + 1)].start_tangent),
@@ -436,7 +439,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
   }
   s.elements = n;
   s.strand_length_mm = length;
-  if (measure_error) MeasureFitError(spline, model, options.error_sagitta_mm, &s);
+  if (measures != Measures::kNone) MeasureFitError(spline, model, options.error_sagitta_mm, &s);
   *summary = s;
   return model;
 }
@@ -457,14 +460,14 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     const int quarter_turns = static_cast<int>(std::ceil(spline.turning_rad() / kRightAngle));
     n = std::max(n, std::min(quarter_turns, options.max_elements));
   }
-  // The fit error is measured when the caller asks for it or the growth
-  // below needs it.
+  // Everything is measured when the caller asks for a summary; otherwise the
+  // fit error only when the growth below needs it.
   const bool grows = options.adaptive && options.target_mean_error_mm > 0;
-  auto measure_error = [&](int elements) {
-    return summary != nullptr || (grows && elements < options.max_elements);
+  auto measures = [&](int elements) {
+    return summary ? Measures::kAll : grows && elements < options.max_elements ? Measures::kError : Measures::kNone;
   };
   StrandFitSummary s;
-  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, measure_error(n), &s));
+  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, measures(n), &s));
   // Ours beside Algorithm 2: more elements while the fit error exceeds the
   // target, aimed straight at it by the error law e ~ N^-k. k starts at 2
   // (measured on the bench's strands: 1.9 from N = 3 to 15; a cubic law
@@ -476,7 +479,7 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     const int previous_n = n;
     const double previous_error = s.mean_error_mm;
     n = std::min(options.max_elements, std::max(n + std::max(1, n / 4), static_cast<int>(std::ceil(predicted))));
-    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, n, options, measure_error(n), &s));
+    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, n, options, measures(n), &s));
     if (s.mean_error_mm > 0 && previous_error > s.mean_error_mm) {
       exponent = std::clamp(std::log(previous_error / s.mean_error_mm) / std::log(static_cast<double>(n) / previous_n),
                             1.0, 4.0);

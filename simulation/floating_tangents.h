@@ -80,9 +80,10 @@ int AdaptiveElementCount(const StrandSpline& spline, const FloatingTangentsOptio
 
 // Fits one strand. InvalidArgument for bad options, fewer than 2 distinct
 // points, NaNs; Internal if no helix joins a relaxed pair (named by index).
-// The fit error (the distance from every point to the helical curve, the
-// costliest step) is measured when `summary` is given, and otherwise only
-// where the element count's growth needs it.
+// The summary's figures are measured only when `summary` is given (the fit
+// error, the distance from every point to the helical curve, is the costliest
+// step); without it, the fit error only where the element count's growth
+// needs it.
 Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
                                            const FloatingTangentsOptions& options,
                                            StrandFitSummary* summary = nullptr);
