@@ -1,6 +1,7 @@
 #include "simulation/helix.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -212,7 +213,7 @@ class HelixSearch {
         const bool bracket = (f_a == 0 || f_a * f_b < 0) &&
                              !(turns == 0 && known.Within(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)]));
         if (bracket && CanBeat(angles, theta0, static_cast<size_t>(i), turns, preferred_length_mm, best_score - turn_cost) &&
-            Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, turns, &candidate)) {
+            Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, f_b, turns, &candidate)) {
           const double score = preferred_length_mm > 0
                                    ? std::abs(candidate.length_mm - preferred_length_mm) + turn_cost
                                    : candidate.length_mm;
@@ -262,7 +263,7 @@ class HelixSearch {
       const double lo = first + quarter * kPi / 2, hi = lo + kPi / 2;
       Root& root = roots->root[roots->count];
       root.phi = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
-      if (RefineFrom(&root.phi, lo, hi, f[quarter], 0, &root.helix) && EndsAtTarget(root.helix)) ++roots->count;
+      if (RefineFrom(&root.phi, lo, hi, f[quarter], f[quarter + 1], 0, &root.helix) && EndsAtTarget(root.helix)) ++roots->count;
     }
   }
 
@@ -339,12 +340,12 @@ class HelixSearch {
   // Newton's method on f with its analytic
   // derivative, kept inside the bracket (a bisection step whenever Newton
   // would leave it): quadratic near a simple root, never lost.
-  bool Refine(double lo, double hi, double f_lo, int turns, HelixElement* out) const {
+  bool Refine(double lo, double hi, double f_lo, double f_hi, int turns, HelixElement* out) const {
     double phi = 0.5 * (lo + hi);
-    return RefineFrom(&phi, lo, hi, f_lo, turns, out);
+    return RefineFrom(&phi, lo, hi, f_lo, f_hi, turns, out);
   }
   // From *phi, which becomes the root.
-  bool RefineFrom(double* root, double lo, double hi, double f_lo, int turns, HelixElement* out) const {
+  bool RefineFrom(double* root, double lo, double hi, double f_lo, double f_hi, int turns, HelixElement* out) const {
     constexpr double kTolerance = 1e-12;
     double& phi = *root;
     if (f_lo == 0) {
@@ -359,18 +360,29 @@ class HelixSearch {
       if (std::abs(f) < 1e-15) break;
       if ((f < 0) == rising) {
         lo = phi;
+        f_lo = f;
       } else {
         hi = phi;
+        f_hi = f;
       }
       double next = phi - f / df;
       const bool newton = next > lo && next < hi;
-      if (!newton) next = 0.5 * (lo + hi);
+      if (!newton) next = Secant(lo, hi, f_lo, f_hi);
       const double step = next - phi;
       phi = next;
       axis = newton && std::abs(step) < kTolerance ? MovedSlightly(axis, step) : AxisAt(phi, turns);
       if (std::abs(step) < kTolerance || hi - lo < 1e-15) break;
     }
     return Build(axis, out);
+  }
+
+  // Where the chord between the bracket's ends crosses zero (regula falsi),
+  // kept a tenth of the bracket from either end (bisection if the values
+  // say nothing); Newton's fallback.
+  static double Secant(double lo, double hi, double f_lo, double f_hi) {
+    const double fraction = f_lo / (f_lo - f_hi);
+    if (!(fraction > 0 && fraction < 1)) return 0.5 * (lo + hi);
+    return lo + (hi - lo) * std::clamp(fraction, 0.1, 0.9);
   }
 
   // f and df/dphi, with d/dphi [cos(phi) sin(psi - phi)] = -cos(psi - 2 phi).
