@@ -433,10 +433,11 @@ bool ShortRotationExists(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0
   return along > 0 && std::abs(across) * kTwoPi * m < 4 * c * along;
 }
 
-Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
-                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1,
-                                  double preferred_length_mm) {
-  const Eigen::Vector3d chord = p1 - p0;
+namespace {
+
+// HelixThrough's conditions on its input (the co-helical one unless the
+// tangents are equal).
+Status CheckPair(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0, const Eigen::Vector3d& t1) {
   const double chord_len = chord.norm();
   if (!(chord_len > 1e-12) || !chord.allFinite())
     return InvalidArgument("helix: the two points coincide or are not finite");
@@ -444,20 +445,42 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
     return InvalidArgument("helix: tangents must be unit vectors");
   }
   const Eigen::Vector3d dt = t1 - t0;
+  if (dt.norm() >= kStraightTangentGap && std::abs(chord.dot(dt)) > 1e-9 * chord_len * dt.norm()) {
+    return InvalidArgument("helix: the points and tangents are not co-helical (Eq. 3 residual " +
+                           std::to_string(chord.dot(dt) / (chord_len * dt.norm())) + ")");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
+                                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1) {
+  std::vector<HelixElement> helices;
+  if (!CheckPair(p1 - p0, t0, t1).ok() || (t1 - t0).norm() < kStraightTangentGap) return helices;
+  const HelixSearch search(p0, t0, p1, t1);
+  ZeroTurnRoots roots;
+  search.ShortRotation(&roots);
+  search.LongRotation(&roots);
+  for (int i = 0; i < roots.count; ++i) helices.push_back(roots.root[i].helix);
+  return helices;
+}
+
+Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
+                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1,
+                                  double preferred_length_mm) {
+  const Eigen::Vector3d chord = p1 - p0;
+  HR_RETURN_IF_ERROR(CheckPair(chord, t0, t1));
   HelixElement h;
   h.start_mm = p0;
   h.start_tangent = t0;
-  if (dt.norm() < kStraightTangentGap) {
+  if ((t1 - t0).norm() < kStraightTangentGap) {
     if (chord.normalized().dot(t0) < 1 - kStraightTangentGap) {
       return InvalidArgument(
           "helix: equal tangents but the chord is not along them (needs a full turn)");
     }
-    h.length_mm = chord_len;
+    h.length_mm = chord.norm();
     return h;
-  }
-  if (std::abs(chord.dot(dt)) > 1e-9 * chord_len * dt.norm()) {
-    return InvalidArgument("helix: the points and tangents are not co-helical (Eq. 3 residual " +
-                           std::to_string(chord.dot(dt) / (chord_len * dt.norm())) + ")");
   }
   HelixSearch search(p0, t0, p1, t1);
   // The usual cases in fitting, a short element of a smooth strand or half a

@@ -59,6 +59,15 @@ HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,
 bool ShortRotationExists(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0,
                          const Eigen::Vector3d& t1);
 
+// The helices through (p0, t0) and (p1, t1) that turn t0 into t1 with no
+// extra turn: by less than pi (the short rotation) or by pi to 2 pi (the long
+// one), found by Newton's method on quarters of the axis angle, without a
+// scan; HelixThrough takes one of them when its length is within 2 % of the
+// preferred one. At most one per quarter; empty when the pair is not
+// co-helical, the tangents are equal or none checks out.
+std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
+                                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1);
+
 // The helix through p0 with tangent t0 that reaches p1 with tangent t1
 // (interpolation of two points and two tangents, Sec. V-C after ref. [38]).
 // The pair must be co-helical (Eq. 3, <p1 - p0, t1 - t0> = 0, relative to

@@ -50,6 +50,38 @@ TEST(Helix, ExactHelixIsRecoveredFromItsEndsToOnePartPerMillion) {
   }
 }
 
+// The short and the long rotation are found without the scan: each exact
+// helix that turns by less than 2 pi is among HelicesWithoutExtraTurn's, and
+// every helix it returns joins the two ends.
+TEST(Helix, ShortAndLongRotationsAreFoundWithoutTheScan) {
+  struct Case {
+    double k, tau, length;
+    bool long_rotation;
+  };
+  for (const Case c : {Case{0.05, 0.02, 30, false}, Case{0.1, 0.0, 20, false}, Case{0.15, 0.05, 26, true},
+                       Case{0.17, 0.06, 33, true}, Case{0.1, 0.08, 45, true}}) {
+    const HelixElement truth = Reference(c.k, c.tau, c.length);
+    const double turn = truth.darboux_per_mm.norm() * c.length;
+    ASSERT_EQ(turn > M_PI, c.long_rotation) << "the case's turn is " << turn << " rad";
+    const Eigen::Vector3d end = truth.PointAt(c.length), end_tangent = truth.TangentAt(c.length);
+    const auto helices = HelicesWithoutExtraTurn(truth.start_mm, truth.start_tangent, end, end_tangent);
+    int matches = 0;
+    for (const HelixElement& h : helices) {
+      EXPECT_LT((h.PointAt(h.length_mm) - end).norm(), 1e-6 * c.length) << "k " << c.k;
+      EXPECT_LT((h.TangentAt(h.length_mm) - end_tangent).norm(), 1e-6) << "k " << c.k;
+      EXPECT_LT(h.darboux_per_mm.norm() * h.length_mm, 2 * M_PI) << "no extra turn, k " << c.k;
+      matches += std::abs(h.length_mm - c.length) < 1e-6 * c.length &&
+                 std::abs(h.curvature_per_mm() - c.k) < 1e-6 * c.k &&
+                 std::abs(h.torsion_per_mm() - c.tau) < 1e-6 * c.k;
+    }
+    EXPECT_EQ(matches, 1) << "k " << c.k << " tau " << c.tau << " length " << c.length << ": "
+                          << helices.size() << " helices";
+  }
+  const Eigen::Vector3d t = Eigen::Vector3d::UnitX();
+  EXPECT_TRUE(HelicesWithoutExtraTurn({0, 0, 0}, t, {1, 2, 0}, Eigen::Vector3d::UnitY()).empty())
+      << "not co-helical";
+}
+
 TEST(Helix, SamplesByRecurrenceFollowEquation8) {
   const HelixElement h = Reference(0.15, 0.3, 30);  // more than a turn
   std::vector<Eigen::Vector3d> samples;
