@@ -66,6 +66,31 @@ TEST(FloatingTangents, StraightStrandGetsTheMinimumOfStraightElements) {
   for (const auto& e : model->elements) EXPECT_EQ(e.curvature_per_mm(), 0);
 }
 
+// Without a summary the fit error is measured only where the growth needs it;
+// the model must not change.
+TEST(FloatingTangents, TheModelIsTheSameWithOrWithoutASummary) {
+  std::vector<Eigen::Vector3d> bent;
+  for (int i = 0; i <= 60; ++i) bent.emplace_back(40 * (1 - std::cos(0.02 * i)), 0, -5.0 * i);
+  auto bent_spline = StrandSpline::Create(bent);
+  ASSERT_TRUE(bent_spline.ok());
+  const int algorithm2 = AdaptiveElementCount(*bent_spline, {});
+  for (const auto& points : {bent, HelixPoints(5, 14, 6, 400)}) {
+    StrandFitSummary s;
+    auto reported = FitFloatingTangents(points, {}, &s);
+    auto alone = FitFloatingTangents(points, {});
+    ASSERT_TRUE(reported.ok() && alone.ok());
+    ASSERT_EQ(reported->elements.size(), alone->elements.size());
+    for (size_t k = 0; k < alone->elements.size(); ++k) {
+      EXPECT_EQ(reported->elements[k].length_mm, alone->elements[k].length_mm) << k;
+      EXPECT_EQ(reported->elements[k].darboux_per_mm, alone->elements[k].darboux_per_mm) << k;
+    }
+  }
+  StrandFitSummary bent_fit;
+  ASSERT_TRUE(FitFloatingTangents(bent, {}, &bent_fit).ok());
+  EXPECT_GT(bent_fit.elements, algorithm2) << "the bent strand's growth (which needs the error) took part";
+  EXPECT_LT(bent_fit.elements, 25) << "and stopped below N_max, at the target";
+}
+
 // The pruned distance equals a brute-force one.
 TEST(FloatingTangents, DistanceToCurveIsExact) {
   std::mt19937 rng(11);

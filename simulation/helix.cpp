@@ -311,11 +311,12 @@ class HelixSearch {
     const double half = std::atan2(c_, m_ * std::abs(sin_phi));
     return (sin_phi < 0 ? 2 * half : kTwoPi - 2 * half) + kTwoPi * turns;
   }
-  // f from the sine and cosine of phi; those of psi - phi follow from psi's.
+  // The sine and cosine of psi - phi (the chord's angle from the axis).
+  double SinChordFromAxis(double sin_phi, double cos_phi) const { return sin_psi_ * cos_phi - cos_psi_ * sin_phi; }
+  double CosChordFromAxis(double sin_phi, double cos_phi) const { return cos_psi_ * cos_phi + sin_psi_ * sin_phi; }
+  // f from the sine and cosine of phi.
   double FromSinCos(double sin_phi, double cos_phi, double theta) const {
-    const double sin_rel = sin_psi_ * cos_phi - cos_psi_ * sin_phi;  // sin(psi - phi)
-    const double cos_rel = cos_psi_ * cos_phi + sin_psi_ * sin_phi;
-    return m_ * theta * cos_phi * sin_rel - 2 * c_ * cos_rel;
+    return m_ * theta * cos_phi * SinChordFromAxis(sin_phi, cos_phi) - 2 * c_ * CosChordFromAxis(sin_phi, cos_phi);
   }
 
   // An axis angle with its sine and cosine, the turn theta about it (with
@@ -387,8 +388,7 @@ class HelixSearch {
 
   // f and df/dphi, with d/dphi [cos(phi) sin(psi - phi)] = -cos(psi - 2 phi).
   void FAndDerivative(const Axis& a, double* f, double* df) const {
-    const double sin_rel = sin_psi_ * a.cos - cos_psi_ * a.sin;  // sin(psi - phi)
-    const double cos_rel = cos_psi_ * a.cos + sin_psi_ * a.sin;
+    const double sin_rel = SinChordFromAxis(a.sin, a.cos), cos_rel = CosChordFromAxis(a.sin, a.cos);
     const double cos_psi_2phi = cos_rel * a.cos + sin_rel * a.sin;
     *f = m_ * a.theta * a.cos * sin_rel - 2 * c_ * cos_rel;
     *df = m_ * a.dtheta * a.cos * sin_rel - m_ * a.theta * cos_psi_2phi - 2 * c_ * sin_rel;
@@ -398,8 +398,7 @@ class HelixSearch {
   // chord. Whether it really ends at (p1, t1) is EndsAtTarget's check.
   bool Build(const Axis& a, HelixElement* out) const {
     const double axial = m_ * a.theta * a.cos;
-    const double sin_rel = sin_psi_ * a.cos - cos_psi_ * a.sin;  // sin(psi - phi)
-    const double cos_rel = cos_psi_ * a.cos + sin_psi_ * a.sin;
+    const double sin_rel = SinChordFromAxis(a.sin, a.cos), cos_rel = CosChordFromAxis(a.sin, a.cos);
     if (axial * cos_rel + 2 * c_ * sin_rel <= 0) return false;  // g against the chord
     const double w = std::sqrt(axial * axial + 4 * c_ * c_) / chord_len_;  // |g| / |d|
     out->start_mm = p0_;
