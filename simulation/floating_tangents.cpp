@@ -410,6 +410,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
       RelaxBreakPoints(p, t, options.anchor_root, options.planar_arcs ? GentleElements(spline, n) : std::vector<char>{});
   PiecewiseHelix model;
   StrandFitSummary s;
+  double axis_angle = -1;  // each element's helix search starts from the previous one's
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d chord =
         relaxed[static_cast<size_t>(i + 1)] - relaxed[static_cast<size_t>(i)];
@@ -423,7 +424,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
     const double preferred = original_chord > 0 ? length / n * chord.norm() / original_chord : length / n;
     auto element = HelixThrough(relaxed[static_cast<size_t>(i)], t[static_cast<size_t>(i)],
                                 relaxed[static_cast<size_t>(i + 1)], t[static_cast<size_t>(i + 1)],
-                                preferred);
+                                preferred, &axis_angle);
     if (!element.ok()) {
       return Internal("floating tangents: element " + std::to_string(i) + " of " +
                       std::to_string(n) + ": " + element.status().message());

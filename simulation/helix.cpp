@@ -107,7 +107,7 @@ HelixElement HelixFromCurvatureTorsion(const Eigen::Vector3d& start_mm,
 
 namespace {
 
-// A helix with no extra turn found without the scan, at axis angle phi.
+// A helix found by the search, at axis angle phi.
 struct Root {
   double phi = 0;
   HelixElement helix;
@@ -174,7 +174,7 @@ class HelixSearch {
   // helix of more turns can beat the best one so far. The `known` roots
   // start the search as the best so far, and the scan does not refine their
   // brackets again.
-  bool Run(int samples, double preferred_length_mm, const ZeroTurnRoots& known, HelixElement* best) const {
+  bool Run(int samples, double preferred_length_mm, const ZeroTurnRoots& known, Root* best) const {
     // The scan's angles, their sines and cosines and theta without extra
     // turns, computed once for all turns: one atan2 per distinct |sin phi|.
     const ScanAngles& angles = ScanAngles::For(samples);
@@ -199,7 +199,7 @@ class HelixSearch {
     bool found = false;
     if (const Root* closest = known.Closest(preferred_length_mm); closest && preferred_length_mm > 0) {
       best_score = std::abs(closest->helix.length_mm - preferred_length_mm);
-      *best = closest->helix;
+      *best = *closest;
       found = true;
     }
     for (int turns = 0; turns <= kMaxTurns; ++turns) {
@@ -209,15 +209,14 @@ class HelixSearch {
       double f_a = f_at(0);
       for (int i = 1; i <= samples; ++i) {
         const double f_b = f_at(static_cast<size_t>(i));
-        HelixElement candidate;
+        Root candidate;
         const bool bracket = (f_a == 0 || f_a * f_b < 0) &&
                              !(turns == 0 && known.Within(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)]));
         if (bracket && CanBeat(angles, theta0, static_cast<size_t>(i), turns, preferred_length_mm, best_score - turn_cost) &&
             Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, f_b, turns, &candidate)) {
-          const double score = preferred_length_mm > 0
-                                   ? std::abs(candidate.length_mm - preferred_length_mm) + turn_cost
-                                   : candidate.length_mm;
-          if (score < best_score && EndsAtTarget(candidate)) {
+          const double length = candidate.helix.length_mm;
+          const double score = preferred_length_mm > 0 ? std::abs(length - preferred_length_mm) + turn_cost : length;
+          if (score < best_score && EndsAtTarget(candidate.helix)) {
             best_score = score;
             *best = candidate;
             found = true;
@@ -232,20 +231,23 @@ class HelixSearch {
   // The helices with no extra turn, found without the scan. The short
   // rotation has sin(phi) < 0 (phi in (pi, 2 pi)): t0 turns to t1 by less
   // than pi. f at pi, 3 pi / 2 and 2 pi brackets it; Newton starts from the
+  // previous element's root (`hint`) if the turn is not small (c > 1/4), else from the
   // small-angle expansion of f,
   //   f ~ (2c / |sin phi|) (sin psi - c^2 cos(phi) sin(psi - phi) / (3 M^2 sin^2 phi)),
   // whose root for small psi is cot(phi) = -3 M^2 sin(psi) / c^2 (a planar
   // arc, psi = 0, has its axis at 3 pi / 2, along t0 x t1). The long
   // rotation has sin(phi) > 0 (phi in (0, pi)): t0 turns to t1 by between
   // pi and 2 pi (an element over about half a curl or more); f at 0, pi / 2
-  // and pi bracket it, Newton starts mid-bracket. Each adds the helices that
+  // and pi bracket it, Newton starts from the hint or mid-bracket. Each adds the helices that
   // check out to `roots`: none when f does not change sign on the half (for
   // the short rotation: the chord leans too far from t0 + t1).
-  void ShortRotation(ZeroTurnRoots* roots) const {
-    const double guess = kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
+  void ShortRotation(double hint, ZeroTurnRoots* roots) const {
+    constexpr double kSmallTurn = 0.25;  // c, the sine of half the turn: 29 deg
+    const bool hint_on_half = hint > kTwoPi / 2 && hint < kTwoPi;
+    const double guess = c_ > kSmallTurn && hint_on_half ? hint : kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
     ZeroTurnRoot(-1, guess, roots);
   }
-  void LongRotation(ZeroTurnRoots* roots) const { ZeroTurnRoot(1, -1, roots); }
+  void LongRotation(double hint, ZeroTurnRoots* roots) const { ZeroTurnRoot(1, hint, roots); }
 
  private:
   // The root on the half of the axis angles where sin(phi) has the sign
@@ -263,7 +265,7 @@ class HelixSearch {
       const double lo = first + quarter * kPi / 2, hi = lo + kPi / 2;
       Root& root = roots->root[roots->count];
       root.phi = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
-      if (RefineFrom(&root.phi, lo, hi, f[quarter], f[quarter + 1], 0, &root.helix) && EndsAtTarget(root.helix)) ++roots->count;
+      if (RefineFrom(root.phi, lo, hi, f[quarter], f[quarter + 1], 0, &root) && EndsAtTarget(root.helix)) ++roots->count;
     }
   }
 
@@ -341,17 +343,15 @@ class HelixSearch {
   // Newton's method on f with its analytic
   // derivative, kept inside the bracket (a bisection step whenever Newton
   // would leave it): quadratic near a simple root, never lost.
-  bool Refine(double lo, double hi, double f_lo, double f_hi, int turns, HelixElement* out) const {
-    double phi = 0.5 * (lo + hi);
-    return RefineFrom(&phi, lo, hi, f_lo, f_hi, turns, out);
+  bool Refine(double lo, double hi, double f_lo, double f_hi, int turns, Root* out) const {
+    return RefineFrom(0.5 * (lo + hi), lo, hi, f_lo, f_hi, turns, out);
   }
-  // From *phi, which becomes the root.
-  bool RefineFrom(double* root, double lo, double hi, double f_lo, double f_hi, int turns, HelixElement* out) const {
+  // From phi.
+  bool RefineFrom(double phi, double lo, double hi, double f_lo, double f_hi, int turns, Root* out) const {
     constexpr double kTolerance = 1e-12;
-    double& phi = *root;
     if (f_lo == 0) {
-      phi = lo;
-      return Build(AxisAt(lo, turns), out);
+      out->phi = lo;
+      return Build(AxisAt(lo, turns), &out->helix);
     }
     const bool rising = f_lo < 0;  // f(lo) < 0 < f(hi)
     Axis axis = AxisAt(phi, turns);
@@ -374,7 +374,8 @@ class HelixSearch {
       axis = newton && std::abs(step) < kTolerance ? MovedSlightly(axis, step) : AxisAt(phi, turns);
       if (std::abs(step) < kTolerance || hi - lo < 1e-15) break;
     }
-    return Build(axis, out);
+    out->phi = axis.phi;
+    return Build(axis, &out->helix);
   }
 
   // Where the chord between the bracket's ends crosses zero (regula falsi),
@@ -459,27 +460,29 @@ std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0, con
   if (!CheckPair(p1 - p0, t0, t1).ok() || (t1 - t0).norm() < kStraightTangentGap) return helices;
   const HelixSearch search(p0, t0, p1, t1);
   ZeroTurnRoots roots;
-  search.ShortRotation(&roots);
-  search.LongRotation(&roots);
+  search.ShortRotation(-1, &roots);
+  search.LongRotation(-1, &roots);
   for (int i = 0; i < roots.count; ++i) helices.push_back(roots.root[i].helix);
   return helices;
 }
 
 Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
                                   const Eigen::Vector3d& p1, const Eigen::Vector3d& t1,
-                                  double preferred_length_mm) {
+                                  double preferred_length_mm, double* axis_angle_rad) {
+  const double hint = axis_angle_rad ? *axis_angle_rad : -1;
+  if (axis_angle_rad) *axis_angle_rad = std::numeric_limits<double>::quiet_NaN();
   const Eigen::Vector3d chord = p1 - p0;
   HR_RETURN_IF_ERROR(CheckPair(chord, t0, t1));
-  HelixElement h;
-  h.start_mm = p0;
-  h.start_tangent = t0;
   if ((t1 - t0).norm() < kStraightTangentGap) {
     if (chord.normalized().dot(t0) < 1 - kStraightTangentGap) {
       return InvalidArgument(
           "helix: equal tangents but the chord is not along them (needs a full turn)");
     }
-    h.length_mm = chord.norm();
-    return h;
+    HelixElement straight;
+    straight.start_mm = p0;
+    straight.start_tangent = t0;
+    straight.length_mm = chord.norm();
+    return straight;
   }
   HelixSearch search(p0, t0, p1, t1);
   // The usual cases in fitting, a short element of a smooth strand or half a
@@ -489,20 +492,22 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
   auto close_to_preferred = [&](const HelixElement& e) {
     return std::abs(e.length_mm - preferred_length_mm) < kZeroTurnTolerance * preferred_length_mm;
   };
+  auto found = [&](const Root& root) {
+    if (axis_angle_rad) *axis_angle_rad = root.phi;
+    return root.helix;
+  };
   ZeroTurnRoots known;
   if (preferred_length_mm > 0) {
-    search.ShortRotation(&known);
-    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return root->helix;
-    search.LongRotation(&known);
-    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return root->helix;
+    search.ShortRotation(hint, &known);
+    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return found(*root);
+    search.LongRotation(hint, &known);
+    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return found(*root);
   }
-  bool found = false;
+  Root best;
   for (int samples : {kCoarseScan, kFineScan}) {
-    found = search.Run(samples, preferred_length_mm, known, &h);
-    if (found) break;
+    if (search.Run(samples, preferred_length_mm, known, &best)) return found(best);
   }
-  if (!found) return InvalidArgument("helix: no helix joins the two points with these tangents");
-  return h;
+  return InvalidArgument("helix: no helix joins the two points with these tangents");
 }
 
 }  // namespace hairrig

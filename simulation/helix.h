@@ -76,8 +76,14 @@ std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0, con
 // tangents give a straight element when the chord is along them.
 // InvalidArgument names the violated condition (coincident points, tangents
 // not unit, not co-helical, no helix found).
+// `axis_angle_rad`, if given, carries the helix axis's angle (radians, in the
+// pair's own frame: e1 along t0 + t1, e2 = (t1 - t0) x e1 normalised) from
+// one call to the next: in, where Newton's method starts for the short
+// rotation of a turn over 29 deg and for the long rotation (neighbouring
+// elements of a curl have nearly the same angle; a value outside their
+// ranges is ignored); out, the returned helix's (NaN for a straight one).
 Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
                                   const Eigen::Vector3d& p1, const Eigen::Vector3d& t1,
-                                  double preferred_length_mm = 0);
+                                  double preferred_length_mm = 0, double* axis_angle_rad = nullptr);
 
 }  // namespace hairrig
