@@ -180,11 +180,12 @@ class HelixSearch {
     const ScanAngles& angles = ScanAngles::For(samples);
     const std::vector<double>& phi = angles.phi;
     const size_t count = phi.size();
-    // F is affine in theta: F = slope * theta - offset at each scanned angle.
-    thread_local std::vector<double> slope, theta0, offset;
-    slope.resize(count);
+    // f is affine in theta, f = M cos(phi) sin(psi - phi) theta - 2 c cos(psi
+    // - phi), and so in the turns T: f = base + T step at each scanned angle.
+    thread_local std::vector<double> theta0, base, step;
     theta0.resize(count);
-    offset.resize(count);
+    base.resize(count);
+    step.resize(count);
     thread_local std::vector<double> half_turn;  // atan2(c, M |sin phi|) per distinct |sin phi|
     half_turn.resize(angles.abs_sin.size());
     for (size_t j = 0; j < half_turn.size(); ++j) half_turn[j] = std::atan2(c_, m_ * angles.abs_sin[j]);
@@ -192,8 +193,9 @@ class HelixSearch {
       const double sin_phi = angles.sin_phi[k], cos_phi = angles.cos_phi[k];
       const double half = half_turn[angles.abs_sin_index[k]];
       theta0[k] = sin_phi < 0 ? 2 * half : kTwoPi - 2 * half;  // ThetaFromSin(sin_phi, 0)
-      offset[k] = -FromSinCos(sin_phi, cos_phi, 0);
-      slope[k] = FromSinCos(sin_phi, cos_phi, 1) + offset[k];
+      const double slope = m_ * cos_phi * SinChordFromAxis(sin_phi, cos_phi);
+      base[k] = slope * theta0[k] - 2 * c_ * CosChordFromAxis(sin_phi, cos_phi);
+      step[k] = kTwoPi * slope;
     }
     double best_score = std::numeric_limits<double>::infinity();
     bool found = false;
@@ -205,7 +207,7 @@ class HelixSearch {
     for (int turns = 0; turns <= kMaxTurns; ++turns) {
       const double turn_cost = kTurnPenalty * turns * preferred_length_mm;
       if (found && (preferred_length_mm <= 0 || turn_cost >= best_score)) break;
-      auto f_at = [&](size_t k) { return slope[k] * (theta0[k] + kTwoPi * turns) - offset[k]; };
+      auto f_at = [&](size_t k) { return base[k] + turns * step[k]; };
       double f_a = f_at(0);
       for (int i = 1; i <= samples; ++i) {
         const double f_b = f_at(static_cast<size_t>(i));
