@@ -112,7 +112,8 @@ struct Root {
   double phi = 0;
   HelixElement helix;
 };
-// The roots the short and the long rotation found (at most one per quarter).
+// The roots the short and the long rotation found (at most one per quarter
+// of the axis angle, four in all).
 struct ZeroTurnRoots {
   Root root[4];
   int count = 0;
@@ -233,16 +234,17 @@ class HelixSearch {
   // The helices with no extra turn, found without the scan. The short
   // rotation has sin(phi) < 0 (phi in (pi, 2 pi)): t0 turns to t1 by less
   // than pi. f at pi, 3 pi / 2 and 2 pi brackets it; Newton starts from the
-  // previous element's root (`hint`) if the turn is not small (c > 1/4), else from the
-  // small-angle expansion of f,
+  // previous element's root (`hint`) if the turn is not small (c > 1/4),
+  // else from the small-angle expansion of f,
   //   f ~ (2c / |sin phi|) (sin psi - c^2 cos(phi) sin(psi - phi) / (3 M^2 sin^2 phi)),
   // whose root for small psi is cot(phi) = -3 M^2 sin(psi) / c^2 (a planar
   // arc, psi = 0, has its axis at 3 pi / 2, along t0 x t1). The long
   // rotation has sin(phi) > 0 (phi in (0, pi)): t0 turns to t1 by between
   // pi and 2 pi (an element over about half a curl or more); f at 0, pi / 2
-  // and pi bracket it, Newton starts from the hint or mid-bracket. Each adds the helices that
-  // check out to `roots`: none when f does not change sign on the half (for
-  // the short rotation: the chord leans too far from t0 + t1).
+  // and pi bracket it, Newton starts from the hint or mid-bracket. Each adds
+  // the helices that check out to `roots` (at most two): none when f does
+  // not change sign on the half (for the short rotation: the chord leans too
+  // far from t0 + t1).
   void ShortRotation(double hint, ZeroTurnRoots* roots) const {
     constexpr double kSmallTurn = 0.25;  // c, the sine of half the turn: 29 deg
     const bool hint_on_half = hint > kTwoPi / 2 && hint < kTwoPi;
@@ -342,9 +344,9 @@ class HelixSearch {
   }
 
   // The root on [lo, hi]; true with the helix if g points along the chord.
-  // Newton's method on f with its analytic
-  // derivative, kept inside the bracket (a bisection step whenever Newton
-  // would leave it): quadratic near a simple root, never lost.
+  // Newton's method on f with its analytic derivative, kept inside the
+  // bracket (a regula falsi step whenever Newton would leave it): quadratic
+  // near a simple root, never lost.
   bool Refine(double lo, double hi, double f_lo, double f_hi, int turns, Root* out) const {
     return RefineFrom(0.5 * (lo + hi), lo, hi, f_lo, f_hi, turns, out);
   }
