@@ -49,7 +49,10 @@ struct FloatingTangentsOptions {
   // if more (Algorithm 2's inner-product test at the spline's own resolution:
   // its 20 samples miss curls shorter than L / 20), and grows (to the N an
   // error law e ~ N^-k predicts, by at least a quarter, up to N_max) while
-  // the mean fit error exceeds this (mm). 0: Algorithm 2 alone, as in the paper.
+  // the mean fit error exceeds this (mm); if it stops at N_max with a
+  // relaxation that moves a break point by more than a quarter element (a
+  // resonance of elements of about half a curl), one element fewer when that
+  // relaxes less. 0: Algorithm 2 alone, as in the paper.
   double target_mean_error_mm = 0.05;
   // The fit error is measured against the helical curve as a polyline whose
   // chords stray from the curve by at most this (mm): each element gets
@@ -73,6 +76,9 @@ struct StrandFitSummary {
   double max_g1_defect_deg = 0;  // angle between tangents at joints
   double max_cohelical_residual =
       0;  // |<p*_{i+1} - p*_i, t_{i+1} - t_i>| / |p*_{i+1} - p*_i|, Eq. 4
+  // The largest move of a break point by the relaxation (Sec. V-B), in
+  // elements (1 = one element's length).
+  double max_relaxation_elements = 0;
 };
 
 // Algorithm 2 (with L_min / L_max of Sec. V-A), clamped to [N_min, N_max].

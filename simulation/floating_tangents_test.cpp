@@ -91,6 +91,35 @@ TEST(FloatingTangents, TheModelIsTheSameWithOrWithoutASummary) {
   EXPECT_LT(bent_fit.elements, 25) << "and stopped below N_max, at the target";
 }
 
+// A curl whose radius grows from 0 at the root over `ramp_mm` of its axis
+// (as the simulated wig's curls do), radius and pitch in mm, `fibre_mm` long.
+std::vector<Eigen::Vector3d> RampedCurl(double fibre_mm, double radius, double pitch, double ramp_mm) {
+  std::vector<Eigen::Vector3d> p;
+  const double axis_length = fibre_mm / std::hypot(1.0, 2 * M_PI * radius / pitch);
+  for (double u = 0; u <= axis_length; u += pitch / 16) {
+    const double r = radius * std::min(1.0, u / ramp_mm), phase = 2 * M_PI * u / pitch;
+    p.emplace_back(r * std::cos(phase), r * std::sin(phase), -u);
+  }
+  return p;
+}
+
+// When the growth ends at N_max with a relaxation that moves a break point
+// by more than a quarter element (a resonance of the co-helical conditions),
+// ours takes one element fewer if that relaxes less.
+TEST(FloatingTangents, OneElementFewerWhenTheRelaxationResonatesAtNmax) {
+  const auto curl = RampedCurl(400, 5, 14, 60);
+  FloatingTangentsOptions fixed, ours;
+  fixed.adaptive = false;
+  fixed.fixed_elements = ours.max_elements = 18;
+  StrandFitSummary at_max, chosen;
+  ASSERT_TRUE(FitFloatingTangents(curl, fixed, &at_max).ok());
+  ASSERT_GT(at_max.max_relaxation_elements, 0.25) << "the case must resonate at N_max";
+  ASSERT_TRUE(FitFloatingTangents(curl, ours, &chosen).ok());
+  EXPECT_EQ(chosen.elements, 17);
+  EXPECT_LT(chosen.max_relaxation_elements, at_max.max_relaxation_elements);
+  EXPECT_LE(chosen.mean_error_mm, at_max.mean_error_mm);
+}
+
 // The pruned distance equals a brute-force one.
 TEST(FloatingTangents, DistanceToCurveIsExact) {
   std::mt19937 rng(11);
