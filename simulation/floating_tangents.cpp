@@ -395,25 +395,41 @@ void MeasureFitError(const StrandSpline& spline, const PiecewiseHelix& model, do
 // ours' growth) or everything in StrandFitSummary.
 enum class Measures { kNone, kError, kAll };
 
-// Algorithm 1, lines 4-8, for a given element count.
-Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, int n,
+// Algorithm 1, lines 4-7: N + 1 break points at equal arc length with their
+// tangents, relaxed to be co-helical.
+struct BreakPoints {
+  std::vector<Eigen::Vector3d> p, t, relaxed;
+  double max_relaxation_elements = 0;  // the largest |p*_i - p_i|, in elements
+};
+BreakPoints RelaxedBreakPoints(const StrandSpline& spline, int n, const FloatingTangentsOptions& options) {
+  const double length = spline.length_mm();
+  BreakPoints b;
+  for (int i = 0; i <= n; ++i) {
+    b.p.push_back(spline.PointAt(length * i / n));
+    b.t.push_back(spline.TangentAt(length * i / n));
+  }
+  StraightenRuns(length / n, options.straight_sagitta_mm, &b.t);
+  b.relaxed = RelaxBreakPoints(b.p, b.t, options.anchor_root,
+                               options.planar_arcs ? GentleElements(spline, n) : std::vector<char>{});
+  for (int i = 0; i <= n; ++i) {
+    b.max_relaxation_elements = std::max(b.max_relaxation_elements,
+                                         (b.relaxed[static_cast<size_t>(i)] - b.p[static_cast<size_t>(i)]).norm() * n / length);
+  }
+  return b;
+}
+
+// Algorithm 1, line 8, for the break points of a given element count.
+Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, const BreakPoints& b,
                                            const FloatingTangentsOptions& options, Measures measures,
                                            StrandFitSummary* summary) {
   const double length = spline.length_mm();
-  std::vector<Eigen::Vector3d> p, t;
-  for (int i = 0; i <= n; ++i) {
-    p.push_back(spline.PointAt(length * i / n));
-    t.push_back(spline.TangentAt(length * i / n));
-  }
-  StraightenRuns(length / n, options.straight_sagitta_mm, &t);
-  const std::vector<Eigen::Vector3d> relaxed =
-      RelaxBreakPoints(p, t, options.anchor_root, options.planar_arcs ? GentleElements(spline, n) : std::vector<char>{});
+  const int n = static_cast<int>(b.p.size()) - 1;
+  const std::vector<Eigen::Vector3d>& p = b.p;
+  const std::vector<Eigen::Vector3d>& t = b.t;
+  const std::vector<Eigen::Vector3d>& relaxed = b.relaxed;
   PiecewiseHelix model;
   StrandFitSummary s;
-  for (int i = 0; i <= n; ++i) {
-    s.max_relaxation_elements = std::max(
-        s.max_relaxation_elements, (relaxed[static_cast<size_t>(i)] - p[static_cast<size_t>(i)]).norm() * n / length);
-  }
+  s.max_relaxation_elements = b.max_relaxation_elements;
   double axis_angle = -1;  // each element's helix search starts from the previous one's
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d chord =
@@ -471,8 +487,27 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
   auto measures = [&](int elements) {
     return summary ? Measures::kAll : grows && elements < options.max_elements ? Measures::kError : Measures::kNone;
   };
+  // Ours: a relaxation that moves a break point by more than a quarter of an
+  // element is a resonance, not a fit. Elements of about half a curl make
+  // consecutive co-helical conditions (Eq. 3) constrain nearly the same
+  // direction, so a strand that is not an exact helix is shifted along it
+  // more with every element (10 mm over 25 elements on curly 40 cm strands,
+  // where one element fewer relaxes by 1 mm). At N_max, where the growth
+  // ends whatever the error, one element fewer is taken if it relaxes less.
+  // Measured on the bench's 5,000 curly 40 cm strands: mean error 0.78 ->
+  // 0.63 mm, max 16.4 -> 8.5 mm; the other sets within 0.5 % or better.
+  constexpr double kResonantRelaxation = 0.25;  // elements
+  auto break_points = [&](int elements) {
+    BreakPoints b = RelaxedBreakPoints(spline, elements, options);
+    if (grows && elements == options.max_elements && elements > options.min_elements &&
+        b.max_relaxation_elements > kResonantRelaxation) {
+      BreakPoints fewer = RelaxedBreakPoints(spline, elements - 1, options);
+      if (fewer.max_relaxation_elements < b.max_relaxation_elements) return fewer;
+    }
+    return b;
+  };
   StrandFitSummary s;
-  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, n, options, measures(n), &s));
+  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, break_points(n), options, measures(n), &s));
   // Ours beside Algorithm 2: more elements while the fit error exceeds the
   // target, aimed straight at it by the error law e ~ N^-k. k starts at 2
   // (measured on the bench's strands: 1.9 from N = 3 to 15; a cubic law
@@ -484,30 +519,10 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     const int previous_n = n;
     const double previous_error = s.mean_error_mm;
     n = std::min(options.max_elements, std::max(n + std::max(1, n / 4), static_cast<int>(std::ceil(predicted))));
-    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, n, options, measures(n), &s));
+    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, break_points(n), options, measures(n), &s));
     if (s.mean_error_mm > 0 && previous_error > s.mean_error_mm) {
       exponent = std::clamp(std::log(previous_error / s.mean_error_mm) / std::log(static_cast<double>(n) / previous_n),
                             1.0, 4.0);
-    }
-  }
-  // Ours: a relaxation that moves a break point by more than a quarter of an
-  // element is a resonance, not a fit. Elements of about half a curl make
-  // consecutive co-helical conditions (Eq. 3) constrain nearly the same
-  // direction, so a strand that is not an exact helix is shifted along it
-  // more with every element (10 mm over 25 elements on curly 40 cm strands,
-  // where one element fewer relaxes by 1 mm). When the growth ended at N_max
-  // (not at the target), one element fewer is taken if it relaxes less. Measured on the bench's 5,000 curly 40 cm strands:
-  // mean error 0.78 -> 0.63 mm, max 16.4 -> 8.5 mm; other sets within 0.5 %
-  // or better.
-  constexpr double kResonantRelaxation = 0.25;  // elements
-  if (grows && n == options.max_elements && s.max_relaxation_elements > kResonantRelaxation &&
-      n > options.min_elements) {
-    StrandFitSummary fewer_summary;
-    HR_ASSIGN_OR_RETURN(PiecewiseHelix fewer,
-                        FitWithElementCount(spline, n - 1, options, measures(n - 1), &fewer_summary));
-    if (fewer_summary.max_relaxation_elements < s.max_relaxation_elements) {
-      model = std::move(fewer);
-      s = fewer_summary;
     }
   }
   if (summary) *summary = s;
