@@ -52,6 +52,7 @@ Result<nlohmann::json> RunFit(const FitArgs& a) {
                         {"max_error_mm", s.max_error_mm},
                         {"max_g1_defect_deg", s.max_g1_defect_deg},
                         {"max_cohelical_residual", s.max_cohelical_residual},
+                        {"max_relaxation_elements", s.max_relaxation_elements},
                         {"wall_s", s.wall_s}};
 }
 

@@ -65,6 +65,7 @@ Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& opti
     s.max_error_mm = std::max(s.max_error_mm, fit.max_error_mm);
     s.max_g1_defect_deg = std::max(s.max_g1_defect_deg, fit.max_g1_defect_deg);
     s.max_cohelical_residual = std::max(s.max_cohelical_residual, fit.max_cohelical_residual);
+    s.max_relaxation_elements = std::max(s.max_relaxation_elements, fit.max_relaxation_elements);
   }
   s.mean_error_mm = error_sum / s.guides;
   s.mean_elements = elements / s.guides;
@@ -99,7 +100,8 @@ Status WriteHelixModel(const std::string& path, const HelixModel& model, const F
                               {"mean_elements", s.mean_elements},
                               {"mean_error_mm", s.mean_error_mm},
                               {"max_error_mm", s.max_error_mm},
-                              {"max_g1_defect_deg", s.max_g1_defect_deg}}}};
+                              {"max_g1_defect_deg", s.max_g1_defect_deg},
+                              {"max_relaxation_elements", s.max_relaxation_elements}}}};
   return WriteFileAtomic(path, j.dump(1) + "\n");
 }
 

@@ -32,6 +32,7 @@ struct FitSummary {
   double max_error_mm = 0;
   double max_g1_defect_deg = 0;
   double max_cohelical_residual = 0;
+  double max_relaxation_elements = 0;  // the relaxation's largest move of a break point, in elements
   double wall_s = 0;
 };
 

@@ -262,6 +262,8 @@ TEST(CliFit, FitsStrandsAndRefusesBadInput) {
   EXPECT_EQ(j["guides"], 4);
   EXPECT_LT(j["mean_error_mm"].get<double>(), 0.5);
   EXPECT_LT(j["max_g1_defect_deg"].get<double>(), 1e-3);
+  ASSERT_TRUE(j.contains("max_relaxation_elements")) << r.output;
+  EXPECT_LT(j["max_relaxation_elements"].get<double>(), 0.25) << "no resonance of the relaxation on these curls";
   EXPECT_TRUE(fs::exists(out));
   r = Hairrig("fit " + strands + " --out " + out + " --guides 1000");
   EXPECT_EQ(r.exit_code, 1);
