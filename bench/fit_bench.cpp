@@ -16,8 +16,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <thread>
 
+#include "core/parallel.h"
 #include "core/strand_io.h"
 #include "sim_hw/wig.h"
 #include "simulation/floating_tangents.h"
@@ -34,30 +34,22 @@ struct Row {
   double fit_seconds = 0, report_seconds = 0, mean_error = 0, max_error = 0, elements = 0;
 };
 
-// Fits every strand, spread over `threads` threads (each its own share), the
-// fastest of kRepeats runs; `fits` null: the models alone.
+// Fits every strand, spread over `threads` threads, the fastest of kRepeats
+// runs; `fits` null: the models alone.
 double TimeFits(const StrandSet& strands, const FloatingTangentsOptions& o, int threads,
                 std::vector<StrandFitSummary>* fits) {
   const auto offsets = strands.Offsets();
-  const size_t count = strands.num_strands();
   double best_seconds = 1e300;
   for (int repeat = 0; repeat < kRepeats; ++repeat) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto fit_range = [&](size_t begin, size_t end) {
-      std::vector<Eigen::Vector3d> p;
-      for (size_t k = begin; k < end; ++k) {
+    ParallelFor(strands.num_strands(), threads, [&] {
+      return [&, p = std::vector<Eigen::Vector3d>()](size_t k) mutable {
         p.clear();
-        for (size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-          p.push_back(strands.points_mm[i].cast<double>());
+        for (size_t i = offsets[k]; i < offsets[k + 1]; ++i) p.push_back(strands.points_mm[i].cast<double>());
         StrandFitSummary* summary = fits ? &(*fits)[k] : nullptr;
         if (!FitFloatingTangents(p, o, summary).ok() && summary) *summary = StrandFitSummary{};
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-      pool.emplace_back(fit_range, count * t / threads, count * (t + 1) / threads);
-    fit_range(0, count / static_cast<size_t>(threads));
-    for (std::thread& thread : pool) thread.join();
+      };
+    });
     best_seconds = std::min(
         best_seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }

@@ -19,7 +19,6 @@ Result<bool> OnOffFromLevel(const Light& light, double level, const std::string&
   return OutOfRange(light.Describe() + ": level must be within 0..1");
 }
 
-
 CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& defaults) {
   CameraNominal n = defaults;
   n.width_px = device.Integer("width_px", defaults.width_px, {.min = 0, .max = 100000});

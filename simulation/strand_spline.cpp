@@ -54,16 +54,13 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
   s.table_u_.push_back(0);
   constexpr double kStep = 1.0 / kSamplesPerSegment;
   for (int seg = 0; seg + 1 < n; ++seg) {
-    // B'(u) / 3 = q0 + u (q1 + u q2), from the control polygon's legs d0, d1, d2.
-    const auto [a, b, c, d] = s.Controls(seg);
-    const Eigen::Vector3d d0 = b - a, d1 = c - b, d2 = d - c;
-    const Eigen::Vector3d q1 = 2 * (d1 - d0), q2 = d0 - 2 * d1 + d2;
-    auto speed = [&](double u) { return 3 * (d0 + u * (q1 + u * q2)).norm(); };
+    const Derivative derivative = s.DerivativeOf(seg);
+    auto speed = [&](double u) { return derivative.At(u).norm(); };
     for (int k = 0; k < kSamplesPerSegment; ++k) {
       const double u0 = k * kStep;
-      const double quarter =
+      const double piece =
           0.5 * kStep * (speed(u0 + kGaussOffset * kStep) + speed(u0 + (1 - kGaussOffset) * kStep));
-      s.cumulative_mm_.push_back(s.cumulative_mm_.back() + quarter);
+      s.cumulative_mm_.push_back(s.cumulative_mm_.back() + piece);
       s.table_u_.push_back(seg + u0 + kStep);
     }
   }
@@ -81,10 +78,10 @@ Eigen::Vector3d StrandSpline::Bezier(int segment, double u) const {
   return v * v * v * a + 3 * v * v * u * b + 3 * v * u * u * c + u * u * u * d;
 }
 
-Eigen::Vector3d StrandSpline::BezierDerivative(int segment, double u) const {
+StrandSpline::Derivative StrandSpline::DerivativeOf(int segment) const {
   const auto [a, b, c, d] = Controls(segment);
-  const double v = 1 - u;
-  return 3 * v * v * (b - a) + 6 * v * u * (c - b) + 3 * u * u * (d - c);
+  const Eigen::Vector3d d0 = b - a, d1 = c - b, d2 = d - c;
+  return {d0, 2 * (d1 - d0), d0 - 2 * d1 + d2};
 }
 
 void StrandSpline::Locate(double s, int* segment, double* u) const {
@@ -112,7 +109,7 @@ Eigen::Vector3d StrandSpline::TangentAt(double s) const {
   int segment;
   double u;
   Locate(s, &segment, &u);
-  return BezierDerivative(segment, u).normalized();
+  return DerivativeOf(segment).At(u).normalized();
 }
 
 }  // namespace hairrig

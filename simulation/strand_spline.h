@@ -31,7 +31,13 @@ class StrandSpline {
   void Locate(double s_mm, int* segment, double* u) const;
   std::array<Eigen::Vector3d, 4> Controls(int segment) const;  // the segment's Bezier control points
   Eigen::Vector3d Bezier(int segment, double u) const;
-  Eigen::Vector3d BezierDerivative(int segment, double u) const;
+  // B'(u) = 3 (d0 + u (q1 + u q2)) on a segment, from its control polygon's
+  // legs d0, d1, d2: q1 = 2 (d1 - d0), q2 = d0 - 2 d1 + d2.
+  struct Derivative {
+    Eigen::Vector3d d0, q1, q2;
+    Eigen::Vector3d At(double u) const { return 3 * (d0 + u * (q1 + u * q2)); }
+  };
+  Derivative DerivativeOf(int segment) const;
 
   std::vector<Eigen::Vector3d> points_;
   std::vector<Eigen::Vector3d> control_;  // 3 per segment: p_i, c1, c2 (p_{i+1} is the next start)
