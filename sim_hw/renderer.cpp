@@ -7,6 +7,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/parallel.h"
+#include "sim_hw/deep_opacity.h"
+#include "sim_hw/hair_shading.h"
+#include "sim_hw/head_model.h"
 #include "sim_hw/render_support.h"
 #include "sim_hw/tag_texture.h"
 #include "sim_hw/wig.h"
@@ -28,6 +32,17 @@ struct FaceTag {
   TagPattern pattern;
 };
 
+// One hair segment as the camera sees it.
+struct HairSegment {
+  Eigen::Vector2f a, b;      // pixel positions of its ends
+  float za = 0, zb = 0;      // their depths (mm)
+  float width_px = 0;        // the fibre's projected diameter
+  uint32_t strand = 0;
+  cv::Vec3f color;           // radiance (BGR)
+  float angle_deg = 0;       // 2D direction in [0, 180)
+  float Depth() const { return 0.5f * (za + zb); }
+};
+
 struct BoxHit {
   bool hit = false;
   int face = -1;
@@ -40,6 +55,7 @@ struct BoxHit {
 
 struct Renderer::Impl {
   Scene scene;
+  std::unique_ptr<HeadModel> head;
   StrandSet strands;
   std::vector<RayTable> ray_tables;
   std::vector<std::vector<FaceTag>> face_tags;  // per box face
@@ -57,6 +73,11 @@ struct Renderer::Impl {
     cv::Mat1f depth;
     cv::Mat1b surface;
     cv::Mat1f hair_alpha;
+    // Ground truth of the front-most strand per pixel.
+    cv::Mat1f hair_front_z, hair_angle;
+    cv::Mat1i hair_id;
+    std::vector<LightShadowMap> shadows;  // per light, when the scene shades with shadows
+    int threads = 1;
   };
 
   double Irradiance(const View& v, const Eigen::Vector3d& p_cam, const Eigen::Vector3d& n_cam) const {
@@ -105,32 +126,55 @@ struct Renderer::Impl {
     return corners;
   }
 
-  void DrawHead(View& v) const {
-    const SceneHead& head = scene.head;
-    const Eigen::Matrix3d r = v.cam_from_turntable.RotationMatrix();
-    const Eigen::Vector3d c_cam = v.cam_from_turntable * head.center_turntable_mm;
-    const Eigen::Matrix3d a = r * head.radii_mm.asDiagonal();  // unit sphere -> camera
-    const Eigen::Matrix3d m = a.inverse();
-    const cv::Rect rect = ProjectedBounds(v, BoxCorners(v.cam_from_turntable, head.center_turntable_mm, head.radii_mm), 2);
-    const Eigen::Vector3d mc = m * c_cam;
-    for (int y = rect.y; y < rect.y + rect.height; ++y) {
-      for (int x = rect.x; x < rect.x + rect.width; ++x) {
-        const Eigen::Vector3d d = v.rays->Ray(x, y);
-        const Eigen::Vector3d md = m * d;
-        const double qa = md.squaredNorm(), qb = -2.0 * md.dot(mc), qc = mc.squaredNorm() - 1.0;
-        const double disc = qb * qb - 4 * qa * qc;
-        if (disc < 0) continue;
-        const double t = (-qb - std::sqrt(disc)) / (2 * qa);
-        if (t <= 0 || t * d.z() >= v.depth(y, x)) continue;
-        const Eigen::Vector3d p = t * d;
-        const Eigen::Vector3d n = (m.transpose() * (m * (p - c_cam))).normalized();
-        const double e = Irradiance(v, p, n);
-        v.radiance(y, x) = cv::Vec3f(static_cast<float>(head.albedo.z() * e), static_cast<float>(head.albedo.y() * e),
-                                     static_cast<float>(head.albedo.x() * e));
-        v.depth(y, x) = static_cast<float>(t * d.z());
-        v.surface(y, x) = kSurfaceHead;
-      }
+  // Direct light from panel i reaching p (camera frame): its power, the hair's
+  // transmittance and the head's shadow.
+  double LightReaching(const View& v, size_t i, const Eigen::Vector3d& p, bool hair_shadow = true) const {
+    double power = v.light_power[i];
+    if (power <= 0 || v.shadows.empty()) return power;
+    const LightShadowMap& m = v.shadows[i];
+    if (hair_shadow) power *= m.HairTransmittance(p);
+    return power * m.HeadVisibility(p);
+  }
+
+  // Skin: Lambert with a little wrap-around (light scattered under the skin)
+  // and the shadows of the hair and the head.
+  cv::Vec3f ShadeSkin(const View& v, const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
+    double e = v.ambient;
+    for (size_t i = 0; i < v.light_power.size(); ++i) {
+      const Eigen::Vector3d l = (v.light_pos_cam[i] - p).normalized();
+      const double wrapped = std::max(0.0, (n.dot(l) + 0.15) / 1.15);
+      if (wrapped > 0) e += LightReaching(v, i, p) * wrapped;
     }
+    const Eigen::Vector3d& a = scene.head.albedo;
+    return {static_cast<float>(a.z() * e), static_cast<float>(a.y() * e), static_cast<float>(a.x() * e)};
+  }
+
+  // The head, ray cast per pixel (rows spread over the view's threads).
+  void DrawHead(View& v) const {
+    const Rigid3d turntable_from_cam = v.cam_from_turntable.Inverse();
+    const Eigen::Matrix3d r = turntable_from_cam.RotationMatrix();
+    const Eigen::Matrix3d cam_r = v.cam_from_turntable.RotationMatrix();
+    std::vector<Eigen::Vector3d> corners_cam;
+    const Eigen::Vector3d lo = head->mesh().MinCorner(), hi = head->mesh().MaxCorner();
+    for (int c = 0; c < 8; ++c) {
+      corners_cam.push_back(v.cam_from_turntable *
+                            Eigen::Vector3d((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z()));
+    }
+    const cv::Rect rect = ProjectedBounds(v, corners_cam, 2);
+    ParallelFor(static_cast<size_t>(rect.height), v.threads, [&] {
+      return [&](size_t row) {
+        const int y = rect.y + static_cast<int>(row);
+        for (int x = rect.x; x < rect.x + rect.width; ++x) {
+          const Eigen::Vector3d d = v.rays->Ray(x, y);
+          HeadHit hit;
+          if (!head->Intersect(turntable_from_cam.translation, r * d, 0.0, v.depth(y, x), &hit)) continue;
+          const Eigen::Vector3d p = hit.t * d;  // the ray's z is 1: t is the depth
+          v.radiance(y, x) = ShadeSkin(v, p, cam_r * hit.normal);
+          v.depth(y, x) = static_cast<float>(hit.t);
+          v.surface(y, x) = kSurfaceHead;
+        }
+      };
+    });
   }
 
   BoxHit CastBox(const View& v, double u, double w, const Eigen::Vector3d& half) const {
@@ -237,73 +281,186 @@ struct Renderer::Impl {
     }
   }
 
-  // Kajiya-Kay shading of a strand segment with tangent t (camera frame).
+  // Radiance of a fibre segment at p with tangent t (camera frame).
   cv::Vec3f ShadeStrand(const View& v, const Eigen::Vector3d& p, const Eigen::Vector3d& t) const {
-    const Eigen::Vector3d view_dir = (-p).normalized();
-    const double cos_tv = t.dot(view_dir), sin_tv = std::sqrt(std::max(0.0, 1 - cos_tv * cos_tv));
-    double diffuse = v.ambient, specular = 0;
+    const Eigen::Vector3d to_camera = (-p).normalized();
+    const Eigen::Vector3d& albedo = scene.wig.albedo;
+    Eigen::Vector3d radiance = 0.9 * v.ambient * albedo;
     for (size_t i = 0; i < v.light_power.size(); ++i) {
-      const Eigen::Vector3d l = (v.light_pos_cam[i] - p).normalized();
-      const double cos_tl = t.dot(l), sin_tl = std::sqrt(std::max(0.0, 1 - cos_tl * cos_tl));
-      diffuse += v.light_power[i] * 0.9 * sin_tl;
-      specular += v.light_power[i] * 0.35 * std::pow(std::max(0.0, cos_tl * cos_tv + sin_tl * sin_tv), 30.0);
+      if (v.light_power[i] <= 0) continue;
+      const FibreRadiance f = ShadeFibre(scene.hair_shading, albedo, t, (v.light_pos_cam[i] - p).normalized(), to_camera);
+      if (v.shadows.empty()) {
+        radiance += v.light_power[i] * (f.single + f.diffuse);
+        continue;
+      }
+      // Light scattered many times inside the volume is shadowed more softly than direct light.
+      const double head_lit = v.shadows[i].HeadVisibility(p), hair = v.shadows[i].HairTransmittance(p);
+      radiance += v.light_power[i] * head_lit * (hair * f.single + std::sqrt(hair) * f.diffuse);
     }
-    const Eigen::Vector3d& a = scene.wig.albedo;
-    return {static_cast<float>(a.z() * diffuse + specular), static_cast<float>(a.y() * diffuse + specular),
-            static_cast<float>(a.x() * diffuse + specular)};
+    return {static_cast<float>(radiance.z()), static_cast<float>(radiance.y()), static_cast<float>(radiance.x())};
   }
 
-  void DrawSegment(View& v, const Eigen::Vector2d& a, const Eigen::Vector2d& b, float z, const cv::Vec3f& color) const {
-    constexpr float kOpacity = 0.6f;
+  // Draws `seg` into the rows [y_begin, y_end) of the view: per pixel within
+  // one pixel of the centre line, coverage = width x tent(distance), composited
+  // over what is there; the front-most strand within half a pixel is the
+  // pixel's ground truth.
+  void DrawSegment(View& v, const HairSegment& seg, int y_begin, int y_end) const {
     constexpr double kOcclusionMarginMm = 3.0;
+    const Eigen::Vector2d a = seg.a.cast<double>(), b = seg.b.cast<double>();
+    const Eigen::Vector2d ab = b - a;
+    const double len2 = ab.squaredNorm();
+    if (len2 < 1e-12) return;
     const int x0 = std::max(0, static_cast<int>(std::floor(std::min(a.x(), b.x()) - 1)));
     const int x1 = std::min(v.width - 1, static_cast<int>(std::ceil(std::max(a.x(), b.x()) + 1)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(std::min(a.y(), b.y()) - 1)));
-    const int y1 = std::min(v.height - 1, static_cast<int>(std::ceil(std::max(a.y(), b.y()) + 1)));
-    const Eigen::Vector2d ab = b - a;
-    const double len2 = std::max(ab.squaredNorm(), 1e-12);
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x) {
-        if (v.depth(y, x) < z - kOcclusionMarginMm) continue;
+    const int y0 = std::max(y_begin, static_cast<int>(std::floor(std::min(a.y(), b.y()) - 1)));
+    const int y1 = std::min(y_end - 1, static_cast<int>(std::ceil(std::max(a.y(), b.y()) + 1)));
+    const bool steep = std::abs(ab.y()) > std::abs(ab.x());
+    const double w = seg.width_px;
+    // Walk the major axis; on each line only the pixels within 1.5 px of the segment.
+    const int major0 = steep ? y0 : x0, major1 = steep ? y1 : x1;
+    for (int m = major0; m <= major1; ++m) {
+      const double t_line = steep ? (m - a.y()) / ab.y() : (m - a.x()) / ab.x();
+      const double centre = steep ? a.x() + t_line * ab.x() : a.y() + t_line * ab.y();
+      const int lo = static_cast<int>(std::floor(centre - 1.5)), hi = static_cast<int>(std::ceil(centre + 1.5));
+      for (int k = lo; k <= hi; ++k) {
+        const int x = steep ? k : m, y = steep ? m : k;
+        if (x < x0 || x > x1 || y < y0 || y > y1) continue;
         const Eigen::Vector2d p(x, y);
-        const double t = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
+        const double t = (p - a).dot(ab) / len2;
+        if (t < 0 || t >= 1) continue;  // each pixel belongs to one segment of a strand's chain
         const double d = (a + t * ab - p).norm();
         if (d >= 1.0) continue;
-        const float alpha = kOpacity * static_cast<float>(1.0 - d);
-        v.radiance(y, x) = v.radiance(y, x) * (1.0f - alpha) + color * alpha;
+        const double z = seg.za + t * (seg.zb - seg.za);
+        if (v.depth(y, x) < z - kOcclusionMarginMm) continue;
+        const float alpha = static_cast<float>(std::min(1.0, w < 1 ? w * (1.0 - d) : 0.5 * w + 0.5 - d));
+        if (alpha <= 0) continue;
+        v.radiance(y, x) = v.radiance(y, x) * (1.0f - alpha) + seg.color * alpha;
         v.hair_alpha(y, x) = 1.0f - (1.0f - v.hair_alpha(y, x)) * (1.0f - alpha);
+        if (d <= 0.5 && z < v.hair_front_z(y, x)) {
+          v.hair_front_z(y, x) = static_cast<float>(z);
+          v.hair_id(y, x) = static_cast<int>(seg.strand);
+          v.hair_angle(y, x) = seg.angle_deg;
+        }
       }
     }
   }
 
-  void DrawHair(View& v) const {
+  // Every visible segment projected and shaded (strands spread over threads).
+  std::vector<HairSegment> HairSegments(const View& v, const std::vector<Eigen::Vector3d>& p_cam,
+                                        const std::vector<Eigen::Vector2d>& uv) const {
     const auto offsets = strands.Offsets();
+    const double fibre_mm = 1e-3 * scene.wig.fibre_diameter_um;
+    const double focal = 0.5 * (v.camera->intrinsics.fx_px + v.camera->intrinsics.fy_px);
+    std::vector<std::vector<HairSegment>> per_strand(strands.num_strands());
+    ParallelFor(strands.num_strands(), v.threads, [&] {
+      return [&](size_t s) {
+        auto& out = per_strand[s];
+        for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
+          if (p_cam[i - 1].z() <= 1.0 || p_cam[i].z() <= 1.0) continue;
+          const Eigen::Vector2d a = uv[i - 1], b = uv[i];
+          if (std::max(a.x(), b.x()) < -2 || std::min(a.x(), b.x()) > v.width + 1 || std::max(a.y(), b.y()) < -2 ||
+              std::min(a.y(), b.y()) > v.height + 1) {
+            continue;
+          }
+          const Eigen::Vector3d t = (p_cam[i] - p_cam[i - 1]).normalized();
+          const Eigen::Vector3d mid = 0.5 * (p_cam[i] + p_cam[i - 1]);
+          HairSegment seg;
+          seg.a = a.cast<float>(), seg.b = b.cast<float>();
+          seg.za = static_cast<float>(p_cam[i - 1].z()), seg.zb = static_cast<float>(p_cam[i].z());
+          seg.width_px = static_cast<float>(fibre_mm * focal / mid.z());
+          seg.strand = static_cast<uint32_t>(s);
+          seg.color = ShadeStrand(v, mid, t);
+          double angle = RadToDeg(std::atan2(b.y() - a.y(), b.x() - a.x()));
+          if (angle < 0) angle += 180;
+          seg.angle_deg = static_cast<float>(angle >= 180 ? angle - 180 : angle);
+          out.push_back(seg);
+        }
+      };
+    });
+    std::vector<HairSegment> all;
+    size_t total = 0;
+    for (const auto& s : per_strand) total += s.size();
+    all.reserve(total);
+    for (auto& s : per_strand) all.insert(all.end(), s.begin(), s.end());
+    return all;
+  }
+
+  void DrawHair(View& v, const std::vector<Eigen::Vector3d>& p_cam) const {
+    const auto params = v.camera->intrinsics.ToParams();
+    std::vector<Eigen::Vector2d> uv(p_cam.size(), Eigen::Vector2d(-1e9, -1e9));
+    for (size_t i = 0; i < p_cam.size(); ++i) {
+      if (p_cam[i].z() > 1.0) ProjectCamPoint(params.data(), p_cam[i].data(), uv[i].data());
+    }
+    const std::vector<HairSegment> segments = HairSegments(v, p_cam, uv);
+    // Horizontal bands, each with the segments that reach it, far to near.
+    constexpr int kBandRows = 64;
+    const int bands = (v.height + kBandRows - 1) / kBandRows;
+    std::vector<std::vector<uint32_t>> band_segments(static_cast<size_t>(bands));
+    for (size_t i = 0; i < segments.size(); ++i) {
+      const HairSegment& s = segments[i];
+      const int b0 = std::max(0, static_cast<int>(std::floor(std::min(s.a.y(), s.b.y()) - 1.5f)) / kBandRows);
+      const int b1 = std::min(bands - 1, static_cast<int>(std::ceil(std::max(s.a.y(), s.b.y()) + 1.5f)) / kBandRows);
+      for (int b = b0; b <= b1; ++b) band_segments[static_cast<size_t>(b)].push_back(static_cast<uint32_t>(i));
+    }
+    ParallelFor(static_cast<size_t>(bands), v.threads, [&] {
+      return [&](size_t b) {
+        auto& list = band_segments[b];
+        std::sort(list.begin(), list.end(),
+                  [&](uint32_t x, uint32_t y) { return segments[x].Depth() > segments[y].Depth(); });
+        const int y_begin = static_cast<int>(b) * kBandRows, y_end = std::min(v.height, y_begin + kBandRows);
+        for (uint32_t i : list) DrawSegment(v, segments[i], y_begin, y_end);
+      };
+    });
+  }
+
+  // The strands' points in the camera frame.
+  std::vector<Eigen::Vector3d> StrandsInCamera(const View& v) const {
     const Eigen::Matrix3d r = v.cam_from_turntable.RotationMatrix();
     const Eigen::Vector3d tr = v.cam_from_turntable.translation;
     std::vector<Eigen::Vector3d> p_cam(strands.num_points());
-    std::vector<Eigen::Vector2d> uv(strands.num_points());
-    const auto params = v.camera->intrinsics.ToParams();
-    for (size_t i = 0; i < p_cam.size(); ++i) {
-      p_cam[i] = r * strands.points_mm[i].cast<double>() + tr;
-      if (p_cam[i].z() > 1.0) ProjectCamPoint(params.data(), p_cam[i].data(), uv[i].data());
-    }
-    // Back to front by the mean depth of each strand.
-    std::vector<double> mean_z(strands.num_strands(), 0.0);
-    for (size_t s = 0; s < strands.num_strands(); ++s) {
-      for (size_t i = offsets[s]; i < offsets[s + 1]; ++i) mean_z[s] += p_cam[i].z();
-      mean_z[s] /= static_cast<double>(offsets[s + 1] - offsets[s]);
-    }
-    std::vector<size_t> order(strands.num_strands());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return mean_z[a] > mean_z[b]; });
-    for (size_t s : order) {
-      for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
-        if (p_cam[i - 1].z() <= 1.0 || p_cam[i].z() <= 1.0) continue;
-        const Eigen::Vector3d t = (p_cam[i] - p_cam[i - 1]).normalized();
-        const Eigen::Vector3d mid = 0.5 * (p_cam[i] + p_cam[i - 1]);
-        DrawSegment(v, uv[i - 1], uv[i], static_cast<float>(mid.z()), ShadeStrand(v, mid, t));
+    for (size_t i = 0; i < p_cam.size(); ++i) p_cam[i] = r * strands.points_mm[i].cast<double>() + tr;
+    return p_cam;
+  }
+
+  // A deep opacity map per lit panel, over the hair and the head.
+  void BuildShadows(View& v, const std::vector<Eigen::Vector3d>& p_cam, bool with_hair) const {
+    TriangleMesh head_cam = head->mesh();
+    head_cam.Transform(v.cam_from_turntable);
+    const auto offsets = with_hair ? strands.Offsets() : std::vector<size_t>{0};
+    const std::vector<Eigen::Vector3d> none;
+    v.shadows.resize(v.light_power.size());
+    ParallelFor(v.light_power.size(), v.threads, [&] {
+      return [&](size_t i) {
+        v.shadows[i] = LightShadowMap::Build(v.light_pos_cam[i], with_hair ? p_cam : none, offsets,
+                                             1e-3 * scene.wig.fibre_diameter_um, head_cam);
+      };
+    });
+  }
+
+  // The ground-truth maps from the view's buffers.
+  ViewTruthMaps TruthMaps(const View& v) const {
+    ViewTruthMaps t;
+    t.label = cv::Mat(v.height, v.width, CV_8U);
+    t.hair_alpha = v.hair_alpha.clone();
+    t.orientation_deg = cv::Mat(v.height, v.width, CV_32F);
+    t.depth_mm = cv::Mat(v.height, v.width, CV_32F);
+    t.strand_id = cv::Mat(v.height, v.width, CV_32S);
+    for (int y = 0; y < v.height; ++y) {
+      for (int x = 0; x < v.width; ++x) {
+        const uint8_t surface = v.surface(y, x);
+        const bool hair = v.hair_alpha(y, x) >= 0.5f && v.hair_id(y, x) >= 0;
+        uint8_t label = surface == kSurfaceBackdrop ? ViewTruthMaps::kBackdrop
+                        : surface == kSurfaceHead   ? ViewTruthMaps::kHead
+                                                    : ViewTruthMaps::kBox;
+        if (hair) label = ViewTruthMaps::kHair;
+        t.label.at<uint8_t>(y, x) = label;
+        t.strand_id.at<int>(y, x) = hair ? v.hair_id(y, x) : -1;
+        t.orientation_deg.at<float>(y, x) = hair ? v.hair_angle(y, x) : std::numeric_limits<float>::quiet_NaN();
+        const float opaque = std::isfinite(v.depth(y, x)) ? v.depth(y, x) : 0.0f;
+        t.depth_mm.at<float>(y, x) = hair ? v.hair_front_z(y, x) : opaque;
       }
     }
+    return t;
   }
 
   std::vector<TagTruth> TagTruths(const View& v) const {
@@ -354,13 +511,15 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Renderer::~Renderer() = default;
 const Scene& Renderer::scene() const { return impl_->scene; }
 const StrandSet& Renderer::strands_turntable_mm() const { return impl_->strands; }
+const HeadModel& Renderer::head() const { return *impl_->head; }
 void Renderer::SetStrands(StrandSet strands_turntable_mm) { impl_->strands = std::move(strands_turntable_mm); }
 
 Result<std::unique_ptr<Renderer>> Renderer::Create(const Scene& scene) {
   auto impl = std::make_unique<Impl>();
   impl->scene = scene;
   HR_RETURN_IF_ERROR(ValidateScene(scene));
-  HR_ASSIGN_OR_RETURN(impl->strands, GenerateWig(scene.wig, scene.head));
+  HR_ASSIGN_OR_RETURN(impl->head, HeadModel::Build(scene.head));
+  HR_ASSIGN_OR_RETURN(impl->strands, GenerateWig(scene.wig, *impl->head));
   for (const SceneCamera& cam : scene.cameras) {
     HR_ASSIGN_OR_RETURN(RayTable table, RayTable::Build(cam.intrinsics));
     impl->ray_tables.push_back(std::move(table));
@@ -409,13 +568,20 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, co
   v.depth = cv::Mat1f(v.height, v.width, kInf);
   v.surface = cv::Mat1b(v.height, v.width, kSurfaceBackdrop);
   v.hair_alpha = cv::Mat1f(v.height, v.width, 0.0f);
+  v.hair_front_z = cv::Mat1f(v.height, v.width, kInf);
+  v.hair_angle = cv::Mat1f(v.height, v.width, 0.0f);
+  v.hair_id = cv::Mat1i(v.height, v.width, -1);
+  v.threads = std::max(1, options.threads);
+  const std::vector<Eigen::Vector3d> p_cam = options.draw_hair ? impl_->StrandsInCamera(v) : std::vector<Eigen::Vector3d>{};
+  if (scene.hair_shading.shadows && total_power > 0) impl_->BuildShadows(v, p_cam, options.draw_hair);
   impl_->DrawBackdrop(v);
   impl_->DrawHead(v);
   impl_->DrawBox(v);
-  if (options.draw_hair) impl_->DrawHair(v);
+  if (options.draw_hair) impl_->DrawHair(v, p_cam);
   RenderedView out;
   out.tags = impl_->TagTruths(v);
   out.image = impl_->Expose(v, options);
+  if (options.ground_truth) out.truth = impl_->TruthMaps(v);
   return out;
 }
 

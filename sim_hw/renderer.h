@@ -1,13 +1,19 @@
-// Renders what a simulated camera sees: backdrop, head, calibration box with
-// its AprilTags, and the hair, through the camera's lens distortion, exposure
-// and sensor noise.
+// Renders what a simulated camera sees: backdrop, head (an ellipsoid or a
+// mesh, skin-shaded), calibration box with its AprilTags, and the hair,
+// through the camera's lens distortion, exposure and sensor noise.
 //
-// Geometry is exact where calibration depends on it: the box is ray-cast per
-// pixel through the inverse of the lens model (no image warping), and pixels on
-// an edge are integrated with 8 x 8 stratified samples, so tag corners land
-// where the camera model projects them. Strands are anti-aliased lines shaded
-// with Kajiya-Kay against the two LED panels, so orientation filters see their
-// direction. All panels off gives a dark frame (noise only).
+// Geometry is exact where calibration depends on it: the box and the head are
+// ray-cast per pixel through the inverse of the lens model (no image warping),
+// and box pixels on an edge are integrated with 8 x 8 stratified samples, so
+// tag corners land where the camera model projects them.
+//
+// Hair: every fibre segment is drawn with its true coverage: a fibre of
+// diameter w at depth z covers w f / z pixels across (about 0.12 px for 70 um
+// at 1 m), spread over the pixels within one pixel of its centre line by a
+// tent filter, composited back to front. Fibres are shaded with R, TT and TRT
+// lobes (sim_hw/hair_shading.h) and shadowed by a deep opacity map per LED
+// panel (sim_hw/deep_opacity.h), which also darkens the head under the hair.
+// All panels off gives a dark frame (noise only).
 #pragma once
 
 #include <array>
@@ -30,6 +36,21 @@ struct RenderOptions {
   bool noise = true;
   uint64_t noise_seed = 0;           // same seed, same noise
   bool draw_hair = true;
+  int threads = 2;                   // for the hair and the head (a view is split in bands)
+  bool ground_truth = false;         // fill RenderedView::truth
+};
+
+// Per-pixel ground truth of one rendered view (pixel (0,0) is the centre of
+// the top-left pixel; the same lens model as the image).
+struct ViewTruthMaps {
+  enum Label : uint8_t { kBackdrop = 0, kBox = 1, kHead = 2, kHair = 3 };
+  cv::Mat label;            // CV_8U: Label. Hair where the hair's coverage is at least 0.5
+  cv::Mat hair_alpha;       // CV_32F: hair coverage, 0..1 (all fibres, composited)
+  cv::Mat orientation_deg;  // CV_32F: 2D direction of the front-most strand, [0, 180), image frame
+                            // (0 = +x, 90 = +y, down the image); NaN where no strand
+  cv::Mat depth_mm;         // CV_32F: depth of the front-most surface along the optical axis;
+                            // for hair, the front-most strand's; 0 on the backdrop
+  cv::Mat strand_id;        // CV_32S: index of the front-most strand in the wig; -1 where none
 };
 
 // Ground truth of one tag in one rendered view.
@@ -44,16 +65,21 @@ struct TagTruth {
 struct RenderedView {
   cv::Mat image;  // CV_8UC3, BGR
   std::vector<TagTruth> tags;
+  ViewTruthMaps truth;  // with RenderOptions::ground_truth only
 };
+
+class HeadModel;
 
 class Renderer {
  public:
-  // Generates the wig and precomputes per-camera ray tables. Keeps a copy of `scene`.
+  // Builds the head, generates the wig and precomputes per-camera ray tables.
+  // Keeps a copy of `scene`. Errors name the scene's field (head.mesh, wig.file).
   static Result<std::unique_ptr<Renderer>> Create(const Scene& scene);
   ~Renderer();
 
   const Scene& scene() const;
   const StrandSet& strands_turntable_mm() const;  // the wig, turntable frame
+  const HeadModel& head() const;
   // Replaces the wig (turntable frame, mm), e.g. with a simulated frame of it.
   // Not safe while another thread renders.
   void SetStrands(StrandSet strands_turntable_mm);

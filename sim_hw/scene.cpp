@@ -34,10 +34,13 @@ Rigid3d ReadPose(const ConfigNode& n) {
 void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) {
   n.AllowOnlyKeys({"style", "strands", "length_mm", "segment_mm", "scalp_min_elevation_deg", "face_dir",
                    "face_half_angle_deg", "wave_amplitude_mm", "wave_period_mm", "curl_radius_mm",
-                   "curl_pitch_mm", "file", "albedo", "seed"});
-  const std::string style = n.Choice("style", {"straight", "wavy", "curly", "file"}, "wavy");
+                   "curl_pitch_mm", "wisps", "clump", "clump_profile", "frizz_mm", "flyaways", "flyaway_mm", "comb",
+                   "bangs_depth_deg", "bangs_length_mm", "file", "file_pose", "fibre_diameter_um", "albedo",
+                   "seed"});
+  const std::string style = n.Choice("style", {"straight", "wavy", "curly", "bangs", "file"}, "wavy");
   w->style = style == "straight" ? WigStyle::kStraight
              : style == "curly"  ? WigStyle::kCurly
+             : style == "bangs"  ? WigStyle::kBangs
              : style == "file"   ? WigStyle::kFile
                                  : WigStyle::kWavy;
   w->num_strands = n.Integer("strands", w->num_strands, {.min = 1, .max = 2e6});
@@ -46,7 +49,7 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
     if (l.size() == 2) {
       w->min_length_mm = l[0];
       w->max_length_mm = l[1];
-      if (!(l[0] > 0 && l[1] >= l[0])) n.Fail("length_mm", "expected [min, max] with 0 < min <= max");
+      if (!(l[0] > 0 && l[1] >= l[0] && l[1] < 5000)) n.Fail("length_mm", "expected [min, max] with 0 < min <= max < 5000");
     }
   }
   w->segment_mm = n.Number("segment_mm", w->segment_mm, {.min = 0.1, .max = 100});
@@ -55,13 +58,61 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
   if (w->face_dir.norm() < 1e-9) n.Fail("face_dir", "must not be the zero vector");
   w->face_dir.normalize();
   w->face_half_angle_deg = n.Number("face_half_angle_deg", w->face_half_angle_deg, {.min = 0, .max = 180});
-  w->wave_amplitude_mm = n.Number("wave_amplitude_mm", w->wave_amplitude_mm, {.min = 0});
-  w->wave_period_mm = n.Number("wave_period_mm", w->wave_period_mm, {.min = 1});
-  w->curl_radius_mm = n.Number("curl_radius_mm", w->curl_radius_mm, {.min = 0});
-  w->curl_pitch_mm = n.Number("curl_pitch_mm", w->curl_pitch_mm, {.min = 0.5});
+  w->wave_amplitude_mm = n.Number("wave_amplitude_mm", w->wave_amplitude_mm, {.min = 0, .max = 200});
+  w->wave_period_mm = n.Number("wave_period_mm", w->wave_period_mm, {.min = 1, .max = 2000});
+  w->curl_radius_mm = n.Number("curl_radius_mm", w->curl_radius_mm, {.min = 0, .max = 200});
+  w->curl_pitch_mm = n.Number("curl_pitch_mm", w->curl_pitch_mm, {.min = 0.5, .max = 2000});
+  w->wisps = n.Integer("wisps", w->wisps, {.min = 0, .max = 1e5});
+  w->clump = n.Number("clump", w->clump, {.min = 0, .max = 1});
+  w->clump_profile = n.Choice("clump_profile", {"tip", "middle"}, "tip") == "middle" ? ClumpProfile::kMiddle
+                                                                                     : ClumpProfile::kTip;
+  w->frizz_mm = n.Number("frizz_mm", w->frizz_mm, {.min = 0, .max = 50});
+  w->flyaway_fraction = n.Number("flyaways", w->flyaway_fraction, {.min = 0, .max = 1});
+  w->flyaway_mm = n.Number("flyaway_mm", w->flyaway_mm, {.min = 0, .max = 500});
+  w->comb = n.Number("comb", w->comb, {.min = 0, .max = 2});
+  w->bangs_depth_deg = n.Number("bangs_depth_deg", w->bangs_depth_deg, {.min = 0, .max = 90});
+  w->bangs_length_mm = n.Number("bangs_length_mm", w->bangs_length_mm, {.min = 5, .max = 1000});
+  w->fibre_diameter_um = n.Number("fibre_diameter_um", w->fibre_diameter_um, {.min = 10, .max = 500});
   w->albedo = n.Vec3("albedo", w->albedo);
+  if (n.ok() && (w->albedo.minCoeff() < 0 || w->albedo.maxCoeff() > 1)) n.Fail("albedo", "each channel must lie in 0..1");
   w->seed = static_cast<uint64_t>(n.Integer("seed", static_cast<int>(w->seed), {.min = 0}));
-  if (w->style == WigStyle::kFile) w->file = Resolve(scene_path, n.String("file"));
+  if (w->style == WigStyle::kFile) {
+    w->file = Resolve(scene_path, n.String("file"));
+    if (n.Has("file_pose")) w->turntable_from_file = ReadPose(n.Child("file_pose"));
+  }
+}
+
+void ReadScalp(const ConfigNode& n, SceneScalp* s) {
+  n.AllowOnlyKeys({"center_mm", "face_dir", "hairline_front_deg", "hairline_temple_deg", "hairline_ear_deg",
+                   "hairline_nape_deg", "parting", "parting_offset_deg", "parting_width_mm", "parting_back_deg"});
+  s->defined = true;
+  s->center_turntable_mm = n.Vec3("center_mm", s->center_turntable_mm);
+  Eigen::Vector3d face = n.Vec3("face_dir", s->face_dir);
+  face.z() = 0;
+  if (face.norm() < 1e-9) n.Fail("face_dir", "must have a horizontal part (x, y): the way the face looks");
+  s->face_dir = face.norm() > 0 ? Eigen::Vector3d(face.normalized()) : s->face_dir;
+  s->hairline_front_deg = n.Number("hairline_front_deg", s->hairline_front_deg, {.min = -90, .max = 90});
+  s->hairline_temple_deg = n.Number("hairline_temple_deg", s->hairline_temple_deg, {.min = -90, .max = 90});
+  s->hairline_ear_deg = n.Number("hairline_ear_deg", s->hairline_ear_deg, {.min = -90, .max = 90});
+  s->hairline_nape_deg = n.Number("hairline_nape_deg", s->hairline_nape_deg, {.min = -90, .max = 90});
+  s->parting = n.Bool("parting", s->parting);
+  s->parting_offset_deg = n.Number("parting_offset_deg", s->parting_offset_deg, {.min = -60, .max = 60});
+  s->parting_width_mm = n.Number("parting_width_mm", s->parting_width_mm, {.min = 0, .max = 50});
+  s->parting_back_deg = n.Number("parting_back_deg", s->parting_back_deg, {.min = -90, .max = 90});
+}
+
+void ReadHead(const ConfigNode& h, const std::string& scene_path, SceneHead* head) {
+  h.AllowOnlyKeys({"mesh", "mesh_pose", "center_mm", "radii_mm", "albedo", "scalp"});
+  if (h.Has("mesh")) {
+    head->mesh_file = Resolve(scene_path, h.String("mesh"));
+    if (h.Has("mesh_pose")) head->turntable_from_mesh = ReadPose(h.Child("mesh_pose"));
+  }
+  head->center_turntable_mm = h.Vec3("center_mm", head->center_turntable_mm);
+  head->radii_mm = h.Vec3("radii_mm", head->radii_mm);
+  if (h.ok() && head->radii_mm.minCoeff() <= 0) h.Fail("radii_mm", "every radius must be positive");
+  head->albedo = h.Vec3("albedo", head->albedo);
+  head->scalp.center_turntable_mm = head->center_turntable_mm;
+  if (h.Has("scalp")) ReadScalp(h.Child("scalp"), &head->scalp);
 }
 
 SceneCamera ReadCamera(const ConfigNode& n) {
@@ -103,21 +154,24 @@ SceneCamera ReadCamera(const ConfigNode& n) {
 
 Result<Scene> LoadScene(const std::string& path) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
-  root.AllowOnlyKeys({"name", "seed", "head", "wig", "calib_box", "lights", "cameras", "backdrop_albedo",
+  root.AllowOnlyKeys({"name", "seed", "head", "wig", "hair_shading", "calib_box", "lights", "cameras", "backdrop_albedo",
                       "ambient", "turntable"});
   Scene scene;
   scene.path = path;
   scene.name = root.String("name", "unnamed scene");
   scene.seed = static_cast<uint64_t>(root.Integer("seed", 1, {.min = 0}));
-  if (root.Has("head")) {
-    const ConfigNode h = root.Child("head");
-    h.AllowOnlyKeys({"center_mm", "radii_mm", "albedo"});
-    scene.head.center_turntable_mm = h.Vec3("center_mm", scene.head.center_turntable_mm);
-    scene.head.radii_mm = h.Vec3("radii_mm", scene.head.radii_mm);
-    if (root.ok() && scene.head.radii_mm.minCoeff() <= 0) h.Fail("radii_mm", "every radius must be positive");
-    scene.head.albedo = h.Vec3("albedo", scene.head.albedo);
-  }
+  if (root.Has("head")) ReadHead(root.Child("head"), path, &scene.head);
   if (root.Has("wig")) ReadWig(root.Child("wig"), path, &scene.wig);
+  if (root.Has("hair_shading")) {
+    const ConfigNode h = root.Child("hair_shading");
+    h.AllowOnlyKeys({"model", "shadows", "cuticle_tilt_deg", "roughness_deg"});
+    scene.hair_shading.model = h.Choice("model", {"marschner", "kajiya-kay"}, "marschner") == "kajiya-kay"
+                                   ? HairShading::Model::kKajiyaKay
+                                   : HairShading::Model::kMarschner;
+    scene.hair_shading.shadows = h.Bool("shadows", scene.hair_shading.shadows);
+    scene.hair_shading.cuticle_tilt_deg = h.Number("cuticle_tilt_deg", scene.hair_shading.cuticle_tilt_deg, {.min = -20, .max = 20});
+    scene.hair_shading.roughness_deg = h.Number("roughness_deg", scene.hair_shading.roughness_deg, {.min = 1, .max = 45});
+  }
   const ConfigNode box = root.Child("calib_box");
   box.AllowOnlyKeys({"file", "turntable_from_box"});
   const std::string box_file = Resolve(path, box.String("file"));

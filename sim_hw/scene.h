@@ -16,13 +16,46 @@
 
 namespace hairrig {
 
-struct SceneHead {
-  Eigen::Vector3d center_turntable_mm{0, 0, 250};  // an ellipsoid on a stand
-  Eigen::Vector3d radii_mm{78, 95, 115};
-  Eigen::Vector3d albedo{0.80, 0.66, 0.56};  // linear RGB
+// The part of the head hair grows from (sim_hw/head_model.h). Directions are
+// seen from `center_turntable_mm`; elevation 0 is level with it, 90 straight up
+// (+z); azimuth 0 is `face_dir`, 180 the back of the head.
+struct SceneScalp {
+  // False for a scene without `head.scalp`: the wig's own rule (WigOptions'
+  // scalp_min_elevation_deg and face cone) places the roots.
+  bool defined = false;
+  Eigen::Vector3d center_turntable_mm{0, 0, 330};
+  Eigen::Vector3d face_dir{0, -1, 0};  // horizontal, unit
+  // The hairline: roots lie above this elevation (deg), linear in azimuth
+  // between the forehead (0), the temples (45), above the ear (90 to 120) and the nape (180).
+  double hairline_front_deg = 38;
+  double hairline_temple_deg = 25;
+  double hairline_ear_deg = 8;
+  double hairline_nape_deg = -28;
+  // The parting: a bare line from the front hairline back over the crown to
+  // `parting_back_deg` past the vertical, in the plane through the centre
+  // that holds face_dir, tilted towards the head's left (+) or right (-) by
+  // `parting_offset_deg` (0 = a centre parting). Hair on either side is combed away from it.
+  bool parting = true;
+  double parting_offset_deg = 0;
+  double parting_width_mm = 2.5;
+  double parting_back_deg = 10;
 };
 
-enum class WigStyle { kStraight, kWavy, kCurly, kFile };
+struct SceneHead {
+  // A triangle mesh (PLY or OBJ, mm) placed by `turntable_from_mesh`; empty
+  // for the ellipsoid below.
+  std::string mesh_file;
+  Rigid3d turntable_from_mesh;
+  // The ellipsoid head; with a mesh, a skull-sized ellipsoid that hair
+  // dynamics use for contact and the calibration box's clearance check.
+  Eigen::Vector3d center_turntable_mm{0, 0, 250};
+  Eigen::Vector3d radii_mm{78, 95, 115};
+  Eigen::Vector3d albedo{0.80, 0.66, 0.56};  // linear RGB (skin or a mannequin's paint)
+  SceneScalp scalp;
+};
+
+enum class WigStyle { kStraight, kWavy, kCurly, kBangs, kFile };
+enum class ClumpProfile { kTip, kMiddle };
 
 struct WigOptions {
   WigStyle style = WigStyle::kWavy;
@@ -33,18 +66,53 @@ struct WigOptions {
   double min_length_mm = 150;
   double max_length_mm = 260;
   double segment_mm = 5;
-  // Scalp: directions from the head centre whose elevation is above this angle
-  // (deg; 0 = equator, 90 = crown), and outside the face cone around `face_dir`.
+  // Roots where the head has no `scalp`: directions from the head centre whose
+  // elevation is above this angle (deg; 0 = equator, 90 = crown), and outside
+  // the face cone around `face_dir`.
   double scalp_min_elevation_deg = -5;
   Eigen::Vector3d face_dir{0, -1, 0};
   double face_half_angle_deg = 55;
   double wave_amplitude_mm = 4;   // wavy
   double wave_period_mm = 35;
-  double curl_radius_mm = 5;      // curly
+  double curl_radius_mm = 5;      // curly: ringlets of twice this diameter
   double curl_pitch_mm = 14;
-  std::string file;               // style kFile: a strand file (turntable frame, mm)
-  Eigen::Vector3d albedo{0.30, 0.18, 0.09};
+  // Wisps: strands clumped around `wisps` wisp centres (0: every strand on its
+  // own). A member keeps its root's offset from the wisp's root in the wisp's
+  // frame, shrunk by `clump` (0..1) where the profile is tightest: at the tip,
+  // or in the middle (spread again towards the tip).
+  int wisps = 0;
+  ClumpProfile clump_profile = ClumpProfile::kTip;
+  double clump = 0.7;
+  double frizz_mm = 0;            // random sideways wander of each fibre, growing to this at the tip
+  double flyaway_fraction = 0;    // share of strands that leave their wisp in a loose arc
+  double flyaway_mm = 25;         // how far a flyaway's tip strays
+  double comb = 0.6;              // how strongly hair leaves the parting sideways (0..2)
+  // Bangs (style kBangs): strands rooted within `bangs_depth_deg` above the
+  // front hairline (and within 60 deg of the face) fall forward over the
+  // forehead, `bangs_length_mm` long; the rest falls as straight hair.
+  double bangs_depth_deg = 22;
+  double bangs_length_mm = 95;
+  // Style kFile: a strand file whose strands are the wisp guides, placed by
+  // `turntable_from_file`; `num_strands` members are grown around them (the
+  // file's own strands alone when num_strands is not larger than their count).
+  std::string file;
+  Rigid3d turntable_from_file;
+  double fibre_diameter_um = 70;
+  Eigen::Vector3d albedo{0.30, 0.18, 0.09};  // linear RGB of the fibre (its absorption colour)
   uint64_t seed = 1;
+};
+
+// How hair fibres are shaded and shadowed (sim_hw/renderer.h).
+struct HairShading {
+  // kMarschner: R, TT and TRT lobes (Marschner et al. 2003, in the simplified
+  // form of Sadeghi et al. 2010); kKajiyaKay: one diffuse and one specular
+  // lobe (Kajiya & Kay 1989), for comparison.
+  enum class Model { kMarschner, kKajiyaKay };
+  Model model = Model::kMarschner;
+  // Deep opacity maps from each LED panel: the hair shadows itself and the head.
+  bool shadows = true;
+  double cuticle_tilt_deg = -5;   // alpha: R shifts by alpha, TT by -alpha/2, TRT by -3 alpha/2 (towards the root)
+  double roughness_deg = 7;       // beta: R's longitudinal width; TT beta/2, TRT 2 beta
 };
 
 struct SceneLight {
@@ -69,6 +137,7 @@ struct Scene {
   uint64_t seed = 1;
   SceneHead head;
   WigOptions wig;
+  HairShading hair_shading;
   CalibBox box;
   Rigid3d turntable_from_box;
   std::vector<SceneLight> lights;

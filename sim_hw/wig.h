@@ -1,17 +1,23 @@
-// Procedural wigs for the simulated rig: roots spread over the scalp of the
-// ellipsoid head, strands that leave the scalp along its normal and fall under
-// gravity, kept outside the head, in straight, wavy or curly styles. Seeded:
-// the same options give the same strands on every machine.
+// Procedural wigs for the simulated rig: roots spread over the head's scalp,
+// strands that leave it along its normal (combed away from the parting) and
+// fall under gravity, kept outside the head, in straight, wavy, curly
+// (ringlets), bangs or file-guided styles. With wisps, strands clump around
+// wisp centres with a clump profile, frizz and a few flyaways. Seeded: the same
+// options give the same strands on every machine.
 #pragma once
 
 #include "core/status.h"
 #include "core/strands.h"
+#include "sim_hw/head_model.h"
 #include "sim_hw/scene.h"
 
 namespace hairrig {
 
 // Strands in the turntable frame (mm), root first. For WigStyle::kFile the
-// strands are read from options.file (turntable frame, mm).
+// file's strands (placed by options.turntable_from_file) are the wisp guides.
+// Errors name the field (wig.file).
+Result<StrandSet> GenerateWig(const WigOptions& options, const HeadModel& head);
+// The same on the head the scene part describes (built for the call).
 Result<StrandSet> GenerateWig(const WigOptions& options, const SceneHead& head);
 
 }  // namespace hairrig
