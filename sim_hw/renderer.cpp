@@ -38,7 +38,7 @@ struct HairSegment {
   float za = 0, zb = 0;      // their depths (mm)
   float width_px = 0;        // the fibre's projected diameter
   uint32_t strand = 0;
-  cv::Vec3f color;           // radiance (BGR)
+  cv::Vec3f color_a, color_b;  // radiance at its ends (BGR)
   float angle_deg = 0;       // 2D direction in [0, 180)
   float Depth() const { return 0.5f * (za + zb); }
 };
@@ -334,7 +334,8 @@ struct Renderer::Impl {
         if (v.depth(y, x) < z - kOcclusionMarginMm) continue;
         const float alpha = static_cast<float>(std::min(1.0, w < 1 ? w * (1.0 - d) : 0.5 * w + 0.5 - d));
         if (alpha <= 0) continue;
-        v.radiance(y, x) = v.radiance(y, x) * (1.0f - alpha) + seg.color * alpha;
+        const cv::Vec3f color = seg.color_a + static_cast<float>(t) * (seg.color_b - seg.color_a);
+        v.radiance(y, x) = v.radiance(y, x) * (1.0f - alpha) + color * alpha;
         v.hair_alpha(y, x) = 1.0f - (1.0f - v.hair_alpha(y, x)) * (1.0f - alpha);
         if (d <= 0.5 && z < v.hair_front_z(y, x)) {
           v.hair_front_z(y, x) = static_cast<float>(z);
@@ -345,31 +346,44 @@ struct Renderer::Impl {
     }
   }
 
-  // Every visible segment projected and shaded (strands spread over threads).
+  // Every visible segment projected and shaded at its ends (strands spread
+  // over threads); the colour is interpolated along it.
   std::vector<HairSegment> HairSegments(const View& v, const std::vector<Eigen::Vector3d>& p_cam,
                                         const std::vector<Eigen::Vector2d>& uv) const {
     const auto offsets = strands.Offsets();
     const double fibre_mm = 1e-3 * scene.wig.fibre_diameter_um;
     const double focal = 0.5 * (v.camera->intrinsics.fx_px + v.camera->intrinsics.fy_px);
+    const auto visible = [&](size_t i) {
+      const Eigen::Vector2d& a = uv[i - 1];
+      const Eigen::Vector2d& b = uv[i];
+      return p_cam[i - 1].z() > 1.0 && p_cam[i].z() > 1.0 && std::max(a.x(), b.x()) >= -2 &&
+             std::min(a.x(), b.x()) <= v.width + 1 && std::max(a.y(), b.y()) >= -2 &&
+             std::min(a.y(), b.y()) <= v.height + 1;
+    };
     std::vector<std::vector<HairSegment>> per_strand(strands.num_strands());
     ParallelFor(strands.num_strands(), v.threads, [&] {
       return [&](size_t s) {
         auto& out = per_strand[s];
-        for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
-          if (p_cam[i - 1].z() <= 1.0 || p_cam[i].z() <= 1.0) continue;
+        const size_t first = offsets[s], last = offsets[s + 1];
+        if (last - first < 2) return;
+        // Radiance at each point, with the tangent of the chord around it.
+        std::vector<cv::Vec3f> color(last - first);
+        bool any = false;
+        for (size_t i = first + 1; i < last && !any; ++i) any = visible(i);
+        if (!any) return;
+        for (size_t i = first; i < last; ++i) {
+          const size_t a = i == first ? i : i - 1, b = i + 1 < last ? i + 1 : i;
+          color[i - first] = ShadeStrand(v, p_cam[i], (p_cam[b] - p_cam[a]).normalized());
+        }
+        for (size_t i = first + 1; i < last; ++i) {
+          if (!visible(i)) continue;
           const Eigen::Vector2d a = uv[i - 1], b = uv[i];
-          if (std::max(a.x(), b.x()) < -2 || std::min(a.x(), b.x()) > v.width + 1 || std::max(a.y(), b.y()) < -2 ||
-              std::min(a.y(), b.y()) > v.height + 1) {
-            continue;
-          }
-          const Eigen::Vector3d t = (p_cam[i] - p_cam[i - 1]).normalized();
-          const Eigen::Vector3d mid = 0.5 * (p_cam[i] + p_cam[i - 1]);
           HairSegment seg;
           seg.a = a.cast<float>(), seg.b = b.cast<float>();
           seg.za = static_cast<float>(p_cam[i - 1].z()), seg.zb = static_cast<float>(p_cam[i].z());
-          seg.width_px = static_cast<float>(fibre_mm * focal / mid.z());
+          seg.width_px = static_cast<float>(fibre_mm * focal / (0.5 * (seg.za + seg.zb)));
           seg.strand = static_cast<uint32_t>(s);
-          seg.color = ShadeStrand(v, mid, t);
+          seg.color_a = color[i - 1 - first], seg.color_b = color[i - first];
           double angle = RadToDeg(std::atan2(b.y() - a.y(), b.x() - a.x()));
           if (angle < 0) angle += 180;
           seg.angle_deg = static_cast<float>(angle >= 180 ? angle - 180 : angle);

@@ -158,9 +158,17 @@ StrandSeed ScalpSeed(const WigOptions& o, const HeadModel& head, const Eigen::Ve
     comb = o.comb * (away - away.dot(normal) * normal);
   }
   s.start_dir = (normal + comb).normalized();
+  double elevation, azimuth;
+  head.ScalpAngles(root, &elevation, &azimuth);
+  // Hair rooted towards the face is combed back and aside, not over the face.
+  Eigen::Vector3d radial = root - scalp.center_turntable_mm;
+  radial.z() = 0;
+  if (azimuth < 110 && radial.norm() > 1e-9) {
+    const double frontness = std::cos(DegToRad(std::min(90.0, azimuth)));
+    s.fall_dir = (s.fall_dir + 0.25 * radial.normalized() - 0.45 * frontness * scalp.face_dir).normalized();
+    s.start_dir = (s.start_dir - 1.2 * frontness * scalp.face_dir).normalized();
+  }
   if (o.style == WigStyle::kBangs) {
-    double elevation, azimuth;
-    head.ScalpAngles(root, &elevation, &azimuth);
     if (azimuth < 60 && elevation < scalp.hairline_front_deg + o.bangs_depth_deg) {
       // Forward and down over the forehead, cut short.
       s.start_dir = (normal + 0.8 * scalp.face_dir).normalized();
