@@ -17,6 +17,7 @@
 #include "core/file_util.h"
 #include "core/strand_io.h"
 #include "core/log.h"
+#include "core/parallel.h"
 #include "drivers/camera_support.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
@@ -636,8 +637,22 @@ Status WriteGroundTruth(const SimWorld& world, const CapturePlan& plan, const st
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) return IoError(dir + ": cannot create (" + ec.message() + ")");
-  HR_RETURN_IF_ERROR(WriteFileAtomic(dir + "/ground_truth.json", GroundTruthJson(scene, truths)));
-  return WriteStrands(dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm());
+  HR_RETURN_IF_ERROR(WriteFileAtomic(dir + "/ground_truth.json", GroundTruthJson(scene, truths, /*with_maps=*/true)));
+  HR_RETURN_IF_ERROR(WriteStrands(dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm()));
+  // The per-pixel maps of every planned view, rendered again without noise.
+  std::vector<Status> errors(truths.size());
+  ParallelFor(truths.size(), 2, [&] {
+    return [&](size_t i) {
+      RenderOptions o;
+      o.noise = false;
+      o.threads = 1;
+      o.ground_truth = true;
+      auto view = WorldRenderer(world).Render(truths[i].camera_index, truths[i].turntable_deg, o);
+      errors[i] = view.ok() ? WriteViewTruthMaps(dir + "/views", truths[i].view, view->truth) : view.status();
+    };
+  });
+  for (const Status& s : errors) HR_RETURN_IF_ERROR(s);
+  return Status::Ok();
 }
 
 // <capture>/contact_sheet.png from the verified frames, in plan order.

@@ -165,11 +165,20 @@ Eigen::Vector3d HeadModel::KeepOutside(const Eigen::Vector3d& p, double margin_m
     if (n >= 1.0 || n < 1e-9) return p;
     return head_.center_turntable_mm + (q / n).cwiseProduct(r);
   }
+  // Deep inside, the grid's distance is flat at -kBandMm: step away from the
+  // mesh's centre until the surface is within the band, then follow the gradient.
+  const Eigen::Vector3d centre = 0.5 * (mesh_.MinCorner() + mesh_.MaxCorner());
   Eigen::Vector3d q = p;
-  for (int iteration = 0; iteration < 4; ++iteration) {
-    if (GridDistance(q) >= margin_mm - 1e-6) break;
+  for (int iteration = 0; iteration < 64; ++iteration) {
+    const double d = GridDistance(q);
+    if (d >= margin_mm - 1e-6) break;
+    if (d <= -kBandMm + grid_step_mm_) {
+      const Eigen::Vector3d away = q - centre;
+      q += kBandMm * (away.norm() > 1e-9 ? Eigen::Vector3d(away.normalized()) : Eigen::Vector3d::UnitZ());
+      continue;
+    }
     Eigen::Vector3d outward;
-    const double d = SignedDistance(q, &outward);
+    SignedDistance(q, &outward);
     q += (margin_mm - d) * outward;
   }
   return q;

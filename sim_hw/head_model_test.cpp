@@ -2,10 +2,76 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include "sim_hw/scene.h"
+
 namespace hairrig {
 namespace {
 
-TEST(HeadModel, Placeholder) {}
+Scene DefaultScene() {
+  auto scene = LoadScene("etc/scenes/default.yaml");
+  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
+  return *scene;
+}
+
+// The mannequin's distance grid: points pushed out by KeepOutside are outside
+// the mesh (the BVH's parity test) and near the surface they were pushed to.
+TEST(HeadModel, TheMeshHeadKeepsPointsOutsideAndKnowsInsideFromOutside) {
+  auto head = HeadModel::Build(DefaultScene().head);
+  ASSERT_TRUE(head.ok()) << head.status().ToString();
+  ASSERT_TRUE((*head)->is_mesh());
+  const MeshBvh bvh((*head)->mesh());
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Eigen::Vector3d lo = (*head)->mesh().MinCorner(), hi = (*head)->mesh().MaxCorner();
+  int inside = 0, checked = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d p = 0.5 * (lo + hi) + 0.5 * (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const double d = (*head)->SignedDistance(p, nullptr);
+    if (std::abs(d) < 3.0) continue;  // within the grid's resolution of the surface
+    ++checked;
+    EXPECT_EQ(d < 0, bvh.Contains(p)) << "sign of the distance at " << p.transpose();
+    if (d < 0) {
+      ++inside;
+      const Eigen::Vector3d q = (*head)->KeepOutside(p, 1.0);
+      EXPECT_FALSE(bvh.Contains(q)) << p.transpose() << " -> " << q.transpose();
+    }
+  }
+  EXPECT_GT(inside, 100);
+  EXPECT_GT(checked, 1000);
+}
+
+// Roots lie on the scalp: above the hairline, off the parting, on the surface.
+TEST(HeadModel, ScalpSamplesLieOnTheHeadAboveTheHairline) {
+  auto head = HeadModel::Build(DefaultScene().head);
+  ASSERT_TRUE(head.ok());
+  std::mt19937_64 rng(9);
+  int left = 0, right = 0;
+  for (int i = 0; i < 2000; ++i) {
+    Eigen::Vector3d n;
+    const Eigen::Vector3d p = (*head)->SampleScalp(rng, &n);
+    EXPECT_TRUE((*head)->OnScalp(p));
+    EXPECT_LT(std::abs((*head)->SignedDistance(p, nullptr)), 1.5) << "on the surface";
+    double elevation, azimuth;
+    (*head)->ScalpAngles(p, &elevation, &azimuth);
+    EXPECT_GT(elevation, -31) << "no roots below the nape's hairline";
+    if (azimuth < 10) {  // the hairline is at 32 deg over the face, 22 at the temples
+      EXPECT_GT(elevation, 29.5) << "the forehead is bare";
+    }
+    (*head)->ScalpSide(p) > 0 ? ++left : ++right;
+  }
+  EXPECT_GT(left, 300);
+  EXPECT_GT(right, 300);
+}
+
+TEST(HeadModel, AMissingMeshNamesTheField) {
+  SceneHead h;
+  h.mesh_file = "/nonexistent/head.ply";
+  auto head = HeadModel::Build(h);
+  ASSERT_FALSE(head.ok());
+  EXPECT_NE(head.status().message().find("head.mesh"), std::string::npos) << head.status().message();
+}
 
 }  // namespace
 }  // namespace hairrig

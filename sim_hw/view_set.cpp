@@ -60,6 +60,8 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
       o.noise = options.noise;
       o.noise_seed = scene.seed * 1000003ull + static_cast<uint64_t>(v);
       o.light_levels = options.light_levels;
+      o.threads = 1;  // the views are already spread over the threads
+      o.ground_truth = true;
       auto view = renderer.Render(g.camera_index, g.turntable_deg, o);
       if (!view.ok()) {
         errors[static_cast<size_t>(v)] = view.status();
@@ -73,6 +75,9 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
         continue;
       }
       errors[static_cast<size_t>(v)] = WriteFileAtomic(path, png.data(), png.size());
+      if (errors[static_cast<size_t>(v)].ok()) {
+        errors[static_cast<size_t>(v)] = WriteViewTruthMaps(out_dir + "/views", v, view->truth);
+      }
       images[static_cast<size_t>(v)] = view->image;
       truths[static_cast<size_t>(v)] = std::move(g);
     }
@@ -97,7 +102,7 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
   summary.contact_sheet = "contact_sheet.png";
   HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.contact_sheet, png.data(), png.size()));
   summary.ground_truth = "ground_truth.json";
-  HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.ground_truth, GroundTruthJson(scene, truths)));
+  HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.ground_truth, GroundTruthJson(scene, truths, /*with_maps=*/true)));
   HR_RETURN_IF_ERROR(WriteStrands(out_dir + "/ground_truth_strands.ply", renderer.strands_turntable_mm()));
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;

@@ -27,8 +27,9 @@ struct RenderViewsSummary {
 };
 
 // Writes <out>/<view>_<serial>.png for every view (view = stop * cameras +
-// camera, three digits), contact_sheet.png, ground_truth.json and
-// ground_truth_strands.ply (turntable frame). `out` must exist.
+// camera, three digits), contact_sheet.png, ground_truth.json,
+// ground_truth_strands.ply (turntable frame) and the per-pixel maps of every
+// view in <out>/views/ (sim_hw/ground_truth.h). `out` must exist.
 Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::string& out_dir,
                                           const RenderViewsOptions& options);
 
