@@ -442,11 +442,14 @@ struct Renderer::Impl {
     head_cam.Transform(v.cam_from_turntable);
     const auto offsets = with_hair ? strands.Offsets() : std::vector<size_t>{0};
     const std::vector<Eigen::Vector3d> none;
+    // A texel per 3 pixels of the view's larger side (a full-size view: 512).
+    ShadowMapOptions options;
+    options.resolution = std::clamp(std::max(v.width, v.height) / 3, 64, 512);
     v.shadows.resize(v.light_power.size());
     ParallelFor(v.light_power.size(), v.threads, [&] {
       return [&](size_t i) {
         v.shadows[i] = LightShadowMap::Build(v.light_pos_cam[i], with_hair ? p_cam : none, offsets,
-                                             1e-3 * scene.wig.fibre_diameter_um, head_cam);
+                                             1e-3 * scene.wig.fibre_diameter_um, head_cam, options);
       };
     });
   }
