@@ -65,6 +65,7 @@ Result<std::unique_ptr<HeadModel>> HeadModel::Build(const SceneHead& head) {
     model->mesh_ = MakeEllipsoidMesh(head.center_turntable_mm, head.radii_mm, static_cast<int>(kEllipsoidRings),
                                      static_cast<int>(kEllipsoidSegments));
   }
+  model->mesh_centre_mm_ = 0.5 * (model->mesh_.MinCorner() + model->mesh_.MaxCorner());
   // Angle-weighted vertex normals for smooth shading and for the distance's sign.
   model->vertex_normals_.assign(model->mesh_.vertices_mm.size(), Eigen::Vector3d::Zero());
   for (size_t t = 0; t < model->mesh_.num_triangles(); ++t) {
@@ -167,7 +168,7 @@ Eigen::Vector3d HeadModel::KeepOutside(const Eigen::Vector3d& p, double margin_m
   }
   // Deep inside, the grid's distance is flat at -kBandMm: step away from the
   // mesh's centre until the surface is within the band, then follow the gradient.
-  const Eigen::Vector3d centre = 0.5 * (mesh_.MinCorner() + mesh_.MaxCorner());
+  const Eigen::Vector3d& centre = mesh_centre_mm_;
   Eigen::Vector3d q = p;
   for (int iteration = 0; iteration < 64; ++iteration) {
     const double d = GridDistance(q);

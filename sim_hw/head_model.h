@@ -75,6 +75,7 @@ class HeadModel {
 
   SceneHead head_;
   TriangleMesh mesh_;
+  Eigen::Vector3d mesh_centre_mm_ = Eigen::Vector3d::Zero();  // centre of the mesh's bounds
   MeshBvh bvh_;
   std::vector<Eigen::Vector3d> vertex_normals_;
   std::vector<double> cumulative_scalp_area_;   // per triangle, for sampling
