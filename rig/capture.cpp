@@ -647,6 +647,7 @@ Status WriteGroundTruth(const SimWorld& world, const CapturePlan& plan, const st
       o.noise = false;
       o.threads = 1;
       o.ground_truth = true;
+      o.shade_hair = false;  // the maps are geometry: no shading or shadows needed
       auto view = WorldRenderer(world).Render(truths[i].camera_index, truths[i].turntable_deg, o);
       errors[i] = view.ok() ? WriteViewTruthMaps(dir + "/views", truths[i].view, view->truth) : view.status();
     };

@@ -30,6 +30,7 @@ struct RenderArgs {
   bool all = false;
   bool no_noise = false;
   int threads = 2;
+  std::vector<int> crop;  // x, y, width, height (px); empty = the whole view
 };
 
 Result<std::unique_ptr<Renderer>> LoadRenderer(const std::string& scene_arg) {
@@ -57,6 +58,15 @@ Result<nlohmann::json> RenderOne(const RenderArgs& a) {
   o.noise = !a.no_noise;
   o.noise_seed = scene.seed * 1000003ull + static_cast<uint64_t>(a.view);
   HR_ASSIGN_OR_RETURN(RenderedView view, renderer->Render(g.camera_index, g.turntable_deg, o));
+  if (!a.crop.empty()) {
+    const cv::Rect rect(a.crop[0], a.crop[1], a.crop[2], a.crop[3]);
+    if (rect.width <= 0 || rect.height <= 0 || (rect & cv::Rect(0, 0, view.image.cols, view.image.rows)) != rect) {
+      return InvalidArgument("--crop " + std::to_string(rect.x) + "," + std::to_string(rect.y) + "," +
+                             std::to_string(rect.width) + "," + std::to_string(rect.height) + " is not inside the " +
+                             std::to_string(view.image.cols) + " x " + std::to_string(view.image.rows) + " view");
+    }
+    view.image = view.image(rect).clone();
+  }
   std::vector<uint8_t> bytes;
   if (!cv::imencode("." + ext, view.image, bytes)) return IoError(a.out + ": encoding failed");
   HR_RETURN_IF_ERROR(WriteFileAtomic(a.out, bytes.data(), bytes.size()));
@@ -315,6 +325,10 @@ void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   view->excludes(all);
   render->add_option("--out", args->out, "output image (--view) or folder (--all)")->required();
   render->add_flag("--no-noise", args->no_noise, "render without sensor noise");
+  render->add_option("--crop", args->crop, "with --view: write only the pixels X,Y,WIDTH,HEIGHT, at full resolution")
+      ->delimiter(',')
+      ->expected(4)
+      ->excludes(all);
   render->add_option("--threads", args->threads, "render threads for --all")->check(CLI::Range(1, 64));
   render->add_flag("--json", common.json, "print the summary as one JSON object");
   AddServeCommand(*sim, common, dispatch);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -78,6 +80,7 @@ struct Renderer::Impl {
     cv::Mat1i hair_id;
     std::vector<LightShadowMap> shadows;  // per light, when the scene shades with shadows
     int threads = 1;
+    bool shade_hair = true;
   };
 
   double Irradiance(const View& v, const Eigen::Vector3d& p_cam, const Eigen::Vector3d& n_cam) const {
@@ -305,40 +308,46 @@ struct Renderer::Impl {
   // over what is there; the front-most strand within half a pixel is the
   // pixel's ground truth.
   void DrawSegment(View& v, const HairSegment& seg, int y_begin, int y_end) const {
-    constexpr double kOcclusionMarginMm = 3.0;
-    const Eigen::Vector2d a = seg.a.cast<double>(), b = seg.b.cast<double>();
-    const Eigen::Vector2d ab = b - a;
-    const double len2 = ab.squaredNorm();
-    if (len2 < 1e-12) return;
-    const int x0 = std::max(0, static_cast<int>(std::floor(std::min(a.x(), b.x()) - 1)));
-    const int x1 = std::min(v.width - 1, static_cast<int>(std::ceil(std::max(a.x(), b.x()) + 1)));
-    const int y0 = std::max(y_begin, static_cast<int>(std::floor(std::min(a.y(), b.y()) - 1)));
-    const int y1 = std::min(y_end - 1, static_cast<int>(std::ceil(std::max(a.y(), b.y()) + 1)));
-    const bool steep = std::abs(ab.y()) > std::abs(ab.x());
-    const double w = seg.width_px;
-    // Walk the major axis; on each line only the pixels within 1.5 px of the segment.
+    constexpr float kOcclusionMarginMm = 3.0f;
+    const float ax = seg.a.x(), ay = seg.a.y();
+    const float dx = seg.b.x() - ax, dy = seg.b.y() - ay;
+    const float len2 = dx * dx + dy * dy;
+    if (len2 < 1e-12f) return;
+    const float inv_len2 = 1.0f / len2, inv_len = std::sqrt(inv_len2);
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min(ax, seg.b.x()) - 1)));
+    const int x1 = std::min(v.width - 1, static_cast<int>(std::ceil(std::max(ax, seg.b.x()) + 1)));
+    const int y0 = std::max(y_begin, static_cast<int>(std::floor(std::min(ay, seg.b.y()) - 1)));
+    const int y1 = std::min(y_end - 1, static_cast<int>(std::ceil(std::max(ay, seg.b.y()) + 1)));
+    const bool steep = std::abs(dy) > std::abs(dx);
+    // A pixel within 1 px of the line lies within `reach` of it along the minor axis.
+    const float reach = std::sqrt(len2) / std::max(std::abs(dx), std::abs(dy));
+    const float w = seg.width_px;
     const int major0 = steep ? y0 : x0, major1 = steep ? y1 : x1;
     for (int m = major0; m <= major1; ++m) {
-      const double t_line = steep ? (m - a.y()) / ab.y() : (m - a.x()) / ab.x();
-      const double centre = steep ? a.x() + t_line * ab.x() : a.y() + t_line * ab.y();
-      const int lo = static_cast<int>(std::floor(centre - 1.5)), hi = static_cast<int>(std::ceil(centre + 1.5));
+      const float mf = static_cast<float>(m);
+      const float t_line = steep ? (mf - ay) / dy : (mf - ax) / dx;
+      const float centre = steep ? ax + t_line * dx : ay + t_line * dy;
+      const int lo = std::max(steep ? x0 : y0, static_cast<int>(std::floor(centre - reach)));
+      const int hi = std::min(steep ? x1 : y1, static_cast<int>(std::ceil(centre + reach)));
       for (int k = lo; k <= hi; ++k) {
         const int x = steep ? k : m, y = steep ? m : k;
-        if (x < x0 || x > x1 || y < y0 || y > y1) continue;
-        const Eigen::Vector2d p(x, y);
-        const double t = (p - a).dot(ab) / len2;
+        const float px = static_cast<float>(x) - ax, py = static_cast<float>(y) - ay;
+        const float t = (px * dx + py * dy) * inv_len2;
         if (t < 0 || t >= 1) continue;  // each pixel belongs to one segment of a strand's chain
-        const double d = (a + t * ab - p).norm();
-        if (d >= 1.0) continue;
-        const double z = seg.za + t * (seg.zb - seg.za);
+        const float d = std::abs(px * dy - py * dx) * inv_len;
+        if (d >= 1.0f) continue;
+        const float z = seg.za + t * (seg.zb - seg.za);
         if (v.depth(y, x) < z - kOcclusionMarginMm) continue;
-        const float alpha = static_cast<float>(std::min(1.0, w < 1 ? w * (1.0 - d) : 0.5 * w + 0.5 - d));
+        const float alpha = std::min(1.0f, w < 1 ? w * (1.0f - d) : 0.5f * w + 0.5f - d);
         if (alpha <= 0) continue;
-        const cv::Vec3f color = seg.color_a + static_cast<float>(t) * (seg.color_b - seg.color_a);
-        v.radiance(y, x) = v.radiance(y, x) * (1.0f - alpha) + color * alpha;
-        v.hair_alpha(y, x) = 1.0f - (1.0f - v.hair_alpha(y, x)) * (1.0f - alpha);
-        if (d <= 0.5 && z < v.hair_front_z(y, x)) {
-          v.hair_front_z(y, x) = static_cast<float>(z);
+        const cv::Vec3f color = seg.color_a + t * (seg.color_b - seg.color_a);
+        cv::Vec3f& radiance = v.radiance(y, x);
+        radiance = radiance * (1.0f - alpha) + color * alpha;
+        float& coverage = v.hair_alpha(y, x);
+        coverage = 1.0f - (1.0f - coverage) * (1.0f - alpha);
+        float& front = v.hair_front_z(y, x);
+        if (d <= 0.5f && z < front) {
+          front = z;
           v.hair_id(y, x) = static_cast<int>(seg.strand);
           v.hair_angle(y, x) = seg.angle_deg;
         }
@@ -347,7 +356,8 @@ struct Renderer::Impl {
   }
 
   // Every visible segment projected and shaded at its ends (strands spread
-  // over threads); the colour is interpolated along it.
+  // over threads); the colour is interpolated along it. Segments are laid out
+  // strand by strand: a count per strand first, then one array filled in place.
   std::vector<HairSegment> HairSegments(const View& v, const std::vector<Eigen::Vector3d>& p_cam,
                                         const std::vector<Eigen::Vector2d>& uv) const {
     const auto offsets = strands.Offsets();
@@ -360,25 +370,32 @@ struct Renderer::Impl {
              std::min(a.x(), b.x()) <= v.width + 1 && std::max(a.y(), b.y()) >= -2 &&
              std::min(a.y(), b.y()) <= v.height + 1;
     };
-    std::vector<std::vector<HairSegment>> per_strand(strands.num_strands());
-    ParallelFor(strands.num_strands(), v.threads, [&] {
+    const size_t n = strands.num_strands();
+    std::vector<size_t> first_segment(n + 1, 0);
+    ParallelFor(n, v.threads, [&] {
       return [&](size_t s) {
-        auto& out = per_strand[s];
+        size_t count = 0;
+        for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) count += visible(i) ? 1 : 0;
+        first_segment[s + 1] = count;
+      };
+    });
+    for (size_t s = 0; s < n; ++s) first_segment[s + 1] += first_segment[s];
+    std::vector<HairSegment> all(first_segment[n]);
+    ParallelFor(n, v.threads, [&] {
+      return [&, color = std::vector<cv::Vec3f>()](size_t s) mutable {
         const size_t first = offsets[s], last = offsets[s + 1];
-        if (last - first < 2) return;
+        if (first_segment[s + 1] == first_segment[s]) return;
         // Radiance at each point, with the tangent of the chord around it.
-        std::vector<cv::Vec3f> color(last - first);
-        bool any = false;
-        for (size_t i = first + 1; i < last && !any; ++i) any = visible(i);
-        if (!any) return;
-        for (size_t i = first; i < last; ++i) {
+        color.assign(last - first, cv::Vec3f(0, 0, 0));
+        for (size_t i = first; i < last && v.shade_hair; ++i) {
           const size_t a = i == first ? i : i - 1, b = i + 1 < last ? i + 1 : i;
           color[i - first] = ShadeStrand(v, p_cam[i], (p_cam[b] - p_cam[a]).normalized());
         }
+        HairSegment* out = &all[first_segment[s]];
         for (size_t i = first + 1; i < last; ++i) {
           if (!visible(i)) continue;
           const Eigen::Vector2d a = uv[i - 1], b = uv[i];
-          HairSegment seg;
+          HairSegment& seg = *out++;
           seg.a = a.cast<float>(), seg.b = b.cast<float>();
           seg.za = static_cast<float>(p_cam[i - 1].z()), seg.zb = static_cast<float>(p_cam[i].z());
           seg.width_px = static_cast<float>(fibre_mm * focal / (0.5 * (seg.za + seg.zb)));
@@ -387,42 +404,47 @@ struct Renderer::Impl {
           double angle = RadToDeg(std::atan2(b.y() - a.y(), b.x() - a.x()));
           if (angle < 0) angle += 180;
           seg.angle_deg = static_cast<float>(angle >= 180 ? angle - 180 : angle);
-          out.push_back(seg);
         }
       };
     });
-    std::vector<HairSegment> all;
-    size_t total = 0;
-    for (const auto& s : per_strand) total += s.size();
-    all.reserve(total);
-    for (auto& s : per_strand) all.insert(all.end(), s.begin(), s.end());
     return all;
   }
 
   void DrawHair(View& v, const std::vector<Eigen::Vector3d>& p_cam) const {
     const auto params = v.camera->intrinsics.ToParams();
-    std::vector<Eigen::Vector2d> uv(p_cam.size(), Eigen::Vector2d(-1e9, -1e9));
-    for (size_t i = 0; i < p_cam.size(); ++i) {
-      if (p_cam[i].z() > 1.0) ProjectCamPoint(params.data(), p_cam[i].data(), uv[i].data());
-    }
+    std::vector<Eigen::Vector2d> uv(p_cam.size());
+    constexpr size_t kChunk = 4096;
+    ParallelFor((p_cam.size() + kChunk - 1) / kChunk, v.threads, [&] {
+      return [&](size_t chunk) {
+        for (size_t i = chunk * kChunk; i < std::min(p_cam.size(), (chunk + 1) * kChunk); ++i) {
+          uv[i] = Eigen::Vector2d(-1e9, -1e9);
+          if (p_cam[i].z() > 1.0) ProjectCamPoint(params.data(), p_cam[i].data(), uv[i].data());
+        }
+      };
+    });
     const std::vector<HairSegment> segments = HairSegments(v, p_cam, uv);
-    // Horizontal bands, each with the segments that reach it, far to near.
-    constexpr int kBandRows = 64;
+    // Horizontal bands, each with the segments that reach it, far to near:
+    // a key per segment, its depth's bits above its index, sorted descending
+    // (positive floats order as their bit patterns do).
+    constexpr int kBandRows = 16;
     const int bands = (v.height + kBandRows - 1) / kBandRows;
-    std::vector<std::vector<uint32_t>> band_segments(static_cast<size_t>(bands));
+    std::vector<std::vector<uint64_t>> band_keys(static_cast<size_t>(bands));
     for (size_t i = 0; i < segments.size(); ++i) {
       const HairSegment& s = segments[i];
+      uint32_t depth_bits;
+      const float depth = std::max(0.0f, s.Depth());
+      std::memcpy(&depth_bits, &depth, sizeof depth_bits);
+      const uint64_t key = (static_cast<uint64_t>(depth_bits) << 32) | static_cast<uint32_t>(i);
       const int b0 = std::max(0, static_cast<int>(std::floor(std::min(s.a.y(), s.b.y()) - 1.5f)) / kBandRows);
       const int b1 = std::min(bands - 1, static_cast<int>(std::ceil(std::max(s.a.y(), s.b.y()) + 1.5f)) / kBandRows);
-      for (int b = b0; b <= b1; ++b) band_segments[static_cast<size_t>(b)].push_back(static_cast<uint32_t>(i));
+      for (int b = b0; b <= b1; ++b) band_keys[static_cast<size_t>(b)].push_back(key);
     }
     ParallelFor(static_cast<size_t>(bands), v.threads, [&] {
       return [&](size_t b) {
-        auto& list = band_segments[b];
-        std::sort(list.begin(), list.end(),
-                  [&](uint32_t x, uint32_t y) { return segments[x].Depth() > segments[y].Depth(); });
+        auto& keys = band_keys[b];
+        std::sort(keys.begin(), keys.end(), std::greater<uint64_t>());
         const int y_begin = static_cast<int>(b) * kBandRows, y_end = std::min(v.height, y_begin + kBandRows);
-        for (uint32_t i : list) DrawSegment(v, segments[i], y_begin, y_end);
+        for (uint64_t key : keys) DrawSegment(v, segments[static_cast<uint32_t>(key)], y_begin, y_end);
       };
     });
   }
@@ -589,8 +611,9 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, co
   v.hair_angle = cv::Mat1f(v.height, v.width, 0.0f);
   v.hair_id = cv::Mat1i(v.height, v.width, -1);
   v.threads = std::max(1, options.threads);
+  v.shade_hair = options.shade_hair;
   const std::vector<Eigen::Vector3d> p_cam = options.draw_hair ? impl_->StrandsInCamera(v) : std::vector<Eigen::Vector3d>{};
-  if (scene.hair_shading.shadows && total_power > 0) impl_->BuildShadows(v, p_cam, options.draw_hair);
+  if (scene.hair_shading.shadows && total_power > 0 && options.shade_hair) impl_->BuildShadows(v, p_cam, options.draw_hair);
   impl_->DrawBackdrop(v);
   impl_->DrawHead(v);
   impl_->DrawBox(v);

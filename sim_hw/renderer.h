@@ -38,6 +38,8 @@ struct RenderOptions {
   bool draw_hair = true;
   int threads = 2;                   // for the hair and the head (a view is split in bands)
   bool ground_truth = false;         // fill RenderedView::truth
+  bool shade_hair = true;            // false: fibres drawn unlit and no shadow maps built (for
+                                     // ground-truth maps alone: the geometry is the same, the image is not)
 };
 
 // Per-pixel ground truth of one rendered view (pixel (0,0) is the centre of

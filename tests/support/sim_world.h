@@ -1,9 +1,12 @@
 // Test helper: the simulated world of etc/scenes/default.yaml (or another
 // scene), noise-free and 100x faster than real time, optionally with its
-// panels on. Header-only;
-// run from the repository root (as ctest does).
+// panels on. The wig is thinned to kDriverTestStrands: these tests check
+// device protocols and timing, not the hair in the frames, and a frame of the
+// full wig costs several times more to render. Header-only; run from the
+// repository root (as ctest does).
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,6 +23,8 @@ inline std::shared_ptr<hairrig::SimWorld> MakeSimWorld(std::vector<hairrig::SimF
                                                        const std::string& scene_path = "etc/scenes/default.yaml") {
   auto scene = hairrig::LoadScene(scene_path);
   EXPECT_TRUE(scene.ok()) << scene.status().ToString();
+  constexpr int kDriverTestStrands = 3000;
+  scene->wig.num_strands = std::min(scene->wig.num_strands, kDriverTestStrands);
   hairrig::SimWorldOptions options;
   options.time_scale = 0.01;
   options.noise = false;
