@@ -8,19 +8,18 @@
 #include <fstream>
 #include <random>
 
+#include <opencv2/core.hpp>
+
 #include "core/camera_model.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/head_model.h"
 #include "sim_hw/renderer.h"
+#include "tests/support/default_scene.h"
 
 namespace hairrig {
 namespace {
 
-Scene DefaultScene() {
-  auto scene = LoadScene("etc/scenes/default.yaml");
-  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
-  return *scene;
-}
+using hairrig_test::DefaultScene;
 
 RenderedView RenderTruth(const Renderer& renderer, int camera, double turntable_deg, bool draw_hair = true) {
   RenderOptions o;
@@ -54,6 +53,19 @@ TEST(HairRender, GroundTruthMapsAgreeWithTheGeometry) {
   ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
   const Scene& scene = (*renderer)->scene();
   const RenderedView view = RenderTruth(**renderer, 1, 40.0);
+  {
+    // The maps are geometry: rendered unshaded (as a capture writes them) they are the same.
+    RenderOptions unshaded;
+    unshaded.noise = false;
+    unshaded.ground_truth = true;
+    unshaded.shade_hair = false;
+    auto geometry_only = (*renderer)->Render(1, 40.0, unshaded);
+    ASSERT_TRUE(geometry_only.ok()) << geometry_only.status().ToString();
+    EXPECT_EQ(cv::countNonZero(geometry_only->truth.label != view.truth.label), 0);
+    EXPECT_EQ(cv::countNonZero(geometry_only->truth.strand_id != view.truth.strand_id), 0);
+    EXPECT_EQ(cv::norm(geometry_only->truth.depth_mm, view.truth.depth_mm, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(geometry_only->truth.hair_alpha, view.truth.hair_alpha, cv::NORM_INF), 0.0);
+  }
   const std::string dir = (std::filesystem::temp_directory_path() / "hairrig_truth_maps").string();
   ASSERT_TRUE(WriteViewTruthMaps(dir, 3, view.truth).ok());
   auto maps = ReadViewTruthMaps(dir, 3);

@@ -5,15 +5,12 @@
 #include <random>
 
 #include "sim_hw/scene.h"
+#include "tests/support/default_scene.h"
 
 namespace hairrig {
 namespace {
 
-Scene DefaultScene() {
-  auto scene = LoadScene("etc/scenes/default.yaml");
-  EXPECT_TRUE(scene.ok()) << scene.status().ToString();
-  return *scene;
-}
+using hairrig_test::DefaultScene;
 
 // The mannequin's distance grid: points pushed out by KeepOutside are outside
 // the mesh (the BVH's parity test) and near the surface they were pushed to.
