@@ -1,5 +1,7 @@
 #include "core/file_util.h"
 
+#include <atomic>
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -34,7 +36,9 @@ Status SyncFolder(const std::string& folder) {
 
 Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
                        const std::function<void(const char* stage)>& on_stage) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  // Unique per process and per call, so that two threads writing one path never share a temporary.
+  static std::atomic<uint64_t> next_temporary{0};
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(next_temporary++);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return IoError(tmp + ": cannot create (" + std::strerror(errno) + ")");
   const auto* p = static_cast<const uint8_t*>(bytes);

@@ -15,14 +15,12 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/file_util.h"
-#include "core/strand_io.h"
 #include "core/log.h"
-#include "core/parallel.h"
 #include "drivers/camera_support.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
-#include "sim_hw/ground_truth.h"
+#include "sim_hw/capture_truth.h"
 #include "sim_hw/view_set.h"
 
 namespace hairrig {
@@ -623,37 +621,13 @@ CaptureSummary Sequencer::Run() {
   return summary;
 }
 
-// <capture>/ground_truth/: what the simulated rig really was, per planned view.
-Status WriteGroundTruth(const SimWorld& world, const CapturePlan& plan, const std::string& capture_dir) {
-  const Scene& scene = WorldRenderer(world).scene();
-  std::vector<ViewGroundTruth> truths;
+// The planned views as the simulated rig's ground truth lists them.
+std::vector<PlannedTruthView> TruthViews(const CapturePlan& plan) {
+  std::vector<PlannedTruthView> views;
   for (const PlannedView& v : plan.views) {
-    const int camera = scene.FindCamera(v.camera_serial);
-    if (camera < 0) continue;
-    const PlannedStop& stop = plan.stops[static_cast<size_t>(v.stop)];
-    truths.push_back(MakeViewGroundTruth(scene, v.index, v.stop, camera, stop.angle_deg));
+    views.push_back({v.index, v.stop, v.camera_serial, plan.stops[static_cast<size_t>(v.stop)].angle_deg});
   }
-  const std::string dir = capture_dir + "/ground_truth";
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) return IoError(dir + ": cannot create (" + ec.message() + ")");
-  HR_RETURN_IF_ERROR(WriteFileAtomic(dir + "/ground_truth.json", GroundTruthJson(scene, truths, /*with_maps=*/true)));
-  HR_RETURN_IF_ERROR(WriteStrands(dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm()));
-  // The per-pixel maps of every planned view, rendered again without noise.
-  std::vector<Status> errors(truths.size());
-  ParallelFor(truths.size(), 2, [&] {
-    return [&](size_t i) {
-      RenderOptions o;
-      o.noise = false;
-      o.threads = 1;
-      o.ground_truth = true;
-      o.shade_hair = false;  // the maps are geometry: no shading or shadows needed
-      auto view = WorldRenderer(world).Render(truths[i].camera_index, truths[i].turntable_deg, o);
-      errors[i] = view.ok() ? WriteViewTruthMaps(dir + "/views", truths[i].view, view->truth) : view.status();
-    };
-  });
-  for (const Status& s : errors) HR_RETURN_IF_ERROR(s);
-  return Status::Ok();
+  return views;
 }
 
 // <capture>/contact_sheet.png from the verified frames, in plan order.
@@ -762,10 +736,14 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
     }
   }
   HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
-  if (rig->sim_world) HR_RETURN_IF_ERROR(WriteGroundTruth(*rig->sim_world, plan, dataset->dir()));
+  std::unique_ptr<CaptureGroundTruth> truth;
+  if (rig->sim_world) {
+    HR_ASSIGN_OR_RETURN(truth, CaptureGroundTruth::Begin(*rig->sim_world, TruthViews(plan), dataset->dir()));
+  }
   Sequencer sequencer(*rig, plan, policies, *dataset, options);
   CaptureSummary summary = sequencer.Run();
   rig->devices.CloseAll();
+  if (truth) HR_RETURN_IF_ERROR(truth->Finish());
   if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   summary.dir = dataset->dir();
   return summary;

@@ -1,6 +1,7 @@
 #include "rig/capture.h"
 
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -8,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "rig/capture_test_util.h"
+#include "sim_hw/ground_truth.h"
+#include "sim_hw/renderer.h"
 
 namespace hairrig {
 namespace {
@@ -58,6 +61,39 @@ void ExpectConsistent(const CaptureSummary& s) {
   EXPECT_EQ(journal.back()["event"], "session_end");
 }
 
+// Every planned view of a simulated capture has its ground-truth maps, and
+// they are the maps of the view's camera at the turntable angle
+// ground_truth.json gives it, rendered here again from the recorded scene.
+void ExpectGroundTruthOfEveryView(const std::string& capture_dir, int views) {
+  std::ifstream in(capture_dir + "/ground_truth/ground_truth.json");
+  const nlohmann::json truth = nlohmann::json::parse(in);
+  ASSERT_EQ(truth["views"].size(), static_cast<size_t>(views));
+  auto scene = LoadScene(truth["scene"].get<std::string>());
+  ASSERT_TRUE(scene.ok()) << scene.status().ToString();
+  auto renderer = Renderer::Create(*scene);
+  ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
+  for (const auto& v : truth["views"]) {
+    const int view = v["view"].get<int>();
+    const double angle = v["turntable_deg"].get<double>();
+    EXPECT_NEAR(std::remainder(angle - 360.0 * v["stop"].get<int>() / 19, 360.0), 0.0, 1e-3) << "view " << view;
+    auto recorded = ReadViewTruthMaps(capture_dir + "/ground_truth/views", view);
+    ASSERT_TRUE(recorded.ok()) << recorded.status().ToString();
+    if (view % 9 != 0) continue;  // a few views rendered again
+    RenderOptions o;
+    o.noise = false;
+    o.ground_truth = true;
+    auto again = (*renderer)->Render(scene->FindCamera(v["camera_serial"].get<std::string>()), angle, o);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(cv::countNonZero(recorded->label != again->truth.label), 0) << "view " << view;
+    EXPECT_EQ(cv::countNonZero(recorded->strand_id != again->truth.strand_id), 0) << "view " << view;
+    cv::Mat alpha_error;
+    cv::absdiff(recorded->hair_alpha, again->truth.hair_alpha, alpha_error);
+    double worst = 0;
+    cv::minMaxLoc(alpha_error, nullptr, &worst);
+    EXPECT_LE(worst, 1.0 / 65535) << "view " << view;  // the 16-bit quantisation
+  }
+}
+
 TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
   const std::string dir = FreshDir("capture_complete");
   CountingSink sink;
@@ -86,6 +122,7 @@ TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
   }
   EXPECT_TRUE(fs::exists(s.dir + "/rig.yaml"));
   EXPECT_GT(s.lower_bound_s, 0);
+  ExpectGroundTruthOfEveryView(s.dir, 38);
 }
 
 // The physical lower bound, recomputed here from the scene's timings: 18 moves
@@ -201,6 +238,7 @@ TEST(CaptureFaults, CameraThatStaysGoneLeavesTheCaptureIncomplete) {
   for (int view : s.missing_views) EXPECT_EQ(view % 2, 1) << "only lower views may be missing";
   EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
   ExpectConsistent(s);
+  ExpectGroundTruthOfEveryView(s.dir, 38);  // views never shot are rendered for the truth alone
 }
 
 TEST(CaptureFaults, LateDownloadTimesOutAndIsReshot) {

@@ -48,6 +48,8 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
   LightShadowMap m;
   m.light_mm_ = light_mm;
   m.res_ = o.resolution;
+  m.head_scale_ = std::max(1, static_cast<int>(std::lround(static_cast<double>(o.head_resolution) / o.resolution)));
+  m.head_res_ = m.res_ * m.head_scale_;
   m.layers_ = o.layers;
   m.layer_mm_ = o.layer_mm;
   // Look at the centre of everything that casts or receives shadows.
@@ -67,13 +69,16 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
   m.focal_ = 0.5 * (m.res_ - 2) / extent;
   const size_t texels = static_cast<size_t>(m.res_) * m.res_;
   m.first_hair_mm_.assign(texels, kFar);
-  m.head_depth_mm_.assign(texels, kFar);
+  m.head_depth_mm_.assign(static_cast<size_t>(m.head_res_) * m.head_res_, kFar);
   m.opacity_.assign(texels * static_cast<size_t>(m.layers_), 0.0f);
   // The head's depth: its triangles rasterised into the map.
   for (size_t t = 0; t < head.num_triangles(); ++t) {
     double u[3], v[3], d[3];
     bool inside = true;
-    for (int k = 0; k < 3; ++k) inside = m.ToTexel(head.Corner(t, k), &u[k], &v[k], &d[k]) && inside;
+    for (int k = 0; k < 3; ++k) {
+      inside = m.ToTexel(head.Corner(t, k), &u[k], &v[k], &d[k]) && inside;
+      u[k] *= m.head_scale_, v[k] *= m.head_scale_;
+    }
     if (!inside) continue;
     const double area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
     if (std::abs(area) < 1e-12) continue;
@@ -81,13 +86,13 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
     const int x1 = static_cast<int>(std::ceil(std::max({u[0], u[1], u[2]})));
     const int y0 = static_cast<int>(std::floor(std::min({v[0], v[1], v[2]})));
     const int y1 = static_cast<int>(std::ceil(std::max({v[0], v[1], v[2]})));
-    for (int y = std::max(0, y0); y <= std::min(m.res_ - 1, y1); ++y) {
-      for (int x = std::max(0, x0); x <= std::min(m.res_ - 1, x1); ++x) {
+    for (int y = std::max(0, y0); y <= std::min(m.head_res_ - 1, y1); ++y) {
+      for (int x = std::max(0, x0); x <= std::min(m.head_res_ - 1, x1); ++x) {
         const double w1 = ((x - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (y - v[0])) / area;
         const double w2 = ((u[1] - u[0]) * (y - v[0]) - (x - u[0]) * (v[1] - v[0])) / area;
         const double w0 = 1 - w1 - w2;
         if (w0 < -1e-9 || w1 < -1e-9 || w2 < -1e-9) continue;
-        float& depth = m.head_depth_mm_[static_cast<size_t>(y) * m.res_ + x];
+        float& depth = m.head_depth_mm_[static_cast<size_t>(y) * m.head_res_ + x];
         depth = std::min(depth, static_cast<float>(w0 * d[0] + w1 * d[1] + w2 * d[2]));
       }
     }
@@ -138,7 +143,29 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
 
 double LightShadowMap::HairTransmittance(const Eigen::Vector3d& p) const {
   double u, v, d;
-  if (!ToTexel(p, &u, &v, &d)) return 1.0;
+  return ToTexel(p, &u, &v, &d) ? HairTransmittanceAtTexel(u, v, d) : 1.0;
+}
+
+double LightShadowMap::HeadVisibility(const Eigen::Vector3d& p) const {
+  double u, v, d;
+  return ToTexel(p, &u, &v, &d) ? HeadVisibilityAtTexel(u, v, d) : 1.0;
+}
+
+LightShadowMap::Visibility LightShadowMap::VisibilityAt(const Eigen::Vector3d& p,
+                                                       const Eigen::Vector3d* surface_normal) const {
+  double u, v, d;
+  if (!ToTexel(p, &u, &v, &d)) return {};
+  Visibility out{HairTransmittanceAtTexel(u, v, d), 1.0};
+  if (surface_normal == nullptr) {
+    out.head_visibility = HeadVisibilityAtTexel(u, v, d);
+  } else {
+    const double head_texel_mm = d / (focal_ * head_scale_);
+    out.head_visibility = HeadVisibility(p + 1.5 * head_texel_mm * *surface_normal);
+  }
+  return out;
+}
+
+double LightShadowMap::HairTransmittanceAtTexel(double u, double v, double d) const {
   u -= 0.5, v -= 0.5;
   const int x = std::clamp(static_cast<int>(std::floor(u)), 0, res_ - 2);
   const int y = std::clamp(static_cast<int>(std::floor(v)), 0, res_ - 2);
@@ -162,16 +189,16 @@ double LightShadowMap::HairTransmittance(const Eigen::Vector3d& p) const {
   return std::exp(-depth);
 }
 
-double LightShadowMap::HeadVisibility(const Eigen::Vector3d& p) const {
-  double u, v, d;
-  if (!ToTexel(p, &u, &v, &d)) return 1.0;
+double LightShadowMap::HeadVisibilityAtTexel(double u, double v, double d) const {
+  u *= head_scale_, v *= head_scale_;
   // Percentage-closer filtering over 3 x 3 texels; the bias covers the map's texel size.
-  const double bias_mm = 2.0 + 1.5 * d / focal_;
+  const double bias_mm = 2.0 + 1.5 * d / (focal_ * head_scale_);
   int lit = 0, n = 0;
   for (int dy = -1; dy <= 1; ++dy) {
     for (int dx = -1; dx <= 1; ++dx) {
-      const int x = std::clamp(static_cast<int>(u) + dx, 0, res_ - 1), y = std::clamp(static_cast<int>(v) + dy, 0, res_ - 1);
-      lit += d <= head_depth_mm_[static_cast<size_t>(y) * res_ + x] + bias_mm ? 1 : 0;
+      const int x = std::clamp(static_cast<int>(u) + dx, 0, head_res_ - 1);
+      const int y = std::clamp(static_cast<int>(v) + dy, 0, head_res_ - 1);
+      lit += d <= head_depth_mm_[static_cast<size_t>(y) * head_res_ + x] + bias_mm ? 1 : 0;
       ++n;
     }
   }

@@ -18,7 +18,8 @@
 namespace hairrig {
 
 struct ShadowMapOptions {
-  int resolution = 512;        // texels per side
+  int resolution = 512;        // texels per side of the hair's opacity layers
+  int head_resolution = 512;   // texels per side of the head's depth map (rounded to a multiple of `resolution`)
   int layers = 16;             // opacity layers behind the first hair
   double layer_mm = 4.0;       // depth of one layer
   // A fibre's projected area times this is its optical depth; below 1 because
@@ -38,9 +39,20 @@ class LightShadowMap {
   // (0..1), and whether the head hides p (0 hidden, 1 lit, soft on the edge).
   double HairTransmittance(const Eigen::Vector3d& p) const;
   double HeadVisibility(const Eigen::Vector3d& p) const;
+  // Both at once (one projection into the map). For a point on the head,
+  // pass its outward normal: the head's depth is then read a texel and a half
+  // off the surface (normal-offset shadow mapping), so that the head does not
+  // shadow itself in stripes where it turns from the light.
+  struct Visibility {
+    double hair_transmittance = 1;
+    double head_visibility = 1;
+  };
+  Visibility VisibilityAt(const Eigen::Vector3d& p, const Eigen::Vector3d* surface_normal = nullptr) const;
 
  private:
   bool ToTexel(const Eigen::Vector3d& p, double* u, double* v, double* depth) const;
+  double HairTransmittanceAtTexel(double u, double v, double depth) const;
+  double HeadVisibilityAtTexel(double u, double v, double depth) const;
   float& Layer(int x, int y, int k) { return opacity_[(static_cast<size_t>(y) * res_ + x) * layers_ + k]; }
   float LayerAt(int x, int y, int k) const { return opacity_[(static_cast<size_t>(y) * res_ + x) * layers_ + k]; }
 
@@ -48,9 +60,11 @@ class LightShadowMap {
   Eigen::Vector3d light_mm_;
   double focal_ = 1;                  // texels per unit of x/z
   int res_ = 0, layers_ = 0;
+  int head_scale_ = 1;                // head map texels per opacity texel, per side
+  int head_res_ = 0;
   double layer_mm_ = 4;
   std::vector<float> first_hair_mm_;  // per texel: depth of the first hair (inf: none)
-  std::vector<float> head_depth_mm_;  // per texel: depth of the head (inf: none)
+  std::vector<float> head_depth_mm_;  // per head texel: depth of the head (inf: none)
   std::vector<float> opacity_;        // per texel and layer: optical depth accumulated up to the layer's far side
 };
 

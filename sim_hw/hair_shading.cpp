@@ -34,19 +34,22 @@ FibreRadiance ShadeFibre(const HairShading& s, const Eigen::Vector3d& albedo, co
   }
   // Longitudinal angles (Marschner Sec. 2.2): theta = asin(t . w), half angle and difference.
   const double theta_i = std::asin(sin_i), theta_r = std::asin(sin_r);
-  const double theta_h = 0.5 * (theta_i + theta_r), theta_d = 0.5 * (theta_r - theta_i);
+  const double theta_h = 0.5 * (theta_i + theta_r);  // theta_d = (theta_r - theta_i) / 2 enters as cos^2 below
   // Azimuth between the projections of the two directions onto the normal plane.
   const Eigen::Vector3d li = to_light - sin_i * t, lr = to_camera - sin_r * t;
   const double norms = li.norm() * lr.norm();
   const double cos_phi = norms > 1e-12 ? std::clamp(li.dot(lr) / norms, -1.0, 1.0) : 1.0;
   const double phi = std::acos(cos_phi);  // 0: light and camera on the same side
+  // cos(phi / 2) and cos^2(theta_d) by half-angle identities (no further trigonometry).
+  const double cos_half_phi = std::sqrt(0.5 * (1 + cos_phi));
+  const double cos2_d = 0.5 * (1 + cos_i * cos_r + sin_i * sin_r);
   const double alpha = DegToRad(s.cuticle_tilt_deg), beta = DegToRad(s.roughness_deg);
   const double m_r = Gaussian(beta, theta_h - alpha);
   const double m_tt = Gaussian(0.5 * beta, theta_h + 0.5 * alpha);
   const double m_trt = Gaussian(2 * beta, theta_h + 1.5 * alpha);
-  const double n_r = std::cos(0.5 * phi);
+  const double n_r = cos_half_phi;
   const double n_tt = std::exp(-0.5 * (kPi - phi) * (kPi - phi) / (kTTAzimuthalWidthRad * kTTAzimuthalWidthRad));
-  const double inv_cos2_d = 1.0 / std::max(0.2, std::cos(theta_d) * std::cos(theta_d));
+  const double inv_cos2_d = 1.0 / std::max(0.2, cos2_d);
   // Colours: the surface reflection is white; light crossing the fibre once
   // (TT) or twice (TRT) takes its colour: sqrt(albedo) per crossing.
   const Eigen::Vector3d once = albedo.cwiseSqrt();

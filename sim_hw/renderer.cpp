@@ -5,9 +5,11 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <numeric>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/parallel.h"
 #include "sim_hw/deep_opacity.h"
@@ -53,7 +55,39 @@ struct BoxHit {
   int Class() const { return hit ? face * 2 + (albedo > 0.5 ? 1 : 0) : -1; }
 };
 
+// DrawSegment skips a pixel whose opaque surface (head, box) lies this far or
+// more in front of the fibre.
+constexpr float kOcclusionMarginMm = 3.0f;
+
+// Whether no pixel within 1 px of the segment a-b (pixels) could show a fibre
+// at depth `nearest_z_mm` or farther: `farthest_nearby` holds, per pixel, the
+// farthest opaque depth within 2 px (Chebyshev), and samples 2 px apart along
+// the segment leave no pixel within 1 px of it more than 2 px from a sample.
+bool HiddenBehindOpaque(const cv::Mat1f& farthest_nearby, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                        float nearest_z_mm) {
+  const int samples = 1 + static_cast<int>(std::ceil((b - a).norm() / 2.0));
+  for (int k = 0; k <= samples; ++k) {
+    const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(k) / samples);
+    const int x = static_cast<int>(std::lround(p.x())), y = static_cast<int>(std::lround(p.y()));
+    if (x < 0 || y < 0 || x >= farthest_nearby.cols || y >= farthest_nearby.rows) return false;
+    if (!(farthest_nearby(y, x) < nearest_z_mm - kOcclusionMarginMm)) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+// The buffers one view's hair needs, kept between renders: a view of a
+// 50,000-strand wig needs a few hundred MB, and fresh pages cost more than the
+// arithmetic that fills them.
+struct HairScratch {
+  std::vector<Eigen::Vector3d> p_cam;     // strand points, camera frame (mm)
+  std::vector<Eigen::Vector2d> uv;        // their projections (px)
+  std::vector<uint8_t> segment_visible;   // [i]: the segment ending at point i is drawn
+  std::vector<size_t> first_segment;      // per strand: index of its first drawn segment
+  std::vector<HairSegment> segments;
+  std::vector<std::vector<std::vector<uint64_t>>> share_keys;  // per thread, per band
+};
 
 struct Renderer::Impl {
   Scene scene;
@@ -61,6 +95,36 @@ struct Renderer::Impl {
   StrandSet strands;
   std::vector<RayTable> ray_tables;
   std::vector<std::vector<FaceTag>> face_tags;  // per box face
+
+  // Scratch buffers of finished renders, for the next ones (as many as renders ran at once, up to 2).
+  static constexpr size_t kMaxSpareScratch = 2;
+  mutable std::mutex scratch_mutex;
+  mutable std::vector<std::unique_ptr<HairScratch>> spare_scratch;
+
+  // Lends a scratch to one render and takes it back when the render is done.
+  class ScratchLease {
+   public:
+    explicit ScratchLease(const Impl& impl) : impl_(impl) {
+      std::lock_guard<std::mutex> lock(impl_.scratch_mutex);
+      if (!impl_.spare_scratch.empty()) {
+        scratch_ = std::move(impl_.spare_scratch.back());
+        impl_.spare_scratch.pop_back();
+      } else {
+        scratch_ = std::make_unique<HairScratch>();
+      }
+    }
+    ~ScratchLease() {
+      std::lock_guard<std::mutex> lock(impl_.scratch_mutex);
+      if (impl_.spare_scratch.size() < kMaxSpareScratch) impl_.spare_scratch.push_back(std::move(scratch_));
+    }
+    ScratchLease(const ScratchLease&) = delete;
+    ScratchLease& operator=(const ScratchLease&) = delete;
+    HairScratch& operator*() const { return *scratch_; }
+
+   private:
+    const Impl& impl_;
+    std::unique_ptr<HairScratch> scratch_;
+  };
 
   // Everything one Render call needs, derived from the view.
   struct View {
@@ -129,16 +193,6 @@ struct Renderer::Impl {
     return corners;
   }
 
-  // Direct light from panel i reaching p (camera frame): its power, the hair's
-  // transmittance and the head's shadow.
-  double LightReaching(const View& v, size_t i, const Eigen::Vector3d& p, bool hair_shadow = true) const {
-    double power = v.light_power[i];
-    if (power <= 0 || v.shadows.empty()) return power;
-    const LightShadowMap& m = v.shadows[i];
-    if (hair_shadow) power *= m.HairTransmittance(p);
-    return power * m.HeadVisibility(p);
-  }
-
   // Skin: Lambert with a little wrap-around (light scattered under the skin)
   // and the shadows of the hair and the head.
   cv::Vec3f ShadeSkin(const View& v, const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
@@ -146,7 +200,13 @@ struct Renderer::Impl {
     for (size_t i = 0; i < v.light_power.size(); ++i) {
       const Eigen::Vector3d l = (v.light_pos_cam[i] - p).normalized();
       const double wrapped = std::max(0.0, (n.dot(l) + 0.15) / 1.15);
-      if (wrapped > 0) e += LightReaching(v, i, p) * wrapped;
+      if (wrapped <= 0 || v.light_power[i] <= 0) continue;
+      double power = v.light_power[i];
+      if (!v.shadows.empty()) {
+        const LightShadowMap::Visibility seen = v.shadows[i].VisibilityAt(p, &n);
+        power *= seen.hair_transmittance * seen.head_visibility;
+      }
+      e += power * wrapped;
     }
     const Eigen::Vector3d& a = scene.head.albedo;
     return {static_cast<float>(a.z() * e), static_cast<float>(a.y() * e), static_cast<float>(a.x() * e)};
@@ -297,8 +357,9 @@ struct Renderer::Impl {
         continue;
       }
       // Light scattered many times inside the volume is shadowed more softly than direct light.
-      const double head_lit = v.shadows[i].HeadVisibility(p), hair = v.shadows[i].HairTransmittance(p);
-      radiance += v.light_power[i] * head_lit * (hair * f.single + std::sqrt(hair) * f.diffuse);
+      const LightShadowMap::Visibility seen = v.shadows[i].VisibilityAt(p);
+      const double hair = seen.hair_transmittance;
+      radiance += v.light_power[i] * seen.head_visibility * (hair * f.single + std::sqrt(hair) * f.diffuse);
     }
     return {static_cast<float>(radiance.z()), static_cast<float>(radiance.y()), static_cast<float>(radiance.x())};
   }
@@ -308,7 +369,6 @@ struct Renderer::Impl {
   // over what is there; the front-most strand within half a pixel is the
   // pixel's ground truth.
   void DrawSegment(View& v, const HairSegment& seg, int y_begin, int y_end) const {
-    constexpr float kOcclusionMarginMm = 3.0f;
     const float ax = seg.a.x(), ay = seg.a.y();
     const float dx = seg.b.x() - ax, dy = seg.b.y() - ay;
     const float len2 = dx * dx + dy * dy;
@@ -355,12 +415,22 @@ struct Renderer::Impl {
     }
   }
 
+  // Per pixel, the farthest opaque depth (head, box; infinite on the
+  // backdrop) within 2 px: where it is nearer than a segment, the segment is hidden.
+  static cv::Mat1f FarthestOpaqueNearby(const View& v) {
+    cv::Mat1f farthest;
+    cv::dilate(v.depth, farthest, cv::Mat(5, 5, CV_8U, cv::Scalar(1)));
+    return farthest;
+  }
+
   // Every visible segment projected and shaded at its ends (strands spread
   // over threads); the colour is interpolated along it. Segments are laid out
   // strand by strand: a count per strand first, then one array filled in place.
-  std::vector<HairSegment> HairSegments(const View& v, const std::vector<Eigen::Vector3d>& p_cam,
-                                        const std::vector<Eigen::Vector2d>& uv) const {
+  void HairSegments(const View& v, HairScratch& scratch) const {
+    const std::vector<Eigen::Vector3d>& p_cam = scratch.p_cam;
+    const std::vector<Eigen::Vector2d>& uv = scratch.uv;
     const auto offsets = strands.Offsets();
+    const cv::Mat1f occluders = FarthestOpaqueNearby(v);
     const double fibre_mm = 1e-3 * scene.wig.fibre_diameter_um;
     const double focal = 0.5 * (v.camera->intrinsics.fx_px + v.camera->intrinsics.fy_px);
     const auto visible = [&](size_t i) {
@@ -368,32 +438,42 @@ struct Renderer::Impl {
       const Eigen::Vector2d& b = uv[i];
       return p_cam[i - 1].z() > 1.0 && p_cam[i].z() > 1.0 && std::max(a.x(), b.x()) >= -2 &&
              std::min(a.x(), b.x()) <= v.width + 1 && std::max(a.y(), b.y()) >= -2 &&
-             std::min(a.y(), b.y()) <= v.height + 1;
+             std::min(a.y(), b.y()) <= v.height + 1 &&
+             !HiddenBehindOpaque(occluders, a, b, static_cast<float>(std::min(p_cam[i - 1].z(), p_cam[i].z())));
     };
     const size_t n = strands.num_strands();
-    std::vector<size_t> first_segment(n + 1, 0);
+    std::vector<size_t>& first_segment = scratch.first_segment;
+    first_segment.assign(n + 1, 0);
+    std::vector<uint8_t>& segment_visible = scratch.segment_visible;
+    segment_visible.assign(strands.num_points(), 0);
     ParallelFor(n, v.threads, [&] {
       return [&](size_t s) {
         size_t count = 0;
-        for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) count += visible(i) ? 1 : 0;
+        for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
+          segment_visible[i] = visible(i) ? 1 : 0;
+          count += segment_visible[i];
+        }
         first_segment[s + 1] = count;
       };
     });
     for (size_t s = 0; s < n; ++s) first_segment[s + 1] += first_segment[s];
-    std::vector<HairSegment> all(first_segment[n]);
+    std::vector<HairSegment>& all = scratch.segments;
+    all.resize(first_segment[n]);
     ParallelFor(n, v.threads, [&] {
       return [&, color = std::vector<cv::Vec3f>()](size_t s) mutable {
         const size_t first = offsets[s], last = offsets[s + 1];
         if (first_segment[s + 1] == first_segment[s]) return;
-        // Radiance at each point, with the tangent of the chord around it.
+        // Radiance at each end of a visible segment, with the tangent of the chord around it.
         color.assign(last - first, cv::Vec3f(0, 0, 0));
         for (size_t i = first; i < last && v.shade_hair; ++i) {
+          const bool needed = (i > first && segment_visible[i]) || (i + 1 < last && segment_visible[i + 1]);
+          if (!needed) continue;
           const size_t a = i == first ? i : i - 1, b = i + 1 < last ? i + 1 : i;
           color[i - first] = ShadeStrand(v, p_cam[i], (p_cam[b] - p_cam[a]).normalized());
         }
         HairSegment* out = &all[first_segment[s]];
         for (size_t i = first + 1; i < last; ++i) {
-          if (!visible(i)) continue;
+          if (!segment_visible[i]) continue;
           const Eigen::Vector2d a = uv[i - 1], b = uv[i];
           HairSegment& seg = *out++;
           seg.a = a.cast<float>(), seg.b = b.cast<float>();
@@ -407,12 +487,13 @@ struct Renderer::Impl {
         }
       };
     });
-    return all;
   }
 
-  void DrawHair(View& v, const std::vector<Eigen::Vector3d>& p_cam) const {
+  void DrawHair(View& v, HairScratch& scratch) const {
+    const std::vector<Eigen::Vector3d>& p_cam = scratch.p_cam;
     const auto params = v.camera->intrinsics.ToParams();
-    std::vector<Eigen::Vector2d> uv(p_cam.size());
+    std::vector<Eigen::Vector2d>& uv = scratch.uv;
+    uv.resize(p_cam.size());
     constexpr size_t kChunk = 4096;
     ParallelFor((p_cam.size() + kChunk - 1) / kChunk, v.threads, [&] {
       return [&](size_t chunk) {
@@ -422,26 +503,43 @@ struct Renderer::Impl {
         }
       };
     });
-    const std::vector<HairSegment> segments = HairSegments(v, p_cam, uv);
+    HairSegments(v, scratch);
+    const std::vector<HairSegment>& segments = scratch.segments;
     // Horizontal bands, each with the segments that reach it, far to near:
     // a key per segment, its depth's bits above its index, sorted descending
     // (positive floats order as their bit patterns do).
     constexpr int kBandRows = 16;
     const int bands = (v.height + kBandRows - 1) / kBandRows;
-    std::vector<std::vector<uint64_t>> band_keys(static_cast<size_t>(bands));
-    for (size_t i = 0; i < segments.size(); ++i) {
-      const HairSegment& s = segments[i];
-      uint32_t depth_bits;
-      const float depth = std::max(0.0f, s.Depth());
-      std::memcpy(&depth_bits, &depth, sizeof depth_bits);
-      const uint64_t key = (static_cast<uint64_t>(depth_bits) << 32) | static_cast<uint32_t>(i);
-      const int b0 = std::max(0, static_cast<int>(std::floor(std::min(s.a.y(), s.b.y()) - 1.5f)) / kBandRows);
-      const int b1 = std::min(bands - 1, static_cast<int>(std::ceil(std::max(s.a.y(), s.b.y()) + 1.5f)) / kBandRows);
-      for (int b = b0; b <= b1; ++b) band_keys[static_cast<size_t>(b)].push_back(key);
+    // Keys are gathered per band by each of the view's threads over its share of the segments.
+    const size_t shares = static_cast<size_t>(v.threads);
+    auto& share_keys = scratch.share_keys;
+    share_keys.resize(shares);
+    for (auto& band_keys : share_keys) {
+      band_keys.resize(static_cast<size_t>(bands));
+      for (auto& keys : band_keys) keys.clear();
     }
+    ParallelFor(shares, v.threads, [&] {
+      return [&](size_t share) {
+        auto& band_keys = share_keys[share];
+        const size_t begin = segments.size() * share / shares, end = segments.size() * (share + 1) / shares;
+        for (size_t i = begin; i < end; ++i) {
+          const HairSegment& s = segments[i];
+          uint32_t depth_bits;
+          const float depth = std::max(0.0f, s.Depth());
+          std::memcpy(&depth_bits, &depth, sizeof depth_bits);
+          const uint64_t key = (static_cast<uint64_t>(depth_bits) << 32) | static_cast<uint32_t>(i);
+          const int b0 = std::max(0, static_cast<int>(std::floor(std::min(s.a.y(), s.b.y()) - 1.5f)) / kBandRows);
+          const int b1 = std::min(bands - 1, static_cast<int>(std::ceil(std::max(s.a.y(), s.b.y()) + 1.5f)) / kBandRows);
+          for (int b = b0; b <= b1; ++b) band_keys[static_cast<size_t>(b)].push_back(key);
+        }
+      };
+    });
     ParallelFor(static_cast<size_t>(bands), v.threads, [&] {
-      return [&](size_t b) {
-        auto& keys = band_keys[b];
+      return [&, keys = std::vector<uint64_t>()](size_t b) mutable {
+        keys.clear();
+        for (auto& band_keys : share_keys) {
+          keys.insert(keys.end(), band_keys[b].begin(), band_keys[b].end());
+        }
         std::sort(keys.begin(), keys.end(), std::greater<uint64_t>());
         const int y_begin = static_cast<int>(b) * kBandRows, y_end = std::min(v.height, y_begin + kBandRows);
         for (uint64_t key : keys) DrawSegment(v, segments[static_cast<uint32_t>(key)], y_begin, y_end);
@@ -450,12 +548,18 @@ struct Renderer::Impl {
   }
 
   // The strands' points in the camera frame.
-  std::vector<Eigen::Vector3d> StrandsInCamera(const View& v) const {
+  void StrandsInCamera(const View& v, std::vector<Eigen::Vector3d>& p_cam) const {
     const Eigen::Matrix3d r = v.cam_from_turntable.RotationMatrix();
     const Eigen::Vector3d tr = v.cam_from_turntable.translation;
-    std::vector<Eigen::Vector3d> p_cam(strands.num_points());
-    for (size_t i = 0; i < p_cam.size(); ++i) p_cam[i] = r * strands.points_mm[i].cast<double>() + tr;
-    return p_cam;
+    p_cam.resize(strands.num_points());
+    constexpr size_t kChunk = 1 << 14;
+    ParallelFor((p_cam.size() + kChunk - 1) / kChunk, v.threads, [&] {
+      return [&](size_t chunk) {
+        for (size_t i = chunk * kChunk; i < std::min(p_cam.size(), (chunk + 1) * kChunk); ++i) {
+          p_cam[i] = r * strands.points_mm[i].cast<double>() + tr;
+        }
+      };
+    });
   }
 
   // A deep opacity map per lit panel, over the hair and the head.
@@ -464,9 +568,11 @@ struct Renderer::Impl {
     head_cam.Transform(v.cam_from_turntable);
     const auto offsets = with_hair ? strands.Offsets() : std::vector<size_t>{0};
     const std::vector<Eigen::Vector3d> none;
-    // A texel per 3 pixels of the view's larger side (a full-size view: 512).
+    // Hair opacity: a texel per 6 pixels of the view's larger side (a full-size
+    // view: 266); the head's depth twice as fine.
     ShadowMapOptions options;
-    options.resolution = std::clamp(std::max(v.width, v.height) / 3, 64, 512);
+    options.resolution = std::clamp(std::max(v.width, v.height) / 6, 64, 512);
+    options.head_resolution = 2 * options.resolution;
     v.shadows.resize(v.light_power.size());
     ParallelFor(v.light_power.size(), v.threads, [&] {
       return [&](size_t i) {
@@ -612,12 +718,16 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, co
   v.hair_id = cv::Mat1i(v.height, v.width, -1);
   v.threads = std::max(1, options.threads);
   v.shade_hair = options.shade_hair;
-  const std::vector<Eigen::Vector3d> p_cam = options.draw_hair ? impl_->StrandsInCamera(v) : std::vector<Eigen::Vector3d>{};
-  if (scene.hair_shading.shadows && total_power > 0 && options.shade_hair) impl_->BuildShadows(v, p_cam, options.draw_hair);
+  const Impl::ScratchLease scratch(*impl_);
+  (*scratch).p_cam.clear();
+  if (options.draw_hair) impl_->StrandsInCamera(v, (*scratch).p_cam);
+  if (scene.hair_shading.shadows && total_power > 0 && options.shade_hair) {
+    impl_->BuildShadows(v, (*scratch).p_cam, options.draw_hair);
+  }
   impl_->DrawBackdrop(v);
   impl_->DrawHead(v);
   impl_->DrawBox(v);
-  if (options.draw_hair) impl_->DrawHair(v, p_cam);
+  if (options.draw_hair) impl_->DrawHair(v, *scratch);
   RenderedView out;
   out.tags = impl_->TagTruths(v);
   out.image = impl_->Expose(v, options);

@@ -175,6 +175,15 @@ class SimWorld {
 
   SimTurntableController& turntable_controller() { return *turntable_controller_; }
 
+  void SetTruthRecorder(WorldTruthRecorder recorder) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    truth_recorder_ = recorder ? std::make_shared<const WorldTruthRecorder>(std::move(recorder)) : nullptr;
+  }
+  std::shared_ptr<const WorldTruthRecorder> truth_recorder() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return truth_recorder_;
+  }
+
  private:
   double AngleLocked() const {
     return move_start_deg_ + TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_,
@@ -195,6 +204,7 @@ class SimWorld {
   bool input_active_ = false;
   std::thread estop_timer_;
   std::unique_ptr<SimTurntableController> turntable_controller_;
+  std::shared_ptr<const WorldTruthRecorder> truth_recorder_;
 };
 
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options) {
@@ -210,6 +220,7 @@ double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); 
 int WorldDiskFullAfterFrames(const SimWorld& world) { return world.DiskFullAfterFrames(); }
 SimTurntableController& WorldTurntableController(SimWorld& world) { return world.turntable_controller(); }
 TriggerBus& WorldTriggers(SimWorld& world) { return world.triggers(); }
+void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder) { world.SetTruthRecorder(std::move(recorder)); }
 Status SetWorldLightLevel(SimWorld& world, const std::string& light, double level) {
   return world.SetLightLevel(light, level);
 }
@@ -226,7 +237,10 @@ Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, con
   o.gain_db = gain_db;
   o.noise = world.noise();
   o.noise_seed = noise_seed;
+  const auto recorder = world.truth_recorder();
+  o.ground_truth = recorder != nullptr;
   HR_ASSIGN_OR_RETURN(RenderedView view, world.renderer().Render(scene_camera, exposure.angle_deg, o));
+  if (recorder) (*recorder)(scene_camera, exposure.angle_deg, view.truth);
   return std::move(view.image);
 }
 

@@ -17,6 +17,7 @@
 // Faults (sim_hw/sim_faults.h) are injected through `SimWorldOptions::faults`.
 #pragma once
 
+#include <functional>
 #include <memory>
 
 #include "drivers/registry.h"
@@ -60,6 +61,12 @@ struct WorldExposure {
   int64_t trigger_ns = 0;
 };
 WorldExposure ExposeWorldNow(const SimWorld& world);
+// Called with the ground-truth maps of every frame a simulated camera renders
+// (scene camera index, turntable angle in deg), on the camera's thread.
+using WorldTruthRecorder = std::function<void(int scene_camera, double turntable_deg, const ViewTruthMaps& maps)>;
+// Installs `recorder` (empty: none). Frames rendered while one is installed
+// also compute their maps.
+void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder);
 // Renders scene camera `scene_camera` for `exposure` as 8-bit BGR, with the
 // world's noise setting; the same seed gives the same noise.
 Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,

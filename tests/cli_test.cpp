@@ -13,6 +13,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -110,6 +113,20 @@ TEST(Cli, RenderOneViewWritesTheImage) {
   EXPECT_EQ(j["camera_serial"], "SIM-CAM-LOWER");
   EXPECT_GT(std::filesystem::file_size(out), 100000u);
   EXPECT_GE(j["tags_unoccluded"].get<int>(), 4);
+}
+
+TEST(Cli, RenderCropIsThoseFullResolutionPixels) {
+  const std::string full = ::testing::TempDir() + "/view8_full.png", crop = ::testing::TempDir() + "/view8_crop.png";
+  ASSERT_EQ(Hairrig("sim render --view 8 --no-noise --out " + full).exit_code, 0);
+  const CommandRun r = Hairrig("sim render --view 8 --no-noise --crop 340,680,56,60 --out " + crop);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const cv::Mat whole = cv::imread(full), part = cv::imread(crop);
+  ASSERT_EQ(part.cols, 56);
+  ASSERT_EQ(part.rows, 60);
+  EXPECT_EQ(cv::norm(part, whole(cv::Rect(340, 680, 56, 60)), cv::NORM_INF), 0);
+  const CommandRun outside = Hairrig("sim render --view 8 --crop 1190,10,20,20 --out " + crop);
+  EXPECT_NE(outside.exit_code, 0);
+  EXPECT_NE(outside.output.find("--crop"), std::string::npos) << outside.output;
 }
 
 TEST(Cli, BadArgumentsAreRefused) {

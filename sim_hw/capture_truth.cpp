@@ -1,0 +1,145 @@
+#include "sim_hw/capture_truth.h"
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <map>
+#include <set>
+
+#include "core/file_util.h"
+#include "core/parallel.h"
+#include "core/strand_io.h"
+#include "sim_hw/ground_truth.h"
+#include "sim_hw/sim_devices.h"
+
+namespace hairrig {
+namespace {
+
+constexpr double kAngleMatchDeg = 0.01;
+
+// ground_truth.json: each view at the angle its frame was rendered at where
+// known (`rendered_deg`), else at its stop's commanded angle.
+Status WriteTruthJson(const Scene& scene, const std::vector<PlannedTruthView>& views,
+                      const std::map<int, double>& rendered_deg, const std::string& dir) {
+  std::vector<ViewGroundTruth> truths;
+  for (const PlannedTruthView& v : views) {
+    const int camera = scene.FindCamera(v.camera_serial);
+    if (camera < 0) continue;
+    const auto rendered = rendered_deg.find(v.view);
+    const double angle = rendered != rendered_deg.end() ? rendered->second : v.turntable_deg;
+    truths.push_back(MakeViewGroundTruth(scene, v.view, v.stop, camera, angle));
+  }
+  return WriteFileAtomic(dir + "/ground_truth.json", GroundTruthJson(scene, truths, /*with_maps=*/true));
+}
+
+std::vector<int> SceneCameras(const Scene& scene, const std::vector<PlannedTruthView>& views) {
+  std::vector<int> cameras;
+  for (const PlannedTruthView& v : views) cameras.push_back(scene.FindCamera(v.camera_serial));
+  return cameras;
+}
+
+}  // namespace
+
+struct CaptureGroundTruth::State {
+  std::vector<PlannedTruthView> views;
+  std::vector<int> scene_cameras;  // per view; -1: not a camera of the scene
+  std::string dir, maps_dir;
+  std::mutex mutex;
+  std::map<int, double> written;  // view -> the turntable angle its maps were rendered at (deg)
+  std::set<int> writing;          // views whose maps a camera's thread is writing now
+  Status first_error;
+  bool recording = true;
+
+  void Record(int scene_camera, double turntable_deg, const ViewTruthMaps& maps) {
+    for (size_t i = 0; i < views.size(); ++i) {
+      const double off = std::remainder(turntable_deg - views[i].turntable_deg, 360.0);
+      if (scene_cameras[i] != scene_camera || std::abs(off) > kAngleMatchDeg) continue;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!recording || written.count(views[i].view) > 0 || writing.count(views[i].view) > 0) continue;
+        writing.insert(views[i].view);
+      }
+      const Status s = WriteViewTruthMaps(maps_dir, views[i].view, maps);
+      std::lock_guard<std::mutex> lock(mutex);
+      writing.erase(views[i].view);
+      if (s.ok()) written[views[i].view] = turntable_deg;
+      else if (first_error.ok()) first_error = s;
+    }
+  }
+};
+
+CaptureGroundTruth::CaptureGroundTruth(SimWorld& world, std::shared_ptr<State> state)
+    : world_(world), state_(std::move(state)) {}
+
+Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(SimWorld& world, std::vector<PlannedTruthView> views,
+                                                                      const std::string& capture_dir) {
+  const Scene& scene = WorldRenderer(world).scene();
+  auto state = std::make_shared<State>();
+  state->dir = capture_dir + "/ground_truth";
+  state->maps_dir = state->dir + "/views";
+  std::error_code ec;
+  std::filesystem::create_directories(state->maps_dir, ec);
+  if (ec) return IoError(state->maps_dir + ": cannot create (" + ec.message() + ")");
+  HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir));
+  HR_RETURN_IF_ERROR(WriteStrands(state->dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm()));
+  state->scene_cameras = SceneCameras(scene, views);
+  state->views = std::move(views);
+  SetWorldTruthRecorder(world, [state](int scene_camera, double turntable_deg, const ViewTruthMaps& maps) {
+    state->Record(scene_camera, turntable_deg, maps);
+  });
+  return std::unique_ptr<CaptureGroundTruth>(new CaptureGroundTruth(world, std::move(state)));
+}
+
+CaptureGroundTruth::~CaptureGroundTruth() { StopRecording(); }
+
+void CaptureGroundTruth::StopRecording() {
+  bool was_recording;
+  {
+    std::lock_guard<std::mutex> lock(state_->mutex);
+    was_recording = state_->recording;
+    state_->recording = false;
+  }
+  if (was_recording) SetWorldTruthRecorder(world_, nullptr);
+}
+
+int CaptureGroundTruth::views_recorded() const {
+  std::lock_guard<std::mutex> lock(state_->mutex);
+  return static_cast<int>(state_->written.size());
+}
+
+Status CaptureGroundTruth::Finish() {
+  StopRecording();
+  State& st = *state_;
+  std::vector<size_t> missing;
+  {
+    std::lock_guard<std::mutex> lock(st.mutex);
+    HR_RETURN_IF_ERROR(st.first_error);
+    for (size_t i = 0; i < st.views.size(); ++i) {
+      if (st.scene_cameras[i] >= 0 && st.written.count(st.views[i].view) == 0) missing.push_back(i);
+    }
+  }
+  // Geometry only: unshaded, without noise, a view per thread.
+  std::vector<Status> errors(missing.size());
+  ParallelFor(missing.size(), 2, [&] {
+    return [&](size_t k) {
+      const PlannedTruthView& v = st.views[missing[k]];
+      RenderOptions o;
+      o.noise = false;
+      o.threads = 1;
+      o.ground_truth = true;
+      o.shade_hair = false;
+      auto view = WorldRenderer(world_).Render(st.scene_cameras[missing[k]], v.turntable_deg, o);
+      errors[k] = view.ok() ? WriteViewTruthMaps(st.maps_dir, v.view, view->truth) : view.status();
+    };
+  });
+  for (const Status& s : errors) HR_RETURN_IF_ERROR(s);
+  std::map<int, double> rendered_deg;
+  {
+    std::lock_guard<std::mutex> lock(st.mutex);
+    rendered_deg = st.written;
+  }
+  if (rendered_deg.empty()) return Status::Ok();
+  return WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir);
+}
+
+}  // namespace hairrig
