@@ -87,7 +87,9 @@ class Renderer {
   void SetStrands(StrandSet strands_turntable_mm);
 
   // OutOfRange for a camera index outside the scene; InvalidArgument for light
-  // levels of the wrong count or outside 0..1. Thread-safe (const).
+  // levels of the wrong count or outside 0..1. Thread-safe (const). The hair's
+  // buffers of up to two finished renders are kept for the next ones (a few
+  // hundred MB for a 50,000-strand wig), for as long as the renderer lives.
   Result<RenderedView> Render(int camera_index, double turntable_deg, const RenderOptions& options) const;
 
  private:

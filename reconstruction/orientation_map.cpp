@@ -1,0 +1,197 @@
+#include "reconstruction/orientation_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/parallel.h"
+#include "core/transform.h"
+
+namespace hairrig {
+namespace {
+
+// The quadrature pair of Gabor kernels for strands along `direction_rad`:
+// cosine (even) and sine (odd) oscillations across the strand, each zero-mean
+// and scaled so that a unit sinusoid across the strand at the tuned
+// wavelength gives a response of about 1.
+struct GaborPair {
+  cv::Mat1f even, odd;
+};
+
+GaborPair MakeGaborPair(double direction_rad, const OrientationOptions& o) {
+  const int radius = static_cast<int>(std::ceil(3.0 * std::max(o.sigma_across_px, o.sigma_along_px)));
+  const int size = 2 * radius + 1;
+  GaborPair k{cv::Mat1f(size, size), cv::Mat1f(size, size)};
+  const double ux = std::cos(direction_rad), uy = std::sin(direction_rad);  // along the strand
+  double envelope_sum = 0;
+  for (int y = -radius; y <= radius; ++y) {
+    for (int x = -radius; x <= radius; ++x) {
+      const double along = x * ux + y * uy, across = -x * uy + y * ux;
+      const double envelope = std::exp(-0.5 * (across * across / (o.sigma_across_px * o.sigma_across_px) +
+                                               along * along / (o.sigma_along_px * o.sigma_along_px)));
+      const double phase = 2 * kPi * across / o.wavelength_px;
+      k.even(y + radius, x + radius) = static_cast<float>(envelope * std::cos(phase));
+      k.odd(y + radius, x + radius) = static_cast<float>(envelope * std::sin(phase));
+      envelope_sum += envelope;
+    }
+  }
+  k.even -= cv::mean(k.even)[0];  // no response to flat shading
+  k.odd -= cv::mean(k.odd)[0];
+  k.even *= 2.0 / envelope_sum;
+  k.odd *= 2.0 / envelope_sum;
+  return k;
+}
+
+// Rows and columns the bank must see for the region (its bounding box grown
+// by the kernels' reach over every pass), clipped to the image.
+cv::Rect WorkingArea(const cv::Mat& region, cv::Size image_size, int reach) {
+  cv::Rect box(0, 0, image_size.width, image_size.height);
+  if (!region.empty()) {
+    box = cv::boundingRect(region);
+    box.x -= reach, box.y -= reach, box.width += 2 * reach, box.height += 2 * reach;
+    box &= cv::Rect(0, 0, image_size.width, image_size.height);
+  }
+  return box;
+}
+
+// One pass of the bank over `input` (already cropped): per pixel the peak
+// direction, its confidence and the peak response.
+OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& bank, bool quadrature, int threads) {
+  const int n = static_cast<int>(bank.size());
+  std::vector<cv::Mat1f> energy(bank.size());
+  ParallelFor(bank.size(), threads, [&] {
+    return [&](size_t k) {
+      cv::Mat1f even, odd;
+      cv::filter2D(input, even, CV_32F, bank[k].even, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+      if (!quadrature) {
+        energy[k] = cv::abs(even);
+        return;
+      }
+      cv::filter2D(input, odd, CV_32F, bank[k].odd, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+      cv::magnitude(even, odd, energy[k]);
+    };
+  });
+  OrientationMap out{cv::Mat1f(input.size()), cv::Mat1f(input.size()), cv::Mat1f(input.size())};
+  const double step_deg = 180.0 / n;
+  // Squared angular distance of every direction from the peak (radians^2), by offset.
+  std::vector<double> distance2(static_cast<size_t>(n));
+  double distance2_sum = 0;
+  for (int d = 0; d < n; ++d) {
+    const double deg = OrientationDifferenceDeg(0.0, d * step_deg);
+    distance2[static_cast<size_t>(d)] = DegToRad(deg) * DegToRad(deg);
+    distance2_sum += distance2[static_cast<size_t>(d)];
+  }
+  ParallelFor(static_cast<size_t>(input.rows), threads, [&] {
+    return [&](size_t row) {
+      const int y = static_cast<int>(row);
+      for (int x = 0; x < input.cols; ++x) {
+        int best = 0;
+        float peak = energy[0](y, x);
+        for (int k = 1; k < n; ++k) {
+          if (energy[static_cast<size_t>(k)](y, x) > peak) peak = energy[static_cast<size_t>(k)](y, x), best = k;
+        }
+        // A parabola through the peak and its two neighbours (the bank is circular).
+        const float before = energy[static_cast<size_t>((best + n - 1) % n)](y, x);
+        const float after = energy[static_cast<size_t>((best + 1) % n)](y, x);
+        const double curvature = before - 2.0 * peak + after;
+        const double shift = curvature < 0 ? std::clamp(0.5 * (before - after) / curvature, -0.5, 0.5) : 0.0;
+        double angle = (best + shift) * step_deg;
+        angle = std::fmod(angle + 180.0, 180.0);
+        double spread = 0;
+        for (int k = 0; k < n; ++k) {
+          const double drop = peak - energy[static_cast<size_t>(k)](y, x);
+          spread += distance2[static_cast<size_t>((k - best + n) % n)] * drop * drop;
+        }
+        out.angle_deg(y, x) = static_cast<float>(angle);
+        out.response(y, x) = peak;
+        out.confidence(y, x) = peak > 1e-6f ? static_cast<float>(std::sqrt(spread / distance2_sum) / peak) : 0.0f;
+      }
+    };
+  });
+  return out;
+}
+
+}  // namespace
+
+Status OrientationOptions::Check() const {
+  if (directions < 4 || directions > 720) return InvalidArgument("orientation directions must be 4..720");
+  if (!(sigma_across_px > 0) || !(sigma_along_px > 0)) return InvalidArgument("orientation sigmas must be positive");
+  if (!(wavelength_px > 1)) return InvalidArgument("orientation wavelength_px must exceed 1 pixel");
+  if (!(dog_fine_px >= 0) || !(dog_coarse_px > dog_fine_px)) {
+    return InvalidArgument("orientation dog_coarse_px must exceed dog_fine_px (>= 0)");
+  }
+  if (refinement_passes < 0 || refinement_passes > 10) return InvalidArgument("orientation refinement_passes must be 0..10");
+  if (threads < 1) return InvalidArgument("orientation threads must be at least 1");
+  return Status::Ok();
+}
+
+double OrientationDifferenceDeg(double a_deg, double b_deg) {
+  const double d = std::fmod(std::abs(a_deg - b_deg), 180.0);
+  return std::min(d, 180.0 - d);
+}
+
+Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat& region,
+                                             const OrientationOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
+  if (image.empty()) return InvalidArgument("orientation map of an empty image");
+  if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
+    return InvalidArgument("orientation map needs an 8-bit grey or BGR image");
+  }
+  if (!region.empty() && (region.size() != image.size() || region.type() != CV_8U)) {
+    return InvalidArgument("orientation region must be an 8-bit mask of the image's size");
+  }
+  std::vector<GaborPair> bank;
+  for (int k = 0; k < options.directions; ++k) bank.push_back(MakeGaborPair(kPi * k / options.directions, options));
+  const int kernel_reach = bank[0].even.rows / 2;
+  const int reach = kernel_reach * (options.refinement_passes + 1) + static_cast<int>(std::ceil(3 * options.dog_coarse_px));
+  const cv::Rect area = WorkingArea(region, image.size(), reach);
+
+  cv::Mat grey;
+  if (image.channels() == 3) cv::cvtColor(image(area), grey, cv::COLOR_BGR2GRAY);
+  else grey = image(area);
+  cv::Mat1f input, coarse;
+  grey.convertTo(input, CV_32F, 1.0 / 255);
+  cv::GaussianBlur(input, coarse, cv::Size(), options.dog_coarse_px);
+  if (options.dog_fine_px > 0) cv::GaussianBlur(input, input, cv::Size(), options.dog_fine_px);
+  input -= coarse;
+
+  OrientationMap pass = FilterPass(input, bank, options.quadrature, options.threads);
+  for (int p = 0; p < options.refinement_passes; ++p) {
+    // The confidence in response units (high on the fibres, where the even kernel peaks).
+    const cv::Mat1f ridges = pass.confidence.mul(pass.response);
+    pass = FilterPass(ridges, bank, options.quadrature, options.threads);
+  }
+
+  OrientationMap out{cv::Mat1f(image.size(), std::numeric_limits<float>::quiet_NaN()),
+                     cv::Mat1f(image.size(), 0.0f), cv::Mat1f(image.size(), 0.0f)};
+  pass.angle_deg.copyTo(out.angle_deg(area));
+  pass.confidence.copyTo(out.confidence(area));
+  pass.response.copyTo(out.response(area));
+  if (!region.empty()) {
+    out.angle_deg.setTo(std::numeric_limits<float>::quiet_NaN(), region == 0);
+    out.confidence.setTo(0.0f, region == 0);
+    out.response.setTo(0.0f, region == 0);
+  }
+  return out;
+}
+
+cv::Mat OrientationPicture(const OrientationMap& map) {
+  cv::Mat hsv(map.angle_deg.size(), CV_8UC3);
+  for (int y = 0; y < hsv.rows; ++y) {
+    for (int x = 0; x < hsv.cols; ++x) {
+      const float angle = map.angle_deg(y, x);
+      const bool known = std::isfinite(angle);
+      const float c = std::clamp(map.confidence(y, x), 0.0f, 1.0f);
+      hsv.at<cv::Vec3b>(y, x) = known ? cv::Vec3b(static_cast<uint8_t>(angle), 255, static_cast<uint8_t>(255 * c))
+                                      : cv::Vec3b(0, 0, 0);
+    }
+  }
+  cv::Mat bgr;
+  cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);  // OpenCV's 8-bit hue runs 0..180: one unit per degree
+  return bgr;
+}
+
+}  // namespace hairrig
