@@ -141,11 +141,6 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
   return m;
 }
 
-double LightShadowMap::HairTransmittance(const Eigen::Vector3d& p) const {
-  double u, v, d;
-  return ToTexel(p, &u, &v, &d) ? HairTransmittanceAtTexel(u, v, d) : 1.0;
-}
-
 double LightShadowMap::HeadVisibility(const Eigen::Vector3d& p) const {
   double u, v, d;
   return ToTexel(p, &u, &v, &d) ? HeadVisibilityAtTexel(u, v, d) : 1.0;

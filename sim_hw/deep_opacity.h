@@ -35,11 +35,10 @@ class LightShadowMap {
                               const std::vector<size_t>& offsets, double fibre_diameter_mm, const TriangleMesh& head,
                               const ShadowMapOptions& options = {});
 
-  // Fraction of the light's direct radiance that reaches p through the hair
-  // (0..1), and whether the head hides p (0 hidden, 1 lit, soft on the edge).
-  double HairTransmittance(const Eigen::Vector3d& p) const;
+  // Whether the head hides p (0 hidden, 1 lit, soft on the edge).
   double HeadVisibility(const Eigen::Vector3d& p) const;
-  // Both at once (one projection into the map). For a point on the head,
+  // The fraction of the light's direct radiance that reaches p through the
+  // hair (0..1) and the head's visibility, at once (one projection into the map). For a point on the head,
   // pass its outward normal: the head's depth is then read a texel and a half
   // off the surface (normal-offset shadow mapping), so that the head does not
   // shadow itself in stripes where it turns from the light.
