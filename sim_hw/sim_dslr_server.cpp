@@ -253,7 +253,16 @@ class SimDslrServer::Impl {
         return false;
       }
     }
-    if (verb == "BYE") return false;
+    if (verb == "BYE") {
+      // The camera is free before the client hears OK, as a USB release
+      // completes before libusb returns: the next HELLO finds it unclaimed.
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        owner_ = nullptr;
+      }
+      Reply(client, {"OK"});
+      return false;
+    }
     if (verb == "CAPTURE") return Reply(client, CaptureNow());
     if (verb == "TRIGGER") {
       QueueShot();

@@ -278,7 +278,15 @@ int About(Camera*, CameraText* text, GPContext*) {
 int Exit(Camera* camera, GPContext*) {
   if (camera->pl == nullptr) return GP_OK;
   if (camera->pl->fd >= 0) {
-    proto::WriteMessage(camera->pl->fd, camera->pl->next_id++, {"BYE"});
+    // Waits for BYE's answer (the camera released) so that whoever opens the
+    // camera next finds it free; a camera that does not answer is left as is.
+    const uint64_t id = camera->pl->next_id++;
+    if (proto::WriteMessage(camera->pl->fd, id, {"BYE"}) == proto::IoResult::kOk) {
+      proto::Message reply;
+      while (proto::ReadMessage(camera->pl->fd, camera->pl->reply_timeout_ms, &reply) == proto::IoResult::kOk &&
+             reply.id < id) {
+      }
+    }
     close(camera->pl->fd);
   }
   delete camera->pl;
