@@ -140,7 +140,7 @@ std::string OpenCvYaml(const CameraIntrinsics& c) {
 }
 
 // COLMAP's text model (colmap.github.io/format.html): camera ids from 1, model
-// OPENCV (fx fy cx cy k1 k2 p1 p2); an image line QW QX QY QZ TX TY TZ
+// OPENCV (fx fy cx cy k1 k2 p1 p2), or FULL_OPENCV (... k3 k4 k5 k6) when k3 is used; an image line QW QX QY QZ TX TY TZ
 // CAMERA_ID NAME with cam_from_object, then an empty line of 2D points.
 void ColmapText(const CaptureCalibrationInput& input, const CaptureCalibration& result, std::string* cameras,
                 std::string* images) {
@@ -151,8 +151,12 @@ void ColmapText(const CaptureCalibrationInput& input, const CaptureCalibration& 
   for (size_t c = 0; c < result.cameras.size(); ++c) {
     if (!result.cameras[c].solved) continue;
     const CameraIntrinsics& k = result.cameras[c].intrinsics;
-    cams << c + 1 << " OPENCV " << k.width_px << " " << k.height_px << " " << k.fx_px << " " << k.fy_px << " "
-         << k.cx_px << " " << k.cy_px << " " << k.k1 << " " << k.k2 << " " << k.p1 << " " << k.p2 << "\n";
+    // COLMAP puts the centre of the top-left pixel at (0.5, 0.5), this project at (0, 0).
+    cams << c + 1 << (k.k3 == 0 ? " OPENCV " : " FULL_OPENCV ") << k.width_px << " " << k.height_px << " " << k.fx_px
+         << " " << k.fy_px << " " << k.cx_px + 0.5 << " " << k.cy_px + 0.5 << " " << k.k1 << " " << k.k2 << " " << k.p1
+         << " " << k.p2;
+    if (k.k3 != 0) cams << " " << k.k3 << " 0 0 0";
+    cams << "\n";
   }
   imgs << "# Image list: IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME, then POINTS2D (none)\n"
        << "# Images are in the capture's frames/ folder; poses are cam_from_object in mm.\n";

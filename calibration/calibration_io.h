@@ -6,7 +6,8 @@
 //                           cam_from_turntable and the RMS, or why it failed
 //   opencv/<serial>.yaml    OpenCV FileStorage: camera_matrix, distortion_coefficients
 //                           (k1 k2 p1 p2 k3), image_width, image_height
-//   colmap/cameras.txt, images.txt, points3D.txt (empty): model OPENCV, poses
+//   colmap/cameras.txt, images.txt, points3D.txt (empty): model OPENCV (FULL_OPENCV
+//                           if k3 is not 0), COLMAP's pixel centres (+0.5 px), poses
 //                           cam_from_turntable (the frame the hair is fixed in;
 //                           cam_from_box in free mode), so COLMAP and OpenMVS
 //                           accept the capture

@@ -5,6 +5,8 @@
 #include <numeric>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 namespace hairrig {
 namespace {
 
@@ -41,6 +43,17 @@ Result<OrientationAccuracy> MeasureOrientation(const OrientationMap& map, const 
   a.p90_error_deg = Quantile(errors, 0.9);
   a.mean_error_deg = errors.empty() ? 0 : std::accumulate(errors.begin(), errors.end(), 0.0) / static_cast<double>(errors.size());
   return a;
+}
+
+Result<double> MaskIoU(const cv::Mat& mask, const cv::Mat& truth_mask) {
+  if (mask.size() != truth_mask.size() || mask.type() != CV_8U || truth_mask.type() != CV_8U) {
+    return InvalidArgument("mask IoU: the masks must be 8-bit and of one size");
+  }
+  const cv::Mat a = mask != 0;
+  const cv::Mat b = truth_mask != 0;
+  const int both = cv::countNonZero(a & b);
+  const int either = cv::countNonZero(a | b);
+  return either == 0 ? 1.0 : static_cast<double>(both) / either;
 }
 
 }  // namespace hairrig

@@ -25,4 +25,9 @@ struct OrientationAccuracy {
 Result<OrientationAccuracy> MeasureOrientation(const OrientationMap& map, const cv::Mat& truth_deg,
                                                const cv::Mat& truth_hair, double min_confidence);
 
+// Overlap of a hair mask with the true one: |A and B| / |A or B| (1 when
+// both are empty). Masks: CV_8U, non-zero = hair, the same size
+// (InvalidArgument otherwise).
+Result<double> MaskIoU(const cv::Mat& mask, const cv::Mat& truth_mask);
+
 }  // namespace hairrig

@@ -25,6 +25,7 @@
 
 #include "core/status.h"
 #include "core/strands.h"
+#include "core/truth_maps.h"
 #include "sim_hw/scene.h"
 
 namespace hairrig {
@@ -40,19 +41,6 @@ struct RenderOptions {
   bool ground_truth = false;         // fill RenderedView::truth
   bool shade_hair = true;            // false: fibres drawn unlit and no shadow maps built (for
                                      // ground-truth maps alone: the geometry is the same, the image is not)
-};
-
-// Per-pixel ground truth of one rendered view (pixel (0,0) is the centre of
-// the top-left pixel; the same lens model as the image).
-struct ViewTruthMaps {
-  enum Label : uint8_t { kBackdrop = 0, kBox = 1, kHead = 2, kHair = 3 };
-  cv::Mat label;            // CV_8U: Label. Hair where the hair's coverage is at least 0.5
-  cv::Mat hair_alpha;       // CV_32F: hair coverage, 0..1 (all fibres, composited)
-  cv::Mat orientation_deg;  // CV_32F: 2D direction of the front-most strand, [0, 180), image frame
-                            // (0 = +x, 90 = +y, down the image); NaN where no strand
-  cv::Mat depth_mm;         // CV_32F: depth of the front-most surface along the optical axis;
-                            // for hair, the front-most strand's; 0 on the backdrop
-  cv::Mat strand_id;        // CV_32S: index of the front-most strand in the wig; -1 where none
 };
 
 // Ground truth of one tag in one rendered view.

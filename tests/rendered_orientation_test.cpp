@@ -1,11 +1,15 @@
-// Orientation maps of a rendered view of the default scene against its
-// ground-truth map (the front-most strand's 2D direction on hair pixels).
+// The reconstruction's per-view stages on a rendered view of the default
+// scene against its ground-truth maps: orientation maps (the front-most
+// strand's 2D direction on hair pixels) and hair segmentation.
 #include <cstdio>
 
 #include <gtest/gtest.h>
 
+#include "core/calib_box.h"
 #include "reconstruction/evaluation.h"
+#include "reconstruction/hair_segmentation.h"
 #include "reconstruction/orientation_map.h"
+#include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
 #include "tests/support/default_scene.h"
 
@@ -38,6 +42,45 @@ TEST(RenderedOrientation, DefaultViewAgainstTheTrueStrandDirections) {
       EXPECT_LT(accuracy->p90_error_deg, 50.0);
     }
   }
+}
+
+TEST(RenderedSegmentation, DefaultViewsAgainstTheTrueLabels) {
+  const Scene& scene = hairrig_test::DefaultScene();
+  auto renderer = Renderer::Create(scene);
+  ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
+  const auto corners = BoxCornerPoints(0.5 * scene.box.size_mm);
+  const std::vector<Eigen::Vector3d> box_corners(corners.begin(), corners.end());
+  for (int view : {0, 3, 8}) {
+    const ViewGroundTruth truth = MakeViewGroundTruth(scene, view);
+    RenderOptions o;
+    o.ground_truth = true;
+    auto rendered = (*renderer)->Render(truth.camera_index, truth.turntable_deg, o);
+    ASSERT_TRUE(rendered.ok());
+    const auto outline = ProjectedOutline(truth.intrinsics, truth.cam_from_box, box_corners);
+    ASSERT_GE(outline.size(), 4u);
+    auto segmentation = SegmentHair(rendered->image, {outline}, SegmentationOptions{});
+    ASSERT_TRUE(segmentation.ok()) << segmentation.status().ToString();
+    const cv::Mat hair = segmentation->label == kSegHair;
+    const cv::Mat true_hair = rendered->truth.label == ViewTruthMaps::kHair;
+    const cv::Mat box = segmentation->label == kSegBox;
+    const cv::Mat true_box = rendered->truth.label == ViewTruthMaps::kBox;
+    const double hair_iou = *MaskIoU(hair, true_hair);
+    const double box_iou = *MaskIoU(box, true_box);
+    const double backdrop_iou = *MaskIoU(segmentation->label == kSegBackdrop, rendered->truth.label == ViewTruthMaps::kBackdrop);
+    std::printf("view %d: IoU hair %.3f, box %.3f, backdrop %.3f\n", view, hair_iou, box_iou, backdrop_iou);
+    // Measured on the demo capture's 38 views: hair IoU 0.86 mean, 0.69 worst
+    // (skin taken for hair where the face is shaded); the backdrop and box are keyed well.
+    EXPECT_GT(hair_iou, 0.6) << "view " << view;
+    EXPECT_GT(box_iou, 0.95) << "view " << view;
+    EXPECT_GT(backdrop_iou, 0.98) << "view " << view;
+  }
+}
+
+TEST(RenderedSegmentation, ABlackFrameIsRefused) {
+  const cv::Mat black(400, 300, CV_8UC3, cv::Scalar(0, 0, 0));
+  auto segmentation = SegmentHair(black, {}, SegmentationOptions{});
+  EXPECT_EQ(segmentation.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(segmentation.status().message().find("black frame"), std::string::npos) << segmentation.status().message();
 }
 
 }  // namespace

@@ -1,0 +1,89 @@
+#include "core/truth_maps.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/file_util.h"
+
+namespace hairrig {
+
+namespace {
+
+std::string MapPath(const std::string& dir, int view, const char* kind) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "/%03d_%s.png", view, kind);
+  return dir + name;
+}
+
+Status WritePng(const std::string& path, const cv::Mat& image) {
+  std::vector<uint8_t> png;
+  if (!cv::imencode(".png", image, png)) return Internal(path + ": PNG encoding failed");
+  return WriteFileAtomic(path, png.data(), png.size());
+}
+
+Result<cv::Mat> ReadPng(const std::string& path, int type) {
+  cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (m.empty()) return NotFound(path + ": missing or not a PNG");
+  if (m.type() != type) return CorruptData(path + ": unexpected pixel type (written by another version?)");
+  return m;
+}
+
+}  // namespace
+
+Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps& maps) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return IoError(dir + ": cannot create (" + ec.message() + ")");
+  const cv::Size size = maps.label.size();
+  cv::Mat alpha(size, CV_16U), orientation(size, CV_16U), depth(size, CV_16U), strand(size, CV_16U);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      alpha.at<uint16_t>(y, x) = static_cast<uint16_t>(std::lround(std::clamp(maps.hair_alpha.at<float>(y, x), 0.f, 1.f) * 65535));
+      const float angle = maps.orientation_deg.at<float>(y, x);
+      orientation.at<uint16_t>(y, x) =
+          std::isfinite(angle) ? static_cast<uint16_t>(std::lround(angle * 100) % 18000) : uint16_t{65535};
+      const double d = std::round(maps.depth_mm.at<float>(y, x) * kTruthDepthScale);
+      if (!(d >= 0 && d <= 65535)) {
+        return OutOfRange(MapPath(dir, view, "depth") + ": depth " + std::to_string(maps.depth_mm.at<float>(y, x)) +
+                          " mm at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") does not fit 16 bits");
+      }
+      depth.at<uint16_t>(y, x) = static_cast<uint16_t>(d);
+      const int id = maps.strand_id.at<int>(y, x);
+      if (id >= 65535) return OutOfRange(MapPath(dir, view, "strand") + ": strand index " + std::to_string(id) + " does not fit 16 bits");
+      strand.at<uint16_t>(y, x) = static_cast<uint16_t>(id + 1);
+    }
+  }
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "label"), maps.label));
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "alpha"), alpha));
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "orientation"), orientation));
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "depth"), depth));
+  return WritePng(MapPath(dir, view, "strand"), strand);
+}
+
+Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view) {
+  ViewTruthMaps m;
+  HR_ASSIGN_OR_RETURN(m.label, ReadPng(MapPath(dir, view, "label"), CV_8U));
+  HR_ASSIGN_OR_RETURN(cv::Mat alpha, ReadPng(MapPath(dir, view, "alpha"), CV_16U));
+  HR_ASSIGN_OR_RETURN(cv::Mat orientation, ReadPng(MapPath(dir, view, "orientation"), CV_16U));
+  HR_ASSIGN_OR_RETURN(cv::Mat depth, ReadPng(MapPath(dir, view, "depth"), CV_16U));
+  HR_ASSIGN_OR_RETURN(cv::Mat strand, ReadPng(MapPath(dir, view, "strand"), CV_16U));
+  alpha.convertTo(m.hair_alpha, CV_32F, 1.0 / 65535);
+  depth.convertTo(m.depth_mm, CV_32F, 1.0 / kTruthDepthScale);
+  strand.convertTo(m.strand_id, CV_32S, 1.0, -1.0);
+  m.orientation_deg = cv::Mat(orientation.size(), CV_32F);
+  for (int y = 0; y < orientation.rows; ++y) {
+    for (int x = 0; x < orientation.cols; ++x) {
+      const uint16_t o = orientation.at<uint16_t>(y, x);
+      m.orientation_deg.at<float>(y, x) = o == 65535 ? std::numeric_limits<float>::quiet_NaN() : o / 100.0f;
+    }
+  }
+  return m;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,45 @@
+// Per-pixel ground truth of a simulated view (label, hair coverage, strand
+// direction, depth, strand id) and its lossless files. The simulated rig
+// (sim_hw/) writes them beside its renders and captures; evaluation reads them
+// to score the reconstruction. Simulation-only data: production stages never
+// take it as input.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <opencv2/core/mat.hpp>
+
+#include "core/status.h"
+
+namespace hairrig {
+
+// Per-pixel ground truth of one rendered view (pixel (0,0) is the centre of
+// the top-left pixel; the same lens model as the image).
+struct ViewTruthMaps {
+  enum Label : uint8_t { kBackdrop = 0, kBox = 1, kHead = 2, kHair = 3 };
+  cv::Mat label;            // CV_8U: Label. Hair where the hair's coverage is at least 0.5
+  cv::Mat hair_alpha;       // CV_32F: hair coverage, 0..1 (all fibres, composited)
+  cv::Mat orientation_deg;  // CV_32F: 2D direction of the front-most strand, [0, 180), image frame
+                            // (0 = +x, 90 = +y, down the image); NaN where no strand
+  cv::Mat depth_mm;         // CV_32F: depth of the front-most surface along the optical axis;
+                            // for hair, the front-most strand's; 0 on the backdrop
+  cv::Mat strand_id;        // CV_32S: index of the front-most strand in the wig; -1 where none
+};
+
+// Per-pixel ground truth of one view, lossless, in `dir` (created if missing):
+//   NNN_label.png        8-bit: 0 backdrop, 1 box, 2 head, 3 hair
+//   NNN_alpha.png        16-bit: hair coverage x 65535
+//   NNN_orientation.png  16-bit: 2D strand direction in deg x 100 ([0, 18000)); 65535 where no strand
+//   NNN_depth.png        16-bit: depth of the front-most surface in mm x kTruthDepthScale; 0 on the backdrop
+//   NNN_strand.png       16-bit: front-most strand index + 1; 0 where no strand
+// NNN is the view number (three digits). A wig of 65,535 strands or more
+// cannot be written (OutOfRange), nor a depth past 3,276 mm.
+constexpr int kTruthMapsVersion = 1;
+constexpr double kTruthDepthScale = 20.0;  // 1/20 mm per count
+Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps& maps);
+// Reads what WriteViewTruthMaps wrote (the same units as ViewTruthMaps; the
+// depth quantised to 0.05 mm, the angle to 0.01 deg). Errors name the file.
+Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view);
+
+}  // namespace hairrig

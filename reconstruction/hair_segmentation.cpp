@@ -1,0 +1,329 @@
+#include "reconstruction/hair_segmentation.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/ml.hpp>
+
+namespace hairrig {
+namespace {
+
+// A comparison's or a logical operation's result as an 8-bit mask.
+cv::Mat1b Mask(const cv::MatExpr& expression) {
+  const cv::Mat m = expression;
+  return m;
+}
+
+// The backdrop as a Gaussian in BGR, from the image's border band.
+struct BackdropModel {
+  cv::Vec3d mean;
+  cv::Matx33d inverse_covariance;
+  double sigma = 0;  // mean standard deviation of the channels
+};
+
+Result<BackdropModel> FitBackdrop(const cv::Mat3b& bgr, int border) {
+  cv::Mat1b band(bgr.size(), uint8_t{255});
+  band(cv::Rect(border, border, bgr.cols - 2 * border, bgr.rows - 2 * border)).setTo(0);
+  std::vector<cv::Vec3d> samples;
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (band(y, x)) samples.push_back(cv::Vec3d(bgr(y, x)[0], bgr(y, x)[1], bgr(y, x)[2]));
+    }
+  }
+  BackdropModel model;
+  cv::Vec3d sum(0, 0, 0);
+  for (const cv::Vec3d& s : samples) sum += s;
+  model.mean = sum / static_cast<double>(samples.size());
+  cv::Matx33d cov = cv::Matx33d::zeros();
+  for (const cv::Vec3d& s : samples) {
+    const cv::Vec3d d = s - model.mean;
+    cov += d * d.t();
+  }
+  cov *= 1.0 / static_cast<double>(samples.size());
+  model.sigma = std::sqrt((cov(0, 0) + cov(1, 1) + cov(2, 2)) / 3.0);
+  if (model.sigma > 30.0) {
+    return FailedPrecondition("the image's border is not a plain backdrop (its colour varies by " +
+                              std::to_string(static_cast<int>(model.sigma)) +
+                              " grey levels): keep the subject and the box off the frame's edges");
+  }
+  // A floor of 1.5 grey levels keeps the inverse finite for a clean or grey
+  // backdrop (a grey image has three equal channels).
+  cov += cv::Matx33d::eye() * (1.5 * 1.5);
+  model.inverse_covariance = cov.inv();
+  return model;
+}
+
+cv::Mat1f BackdropDistance(const cv::Mat3b& bgr, const BackdropModel& model) {
+  cv::Mat1f distance(bgr.size());
+  distance.forEach([&](float& d, const int* pos) {
+    const cv::Vec3b& p = bgr(pos[0], pos[1]);
+    const cv::Vec3d v(p[0] - model.mean[0], p[1] - model.mean[1], p[2] - model.mean[2]);
+    d = static_cast<float>(std::sqrt(std::max(0.0, (v.t() * model.inverse_covariance * v)(0))));
+  });
+  return distance;
+}
+
+// Fine-scale texture: a band-pass of the grey image, its energy averaged over
+// a window. Fibres give a high value, skin little more than the sensor noise.
+cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, double sigma) {
+  cv::Mat1f grey, fine, coarse;
+  cv::Mat grey8;
+  cv::cvtColor(bgr, grey8, cv::COLOR_BGR2GRAY);
+  grey8.convertTo(grey, CV_32F);
+  cv::GaussianBlur(grey, fine, cv::Size(), 1.5);
+  cv::GaussianBlur(grey, coarse, cv::Size(), 4.0);
+  cv::Mat1f band, energy;
+  cv::subtract(fine, coarse, band);
+  cv::multiply(band, band, energy);
+  cv::GaussianBlur(energy, energy, cv::Size(), sigma);
+  cv::sqrt(energy, energy);
+  // Relative to the local brightness, so that hair in shadow stays textured.
+  cv::Mat1f brightness;
+  cv::GaussianBlur(coarse, brightness, cv::Size(), sigma);
+  cv::divide(energy, brightness + 8.0, energy);
+  return energy;
+}
+
+float Quantile(std::vector<float> values, double q) {
+  if (values.empty()) return 0;
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+// Colour samples (BGR as float rows) of the pixels in `where`, at most `limit`, evenly spread.
+cv::Mat1f ColourSamples(const cv::Mat3b& bgr, const cv::Mat1b& where, int limit) {
+  const int count = cv::countNonZero(where);
+  const int step = std::max(1, count / std::max(1, limit));
+  cv::Mat1f samples(0, 3);
+  int seen = 0;
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (!where(y, x) || seen++ % step != 0) continue;
+      const cv::Vec3b& p = bgr(y, x);
+      samples.push_back(cv::Mat1f(1, 3, std::array<float, 3>{float(p[0]), float(p[1]), float(p[2])}.data()));
+    }
+  }
+  return samples;
+}
+
+// Colours of the foreground as a Gaussian mixture (EM, OpenCV's ml::EM), each
+// component then called hair or skin by the texture of its pixels: skin is
+// smooth, fibres are not, and a component's colour is one material's.
+// Evaluated here (not by ml::EM::predict2) so that pixels are scored in parallel.
+class MaterialModel {
+ public:
+  static Result<MaterialModel> Fit(const cv::Mat3b& bgr, const cv::Mat1b& where, const cv::Mat1f& energy,
+                                   const SegmentationOptions& options) {
+    const int components = options.colour_components;
+    const cv::Mat1f samples = ColourSamples(bgr, where, 8000);
+    if (samples.rows < 20 * components) return FailedPrecondition("too few foreground pixels for a colour model");
+    cv::Ptr<cv::ml::EM> em = cv::ml::EM::create();
+    em->setClustersNumber(components);
+    em->setCovarianceMatrixType(cv::ml::EM::COV_MAT_GENERIC);
+    em->setTermCriteria(cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 60, 1e-3));
+    if (!em->trainEM(samples)) return FailedPrecondition("the colour model did not converge");
+    MaterialModel model;
+    std::vector<cv::Mat> covariances;
+    em->getCovs(covariances);
+    const cv::Mat means = em->getMeans();
+    const cv::Mat weights = em->getWeights();
+    for (int k = 0; k < components; ++k) {
+      Gaussian g;
+      for (int c = 0; c < 3; ++c) g.mean[c] = means.at<double>(k, c);
+      cv::Matx33d cov;
+      covariances[static_cast<size_t>(k)].convertTo(cv::Mat(cov, false), CV_64F);
+      cov += cv::Matx33d::eye() * 1.0;  // a grey level of floor: sensor noise
+      g.inverse = cov.inv();
+      g.log_norm = std::log(std::max(1e-12, weights.at<double>(0, k))) - 0.5 * std::log(cv::determinant(cov));
+      model.gaussians_.push_back(g);
+    }
+    // Each component's median texture energy, over the pixels it wins.
+    std::vector<std::vector<float>> energies(static_cast<size_t>(components));
+    std::vector<float> all;
+    for (int y = 0; y < bgr.rows; y += 2) {
+      for (int x = 0; x < bgr.cols; x += 2) {
+        if (!where(y, x)) continue;
+        energies[static_cast<size_t>(model.Best(Colour(bgr(y, x))))].push_back(energy(y, x));
+        all.push_back(energy(y, x));
+      }
+    }
+    const float overall = Quantile(all, 0.5);
+    for (size_t k = 0; k < energies.size(); ++k) {
+      model.gaussians_[k].hair = energies[k].empty() || Quantile(energies[k], 0.5) > options.skin_texture_ratio * overall;
+    }
+    return model;
+  }
+
+  static cv::Vec3d Colour(const cv::Vec3b& p) { return cv::Vec3d(p[0], p[1], p[2]); }
+
+  // log p(colour, hair) - log p(colour, skin), clamped to +-20.
+  double HairLogRatio(const cv::Vec3d& colour) const {
+    double hair = -1e300, skin = -1e300;
+    for (const Gaussian& g : gaussians_) {
+      const double t = Term(g, colour);
+      (g.hair ? hair : skin) = LogAdd(g.hair ? hair : skin, t);
+    }
+    return std::clamp(hair - skin, -20.0, 20.0);
+  }
+
+ private:
+  struct Gaussian {
+    cv::Vec3d mean;
+    cv::Matx33d inverse;
+    double log_norm = 0;
+    bool hair = true;
+  };
+  static double Term(const Gaussian& g, const cv::Vec3d& colour) {
+    const cv::Vec3d d = colour - g.mean;
+    return g.log_norm - 0.5 * (d.t() * g.inverse * d)(0);
+  }
+  static double LogAdd(double a, double b) {
+    if (a < b) std::swap(a, b);
+    return b < -1e299 ? a : a + std::log1p(std::exp(b - a));
+  }
+  int Best(const cv::Vec3d& colour) const {
+    int best = 0;
+    for (size_t k = 1; k < gaussians_.size(); ++k) {
+      if (Term(gaussians_[k], colour) > Term(gaussians_[static_cast<size_t>(best)], colour)) best = static_cast<int>(k);
+    }
+    return best;
+  }
+  std::vector<Gaussian> gaussians_;
+};
+
+// Hair against skin on the foreground (non-zero in `candidates`): the
+// material model's likelihood ratio, smoothed over a few pixels. Returns a
+// mask of hair, same size as `bgr`.
+Result<cv::Mat1b> HairBySkinContrast(const cv::Mat3b& bgr, const cv::Mat1b& candidates, const cv::Mat1f& energy,
+                                     const SegmentationOptions& options) {
+  HR_ASSIGN_OR_RETURN(const MaterialModel model, MaterialModel::Fit(bgr, candidates, energy, options));
+  cv::Mat1f ratio(bgr.size(), 0.f);
+  ratio.forEach([&](float& r, const int* pos) {
+    if (candidates(pos[0], pos[1])) r = static_cast<float>(model.HairLogRatio(MaterialModel::Colour(bgr(pos[0], pos[1]))));
+  });
+  cv::GaussianBlur(ratio, ratio, cv::Size(), options.texture_sigma_px * options.work_scale);
+  return Mask(candidates & (ratio > 0));
+}
+
+cv::Mat3b AsBgr(const cv::Mat& image) {
+  if (image.channels() == 3) return image;
+  cv::Mat3b bgr;
+  cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+  return bgr;
+}
+
+}  // namespace
+
+Status SegmentationOptions::Check() const {
+  if (border_px < 2) return InvalidArgument("segmentation border_px must be at least 2");
+  if (!(backdrop_distance > 0)) return InvalidArgument("segmentation backdrop_distance must be positive");
+  if (!(texture_sigma_px > 0)) return InvalidArgument("segmentation texture_sigma_px must be positive");
+  if (!(skin_texture_ratio > 0 && skin_texture_ratio < 1)) {
+    return InvalidArgument("segmentation skin_texture_ratio must be in (0, 1)");
+  }
+  if (colour_components < 1 || colour_components > 8) {
+    return InvalidArgument("segmentation colour_components must be in 1..8");
+  }
+  if (!(work_scale > 0.1 && work_scale <= 1)) return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
+  return Status::Ok();
+}
+
+std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera, const Rigid3d& cam_from_points,
+                                          const std::vector<Eigen::Vector3d>& points) {
+  std::vector<cv::Point2f> projected, hull;
+  for (const Eigen::Vector3d& p : points) {
+    Eigen::Vector2d uv;
+    if (ProjectChecked(camera, cam_from_points * p, &uv)) projected.emplace_back(float(uv.x()), float(uv.y()));
+  }
+  if (projected.size() < 3) return {};
+  cv::convexHull(projected, hull);
+  return hull;
+}
+
+Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std::vector<cv::Point2f>>& not_hair_px,
+                                     const SegmentationOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
+  if (image.empty() || image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
+    return InvalidArgument("segmentation needs an 8-bit grey or BGR image");
+  }
+  if (image.cols <= 4 * options.border_px || image.rows <= 4 * options.border_px) {
+    return InvalidArgument("segmentation: the image is too small for a border of " +
+                           std::to_string(options.border_px) + " px");
+  }
+  const cv::Mat3b bgr = AsBgr(image);
+  HR_ASSIGN_OR_RETURN(const BackdropModel backdrop, FitBackdrop(bgr, options.border_px));
+  const cv::Mat1f distance = BackdropDistance(bgr, backdrop);
+  const cv::Mat1b foreground = Mask(distance >= options.backdrop_distance);
+
+  cv::Mat1b box_region(bgr.size(), uint8_t{0});
+  for (const auto& polygon : not_hair_px) {
+    std::vector<cv::Point> points;
+    for (const cv::Point2f& p : polygon) points.emplace_back(cvRound(p.x), cvRound(p.y));
+    if (points.size() >= 3) cv::fillPoly(box_region, std::vector<std::vector<cv::Point>>{points}, cv::Scalar(255));
+  }
+  const cv::Mat1b candidates = Mask(foreground & ~box_region);
+  if (cv::countNonZero(candidates) < 100) {
+    return FailedPrecondition("nothing but backdrop and box in the image (no subject in view, or a black frame)");
+  }
+
+  // The colour model and graph cut at the working scale.
+  const double s = options.work_scale;
+  cv::Mat3b small_bgr;
+  cv::Mat1b small_candidates;
+  cv::Mat1f small_energy;
+  cv::resize(bgr, small_bgr, cv::Size(), s, s, cv::INTER_AREA);
+  cv::resize(candidates, small_candidates, small_bgr.size(), 0, 0, cv::INTER_AREA);
+  small_candidates = Mask(small_candidates >= 128);
+  cv::resize(TextureEnergy(bgr, options.texture_sigma_px), small_energy, small_bgr.size(), 0, 0, cv::INTER_AREA);
+  HR_ASSIGN_OR_RETURN(const cv::Mat1b small_hair, HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
+  cv::Mat1b hair_side;
+  cv::resize(small_hair, hair_side, bgr.size(), 0, 0, cv::INTER_LINEAR);
+  hair_side = Mask(hair_side >= 128);
+  // Foreground pixels the small scale lost (thin strands at the silhouette)
+  // take the side of the hair within a few pixels.
+  cv::Mat1b skin_side;
+  cv::resize(Mask(small_candidates & ~small_hair), skin_side, bgr.size(), 0, 0, cv::INTER_LINEAR);
+  skin_side = Mask(skin_side >= 128);
+  cv::Mat1b near_hair;
+  cv::dilate(hair_side, near_hair, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7)));
+  const cv::Mat1b hair_region = Mask(candidates & (hair_side | (near_hair & ~skin_side)));
+  if (cv::countNonZero(hair_region) < 50) return FailedPrecondition("no pixel looks like hair in the image");
+
+  // Coverage against the backdrop: the distance relative to the hair's own.
+  std::vector<float> hair_distances;
+  for (int y = 0; y < bgr.rows; y += 2) {
+    for (int x = 0; x < bgr.cols; x += 2) {
+      if (hair_region(y, x)) hair_distances.push_back(distance(y, x));
+    }
+  }
+  const float full_coverage = std::max(static_cast<float>(2 * options.backdrop_distance), Quantile(hair_distances, 0.5));
+
+  HairSegmentation out;
+  out.backdrop_sigma = backdrop.sigma;
+  out.label = cv::Mat1b(bgr.size(), uint8_t{kSegBackdrop});
+  out.hair_alpha = cv::Mat1f(bgr.size(), 0.f);
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (!foreground(y, x)) continue;
+      if (box_region(y, x)) {
+        out.label(y, x) = kSegBox;
+        continue;
+      }
+      if (!hair_region(y, x)) {
+        out.label(y, x) = kSegHead;
+        continue;
+      }
+      const float alpha = std::min(1.f, distance(y, x) / full_coverage);
+      out.hair_alpha(y, x) = alpha;
+      out.label(y, x) = alpha >= 0.5f ? kSegHair : kSegBackdrop;
+    }
+  }
+  return out;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,64 @@
+// Per-view segmentation of a hair capture into backdrop, calibration box,
+// head (skin) and hair, with a soft hair coverage (alpha).
+//
+// Keying as Bao & Qi 2017 Sec. III (a colour classifier seeded by what the rig
+// knows), in three steps:
+//  1. backdrop: the colour of the image's border band (the rig's backdrop
+//     fills it) as a Gaussian in BGR; a pixel's Mahalanobis distance to it
+//     gives the backdrop, and the hair's coverage where hair is seen against it
+//     (alpha = distance / the distance of the hair's own colour);
+//  2. box: the polygons the caller knows hold no hair (the calibration box's
+//     projected outline) are box wherever they are not backdrop;
+//  3. hair against skin: the foreground's colours as a Gaussian mixture (EM);
+//     fibres make a fine texture that skin lacks, so each component is hair or
+//     skin by the texture of the pixels it explains; the likelihood ratio of
+//     the two, smoothed over a few pixels, labels every pixel.
+// Labels use the simulated ground truth's numbering (core/truth_maps.h) so that
+// they compare directly.
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
+
+#include "core/camera_model.h"
+#include "core/status.h"
+#include "core/transform.h"
+
+namespace hairrig {
+
+enum SegmentLabel : uint8_t { kSegBackdrop = 0, kSegBox = 1, kSegHead = 2, kSegHair = 3 };
+
+struct SegmentationOptions {
+  int border_px = 16;               // the band along the image's edges that shows the backdrop
+  double backdrop_distance = 6.0;   // Mahalanobis distance to the backdrop colour under which a pixel is backdrop
+  double texture_sigma_px = 4.0;    // window over which the fine-scale energy is averaged
+  int colour_components = 6;        // Gaussians in the foreground's colour model
+  double skin_texture_ratio = 0.75; // a component is skin when its texture is below this share of the foreground's
+  double work_scale = 0.5;          // the colour model and graph cut run at this scale (1 = full size)
+
+  // InvalidArgument naming the field for a value out of range.
+  Status Check() const;
+};
+
+struct HairSegmentation {
+  cv::Mat1b label;       // SegmentLabel per pixel, full size
+  cv::Mat1f hair_alpha;  // hair coverage 0..1 (0 off the hair); label is hair where alpha >= 0.5
+  double backdrop_sigma = 0;  // the backdrop's colour spread (grey levels, mean of the channels)
+};
+
+// The outline (convex hull, px) of 3D points seen by a camera: how the rig
+// turns the calibration box's corners into a not-hair polygon. Points behind
+// the camera are skipped; fewer than three in front give an empty outline.
+std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera, const Rigid3d& cam_from_points,
+                                          const std::vector<Eigen::Vector3d>& points);
+
+// `image`: 8-bit BGR or grey. `not_hair_px`: polygons in pixels (may be
+// empty). InvalidArgument for an empty image or bad options; FailedPrecondition
+// when the border is not a backdrop (too varied: the subject or box touches
+// the edge, or the frame is black) or no pixel looks like hair.
+Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std::vector<cv::Point2f>>& not_hair_px,
+                                     const SegmentationOptions& options);
+
+}  // namespace hairrig

@@ -1,0 +1,377 @@
+#include "reconstruction/line_mvs.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/parallel.h"
+#include "reconstruction/orientation_map.h"
+
+namespace hairrig {
+namespace {
+
+constexpr float kNoCost = 1.0f;
+
+// Bilinear sample of a float map; false outside.
+bool Sample(const cv::Mat1f& map, double u, double v, float* value) {
+  if (!(u >= 0 && v >= 0 && u < map.cols - 1 && v < map.rows - 1)) return false;
+  const int x = static_cast<int>(u), y = static_cast<int>(v);
+  const float fx = static_cast<float>(u - x), fy = static_cast<float>(v - y);
+  const float* r0 = map[y];
+  const float* r1 = map[y + 1];
+  *value = (r0[x] * (1 - fx) + r0[x + 1] * fx) * (1 - fy) + (r1[x] * (1 - fx) + r1[x + 1] * fx) * fy;
+  return true;
+}
+
+// A neighbour as seen from the reference camera.
+struct Neighbour {
+  const MvsView* view = nullptr;
+  Eigen::Matrix3d rotation;  // cam_n_from_cam_ref
+  Eigen::Vector3d translation;
+  std::array<double, CameraIntrinsics::kNumParams> params;
+};
+
+struct Hypothesis {
+  float depth = 0;
+  float tilt = 0;  // rad
+  float cost = kNoCost;
+};
+
+class ReferenceSolver {
+ public:
+  ReferenceSolver(const std::vector<MvsView>& views, int reference, const std::vector<int>& neighbours,
+                  double centre_depth, const LineMvsOptions& options)
+      : ref_(views[static_cast<size_t>(reference)]), options_(options), centre_depth_(centre_depth) {
+    ref_params_ = ref_.camera.ToParams();
+    const Rigid3d object_from_ref = ref_.cam_from_object.Inverse();
+    for (int n : neighbours) {
+      const Rigid3d n_from_ref = views[static_cast<size_t>(n)].cam_from_object * object_from_ref;
+      neighbours_.push_back({&views[static_cast<size_t>(n)], n_from_ref.RotationMatrix(), n_from_ref.translation,
+                             views[static_cast<size_t>(n)].camera.ToParams()});
+    }
+    object_from_ref_rotation_ = object_from_ref.RotationMatrix();
+    truncation_ = options.orientation_truncation_deg;
+  }
+
+  LineDepthMap Solve(uint64_t seed) {
+    const int cols = (ref_.grey.cols + options_.stride_px - 1) / options_.stride_px;
+    const int rows = (ref_.grey.rows + options_.stride_px - 1) / options_.stride_px;
+    LineDepthMap map;
+    map.stride_px = options_.stride_px;
+    map.depth_mm = cv::Mat1f(rows, cols, 0.f);
+    map.cost = cv::Mat1f(rows, cols, kNoCost);
+    map.direction = cv::Mat3f(rows, cols, cv::Vec3f(0, 0, 0));
+    PrepareCells(rows, cols);
+    std::mt19937_64 rng(seed);
+    InitialiseRandomly(&rng);
+    double depth_range = options_.depth_margin_mm * 0.5;
+    double tilt_range = DegToRad(options_.max_tilt_deg) * 0.5;
+    for (int it = 0; it < options_.iterations; ++it) {
+      Sweep(it % 2 == 1, depth_range, tilt_range, &rng);
+      depth_range *= 0.5;
+      tilt_range *= 0.5;
+    }
+    for (size_t i = 0; i < cells_.size(); ++i) {
+      const Cell& c = cells_[i];
+      const Hypothesis& h = best_[i];
+      if (h.cost >= kNoCost) continue;
+      map.depth_mm(c.gy, c.gx) = h.depth;
+      map.cost(c.gy, c.gx) = h.cost;
+      const Eigen::Vector3d t = object_from_ref_rotation_ * Direction(c, h.tilt);
+      map.direction(c.gy, c.gx) = cv::Vec3f(static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z()));
+    }
+    return map;
+  }
+
+ private:
+  // A reference grid cell on hair: its ray and the in-image direction.
+  struct Cell {
+    int gx = 0, gy = 0;
+    Eigen::Vector3d ray;     // (x, y, 1): normalised coordinates
+    Eigen::Vector3d across;  // unit, perpendicular to the ray, along the image direction
+  };
+
+  void PrepareCells(int rows, int cols) {
+    index_ = cv::Mat1i(rows, cols, -1);
+    for (int gy = 0; gy < rows; ++gy) {
+      for (int gx = 0; gx < cols; ++gx) {
+        const int u = gx * options_.stride_px, v = gy * options_.stride_px;
+        if (!ref_.hair(v, u)) continue;
+        const float angle = ref_.orientation_deg(v, u);
+        if (!std::isfinite(angle)) continue;
+        const Result<Eigen::Vector2d> n0 = UndistortPixel(ref_.camera, Eigen::Vector2d(u, v));
+        if (!n0.ok()) continue;
+        Cell c;
+        c.gx = gx;
+        c.gy = gy;
+        c.ray = Eigen::Vector3d(n0->x(), n0->y(), 1.0);
+        // One pixel along the image direction, at the same depth (distortion
+        // varies little over a pixel).
+        const double a = DegToRad(angle);
+        const Eigen::Vector3d along(std::cos(a) / ref_.camera.fx_px, std::sin(a) / ref_.camera.fy_px, 0.0);
+        const Eigen::Vector3d r = c.ray.normalized();
+        c.across = (along - along.dot(r) * r).normalized();
+        index_(gy, gx) = static_cast<int>(cells_.size());
+        cells_.push_back(c);
+      }
+    }
+    best_.assign(cells_.size(), Hypothesis{});
+  }
+
+  Eigen::Vector3d Direction(const Cell& c, double tilt) const {
+    return std::cos(tilt) * c.across + std::sin(tilt) * c.ray.normalized();
+  }
+
+  void InitialiseRandomly(std::mt19937_64* rng) {
+    std::uniform_real_distribution<double> depth(centre_depth_ - options_.depth_margin_mm,
+                                                 centre_depth_ + options_.depth_margin_mm);
+    std::uniform_real_distribution<double> tilt(-DegToRad(options_.max_tilt_deg), DegToRad(options_.max_tilt_deg));
+    for (size_t i = 0; i < cells_.size(); ++i) {
+      Hypothesis h{static_cast<float>(std::max(1.0, depth(*rng))), static_cast<float>(tilt(*rng)), kNoCost};
+      h.cost = Cost(cells_[i], h.depth, h.tilt);
+      best_[i] = h;
+    }
+  }
+
+  void TryHypothesis(size_t i, float depth, float tilt) {
+    const double max_tilt = DegToRad(options_.max_tilt_deg);
+    if (!(depth > 1.0f) || std::abs(tilt) > max_tilt) return;
+    const float cost = Cost(cells_[i], depth, tilt);
+    if (cost < best_[i].cost) best_[i] = {depth, tilt, cost};
+  }
+
+  // One scan over the grid: each cell takes its scan-previous neighbours'
+  // hypotheses (a plane through their point would be better; a line's depth
+  // changes little over a few pixels), then a random refinement.
+  void Sweep(bool reverse, double depth_range, double tilt_range, std::mt19937_64* rng) {
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const int step = reverse ? -1 : 1;
+    const int n = static_cast<int>(cells_.size());
+    for (int k = reverse ? n - 1 : 0; k >= 0 && k < n; k += step) {
+      const size_t i = static_cast<size_t>(k);
+      const Cell& c = cells_[i];
+      const int dx[2] = {-step, 0}, dy[2] = {0, -step};
+      for (int d = 0; d < 2; ++d) {
+        for (int reach : {1, 3}) {
+          const int x = c.gx + dx[d] * reach, y = c.gy + dy[d] * reach;
+          if (x < 0 || y < 0 || x >= index_.cols || y >= index_.rows) continue;
+          const int j = index_(y, x);
+          if (j >= 0) TryHypothesis(i, best_[static_cast<size_t>(j)].depth, best_[static_cast<size_t>(j)].tilt);
+        }
+      }
+      const Hypothesis h = best_[i];
+      TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range), h.tilt);
+      TryHypothesis(i, h.depth, static_cast<float>(h.tilt + unit(*rng) * tilt_range));
+      TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range),
+                    static_cast<float>(h.tilt + unit(*rng) * tilt_range));
+    }
+  }
+
+  // The cost of a segment through the cell's ray at `depth` with `tilt`.
+  float Cost(const Cell& c, double depth, double tilt) const {
+    const Eigen::Vector3d centre = c.ray * depth;
+    const Eigen::Vector3d t = Direction(c, tilt);
+    // Samples spaced `sample_step_px` as the reference view sees them.
+    const double step_mm = options_.sample_step_px * depth / ref_.camera.fx_px;
+    const int half = options_.samples / 2;
+    std::array<float, 16> view_costs{};
+    for (size_t v = 0; v < neighbours_.size(); ++v) {
+      const Neighbour& nb = neighbours_[v];
+      float orientation_cost = 0, photometric_cost = 0;
+      if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, centre, t, step_mm, half);
+      if (options_.cost != MvsCost::kOrientation) photometric_cost = PhotometricCost(nb, c, centre, t, step_mm, half);
+      view_costs[v] = options_.cost == MvsCost::kOrientation ? orientation_cost
+                      : options_.cost == MvsCost::kPhotometric ? photometric_cost
+                                                               : 0.5f * (orientation_cost + photometric_cost);
+    }
+    const size_t used = std::min(neighbours_.size(), static_cast<size_t>(options_.views_in_cost));
+    std::partial_sort(view_costs.begin(), view_costs.begin() + static_cast<std::ptrdiff_t>(used),
+                      view_costs.begin() + static_cast<std::ptrdiff_t>(neighbours_.size()));
+    float sum = 0;
+    for (size_t k = 0; k < used; ++k) sum += view_costs[k];
+    return sum / static_cast<float>(used);
+  }
+
+  bool ProjectInto(const Neighbour& nb, const Eigen::Vector3d& p_ref, Eigen::Vector2d* uv) const {
+    const Eigen::Vector3d p = nb.rotation * p_ref + nb.translation;
+    if (p.z() <= 1.0) return false;
+    ProjectCamPoint(nb.params.data(), p.data(), uv->data());
+    return true;
+  }
+
+  float OrientationCost(const Neighbour& nb, const Eigen::Vector3d& centre, const Eigen::Vector3d& t, double step_mm,
+                        int half) const {
+    float sum = 0;
+    for (int k = -half; k <= half; ++k) {
+      const Eigen::Vector3d p = centre + (k * step_mm) * t;
+      Eigen::Vector2d a, b;
+      if (!ProjectInto(nb, p, &a) || !ProjectInto(nb, p + 0.25 * step_mm * t, &b)) {
+        sum += 1;
+        continue;
+      }
+      const int x = static_cast<int>(std::lround(a.x())), y = static_cast<int>(std::lround(a.y()));
+      if (x < 0 || y < 0 || x >= nb.view->hair.cols || y >= nb.view->hair.rows || !nb.view->hair(y, x)) {
+        sum += 1;
+        continue;
+      }
+      const float seen = nb.view->orientation_deg(y, x);
+      if (!std::isfinite(seen)) {
+        sum += 1;
+        continue;
+      }
+      const Eigen::Vector2d d = b - a;
+      double projected = RadToDeg(std::atan2(d.y(), d.x()));
+      if (projected < 0) projected += 180;
+      const double diff = OrientationDifferenceDeg(projected, seen);
+      sum += static_cast<float>(std::min(diff, truncation_) / truncation_);
+    }
+    return sum / static_cast<float>(2 * half + 1);
+  }
+
+  float PhotometricCost(const Neighbour& nb, const Cell& c, const Eigen::Vector3d& centre, const Eigen::Vector3d& t,
+                        double step_mm, int half) const {
+    const Eigen::Vector3d side = t.cross(c.ray.normalized()).normalized() * step_mm;
+    double sr = 0, sn = 0, srr = 0, snn = 0, srn = 0;
+    int count = 0;
+    for (int k = -half; k <= half; ++k) {
+      for (int j = -1; j <= 1; ++j) {
+        const Eigen::Vector3d p = centre + (k * step_mm) * t + static_cast<double>(j) * side;
+        Eigen::Vector2d in_ref, in_n;
+        ProjectCamPoint(ref_params_.data(), p.data(), in_ref.data());
+        float a, b;
+        if (!ProjectInto(nb, p, &in_n) || !Sample(ref_.grey, in_ref.x(), in_ref.y(), &a) ||
+            !Sample(nb.view->grey, in_n.x(), in_n.y(), &b)) {
+          return kNoCost;
+        }
+        sr += a;
+        sn += b;
+        srr += double(a) * a;
+        snn += double(b) * b;
+        srn += double(a) * b;
+        ++count;
+      }
+    }
+    const double var_r = srr - sr * sr / count, var_n = snn - sn * sn / count;
+    if (var_r < 1e-6 * count || var_n < 1e-6 * count) return kNoCost;
+    const double ncc = (srn - sr * sn / count) / std::sqrt(var_r * var_n);
+    return static_cast<float>((1.0 - std::clamp(ncc, -1.0, 1.0)) * 0.5);
+  }
+
+  const MvsView& ref_;
+  const LineMvsOptions& options_;
+  double centre_depth_;
+  double truncation_ = 25;
+  std::array<double, CameraIntrinsics::kNumParams> ref_params_{};
+  std::vector<Neighbour> neighbours_;
+  Eigen::Matrix3d object_from_ref_rotation_;
+  std::vector<Cell> cells_;
+  std::vector<Hypothesis> best_;
+  cv::Mat1i index_;
+};
+
+Eigen::Vector3d ViewingDirection(const MvsView& v) {
+  return v.cam_from_object.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+}
+
+Eigen::Vector3d CameraCentre(const MvsView& v) { return v.cam_from_object.Inverse().translation; }
+
+// The point closest to the rays through each view's hair centroid (least squares).
+Result<Eigen::Vector3d> SubjectCentre(const std::vector<MvsView>& views) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const MvsView& v : views) {
+    const cv::Moments m = cv::moments(v.hair, true);
+    if (m.m00 < 1) continue;
+    const Result<Eigen::Vector2d> n = UndistortPixel(v.camera, Eigen::Vector2d(m.m10 / m.m00, m.m01 / m.m00));
+    if (!n.ok()) continue;
+    const Eigen::Vector3d d = (v.cam_from_object.rotation.conjugate() * Eigen::Vector3d(n->x(), n->y(), 1)).normalized();
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += p;
+    b += p * CameraCentre(v);
+  }
+  if (std::abs(a.determinant()) < 1e-9) return FailedPrecondition("the views' hair does not meet in one place");
+  return Eigen::Vector3d(a.ldlt().solve(b));
+}
+
+}  // namespace
+
+Status LineMvsOptions::Check() const {
+  if (stride_px < 1 || stride_px > 8) return InvalidArgument("mvs stride_px must be in 1..8");
+  if (neighbours < 1 || neighbours > 16) return InvalidArgument("mvs neighbours must be in 1..16");
+  if (views_in_cost < 1 || views_in_cost > neighbours) return InvalidArgument("mvs views_in_cost must be in 1..neighbours");
+  if (!(min_baseline_deg >= 0 && min_baseline_deg < max_baseline_deg && max_baseline_deg <= 180)) {
+    return InvalidArgument("mvs baselines must satisfy 0 <= min_baseline_deg < max_baseline_deg <= 180");
+  }
+  if (iterations < 1) return InvalidArgument("mvs iterations must be at least 1");
+  if (samples < 1 || samples % 2 == 0 || samples > 31) return InvalidArgument("mvs samples must be odd, 1..31");
+  if (!(sample_step_px > 0)) return InvalidArgument("mvs sample_step_px must be positive");
+  if (!(orientation_truncation_deg > 0 && orientation_truncation_deg <= 90)) {
+    return InvalidArgument("mvs orientation_truncation_deg must be in (0, 90]");
+  }
+  if (!(max_tilt_deg > 0 && max_tilt_deg < 90)) return InvalidArgument("mvs max_tilt_deg must be in (0, 90)");
+  if (!(depth_margin_mm > 0)) return InvalidArgument("mvs depth_margin_mm must be positive");
+  if (threads < 1) return InvalidArgument("mvs threads must be at least 1");
+  return Status::Ok();
+}
+
+std::vector<int> NeighbourViews(const std::vector<MvsView>& views, int reference, const LineMvsOptions& options) {
+  const Eigen::Vector3d d_ref = ViewingDirection(views[static_cast<size_t>(reference)]);
+  std::vector<std::pair<double, int>> candidates;
+  for (size_t n = 0; n < views.size(); ++n) {
+    if (static_cast<int>(n) == reference) continue;
+    const double angle = RadToDeg(std::acos(std::clamp(d_ref.dot(ViewingDirection(views[n])), -1.0, 1.0)));
+    if (angle >= options.min_baseline_deg && angle <= options.max_baseline_deg) {
+      candidates.push_back({angle, static_cast<int>(n)});
+    }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<int> out;
+  for (size_t k = 0; k < candidates.size() && static_cast<int>(k) < options.neighbours; ++k) out.push_back(candidates[k].second);
+  return out;
+}
+
+Result<std::vector<LineDepthMap>> ComputeLineDepthMaps(const std::vector<MvsView>& views,
+                                                       const LineMvsOptions& options, const MvsProgress& progress) {
+  HR_RETURN_IF_ERROR(options.Check());
+  if (options.neighbours > 16) return InvalidArgument("mvs neighbours must be at most 16");
+  if (views.size() < 2) return InvalidArgument("multi-view stereo needs at least two views");
+  for (size_t v = 0; v < views.size(); ++v) {
+    const MvsView& view = views[v];
+    const cv::Size size(view.camera.width_px, view.camera.height_px);
+    if (view.grey.size() != size || view.orientation_deg.size() != size || view.hair.size() != size) {
+      return InvalidArgument("mvs view " + std::to_string(v) + ": its maps are not the camera's size");
+    }
+  }
+  std::vector<std::vector<int>> neighbours(views.size());
+  for (size_t v = 0; v < views.size(); ++v) {
+    neighbours[v] = NeighbourViews(views, static_cast<int>(v), options);
+    if (static_cast<int>(neighbours[v].size()) < options.views_in_cost) {
+      return FailedPrecondition("view " + std::to_string(v) + " has " + std::to_string(neighbours[v].size()) +
+                                " neighbours within " + std::to_string(options.min_baseline_deg) + "-" +
+                                std::to_string(options.max_baseline_deg) + " deg; it needs " +
+                                std::to_string(options.views_in_cost));
+    }
+  }
+  HR_ASSIGN_OR_RETURN(const Eigen::Vector3d centre, SubjectCentre(views));
+  std::vector<LineDepthMap> maps(views.size());
+  std::atomic<int> done{0};
+  ParallelFor(views.size(), options.threads, [&] {
+    return [&](size_t v) {
+      const double centre_depth = (views[v].cam_from_object * centre).z();
+      ReferenceSolver solver(views, static_cast<int>(v), neighbours[v], centre_depth, options);
+      maps[v] = solver.Solve(0x9e3779b97f4a7c15ull * (v + 1));
+      maps[v].neighbours = neighbours[v];
+      const int finished = ++done;
+      if (progress) progress(finished, static_cast<int>(views.size()));
+    };
+  });
+  return maps;
+}
+
+}  // namespace hairrig
