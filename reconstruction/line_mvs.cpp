@@ -56,7 +56,6 @@ class ReferenceSolver {
                              views[static_cast<size_t>(n)].camera.ToParams()});
     }
     object_from_ref_rotation_ = object_from_ref.RotationMatrix();
-    truncation_ = options.orientation_truncation_deg;
   }
 
   LineDepthMap Solve(uint64_t seed) {
@@ -229,7 +228,8 @@ class ReferenceSolver {
       double projected = RadToDeg(std::atan2(d.y(), d.x()));
       if (projected < 0) projected += 180;
       const double diff = OrientationDifferenceDeg(projected, seen);
-      sum += static_cast<float>(std::min(diff, truncation_) / truncation_);
+      const double truncation = options_.orientation_truncation_deg;
+      sum += static_cast<float>(std::min(diff, truncation) / truncation);
     }
     return sum / static_cast<float>(2 * half + 1);
   }
@@ -266,7 +266,6 @@ class ReferenceSolver {
   const MvsView& ref_;
   const LineMvsOptions& options_;
   double centre_depth_;
-  double truncation_ = 25;
   std::array<double, CameraIntrinsics::kNumParams> ref_params_{};
   std::vector<Neighbour> neighbours_;
   Eigen::Matrix3d object_from_ref_rotation_;
@@ -339,7 +338,6 @@ std::vector<int> NeighbourViews(const std::vector<MvsView>& views, int reference
 Result<std::vector<LineDepthMap>> ComputeLineDepthMaps(const std::vector<MvsView>& views,
                                                        const LineMvsOptions& options, const MvsProgress& progress) {
   HR_RETURN_IF_ERROR(options.Check());
-  if (options.neighbours > 16) return InvalidArgument("mvs neighbours must be at most 16");
   if (views.size() < 2) return InvalidArgument("multi-view stereo needs at least two views");
   for (size_t v = 0; v < views.size(); ++v) {
     const MvsView& view = views[v];

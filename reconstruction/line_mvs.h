@@ -83,7 +83,7 @@ inline cv::Point2d GridPixel(const LineDepthMap& map, int gx, int gy) {
   return {static_cast<double>(gx * map.stride_px), static_cast<double>(gy * map.stride_px)};
 }
 
-// Progress: (views done, views in all).
+// Progress: (views done, views in all), called from the worker threads.
 using MvsProgress = std::function<void(int, int)>;
 
 // Depth and direction maps of every view. The subject's centre is found by
