@@ -213,6 +213,11 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
   StoredCalibration out;
   out.mode = root.value("mode", "");
   out.rms_px = root.value("rms_px", 0.0);
+  if (out.mode == "turntable") {
+    auto turntable_from_box = PoseFromJson(root.value("turntable_from_box", nlohmann::json()), file + ": turntable_from_box");
+    if (!turntable_from_box.ok()) return CorruptData(turntable_from_box.status().message());
+    out.turntable_from_box = *turntable_from_box;
+  }
   for (size_t c = 0; c < root["cameras"].size(); ++c) {
     const nlohmann::json& j = root["cameras"][c];
     StoredCalibration::Camera camera;
@@ -246,6 +251,7 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
       return CorruptData(where + ": camera " + std::to_string(view.camera) + " is not in cameras");
     view.frame = j.value("frame", "");
     view.solved = j.value("solved", false);
+    if (!view.solved) view.failure = j.value("failure", "");
     if (view.solved) {
       auto pose = PoseFromJson(j.value("cam_from_box", nlohmann::json()), where + ".cam_from_box");
       if (!pose.ok()) return CorruptData(pose.status().message());
@@ -253,6 +259,9 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
       auto initial = PoseFromJson(j.value("cam_from_box_initial", nlohmann::json()), where + ".cam_from_box_initial");
       if (!initial.ok()) return CorruptData(initial.status().message());
       view.cam_from_box_initial = *initial;
+      auto object = PoseFromJson(j.value("cam_from_object", nlohmann::json()), where + ".cam_from_object");
+      if (!object.ok()) return CorruptData(object.status().message());
+      view.cam_from_object = *object;
       view.rms_px = j.value("rms_px", 0.0);
       view.uncertainty = UncertaintyFromJson(j.value("uncertainty", nlohmann::json()));
       for (const nlohmann::json& tag : j.value("tags", nlohmann::json::array())) {

@@ -52,11 +52,14 @@ struct StoredCalibration {
     bool solved = false;
     Rigid3d cam_from_box;
     Rigid3d cam_from_box_initial;  // the per-view PnP before the bundle adjustment
+    Rigid3d cam_from_object;       // the object frame: turntable in turntable mode, box in free mode
+    std::string failure;           // why the view was not solved
     double rms_px = 0;
     ViewUncertainty uncertainty;  // NaN where calibration.json has none
     std::vector<Tag> tags;        // the detections the bundle adjustment used
   };
   std::string mode;
+  Rigid3d turntable_from_box;  // turntable mode
   std::vector<Camera> cameras;
   std::vector<View> views;
   double rms_px = 0;

@@ -7,9 +7,12 @@
 #include <limits>
 #include <vector>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/file_util.h"
+#include "core/geometry_json.h"
+#include "core/json_file.h"
 
 namespace hairrig {
 
@@ -84,6 +87,32 @@ Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view) {
     }
   }
   return m;
+}
+
+Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir) {
+  const std::filesystem::path truth_dir = std::filesystem::path(capture_dir) / "ground_truth";
+  const std::string path = (truth_dir / "ground_truth.json").string();
+  HR_ASSIGN_OR_RETURN(nlohmann::json root, ReadJsonFile(path, "only captures from the simulated rig have a ground truth"));
+  if (!root.is_object() || !root.contains("views") || !root["views"].is_array())
+    return CorruptData(path + ": views is not an array");
+  CaptureTruth truth;
+  HR_ASSIGN_OR_RETURN(truth.turntable_from_box,
+                      PoseFromJson(root.value("turntable_from_box", nlohmann::json()), path + ": turntable_from_box"));
+  for (size_t i = 0; i < root["views"].size(); ++i) {
+    const nlohmann::json& j = root["views"][i];
+    const std::string where = path + ": views[" + std::to_string(i) + "]";
+    if (!j.is_object() || !j.contains("view") || !j["view"].is_number_integer())
+      return CorruptData(where + ": view is not an integer");
+    CaptureTruth::View v;
+    const nlohmann::json serial = j.value("camera_serial", nlohmann::json());
+    v.camera_serial = serial.is_string() ? serial.get<std::string>() : "";
+    HR_ASSIGN_OR_RETURN(v.intrinsics, IntrinsicsFromJson(j.value("intrinsics", nlohmann::json()), where + ".intrinsics"));
+    HR_ASSIGN_OR_RETURN(v.cam_from_box, PoseFromJson(j.value("cam_from_box", nlohmann::json()), where + ".cam_from_box"));
+    truth.views[j["view"].get<int>()] = v;
+  }
+  truth.views_dir = (truth_dir / "views").string();
+  truth.strands_file = (truth_dir / "ground_truth_strands.ply").string();
+  return truth;
 }
 
 }  // namespace hairrig

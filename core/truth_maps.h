@@ -6,11 +6,14 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include <opencv2/core/mat.hpp>
 
+#include "core/camera_model.h"
 #include "core/status.h"
+#include "core/transform.h"
 
 namespace hairrig {
 
@@ -41,5 +44,23 @@ Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps&
 // Reads what WriteViewTruthMaps wrote (the same units as ViewTruthMaps; the
 // depth quantised to 0.05 mm, the angle to 0.01 deg). Errors name the file.
 Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view);
+
+// The true cameras of a simulated capture, as <capture>/ground_truth/
+// ground_truth.json gives them (written by sim_hw/ground_truth.h).
+struct CaptureTruth {
+  struct View {
+    std::string camera_serial;
+    CameraIntrinsics intrinsics;
+    Rigid3d cam_from_box;
+  };
+  Rigid3d turntable_from_box;
+  std::map<int, View> views;  // by view number
+  std::string views_dir;      // the per-view maps' folder (<capture>/ground_truth/views)
+  std::string strands_file;   // the true strands, turntable frame (<capture>/ground_truth/ground_truth_strands.ply)
+};
+
+// NotFound for a capture without ground truth (only the simulated rig writes
+// one); CorruptData naming the file and field for a damaged one.
+Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir);
 
 }  // namespace hairrig

@@ -37,6 +37,12 @@ struct Neighbour {
   std::array<double, CameraIntrinsics::kNumParams> params;
 };
 
+// The depths a cell's hypotheses may take.
+struct DepthRange {
+  float lo = 1, hi = 1;
+  float Clamp(float d) const { return std::clamp(d, lo, hi); }
+};
+
 struct Hypothesis {
   float depth = 0;
   float tilt = 0;  // rad
@@ -69,11 +75,11 @@ class ReferenceSolver {
     PrepareCells(rows, cols);
     std::mt19937_64 rng(seed);
     InitialiseRandomly(&rng);
-    double depth_range = options_.depth_margin_mm * 0.5;
+    double depth_fraction = 0.25;  // of each cell's depth range
     double tilt_range = DegToRad(options_.max_tilt_deg) * 0.5;
     for (int it = 0; it < options_.iterations; ++it) {
-      Sweep(it % 2 == 1, depth_range, tilt_range, &rng);
-      depth_range *= 0.5;
+      Sweep(it % 2 == 1, depth_fraction, tilt_range, &rng);
+      depth_fraction *= 0.5;
       tilt_range *= 0.5;
     }
     for (size_t i = 0; i < cells_.size(); ++i) {
@@ -94,6 +100,8 @@ class ReferenceSolver {
     int gx = 0, gy = 0;
     Eigen::Vector3d ray;     // (x, y, 1): normalised coordinates
     Eigen::Vector3d across;  // unit, perpendicular to the ray, along the image direction
+    DepthRange range;
+    float prior_mm = 0;  // the prior depth, 0 = none
   };
 
   void PrepareCells(int rows, int cols) {
@@ -116,6 +124,8 @@ class ReferenceSolver {
         const Eigen::Vector3d along(std::cos(a) / ref_.camera.fx_px, std::sin(a) / ref_.camera.fy_px, 0.0);
         const Eigen::Vector3d r = c.ray.normalized();
         c.across = (along - along.dot(r) * r).normalized();
+        c.prior_mm = ref_.prior_depth_mm.empty() ? 0.f : std::max(0.f, ref_.prior_depth_mm(v, u));
+        c.range = RangeAt(c.prior_mm);
         index_(gy, gx) = static_cast<int>(cells_.size());
         cells_.push_back(c);
       }
@@ -123,16 +133,25 @@ class ReferenceSolver {
     best_.assign(cells_.size(), Hypothesis{});
   }
 
+  DepthRange RangeAt(float prior) const {
+    if (prior > 0) {
+      return {std::max(1.f, prior - static_cast<float>(options_.prior_front_mm)),
+              prior + static_cast<float>(options_.prior_behind_mm)};
+    }
+    return {static_cast<float>(std::max(1.0, centre_depth_ - options_.depth_margin_mm)),
+            static_cast<float>(std::max(1.0, centre_depth_ + options_.depth_margin_mm))};
+  }
+
   Eigen::Vector3d Direction(const Cell& c, double tilt) const {
     return std::cos(tilt) * c.across + std::sin(tilt) * c.ray.normalized();
   }
 
   void InitialiseRandomly(std::mt19937_64* rng) {
-    std::uniform_real_distribution<double> depth(centre_depth_ - options_.depth_margin_mm,
-                                                 centre_depth_ + options_.depth_margin_mm);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
     std::uniform_real_distribution<double> tilt(-DegToRad(options_.max_tilt_deg), DegToRad(options_.max_tilt_deg));
     for (size_t i = 0; i < cells_.size(); ++i) {
-      Hypothesis h{static_cast<float>(std::max(1.0, depth(*rng))), static_cast<float>(tilt(*rng)), kNoCost};
+      const DepthRange& r = cells_[i].range;
+      Hypothesis h{static_cast<float>(r.lo + unit(*rng) * (r.hi - r.lo)), static_cast<float>(tilt(*rng)), kNoCost};
       h.cost = Cost(cells_[i], h.depth, h.tilt);
       best_[i] = h;
     }
@@ -140,15 +159,17 @@ class ReferenceSolver {
 
   void TryHypothesis(size_t i, float depth, float tilt) {
     const double max_tilt = DegToRad(options_.max_tilt_deg);
-    if (!(depth > 1.0f) || std::abs(tilt) > max_tilt) return;
+    if (!std::isfinite(depth) || std::abs(tilt) > max_tilt) return;
+    depth = cells_[i].range.Clamp(depth);
     const float cost = Cost(cells_[i], depth, tilt);
     if (cost < best_[i].cost) best_[i] = {depth, tilt, cost};
   }
 
   // One scan over the grid: each cell takes its scan-previous neighbours'
-  // hypotheses (a plane through their point would be better; a line's depth
-  // changes little over a few pixels), then a random refinement.
-  void Sweep(bool reverse, double depth_range, double tilt_range, std::mt19937_64* rng) {
+  // hypotheses, as the same depth and, where both have a prior, as the same
+  // offset from the prior (the prior's surface follows the subject's slant),
+  // then a random refinement.
+  void Sweep(bool reverse, double depth_fraction, double tilt_range, std::mt19937_64* rng) {
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
     const int step = reverse ? -1 : 1;
     const int n = static_cast<int>(cells_.size());
@@ -161,10 +182,15 @@ class ReferenceSolver {
           const int x = c.gx + dx[d] * reach, y = c.gy + dy[d] * reach;
           if (x < 0 || y < 0 || x >= index_.cols || y >= index_.rows) continue;
           const int j = index_(y, x);
-          if (j >= 0) TryHypothesis(i, best_[static_cast<size_t>(j)].depth, best_[static_cast<size_t>(j)].tilt);
+          if (j < 0) continue;
+          const Hypothesis& hj = best_[static_cast<size_t>(j)];
+          TryHypothesis(i, hj.depth, hj.tilt);
+          const float prior_j = cells_[static_cast<size_t>(j)].prior_mm;
+          if (c.prior_mm > 0 && prior_j > 0) TryHypothesis(i, c.prior_mm + (hj.depth - prior_j), hj.tilt);
         }
       }
       const Hypothesis h = best_[i];
+      const double depth_range = depth_fraction * (c.range.hi - c.range.lo);
       TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range), h.tilt);
       TryHypothesis(i, h.depth, static_cast<float>(h.tilt + unit(*rng) * tilt_range));
       TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range),
@@ -315,6 +341,8 @@ Status LineMvsOptions::Check() const {
   }
   if (!(max_tilt_deg > 0 && max_tilt_deg < 90)) return InvalidArgument("mvs max_tilt_deg must be in (0, 90)");
   if (!(depth_margin_mm > 0)) return InvalidArgument("mvs depth_margin_mm must be positive");
+  if (!(prior_front_mm >= 0 && prior_behind_mm > 0 && prior_front_mm + prior_behind_mm < 1000))
+    return InvalidArgument("mvs prior_front_mm must be >= 0 and prior_behind_mm > 0 (their sum under 1000)");
   if (threads < 1) return InvalidArgument("mvs threads must be at least 1");
   return Status::Ok();
 }
@@ -342,7 +370,8 @@ Result<std::vector<LineDepthMap>> ComputeLineDepthMaps(const std::vector<MvsView
   for (size_t v = 0; v < views.size(); ++v) {
     const MvsView& view = views[v];
     const cv::Size size(view.camera.width_px, view.camera.height_px);
-    if (view.grey.size() != size || view.orientation_deg.size() != size || view.hair.size() != size) {
+    if (view.grey.size() != size || view.orientation_deg.size() != size || view.hair.size() != size ||
+        (!view.prior_depth_mm.empty() && view.prior_depth_mm.size() != size)) {
       return InvalidArgument("mvs view " + std::to_string(v) + ": its maps are not the camera's size");
     }
   }

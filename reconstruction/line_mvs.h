@@ -53,7 +53,11 @@ struct LineMvsOptions {
   double sample_step_px = 2.0;    // their spacing, as seen in the reference view
   double orientation_truncation_deg = 25;
   double max_tilt_deg = 75;
-  double depth_margin_mm = 200;   // hypotheses within this of the subject's centre depth
+  double depth_margin_mm = 200;   // without a prior: hypotheses within this of the subject's centre depth
+  // With a prior depth (MvsView::prior_depth_mm, the visual hull's surface):
+  // hypotheses lie from this far in front of it ...
+  double prior_front_mm = 3;
+  double prior_behind_mm = 25;    // ... to this far behind it
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
@@ -67,6 +71,10 @@ struct MvsView {
   cv::Mat1f grey;               // 0..255
   cv::Mat1f orientation_deg;    // [0, 180), NaN where unknown
   cv::Mat1b hair;               // non-zero on hair
+  // Optional (empty, or 0 at a pixel = none): a depth (mm) the surface is
+  // near, such as the visual hull's (reconstruction/visual_hull.h), read at
+  // the grid's pixels.
+  cv::Mat1f prior_depth_mm;
 };
 
 // A reference view's result on its grid (cols = ceil(width / stride)).
@@ -86,7 +94,8 @@ inline cv::Point2d GridPixel(const LineDepthMap& map, int gx, int gy) {
 // Progress: (views done, views in all), called from the worker threads.
 using MvsProgress = std::function<void(int, int)>;
 
-// Depth and direction maps of every view. The subject's centre is found by
+// Depth and direction maps of every view. Where a view has no prior depth,
+// the search spans depth_margin_mm around the subject's centre, found by
 // intersecting the rays through each view's hair centroid. InvalidArgument
 // for fewer than two views, maps of the wrong size or bad options;
 // FailedPrecondition when a view has no neighbour within the baselines.

@@ -8,6 +8,7 @@
 // Conrady, core/camera_model.h) maps every 3D point to its distorted pixel.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,9 @@ struct ReconstructionView {
 
 struct ReconstructionInput {
   std::string object_frame;  // "turntable" or "colmap world": what points.ply's coordinates are in
+  // Where the object frame stands on the calibration box, when a capture's
+  // calibration says it (the simulated rig's ground truth is tied to the box).
+  std::optional<Rigid3d> object_from_box;
   std::vector<ReconstructionView> views;
   // Views that cannot be used, each "name: why" (a failed calibration, a
   // missing frame); the rest are reconstructed.

@@ -44,5 +44,6 @@ void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

@@ -1,5 +1,5 @@
 // `hairrig eval <stage> DIR`: a stage's output against the simulated rig's
-// ground truth (<capture>/ground_truth/). Stages: calibration, intrinsics.
+// ground truth (<capture>/ground_truth/). Stages: calibration, intrinsics, reconstruction.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +13,8 @@
 #include "calibration/uncertainty_check.h"
 #include "core/geometry_json.h"
 #include "core/json_file.h"
+#include "core/truth_maps.h"
+#include "reconstruction/reconstruction_evaluation.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/cli.h"
 
@@ -21,34 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct TruthView {
-  std::string serial;
-  CameraIntrinsics intrinsics;
-  Rigid3d cam_from_box;
-};
-
-Result<std::map<int, TruthView>> ReadGroundTruthViews(const std::string& capture_dir) {
-  const std::string path = (fs::path(capture_dir) / "ground_truth" / "ground_truth.json").string();
-  HR_ASSIGN_OR_RETURN(nlohmann::json root,
-                      ReadJsonFile(path, "only captures from the simulated rig have a ground truth"));
-  if (!root.contains("views") || !root["views"].is_array()) return CorruptData(path + ": views is not an array");
-  std::map<int, TruthView> views;
-  for (size_t i = 0; i < root["views"].size(); ++i) {
-    const nlohmann::json& j = root["views"][i];
-    const std::string where = path + ": views[" + std::to_string(i) + "]";
-    if (!j.contains("view") || !j["view"].is_number_integer()) return CorruptData(where + ": view is not an integer");
-    TruthView v;
-    v.serial = j.value("camera_serial", "");
-    auto intrinsics = IntrinsicsFromJson(j.value("intrinsics", nlohmann::json()), where + ".intrinsics");
-    auto pose = PoseFromJson(j.value("cam_from_box", nlohmann::json()), where + ".cam_from_box");
-    if (!intrinsics.ok()) return CorruptData(intrinsics.status().message());
-    if (!pose.ok()) return CorruptData(pose.status().message());
-    v.intrinsics = *intrinsics;
-    v.cam_from_box = *pose;
-    views[j["view"].get<int>()] = v;
-  }
-  return views;
-}
+using TruthView = CaptureTruth::View;
 
 struct Spread {
   std::vector<double> values;
@@ -131,7 +106,8 @@ nlohmann::json CornerNoise(const StoredCalibration& calibration, const std::map<
 Result<nlohmann::json> EvalCalibration(const std::string& dir) {
   HR_ASSIGN_OR_RETURN(StoredCalibration calibration,
                       ReadCalibration((fs::path(dir) / "calibration" / "calibration.json").string()));
-  HR_ASSIGN_OR_RETURN(auto truth, ReadGroundTruthViews(dir));
+  HR_ASSIGN_OR_RETURN(const CaptureTruth capture_truth, ReadCaptureTruth(dir));
+  const std::map<int, TruthView>& truth = capture_truth.views;
   int compared = 0, compared_initial = 0;
   nlohmann::json out{{"stage", "calibration"}, {"dir", dir}, {"mode", calibration.mode}};
   out["solved"] = PoseErrors(calibration, truth, false, &compared);
@@ -254,6 +230,29 @@ void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   intrinsics->callback([dir, &dispatch] {
     dispatch.action = [dir] { return EvalIntrinsics(*dir); };
     dispatch.print_human = PrintEvalIntrinsics;
+  });
+  auto* reconstruction = cmd->add_subcommand(
+      "reconstruction", "masks, orientation, depth and points of DIR/reconstruction/ against DIR/ground_truth/");
+  auto threads = std::make_shared<int>(2);
+  reconstruction->add_option("DIR", *dir, "a reconstructed capture of the simulated rig")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  reconstruction->add_option("--threads", *threads, "worker threads")->check(CLI::PositiveNumber)->capture_default_str();
+  reconstruction->add_flag("--json", common.json, "print the summary as one JSON object");
+  reconstruction->callback([dir, threads, &dispatch] {
+    dispatch.action = [dir, threads]() -> Result<nlohmann::json> {
+      ReconstructionEvalOptions options;
+      options.threads = *threads;
+      HR_ASSIGN_OR_RETURN(const ReconstructionEvaluation evaluation, EvaluateReconstruction(*dir, options));
+      nlohmann::json j = evaluation.ToJson();
+      j["dir"] = *dir;
+      j["brief"] = evaluation.BriefReport();
+      return j;
+    };
+    dispatch.print_human = [](const nlohmann::json& j) {
+      std::printf("reconstruction of %s against the ground truth\n%s", j["dir"].get<std::string>().c_str(),
+                  j["brief"].get<std::string>().c_str());
+    };
   });
 }
 

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   AddFitCommand(app, common, dispatch);
   AddSimulateCommand(app, common, dispatch);
   AddCalibrateCommand(app, common, dispatch);
+  AddReconstructCommand(app, common, dispatch);
   AddEvalCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   try {

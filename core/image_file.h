@@ -1,0 +1,20 @@
+// Images written to disk the one way every module does it: encoded by the
+// file's extension (png, jpg, ...), the encoding checked, the bytes written
+// atomically (core/file_util.h), so no reader ever sees half an image.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "core/status.h"
+
+namespace hairrig {
+
+// `params`: OpenCV's imwrite flags (e.g. {cv::IMWRITE_JPEG_QUALITY, 85}).
+// Internal when the image cannot be encoded in that format (a float image as
+// JPEG, an unknown extension); IoError naming the file when it cannot be written.
+Status WriteImageAtomic(const std::string& path, const cv::Mat& image, const std::vector<int>& params = {});
+
+}  // namespace hairrig

@@ -1,0 +1,44 @@
+// Fusion of the per-view line depth maps (line_mvs.h) into one cloud of
+// oriented points: a cell's segment is kept when other views' maps agree
+// with it (their depth at its projection and their direction), the views
+// that agree are recorded as the ones that see it, and points closer than a
+// merge distance are merged (the most confident wins), so that the 38 views'
+// overlapping maps give one surface, not 38 copies.
+//
+// Frames and units: points in the views' object frame (the turntable frame
+// for a capture), mm; directions unsigned.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "reconstruction/line_mvs.h"
+#include "reconstruction/point_cloud.h"
+
+namespace hairrig {
+
+struct FusionOptions {
+  double max_cost = 0.4;               // cells whose best hypothesis costs more are not points
+  double depth_tolerance_mm = 2.0;     // another view agrees where its depth at the projection is within this ...
+  double angle_tolerance_deg = 20;     // ... and its direction within this
+  int min_agreeing_views = 1;          // views besides the reference that must agree
+  double merge_mm = 0.5;               // points within one cell of this size are merged
+  int threads = 2;
+
+  // InvalidArgument naming the field for a value out of range.
+  Status Check() const;
+};
+
+struct FusionSummary {
+  int64_t candidates = 0;   // cells with an estimate under max_cost
+  int64_t consistent = 0;   // ... that enough other views agree with
+  int64_t points = 0;       // after merging
+};
+
+// `views` and `maps` as given to and returned by ComputeLineDepthMaps (the
+// same order). Each point's `views` holds indices into `views`, sorted.
+// InvalidArgument when the sizes differ or the options are bad.
+Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views, const std::vector<LineDepthMap>& maps,
+                                              const FusionOptions& options, FusionSummary* summary = nullptr);
+
+}  // namespace hairrig

@@ -1,0 +1,364 @@
+#include "reconstruction/point_reconstruction.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/file_util.h"
+#include "core/geometry_json.h"
+#include "core/image_file.h"
+#include "core/parallel.h"
+
+namespace hairrig {
+namespace {
+
+namespace fs = std::filesystem;
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// A view after segmentation and orientation: what the stereo and the report need.
+struct PreparedView {
+  std::string why_not;  // non-empty: left out
+  uint16_t input_index = 0;  // in ReconstructionInput::views
+  MvsView mvs;
+  cv::Mat1b silhouette;
+  cv::Mat image;        // BGR, for the report
+  ViewPointsSummary summary;
+};
+
+cv::Mat1w ToUnit16(const cv::Mat1f& values, float scale, float missing_value, uint16_t missing) {
+  cv::Mat1w out(values.size(), missing);
+  for (int y = 0; y < values.rows; ++y)
+    for (int x = 0; x < values.cols; ++x) {
+      const float v = values(y, x);
+      if (std::isfinite(v) && v != missing_value)
+        out(y, x) = static_cast<uint16_t>(std::clamp(std::lround(v * scale), 0L, 65534L));
+    }
+  return out;
+}
+
+Status WriteSegmentation(const std::string& dir, const std::string& name, const HairSegmentation& s) {
+  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_label.png", s.label));
+  cv::Mat1w alpha;
+  s.hair_alpha.convertTo(alpha, CV_16U, 65535.0);
+  return WriteImageAtomic(dir + "/" + name + "_alpha.png", alpha);
+}
+
+Status WriteOrientation(const std::string& dir, const std::string& name, const OrientationMap& map, bool picture) {
+  HR_RETURN_IF_ERROR(
+      WriteImageAtomic(dir + "/" + name + "_angle.png", ToUnit16(map.angle_deg, 100.f, -1.f, uint16_t{65535})));
+  cv::Mat1w confidence;
+  map.confidence.convertTo(confidence, CV_16U, 65535.0);
+  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_confidence.png", confidence));
+  if (!picture) return Status::Ok();
+  return WriteImageAtomic(dir + "/" + name + ".jpg", OrientationPicture(map), {cv::IMWRITE_JPEG_QUALITY, 90});
+}
+
+// Reads, segments and filters one view; a view that cannot be used says why.
+PreparedView PrepareView(const ReconstructionView& view, const PointReconstructionOptions& options,
+                         const std::string& out_dir) {
+  PreparedView p;
+  p.summary.name = view.name;
+  p.image = cv::imread(view.image_path, cv::IMREAD_COLOR);
+  if (p.image.empty()) {
+    p.why_not = view.image_path + ": cannot be read as an image";
+    return p;
+  }
+  if (p.image.cols != view.camera.width_px || p.image.rows != view.camera.height_px) {
+    p.why_not = view.image_path + ": " + std::to_string(p.image.cols) + "x" + std::to_string(p.image.rows) +
+                " px, its camera is " + std::to_string(view.camera.width_px) + "x" +
+                std::to_string(view.camera.height_px);
+    return p;
+  }
+  SegmentationOptions segmentation = options.segmentation;
+  Result<HairSegmentation> seg = SegmentHair(p.image, view.not_hair_px, segmentation);
+  if (!seg.ok()) {
+    p.why_not = seg.status().message();
+    return p;
+  }
+  if (!view.mask_path.empty()) {
+    const cv::Mat given = cv::imread(view.mask_path, cv::IMREAD_GRAYSCALE);
+    if (given.size() != p.image.size()) {
+      p.why_not = view.mask_path + ": missing, unreadable or not the image's size";
+      return p;
+    }
+    seg->label.setTo(kSegHead, (seg->label == kSegHair) & (given == 0));
+    seg->label.setTo(kSegHair, given != 0);
+  }
+  const cv::Mat1b hair = seg->label == kSegHair;
+  p.summary.hair_pixels = cv::countNonZero(hair);
+  if (p.summary.hair_pixels == 0) {
+    p.why_not = "no hair is seen";
+    return p;
+  }
+  OrientationOptions orientation = options.orientation;
+  orientation.threads = 1;
+  Result<OrientationMap> map = ComputeOrientationMap(p.image, hair, orientation);
+  if (!map.ok()) {
+    p.why_not = map.status().message();
+    return p;
+  }
+  p.silhouette = cv::Mat1b(hair.size(), kSilhouetteEmpty);
+  p.silhouette.setTo(kSilhouetteSubject, (seg->label == kSegHair) | (seg->label == kSegHead));
+  p.silhouette.setTo(kSilhouetteUnknown, seg->label == kSegBox);
+  p.mvs.camera = view.camera;
+  p.mvs.cam_from_object = view.cam_from_object;
+  cv::Mat grey;
+  cv::cvtColor(p.image, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(p.mvs.grey, CV_32F);
+  p.mvs.orientation_deg = map->angle_deg.clone();
+  p.mvs.orientation_deg.setTo(std::numeric_limits<float>::quiet_NaN(),
+                              map->confidence < static_cast<float>(options.min_orientation_confidence));
+  p.mvs.hair = hair & (map->confidence >= static_cast<float>(options.min_orientation_confidence));
+  p.summary.stereo_pixels = cv::countNonZero(p.mvs.hair);
+  Status written = WriteSegmentation(out_dir + "/masks", view.name, *seg);
+  if (written.ok()) written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
+  if (!written.ok()) p.why_not = "!" + written.message();  // "!": an output error, not the view's fault
+  return p;
+}
+
+Status WriteDepth(const std::string& dir, const std::string& name, const LineDepthMap& map, bool picture) {
+  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_depth.png", ToUnit16(map.depth_mm, 20.f, 0.f, 0)));
+  if (!picture) return Status::Ok();
+  const cv::Mat1b valid = map.depth_mm > 0;
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(map.depth_mm, &lo, &hi, nullptr, nullptr, valid);
+  cv::Mat1b scaled;
+  map.depth_mm.convertTo(scaled, CV_8U, hi > lo ? 255.0 / (hi - lo) : 1.0, hi > lo ? -lo * 255.0 / (hi - lo) : 0.0);
+  cv::Mat coloured;
+  cv::applyColorMap(scaled, coloured, cv::COLORMAP_TURBO);
+  coloured.setTo(cv::Scalar::all(0), ~valid);
+  return WriteImageAtomic(dir + "/" + name + ".jpg", coloured, {cv::IMWRITE_JPEG_QUALITY, 90});
+}
+
+// Half-size picture of a view: its hair outline and the points it sees,
+// coloured by |direction| (x red, y green, z blue).
+cv::Mat ReportPicture(const PreparedView& view, const std::vector<OrientedPoint>& points) {
+  cv::Mat shown;
+  cv::resize(view.image, shown, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+  shown *= 0.6;
+  const std::array<double, CameraIntrinsics::kNumParams> params = view.mvs.camera.ToParams();
+  for (const OrientedPoint& p : points) {
+    if (!std::binary_search(p.views.begin(), p.views.end(), view.input_index)) continue;
+    const Eigen::Vector3d q = view.mvs.cam_from_object * p.position_mm.cast<double>();
+    if (q.z() <= 1) continue;
+    double uv[2];
+    ProjectCamPoint(params.data(), q.data(), uv);
+    const int x = static_cast<int>(uv[0] * 0.5), y = static_cast<int>(uv[1] * 0.5);
+    if (x < 0 || y < 0 || x >= shown.cols || y >= shown.rows) continue;
+    const Eigen::Vector3f d = p.direction.cwiseAbs() * 255.f;
+    shown.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(d.z()), static_cast<uint8_t>(d.y()),
+                                          static_cast<uint8_t>(d.x()));
+  }
+  cv::Mat1b hair;
+  cv::resize(view.mvs.hair, hair, shown.size(), 0, 0, cv::INTER_NEAREST);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(hair, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  cv::drawContours(shown, contours, -1, cv::Scalar(0, 255, 255), 1);
+  return shown;
+}
+
+Status CreateFolders(const std::string& out_dir) {
+  for (const char* sub : {"", "/masks", "/orientation", "/depth", "/report"}) {
+    std::error_code ec;
+    fs::create_directories(out_dir + sub, ec);
+    if (ec) return IoError(out_dir + sub + ": cannot create the folder (" + ec.message() + ")");
+  }
+  return Status::Ok();
+}
+
+double Median(std::vector<float> values) {
+  if (values.empty()) return 0;
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+void SummariseDepth(const LineDepthMap& map, double max_cost, ViewPointsSummary* s) {
+  std::vector<float> costs;
+  for (int y = 0; y < map.cost.rows; ++y)
+    for (int x = 0; x < map.cost.cols; ++x)
+      if (map.depth_mm(y, x) > 0 && map.cost(y, x) <= max_cost) costs.push_back(map.cost(y, x));
+  s->depth_cells = static_cast<int>(costs.size());
+  s->median_cost = Median(std::move(costs));
+}
+
+PointReconstructionOptions WithThreads(PointReconstructionOptions o) {
+  o.orientation.threads = o.threads;
+  o.hull.threads = o.threads;
+  o.mvs.threads = o.threads;
+  o.fusion.threads = o.threads;
+  return o;
+}
+
+}  // namespace
+
+Status PointReconstructionOptions::Check() const {
+  if (threads < 1) return InvalidArgument("reconstruction threads must be at least 1");
+  if (!(min_orientation_confidence >= 0 && min_orientation_confidence < 1))
+    return InvalidArgument("reconstruction min_orientation_confidence must be in [0, 1)");
+  HR_RETURN_IF_ERROR(segmentation.Check());
+  HR_RETURN_IF_ERROR(orientation.Check());
+  HR_RETURN_IF_ERROR(hull.Check());
+  HR_RETURN_IF_ERROR(mvs.Check());
+  return fusion.Check();
+}
+
+nlohmann::json PointReconstructionSummary::ToJson() const {
+  nlohmann::json views_json = nlohmann::json::array();
+  for (const ViewPointsSummary& v : views) {
+    views_json.push_back({{"name", v.name},
+                          {"hair_pixels", v.hair_pixels},
+                          {"stereo_pixels", v.stereo_pixels},
+                          {"depth_cells", v.depth_cells},
+                          {"median_cost", v.median_cost},
+                          {"points_seen", v.points_seen}});
+  }
+  nlohmann::json out = {{"format", "hairrig-reconstruction-points"},
+          {"version", 1},
+          {"object_frame", object_frame},
+          {"stride_px", stride_px},
+          {"min_orientation_confidence", min_orientation_confidence},
+          {"points_file", points_file},
+          {"views_used", views.size()},
+          {"left_out", left_out},
+          {"hull", {{"voxels", hull_voxels}, {"voxel_mm", hull_voxel_mm}}},
+          {"fusion", {{"candidates", fusion.candidates}, {"consistent", fusion.consistent}, {"points", fusion.points}}},
+          {"seconds",
+           {{"segmentation", segmentation_s},
+            {"hull", hull_s},
+            {"stereo", stereo_s},
+            {"fusion", fusion_s},
+            {"writing", writing_s},
+            {"total", total_s}}},
+          {"views", views_json}};
+  if (object_from_box) out["object_from_box"] = PoseToJson(*object_from_box);
+  return out;
+}
+
+std::string PointReconstructionSummary::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << "points: " << fusion.points << " oriented points from " << views.size() << " views (" << fusion.consistent
+    << " of " << fusion.candidates << " depth cells confirmed by another view), " << object_frame << " frame\n";
+  s << "time: " << total_s << " s (segmentation and orientation " << segmentation_s << " s, hull " << hull_s
+    << " s, stereo " << stereo_s << " s, fusion " << fusion_s << " s, writing " << writing_s << " s)\n";
+  for (const std::string& l : left_out) s << "left out: " << l << "\n";
+  s << "wrote: " << points_file << "\n";
+  return s.str();
+}
+
+Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& input, const std::string& out_dir,
+                                                     const PointReconstructionOptions& raw_options,
+                                                     const ReconstructionProgress& progress) {
+  HR_RETURN_IF_ERROR(raw_options.Check());
+  const PointReconstructionOptions options = WithThreads(raw_options);
+  if (input.views.size() > 65535) return InvalidArgument("reconstruction: at most 65,535 views");
+  HR_RETURN_IF_ERROR(CreateFolders(out_dir));
+  const auto start = std::chrono::steady_clock::now();
+  PointReconstructionSummary summary;
+  summary.object_frame = input.object_frame;
+  summary.object_from_box = input.object_from_box;
+  summary.stride_px = options.mvs.stride_px;
+  summary.min_orientation_confidence = options.min_orientation_confidence;
+  summary.left_out = input.left_out;
+
+  // Segmentation and orientation, a view per thread.
+  std::vector<PreparedView> prepared(input.views.size());
+  std::atomic<int> done{0};
+  ParallelFor(input.views.size(), options.threads, [&] {
+    return [&](size_t v) {
+      prepared[v] = PrepareView(input.views[v], options, out_dir);
+      prepared[v].input_index = static_cast<uint16_t>(v);
+      if (progress) progress("segmentation", ++done, static_cast<int>(input.views.size()));
+    };
+  });
+  std::vector<PreparedView> used;
+  for (size_t v = 0; v < prepared.size(); ++v) {
+    if (!prepared[v].why_not.empty() && prepared[v].why_not[0] == '!') return IoError(prepared[v].why_not.substr(1));
+    if (prepared[v].why_not.empty()) {
+      used.push_back(std::move(prepared[v]));
+    } else {
+      summary.left_out.push_back(input.views[v].name + ": " + prepared[v].why_not);
+    }
+  }
+  prepared.clear();
+  if (used.size() < 2)
+    return FailedPrecondition("only " + std::to_string(used.size()) + " view(s) can be used; the stereo needs two");
+  summary.segmentation_s = SecondsSince(start);
+
+  // The hull, then each view's depth prior on its stereo pixels.
+  auto step = std::chrono::steady_clock::now();
+  std::vector<SilhouetteView> silhouettes;
+  for (const PreparedView& p : used) silhouettes.push_back({p.mvs.camera, p.mvs.cam_from_object, p.silhouette});
+  HR_ASSIGN_OR_RETURN(const VisualHull hull, CarveVisualHull(silhouettes, options.hull));
+  silhouettes.clear();
+  summary.hull_voxels = hull.OccupiedCount();
+  summary.hull_voxel_mm = hull.voxel_mm;
+  done = 0;
+  ParallelFor(used.size(), options.threads, [&] {
+    return [&](size_t v) {
+      PreparedView& p = used[v];
+      p.mvs.prior_depth_mm = HullDepthMap(hull, p.mvs.camera, p.mvs.cam_from_object, p.mvs.hair, options.mvs.stride_px);
+      if (progress) progress("hull", ++done, static_cast<int>(used.size()));
+    };
+  });
+  summary.hull_s = SecondsSince(step);
+
+  step = std::chrono::steady_clock::now();
+  std::vector<MvsView> mvs_views;
+  for (PreparedView& p : used) mvs_views.push_back(p.mvs);
+  HR_ASSIGN_OR_RETURN(const std::vector<LineDepthMap> maps,
+                      ComputeLineDepthMaps(mvs_views, options.mvs, [&](int d, int total) {
+                        if (progress) progress("stereo", d, total);
+                      }));
+  summary.stereo_s = SecondsSince(step);
+
+  step = std::chrono::steady_clock::now();
+  HR_ASSIGN_OR_RETURN(std::vector<OrientedPoint> points, FusePoints(mvs_views, maps, options.fusion, &summary.fusion));
+  for (OrientedPoint& p : points) {
+    for (uint16_t& v : p.views) {
+      ++used[v].summary.points_seen;
+      v = used[v].input_index;
+    }
+  }
+  if (progress) progress("fusion", 1, 1);
+  summary.fusion_s = SecondsSince(step);
+
+  step = std::chrono::steady_clock::now();
+  summary.points_file = out_dir + "/points.ply";
+  HR_RETURN_IF_ERROR(WritePointCloudPly(summary.points_file, points));
+  std::vector<Status> written(used.size());
+  done = 0;
+  ParallelFor(used.size(), options.threads, [&] {
+    return [&](size_t v) {
+      written[v] = WriteDepth(out_dir + "/depth", used[v].summary.name, maps[v], options.write_pictures);
+      if (written[v].ok() && options.write_pictures) {
+        written[v] = WriteImageAtomic(out_dir + "/report/" + used[v].summary.name + ".jpg",
+                                      ReportPicture(used[v], points),
+                                      {cv::IMWRITE_JPEG_QUALITY, 85});
+      }
+      if (progress) progress("writing", ++done, static_cast<int>(used.size()));
+    };
+  });
+  for (const Status& s : written) HR_RETURN_IF_ERROR(s);
+  for (size_t v = 0; v < used.size(); ++v) {
+    SummariseDepth(maps[v], options.fusion.max_cost, &used[v].summary);
+    summary.views.push_back(used[v].summary);
+  }
+  summary.writing_s = SecondsSince(step);
+  summary.total_s = SecondsSince(start);
+  HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/summary.json", summary.ToJson().dump(1)));
+  return summary;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,304 @@
+#include "reconstruction/reconstruction_evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/geometry_json.h"
+#include "core/json_file.h"
+#include "core/parallel.h"
+#include "core/strand_io.h"
+#include "core/truth_maps.h"
+#include "reconstruction/point_cloud.h"
+
+namespace hairrig {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReconstructedViews {
+  std::vector<std::string> names;
+  int stride_px = 1;
+  double min_confidence = 0;
+  Rigid3d object_from_box;
+};
+
+Result<ReconstructedViews> ReadSummary(const std::string& dir) {
+  const std::string path = dir + "/summary.json";
+  HR_ASSIGN_OR_RETURN(nlohmann::json root, ReadJsonFile(path, "run `hairrig reconstruct` on the capture first"));
+  if (!root.is_object() || !root.contains("views") || !root["views"].is_array() || !root.contains("stride_px") ||
+      !root["stride_px"].is_number_integer())
+    return CorruptData(path + ": needs views (an array) and stride_px (an integer)");
+  ReconstructedViews out;
+  out.stride_px = std::max(1, root["stride_px"].get<int>());
+  const nlohmann::json confidence = root.value("min_orientation_confidence", nlohmann::json(0.0));
+  out.min_confidence = confidence.is_number() ? confidence.get<double>() : 0.0;
+  if (!root.contains("object_from_box"))
+    return CorruptData(path + ": no object_from_box: only a capture's reconstruction can be compared with its truth");
+  HR_ASSIGN_OR_RETURN(out.object_from_box, PoseFromJson(root["object_from_box"], path + ": object_from_box"));
+  for (const nlohmann::json& v : root["views"]) {
+    if (!v.is_object() || !v.contains("name") || !v["name"].is_string())
+      return CorruptData(path + ": every view needs a name");
+    out.names.push_back(v["name"].get<std::string>());
+  }
+  return out;
+}
+
+// The capture's view number at the start of a view's name ("012_SIM-CAM-UPPER").
+Result<int> ViewNumber(const std::string& name) {
+  int view = -1, used = 0;
+  if (std::sscanf(name.c_str(), "%d%n", &view, &used) != 1 || used == 0 || view < 0)
+    return CorruptData("view '" + name + "' does not start with its view number");
+  return view;
+}
+
+Result<cv::Mat> ReadPng(const std::string& path, int flags) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return NotFound(path + " is missing");
+  cv::Mat image = cv::imread(path, flags);
+  if (image.empty()) return CorruptData(path + ": not a readable PNG");
+  return image;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+struct ViewResult {
+  Status status;
+  ViewReconstructionAccuracy accuracy;
+  std::vector<double> depth_errors;
+  cv::Mat1f true_depth;
+};
+
+ViewResult EvaluateView(const std::string& dir, const std::string& name, const ReconstructedViews& recon,
+                        const CaptureTruth& truth) {
+  ViewResult r;
+  r.accuracy.name = name;
+  auto run = [&]() -> Status {
+    HR_ASSIGN_OR_RETURN(r.accuracy.view, ViewNumber(name));
+    if (!truth.views.count(r.accuracy.view)) return NotFound("view " + name + " has no ground truth");
+    HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps, ReadViewTruthMaps(truth.views_dir, r.accuracy.view));
+    const cv::Mat true_hair = maps.label == ViewTruthMaps::kHair;
+    HR_ASSIGN_OR_RETURN(const cv::Mat label, ReadPng(dir + "/masks/" + name + "_label.png", cv::IMREAD_UNCHANGED));
+    HR_ASSIGN_OR_RETURN(r.accuracy.mask_iou, MaskIoU(label == 3, true_hair));
+    HR_ASSIGN_OR_RETURN(const cv::Mat angle, ReadPng(dir + "/orientation/" + name + "_angle.png", cv::IMREAD_UNCHANGED));
+    HR_ASSIGN_OR_RETURN(const cv::Mat confidence,
+                        ReadPng(dir + "/orientation/" + name + "_confidence.png", cv::IMREAD_UNCHANGED));
+    OrientationMap map;
+    angle.convertTo(map.angle_deg, CV_32F, 0.01);
+    map.angle_deg.setTo(std::numeric_limits<float>::quiet_NaN(), angle == 65535);
+    confidence.convertTo(map.confidence, CV_32F, 1.0 / 65535);
+    HR_ASSIGN_OR_RETURN(r.accuracy.orientation,
+                        MeasureOrientation(map, maps.orientation_deg, true_hair, recon.min_confidence));
+    HR_ASSIGN_OR_RETURN(const cv::Mat depth, ReadPng(dir + "/depth/" + name + "_depth.png", cv::IMREAD_UNCHANGED));
+    if (depth.type() != CV_16U) return CorruptData(dir + "/depth/" + name + "_depth.png: not a 16-bit PNG");
+    for (int gy = 0; gy < depth.rows; ++gy) {
+      for (int gx = 0; gx < depth.cols; ++gx) {
+        const int u = gx * recon.stride_px, v = gy * recon.stride_px;
+        const uint16_t d = depth.at<uint16_t>(gy, gx);
+        if (d == 0 || u >= maps.label.cols || v >= maps.label.rows || !true_hair.at<uint8_t>(v, u)) continue;
+        r.depth_errors.push_back(std::abs(d / 20.0 - maps.depth_mm.at<float>(v, u)));
+      }
+    }
+    r.accuracy.depth_cells = static_cast<int>(r.depth_errors.size());
+    double sum = 0;
+    for (double e : r.depth_errors) sum += e;
+    r.accuracy.depth_mean_mm = r.depth_errors.empty() ? 0 : sum / static_cast<double>(r.depth_errors.size());
+    r.accuracy.depth_median_mm = Median(r.depth_errors);
+    r.true_depth = maps.depth_mm;
+    return Status::Ok();
+  };
+  r.status = run();
+  return r;
+}
+
+// How many true cameras see each sample: within tolerance of their true depth maps.
+std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples, const CaptureTruth& truth,
+                               const std::map<int, cv::Mat1f>& depth_maps, double tolerance_mm, int threads) {
+  struct Camera {
+    std::array<double, CameraIntrinsics::kNumParams> params;
+    Rigid3d cam_from_turntable;
+    const cv::Mat1f* depth;
+  };
+  std::vector<Camera> cameras;
+  const Rigid3d box_from_turntable = truth.turntable_from_box.Inverse();
+  for (const auto& [view, depth] : depth_maps) {
+    const CaptureTruth::View& v = truth.views.at(view);
+    cameras.push_back({v.intrinsics.ToParams(), v.cam_from_box * box_from_turntable, &depth});
+  }
+  std::vector<int> counts(samples.size(), 0);
+  ParallelFor(samples.size(), threads, [&] {
+    return [&](size_t i) {
+      const Eigen::Vector3d p = samples[i].position_mm.cast<double>();
+      for (const Camera& c : cameras) {
+        const Eigen::Vector3d q = c.cam_from_turntable * p;
+        if (q.z() <= 1) continue;
+        double uv[2];
+        ProjectCamPoint(c.params.data(), q.data(), uv);
+        const int x = static_cast<int>(std::lround(uv[0])), y = static_cast<int>(std::lround(uv[1]));
+        if (x < 0 || y < 0 || x >= c.depth->cols || y >= c.depth->rows) continue;
+        if (std::abs((*c.depth)(y, x) - q.z()) <= tolerance_mm) ++counts[i];
+      }
+    };
+  });
+  return counts;
+}
+
+// The reconstruction's points as samples in the true turntable frame.
+Result<std::vector<OrientedSample>> EstimateSamples(const std::string& dir, const Rigid3d& object_from_box,
+                                                    const CaptureTruth& truth) {
+  const Rigid3d truth_from_estimate = truth.turntable_from_box * object_from_box.Inverse();
+  const Eigen::Matrix3f rotation = truth_from_estimate.RotationMatrix().cast<float>();
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points, ReadPointCloudPly(dir + "/points.ply"));
+  std::vector<OrientedSample> samples;
+  samples.reserve(points.size());
+  for (const OrientedPoint& p : points) {
+    samples.push_back({(truth_from_estimate * p.position_mm.cast<double>()).cast<float>(), rotation * p.direction});
+  }
+  return samples;
+}
+
+nlohmann::json ScoresJson(const std::vector<MatchScore>& scores) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const MatchScore& s : scores) {
+    out.push_back({{"distance_mm", s.threshold.distance_mm},
+                   {"angle_deg", s.threshold.angle_deg},
+                   {"precision", s.precision},
+                   {"recall", s.recall},
+                   {"f1", s.f1}});
+  }
+  return out;
+}
+
+}  // namespace
+
+Status ReconstructionEvalOptions::Check() const {
+  if (!(truth_step_mm >= 0.1)) return InvalidArgument("eval truth_step_mm must be at least 0.1");
+  if (!(visibility_tolerance_mm > 0)) return InvalidArgument("eval visibility_tolerance_mm must be positive");
+  if (min_visible_views < 1) return InvalidArgument("eval min_visible_views must be at least 1");
+  if (threads < 1) return InvalidArgument("eval threads must be at least 1");
+  return Status::Ok();
+}
+
+Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
+                                                        const ReconstructionEvalOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
+  const std::string dir = (fs::path(capture_dir) / "reconstruction").string();
+  HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(capture_dir));
+  HR_ASSIGN_OR_RETURN(const ReconstructedViews recon, ReadSummary(dir));
+
+  std::vector<ViewResult> per_view(recon.names.size());
+  ParallelFor(recon.names.size(), options.threads, [&] {
+    return [&](size_t v) { per_view[v] = EvaluateView(dir, recon.names[v], recon, truth); };
+  });
+  ReconstructionEvaluation out;
+  std::vector<double> ious, orientation_medians, orientation_p90s, depth_errors;
+  int64_t hair = 0, kept = 0;
+  std::map<int, cv::Mat1f> depth_maps;
+  for (ViewResult& r : per_view) {
+    HR_RETURN_IF_ERROR(r.status);
+    out.views.push_back(r.accuracy);
+    ious.push_back(r.accuracy.mask_iou);
+    orientation_medians.push_back(r.accuracy.orientation.median_error_deg);
+    orientation_p90s.push_back(r.accuracy.orientation.p90_error_deg);
+    hair += r.accuracy.orientation.hair_pixels;
+    kept += r.accuracy.orientation.kept_pixels;
+    depth_errors.insert(depth_errors.end(), r.depth_errors.begin(), r.depth_errors.end());
+    depth_maps[r.accuracy.view] = r.true_depth;
+  }
+  if (!ious.empty()) {
+    out.mask_iou_median = Median(ious);
+    out.mask_iou_worst = *std::min_element(ious.begin(), ious.end());
+    out.orientation_median_deg = Median(orientation_medians);
+    out.orientation_p90_deg = Median(orientation_p90s);
+    out.orientation_kept_fraction = hair > 0 ? static_cast<double>(kept) / static_cast<double>(hair) : 0;
+  }
+  double sum = 0;
+  for (double e : depth_errors) sum += e;
+  out.depth_mean_mm = depth_errors.empty() ? 0 : sum / static_cast<double>(depth_errors.size());
+  out.depth_median_mm = Median(std::move(depth_errors));
+
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedSample> estimate, EstimateSamples(dir, recon.object_from_box, truth));
+  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(truth.strands_file));
+  const std::vector<OrientedSample> all_truth = SampleStrands(strands, options.truth_step_mm);
+  const std::vector<int> counts =
+      VisibleCounts(all_truth, truth, depth_maps, options.visibility_tolerance_mm, options.threads);
+  std::vector<OrientedSample> visible_truth;
+  for (size_t i = 0; i < all_truth.size(); ++i)
+    if (counts[i] >= options.min_visible_views) visible_truth.push_back(all_truth[i]);
+  out.points = static_cast<int64_t>(estimate.size());
+  out.truth_samples = static_cast<int64_t>(all_truth.size());
+  out.visible_truth_samples = static_cast<int64_t>(visible_truth.size());
+  SampleMatchOptions match;
+  match.threads = options.threads;
+  out.all = MatchSamples(estimate, all_truth, DefaultMatchThresholds(), match);
+  out.visible = MatchSamples(estimate, visible_truth, DefaultMatchThresholds(), match);
+  // Precision does not depend on which truth the recall counts: a point is
+  // right when it lies on any true strand.
+  for (size_t k = 0; k < out.visible.size(); ++k) {
+    MatchScore& s = out.visible[k];
+    s.precision = out.all[k].precision;
+    s.f1 = s.precision + s.recall > 0 ? 2 * s.precision * s.recall / (s.precision + s.recall) : 0;
+  }
+  return out;
+}
+
+nlohmann::json ReconstructionEvaluation::ToJson() const {
+  nlohmann::json views_json = nlohmann::json::array();
+  for (const ViewReconstructionAccuracy& v : views) {
+    views_json.push_back({{"name", v.name},
+                          {"view", v.view},
+                          {"mask_iou", v.mask_iou},
+                          {"orientation_median_deg", v.orientation.median_error_deg},
+                          {"orientation_p90_deg", v.orientation.p90_error_deg},
+                          {"orientation_kept_fraction", v.orientation.kept_fraction},
+                          {"depth_cells", v.depth_cells},
+                          {"depth_mean_mm", v.depth_mean_mm},
+                          {"depth_median_mm", v.depth_median_mm}});
+  }
+  return {{"stage", "reconstruction"},
+          {"masks", {{"iou_median", mask_iou_median}, {"iou_worst", mask_iou_worst}}},
+          {"orientation",
+           {{"median_deg", orientation_median_deg},
+            {"p90_deg", orientation_p90_deg},
+            {"kept_fraction", orientation_kept_fraction}}},
+          {"depth", {{"median_mm", depth_median_mm}, {"mean_mm", depth_mean_mm}}},
+          {"points",
+           {{"count", points},
+            {"truth_samples", truth_samples},
+            {"visible_truth_samples", visible_truth_samples},
+            {"visible_surface", ScoresJson(visible)},
+            {"all_strands", ScoresJson(all)}}},
+          {"views", views_json}};
+}
+
+std::string ReconstructionEvaluation::BriefReport() const {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(3);
+  s << "masks: hair IoU median " << mask_iou_median << ", worst " << mask_iou_worst << " (" << views.size()
+    << " views)\n";
+  s.precision(2);
+  s << "orientation: median error " << orientation_median_deg << " deg, 90th percentile " << orientation_p90_deg
+    << " deg (medians over views), " << 100 * orientation_kept_fraction << " % of hair pixels kept\n";
+  s << "depth: median error " << depth_median_mm << " mm, mean " << depth_mean_mm << " mm (stereo grid, true hair)\n";
+  s << "points: " << points << " against " << truth_samples << " true samples (" << visible_truth_samples
+    << " seen by >= 2 cameras)\n";
+  s.precision(3);
+  for (size_t k = 0; k < visible.size(); ++k) {
+    s << "  (" << visible[k].threshold.distance_mm << " mm, " << visible[k].threshold.angle_deg
+      << " deg): precision " << visible[k].precision << ", visible-surface recall " << visible[k].recall << " (F1 "
+      << visible[k].f1 << "), all-strands recall " << all[k].recall << "\n";
+  }
+  return s.str();
+}
+
+}  // namespace hairrig

@@ -1,0 +1,63 @@
+// `hairrig eval reconstruction`: every stage of a capture's reconstruction
+// (<capture>/reconstruction/, point_reconstruction.h) against the simulated
+// rig's ground truth (<capture>/ground_truth/, core/truth_maps.h):
+//   masks        IoU with the true hair label, per view
+//   orientation  unsigned angle error on true hair pixels, and the share kept
+//   depth        |depth - true depth| on the stereo grid's true hair pixels
+//   points       precision, recall of the visible surface (true strand
+//                samples seen by >= 2 cameras) and of all strands, F1, at the
+//                protocol's thresholds (point_evaluation.h)
+// The reconstruction's object frame is mapped into the true turntable frame
+// through the box, which both frames are fixed to:
+//   truth_from_estimate = true turntable_from_box * (summary.json's object_from_box)^-1.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "reconstruction/evaluation.h"
+#include "reconstruction/point_evaluation.h"
+
+namespace hairrig {
+
+struct ReconstructionEvalOptions {
+  double truth_step_mm = 1.0;           // true strands sampled every this far
+  double visibility_tolerance_mm = 2.0; // a camera sees a true sample within this of its true depth map
+  int min_visible_views = 2;            // the visible surface: samples seen by at least this many cameras
+  int threads = 2;
+
+  // InvalidArgument naming the field for a value out of range.
+  Status Check() const;
+};
+
+struct ViewReconstructionAccuracy {
+  std::string name;
+  int view = 0;
+  double mask_iou = 0;
+  OrientationAccuracy orientation;
+  int depth_cells = 0;          // grid cells with a depth on true hair
+  double depth_mean_mm = 0;
+  double depth_median_mm = 0;
+};
+
+struct ReconstructionEvaluation {
+  std::vector<ViewReconstructionAccuracy> views;
+  double mask_iou_median = 0, mask_iou_worst = 0;
+  double orientation_median_deg = 0, orientation_p90_deg = 0, orientation_kept_fraction = 0;  // over all views' pixels
+  double depth_median_mm = 0, depth_mean_mm = 0;  // over all views' cells
+  int64_t points = 0, truth_samples = 0, visible_truth_samples = 0;
+  std::vector<MatchScore> visible;  // recall against the visible surface
+  std::vector<MatchScore> all;      // recall against every true strand sample
+
+  nlohmann::json ToJson() const;
+  std::string BriefReport() const;
+};
+
+// NotFound when the capture has no ground truth or no reconstruction;
+// CorruptData naming the file for a damaged one.
+Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
+                                                        const ReconstructionEvalOptions& options);
+
+}  // namespace hairrig

@@ -1,0 +1,130 @@
+// `hairrig reconstruct DIR`: oriented points from a calibrated capture, or from
+// a COLMAP text model (reconstruction/point_reconstruction.h).
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <cstdio>
+#include <mutex>
+
+#include <CLI/CLI.hpp>
+
+#include "core/log.h"
+#include "reconstruction/colmap_model.h"
+#include "reconstruction/point_reconstruction.h"
+#include "rig/cli.h"
+#include "rig/reconstruction_input.h"
+
+namespace hairrig {
+namespace {
+
+struct ReconstructArgs {
+  std::string dir;
+  std::string stage = "points";
+  std::string colmap, images, masks;
+  std::vector<int> views;
+  int threads = 2;
+  std::string cost = "both";
+};
+
+// Keeps the listed view ids; an id that is not among the views is an error.
+Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input) {
+  if (ids.empty()) return Status::Ok();
+  std::vector<ReconstructionView> kept;
+  for (int id : ids) {
+    const auto it = std::find_if(input->views.begin(), input->views.end(),
+                                 [id](const ReconstructionView& v) { return v.id == id; });
+    if (it == input->views.end()) return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
+    kept.push_back(*it);
+  }
+  input->views = std::move(kept);
+  return Status::Ok();
+}
+
+// One line per stage on a terminal (rewritten in place), with the stage's ETA.
+ReconstructionProgress ProgressPrinter() {
+  struct State {
+    std::mutex mutex;
+    std::string stage;
+    std::chrono::steady_clock::time_point start;
+  };
+  auto state = std::make_shared<State>();
+  const bool terminal = ::isatty(STDERR_FILENO) != 0;
+  return [state, terminal](const std::string& stage, int done, int total) {
+    std::lock_guard<std::mutex> lock(state->mutex);
+    const auto now = std::chrono::steady_clock::now();
+    if (stage != state->stage) {
+      if (terminal && !state->stage.empty()) std::fputc('\n', stderr);
+      state->stage = stage;
+      state->start = now;
+    }
+    const double elapsed = std::chrono::duration<double>(now - state->start).count();
+    const double eta = done > 0 ? elapsed * (total - done) / done : 0;
+    char line[160];
+    std::snprintf(line, sizeof line, "reconstruct: %s %d of %d | %.0f s | ETA %.0f s", stage.c_str(), done, total,
+                  elapsed, eta);
+    if (terminal) {
+      std::fprintf(stderr, "\r\033[K%s", line);
+      if (done == total && stage == "writing") std::fputc('\n', stderr);
+      std::fflush(stderr);
+    } else if (done == total) {
+      LogInfo(line);
+    }
+  };
+}
+
+Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
+  if (a.stage != "points") return InvalidArgument("--stage " + a.stage + ": only 'points' exists so far");
+  ReconstructionInput input;
+  if (!a.colmap.empty()) {
+    if (a.images.empty()) return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
+    ColmapReadOptions colmap;
+    colmap.images_dir = a.images;
+    colmap.masks_dir = a.masks;
+    HR_ASSIGN_OR_RETURN(input, ReadColmapModel(a.colmap, colmap));
+  } else {
+    HR_ASSIGN_OR_RETURN(input, LoadCaptureReconstructionInput(a.dir));
+  }
+  HR_RETURN_IF_ERROR(SelectViews(a.views, &input));
+  PointReconstructionOptions options;
+  options.threads = a.threads;
+  options.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
+                     : a.cost == "photometric" ? MvsCost::kPhotometric
+                                               : MvsCost::kBoth;
+  HR_ASSIGN_OR_RETURN(const PointReconstructionSummary summary,
+                      ReconstructPoints(input, a.dir + "/reconstruction", options, ProgressPrinter()));
+  nlohmann::json j = summary.ToJson();
+  j["brief"] = summary.BriefReport();
+  return j;
+}
+
+}  // namespace
+
+void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
+  auto args = std::make_shared<ReconstructArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "reconstruct", "oriented 3D hair points from a calibrated capture (or a COLMAP model) into DIR/reconstruction/");
+  cmd->add_option("DIR", args->dir, "a calibrated capture folder (with --colmap: where reconstruction/ is written)")
+      ->required();
+  cmd->add_option("--stage", args->stage, "how far to go: points")->capture_default_str();
+  cmd->add_option("--colmap", args->colmap, "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--images", args->images, "with --colmap: the folder of the model's images")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--masks", args->masks, "with --colmap: hair masks, <image name>.png (non-zero = hair)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--views", args->views, "only these view numbers (capture) or IMAGE_IDs (COLMAP)");
+  cmd->add_option("--threads", args->threads, "worker threads")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--cost", args->cost,
+                  "stereo cost: both (orientation and photometric), orientation, or photometric (the baseline)")
+      ->check(CLI::IsMember({"both", "orientation", "photometric"}))
+      ->capture_default_str();
+  cmd->add_flag("--json", common.json, "print the summary as one JSON object");
+  cmd->callback([args, &dispatch] {
+    dispatch.action = [args] { return RunReconstruct(*args); };
+    dispatch.print_human = [](const nlohmann::json& j) { std::printf("%s", j["brief"].get<std::string>().c_str()); };
+  });
+}
+
+}  // namespace hairrig

@@ -1,0 +1,69 @@
+#include "rig/reconstruction_input.h"
+
+#include <filesystem>
+
+#include "calibration/calibration_io.h"
+#include "core/calib_box.h"
+#include "reconstruction/hair_segmentation.h"
+#include "rig/capture_calibration_input.h"
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The frame's path when it lies inside the capture folder and exists.
+Result<std::string> FramePath(const fs::path& capture, const std::string& frame) {
+  const fs::path path = (capture / frame).lexically_normal();
+  const fs::path relative = path.lexically_relative(capture);
+  if (frame.empty() || relative.empty() || *relative.begin() == "..")
+    return CorruptData("frame '" + frame + "' is outside the capture folder");
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return NotFound(path.string() + " is missing");
+  return path.string();
+}
+
+}  // namespace
+
+Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& capture_dir) {
+  const fs::path capture = fs::path(capture_dir).lexically_normal();
+  const std::string calibration_file = (capture / "calibration" / "calibration.json").string();
+  HR_ASSIGN_OR_RETURN(const StoredCalibration calibration, ReadCalibration(calibration_file));
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
+  CalibBox box;
+  double box_height_mm = 0;
+  HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &box, &box_height_mm));
+  const std::array<Eigen::Vector3d, 8> corners = BoxCornerPoints(0.5 * box.size_mm);
+  const std::vector<Eigen::Vector3d> box_corners(corners.begin(), corners.end());
+
+  ReconstructionInput input;
+  input.object_frame = calibration.mode == "turntable" ? "turntable" : "box";
+  input.object_from_box = calibration.mode == "turntable" ? calibration.turntable_from_box : Rigid3d();
+  for (const StoredCalibration::View& view : calibration.views) {
+    const std::string name = fs::path(view.frame).stem().string();
+    const StoredCalibration::Camera& camera = calibration.cameras[static_cast<size_t>(view.camera)];
+    if (!view.solved || !camera.solved) {
+      const std::string why = !camera.solved ? "camera " + camera.name + " was not calibrated" : view.failure;
+      input.left_out.push_back(name + ": the calibration failed (" + why + ")");
+      continue;
+    }
+    const Result<std::string> path = FramePath(capture, view.frame);
+    if (!path.ok()) {
+      input.left_out.push_back(name + ": " + path.status().message());
+      continue;
+    }
+    ReconstructionView v;
+    v.id = view.view;
+    v.name = name;
+    v.image_path = *path;
+    v.camera = camera.intrinsics;
+    v.cam_from_object = view.cam_from_object;
+    const std::vector<cv::Point2f> outline = ProjectedOutline(camera.intrinsics, view.cam_from_box, box_corners);
+    if (!outline.empty()) v.not_hair_px.push_back(outline);
+    input.views.push_back(std::move(v));
+  }
+  return input;
+}
+
+}  // namespace hairrig

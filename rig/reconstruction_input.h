@@ -1,0 +1,20 @@
+// The reconstruction's input from a calibrated capture folder (design.md
+// sections 4-6): every view that calibration.json solved, with its frame,
+// its camera's solved lens model, cam_from_object (the turntable frame in
+// turntable mode, the box frame in free mode) and the calibration box's
+// projected outline as a region that holds no hair.
+#pragma once
+
+#include <string>
+
+#include "reconstruction/views.h"
+
+namespace hairrig {
+
+// Errors name the file: no calibration (run `hairrig calibrate` first), a
+// damaged calibration.json or rig.yaml. A view the calibration did not solve
+// or whose frame is missing or outside the capture folder is listed in
+// `left_out` with the reason; the rest are returned.
+Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& capture_dir);
+
+}  // namespace hairrig
