@@ -198,19 +198,61 @@ class ReferenceSolver {
     }
   }
 
+  // The segment's samples, computed once per hypothesis and shared by the
+  // neighbours: points along it (and a quarter step further, for the
+  // projected direction) and, for the photometric cost, a strip of three
+  // lines with the reference view's grey values.
+  struct Samples {
+    int along = 0, strip = 0;
+    std::array<Eigen::Vector3d, 31> on_line, ahead;
+    std::array<Eigen::Vector3d, 93> strip_points;
+    std::array<float, 93> ref_grey{};
+    bool strip_ok = true;
+  };
+
+  void MakeSamples(const Cell& c, const Eigen::Vector3d& centre, const Eigen::Vector3d& t, double step_mm,
+                   Samples* s) const {
+    const int half = options_.samples / 2;
+    s->along = 2 * half + 1;
+    for (int k = -half; k <= half; ++k) {
+      const Eigen::Vector3d p = centre + (k * step_mm) * t;
+      s->on_line[static_cast<size_t>(k + half)] = p;
+      s->ahead[static_cast<size_t>(k + half)] = p + 0.25 * step_mm * t;
+    }
+    s->strip = 0;
+    s->strip_ok = true;
+    if (options_.cost == MvsCost::kOrientation) return;
+    const Eigen::Vector3d side = t.cross(c.ray.normalized()).normalized() * step_mm;
+    for (int k = 0; k < s->along && s->strip_ok; ++k) {
+      for (int j = -1; j <= 1; ++j) {
+        const Eigen::Vector3d p = s->on_line[static_cast<size_t>(k)] + static_cast<double>(j) * side;
+        Eigen::Vector2d in_ref;
+        ProjectCamPoint(ref_params_.data(), p.data(), in_ref.data());
+        float a;
+        if (!Sample(ref_.grey, in_ref.x(), in_ref.y(), &a)) {
+          s->strip_ok = false;
+          break;
+        }
+        s->strip_points[static_cast<size_t>(s->strip)] = p;
+        s->ref_grey[static_cast<size_t>(s->strip++)] = a;
+      }
+    }
+  }
+
   // The cost of a segment through the cell's ray at `depth` with `tilt`.
   float Cost(const Cell& c, double depth, double tilt) const {
     const Eigen::Vector3d centre = c.ray * depth;
     const Eigen::Vector3d t = Direction(c, tilt);
     // Samples spaced `sample_step_px` as the reference view sees them.
     const double step_mm = options_.sample_step_px * depth / ref_.camera.fx_px;
-    const int half = options_.samples / 2;
+    Samples samples;
+    MakeSamples(c, centre, t, step_mm, &samples);
     std::array<float, 16> view_costs{};
     for (size_t v = 0; v < neighbours_.size(); ++v) {
       const Neighbour& nb = neighbours_[v];
       float orientation_cost = 0, photometric_cost = 0;
-      if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, centre, t, step_mm, half);
-      if (options_.cost != MvsCost::kOrientation) photometric_cost = PhotometricCost(nb, c, centre, t, step_mm, half);
+      if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, samples);
+      if (options_.cost != MvsCost::kOrientation) photometric_cost = PhotometricCost(nb, samples);
       view_costs[v] = options_.cost == MvsCost::kOrientation ? orientation_cost
                       : options_.cost == MvsCost::kPhotometric ? photometric_cost
                                                                : 0.5f * (orientation_cost + photometric_cost);
@@ -230,13 +272,12 @@ class ReferenceSolver {
     return true;
   }
 
-  float OrientationCost(const Neighbour& nb, const Eigen::Vector3d& centre, const Eigen::Vector3d& t, double step_mm,
-                        int half) const {
+  float OrientationCost(const Neighbour& nb, const Samples& s) const {
     float sum = 0;
-    for (int k = -half; k <= half; ++k) {
-      const Eigen::Vector3d p = centre + (k * step_mm) * t;
+    const double truncation = options_.orientation_truncation_deg;
+    for (int k = 0; k < s.along; ++k) {
       Eigen::Vector2d a, b;
-      if (!ProjectInto(nb, p, &a) || !ProjectInto(nb, p + 0.25 * step_mm * t, &b)) {
+      if (!ProjectInto(nb, s.on_line[static_cast<size_t>(k)], &a) || !ProjectInto(nb, s.ahead[static_cast<size_t>(k)], &b)) {
         sum += 1;
         continue;
       }
@@ -254,35 +295,29 @@ class ReferenceSolver {
       double projected = RadToDeg(std::atan2(d.y(), d.x()));
       if (projected < 0) projected += 180;
       const double diff = OrientationDifferenceDeg(projected, seen);
-      const double truncation = options_.orientation_truncation_deg;
       sum += static_cast<float>(std::min(diff, truncation) / truncation);
     }
-    return sum / static_cast<float>(2 * half + 1);
+    return sum / static_cast<float>(s.along);
   }
 
-  float PhotometricCost(const Neighbour& nb, const Cell& c, const Eigen::Vector3d& centre, const Eigen::Vector3d& t,
-                        double step_mm, int half) const {
-    const Eigen::Vector3d side = t.cross(c.ray.normalized()).normalized() * step_mm;
+  float PhotometricCost(const Neighbour& nb, const Samples& s) const {
+    if (!s.strip_ok || s.strip == 0) return kNoCost;
     double sr = 0, sn = 0, srr = 0, snn = 0, srn = 0;
-    int count = 0;
-    for (int k = -half; k <= half; ++k) {
-      for (int j = -1; j <= 1; ++j) {
-        const Eigen::Vector3d p = centre + (k * step_mm) * t + static_cast<double>(j) * side;
-        Eigen::Vector2d in_ref, in_n;
-        ProjectCamPoint(ref_params_.data(), p.data(), in_ref.data());
-        float a, b;
-        if (!ProjectInto(nb, p, &in_n) || !Sample(ref_.grey, in_ref.x(), in_ref.y(), &a) ||
-            !Sample(nb.view->grey, in_n.x(), in_n.y(), &b)) {
-          return kNoCost;
-        }
-        sr += a;
-        sn += b;
-        srr += double(a) * a;
-        snn += double(b) * b;
-        srn += double(a) * b;
-        ++count;
+    for (int i = 0; i < s.strip; ++i) {
+      Eigen::Vector2d in_n;
+      float b;
+      if (!ProjectInto(nb, s.strip_points[static_cast<size_t>(i)], &in_n) ||
+          !Sample(nb.view->grey, in_n.x(), in_n.y(), &b)) {
+        return kNoCost;
       }
+      const double a = s.ref_grey[static_cast<size_t>(i)];
+      sr += a;
+      sn += b;
+      srr += a * a;
+      snn += double(b) * b;
+      srn += a * b;
     }
+    const double count = s.strip;
     const double var_r = srr - sr * sr / count, var_n = snn - sn * sn / count;
     if (var_r < 1e-6 * count || var_n < 1e-6 * count) return kNoCost;
     const double ncc = (srn - sr * sn / count) / std::sqrt(var_r * var_n);

@@ -3,11 +3,14 @@
 // accuracy against the ground truth, the OpenCV-only start beside the bundle
 // adjustment, the two modes, and bad input (no capture, a frame outside the
 // capture folder, a corrupt frame, a capture not yet calibrated).
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include <gtest/gtest.h>
 
+#include "reconstruction/colmap_model.h"
+#include "rig/reconstruction_input.h"
 #include "tests/support/command_run.h"
 
 namespace {
@@ -92,6 +95,32 @@ TEST_F(CliCalibrate, BothModesWriteEveryOutputAndMeetTheGroundTruth) {
   EXPECT_GT(Median(opencv, "camera_centre_mm"), 1.5 * Median(ours, "camera_centre_mm"));
   EXPECT_GT(Median(opencv, "rotation_deg"), 1.5 * Median(ours, "rotation_deg"));
   EXPECT_LT(Median(ours, "camera_centre_mm"), Median(free_mode["solved"], "camera_centre_mm"));
+}
+
+// The COLMAP export read back by the reconstruction's COLMAP reader gives the
+// same views as calibration.json does: names, lens models and poses.
+TEST_F(CliCalibrate, TheColmapExportReadsBackAsTheCalibratedViews) {
+  const CommandRun r = Hairrig("--log-level warning calibrate " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto from_capture = hairrig::LoadCaptureReconstructionInput(capture_);
+  ASSERT_TRUE(from_capture.ok()) << from_capture.status().ToString();
+  hairrig::ColmapReadOptions options;
+  options.images_dir = capture_ + "/frames";
+  auto from_colmap = hairrig::ReadColmapModel(capture_ + "/calibration/colmap", options);
+  ASSERT_TRUE(from_colmap.ok()) << from_colmap.status().ToString();
+  ASSERT_EQ(from_colmap->views.size(), 38u);
+  ASSERT_EQ(from_capture->views.size(), 38u);
+  EXPECT_TRUE(from_colmap->left_out.empty());
+  for (size_t v = 0; v < 38; ++v) {
+    const hairrig::ReconstructionView& a = from_capture->views[v];
+    const hairrig::ReconstructionView& b = from_colmap->views[v];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(fs::path(a.image_path).filename(), fs::path(b.image_path).filename());
+    const auto pa = a.camera.ToParams(), pb = b.camera.ToParams();
+    for (size_t k = 0; k < pa.size(); ++k) EXPECT_NEAR(pa[k], pb[k], 1e-9 + 1e-9 * std::abs(pa[k])) << k;
+    EXPECT_LT(hairrig::RotationDifferenceDeg(a.cam_from_object, b.cam_from_object), 1e-6);
+    EXPECT_LT((a.cam_from_object.translation - b.cam_from_object.translation).norm(), 1e-6);
+  }
 }
 
 // The technician's route: each camera's intrinsics from a ChArUco board
