@@ -10,6 +10,7 @@
 
 #include "calibration/intrinsics_from_views.h"
 #include "core/parallel.h"
+#include "core/statistics.h"
 
 namespace hairrig {
 namespace {
@@ -18,12 +19,6 @@ cv::Ptr<cv::aruco::CharucoBoard> OpenCvBoard(const ChArUcoBoard& board) {
   return cv::aruco::CharucoBoard::create(board.squares_x, board.squares_y, static_cast<float>(board.square_mm),
                                          static_cast<float>(board.marker_mm),
                                          cv::aruco::getPredefinedDictionary(board.opencv_dictionary));
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-  return v[v.size() / 2];
 }
 
 struct Solve {

@@ -15,6 +15,7 @@
 #include "core/geometry_json.h"
 #include "core/image_file.h"
 #include "core/parallel.h"
+#include "core/statistics.h"
 
 namespace hairrig {
 namespace {
@@ -28,6 +29,7 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 // A view after segmentation and orientation: what the stereo and the report need.
 struct PreparedView {
   std::string why_not;  // non-empty: left out
+  Status written;       // writing the view's masks and orientation maps
   uint16_t input_index = 0;  // in ReconstructionInput::views
   MvsView mvs;
   cv::Mat1b silhouette;
@@ -79,8 +81,7 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
                 std::to_string(view.camera.height_px);
     return p;
   }
-  SegmentationOptions segmentation = options.segmentation;
-  Result<HairSegmentation> seg = SegmentHair(p.image, view.not_hair_px, segmentation);
+  Result<HairSegmentation> seg = SegmentHair(p.image, view.not_hair_px, options.segmentation);
   if (!seg.ok()) {
     p.why_not = seg.status().message();
     return p;
@@ -94,7 +95,7 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
     seg->label.setTo(kSegHead, (seg->label == kSegHair) & (given == 0));
     seg->label.setTo(kSegHair, given != 0);
   }
-  const cv::Mat1b hair = seg->label == kSegHair;
+  const cv::Mat1b hair(seg->label == kSegHair);
   p.summary.hair_pixels = cv::countNonZero(hair);
   if (p.summary.hair_pixels == 0) {
     p.why_not = "no hair is seen";
@@ -120,16 +121,15 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
                               map->confidence < static_cast<float>(options.min_orientation_confidence));
   p.mvs.hair = hair & (map->confidence >= static_cast<float>(options.min_orientation_confidence));
   p.summary.stereo_pixels = cv::countNonZero(p.mvs.hair);
-  Status written = WriteSegmentation(out_dir + "/masks", view.name, *seg);
-  if (written.ok()) written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
-  if (!written.ok()) p.why_not = "!" + written.message();  // "!": an output error, not the view's fault
+  p.written = WriteSegmentation(out_dir + "/masks", view.name, *seg);
+  if (p.written.ok()) p.written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
   return p;
 }
 
 Status WriteDepth(const std::string& dir, const std::string& name, const LineDepthMap& map, bool picture) {
   HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_depth.png", ToUnit16(map.depth_mm, 20.f, 0.f, 0)));
   if (!picture) return Status::Ok();
-  const cv::Mat1b valid = map.depth_mm > 0;
+  const cv::Mat1b valid(map.depth_mm > 0);
   double lo = 0, hi = 0;
   cv::minMaxLoc(map.depth_mm, &lo, &hi, nullptr, nullptr, valid);
   cv::Mat1b scaled;
@@ -174,13 +174,6 @@ Status CreateFolders(const std::string& out_dir) {
     if (ec) return IoError(out_dir + sub + ": cannot create the folder (" + ec.message() + ")");
   }
   return Status::Ok();
-}
-
-double Median(std::vector<float> values) {
-  if (values.empty()) return 0;
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
 }
 
 void SummariseDepth(const LineDepthMap& map, double max_cost, ViewPointsSummary* s) {
@@ -284,7 +277,7 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   });
   std::vector<PreparedView> used;
   for (size_t v = 0; v < prepared.size(); ++v) {
-    if (!prepared[v].why_not.empty() && prepared[v].why_not[0] == '!') return IoError(prepared[v].why_not.substr(1));
+    HR_RETURN_IF_ERROR(prepared[v].written);
     if (prepared[v].why_not.empty()) {
       used.push_back(std::move(prepared[v]));
     } else {

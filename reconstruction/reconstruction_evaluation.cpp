@@ -12,6 +12,7 @@
 #include "core/geometry_json.h"
 #include "core/json_file.h"
 #include "core/parallel.h"
+#include "core/statistics.h"
 #include "core/strand_io.h"
 #include "core/truth_maps.h"
 #include "reconstruction/point_cloud.h"
@@ -63,12 +64,6 @@ Result<cv::Mat> ReadPng(const std::string& path, int flags) {
   cv::Mat image = cv::imread(path, flags);
   if (image.empty()) return CorruptData(path + ": not a readable PNG");
   return image;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
 }
 
 struct ViewResult {

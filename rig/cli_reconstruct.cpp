@@ -26,6 +26,8 @@ struct ReconstructArgs {
   std::vector<int> views;
   int threads = 2;
   std::string cost = "both";
+  int stride = LineMvsOptions{}.stride_px;
+  int iterations = LineMvsOptions{}.iterations;
 };
 
 // Keeps the listed view ids; an id that is not among the views is an error.
@@ -89,6 +91,8 @@ Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
   HR_RETURN_IF_ERROR(SelectViews(a.views, &input));
   PointReconstructionOptions options;
   options.threads = a.threads;
+  options.mvs.stride_px = a.stride;
+  options.mvs.iterations = a.iterations;
   options.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
                      : a.cost == "photometric" ? MvsCost::kPhotometric
                                                : MvsCost::kBoth;
@@ -119,6 +123,12 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_option("--cost", args->cost,
                   "stereo cost: both (orientation and photometric), orientation, or photometric (the baseline)")
       ->check(CLI::IsMember({"both", "orientation", "photometric"}))
+      ->capture_default_str();
+  cmd->add_option("--stride", args->stride, "stereo on every N-th pixel in x and y (1 = every pixel)")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  cmd->add_option("--iterations", args->iterations, "stereo PatchMatch iterations")
+      ->check(CLI::Range(1, 50))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/statistics.h"
+
 #include "calibration/bundle_adjustment.h"
 #include "calibration/turntable_axis.h"
 #include "sim_hw/ground_truth.h"
@@ -18,11 +20,6 @@
 
 namespace hairrig {
 namespace {
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 CameraIntrinsics WrongIntrinsics(const CameraIntrinsics& truth) {
   CameraIntrinsics c = truth;

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/statistics.h"
+
 #include "calibration/view_pose.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
@@ -14,11 +16,6 @@
 
 namespace hairrig {
 namespace {
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 TEST(RenderedViewPose, EveryViewIsInitialisedCloseToTheTruth) {
   auto scene = LoadScene("etc/scenes/default.yaml");
