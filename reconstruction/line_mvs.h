@@ -43,12 +43,12 @@ enum class MvsCost { kOrientation, kPhotometric, kBoth };
 
 struct LineMvsOptions {
   MvsCost cost = MvsCost::kBoth;
-  int stride_px = 2;              // reference pixels on a grid of this step (1 = every pixel)
+  int stride_px = 3;              // reference pixels on a grid of this step (1 = every pixel)
   int neighbours = 4;             // views compared with each reference view
   int views_in_cost = 2;          // ... of which the best this many score a hypothesis
   double min_baseline_deg = 8;    // neighbour views are at least this far in viewing direction ...
   double max_baseline_deg = 50;   // ... and at most this far
-  int iterations = 6;
+  int iterations = 4;             // with the hull's prior 4 find the depth 6 do (README)
   int samples = 7;                // along the segment (odd)
   double sample_step_px = 2.0;    // their spacing, as seen in the reference view
   double orientation_truncation_deg = 25;

@@ -97,6 +97,8 @@ std::pair<double, double> DepthError(const PlaneScene& scene, const LineDepthMap
 double MedianDepthError(const PlaneScene& scene, MvsCost cost) {
   LineMvsOptions options;
   options.cost = cost;
+  options.stride_px = 2;
+  options.iterations = 6;  // no prior depth: the search spans +-depth_margin_mm
   options.neighbours = 3;
   options.views_in_cost = 3;
   options.max_baseline_deg = 60;
@@ -130,6 +132,8 @@ TEST(LineMvs, FindsThePlaneFromPhotometryAlone) {
   LineMvsOptions options;
   options.cost = MvsCost::kPhotometric;
   options.neighbours = 2;
+  options.stride_px = 2;
+  options.iterations = 6;
   options.depth_margin_mm = 150;
   auto maps = ComputeLineDepthMaps(scene.views, options);
   ASSERT_TRUE(maps.ok()) << maps.status().ToString();

@@ -186,7 +186,8 @@ Status ReconstructionEvalOptions::Check() const {
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
-  const std::string dir = (fs::path(capture_dir) / "reconstruction").string();
+  const std::string dir = options.reconstruction_dir.empty() ? (fs::path(capture_dir) / "reconstruction").string()
+                                                              : options.reconstruction_dir;
   HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(capture_dir));
   HR_ASSIGN_OR_RETURN(const ReconstructedViews recon, ReadSummary(dir));
 
