@@ -217,6 +217,22 @@ cv::Mat3b AsBgr(const cv::Mat& image) {
   return bgr;
 }
 
+// Hair-like pixels in pieces smaller than `share` of the largest piece: specks
+// and thin lines apart from the hair, not the subject.
+cv::Mat1b StrayComponents(const cv::Mat1b& hair, double share) {
+  cv::Mat1i labels;
+  cv::Mat stats, centroids;
+  const int n = cv::connectedComponentsWithStats(hair, labels, stats, centroids, 8, CV_32S);
+  int largest = 0;
+  for (int k = 1; k < n; ++k) largest = std::max(largest, stats.at<int>(k, cv::CC_STAT_AREA));
+  std::vector<uint8_t> is_stray(static_cast<size_t>(n), 0);
+  for (int k = 1; k < n; ++k) is_stray[static_cast<size_t>(k)] = stats.at<int>(k, cv::CC_STAT_AREA) < share * largest;
+  cv::Mat1b stray(hair.size(), uint8_t{0});
+  for (int y = 0; y < hair.rows; ++y)
+    for (int x = 0; x < hair.cols; ++x) stray(y, x) = is_stray[static_cast<size_t>(labels(y, x))] ? 255 : 0;
+  return stray;
+}
+
 }  // namespace
 
 Status SegmentationOptions::Check() const {
@@ -229,6 +245,8 @@ Status SegmentationOptions::Check() const {
   if (colour_components < 1 || colour_components > 8) {
     return InvalidArgument("segmentation colour_components must be in 1..8");
   }
+  if (!(min_hair_component_share >= 0 && min_hair_component_share < 1))
+    return InvalidArgument("segmentation min_hair_component_share must be in [0, 1)");
   if (!(work_scale > 0.1 && work_scale <= 1)) return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
   return Status::Ok();
 }
@@ -303,13 +321,14 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std
   }
   const float full_coverage = std::max(static_cast<float>(2 * options.backdrop_distance), Quantile(hair_distances, 0.5));
 
+  const cv::Mat1b stray = StrayComponents(hair_region, options.min_hair_component_share);
   HairSegmentation out;
   out.backdrop_sigma = backdrop.sigma;
   out.label = cv::Mat1b(bgr.size(), uint8_t{kSegBackdrop});
   out.hair_alpha = cv::Mat1f(bgr.size(), 0.f);
   for (int y = 0; y < bgr.rows; ++y) {
     for (int x = 0; x < bgr.cols; ++x) {
-      if (!foreground(y, x)) continue;
+      if (!foreground(y, x) || stray(y, x)) continue;
       if (box_region(y, x)) {
         out.label(y, x) = kSegBox;
         continue;

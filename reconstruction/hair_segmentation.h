@@ -37,6 +37,9 @@ struct SegmentationOptions {
   int colour_components = 6;        // Gaussians in the foreground's colour model
   double skin_texture_ratio = 0.75; // a component is skin when its texture is below this share of the foreground's
   double work_scale = 0.5;          // the colour model and graph cut run at this scale (1 = full size)
+  // Hair pieces smaller than this share of the largest are not hair (specks,
+  // thin lines of the rig apart from the subject): labelled backdrop.
+  double min_hair_component_share = 0.01;
 
   // InvalidArgument naming the field for a value out of range.
   Status Check() const;
