@@ -2,6 +2,7 @@
 // cost side by side: each step's time and the accuracy against the ground
 // truth. Run from the repository root:
 //   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric] [--stride N] [--iterations N]
+//       [--mls SIGMA_MM]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
 // reconstructions go to CAPTURE/bench-reconstruction-<cost>/ (the capture's
 // own reconstruction/ is left alone). The last line compares the costs as
@@ -35,7 +36,7 @@ MvsCost ParseCost(const std::string& name) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] [--mls SIGMA_MM]\n", argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
@@ -48,6 +49,8 @@ int main(int argc, char** argv) {
       for (std::string c; std::getline(list, c, ',');) costs.push_back(c);
     } else if (std::strcmp(argv[i], "--stride") == 0) {
       options.mvs.stride_px = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--mls") == 0) {
+      options.fusion.mls_sigma_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--iterations") == 0) {
       options.mvs.iterations = std::atoi(argv[i + 1]);
     }
@@ -60,7 +63,7 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   for (const std::string& cost : costs) {
     options.mvs.cost = ParseCost(cost);
-    const std::string out = capture + "/bench-reconstruction-" + cost;
+    const std::string out = capture + "/bench-reconstruction-" + cost + (options.fusion.mls_sigma_mm > 0 ? "-mls" : "");
     auto summary = ReconstructPoints(*input, out, options);
     if (!summary.ok()) {
       std::fprintf(stderr, "%s: %s\n", cost.c_str(), summary.status().ToString().c_str());

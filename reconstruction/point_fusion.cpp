@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "core/parallel.h"
+#include "reconstruction/mls.h"
 
 namespace hairrig {
 namespace {
@@ -113,6 +114,7 @@ Status FusionOptions::Check() const {
     return InvalidArgument("fusion angle_tolerance_deg must be in (0, 90]");
   if (min_agreeing_views < 0) return InvalidArgument("fusion min_agreeing_views must not be negative");
   if (!(merge_mm >= 0.01)) return InvalidArgument("fusion merge_mm must be at least 0.01");
+  if (!(mls_sigma_mm >= 0 && mls_sigma_mm <= 50)) return InvalidArgument("fusion mls_sigma_mm must be in [0, 50]");
   if (threads < 1) return InvalidArgument("fusion threads must be at least 1");
   return Status::Ok();
 }
@@ -146,6 +148,10 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
   }
   s.consistent = static_cast<int64_t>(all.size());
   std::vector<OrientedPoint> merged = MergeByCell(std::move(all), options.merge_mm);
+  if (options.mls_sigma_mm > 0) {
+    merged = SmoothByMls(merged, options.mls_sigma_mm, options.threads);
+    s.mls = true;
+  }
   s.points = static_cast<int64_t>(merged.size());
   if (summary != nullptr) *summary = s;
   return merged;

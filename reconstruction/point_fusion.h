@@ -23,6 +23,9 @@ struct FusionOptions {
   double angle_tolerance_deg = 20;     // ... and its direction within this
   int min_agreeing_views = 1;          // views besides the reference that must agree
   double merge_mm = 0.5;               // points within one cell of this size are merged
+  // Luo 2013 Sec. 4's MLS filtering of the merged points (reconstruction/mls.h):
+  // the Gaussian's sigma in mm, 0 = off.
+  double mls_sigma_mm = 0;
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
@@ -33,6 +36,7 @@ struct FusionSummary {
   int64_t candidates = 0;   // cells with an estimate under max_cost
   int64_t consistent = 0;   // ... that enough other views agree with
   int64_t points = 0;       // after merging
+  bool mls = false;         // the points were MLS-filtered
 };
 
 // `views` and `maps` as given to and returned by ComputeLineDepthMaps (the
