@@ -126,6 +126,9 @@ class MaterialModel {
     em->setClustersNumber(components);
     em->setCovarianceMatrixType(cv::ml::EM::COV_MAT_GENERIC);
     em->setTermCriteria(cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 60, 1e-3));
+    // EM starts from k-means, which draws from this thread's cv::theRNG():
+    // seeded here so that a view segments the same on any thread, in any order.
+    cv::theRNG() = cv::RNG(0x5eed5eedULL);
     if (!em->trainEM(samples)) return FailedPrecondition("the colour model did not converge");
     MaterialModel model;
     std::vector<cv::Mat> covariances;
