@@ -37,7 +37,7 @@ struct PreparedView {
   ViewPointsSummary summary;
 };
 
-cv::Mat1w ToUnit16(const cv::Mat1f& values, float scale, float missing_value, uint16_t missing) {
+cv::Mat1w ToUInt16(const cv::Mat1f& values, float scale, float missing_value, uint16_t missing) {
   cv::Mat1w out(values.size(), missing);
   for (int y = 0; y < values.rows; ++y)
     for (int x = 0; x < values.cols; ++x) {
@@ -57,7 +57,7 @@ Status WriteSegmentation(const std::string& dir, const std::string& name, const 
 
 Status WriteOrientation(const std::string& dir, const std::string& name, const OrientationMap& map, bool picture) {
   HR_RETURN_IF_ERROR(
-      WriteImageAtomic(dir + "/" + name + "_angle.png", ToUnit16(map.angle_deg, 100.f, -1.f, uint16_t{65535})));
+      WriteImageAtomic(dir + "/" + name + "_angle.png", ToUInt16(map.angle_deg, 100.f, -1.f, uint16_t{65535})));
   cv::Mat1w confidence;
   map.confidence.convertTo(confidence, CV_16U, 65535.0);
   HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_confidence.png", confidence));
@@ -127,7 +127,7 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
 }
 
 Status WriteDepth(const std::string& dir, const std::string& name, const LineDepthMap& map, bool picture) {
-  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_depth.png", ToUnit16(map.depth_mm, 20.f, 0.f, 0)));
+  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_depth.png", ToUInt16(map.depth_mm, 20.f, 0.f, 0)));
   if (!picture) return Status::Ok();
   const cv::Mat1b valid(map.depth_mm > 0);
   double lo = 0, hi = 0;
