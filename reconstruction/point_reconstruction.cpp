@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -11,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/clock.h"
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "core/image_file.h"
@@ -22,9 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+double SecondsSince(int64_t start_ns) { return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9; }
 
 // A view after segmentation and orientation: what the stereo and the report need.
 struct PreparedView {
@@ -257,7 +255,7 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   const PointReconstructionOptions options = WithThreads(raw_options);
   if (input.views.size() > 65535) return InvalidArgument("reconstruction: at most 65,535 views");
   HR_RETURN_IF_ERROR(CreateFolders(out_dir));
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyNowNs();
   PointReconstructionSummary summary;
   summary.object_frame = input.object_frame;
   summary.object_from_box = input.object_from_box;
@@ -290,7 +288,7 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   summary.segmentation_s = SecondsSince(start);
 
   // The hull, then each view's depth prior on its stereo pixels.
-  auto step = std::chrono::steady_clock::now();
+  auto step = SteadyNowNs();
   std::vector<SilhouetteView> silhouettes;
   for (const PreparedView& p : used) silhouettes.push_back({p.mvs.camera, p.mvs.cam_from_object, p.silhouette});
   HR_ASSIGN_OR_RETURN(const VisualHull hull, CarveVisualHull(silhouettes, options.hull));
@@ -307,7 +305,7 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   });
   summary.hull_s = SecondsSince(step);
 
-  step = std::chrono::steady_clock::now();
+  step = SteadyNowNs();
   std::vector<MvsView> mvs_views;
   for (PreparedView& p : used) mvs_views.push_back(p.mvs);
   HR_ASSIGN_OR_RETURN(const std::vector<LineDepthMap> maps,
@@ -316,7 +314,7 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
                       }));
   summary.stereo_s = SecondsSince(step);
 
-  step = std::chrono::steady_clock::now();
+  step = SteadyNowNs();
   HR_ASSIGN_OR_RETURN(std::vector<OrientedPoint> points, FusePoints(mvs_views, maps, options.fusion, &summary.fusion));
   for (OrientedPoint& p : points) {
     for (uint16_t& v : p.views) {
@@ -327,7 +325,7 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   if (progress) progress("fusion", 1, 1);
   summary.fusion_s = SecondsSince(step);
 
-  step = std::chrono::steady_clock::now();
+  step = SteadyNowNs();
   summary.points_file = out_dir + "/points.ply";
   HR_RETURN_IF_ERROR(WritePointCloudPly(summary.points_file, points));
   std::vector<Status> written(used.size());

@@ -6,6 +6,7 @@
 #include "core/calib_box.h"
 #include "reconstruction/hair_segmentation.h"
 #include "rig/capture_calibration_input.h"
+#include "rig/safe_names.h"
 
 namespace hairrig {
 
@@ -16,8 +17,7 @@ namespace {
 // The frame's path when it lies inside the capture folder and exists.
 Result<std::string> FramePath(const fs::path& capture, const std::string& frame) {
   const fs::path path = (capture / frame).lexically_normal();
-  const fs::path relative = path.lexically_relative(capture);
-  if (frame.empty() || relative.empty() || *relative.begin() == "..")
+  if (frame.empty() || !PathIsInside(path.string(), capture.string()))
     return CorruptData("frame '" + frame + "' is outside the capture folder");
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return NotFound(path.string() + " is missing");
