@@ -19,7 +19,7 @@ using namespace hairrig;
 
 namespace {
 
-Result<HelixModel> Hairstyle(const SceneHead& head, int guides, int elements) {
+Result<HelixModel> Hairstyle(const HeadSpec& head, int guides, int elements) {
   WigOptions wig;
   wig.num_strands = guides;
   wig.min_length_mm = 150;
@@ -33,7 +33,7 @@ Result<HelixModel> Hairstyle(const SceneHead& head, int guides, int elements) {
   return FitHairModel(strands, fit, &summary);
 }
 
-void Row(const SceneHead& head, int guides, int elements, LinearSolver solver, int threads, int steps) {
+void Row(const HeadSpec& head, int guides, int elements, LinearSolver solver, int threads, int steps) {
   auto model = Hairstyle(head, guides, elements);
   if (!model.ok()) {
     std::fprintf(stderr, "%s\n", model.status().ToString().c_str());
@@ -56,7 +56,7 @@ void Row(const SceneHead& head, int guides, int elements, LinearSolver solver, i
               steps * guides / seconds / 1000, (*sim)->stats().mean_solver_iterations);
 }
 
-void Interpolation(const SceneHead& head) {
+void Interpolation(const HeadSpec& head) {
   WigOptions wig;
   wig.num_strands = 40000;
   auto full = GenerateWig(wig, head);
@@ -90,7 +90,7 @@ void Interpolation(const SceneHead& head) {
 
 int main(int argc, char** argv) {
   const int steps = argc > 1 ? std::atoi(argv[1]) : 24;
-  const SceneHead head;
+  const HeadSpec head;
   std::printf("%7s %9s %-9s %8s %12s %14s %11s\n", "guides", "elements", "solver", "threads", "steps/s",
               "kguide-steps/s", "iterations");
   for (LinearSolver solver : {LinearSolver::kConjugateGradient, LinearSolver::kCholesky}) {

@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
       w.style = style;
       w.num_strands = 5000;
       w.min_length_mm = w.max_length_mm = length;
-      auto strands = GenerateWig(w, SceneHead{});
+      auto strands = GenerateWig(w, HeadSpec{});
       if (!strands.ok()) {
         std::fprintf(stderr, "%s\n", strands.status().ToString().c_str());
         return 1;

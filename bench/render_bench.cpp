@@ -29,7 +29,7 @@ Scene SceneFor(int which) {
   Scene scene = LoadOrThrow("etc/scenes/default.yaml");
   if (which == 3) scene.wig.num_strands = 50000;
   if (which == 2) {
-    scene.head = SceneHead{};
+    scene.head = HeadSpec{};
     scene.head.center_turntable_mm = Eigen::Vector3d(0, 0, 330);
     scene.wig = WigOptions{};
     scene.wig.min_length_mm = 150;

@@ -81,6 +81,10 @@ bool ConfigNode::Has(std::string_view key) const {
          !impl_->node[std::string(key)].IsNull();
 }
 
+bool ConfigNode::HasScalar(std::string_view key) const {
+  return Has(key) && impl_->node[std::string(key)].IsScalar();
+}
+
 void ConfigNode::Fail(std::string_view key, const std::string& what) const {
   if (!ok()) return;
   YAML::Mark mark = impl_->node.Mark();

@@ -47,6 +47,8 @@ class ConfigNode {
   std::string Where() const;        // "file:line:col" of this node
   bool IsMap() const;
   bool Has(std::string_view key) const;
+  // The field is present and a scalar (text or a number), not a map or a list.
+  bool HasScalar(std::string_view key) const;
 
   double Number(std::string_view key, NumberRange range = {}) const;
   double Number(std::string_view key, double fallback, NumberRange range = {}) const;

@@ -76,4 +76,12 @@ Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::
   return camera;
 }
 
+nlohmann::json Vector3ToJson(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key, const std::string& where) {
+  double v[3];
+  HR_RETURN_IF_ERROR(ReadNumbers(j, key.c_str(), where, v));
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
 }  // namespace hairrig

@@ -4,6 +4,7 @@
 //
 //   pose:       {"quaternion_wxyz": [w,x,y,z], "translation_mm": [x,y,z], "matrix_3x4": [[..],[..],[..]]}
 //   intrinsics: {"width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "p1", "p2", "k3"}
+//   vector:     [x, y, z]
 #pragma once
 
 #include <string>
@@ -25,5 +26,10 @@ Result<Rigid3d> PoseFromJson(const nlohmann::json& j, const std::string& where);
 nlohmann::json IntrinsicsToJson(const CameraIntrinsics& camera);
 // InvalidArgument names `where` and the member; the result is Validate()d.
 Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::string& where);
+
+nlohmann::json Vector3ToJson(const Eigen::Vector3d& v);
+// j[key] as three finite numbers. InvalidArgument names `where` and the key
+// when it is missing, not three numbers, or not finite.
+Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key, const std::string& where);
 
 }  // namespace hairrig

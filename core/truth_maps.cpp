@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
+#include "core/head_json.h"
 #include "core/json_file.h"
 
 namespace hairrig {
@@ -112,6 +114,13 @@ Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir) {
   }
   truth.views_dir = (truth_dir / "views").string();
   truth.strands_file = (truth_dir / "ground_truth_strands.ply").string();
+  if (root.contains("head")) {
+    HR_ASSIGN_OR_RETURN(HeadSpec head, HeadSpecFromJson(root["head"], truth_dir.string(), path + ": head"));
+    std::error_code ec;
+    if (!head.mesh_file.empty() && !std::filesystem::is_regular_file(head.mesh_file, ec))
+      return CorruptData(path + ": head.mesh_file " + head.mesh_file + " is missing");
+    truth.head = std::move(head);
+  }
   return truth;
 }
 

@@ -7,11 +7,13 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 
 #include <opencv2/core/mat.hpp>
 
 #include "core/camera_model.h"
+#include "core/head_spec.h"
 #include "core/status.h"
 #include "core/transform.h"
 
@@ -57,10 +59,16 @@ struct CaptureTruth {
   std::map<int, View> views;  // by view number
   std::string views_dir;      // the per-view maps' folder (<capture>/ground_truth/views)
   std::string strands_file;   // the true strands, turntable frame (<capture>/ground_truth/ground_truth_strands.ply)
+  // The true head, turntable frame (ground_truth.json's "head", core/head_json.h);
+  // its mesh_file is absolute or relative to the working folder, e.g.
+  // <capture>/ground_truth/head_mesh.ply. Absent in captures written before the
+  // ground truth recorded the head.
+  std::optional<HeadSpec> head;
 };
 
 // NotFound for a capture without ground truth (only the simulated rig writes
-// one); CorruptData naming the file and field for a damaged one.
+// one); CorruptData naming the file and field for a damaged one (a head whose
+// mesh file is missing included).
 Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir);
 
 }  // namespace hairrig

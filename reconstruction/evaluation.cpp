@@ -7,16 +7,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/statistics.h"
+
 namespace hairrig {
-namespace {
-
-double Quantile(std::vector<double>& sorted_values, double q) {
-  if (sorted_values.empty()) return 0;
-  const size_t i = std::min(sorted_values.size() - 1, static_cast<size_t>(q * static_cast<double>(sorted_values.size())));
-  return sorted_values[i];
-}
-
-}  // namespace
 
 Result<OrientationAccuracy> MeasureOrientation(const OrientationMap& map, const cv::Mat& truth_deg,
                                                const cv::Mat& truth_hair, double min_confidence) {
@@ -38,7 +31,6 @@ Result<OrientationAccuracy> MeasureOrientation(const OrientationMap& map, const 
   }
   a.kept_pixels = static_cast<int>(errors.size());
   a.kept_fraction = a.hair_pixels > 0 ? static_cast<double>(a.kept_pixels) / a.hair_pixels : 0;
-  std::sort(errors.begin(), errors.end());
   a.median_error_deg = Quantile(errors, 0.5);
   a.p90_error_deg = Quantile(errors, 0.9);
   a.mean_error_deg = errors.empty() ? 0 : std::accumulate(errors.begin(), errors.end(), 0.0) / static_cast<double>(errors.size());

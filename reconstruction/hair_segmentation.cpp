@@ -9,6 +9,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ml.hpp>
 
+#include "core/statistics.h"
+
 namespace hairrig {
 namespace {
 
@@ -88,13 +90,6 @@ cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, double sigma) {
   return energy;
 }
 
-float Quantile(std::vector<float> values, double q) {
-  if (values.empty()) return 0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
-
 // Colour samples (BGR as float rows) of the pixels in `where`, at most `limit`, evenly spread.
 cv::Mat1f ColourSamples(const cv::Mat3b& bgr, const cv::Mat1b& where, int limit) {
   const int count = cv::countNonZero(where);
@@ -155,7 +150,7 @@ class MaterialModel {
         all.push_back(energy(y, x));
       }
     }
-    const float overall = Quantile(all, 0.5);
+    const float overall = static_cast<float>(Quantile(all, 0.5));
     for (size_t k = 0; k < energies.size(); ++k) {
       model.gaussians_[k].hair = energies[k].empty() || Quantile(energies[k], 0.5) > options.skin_texture_ratio * overall;
     }
@@ -322,7 +317,8 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std
       if (hair_region(y, x)) hair_distances.push_back(distance(y, x));
     }
   }
-  const float full_coverage = std::max(static_cast<float>(2 * options.backdrop_distance), Quantile(hair_distances, 0.5));
+  const float full_coverage = std::max(static_cast<float>(2 * options.backdrop_distance),
+                                        static_cast<float>(Quantile(hair_distances, 0.5)));
 
   const cv::Mat1b stray = StrayComponents(hair_region, options.min_hair_component_share);
   HairSegmentation out;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 #include <Eigen/Eigenvalues>
 
@@ -10,61 +9,25 @@
 
 namespace hairrig {
 
-namespace {
-constexpr int64_t kCellRange = int64_t{1} << 20;  // cells per axis that keys tell apart
-
-int64_t CellOf(float v, double cell_mm) { return static_cast<int64_t>(std::floor(v / cell_mm)); }
-}  // namespace
-
-int64_t PointSetSurface::Key(int64_t x, int64_t y, int64_t z) const {
-  const auto wrap = [](int64_t c) { return ((c % kCellRange) + kCellRange) % kCellRange; };
-  return (wrap(x) * kCellRange + wrap(y)) * kCellRange + wrap(z);
-}
-
 PointSetSurface::PointSetSurface(const std::vector<Eigen::Vector3f>& positions, double sigma_mm)
-    : positions_(positions), sigma_mm_(sigma_mm), cell_mm_(2 * sigma_mm) {
-  std::vector<int64_t> keys(positions.size());
-  for (size_t i = 0; i < positions.size(); ++i) {
-    const Eigen::Vector3f& p = positions[i];
-    keys[i] = Key(CellOf(p.x(), cell_mm_), CellOf(p.y(), cell_mm_), CellOf(p.z(), cell_mm_));
-  }
-  order_.resize(positions.size());
-  std::iota(order_.begin(), order_.end(), 0u);
-  std::sort(order_.begin(), order_.end(), [&](uint32_t a, uint32_t b) { return keys[a] < keys[b]; });
-  for (uint32_t k = 0; k < order_.size();) {
-    uint32_t end = k;
-    while (end < order_.size() && keys[order_[end]] == keys[order_[k]]) ++end;
-    cells_[keys[order_[k]]] = {k, end};
-    k = end;
-  }
-}
+    : sigma_mm_(sigma_mm), grid_(positions, 2 * sigma_mm) {}
 
 bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* projected, Eigen::Vector3f* normal,
                               int min_neighbours) const {
-  const double radius2 = 4 * sigma_mm_ * sigma_mm_;
   const double inv_sigma2 = 1.0 / (sigma_mm_ * sigma_mm_);
-  const int64_t cx = CellOf(q.x(), cell_mm_), cy = CellOf(q.y(), cell_mm_), cz = CellOf(q.z(), cell_mm_);
   double weight = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
   int count = 0;
   const Eigen::Vector3d origin = q.cast<double>();
-  for (int64_t dz = -1; dz <= 1; ++dz)
-    for (int64_t dy = -1; dy <= 1; ++dy)
-      for (int64_t dx = -1; dx <= 1; ++dx) {
-        const auto cell = cells_.find(Key(cx + dx, cy + dy, cz + dz));
-        if (cell == cells_.end()) continue;
-        for (uint32_t k = cell->second.first; k < cell->second.second; ++k) {
-          const Eigen::Vector3d d = positions_[order_[k]].cast<double>() - origin;
-          const double d2 = d.squaredNorm();
-          if (d2 > radius2) continue;
-          const double w = std::exp(-d2 * inv_sigma2);
-          weight += w;
-          sum += w * d;
-          outer += w * d * d.transpose();
-          ++count;
-        }
-      }
+  grid_.ForEachWithin(q, 2 * sigma_mm_, [&](uint32_t i, double d2) {
+    const Eigen::Vector3d d = grid_.positions()[i].cast<double>() - origin;
+    const double w = std::exp(-d2 * inv_sigma2);
+    weight += w;
+    sum += w * d;
+    outer += w * d * d.transpose();
+    ++count;
+  });
   if (count < min_neighbours || weight <= 0) return false;
   const Eigen::Vector3d mean = sum / weight;
   const Eigen::Matrix3d covariance = outer / weight - mean * mean.transpose();

@@ -8,13 +8,12 @@
 // 2 sigma. Units mm; any frame.
 #pragma once
 
-#include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "reconstruction/point_cloud.h"
+#include "reconstruction/point_grid.h"
 
 namespace hairrig {
 
@@ -30,11 +29,8 @@ class PointSetSurface {
                int min_neighbours = 4) const;
 
  private:
-  int64_t Key(int64_t x, int64_t y, int64_t z) const;
-  const std::vector<Eigen::Vector3f>& positions_;
-  double sigma_mm_, cell_mm_;
-  std::vector<uint32_t> order_;                                   // point indices sorted by cell
-  std::unordered_map<int64_t, std::pair<uint32_t, uint32_t>> cells_;  // cell -> [begin, end) in order_
+  double sigma_mm_;
+  PointGrid grid_;
 };
 
 // Every point moved onto its MLS plane and its direction projected into the

@@ -7,6 +7,8 @@
 #include <numbers>
 #include <utility>
 
+#include <nlohmann/json.hpp>
+
 #include "core/parallel.h"
 
 namespace hairrig {
@@ -129,9 +131,10 @@ struct Grid {
   std::vector<Eigen::Vector3f> direction;  // unit
   std::vector<uint64_t> cell_key;          // occupied cells, increasing
   std::vector<size_t> cell_begin;          // cell i holds [cell_begin[i], cell_begin[i + 1]); size cells + 1
+  std::vector<size_t> source;              // with keep_source: each kept sample's index in the input, else empty
 };
 
-Grid BuildGrid(const std::vector<OrientedSample>& samples, const CellFrame& frame) {
+Grid BuildGrid(const std::vector<OrientedSample>& samples, const CellFrame& frame, bool keep_source) {
   Grid grid;
   std::vector<KeyIndex> items;
   items.reserve(samples.size());
@@ -146,10 +149,12 @@ Grid BuildGrid(const std::vector<OrientedSample>& samples, const CellFrame& fram
   RadixSort(&items, max_key);
   grid.position.resize(items.size());
   grid.direction.resize(items.size());
+  if (keep_source) grid.source.resize(items.size());
   for (size_t k = 0; k < items.size(); ++k) {
     const OrientedSample& s = samples[items[k].index];
     grid.position[k] = s.position_mm;
     grid.direction[k] = s.direction.normalized();
+    if (keep_source) grid.source[k] = items[k].index;
     if (k == 0 || items[k].key != items[k - 1].key) {
       grid.cell_key.push_back(items[k].key);
       grid.cell_begin.push_back(k);
@@ -175,38 +180,36 @@ size_t SearchFrom(const std::vector<uint64_t>& keys, size_t from, uint64_t key) 
   return lo;
 }
 
-// Counts, per threshold, the query samples that have a target sample within it; one per thread.
-class Matcher {
+// The occupied target cells around each query sample's cell, nearest first (the own cell, faces, edges,
+// corners), for the query samples of a chunk (kChunk of them, in cell order) one after the other.
+class TargetCells {
  public:
-  Matcher(const Grid& queries, const Grid& targets, const CellFrame& frame, const Criteria& criteria, bool directed,
-          std::vector<int64_t>* counts)
-      : queries_(queries),
-        targets_(targets),
-        frame_(frame),
-        criteria_(criteria),
-        directed_(directed),
-        counts_(counts),
-        met_(criteria.usable.size(), 0) {}
+  struct Neighbour {
+    size_t begin = 0, end = 0;    // target samples [begin, end)
+    std::array<int, 3> offset{};  // cell offset from the query's cell
+  };
 
-  void operator()(size_t chunk) {
+  TargetCells(const Grid& queries, const Grid& targets, const CellFrame& frame)
+      : queries_(queries), targets_(targets), frame_(frame) {}
+
+  // Calls visit(q) for every query sample q of `chunk`, in order, with the neighbours of q's cell current.
+  template <typename Visit>
+  void ForEachQuery(size_t chunk, Visit&& visit) {
     const size_t begin = chunk * kChunk, end = std::min(queries_.position.size(), begin + kChunk);
     const std::vector<size_t>& starts = queries_.cell_begin;
     size_t cell = static_cast<size_t>(std::upper_bound(starts.begin(), starts.end(), begin) - starts.begin() - 1);
     cursors_.fill(0);
     EnterCell(cell);
     for (size_t q = begin; q < end; ++q) {
-      while (queries_.cell_begin[cell + 1] <= q) EnterCell(++cell);
-      Match(q);
+      while (starts[cell + 1] <= q) EnterCell(++cell);
+      visit(q);
     }
   }
 
- private:
-  struct Neighbour {
-    size_t begin = 0, end = 0;
-    std::array<int, 3> offset{};
-  };
+  int size() const { return num_neighbours_; }
+  const Neighbour& operator[](int n) const { return neighbours_[static_cast<size_t>(n)]; }
 
-  // The occupied target cells around the query cell, nearest first (the own cell, faces, edges, corners).
+ private:
   void EnterCell(size_t cell) {
     const uint64_t key = queries_.cell_key[cell];
     const std::vector<uint64_t>& keys = targets_.cell_key;
@@ -217,7 +220,7 @@ class Matcher {
         const uint64_t first = key + frame_.Offset(-1, dy, dz);
         size_t j = cursors_[row] = SearchFrom(keys, cursors_[row], first);
         for (; j < keys.size() && keys[j] <= first + 2; ++j) {
-          Neighbour& n = neighbours_[num_neighbours_++];
+          Neighbour& n = neighbours_[static_cast<size_t>(num_neighbours_++)];
           n.begin = targets_.cell_begin[j];
           n.end = targets_.cell_begin[j + 1];
           n.offset = {static_cast<int>(keys[j] - first) - 1, dy, dz};
@@ -231,24 +234,68 @@ class Matcher {
               [&](const Neighbour& a, const Neighbour& b) { return rank(a) < rank(b); });
   }
 
+  const Grid& queries_;
+  const Grid& targets_;
+  const CellFrame& frame_;
+  std::array<size_t, 9> cursors_{};
+  std::array<Neighbour, 27> neighbours_{};
+  int num_neighbours_ = 0;
+};
+
+// Squared distances from a point to the faces of its cell, below and above per axis: BoxDistance2 is a lower
+// bound of the squared distance from the point to anything in a neighbour cell.
+class CellFaces {
+ public:
+  CellFaces(const Eigen::Vector3f& p, double cell_mm) {
+    for (size_t k = 0; k < 3; ++k) {
+      const double s = static_cast<double>(p[static_cast<int>(k)]) / cell_mm;
+      const double u = (s - std::floor(s)) * cell_mm;
+      below_[k] = u * u;
+      above_[k] = (cell_mm - u) * (cell_mm - u);
+    }
+  }
+  double BoxDistance2(const std::array<int, 3>& offset) const {
+    double box2 = 0;
+    for (size_t k = 0; k < 3; ++k) box2 += offset[k] < 0 ? below_[k] : offset[k] > 0 ? above_[k] : 0.0;
+    return box2;
+  }
+  // False when the cell at `offset` lies beyond `reach2` (a squared distance), with a margin for rounding.
+  bool CanReach(const std::array<int, 3>& offset, float reach2) const {
+    return BoxDistance2(offset) <= static_cast<double>(reach2) * (1 + 1e-6) + 1e-9;
+  }
+
+ private:
+  std::array<double, 3> below_{}, above_{};
+};
+
+// Counts, per threshold, the query samples that have a target sample within it; one per thread.
+class Matcher {
+ public:
+  Matcher(const Grid& queries, const Grid& targets, const CellFrame& frame, const Criteria& criteria, bool directed,
+          std::vector<int64_t>* counts)
+      : queries_(queries),
+        targets_(targets),
+        frame_(frame),
+        cells_(queries, targets, frame),
+        criteria_(criteria),
+        directed_(directed),
+        counts_(counts),
+        met_(criteria.usable.size(), 0) {}
+
+  void operator()(size_t chunk) {
+    cells_.ForEachQuery(chunk, [this](size_t q) { Match(q); });
+  }
+
+ private:
   void Match(size_t q) {
     const Eigen::Vector3f p = queries_.position[q], d = queries_.direction[q];
     std::fill(met_.begin(), met_.end(), 0);
     size_t unmet = criteria_.num_usable;
     float reach2 = NeededReach2();
-    // Squared distance from p to the faces of its cell below and above, per axis.
-    std::array<double, 3> below{}, above{};
-    for (size_t k = 0; k < 3; ++k) {
-      const double s = static_cast<double>(p[static_cast<int>(k)]) / frame_.cell_mm;
-      const double u = (s - std::floor(s)) * frame_.cell_mm;
-      below[k] = u * u;
-      above[k] = (frame_.cell_mm - u) * (frame_.cell_mm - u);
-    }
-    for (int n = 0; n < num_neighbours_ && unmet > 0; ++n) {
-      const Neighbour& nb = neighbours_[static_cast<size_t>(n)];
-      double box2 = 0;
-      for (size_t k = 0; k < 3; ++k) box2 += nb.offset[k] < 0 ? below[k] : nb.offset[k] > 0 ? above[k] : 0.0;
-      if (box2 > static_cast<double>(reach2) * (1 + 1e-6) + 1e-9) continue;
+    const CellFaces faces(p, frame_.cell_mm);
+    for (int n = 0; n < cells_.size() && unmet > 0; ++n) {
+      const TargetCells::Neighbour& nb = cells_[n];
+      if (!faces.CanReach(nb.offset, reach2)) continue;
       for (size_t j = nb.begin; j < nb.end; ++j) {
         const float d2 = (targets_.position[j] - p).squaredNorm();
         if (d2 > reach2) continue;
@@ -282,13 +329,64 @@ class Matcher {
   const Grid& queries_;
   const Grid& targets_;
   const CellFrame& frame_;
+  TargetCells cells_;
   const Criteria& criteria_;
   bool directed_;
   std::vector<int64_t>* counts_;
   std::vector<char> met_;
-  std::array<size_t, 9> cursors_{};
-  std::array<Neighbour, 27> neighbours_{};
-  int num_neighbours_ = 0;
+};
+
+// For each query sample, the input index of the nearest target sample within one threshold (ties: the lower
+// index), -1 when none; one per thread. The grids keep their sources.
+class NearestFinder {
+ public:
+  NearestFinder(const Grid& queries, const Grid& targets, const CellFrame& frame, float max_d2, float min_cos,
+                bool directed, std::vector<int64_t>* nearest)
+      : queries_(queries),
+        targets_(targets),
+        frame_(frame),
+        cells_(queries, targets, frame),
+        max_d2_(max_d2),
+        min_cos_(min_cos),
+        directed_(directed),
+        nearest_(nearest) {}
+
+  void operator()(size_t chunk) {
+    cells_.ForEachQuery(chunk, [this](size_t q) { Find(q); });
+  }
+
+ private:
+  void Find(size_t q) {
+    const Eigen::Vector3f p = queries_.position[q], d = queries_.direction[q];
+    const CellFaces faces(p, frame_.cell_mm);
+    float best2 = max_d2_;
+    int64_t best = -1;
+    for (int n = 0; n < cells_.size(); ++n) {
+      const TargetCells::Neighbour& nb = cells_[n];
+      if (!faces.CanReach(nb.offset, best2)) continue;
+      for (size_t j = nb.begin; j < nb.end; ++j) {
+        const float d2 = (targets_.position[j] - p).squaredNorm();
+        if (d2 > best2) continue;
+        float c = targets_.direction[j].dot(d);
+        if (!directed_) c = std::fabs(c);
+        if (c < min_cos_) continue;
+        const auto source = static_cast<int64_t>(targets_.source[j]);
+        if (best < 0 || d2 < best2 || source < best) {
+          best = source;
+          best2 = d2;
+        }
+      }
+    }
+    (*nearest_)[queries_.source[q]] = best;  // each query sample is one thread's
+  }
+
+  const Grid& queries_;
+  const Grid& targets_;
+  const CellFrame& frame_;
+  TargetCells cells_;
+  float max_d2_, min_cos_;
+  bool directed_;
+  std::vector<int64_t>* nearest_;
 };
 
 std::vector<int64_t> CountMatched(const Grid& queries, const Grid& targets, const CellFrame& frame,
@@ -327,6 +425,10 @@ void SampleStrand(const Eigen::Vector3f* points, size_t count, double step_mm, s
   }
 }
 
+double F1(double precision, double recall) {
+  return precision + recall > 0 ? 2 * precision * recall / (precision + recall) : 0;
+}
+
 }  // namespace
 
 std::vector<MatchThreshold> DefaultMatchThresholds() { return {{1, 10}, {2, 20}, {3, 30}, {4, 40}, {4, 90}}; }
@@ -338,7 +440,9 @@ std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate
   const CellFrame frame = MakeFrame(estimate, truth, criteria.cell_mm);
   Grid estimate_grid, truth_grid;
   ParallelFor(2, options.threads, [&] {
-    return [&](size_t i) { (i == 0 ? estimate_grid : truth_grid) = BuildGrid(i == 0 ? estimate : truth, frame); };
+    return [&](size_t i) {
+      (i == 0 ? estimate_grid : truth_grid) = BuildGrid(i == 0 ? estimate : truth, frame, /*keep_source=*/false);
+    };
   });
   const std::vector<int64_t> matched_estimate =
       CountMatched(estimate_grid, truth_grid, frame, criteria, options.directed, options.threads);
@@ -352,9 +456,65 @@ std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate
     s.matched_truth = matched_truth[t];
     s.precision = estimate.empty() ? 0 : static_cast<double>(s.matched_estimate) / static_cast<double>(estimate.size());
     s.recall = truth.empty() ? 0 : static_cast<double>(s.matched_truth) / static_cast<double>(truth.size());
-    s.f1 = s.precision + s.recall > 0 ? 2 * s.precision * s.recall / (s.precision + s.recall) : 0;
+    s.f1 = F1(s.precision, s.recall);
   }
   return scores;
+}
+
+SubsetMatchScores MatchSamplesAndSubset(const std::vector<OrientedSample>& estimate,
+                                        const std::vector<OrientedSample>& truth,
+                                        const std::vector<uint8_t>& truth_in_subset,
+                                        const std::vector<MatchThreshold>& thresholds,
+                                        const SampleMatchOptions& options) {
+  SubsetMatchScores out;
+  out.all = MatchSamples(estimate, truth, thresholds, options);
+  if (truth_in_subset.size() != truth.size()) return out;
+  std::vector<OrientedSample> subset;
+  for (size_t i = 0; i < truth.size(); ++i)
+    if (truth_in_subset[i] != 0) subset.push_back(truth[i]);
+  out.subset_size = static_cast<int64_t>(subset.size());
+  out.subset = MatchSamples(estimate, subset, thresholds, options);
+  // An estimate sample is right when it lies on any true strand, seen or not.
+  for (size_t t = 0; t < out.subset.size(); ++t) {
+    MatchScore& s = out.subset[t];
+    s.matched_estimate = out.all[t].matched_estimate;
+    s.precision = out.all[t].precision;
+    s.f1 = F1(s.precision, s.recall);
+  }
+  return out;
+}
+
+std::vector<int64_t> NearestMatches(const std::vector<OrientedSample>& estimate,
+                                    const std::vector<OrientedSample>& truth, const MatchThreshold& threshold,
+                                    const SampleMatchOptions& options) {
+  std::vector<int64_t> nearest(truth.size(), -1);
+  const Criteria criteria = MakeCriteria({threshold});
+  if (criteria.num_usable == 0 || estimate.empty() || truth.empty()) return nearest;
+  const CellFrame frame = MakeFrame(estimate, truth, criteria.cell_mm);
+  Grid estimate_grid, truth_grid;
+  ParallelFor(2, options.threads, [&] {
+    return [&](size_t i) {
+      (i == 0 ? estimate_grid : truth_grid) = BuildGrid(i == 0 ? estimate : truth, frame, /*keep_source=*/true);
+    };
+  });
+  if (estimate_grid.position.empty()) return nearest;
+  ParallelFor((truth_grid.position.size() + kChunk - 1) / kChunk, options.threads, [&] {
+    return NearestFinder(truth_grid, estimate_grid, frame, criteria.max_d2[0], criteria.min_cos[0], options.directed,
+                         &nearest);
+  });
+  return nearest;
+}
+
+nlohmann::json ScoresToJson(const std::vector<MatchScore>& scores) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const MatchScore& s : scores) {
+    out.push_back({{"distance_mm", s.threshold.distance_mm},
+                   {"angle_deg", s.threshold.angle_deg},
+                   {"precision", s.precision},
+                   {"recall", s.recall},
+                   {"f1", s.f1}});
+  }
+  return out;
 }
 
 std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::Vector3f>>& strands, double step_mm) {
@@ -364,11 +524,19 @@ std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::V
 }
 
 std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_mm) {
+  return SampleStrands(strands, step_mm, nullptr);
+}
+
+std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_mm,
+                                          std::vector<uint32_t>* sample_strand) {
   std::vector<OrientedSample> samples;
+  if (sample_strand != nullptr) sample_strand->clear();
   size_t first = 0;
-  for (uint32_t count : strands.point_counts) {
+  for (size_t k = 0; k < strands.point_counts.size(); ++k) {
+    const uint32_t count = strands.point_counts[k];
     if (count > strands.points_mm.size() - first) break;  // counts inconsistent with the points (see Validate)
     SampleStrand(strands.points_mm.data() + first, count, step_mm, &samples);
+    if (sample_strand != nullptr) sample_strand->resize(samples.size(), static_cast<uint32_t>(k));
     first += count;
   }
   return samples;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
 
 #include "core/strands.h"
 
@@ -59,6 +60,38 @@ std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate
                                      const std::vector<OrientedSample>& truth,
                                      const std::vector<MatchThreshold>& thresholds, const SampleMatchOptions& options);
 
+// Recall against all true samples and against a subset of them (the visible
+// surface: true samples seen by enough cameras), with one precision.
+struct SubsetMatchScores {
+  std::vector<MatchScore> all;     // MatchSamples(estimate, truth, ...)
+  // Recall (and matched_truth) against the true samples whose flag is set;
+  // precision, matched_estimate and so F1 from `all`: an estimate sample is
+  // right when it lies on any true strand, seen or not. Empty when the flags
+  // are not one per true sample.
+  std::vector<MatchScore> subset;
+  int64_t subset_size = 0;  // true samples in the subset
+};
+SubsetMatchScores MatchSamplesAndSubset(const std::vector<OrientedSample>& estimate,
+                                        const std::vector<OrientedSample>& truth,
+                                        const std::vector<uint8_t>& truth_in_subset,
+                                        const std::vector<MatchThreshold>& thresholds,
+                                        const SampleMatchOptions& options);
+
+// Which estimate sample matched each true sample: per `truth` sample, the
+// index in `estimate` of the nearest estimate sample (Euclidean) among those
+// within `threshold` as MatchSamples counts them (distance <=, angle <=,
+// directed or not by `options`), the lower index of equally near ones; -1 when
+// there is none. The same grid as MatchSamples, on `options.threads` threads
+// (a little more time than one threshold of MatchSamples: every candidate
+// within reach is looked at); samples that match nothing there (non-finite,
+// far out, no direction) are -1 or never chosen.
+std::vector<int64_t> NearestMatches(const std::vector<OrientedSample>& estimate,
+                                    const std::vector<OrientedSample>& truth, const MatchThreshold& threshold,
+                                    const SampleMatchOptions& options);
+
+// [{"distance_mm", "angle_deg", "precision", "recall", "f1"}, ...] in the scores' order.
+nlohmann::json ScoresToJson(const std::vector<MatchScore>& scores);
+
 // Samples along polylines (points root to tip, mm): every vertex of a strand
 // and, on each segment, evenly spaced points so that consecutive samples are
 // at most `step_mm` apart (`step_mm` <= 0 or non-finite: the vertices only).
@@ -67,5 +100,10 @@ std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate
 // samples; a strand of one point gives none.
 std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::Vector3f>>& strands, double step_mm);
 std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_mm);
+// The same samples, and in `sample_strand` (replaced; may be null) the index
+// of each sample's strand in `strands`. Samples come strand after strand, so
+// the indices never decrease.
+std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_mm,
+                                          std::vector<uint32_t>* sample_strand);
 
 }  // namespace hairrig

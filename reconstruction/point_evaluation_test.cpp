@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -181,6 +183,93 @@ TEST(PointEvaluation, TheGridAgreesWithABruteForceSearch) {
   }
 }
 
+// The nearest estimate sample within a threshold, searched by comparing every
+// pair with the grid's arithmetic (ties: the lower index).
+std::vector<int64_t> BruteForceNearest(const std::vector<OrientedSample>& estimate,
+                                       const std::vector<OrientedSample>& truth, const MatchThreshold& t,
+                                       bool directed) {
+  const auto max_d2 = static_cast<float>(t.distance_mm * t.distance_mm);
+  const auto min_cos = static_cast<float>(std::cos(t.angle_deg * std::numbers::pi / 180) - 1e-6);
+  std::vector<int64_t> nearest;
+  for (const OrientedSample& q : truth) {
+    const Eigen::Vector3f qd = q.direction.normalized();
+    int64_t best = -1;
+    float best2 = max_d2;
+    for (size_t i = 0; i < estimate.size(); ++i) {
+      if (!(estimate[i].direction.norm() > 0)) continue;  // matches nothing
+      const float d2 = (estimate[i].position_mm - q.position_mm).squaredNorm();
+      float c = estimate[i].direction.normalized().dot(qd);
+      if (!directed) c = std::fabs(c);
+      if (d2 > best2 || c < min_cos) continue;
+      if (best < 0 || d2 < best2) {
+        best = static_cast<int64_t>(i);
+        best2 = d2;
+      }
+    }
+    nearest.push_back(best);
+  }
+  return nearest;
+}
+
+TEST(PointEvaluation, NearestMatchesAgreeWithABruteForceSearchAndWithTheMatchCounts) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> coord(0.f, 40.f);
+  std::vector<OrientedSample> truth, estimate;
+  for (int i = 0; i < 1500; ++i) {
+    truth.push_back({{coord(rng), coord(rng), coord(rng)}, RandomDirection(rng)});
+    estimate.push_back({{coord(rng), coord(rng), coord(rng)}, (i % 3 ? 1.f : -2.f) * RandomDirection(rng)});
+  }
+  estimate.push_back({{1, 1, 1}, Eigen::Vector3f::Zero()});  // no direction: never chosen
+  for (const MatchThreshold t : {MatchThreshold{3, 30}, MatchThreshold{2.5, 180}, MatchThreshold{2, 90}}) {
+    for (bool directed : {false, true}) {
+      const std::vector<int64_t> expected = BruteForceNearest(estimate, truth, t, directed);
+      for (int threads : {1, 2}) {
+        const std::vector<int64_t> nearest = NearestMatches(estimate, truth, t, {.directed = directed, .threads = threads});
+        ASSERT_EQ(nearest.size(), truth.size());
+        EXPECT_EQ(nearest, expected) << t.distance_mm << " mm, " << t.angle_deg << " deg, directed " << directed;
+      }
+      // A true sample has a nearest match exactly when MatchSamples counts it as matched.
+      const std::vector<int64_t> nearest = NearestMatches(estimate, truth, t, {.directed = directed});
+      const int64_t matched = std::count_if(nearest.begin(), nearest.end(), [](int64_t i) { return i >= 0; });
+      EXPECT_EQ(matched, MatchSamples(estimate, truth, {t}, {.directed = directed})[0].matched_truth);
+      EXPECT_GT(matched, 0);
+      EXPECT_LT(matched, 1500);
+    }
+  }
+}
+
+TEST(PointEvaluation, NearestMatchesPickTheNearerOfTwoAndTheLowerIndexOfEquals) {
+  const Eigen::Vector3f x = Eigen::Vector3f::UnitX();
+  const std::vector<OrientedSample> truth = {{{0, 0, 0}, x}, {{10, 0, 0}, x}, {{20, 0, 0}, x}};
+  const std::vector<OrientedSample> estimate = {
+      {{0, 2, 0}, x},   {{0, 1, 0}, x},    // the second is nearer to truth 0
+      {{10, 1, 0}, x},  {{10, -1, 0}, x},  // equally near truth 1: the lower index
+      {{20, 1, 0}, Eigen::Vector3f::UnitY()}};  // too steep for truth 2
+  EXPECT_EQ(NearestMatches(estimate, truth, {3, 30}, {}), (std::vector<int64_t>{1, 2, -1}));
+  EXPECT_EQ(NearestMatches({}, truth, {3, 30}, {}), (std::vector<int64_t>{-1, -1, -1}));
+  EXPECT_TRUE(NearestMatches(estimate, {}, {3, 30}, {}).empty());
+}
+
+TEST(PointEvaluation, SubsetRecallKeepsThePrecisionOfTheWholeTruth) {
+  const std::vector<OrientedSample> truth = Lattice();
+  std::vector<OrientedSample> half;
+  std::vector<uint8_t> in_half(truth.size(), 0), in_other_half(truth.size(), 0);
+  for (size_t i = 0; i < truth.size(); ++i) {
+    (i % 2 == 0 ? in_half : in_other_half)[i] = 1;
+    if (i % 2 == 0) half.push_back(truth[i]);
+  }
+  for (const auto& [subset, recall] : {std::pair{in_half, 1.0}, std::pair{in_other_half, 0.0}}) {
+    const SubsetMatchScores scores = MatchSamplesAndSubset(half, truth, subset, DefaultMatchThresholds(), {});
+    ASSERT_EQ(scores.subset.size(), 5u);
+    EXPECT_EQ(scores.subset_size, 256);
+    for (size_t t = 0; t < scores.subset.size(); ++t) {
+      ExpectScore(scores.all[t], 1, 0.5);
+      ExpectScore(scores.subset[t], 1, recall);
+    }
+  }
+  EXPECT_TRUE(MatchSamplesAndSubset(half, truth, {}, DefaultMatchThresholds(), {}).subset.empty());
+}
+
 TEST(PointEvaluation, StrandsAreSampledAtMostAStepApartWithTheirSegmentsDirection) {
   const std::vector<std::vector<Eigen::Vector3f>> strands = {
       {{0, 0, 0}, {2.5f, 0, 0}, {2.5f, 1, 0}}, {{5, 5, 5}}, {{1, 1, 1}, {1, 1, 1}, {1, 1, 2}}};
@@ -200,6 +289,12 @@ TEST(PointEvaluation, StrandsAreSampledAtMostAStepApartWithTheirSegmentsDirectio
   const std::vector<OrientedSample> from_set = SampleStrands(set, 1.0);
   ASSERT_EQ(from_set.size(), samples.size());
   for (size_t i = 0; i < samples.size(); ++i) EXPECT_EQ(from_set[i].position_mm, samples[i].position_mm);
+  // The strand each sample comes from (the second strand, of one point, has none).
+  std::vector<uint32_t> strand_of{9};
+  const std::vector<OrientedSample> indexed = SampleStrands(set, 1.0, &strand_of);
+  ASSERT_EQ(indexed.size(), samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) EXPECT_EQ(indexed[i].position_mm, samples[i].position_mm);
+  EXPECT_EQ(strand_of, (std::vector<uint32_t>{0, 0, 0, 0, 0, 2, 2}));
 }
 
 }  // namespace

@@ -4,12 +4,15 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <sstream>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/geometry_json.h"
+#include "core/head_model.h"
 #include "core/json_file.h"
 #include "core/parallel.h"
 #include "core/statistics.h"
@@ -148,9 +151,7 @@ std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples, const
 }
 
 // The reconstruction's points as samples in the true turntable frame.
-Result<std::vector<OrientedSample>> EstimateSamples(const std::string& dir, const Rigid3d& object_from_box,
-                                                    const CaptureTruth& truth) {
-  const Rigid3d truth_from_estimate = truth.turntable_from_box * object_from_box.Inverse();
+Result<std::vector<OrientedSample>> EstimateSamples(const std::string& dir, const Rigid3d& truth_from_estimate) {
   const Eigen::Matrix3f rotation = truth_from_estimate.RotationMatrix().cast<float>();
   HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points, ReadPointCloudPly(dir + "/points.ply"));
   std::vector<OrientedSample> samples;
@@ -161,16 +162,39 @@ Result<std::vector<OrientedSample>> EstimateSamples(const std::string& dir, cons
   return samples;
 }
 
-nlohmann::json ScoresJson(const std::vector<MatchScore>& scores) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const MatchScore& s : scores) {
-    out.push_back({{"distance_mm", s.threshold.distance_mm},
-                   {"angle_deg", s.threshold.angle_deg},
-                   {"precision", s.precision},
-                   {"recall", s.recall},
-                   {"f1", s.f1}});
-  }
+// `strands` with every point mapped by to_from_strands.
+StrandSet TransformedStrands(const StrandSet& strands, const Rigid3d& to_from_strands) {
+  StrandSet out = strands;
+  for (Eigen::Vector3f& p : out.points_mm) p = (to_from_strands * p.cast<double>()).cast<float>();
   return out;
+}
+
+// The reconstruction's strands against the true ones, if it has any.
+Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(const std::string& dir, const std::string& capture_dir,
+                                                            const CaptureTruth& truth,
+                                                            const Rigid3d& truth_from_estimate,
+                                                            const StrandSet& true_strands,
+                                                            const std::vector<OrientedSample>& truth_samples,
+                                                            const std::vector<uint32_t>& truth_sample_strand,
+                                                            const std::vector<uint8_t>& visible,
+                                                            const ReconstructionEvalOptions& options) {
+  const std::string path = (fs::path(dir) / "strands" / "strands.ply").string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return std::optional<StrandEvaluation>();
+  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(path));
+  std::unique_ptr<HeadModel> head;
+  if (truth.head) {
+    auto built = HeadModel::Build(*truth.head);
+    if (!built.ok()) return built.status().WithContext("the true head of " + capture_dir);
+    head = std::move(built).value();
+  }
+  StrandEvalOptions strand_options;
+  strand_options.sample_step_mm = options.truth_step_mm;
+  strand_options.threads = options.threads;
+  auto evaluation = EvaluateStrands(TransformedStrands(strands, truth_from_estimate), true_strands, truth_samples,
+                                    truth_sample_strand, visible, head.get(), strand_options);
+  if (!evaluation.ok()) return evaluation.status().WithContext(path);
+  return std::optional<StrandEvaluation>(std::move(evaluation).value());
 }
 
 }  // namespace
@@ -222,28 +246,27 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   out.depth_mean_mm = depth_errors.empty() ? 0 : sum / static_cast<double>(depth_errors.size());
   out.depth_median_mm = Median(std::move(depth_errors));
 
-  HR_ASSIGN_OR_RETURN(const std::vector<OrientedSample> estimate, EstimateSamples(dir, recon.object_from_box, truth));
-  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(truth.strands_file));
-  const std::vector<OrientedSample> all_truth = SampleStrands(strands, options.truth_step_mm);
+  const Rigid3d truth_from_estimate = truth.turntable_from_box * recon.object_from_box.Inverse();
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedSample> estimate, EstimateSamples(dir, truth_from_estimate));
+  HR_ASSIGN_OR_RETURN(const StrandSet true_strands, ReadStrands(truth.strands_file));
+  // The true strands sampled, and their samples tested for visibility, once for the points and the strands.
+  std::vector<uint32_t> truth_sample_strand;
+  const std::vector<OrientedSample> all_truth =
+      SampleStrands(true_strands, options.truth_step_mm, &truth_sample_strand);
   const std::vector<int> counts =
       VisibleCounts(all_truth, truth, depth_maps, options.visibility_tolerance_mm, options.threads);
-  std::vector<OrientedSample> visible_truth;
-  for (size_t i = 0; i < all_truth.size(); ++i)
-    if (counts[i] >= options.min_visible_views) visible_truth.push_back(all_truth[i]);
+  std::vector<uint8_t> visible(all_truth.size(), 0);
+  for (size_t i = 0; i < all_truth.size(); ++i) visible[i] = static_cast<uint8_t>(counts[i] >= options.min_visible_views);
   out.points = static_cast<int64_t>(estimate.size());
   out.truth_samples = static_cast<int64_t>(all_truth.size());
-  out.visible_truth_samples = static_cast<int64_t>(visible_truth.size());
   SampleMatchOptions match;
   match.threads = options.threads;
-  out.all = MatchSamples(estimate, all_truth, DefaultMatchThresholds(), match);
-  out.visible = MatchSamples(estimate, visible_truth, DefaultMatchThresholds(), match);
-  // Precision does not depend on which truth the recall counts: a point is
-  // right when it lies on any true strand.
-  for (size_t k = 0; k < out.visible.size(); ++k) {
-    MatchScore& s = out.visible[k];
-    s.precision = out.all[k].precision;
-    s.f1 = s.precision + s.recall > 0 ? 2 * s.precision * s.recall / (s.precision + s.recall) : 0;
-  }
+  SubsetMatchScores scores = MatchSamplesAndSubset(estimate, all_truth, visible, DefaultMatchThresholds(), match);
+  out.visible_truth_samples = scores.subset_size;
+  out.all = std::move(scores.all);
+  out.visible = std::move(scores.subset);
+  HR_ASSIGN_OR_RETURN(out.strands, EvaluateStrandsFile(dir, capture_dir, truth, truth_from_estimate, true_strands,
+                                                       all_truth, truth_sample_strand, visible, options));
   return out;
 }
 
@@ -260,7 +283,7 @@ nlohmann::json ReconstructionEvaluation::ToJson() const {
                           {"depth_mean_mm", v.depth_mean_mm},
                           {"depth_median_mm", v.depth_median_mm}});
   }
-  return {{"stage", "reconstruction"},
+  nlohmann::json j = {{"stage", "reconstruction"},
           {"masks", {{"iou_median", mask_iou_median}, {"iou_worst", mask_iou_worst}}},
           {"orientation",
            {{"median_deg", orientation_median_deg},
@@ -271,9 +294,11 @@ nlohmann::json ReconstructionEvaluation::ToJson() const {
            {{"count", points},
             {"truth_samples", truth_samples},
             {"visible_truth_samples", visible_truth_samples},
-            {"visible_surface", ScoresJson(visible)},
-            {"all_strands", ScoresJson(all)}}},
+            {"visible_surface", ScoresToJson(visible)},
+            {"all_strands", ScoresToJson(all)}}},
           {"views", views_json}};
+  if (strands) j["strands"] = strands->ToJson();
+  return j;
 }
 
 std::string ReconstructionEvaluation::BriefReport() const {
@@ -294,6 +319,7 @@ std::string ReconstructionEvaluation::BriefReport() const {
       << " deg): precision " << visible[k].precision << ", visible-surface recall " << visible[k].recall << " (F1 "
       << visible[k].f1 << "), all-strands recall " << all[k].recall << "\n";
   }
+  if (strands) s << strands->BriefReport();
   return s.str();
 }
 

@@ -7,11 +7,16 @@
 //   points       precision, recall of the visible surface (true strand
 //                samples seen by >= 2 cameras) and of all strands, F1, at the
 //                protocol's thresholds (point_evaluation.h)
-// The reconstruction's object frame is mapped into the true turntable frame
-// through the box, which both frames are fixed to:
+//   strands      when <reconstruction>/strands/strands.ply exists: the strand
+//                protocol (strand_evaluation.h) with the same true samples and
+//                visible surface as the points, and the true head where the
+//                ground truth records one (not in captures made before it did)
+// The reconstruction's object frame (points and strands) is mapped into the
+// true turntable frame through the box, which both frames are fixed to:
 //   truth_from_estimate = true turntable_from_box * (summary.json's object_from_box)^-1.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +24,7 @@
 
 #include "reconstruction/evaluation.h"
 #include "reconstruction/point_evaluation.h"
+#include "reconstruction/strand_evaluation.h"
 
 namespace hairrig {
 
@@ -51,13 +57,18 @@ struct ReconstructionEvaluation {
   int64_t points = 0, truth_samples = 0, visible_truth_samples = 0;
   std::vector<MatchScore> visible;  // recall against the visible surface
   std::vector<MatchScore> all;      // recall against every true strand sample
+  // The strands' scores (true samples every truth_step_mm, as for the points);
+  // nullopt when the reconstruction has no strands/strands.ply.
+  std::optional<StrandEvaluation> strands;
 
+  // The strands under "strands" when there are any.
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };
 
 // NotFound when the capture has no ground truth or no reconstruction;
-// CorruptData naming the file for a damaged one.
+// CorruptData naming the file for a damaged one (a strands file included);
+// the true head's error (e.g. its mesh unreadable) when it cannot be built.
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options);
 

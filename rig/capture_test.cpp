@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/truth_maps.h"
 #include "rig/capture_test_util.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
@@ -70,6 +71,14 @@ void ExpectGroundTruthOfEveryView(const std::string& capture_dir, int views) {
   ASSERT_EQ(truth["views"].size(), static_cast<size_t>(views));
   auto scene = LoadScene(truth["scene"].get<std::string>());
   ASSERT_TRUE(scene.ok()) << scene.status().ToString();
+  // The true head, its mesh copied beside the JSON file.
+  auto read = ReadCaptureTruth(capture_dir);
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  ASSERT_TRUE(read->head.has_value());
+  EXPECT_EQ(read->head->radii_mm, scene->head.radii_mm);
+  EXPECT_EQ(read->head->scalp.defined, scene->head.scalp.defined);
+  EXPECT_EQ(read->head->mesh_file.empty(), scene->head.mesh_file.empty());
+  if (!scene->head.mesh_file.empty()) EXPECT_TRUE(fs::exists(read->head->mesh_file)) << read->head->mesh_file;
   auto renderer = Renderer::Create(*scene);
   ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
   for (const auto& v : truth["views"]) {

@@ -232,7 +232,8 @@ void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
     dispatch.print_human = PrintEvalIntrinsics;
   });
   auto* reconstruction = cmd->add_subcommand(
-      "reconstruction", "masks, orientation, depth and points of DIR/reconstruction/ against DIR/ground_truth/");
+      "reconstruction",
+      "masks, orientation, depth, points and strands (if any) of DIR/reconstruction/ against DIR/ground_truth/");
   auto threads = std::make_shared<int>(2);
   reconstruction->add_option("DIR", *dir, "a reconstructed capture of the simulated rig")
       ->required()

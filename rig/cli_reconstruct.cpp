@@ -1,5 +1,6 @@
 // `hairrig reconstruct DIR`: oriented points from a calibrated capture, or from
-// a COLMAP text model (reconstruction/point_reconstruction.h).
+// a COLMAP text model (reconstruction/point_reconstruction.h), then strands
+// rooted on the subject's scalp (reconstruction/strand_reconstruction.h).
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include "core/log.h"
 #include "reconstruction/colmap_model.h"
 #include "reconstruction/point_reconstruction.h"
+#include "reconstruction/strand_reconstruction.h"
 #include "rig/cli.h"
 #include "rig/reconstruction_input.h"
 
@@ -21,7 +23,10 @@ namespace {
 
 struct ReconstructArgs {
   std::string dir;
-  std::string stage = "points";
+  std::string stage = "all";
+  std::string method = "bao-qi";
+  std::string head;
+  int strands = StrandReconstructionOptions{}.strands;
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -76,8 +81,7 @@ ReconstructionProgress ProgressPrinter() {
   };
 }
 
-Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
-  if (a.stage != "points") return InvalidArgument("--stage " + a.stage + ": only 'points' exists so far");
+Result<nlohmann::json> RunPoints(const ReconstructArgs& a) {
   ReconstructionInput input;
   if (!a.colmap.empty()) {
     if (a.images.empty()) return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
@@ -103,15 +107,53 @@ Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
   return j;
 }
 
+Result<nlohmann::json> RunStrands(const ReconstructArgs& a) {
+  if (!a.colmap.empty() && a.head.empty()) {
+    return InvalidArgument("strands from a COLMAP model need --head FILE (the head in the model's frame)");
+  }
+  HR_ASSIGN_OR_RETURN(const SubjectHead head, LoadCaptureHead(a.dir, a.head));
+  StrandReconstructionOptions options;
+  HR_ASSIGN_OR_RETURN(options.method, ParseStrandMethod(a.method));
+  options.strands = a.strands;
+  options.threads = a.threads;
+  LogInfo("reconstruct: strands (" + a.method + ") from " + a.dir + "/reconstruction/points.ply");
+  HR_ASSIGN_OR_RETURN(const StrandReconstructionSummary summary,
+                      ReconstructStrands(a.dir + "/reconstruction", head.spec, head.source, options));
+  nlohmann::json j = summary.ToJson();
+  j["brief"] = summary.BriefReport();
+  return j;
+}
+
+Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
+  if (a.stage == "points") return RunPoints(a);
+  if (a.stage == "strands") return RunStrands(a);
+  HR_ASSIGN_OR_RETURN(nlohmann::json points, RunPoints(a));
+  HR_ASSIGN_OR_RETURN(nlohmann::json strands, RunStrands(a));
+  const std::string brief = points["brief"].get<std::string>() + strands["brief"].get<std::string>();
+  return nlohmann::json{{"points", std::move(points)}, {"strands", std::move(strands)}, {"brief", brief}};
+}
+
 }  // namespace
 
 void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto args = std::make_shared<ReconstructArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "reconstruct", "oriented 3D hair points from a calibrated capture (or a COLMAP model) into DIR/reconstruction/");
+      "reconstruct",
+      "oriented 3D hair points, then strands rooted on the scalp, from a calibrated capture (or a COLMAP model) "
+      "into DIR/reconstruction/");
   cmd->add_option("DIR", args->dir, "a calibrated capture folder (with --colmap: where reconstruction/ is written)")
       ->required();
-  cmd->add_option("--stage", args->stage, "how far to go: points")->capture_default_str();
+  cmd->add_option("--stage", args->stage, "points, strands (from the points already there), or all")
+      ->check(CLI::IsMember({"points", "strands", "all"}))
+      ->capture_default_str();
+  cmd->add_option("--method", args->method, "strands: bao-qi (hybrid orientation field) or naive (the baseline)")
+      ->check(CLI::IsMember({"bao-qi", "naive"}))
+      ->capture_default_str();
+  cmd->add_option("--head", args->head, "the subject's head (a YAML file with a head: map; default: the rig config's)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--strands", args->strands, "how many strands to grow (roots on the scalp)")
+      ->check(CLI::Range(1, 2000000))
+      ->capture_default_str();
   cmd->add_option("--colmap", args->colmap, "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--images", args->images, "with --colmap: the folder of the model's images")

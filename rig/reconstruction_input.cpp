@@ -4,6 +4,7 @@
 
 #include "calibration/calibration_io.h"
 #include "core/calib_box.h"
+#include "core/head_config.h"
 #include "reconstruction/hair_segmentation.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/safe_names.h"
@@ -64,6 +65,23 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
     input.views.push_back(std::move(v));
   }
   return input;
+}
+
+Result<SubjectHead> LoadCaptureHead(const std::string& capture_dir, const std::string& head_file) {
+  SubjectHead head;
+  if (!head_file.empty()) {
+    HR_ASSIGN_OR_RETURN(head.spec, LoadHeadFile(head_file));
+    head.source = head_file;
+    return head;
+  }
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
+  if (!config.head) {
+    return NotFound(capture_dir + "/rig.yaml has no head: section; give the subject's head with --head FILE "
+                    "(a YAML file with a head: map, as etc/heads/mannequin.yaml) or add head: to the rig config");
+  }
+  head.spec = *config.head;
+  head.source = capture_dir + "/rig.yaml";
+  return head;
 }
 
 }  // namespace hairrig

@@ -7,6 +7,7 @@
 
 #include <string>
 
+#include "core/head_spec.h"
 #include "reconstruction/views.h"
 
 namespace hairrig {
@@ -16,5 +17,15 @@ namespace hairrig {
 // or whose frame is missing or outside the capture folder is listed in
 // `left_out` with the reason; the rest are returned.
 Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& capture_dir);
+
+// The subject's head for the strands, in the turntable frame: the head file
+// `head_file` when given (core/head_config.h), else the `head:` of the
+// capture's rig.yaml snapshot. `source` says which, for reports. NotFound
+// naming both when there is neither (the rig config's `head:` or --head FILE).
+struct SubjectHead {
+  HeadSpec spec;
+  std::string source;
+};
+Result<SubjectHead> LoadCaptureHead(const std::string& capture_dir, const std::string& head_file);
 
 }  // namespace hairrig

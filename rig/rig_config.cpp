@@ -11,6 +11,8 @@
 #include "sim_hw/sim_turntable_controller.h"
 #include "sim_hw/sim_v4l2.h"
 
+#include "core/head_config.h"
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -36,7 +38,7 @@ Result<std::string> DefaultRigConfigPath() { return EtcPath("sim-rig.yaml"); }
 
 Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& relative_to) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
-  root.AllowOnlyKeys({"name", "sim", "devices", "plan", "storage", "retries", "calibration"});
+  root.AllowOnlyKeys({"name", "sim", "devices", "plan", "storage", "retries", "calibration", "head"});
   RigConfig config;
   config.path = path;
   config.relative_to = relative_to.empty() ? fs::absolute(path).parent_path().string() : relative_to;
@@ -52,6 +54,12 @@ Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& rela
     } else {
       config.sim_scene_path = scene;
     }
+  }
+  if (root.Has("head")) {
+    config.head.emplace();
+    // ReadHeadConfig resolves relative paths beside a file: one inside relative_to.
+    HR_RETURN_IF_ERROR(ReadHeadConfig(root, "head", (fs::path(config.relative_to) / "rig.yaml").string(),
+                                      &*config.head));
   }
   root.Child("devices");
   if (!root.ok()) return root.status();

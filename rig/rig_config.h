@@ -4,9 +4,11 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/config.h"
+#include "core/head_spec.h"
 #include "drivers/registry.h"
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/sim_aravis.h"
@@ -22,6 +24,10 @@ struct RigConfig {
   std::string name;
   std::string sim_scene_path;  // resolved; empty when no sim section
   double sim_time_scale = 0.01;
+  // The subject's head as the lab knows it (its `head:` section: a mannequin's
+  // mesh and pose, or an ellipsoid, with the scalp region); absent when the
+  // config has none.
+  std::optional<HeadSpec> head;
   ConfigNode root;             // the whole document
 };
 

@@ -80,6 +80,7 @@ Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(SimWorld& 
   std::error_code ec;
   std::filesystem::create_directories(state->maps_dir, ec);
   if (ec) return IoError(state->maps_dir + ": cannot create (" + ec.message() + ")");
+  HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, state->dir));
   HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir));
   HR_RETURN_IF_ERROR(WriteStrands(state->dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm()));
   state->scene_cameras = SceneCameras(scene, views);

@@ -1,7 +1,8 @@
 // The ground truth of a simulated capture, written by the simulated rig
 // beside the frames: <capture>/ground_truth/ground_truth.json (true cameras,
-// box and turntable per planned view), ground_truth_strands.ply (the wig,
-// turntable frame) and views/NNN_*.png (per-pixel maps, sim_hw/ground_truth.h).
+// box and turntable per planned view, the head), head_mesh.ply (the head's
+// mesh, if it has one), ground_truth_strands.ply (the wig, turntable frame)
+// and views/NNN_*.png (per-pixel maps, sim_hw/ground_truth.h).
 // The maps come from the very renders that make the frames: a view's maps
 // are written when a simulated camera renders its frame, so the capture pays
 // no second render.

@@ -10,6 +10,7 @@
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
+#include "core/head_json.h"
 
 namespace hairrig {
 
@@ -36,6 +37,18 @@ ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int 
 }
 
 
+std::string TruthHeadMeshName(const HeadSpec& head) {
+  if (head.mesh_file.empty()) return "";
+  return FileExtension(head.mesh_file) == "obj" ? "head_mesh.obj" : "head_mesh.ply";
+}
+
+Status WriteTruthHeadMesh(const Scene& scene, const std::string& truth_dir) {
+  const std::string name = TruthHeadMeshName(scene.head);
+  if (name.empty()) return Status::Ok();
+  HR_ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, ReadFileBytes(scene.head.mesh_file));
+  return WriteFileAtomic(truth_dir + "/" + name, bytes.data(), bytes.size());
+}
+
 std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views, bool with_maps) {
   nlohmann::json root;
   root["simulation_only"] = true;
@@ -43,6 +56,7 @@ std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTrut
                  "pixel (0,0) is the centre of the top-left pixel.";
   root["scene"] = scene.path;
   root["turntable_from_box"] = PoseToJson(scene.turntable_from_box);
+  root["head"] = HeadSpecToJson(scene.head, TruthHeadMeshName(scene.head));
   if (with_maps) {
     root["maps"] = {
         {"version", kTruthMapsVersion},

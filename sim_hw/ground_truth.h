@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "core/camera_model.h"
+#include "core/head_spec.h"
+#include "core/status.h"
 #include "core/transform.h"
 #include "core/truth_maps.h"
 #include "sim_hw/renderer.h"
@@ -33,8 +35,17 @@ ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view);
 ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int camera_index, double turntable_deg);
 
 // JSON text: {"simulation_only": true, "scene": ..., "turntable_from_box": ...,
-// "views": [...]}, and with `with_maps` a "maps" entry that documents the
-// per-pixel files below (format version, file names, units and scales).
+// "head": ..., "views": [...]}, and with `with_maps` a "maps" entry that
+// documents the per-pixel files below (format version, file names, units and
+// scales). "head" is the scene's head (core/head_json.h) with its mesh, if it
+// has one, named as WriteTruthHeadMesh copies it beside the JSON file.
 std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views, bool with_maps = false);
+
+// The name of the head's mesh in a ground truth folder: "head_mesh.ply" (or
+// "head_mesh.obj" for an OBJ mesh, copied as it is); "" for an ellipsoid head.
+std::string TruthHeadMeshName(const HeadSpec& head);
+// Copies the scene head's mesh file to <truth_dir>/TruthHeadMeshName(...)
+// (written atomically; nothing for an ellipsoid head). Errors name the file.
+Status WriteTruthHeadMesh(const Scene& scene, const std::string& truth_dir);
 
 }  // namespace hairrig

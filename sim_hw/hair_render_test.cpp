@@ -12,7 +12,7 @@
 
 #include "core/camera_model.h"
 #include "sim_hw/ground_truth.h"
-#include "sim_hw/head_model.h"
+#include "core/head_model.h"
 #include "sim_hw/renderer.h"
 #include "tests/support/default_scene.h"
 
@@ -129,8 +129,8 @@ TEST(HairRender, GroundTruthMapsAgreeWithTheGeometry) {
 // pixels, save along the silhouette (the tessellation's sagitta).
 TEST(HairRender, AMeshHeadAndAnEllipsoidHeadHaveOneSilhouette) {
   Scene ellipsoid = DefaultScene();
-  const SceneScalp scalp = ellipsoid.head.scalp;  // the wig's wisps grow from a scalp
-  ellipsoid.head = SceneHead{};
+  const ScalpSpec scalp = ellipsoid.head.scalp;  // the wig's wisps grow from a scalp
+  ellipsoid.head = HeadSpec{};
   ellipsoid.head.center_turntable_mm = Eigen::Vector3d(0, 0, 330);
   ellipsoid.head.scalp = scalp;
   const TriangleMesh mesh = MakeEllipsoidMesh(ellipsoid.head.center_turntable_mm, ellipsoid.head.radii_mm, 120, 240);

@@ -14,7 +14,7 @@
 #include "core/parallel.h"
 #include "sim_hw/deep_opacity.h"
 #include "sim_hw/hair_shading.h"
-#include "sim_hw/head_model.h"
+#include "core/head_model.h"
 #include "sim_hw/render_support.h"
 #include "sim_hw/tag_texture.h"
 #include "sim_hw/wig.h"

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/config.h"
+#include "core/head_config.h"
 
 namespace hairrig {
 
@@ -15,21 +16,6 @@ int Scene::FindCamera(const std::string& serial) const {
 }
 
 namespace {
-
-std::string Resolve(const std::string& base_file, const std::string& relative) {
-  if (relative.empty() || relative[0] == '/') return relative;
-  return (std::filesystem::path(base_file).parent_path() / relative).lexically_normal().string();
-}
-
-Rigid3d ReadPose(const ConfigNode& n) {
-  n.AllowOnlyKeys({"translation_mm", "rotation_deg"});
-  const Eigen::Vector3d t = n.Vec3("translation_mm", Eigen::Vector3d::Zero());
-  const Eigen::Vector3d r = n.Vec3("rotation_deg", Eigen::Vector3d::Zero());
-  const Eigen::Quaterniond q = Eigen::AngleAxisd(DegToRad(r.z()), Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(DegToRad(r.y()), Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(DegToRad(r.x()), Eigen::Vector3d::UnitX());
-  return Rigid3d(q, t);
-}
 
 void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) {
   n.AllowOnlyKeys({"style", "strands", "length_mm", "segment_mm", "scalp_min_elevation_deg", "face_dir",
@@ -77,42 +63,9 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
   if (n.ok() && (w->albedo.minCoeff() < 0 || w->albedo.maxCoeff() > 1)) n.Fail("albedo", "each channel must lie in 0..1");
   w->seed = static_cast<uint64_t>(n.Integer("seed", static_cast<int>(w->seed), {.min = 0}));
   if (w->style == WigStyle::kFile) {
-    w->file = Resolve(scene_path, n.String("file"));
-    if (n.Has("file_pose")) w->turntable_from_file = ReadPose(n.Child("file_pose"));
+    w->file = ResolveBesideFile(scene_path, n.String("file"));
+    if (n.Has("file_pose")) w->turntable_from_file = ReadPoseConfig(n.Child("file_pose"));
   }
-}
-
-void ReadScalp(const ConfigNode& n, SceneScalp* s) {
-  n.AllowOnlyKeys({"center_mm", "face_dir", "hairline_front_deg", "hairline_temple_deg", "hairline_ear_deg",
-                   "hairline_nape_deg", "parting", "parting_offset_deg", "parting_width_mm", "parting_back_deg"});
-  s->defined = true;
-  s->center_turntable_mm = n.Vec3("center_mm", s->center_turntable_mm);
-  Eigen::Vector3d face = n.Vec3("face_dir", s->face_dir);
-  face.z() = 0;
-  if (face.norm() < 1e-9) n.Fail("face_dir", "must have a horizontal part (x, y): the way the face looks");
-  s->face_dir = face.norm() > 0 ? Eigen::Vector3d(face.normalized()) : s->face_dir;
-  s->hairline_front_deg = n.Number("hairline_front_deg", s->hairline_front_deg, {.min = -90, .max = 90});
-  s->hairline_temple_deg = n.Number("hairline_temple_deg", s->hairline_temple_deg, {.min = -90, .max = 90});
-  s->hairline_ear_deg = n.Number("hairline_ear_deg", s->hairline_ear_deg, {.min = -90, .max = 90});
-  s->hairline_nape_deg = n.Number("hairline_nape_deg", s->hairline_nape_deg, {.min = -90, .max = 90});
-  s->parting = n.Bool("parting", s->parting);
-  s->parting_offset_deg = n.Number("parting_offset_deg", s->parting_offset_deg, {.min = -60, .max = 60});
-  s->parting_width_mm = n.Number("parting_width_mm", s->parting_width_mm, {.min = 0, .max = 50});
-  s->parting_back_deg = n.Number("parting_back_deg", s->parting_back_deg, {.min = -90, .max = 90});
-}
-
-void ReadHead(const ConfigNode& h, const std::string& scene_path, SceneHead* head) {
-  h.AllowOnlyKeys({"mesh", "mesh_pose", "center_mm", "radii_mm", "albedo", "scalp"});
-  if (h.Has("mesh")) {
-    head->mesh_file = Resolve(scene_path, h.String("mesh"));
-    if (h.Has("mesh_pose")) head->turntable_from_mesh = ReadPose(h.Child("mesh_pose"));
-  }
-  head->center_turntable_mm = h.Vec3("center_mm", head->center_turntable_mm);
-  head->radii_mm = h.Vec3("radii_mm", head->radii_mm);
-  if (h.ok() && head->radii_mm.minCoeff() <= 0) h.Fail("radii_mm", "every radius must be positive");
-  head->albedo = h.Vec3("albedo", head->albedo);
-  head->scalp.center_turntable_mm = head->center_turntable_mm;
-  if (h.Has("scalp")) ReadScalp(h.Child("scalp"), &head->scalp);
 }
 
 SceneCamera ReadCamera(const ConfigNode& n) {
@@ -160,7 +113,7 @@ Result<Scene> LoadScene(const std::string& path) {
   scene.path = path;
   scene.name = root.String("name", "unnamed scene");
   scene.seed = static_cast<uint64_t>(root.Integer("seed", 1, {.min = 0}));
-  if (root.Has("head")) ReadHead(root.Child("head"), path, &scene.head);
+  if (root.Has("head")) HR_RETURN_IF_ERROR(ReadHeadConfig(root, "head", path, &scene.head));
   if (root.Has("wig")) ReadWig(root.Child("wig"), path, &scene.wig);
   if (root.Has("hair_shading")) {
     const ConfigNode h = root.Child("hair_shading");
@@ -174,8 +127,8 @@ Result<Scene> LoadScene(const std::string& path) {
   }
   const ConfigNode box = root.Child("calib_box");
   box.AllowOnlyKeys({"file", "turntable_from_box"});
-  const std::string box_file = Resolve(path, box.String("file"));
-  scene.turntable_from_box = ReadPose(box.Child("turntable_from_box"));
+  const std::string box_file = ResolveBesideFile(path, box.String("file"));
+  scene.turntable_from_box = ReadPoseConfig(box.Child("turntable_from_box"));
   for (const ConfigNode& l : root.Items("lights")) {
     l.AllowOnlyKeys({"name", "position_mm", "intensity"});
     scene.lights.push_back({l.String("name"), l.Vec3("position_mm"), l.Number("intensity", 1.0, {.min = 0})});

@@ -101,6 +101,7 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
   cv::imencode(".png", MakeContactSheet(images, labels, columns, 240), png);
   summary.contact_sheet = "contact_sheet.png";
   HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.contact_sheet, png.data(), png.size()));
+  HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, out_dir));
   summary.ground_truth = "ground_truth.json";
   HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.ground_truth, GroundTruthJson(scene, truths, /*with_maps=*/true)));
   HR_RETURN_IF_ERROR(WriteStrands(out_dir + "/ground_truth_strands.ply", renderer.strands_turntable_mm()));

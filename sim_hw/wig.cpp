@@ -126,7 +126,7 @@ std::vector<Eigen::Vector3f> Grow(const WigOptions& o, const HeadModel& head, co
 // from the ellipsoid's centre, each strand on its own.
 StrandSet IndependentStrands(const WigOptions& o, const HeadModel& head) {
   std::mt19937_64 rng(o.seed);
-  const SceneHead& h = head.head();
+  const HeadSpec& h = head.head();
   StrandSet set;
   for (int i = 0; i < o.num_strands; ++i) {
     StrandSeed s;
@@ -150,7 +150,7 @@ StrandSeed ScalpSeed(const WigOptions& o, const HeadModel& head, const Eigen::Ve
   s.root = root;
   s.fall_dir = Eigen::Vector3d(0, 0, -1);
   DrawStyle(o, rng, &s);
-  const SceneScalp& scalp = head.head().scalp;
+  const ScalpSpec& scalp = head.head().scalp;
   const Eigen::Vector3d side_axis = Eigen::Vector3d::UnitZ().cross(scalp.face_dir);
   Eigen::Vector3d comb = Eigen::Vector3d::Zero();
   if (const int side = head.ScalpSide(root); side != 0) {
@@ -373,7 +373,7 @@ Result<StrandSet> GenerateWig(const WigOptions& o, const HeadModel& head) {
   return Members(o, head, wisps);
 }
 
-Result<StrandSet> GenerateWig(const WigOptions& options, const SceneHead& head) {
+Result<StrandSet> GenerateWig(const WigOptions& options, const HeadSpec& head) {
   HR_ASSIGN_OR_RETURN(std::unique_ptr<HeadModel> model, HeadModel::Build(head));
   return GenerateWig(options, *model);
 }

@@ -8,7 +8,7 @@
 
 #include "core/status.h"
 #include "core/strands.h"
-#include "sim_hw/head_model.h"
+#include "core/head_model.h"
 #include "sim_hw/scene.h"
 
 namespace hairrig {
@@ -18,6 +18,6 @@ namespace hairrig {
 // Errors name the field (wig.file).
 Result<StrandSet> GenerateWig(const WigOptions& options, const HeadModel& head);
 // The same on the head the scene part describes (built for the call).
-Result<StrandSet> GenerateWig(const WigOptions& options, const SceneHead& head);
+Result<StrandSet> GenerateWig(const WigOptions& options, const HeadSpec& head);
 
 }  // namespace hairrig

@@ -10,7 +10,7 @@ namespace hairrig {
 namespace {
 
 // Smallest value of the ellipsoid's implicit function over all points (1 = on the surface).
-double MinEllipsoidLevel(const StrandSet& s, const SceneHead& head) {
+double MinEllipsoidLevel(const StrandSet& s, const HeadSpec& head) {
   double level = 1e30;
   for (const auto& p : s.points_mm) {
     level = std::min(level, (p.cast<double>() - head.center_turntable_mm).cwiseQuotient(head.radii_mm).norm());
@@ -26,7 +26,7 @@ WigOptions StyleOptions(WigStyle style, int num_strands) {
 }
 
 TEST(Wig, EveryStyleIsSeededHangsDownAndStaysOutsideTheHead) {
-  SceneHead head;
+  HeadSpec head;
   for (WigStyle style : {WigStyle::kStraight, WigStyle::kWavy, WigStyle::kCurly}) {
     WigOptions o = StyleOptions(style, 500);
     auto a = GenerateWig(o, head);
@@ -50,7 +50,7 @@ TEST(Wig, EveryStyleIsSeededHangsDownAndStaysOutsideTheHead) {
 }
 
 TEST(Wig, CurlyStrandsAreLongerThanTheirSpanAndStraightOnesAreNot) {
-  SceneHead head;
+  HeadSpec head;
   WigOptions o;
   o.num_strands = 200;
   const auto ratio = [&](WigStyle style) {
@@ -74,7 +74,7 @@ TEST(Wig, CurlyStrandsAreLongerThanTheirSpanAndStraightOnesAreNot) {
 // the polyline turns gently (5 mm steps along the centreline made 14 mm
 // curls zigzags turning about 130 deg a point).
 TEST(Wig, StrandsHaveTheirFibreLengthAndCurlsAreSampledFinely) {
-  SceneHead head;
+  HeadSpec head;
   for (WigStyle style : {WigStyle::kStraight, WigStyle::kWavy, WigStyle::kCurly}) {
     WigOptions o = StyleOptions(style, 100);
     o.min_length_mm = 380;
@@ -106,7 +106,7 @@ TEST(Wig, AMissingStrandFileNamesTheField) {
   WigOptions o;
   o.style = WigStyle::kFile;
   o.file = "/nonexistent/wig.hair";
-  auto s = GenerateWig(o, SceneHead{});
+  auto s = GenerateWig(o, HeadSpec{});
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.status().message().find("wig.file"), std::string::npos);
 }

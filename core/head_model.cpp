@@ -1,4 +1,4 @@
-#include "sim_hw/head_model.h"
+#include "core/head_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -35,7 +35,7 @@ Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3
 }
 
 // Linear interpolation of the hairline's elevation between its knots (azimuth deg -> elevation deg).
-double HairlineElevationDeg(const SceneScalp& s, double azimuth_deg) {
+double HairlineElevationDeg(const ScalpSpec& s, double azimuth_deg) {
   const double knots[5][2] = {{0, s.hairline_front_deg},
                               {45, s.hairline_temple_deg},
                               {90, s.hairline_ear_deg},
@@ -54,7 +54,7 @@ double HairlineElevationDeg(const SceneScalp& s, double azimuth_deg) {
 
 HeadModel::~HeadModel() = default;
 
-Result<std::unique_ptr<HeadModel>> HeadModel::Build(const SceneHead& head) {
+Result<std::unique_ptr<HeadModel>> HeadModel::Build(const HeadSpec& head) {
   std::unique_ptr<HeadModel> model(new HeadModel(head));
   if (model->is_mesh()) {
     auto mesh = ReadTriangleMesh(head.mesh_file);
@@ -186,7 +186,7 @@ Eigen::Vector3d HeadModel::KeepOutside(const Eigen::Vector3d& p, double margin_m
 }
 
 void HeadModel::ScalpAngles(const Eigen::Vector3d& p, double* elevation_deg, double* azimuth_deg) const {
-  const SceneScalp& s = head_.scalp;
+  const ScalpSpec& s = head_.scalp;
   const Eigen::Vector3d d = (p - s.center_turntable_mm).normalized();
   *elevation_deg = RadToDeg(std::asin(std::clamp(d.z(), -1.0, 1.0)));
   const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(s.face_dir);
@@ -194,7 +194,7 @@ void HeadModel::ScalpAngles(const Eigen::Vector3d& p, double* elevation_deg, dou
 }
 
 int HeadModel::ScalpSide(const Eigen::Vector3d& p) const {
-  const SceneScalp& s = head_.scalp;
+  const ScalpSpec& s = head_.scalp;
   if (!s.defined || !s.parting) return 0;
   const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(s.face_dir);
   // The parting plane holds face_dir and the up axis tilted about it by the offset.
@@ -204,7 +204,7 @@ int HeadModel::ScalpSide(const Eigen::Vector3d& p) const {
 }
 
 bool HeadModel::OnScalp(const Eigen::Vector3d& p) const {
-  const SceneScalp& s = head_.scalp;
+  const ScalpSpec& s = head_.scalp;
   if (!s.defined) return true;
   double elevation, azimuth;
   ScalpAngles(p, &elevation, &azimuth);

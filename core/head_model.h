@@ -1,8 +1,8 @@
-// The simulated subject's head in the turntable frame (mm): an ellipsoid, or a
+// The subject's head in the turntable frame (mm): an ellipsoid, or a
 // triangle mesh (a mannequin head such as ../shared/data/strands/Bangs_head.ply)
-// placed by the scene's pose. One interface for the renderer (ray casting,
-// shading normals) and the wig generator (roots on the scalp, keeping hair
-// outside the head).
+// placed by a pose (core/head_spec.h). One interface for the simulated rig's
+// renderer and wig (ray casting, shading normals, roots on the scalp) and for
+// reconstruction (strand roots on the scalp, hair kept outside the head).
 //
 // The scalp is the part of the head's surface hair grows from: above a
 // hairline whose elevation (seen from the scalp centre, 0 = level with it,
@@ -18,7 +18,7 @@
 #include "core/mesh_bvh.h"
 #include "core/status.h"
 #include "core/triangle_mesh.h"
-#include "sim_hw/scene.h"
+#include "core/head_spec.h"
 
 namespace hairrig {
 
@@ -29,12 +29,12 @@ struct HeadHit {
 
 class HeadModel {
  public:
-  // Loads the mesh (if the scene gives one), builds its BVH and its signed
+  // Loads the mesh (if the spec gives one), builds its BVH and its signed
   // distance grid (2 mm; about 0.3 s for 8,000 triangles). Errors name the mesh file.
-  static Result<std::unique_ptr<HeadModel>> Build(const SceneHead& head);
+  static Result<std::unique_ptr<HeadModel>> Build(const HeadSpec& head);
   ~HeadModel();
 
-  const SceneHead& head() const { return head_; }
+  const HeadSpec& head() const { return head_; }
   bool is_mesh() const { return !head_.mesh_file.empty(); }
   // The mesh in the turntable frame; for an ellipsoid, a tessellation of it
   // (for bounds and root sampling only: the ellipsoid is ray cast exactly).
@@ -55,7 +55,7 @@ class HeadModel {
   Eigen::Vector3d KeepOutside(const Eigen::Vector3d& p, double margin_mm) const;
 
   // A point on the scalp, uniform by area, with its outward normal. The
-  // region is the scene's scalp; ScalpSide gives the side of the parting
+  // region is the spec's scalp; ScalpSide gives the side of the parting
   // (-1, +1, or 0 without a parting).
   Eigen::Vector3d SampleScalp(std::mt19937_64& rng, Eigen::Vector3d* normal) const;
   bool OnScalp(const Eigen::Vector3d& p) const;
@@ -69,11 +69,11 @@ class HeadModel {
   static constexpr double kBandMm = 12.0;
 
  private:
-  explicit HeadModel(const SceneHead& head) : head_(head) {}
+  explicit HeadModel(const HeadSpec& head) : head_(head) {}
   Status BuildDistanceGrid();
   double GridDistance(const Eigen::Vector3d& p) const;
 
-  SceneHead head_;
+  HeadSpec head_;
   TriangleMesh mesh_;
   Eigen::Vector3d mesh_centre_mm_ = Eigen::Vector3d::Zero();  // centre of the mesh's bounds
   MeshBvh bvh_;

@@ -1,21 +1,28 @@
-#include "sim_hw/head_model.h"
+#include "core/head_model.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "sim_hw/scene.h"
-#include "tests/support/default_scene.h"
+#include "core/head_config.h"
 
 namespace hairrig {
 namespace {
 
-using hairrig_test::DefaultScene;
+// The lab's mannequin (etc/heads/mannequin.yaml), with a side parting.
+HeadSpec Mannequin() {
+  auto head = LoadHeadFile("etc/heads/mannequin.yaml");
+  EXPECT_TRUE(head.ok()) << head.status().ToString();
+  HeadSpec spec = head.ok() ? *head : HeadSpec{};
+  spec.scalp.parting = true;
+  spec.scalp.parting_offset_deg = 12;
+  return spec;
+}
 
 // The mannequin's distance grid: points pushed out by KeepOutside are outside
 // the mesh (the BVH's parity test) and near the surface they were pushed to.
 TEST(HeadModel, TheMeshHeadKeepsPointsOutsideAndKnowsInsideFromOutside) {
-  auto head = HeadModel::Build(DefaultScene().head);
+  auto head = HeadModel::Build(Mannequin());
   ASSERT_TRUE(head.ok()) << head.status().ToString();
   ASSERT_TRUE((*head)->is_mesh());
   const MeshBvh bvh((*head)->mesh());
@@ -41,7 +48,7 @@ TEST(HeadModel, TheMeshHeadKeepsPointsOutsideAndKnowsInsideFromOutside) {
 
 // Roots lie on the scalp: above the hairline, off the parting, on the surface.
 TEST(HeadModel, ScalpSamplesLieOnTheHeadAboveTheHairline) {
-  auto head = HeadModel::Build(DefaultScene().head);
+  auto head = HeadModel::Build(Mannequin());
   ASSERT_TRUE(head.ok());
   std::mt19937_64 rng(9);
   int left = 0, right = 0;
@@ -63,7 +70,7 @@ TEST(HeadModel, ScalpSamplesLieOnTheHeadAboveTheHairline) {
 }
 
 TEST(HeadModel, AMissingMeshNamesTheField) {
-  SceneHead h;
+  HeadSpec h;
   h.mesh_file = "/nonexistent/head.ply";
   auto head = HeadModel::Build(h);
   ASSERT_FALSE(head.ok());

@@ -1,0 +1,71 @@
+// Reconstruction II on a capture of the simulated rig whose points exist
+// (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
+// timed, side by side. Run from the repository root:
+//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,naive] [--strands N] [--head FILE]
+// The strands go to CAPTURE/bench-strands-<method>/strands/ (the capture's own
+// reconstruction is left alone); preview.jpg beside them shows the model over
+// the ground truth's strands.
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/image_file.h"
+#include "core/strand_io.h"
+#include "reconstruction/strand_preview.h"
+#include "reconstruction/strand_reconstruction.h"
+#include "rig/reconstruction_input.h"
+
+int main(int argc, char** argv) {
+  using namespace hairrig;
+  namespace fs = std::filesystem;
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,naive] [--strands N] [--head FILE]\n", argv[0]);
+    return 2;
+  }
+  const std::string capture = argv[1];
+  std::vector<std::string> methods = {"bao-qi", "naive"};
+  StrandReconstructionOptions options;
+  std::string head_file;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--methods") == 0) {
+      methods.clear();
+      std::stringstream list(argv[i + 1]);
+      for (std::string m; std::getline(list, m, ',');) methods.push_back(m);
+    } else if (std::strcmp(argv[i], "--strands") == 0) {
+      options.strands = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--head") == 0) {
+      head_file = argv[i + 1];
+    }
+  }
+  auto head = LoadCaptureHead(capture, head_file);
+  auto truth = ReadStrands(capture + "/ground_truth/ground_truth_strands.ply");
+  if (!head.ok() || !truth.ok()) {
+    std::fprintf(stderr, "%s\n", (!head.ok() ? head.status() : truth.status()).ToString().c_str());
+    return 1;
+  }
+  for (const std::string& name : methods) {
+    auto method = ParseStrandMethod(name);
+    if (!method.ok()) {
+      std::fprintf(stderr, "%s\n", method.status().ToString().c_str());
+      return 2;
+    }
+    options.method = *method;
+    const std::string dir = capture + "/bench-strands-" + name;
+    fs::create_directories(dir);
+    fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply", fs::copy_options::overwrite_existing);
+    auto summary = ReconstructStrands(dir, head->spec, head->source, options);
+    if (!summary.ok()) {
+      std::fprintf(stderr, "%s: %s\n", name.c_str(), summary.status().ToString().c_str());
+      return 1;
+    }
+    std::printf("%s", summary->BriefReport().c_str());
+    auto strands = ReadStrands(dir + "/strands/strands.ply");
+    if (!strands.ok()) return 1;
+    const cv::Mat preview = RenderStrandPreview({&*strands, &*truth}, {name, "ground truth"}, StrandPreviewOptions{});
+    if (!WriteImageAtomic(dir + "/strands/preview_truth.jpg", preview).ok()) return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,58 @@
+// A uniform grid over a point set for radius queries (mm, any frame): points
+// sorted by cell, a hash from cell to its run. Built once (O(n log n)), then
+// read by any number of threads.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace hairrig {
+
+class PointGrid {
+ public:
+  // `positions` must outlive the grid. cell_mm > 0; queries are cheapest
+  // with radius <= cell_mm (27 cells visited).
+  PointGrid(const std::vector<Eigen::Vector3f>& positions, double cell_mm);
+
+  const std::vector<Eigen::Vector3f>& positions() const { return positions_; }
+  double cell_mm() const { return cell_mm_; }
+
+  // Calls visit(index, squared distance) for every point within `radius_mm`
+  // of q (<=), in no particular order.
+  template <typename Visit>
+  void ForEachWithin(const Eigen::Vector3f& q, double radius_mm, Visit&& visit) const {
+    const double radius2 = radius_mm * radius_mm;
+    const int64_t reach = static_cast<int64_t>(std::ceil(radius_mm / cell_mm_));
+    const int64_t cx = CellOf(q.x()), cy = CellOf(q.y()), cz = CellOf(q.z());
+    for (int64_t dz = -reach; dz <= reach; ++dz)
+      for (int64_t dy = -reach; dy <= reach; ++dy)
+        for (int64_t dx = -reach; dx <= reach; ++dx) {
+          const auto cell = cells_.find(Key(cx + dx, cy + dy, cz + dz));
+          if (cell == cells_.end()) continue;
+          for (uint32_t k = cell->second.first; k < cell->second.second; ++k) {
+            const uint32_t i = order_[k];
+            const double d2 = (positions_[i] - q).cast<double>().squaredNorm();
+            if (d2 <= radius2) visit(i, d2);
+          }
+        }
+  }
+
+  // The nearest point within `radius_mm` (-1 when none) and its squared distance.
+  int64_t Nearest(const Eigen::Vector3f& q, double radius_mm, double* distance2 = nullptr) const;
+
+ private:
+  int64_t CellOf(float v) const { return static_cast<int64_t>(std::floor(v / cell_mm_)); }
+  static int64_t Key(int64_t x, int64_t y, int64_t z);
+
+  const std::vector<Eigen::Vector3f>& positions_;
+  double cell_mm_;
+  std::vector<uint32_t> order_;                                        // point indices sorted by cell
+  std::unordered_map<int64_t, std::pair<uint32_t, uint32_t>> cells_;  // cell -> [begin, end) in order_
+};
+
+}  // namespace hairrig

@@ -1,0 +1,253 @@
+#include "reconstruction/strand_direction.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <random>
+#include <utility>
+
+#include <maxflow.h>
+
+#include "core/parallel.h"
+#include "reconstruction/point_grid.h"
+
+namespace hairrig {
+
+namespace {
+
+// A signed pair term: weight > 0; aligned = the two segments' vertex orders
+// agree (the same label is compatible).
+struct PairTerm {
+  double signed_weight = 0;  // + aligned, - opposed (summed over relations)
+};
+
+using PairKey = std::pair<uint32_t, uint32_t>;
+
+// Distance to the scalp (zeta of Eq. 5): to the nearest of a dense sample of it.
+class ScalpDistance {
+ public:
+  explicit ScalpDistance(const HeadModel* head) {
+    if (head == nullptr) return;
+    std::mt19937_64 rng(17);
+    samples_.resize(4000);
+    for (Eigen::Vector3f& s : samples_) {
+      Eigen::Vector3d normal;
+      s = head->SampleScalp(rng, &normal).cast<float>();
+    }
+  }
+  bool available() const { return !samples_.empty(); }
+  double operator()(const Eigen::Vector3f& p) const {
+    float best = std::numeric_limits<float>::max();
+    for (const Eigen::Vector3f& s : samples_) best = std::min(best, (s - p).squaredNorm());
+    return samples_.empty() ? 0.0 : std::sqrt(best);
+  }
+
+ private:
+  std::vector<Eigen::Vector3f> samples_;
+};
+
+// E_ribb (Eq. 5) of keeping each segment's vertex order.
+std::vector<double> KeepEnergies(const std::vector<StrandSegment>& segments, const HeadModel* head,
+                                 const DirectionOptions& o) {
+  const ScalpDistance zeta(head);
+  std::vector<double> keep(segments.size());
+  ParallelFor(segments.size(), o.threads, [&] {
+    return [&](size_t i) {
+      const Eigen::Vector3f& first = segments[i].points_mm.front();
+      const Eigen::Vector3f& last = segments[i].points_mm.back();
+      double e = first.dot(o.down) - last.dot(o.down);
+      if (zeta.available()) e += zeta(first) - zeta(last);
+      keep[i] = e / (2 * o.height_scale_mm);
+    };
+  });
+  return keep;
+}
+
+Eigen::Vector3f Tangent(const std::vector<Eigen::Vector3f>& p, size_t i) {
+  const size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, p.size() - 1);
+  const Eigen::Vector3f d = p[b] - p[a];
+  return d.norm() > 0 ? Eigen::Vector3f(d.normalized()) : Eigen::Vector3f::Zero();
+}
+
+// E_close (Eq. 7): side-by-side segments, weighted by their overlap share.
+void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
+                 std::map<PairKey, PairTerm>* pairs, int64_t* count) {
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<uint32_t> owner, index;
+  for (uint32_t s = 0; s < segments.size(); ++s) {
+    for (uint32_t k = 0; k < segments[s].points_mm.size(); ++k) {
+      vertices.push_back(segments[s].points_mm[k]);
+      owner.push_back(s);
+      index.push_back(k);
+    }
+  }
+  const PointGrid grid(vertices, o.overlap_mm);
+  // Per segment: for each other segment, its vertices overlapped and the vote of their tangents.
+  std::vector<std::map<uint32_t, std::pair<int, int>>> seen(segments.size());
+  ParallelFor(segments.size(), o.threads, [&] {
+    return [&](size_t s) {
+      const auto& points = segments[s].points_mm;
+      for (size_t k = 0; k < points.size(); ++k) {
+        const Eigen::Vector3f t = Tangent(points, k);
+        struct Near {
+          uint32_t segment;
+          double d2;
+          float dot;
+        };
+        std::vector<Near> nearest;  // per other segment: its nearest vertex
+        grid.ForEachWithin(points[k], o.overlap_mm, [&](uint32_t v, double d2) {
+          const uint32_t other = owner[v];
+          if (other == s) return;
+          auto it = std::find_if(nearest.begin(), nearest.end(), [&](const Near& n) { return n.segment == other; });
+          if (it == nearest.end()) it = nearest.insert(nearest.end(), {other, d2 + 1, 0.0f});
+          if (it->d2 <= d2) return;
+          it->d2 = d2;
+          it->dot = t.dot(Tangent(segments[other].points_mm, index[v]));
+        });
+        for (const Near& n : nearest) {
+          auto& entry = seen[s][n.segment];
+          ++entry.first;
+          entry.second += n.dot >= 0 ? 1 : -1;
+        }
+      }
+    };
+  });
+  for (uint32_t s = 0; s < segments.size(); ++s) {
+    for (const auto& [other, entry] : seen[s]) {
+      if (other < s) continue;  // each pair once, from its lower index; the other side's count joins it
+      int overlapped = entry.first, votes = entry.second;
+      const auto back = seen[other].find(s);
+      if (back != seen[other].end()) overlapped += back->second.first, votes += back->second.second;
+      const double eta =
+          static_cast<double>(overlapped) / static_cast<double>(segments[s].points_mm.size() + segments[other].points_mm.size());
+      if (votes == 0) continue;
+      (*pairs)[{s, other}].signed_weight += (votes > 0 ? 1 : -1) * o.alpha_close * eta;
+      ++*count;
+    }
+  }
+}
+
+// E_link (Eq. 6): a segment's end continues into another's end across a small gap.
+void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
+              std::map<PairKey, PairTerm>* pairs, int64_t* count) {
+  std::vector<Eigen::Vector3f> ends;
+  std::vector<Eigen::Vector3f> outward;  // the tangent leaving the segment at that end
+  for (const StrandSegment& s : segments) {
+    const auto& p = s.points_mm;
+    ends.push_back(p.front());
+    outward.push_back(-Tangent(p, 0));
+    ends.push_back(p.back());
+    outward.push_back(Tangent(p, p.size() - 1));
+  }
+  const PointGrid grid(ends, o.link_gap_mm);
+  for (uint32_t e = 0; e < ends.size(); ++e) {
+    grid.ForEachWithin(ends[e], o.link_gap_mm, [&](uint32_t f, double d2) {
+      if (f <= e || f / 2 == e / 2) return;
+      if (outward[e].dot(-outward[f]) < o.link_cos) return;
+      if (d2 > 0.25) {
+        const Eigen::Vector3f gap = (ends[f] - ends[e]).normalized();
+        if (outward[e].dot(gap) < o.link_cos || outward[f].dot(-gap) < o.link_cos) return;
+      }
+      // A last end meeting a first end keeps both orders; two firsts or two lasts oppose them.
+      const bool aligned = (e % 2) != (f % 2);
+      (*pairs)[{e / 2, f / 2}].signed_weight += (aligned ? 1 : -1) * o.alpha_link;
+      ++*count;
+    });
+  }
+}
+
+// Orientation flips (+1 keep, -1 reverse) that make every edge of a maximum
+// spanning tree of |weight| aligned.
+std::vector<int> SpanningTreeOrientation(size_t n, const std::map<PairKey, PairTerm>& pairs) {
+  std::vector<std::pair<double, PairKey>> edges;
+  for (const auto& [key, term] : pairs) edges.emplace_back(std::abs(term.signed_weight), key);
+  std::sort(edges.begin(), edges.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::vector<std::vector<std::pair<uint32_t, int>>> tree(n);
+  for (const auto& [weight, key] : edges) {
+    const uint32_t a = find(key.first), b = find(key.second);
+    if (a == b) continue;
+    parent[a] = b;
+    const int sign = pairs.at(key).signed_weight >= 0 ? 1 : -1;
+    tree[key.first].emplace_back(key.second, sign);
+    tree[key.second].emplace_back(key.first, sign);
+  }
+  std::vector<int> flip(n, 0);
+  std::vector<uint32_t> stack;
+  for (uint32_t root = 0; root < n; ++root) {
+    if (flip[root] != 0) continue;
+    flip[root] = 1;
+    stack.push_back(root);
+    while (!stack.empty()) {
+      const uint32_t u = stack.back();
+      stack.pop_back();
+      for (const auto& [v, sign] : tree[u]) {
+        if (flip[v] != 0) continue;
+        flip[v] = flip[u] * sign;
+        stack.push_back(v);
+      }
+    }
+  }
+  return flip;
+}
+
+}  // namespace
+
+Status DirectionOptions::Check() const {
+  if (!(height_scale_mm > 0)) return InvalidArgument("direction height_scale_mm must be positive");
+  if (!(alpha_link >= 0) || !(alpha_close >= 0)) return InvalidArgument("direction weights must be non-negative");
+  if (!(link_gap_mm > 0) || !(overlap_mm > 0)) return InvalidArgument("direction link_gap_mm and overlap_mm must be positive");
+  if (!(link_cos >= 0 && link_cos <= 1)) return InvalidArgument("direction link_cos must lie in 0..1");
+  if (!(std::abs(down.norm() - 1) < 1e-3)) return InvalidArgument("direction down must be a unit vector");
+  return Status::Ok();
+}
+
+DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const HeadModel* head,
+                                const DirectionOptions& o) {
+  DirectionSummary summary;
+  const size_t n = segments->size();
+  summary.segments = static_cast<int64_t>(n);
+  if (n == 0) return summary;
+  const std::vector<double> keep = KeepEnergies(*segments, head, o);
+  std::map<PairKey, PairTerm> pairs;
+  AddOverlaps(*segments, o, &pairs, &summary.overlaps);
+  AddLinks(*segments, o, &pairs, &summary.links);
+  const std::vector<int> orient = SpanningTreeOrientation(n, pairs);
+
+  // Labels relative to the tree's orientation: 0 (source side) keeps it, 1 reverses it.
+  maxflow::Graph_DDD graph(static_cast<int>(n), static_cast<int>(pairs.size()));
+  graph.add_node(static_cast<int>(n));
+  for (size_t i = 0; i < n; ++i) {
+    const double cost_keep = keep[i] * orient[i], cost_reverse = -cost_keep;
+    const double floor = std::min(cost_keep, cost_reverse);
+    // Being on the sink side (label 1) cuts the source edge: its capacity is label 1's cost.
+    graph.add_tweights(static_cast<int>(i), cost_reverse - floor, cost_keep - floor);
+  }
+  for (const auto& [key, term] : pairs) {
+    const double aligned = term.signed_weight * orient[key.first] * orient[key.second];
+    if (aligned <= 0) {
+      if (aligned < 0) ++summary.truncated_pairs;
+      continue;
+    }
+    graph.add_edge(static_cast<int>(key.first), static_cast<int>(key.second), aligned, aligned);
+  }
+  summary.energy = graph.maxflow();
+  for (size_t i = 0; i < n; ++i) {
+    const bool reverse_tree = graph.what_segment(static_cast<int>(i)) == maxflow::Graph_DDD::SINK;
+    const int final_orientation = orient[i] * (reverse_tree ? -1 : 1);
+    if (final_orientation < 0) {
+      std::reverse((*segments)[i].points_mm.begin(), (*segments)[i].points_mm.end());
+      ++summary.reversed;
+    }
+    if (keep[i] * final_orientation > 0) ++summary.unary_disagreements;
+  }
+  return summary;
+}
+
+}  // namespace hairrig

@@ -1,0 +1,63 @@
+// Which end of each strand segment is nearer the root: Luo et al. 2013
+// Sec. 6.2's direction analysis as a two-label MRF over the segments, solved
+// by graph cuts (Boykov-Kolmogorov max-flow, Debian's libmaxflow).
+//
+// Energy (Luo Eq. 4), per segment S with label D(S) (keep its vertex order as
+// root to tip, or reverse it):
+//   E_ribb (Eq. 5): (H(first) - H(last) + zeta(first) - zeta(last)) / (2 h),
+//     H the height along `down`, zeta the distance to the scalp: hair falls
+//     and leaves the scalp;
+//   E_link (Eq. 6): end-to-end links between segments whose ends meet (gap
+//     within link_gap_mm, tangents and gap aligned within link_cos), weighted
+//     by their alignment; an incompatible link costs alpha_link;
+//   E_close (Eq. 7): segments that run side by side (vertices within
+//     overlap_mm) with incompatible directions cost alpha_close times the
+//     share of overlapped vertices.
+// The pairwise terms are made submodular by orienting the segments along a
+// maximum spanning tree of the pair graph first; the few that stay
+// non-submodular are truncated (Rother et al. 2005's truncation), so the cut
+// is exact for the truncated energy.
+//
+// Links here join segment ends directly; Luo's circle fits between segments
+// (Sec. 6.1) are not implemented.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/head_model.h"
+#include "core/status.h"
+#include "reconstruction/strand_segments.h"
+
+namespace hairrig {
+
+struct DirectionOptions {
+  double height_scale_mm = 100;     // h of Eq. 5
+  double alpha_link = 1.0;          // Eq. 4's weights
+  double alpha_close = 1.0;
+  double link_gap_mm = 10;          // ends this close may link
+  double link_cos = 0.8;            // |tangent . tangent'| and the gap's alignment for a link
+  double overlap_mm = 3.0;          // vertices this close overlap
+  Eigen::Vector3f down{0, 0, -1};   // H's direction (unit)
+  int threads = 2;
+
+  Status Check() const;
+};
+
+struct DirectionSummary {
+  int64_t segments = 0, links = 0, overlaps = 0;
+  int64_t reversed = 0;                 // segments whose vertex order was flipped
+  int64_t truncated_pairs = 0;          // non-submodular pairs truncated
+  int64_t unary_disagreements = 0;      // segments whose label goes against their own E_ribb
+  double energy = 0;                    // Eq. 4 at the solution (truncated energy)
+};
+
+// Reverses the segments whose root is at their last vertex, so every
+// segment runs root to tip. `head` (may be null) gives zeta; without it
+// E_ribb uses the height alone.
+DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const HeadModel* head,
+                                const DirectionOptions& options);
+
+}  // namespace hairrig

@@ -1,0 +1,119 @@
+#include "reconstruction/strand_growth.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace hairrig {
+
+namespace {
+
+enum class End { kVolume, kLength };
+
+// Grows every root's strand with `step(previous vertex, previous direction,
+// &next direction) -> false to stop (volume)`, in parallel, in root order.
+template <typename MakeStep>
+StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head, const StrandGrowthOptions& o,
+                  MakeStep make_step, StrandGrowthSummary* summary) {
+  std::vector<std::vector<Eigen::Vector3f>> strands(roots.size());
+  std::vector<End> ends(roots.size(), End::kLength);
+  const int max_steps = static_cast<int>(o.max_length_mm / o.step_mm);
+  ParallelFor(roots.size(), o.threads, [&] {
+    return [&](size_t r) {
+      auto step = make_step();  // per strand: a step may keep state along its strand
+      std::vector<Eigen::Vector3f>& strand = strands[r];
+      Eigen::Vector3f p = roots[r].position_mm, direction = roots[r].normal;
+      strand.push_back(p);
+      for (int i = 0; i < max_steps; ++i) {
+        Eigen::Vector3f next = direction;
+        if (!step(p, direction, &next)) {
+          ends[r] = End::kVolume;
+          break;
+        }
+        p += next * static_cast<float>(o.step_mm);
+        if (head != nullptr) p = head->KeepOutside(p.cast<double>(), o.head_clearance_mm).cast<float>();
+        strand.push_back(p);
+        direction = next;
+      }
+    };
+  });
+  StrandSet set;
+  StrandGrowthSummary s;
+  double length = 0;
+  for (size_t r = 0; r < strands.size(); ++r) {
+    if (strands[r].size() < 2) {
+      ++s.dropped_short;
+      continue;
+    }
+    ++(ends[r] == End::kVolume ? s.stopped_volume : s.stopped_length);
+    set.AddStrand(strands[r]);
+    s.vertices += static_cast<int64_t>(strands[r].size());
+    length += static_cast<double>(strands[r].size() - 1) * o.step_mm;
+  }
+  s.strands = static_cast<int64_t>(set.num_strands());
+  s.mean_length_mm = s.strands > 0 ? length / static_cast<double>(s.strands) : 0;
+  if (summary != nullptr) *summary = s;
+  return set;
+}
+
+}  // namespace
+
+std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<DirectedRoot> roots(static_cast<size_t>(std::max(count, 0)));
+  for (DirectedRoot& root : roots) {
+    Eigen::Vector3d normal;
+    root.position_mm = head.SampleScalp(rng, &normal).cast<float>();
+    root.normal = normal.cast<float>();
+  }
+  return roots;
+}
+
+Status StrandGrowthOptions::Check() const {
+  if (!(step_mm > 0)) return InvalidArgument("strand step_mm must be positive");
+  if (!(max_length_mm > step_mm)) return InvalidArgument("strand max_length_mm must exceed step_mm");
+  if (!(surface_threshold_mm >= 0)) return InvalidArgument("strand surface_threshold_mm must be non-negative");
+  if (!(volume_bound > 0)) return InvalidArgument("strand volume_bound must be positive");
+  if (!(head_clearance_mm >= 0)) return InvalidArgument("strand head_clearance_mm must be non-negative");
+  return Status::Ok();
+}
+
+StrandSet GrowStrandsInField(const HybridOrientationField& field, const std::vector<DirectedRoot>& roots,
+                             const HeadModel* head, const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
+  const auto make_step = [&] {
+    return [&](const Eigen::Vector3f& p, const Eigen::Vector3f& previous, Eigen::Vector3f* next) {
+      if (!field.Contains(p) || field.Distance(p) > o.volume_bound) return false;
+      // Eq. 1 with the paper's dynamic weights (Sec. IV-B).
+      const double d_s = field.RibbonDistance(p);
+      double a_s = 0, a_i = 100 * d_s;
+      if (d_s < o.surface_threshold_mm) a_s = 100 - d_s, a_i = 0.1;
+      const double a_d = 0.1 * a_i, a_g = 10;
+      Eigen::Vector3f h = static_cast<float>(a_i) * field.Interior(p, previous) -
+                          static_cast<float>(a_d) * field.DistanceGradient(p) + static_cast<float>(a_g) * previous;
+      if (a_s > 0) h += static_cast<float>(a_s) * field.Surface(p, previous);
+      if (h.norm() < 1e-6f) return true;  // keeps the previous direction
+      *next = h.normalized();
+      return true;
+    };
+  };
+  return GrowAll(roots, head, o, make_step, summary);
+}
+
+StrandSet GrowStrandsAlongPoints(const PointOrientationField& points, const std::vector<DirectedRoot>& roots,
+                                 const HeadModel* head, const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
+  const auto make_step = [&] {
+    return [&, reached = false](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
+                                Eigen::Vector3f* next) mutable {
+      Eigen::Vector3f orientation;
+      const bool near = points.At(p, previous, 0.0, 1, &orientation);
+      if (!near) return !reached;  // straight on until the points are reached; stop on leaving them
+      reached = true;
+      *next = orientation;
+      return true;
+    };
+  };
+  return GrowAll(roots, head, o, make_step, summary);
+}
+
+}  // namespace hairrig

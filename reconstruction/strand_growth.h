@@ -1,0 +1,64 @@
+// Full strands grown from roots on the scalp (mm, the points' frame):
+//   - Bao & Qi 2017 Sec. IV-B: p_i = p_{i-1} + delta H(p_{i-1}) (Eq. 2) in the
+//     hybrid field H = a_s S_s + a_i V_i + a_d grad I_d + a_g O_g (Eq. 1), with
+//     the paper's dynamic weights from d_s, the distance to the ribbons:
+//       d_s < T_s:  a_s = 100 - d_s, a_i = 0.1, a_d = 0.1 a_i, a_g = 10
+//       else:       a_s = 0, a_i = 100 d_s, a_d = 0.1 a_i, a_g = 10
+//     H is normalised before the step (the weights scale it by up to 100 d_s,
+//     which would make the step length arbitrary), and the distance term
+//     descends I_d (-grad I_d), which keeps strands in the hair volume (the
+//     paper's sign would push them out of it). Growth stops where I_d exceeds
+//     I_bound or at the maximum length.
+//   - the naive baseline: the direction of the nearest points (Luo Eq. 2
+//     over the oriented points within 2 sigma of the field, signed to
+//     continue the strand), no structure
+//     analysis; straight out of the scalp until the strand reaches points,
+//     stopped where it leaves them.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/head_model.h"
+#include "core/status.h"
+#include "core/strands.h"
+#include "reconstruction/hybrid_field.h"
+#include "reconstruction/strand_segments.h"
+
+namespace hairrig {
+
+// `count` roots uniform by area on the head's scalp, with the scalp normal;
+// deterministic for a seed.
+std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed);
+
+struct StrandGrowthOptions {
+  double step_mm = 1.0;            // delta of Eq. 2
+  double max_length_mm = 400;
+  double surface_threshold_mm = 0.1;  // T_s
+  double volume_bound = 3.0;       // I_bound (I_d's units: mm at the grid's faces)
+  double head_clearance_mm = 0.5;  // vertices are kept this far outside the head
+  int threads = 2;
+
+  Status Check() const;
+};
+
+struct StrandGrowthSummary {
+  int64_t strands = 0, vertices = 0;
+  int64_t stopped_volume = 0, stopped_length = 0, dropped_short = 0;
+  double mean_length_mm = 0;
+};
+
+// Bao & Qi Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
+StrandSet GrowStrandsInField(const HybridOrientationField& field, const std::vector<DirectedRoot>& roots,
+                             const HeadModel* head, const StrandGrowthOptions& options,
+                             StrandGrowthSummary* summary = nullptr);
+
+// The naive baseline from each root along the points' orientation.
+StrandSet GrowStrandsAlongPoints(const PointOrientationField& points, const std::vector<DirectedRoot>& roots,
+                                 const HeadModel* head, const StrandGrowthOptions& options,
+                                 StrandGrowthSummary* summary = nullptr);
+
+}  // namespace hairrig

@@ -1,0 +1,266 @@
+#include "reconstruction/strand_segments.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Sparse>
+
+namespace hairrig {
+
+namespace {
+
+std::vector<Eigen::Vector3f> Positions(const std::vector<OrientedPoint>& points) {
+  std::vector<Eigen::Vector3f> positions(points.size());
+  for (size_t i = 0; i < points.size(); ++i) positions[i] = points[i].position_mm;
+  return positions;
+}
+
+double PointSegmentDistance2(const Eigen::Vector3f& q, const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+  const Eigen::Vector3f ab = b - a;
+  const float len2 = ab.squaredNorm();
+  const float t = len2 > 0 ? std::clamp((q - a).dot(ab) / len2, 0.0f, 1.0f) : 0.0f;
+  return (a + t * ab - q).squaredNorm();
+}
+
+enum class Stop { kTurn, kHole, kMls, kLength };
+
+// Grows from `start` along `direction` (one side of Sec. 5.1's growing); the
+// vertices after `start`.
+std::vector<Eigen::Vector3f> GrowOneWay(const PointOrientationField& field, const PointSetSurface& surface,
+                                        const Eigen::Vector3f& start, Eigen::Vector3f direction,
+                                        const SegmentGrowthOptions& o, Stop* why) {
+  std::vector<Eigen::Vector3f> grown;
+  Eigen::Vector3f p = start;
+  *why = Stop::kLength;
+  for (int step = 0; step < o.max_steps; ++step) {
+    const Eigen::Vector3f moved = p + direction * static_cast<float>(o.step_mm);
+    Eigen::Vector3f projected, normal;
+    if (!surface.Project(moved, &projected, &normal, o.min_neighbours)) {
+      *why = Stop::kHole;
+      break;
+    }
+    const Eigen::Vector3f shift = projected - moved;
+    if (shift.norm() > o.mls_min_shift_mm && std::abs(shift.normalized().dot(direction)) > o.max_mls_along) {
+      *why = Stop::kMls;  // rule 3
+      break;
+    }
+    Eigen::Vector3f next;
+    if (!field.At(projected, direction, o.neighbour_cos, o.min_neighbours, &next)) {
+      *why = Stop::kHole;  // rule 2
+      break;
+    }
+    if (next.dot(direction) < o.min_turn_cos) {
+      *why = Stop::kTurn;  // rule 1 (next is signed to agree with direction)
+      break;
+    }
+    grown.push_back(projected);
+    p = projected;
+    direction = next;
+  }
+  return grown;
+}
+
+// Marks the seeds within `cover_mm` of the polyline.
+void Cover(const PointGrid& grid, const std::vector<Eigen::Vector3f>& line, double cover_mm,
+           std::vector<uint8_t>* covered) {
+  const double cover2 = cover_mm * cover_mm;
+  for (size_t i = 0; i + 1 < line.size(); ++i) {
+    const Eigen::Vector3f& a = line[i];
+    const Eigen::Vector3f& b = line[i + 1];
+    const Eigen::Vector3f mid = 0.5f * (a + b);
+    const double reach = cover_mm + 0.5 * (b - a).norm();
+    grid.ForEachWithin(mid, reach, [&](uint32_t k, double) {
+      if (!(*covered)[k] && PointSegmentDistance2(grid.positions()[k], a, b) <= cover2) (*covered)[k] = 1;
+    });
+  }
+  if (line.size() == 1) {
+    grid.ForEachWithin(line[0], cover_mm, [&](uint32_t k, double) { (*covered)[k] = 1; });
+  }
+}
+
+}  // namespace
+
+PointOrientationField::PointOrientationField(const std::vector<OrientedPoint>& points, double sigma_mm)
+    : points_(points), positions_(Positions(points)), sigma_mm_(sigma_mm), grid_(positions_, 2 * sigma_mm) {}
+
+bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference, double min_abs_cos,
+                               int min_neighbours, Eigen::Vector3f* orientation, int* neighbours) const {
+  const bool filter = reference.squaredNorm() > 0;
+  const double inv_two_sigma2 = 1.0 / (2 * sigma_mm_ * sigma_mm_);
+  Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
+  int count = 0;
+  grid_.ForEachWithin(p, 2 * sigma_mm_, [&](uint32_t i, double d2) {
+    const Eigen::Vector3f& o = points_[i].direction;
+    if (filter && std::abs(o.dot(reference)) <= min_abs_cos) return;
+    const Eigen::Vector3d od = o.cast<double>();
+    tensor += std::exp(-d2 * inv_two_sigma2) * std::max(points_[i].confidence, 1e-3f) * od * od.transpose();
+    ++count;
+  });
+  if (neighbours != nullptr) *neighbours = count;
+  if (count < min_neighbours || count == 0) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(tensor);
+  Eigen::Vector3f o = eigen.eigenvectors().col(2).cast<float>();  // the largest eigenvalue's
+  if (filter && o.dot(reference) < 0) o = -o;
+  *orientation = o.normalized();
+  return true;
+}
+
+Status SegmentGrowthOptions::Check() const {
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  if (!positive(step_mm)) return InvalidArgument("segment step_mm must be positive");
+  if (!positive(sigma_mm)) return InvalidArgument("segment sigma_mm must be positive");
+  if (!(min_turn_cos >= 0 && min_turn_cos <= 1)) return InvalidArgument("segment min_turn_cos must lie in 0..1");
+  if (!(neighbour_cos >= 0 && neighbour_cos < 1)) return InvalidArgument("segment neighbour_cos must lie in [0, 1)");
+  if (!(max_mls_along > 0 && max_mls_along <= 1)) return InvalidArgument("segment max_mls_along must lie in (0, 1]");
+  if (min_neighbours < 1) return InvalidArgument("segment min_neighbours must be at least 1");
+  if (!positive(cover_mm)) return InvalidArgument("segment cover_mm must be positive");
+  if (!(smooth_position > 0) || !(smooth_orientation >= 0) || !(smooth_curvature >= 0)) {
+    return InvalidArgument("segment smoothing weights: position must be positive, the others non-negative");
+  }
+  if (!positive(split_height_mm)) return InvalidArgument("segment split_height_mm must be positive");
+  if (!(std::abs(down.norm() - 1) < 1e-3)) return InvalidArgument("segment down must be a unit vector");
+  if (!(mls_min_shift_mm >= 0)) return InvalidArgument("segment mls_min_shift_mm must be non-negative");
+  if (max_steps < 1) return InvalidArgument("segment max_steps must be at least 1");
+  if (min_vertices < 2) return InvalidArgument("segment min_vertices must be at least 2");
+  return Status::Ok();
+}
+
+double StrandSegment::Length() const {
+  double length = 0;
+  for (size_t i = 1; i < points_mm.size(); ++i) length += (points_mm[i] - points_mm[i - 1]).norm();
+  return length;
+}
+
+std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points, double alpha_position,
+                                            double alpha_orientation, double alpha_curvature) {
+  const int n = static_cast<int>(points.size());
+  if (n < 3) return points;
+  // Normal equations of Eq. 3, one banded system shared by x, y and z.
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
+  const auto add = [&](int r, int c, double v) { entries.emplace_back(r, c, v); };
+  for (int i = 0; i < n; ++i) {
+    add(i, i, alpha_position);
+    rhs.row(i) += alpha_position * points[i].cast<double>().transpose();
+  }
+  for (int i = 0; i + 1 < n; ++i) {  // alpha1 |p_{i+1} - p_i - e_i|^2, e_i the initial edge
+    const Eigen::RowVector3d e = (points[i + 1] - points[i]).cast<double>().transpose();
+    add(i, i, alpha_orientation);
+    add(i + 1, i + 1, alpha_orientation);
+    add(i, i + 1, -alpha_orientation);
+    add(i + 1, i, -alpha_orientation);
+    rhs.row(i + 1) += alpha_orientation * e;
+    rhs.row(i) -= alpha_orientation * e;
+  }
+  for (int i = 1; i + 1 < n; ++i) {  // alpha2 |p_{i-1} - 2 p_i + p_{i+1}|^2
+    const int idx[3] = {i - 1, i, i + 1};
+    const double coef[3] = {1, -2, 1};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) add(idx[a], idx[b], alpha_curvature * coef[a] * coef[b]);
+  }
+  Eigen::SparseMatrix<double> system(n, n);
+  system.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(system);
+  if (solver.info() != Eigen::Success) return points;
+  const Eigen::MatrixXd solved = solver.solve(rhs);
+  std::vector<Eigen::Vector3f> out(n);
+  for (int i = 0; i < n; ++i) out[i] = solved.row(i).transpose().cast<float>();
+  return out;
+}
+
+std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(const std::vector<Eigen::Vector3f>& points,
+                                                           const Eigen::Vector3f& down, double split_height_mm) {
+  constexpr double kHysteresisMm = 1.0;
+  const size_t n = points.size();
+  if (n < 3) return {points};
+  std::vector<double> height(n);
+  for (size_t i = 0; i < n; ++i) height[i] = points[i].dot(down);
+  // Turning points: where the height's trend reverses by more than the hysteresis.
+  std::vector<size_t> turns = {0};
+  size_t extreme = 0;
+  int trend = 0;
+  for (size_t i = 1; i < n; ++i) {
+    const double change = height[i] - height[extreme];
+    if (trend == 0) {
+      if (std::abs(change) > kHysteresisMm) trend = change > 0 ? 1 : -1, extreme = i;
+      continue;
+    }
+    if ((trend > 0 && height[i] >= height[extreme]) || (trend < 0 && height[i] <= height[extreme])) {
+      extreme = i;
+    } else if (std::abs(change) > kHysteresisMm) {
+      turns.push_back(extreme);
+      trend = -trend;
+      extreme = i;
+    }
+  }
+  turns.push_back(n - 1);
+  std::vector<size_t> cuts;
+  for (size_t k = 1; k + 1 < turns.size(); ++k) {
+    const bool big_before = std::abs(height[turns[k]] - height[turns[k - 1]]) > split_height_mm;
+    const bool big_after = std::abs(height[turns[k + 1]] - height[turns[k]]) > split_height_mm;
+    if (big_before || big_after) cuts.push_back(turns[k]);
+  }
+  std::vector<std::vector<Eigen::Vector3f>> pieces;
+  size_t begin = 0;
+  for (size_t cut : cuts) {
+    pieces.emplace_back(points.begin() + static_cast<std::ptrdiff_t>(begin),
+                        points.begin() + static_cast<std::ptrdiff_t>(cut) + 1);
+    begin = cut;
+  }
+  pieces.emplace_back(points.begin() + static_cast<std::ptrdiff_t>(begin), points.end());
+  return pieces;
+}
+
+std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& points,
+                                              const SegmentGrowthOptions& o, SegmentGrowthSummary* summary) {
+  SegmentGrowthSummary s;
+  s.seeds = static_cast<int64_t>(points.size());
+  const PointOrientationField field(points, o.sigma_mm);
+  const PointSetSurface surface(field.grid().positions(), o.sigma_mm);
+  std::vector<uint32_t> seeds(points.size());
+  std::iota(seeds.begin(), seeds.end(), 0u);
+  std::stable_sort(seeds.begin(), seeds.end(),
+                   [&](uint32_t a, uint32_t b) { return points[a].confidence > points[b].confidence; });
+  std::vector<uint8_t> covered(points.size(), 0);
+  std::vector<StrandSegment> segments;
+  double total_length = 0;
+  for (uint32_t seed : seeds) {
+    if (covered[seed]) continue;
+    covered[seed] = 1;
+    ++s.seeds_grown;
+    Eigen::Vector3f start = points[seed].position_mm, normal;
+    Eigen::Vector3f projected;
+    if (surface.Project(start, &projected, &normal, o.min_neighbours)) start = projected;
+    Eigen::Vector3f t;
+    if (!field.At(start, Eigen::Vector3f::Zero(), 0, o.min_neighbours, &t)) continue;
+    Stop why_back, why_forward;
+    std::vector<Eigen::Vector3f> back = GrowOneWay(field, surface, start, -t, o, &why_back);
+    const std::vector<Eigen::Vector3f> forward = GrowOneWay(field, surface, start, t, o, &why_forward);
+    for (Stop why : {why_back, why_forward}) {
+      ++(why == Stop::kTurn ? s.stops_turn : why == Stop::kHole ? s.stops_hole : why == Stop::kMls ? s.stops_mls
+                                                                                                  : s.stops_length);
+    }
+    std::reverse(back.begin(), back.end());
+    back.push_back(start);
+    back.insert(back.end(), forward.begin(), forward.end());
+    const std::vector<Eigen::Vector3f> smooth =
+        SmoothPolyline(back, o.smooth_position, o.smooth_orientation, o.smooth_curvature);
+    Cover(field.grid(), smooth, o.cover_mm, &covered);
+    const auto pieces = SplitImplausible(smooth, o.down, o.split_height_mm);
+    s.splits += static_cast<int64_t>(pieces.size()) - 1;
+    for (const auto& piece : pieces) {
+      if (static_cast<int>(piece.size()) < o.min_vertices) continue;
+      segments.push_back({piece});
+      s.vertices += static_cast<int64_t>(piece.size());
+      total_length += segments.back().Length();
+    }
+  }
+  s.segments = static_cast<int64_t>(segments.size());
+  s.mean_length_mm = segments.empty() ? 0 : total_length / static_cast<double>(segments.size());
+  if (summary != nullptr) *summary = s;
+  return segments;
+}
+
+}  // namespace hairrig

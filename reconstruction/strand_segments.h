@@ -1,0 +1,110 @@
+// Strand segments grown through the oriented point cloud (Luo et al. 2013,
+// Sec. 4 Eq. 2 and Sec. 5.1): the first structure the strand stage finds.
+//
+// A segment is a polyline (mm, the points' frame) that follows the 3D
+// orientation field of the points and stays on their point set surface.
+// Segments are unsigned: which end is the root is decided later
+// (strand_direction.h).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/status.h"
+#include "reconstruction/mls.h"
+#include "reconstruction/point_cloud.h"
+#include "reconstruction/point_grid.h"
+
+namespace hairrig {
+
+// The 3D orientation at any position from the oriented points (Luo Eq. 2):
+// the unit o maximising sum_q w_q rho_q (o . o_q)^2 over the points q within
+// 2 sigma, w_q = exp(-|p - q|^2 / (2 sigma^2)), rho_q the point's confidence;
+// the principal eigenvector of that structure tensor.
+class PointOrientationField {
+ public:
+  // `points` must outlive the field. sigma_mm > 0.
+  PointOrientationField(const std::vector<OrientedPoint>& points, double sigma_mm);
+
+  // The orientation at p from the neighbours whose direction is within
+  // acos(min_abs_cos) of `reference` (unsigned; Luo Sec. 5.1 keeps crossing
+  // wisps apart this way), signed to agree with `reference`. A zero
+  // reference uses every neighbour. False when fewer than `min_neighbours`
+  // points qualify; *neighbours (optional) is their number either way.
+  bool At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference, double min_abs_cos, int min_neighbours,
+          Eigen::Vector3f* orientation, int* neighbours = nullptr) const;
+
+  const PointGrid& grid() const { return grid_; }
+  const std::vector<OrientedPoint>& points() const { return points_; }
+  double sigma_mm() const { return sigma_mm_; }
+
+ private:
+  const std::vector<OrientedPoint>& points_;
+  std::vector<Eigen::Vector3f> positions_;
+  double sigma_mm_;
+  PointGrid grid_;
+};
+
+struct SegmentGrowthOptions {
+  double step_mm = 2.0;            // delta: the forward Euler step
+  double sigma_mm = 2.0;           // sigma_d of Eq. 2 and the MLS projection's sigma
+  double min_turn_cos = 0.9;       // T_t: stop where the next direction turns further (rule 1)
+  int min_neighbours = 5;          // T_N: stop in holes and past the boundary (rule 2)
+  double max_mls_along = 0.5;      // T_MLS: stop where the MLS projection moves along the strand (rule 3)
+  // Rule 3 looks only at projections that move the vertex further than this
+  // (0: the paper's rule, which a noisy cloud trips on sub-0.1 mm shifts).
+  double mls_min_shift_mm = 0.3;
+  double neighbour_cos = 0.5;      // T_o: neighbours whose direction is this compatible with the growth
+  double cover_mm = 1.5;           // Delta: seeds this close to a grown segment are covered
+  // Eq. 3's weights: position, orientation, curvature (the paper's values, for mm).
+  double smooth_position = 0.1, smooth_orientation = 1.0, smooth_curvature = 5.0;
+  double split_height_mm = 50;     // T_H: the plausibility check's height between turning points
+  Eigen::Vector3f down{0, 0, -1};  // d_down (unit): the reference down direction (the turntable's -z)
+  int max_steps = 400;             // per growing direction
+  int min_vertices = 3;            // shorter segments are dropped (their seeds stay covered)
+
+  // InvalidArgument naming the field for a value out of range.
+  Status Check() const;
+};
+
+struct StrandSegment {
+  std::vector<Eigen::Vector3f> points_mm;  // at least min_vertices, about step_mm apart
+  double Length() const;
+};
+
+struct SegmentGrowthSummary {
+  int64_t seeds = 0, seeds_grown = 0;  // all points; those a segment was grown from
+  int64_t segments = 0, vertices = 0;
+  int64_t splits = 0;                  // plausibility splits
+  int64_t stops_turn = 0, stops_hole = 0, stops_mls = 0, stops_length = 0;  // why growing ended
+  double mean_length_mm = 0;
+};
+
+// Luo Sec. 5.1: seeds are all points, most confident first; from each
+// uncovered seed a segment is grown both ways (Euler steps along Eq. 2's
+// orientation, MLS-projected onto the point set surface, ended by rules
+// 1-3), smoothed by Eq. 3, split where the plausibility check finds a
+// U-turn, and the seeds within cover_mm of it are covered. Deterministic
+// (single-threaded; the covering makes it sequential).
+std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& points,
+                                              const SegmentGrowthOptions& options,
+                                              SegmentGrowthSummary* summary = nullptr);
+
+// Eq. 3: positions minimising alpha0 |p - p0|^2 + alpha1 |p_{i+1} - p_i -
+// t_i l_i|^2 + alpha2 |p_{i-1} - 2 p_i + p_{i+1}|^2, with t_i the unit
+// direction and l_i the length of the initial edge i (the paper's t delta,
+// with the edge's own length so the polyline keeps its length). Polylines of
+// fewer than 3 points are returned unchanged.
+std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points, double alpha_position,
+                                            double alpha_orientation, double alpha_curvature);
+
+// The plausibility check: heights H = p . down; the turning points are the
+// local extrema of H (with 1 mm hysteresis) and the ends; the polyline is cut
+// at every turning point next to a rise or fall larger than split_height_mm.
+std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(const std::vector<Eigen::Vector3f>& points,
+                                                           const Eigen::Vector3f& down, double split_height_mm);
+
+}  // namespace hairrig
