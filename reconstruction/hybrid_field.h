@@ -35,8 +35,6 @@ struct HybridFieldOptions {
   bool directed = true;      // diffuse vectors (else the paper's tensors v v^T)
   int sweeps_per_level = 40; // Gauss-Seidel (SOR) sweeps at each level of the coarse-to-fine solve
   double ribbon_min_length_mm = 20;  // segments at least this long stand for the directed ribbons of S_s
-  int threads = 2;
-
   Status Check() const;
 };
 

@@ -10,7 +10,9 @@
 namespace hairrig {
 
 PointSetSurface::PointSetSurface(const std::vector<Eigen::Vector3f>& positions, double sigma_mm)
-    : sigma_mm_(sigma_mm), grid_(positions, 2 * sigma_mm) {}
+    : sigma_mm_(sigma_mm), owned_grid_(std::make_unique<PointGrid>(positions, 2 * sigma_mm)), grid_(*owned_grid_) {}
+
+PointSetSurface::PointSetSurface(const PointGrid& grid, double sigma_mm) : sigma_mm_(sigma_mm), grid_(grid) {}
 
 bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* projected, Eigen::Vector3f* normal,
                               int min_neighbours) const {

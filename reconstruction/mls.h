@@ -8,6 +8,7 @@
 // 2 sigma. Units mm; any frame.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -21,6 +22,9 @@ class PointSetSurface {
  public:
   // `positions` must outlive the surface. sigma_mm > 0.
   PointSetSurface(const std::vector<Eigen::Vector3f>& positions, double sigma_mm);
+  // Over a grid already built on the points (any cell size; it must outlive
+  // the surface), so a caller that has one does not build a second.
+  PointSetSurface(const PointGrid& grid, double sigma_mm);
 
   // The plane through q's weighted neighbourhood: q projected onto it and its
   // unit normal. False where fewer than `min_neighbours` points are within
@@ -30,7 +34,8 @@ class PointSetSurface {
 
  private:
   double sigma_mm_;
-  PointGrid grid_;
+  std::unique_ptr<PointGrid> owned_grid_;  // built by the positions' constructor
+  const PointGrid& grid_;
 };
 
 // Every point moved onto its MLS plane and its direction projected into the

@@ -16,13 +16,10 @@ namespace hairrig {
 
 namespace {
 
-// A signed pair term: weight > 0; aligned = the two segments' vertex orders
-// agree (the same label is compatible).
-struct PairTerm {
-  double signed_weight = 0;  // + aligned, - opposed (summed over relations)
-};
-
 using PairKey = std::pair<uint32_t, uint32_t>;
+// Per pair of segments, the signed weight of their relations, summed: + where
+// their vertex orders agree (the same label is compatible), - where they oppose.
+using PairWeights = std::map<PairKey, double>;
 
 // Distance to the scalp (zeta of Eq. 5): to the nearest of a dense sample of it.
 class ScalpDistance {
@@ -72,7 +69,7 @@ Eigen::Vector3f Tangent(const std::vector<Eigen::Vector3f>& p, size_t i) {
 
 // E_close (Eq. 7): side-by-side segments, weighted by their overlap share.
 void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
-                 std::map<PairKey, PairTerm>* pairs, int64_t* count) {
+                 PairWeights* pairs, int64_t* count) {
   std::vector<Eigen::Vector3f> vertices;
   std::vector<uint32_t> owner, index;
   for (uint32_t s = 0; s < segments.size(); ++s) {
@@ -122,7 +119,7 @@ void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOpti
       const double eta =
           static_cast<double>(overlapped) / static_cast<double>(segments[s].points_mm.size() + segments[other].points_mm.size());
       if (votes == 0) continue;
-      (*pairs)[{s, other}].signed_weight += (votes > 0 ? 1 : -1) * o.alpha_close * eta;
+      (*pairs)[{s, other}] += (votes > 0 ? 1 : -1) * o.alpha_close * eta;
       ++*count;
     }
   }
@@ -130,7 +127,7 @@ void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOpti
 
 // E_link (Eq. 6): a segment's end continues into another's end across a small gap.
 void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
-              std::map<PairKey, PairTerm>* pairs, int64_t* count) {
+              PairWeights* pairs, int64_t* count) {
   std::vector<Eigen::Vector3f> ends;
   std::vector<Eigen::Vector3f> outward;  // the tangent leaving the segment at that end
   for (const StrandSegment& s : segments) {
@@ -151,7 +148,7 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
       }
       // A last end meeting a first end keeps both orders; two firsts or two lasts oppose them.
       const bool aligned = (e % 2) != (f % 2);
-      (*pairs)[{e / 2, f / 2}].signed_weight += (aligned ? 1 : -1) * o.alpha_link;
+      (*pairs)[{e / 2, f / 2}] += (aligned ? 1 : -1) * o.alpha_link;
       ++*count;
     });
   }
@@ -159,9 +156,9 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
 
 // Orientation flips (+1 keep, -1 reverse) that make every edge of a maximum
 // spanning tree of |weight| aligned.
-std::vector<int> SpanningTreeOrientation(size_t n, const std::map<PairKey, PairTerm>& pairs) {
+std::vector<int> SpanningTreeOrientation(size_t n, const PairWeights& pairs) {
   std::vector<std::pair<double, PairKey>> edges;
-  for (const auto& [key, term] : pairs) edges.emplace_back(std::abs(term.signed_weight), key);
+  for (const auto& [key, weight] : pairs) edges.emplace_back(std::abs(weight), key);
   std::sort(edges.begin(), edges.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<uint32_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0u);
@@ -174,7 +171,7 @@ std::vector<int> SpanningTreeOrientation(size_t n, const std::map<PairKey, PairT
     const uint32_t a = find(key.first), b = find(key.second);
     if (a == b) continue;
     parent[a] = b;
-    const int sign = pairs.at(key).signed_weight >= 0 ? 1 : -1;
+    const int sign = pairs.at(key) >= 0 ? 1 : -1;
     tree[key.first].emplace_back(key.second, sign);
     tree[key.second].emplace_back(key.first, sign);
   }
@@ -215,7 +212,7 @@ DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const Head
   summary.segments = static_cast<int64_t>(n);
   if (n == 0) return summary;
   const std::vector<double> keep = KeepEnergies(*segments, head, o);
-  std::map<PairKey, PairTerm> pairs;
+  PairWeights pairs;
   AddOverlaps(*segments, o, &pairs, &summary.overlaps);
   AddLinks(*segments, o, &pairs, &summary.links);
   const std::vector<int> orient = SpanningTreeOrientation(n, pairs);
@@ -229,8 +226,8 @@ DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const Head
     // Being on the sink side (label 1) cuts the source edge: its capacity is label 1's cost.
     graph.add_tweights(static_cast<int>(i), cost_reverse - floor, cost_keep - floor);
   }
-  for (const auto& [key, term] : pairs) {
-    const double aligned = term.signed_weight * orient[key.first] * orient[key.second];
+  for (const auto& [key, weight] : pairs) {
+    const double aligned = weight * orient[key.first] * orient[key.second];
     if (aligned <= 0) {
       if (aligned < 0) ++summary.truncated_pairs;
       continue;

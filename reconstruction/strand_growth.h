@@ -17,7 +17,6 @@
 #pragma once
 
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include <Eigen/Core>

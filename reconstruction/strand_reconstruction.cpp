@@ -146,10 +146,8 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
   StrandSet strands;
   if (o.method == StrandMethod::kBaoQi) {
     t = SteadyNowNs();
-    HybridFieldOptions field_options = o.field;
-    field_options.threads = o.threads;
     HR_ASSIGN_OR_RETURN(const HybridOrientationField field,
-                        HybridOrientationField::Build(segments, roots, head.get(), field_options));
+                        HybridOrientationField::Build(segments, roots, head.get(), o.field));
     summary.seconds_field = SecondsSince(t);
     t = SteadyNowNs();
     strands = GrowStrandsInField(field, roots, head.get(), growth, &summary.growth);

@@ -218,7 +218,7 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
   SegmentGrowthSummary s;
   s.seeds = static_cast<int64_t>(points.size());
   const PointOrientationField field(points, o.sigma_mm);
-  const PointSetSurface surface(field.grid().positions(), o.sigma_mm);
+  const PointSetSurface surface(field.grid(), o.sigma_mm);  // the field's grid: same points, same 2 sigma cells
   std::vector<uint32_t> seeds(points.size());
   std::iota(seeds.begin(), seeds.end(), 0u);
   std::stable_sort(seeds.begin(), seeds.end(),
