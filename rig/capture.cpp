@@ -683,7 +683,7 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
     if (fs::exists(options.out_dir)) {
       return FailedPrecondition(options.out_dir + " already exists: choose a new --out folder, or add --resume to continue it");
     }
-    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(options.config_path));
+    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(options.config_path, options.config_relative_to));
     config_text = ReadText(options.config_path);
   }
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));

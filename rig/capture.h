@@ -40,6 +40,9 @@ struct CaptureProgress {
 
 struct CaptureOptions {
   std::string config_path;  // rig config; ignored with resume (the snapshot is used)
+  // The folder the config's relative paths (sim.scene, head, calibration.box)
+  // resolve against; empty: the config's own folder.
+  std::string config_relative_to;
   std::string out_dir;      // the capture folder: must not exist, unless resume
   std::string subject;      // recorded in the journal and manifest
   bool resume = false;

@@ -2,32 +2,15 @@
 
 #include <CLI/CLI.hpp>
 
-#include "rig/capture.h"
 #include "rig/cli.h"
-#include "rig/replay.h"
+#include "rig/replay_capture.h"
 
 namespace hairrig {
 namespace {
 
-struct ReplayArgs {
-  std::string dir;
-  std::string out;
-  double speed = 0;
-};
-
-Result<nlohmann::json> RunReplay(const ReplayArgs& a) {
-  HR_ASSIGN_OR_RETURN(std::shared_ptr<ReplaySource> source, OpenReplaySource(a.dir, {.speed = a.speed}));
-  CaptureOptions options;
-  options.config_path = a.dir + "/rig.yaml";
-  options.out_dir = a.out.empty() ? a.dir + "-replay" : a.out;
-  options.rig_build.register_backends = [source](DeviceRegistry* registry) { RegisterReplayBackends(registry, source); };
-  options.rig_build.backend_override = "replay";
-  options.rig_build.simulate = false;
-  HR_ASSIGN_OR_RETURN(CaptureSummary summary, RunCapture(options));
-  nlohmann::json out = summary.ToJson();
-  out["replayed_from"] = a.dir;
-  out["recorded_frames"] = ReplayFrameCount(*source);
-  return out;
+Result<nlohmann::json> RunReplay(const ReplayCaptureOptions& options) {
+  HR_ASSIGN_OR_RETURN(ReplayCaptureSummary summary, ReplayCapture(options));
+  return summary.ToJson();
 }
 
 void PrintReplay(const nlohmann::json& j) {
@@ -43,9 +26,9 @@ void PrintReplay(const nlohmann::json& j) {
 void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto* cmd = app.add_subcommand(
       "replay", "Run the capture sequencer on a recorded capture through the replay device backend (no hardware)");
-  auto args = std::make_shared<ReplayArgs>();
-  cmd->add_option("DIR", args->dir, "a capture folder made by `hairrig capture`")->required();
-  cmd->add_option("--out", args->out, "the new capture folder (default: DIR-replay); must not exist");
+  auto args = std::make_shared<ReplayCaptureOptions>();
+  cmd->add_option("DIR", args->recorded_dir, "a capture folder made by `hairrig capture`")->required();
+  cmd->add_option("--out", args->out_dir, "the new capture folder (default: DIR-replay); must not exist");
   cmd->add_option("--speed", args->speed, "0: as fast as possible (default); 1: recorded timing; 2: twice as fast")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");

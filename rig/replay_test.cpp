@@ -1,4 +1,5 @@
 #include "rig/replay.h"
+#include "rig/replay_capture.h"
 
 #include <filesystem>
 
@@ -6,6 +7,7 @@
 
 #include "core/file_util.h"
 #include "rig/capture.h"
+#include "rig/capture_calibration_input.h"
 #include "rig/capture_test_util.h"
 
 namespace hairrig {
@@ -15,24 +17,21 @@ namespace fs = std::filesystem;
 using namespace hairrig::testing;
 
 Result<CaptureSummary> Replay(const std::string& recorded, const std::string& out, double speed) {
-  auto source = OpenReplaySource(recorded, {.speed = speed});
-  if (!source.ok()) return source.status();
-  CaptureOptions o;
-  o.config_path = recorded + "/rig.yaml";
-  o.out_dir = out;
-  std::shared_ptr<ReplaySource> shared = *source;
-  o.rig_build.register_backends = [shared](DeviceRegistry* r) { RegisterReplayBackends(r, shared); };
-  o.rig_build.backend_override = "replay";
-  o.rig_build.simulate = false;
-  return RunCapture(o);
+  auto summary = ReplayCapture({.recorded_dir = recorded, .out_dir = out, .speed = speed});
+  if (!summary.ok()) return summary.status();
+  return summary->capture;
 }
 
 class ReplayTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = FreshDir("replay");
+    // The head file lies beside the config, named by a relative path: the
+    // replay must resolve it where the recording did, not in the capture folder.
+    fs::create_directories(dir_ + "/heads");
+    ASSERT_TRUE(WriteFileAtomic(dir_ + "/heads/ball.yaml", "head:\n  center_mm: [0, 0, 250]\n  radii_mm: [70, 70, 90]\n").ok());
     CaptureOptions o;
-    o.config_path = WriteSmallRig(dir_);
+    o.config_path = WriteSmallRig(dir_, {{"head", "head: heads/ball.yaml\n"}});
     o.out_dir = dir_ + "/recorded";
     auto s = RunCapture(o);
     ASSERT_TRUE(s.ok() && s->status == "complete");
@@ -40,6 +39,19 @@ class ReplayTest : public ::testing::Test {
   static std::string dir_;
 };
 std::string ReplayTest::dir_;
+
+TEST_F(ReplayTest, AReplayOfAReplayFindsTheFilesTheOriginalConfigNamed) {
+  const std::string first = dir_ + "/replayed_once", second = dir_ + "/replayed_twice";
+  auto once = Replay(dir_ + "/recorded", first, 0);
+  ASSERT_TRUE(once.ok()) << once.status().ToString();
+  auto twice = Replay(first, second, 0);
+  ASSERT_TRUE(twice.ok()) << twice.status().ToString();
+  EXPECT_EQ(twice->status, "complete") << twice->message;
+  auto config = LoadCaptureRigConfig(second);
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  ASSERT_TRUE(config->head.has_value());
+  EXPECT_DOUBLE_EQ(config->head->radii_mm.z(), 90);
+}
 
 TEST_F(ReplayTest, CaptureFromReplayHasTheSameChecksums) {
   for (double speed : {0.0, 1.0}) {

@@ -1,0 +1,111 @@
+#include "reconstruction/strand_direction.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "core/head_spec.h"
+
+namespace hairrig {
+namespace {
+
+// Points from `from` towards `to`, about 2 mm apart, both ends included.
+std::vector<Eigen::Vector3f> Line(const Eigen::Vector3f& from, const Eigen::Vector3f& to) {
+  const int steps = std::max(2, static_cast<int>(std::ceil((to - from).norm() / 2.0f)));
+  std::vector<Eigen::Vector3f> points;
+  for (int k = 0; k <= steps; ++k) points.push_back(from + (to - from) * (static_cast<float>(k) / static_cast<float>(steps)));
+  return points;
+}
+
+// Reverses a random half of the segments, as segment growing leaves them.
+void ShuffleOrders(std::vector<StrandSegment>* segments, uint32_t seed) {
+  std::mt19937 rng(seed);
+  for (StrandSegment& s : *segments) {
+    if (rng() % 2) std::reverse(s.points_mm.begin(), s.points_mm.end());
+  }
+}
+
+TEST(StrandDirection, HangingStrandsRunRootToTipWhateverOrderTheyArriveIn) {
+  // 20 strands side by side (1.5 mm apart), each cut in 4 pieces with 3 mm gaps, hanging
+  // from z = 100 down a slight slope; their roots are the top ends.
+  std::vector<StrandSegment> segments;
+  for (int strand = 0; strand < 20; ++strand) {
+    const float x = 1.5f * static_cast<float>(strand);
+    for (int piece = 0; piece < 4; ++piece) {
+      const float top = 100.0f - 40.0f * static_cast<float>(piece);
+      segments.push_back({Line({x, 0.2f * top, top}, {x, 0.2f * (top - 37), top - 37})});
+    }
+  }
+  ShuffleOrders(&segments, 5);
+  const DirectionSummary summary = DirectSegments(&segments, nullptr, DirectionOptions{});
+  EXPECT_EQ(summary.segments, 80);
+  EXPECT_GT(summary.links, 0);
+  EXPECT_GT(summary.overlaps, 0);
+  for (size_t i = 0; i < segments.size(); ++i) {
+    EXPECT_GT(segments[i].points_mm.front().z(), segments[i].points_mm.back().z()) << "segment " << i;
+  }
+}
+
+TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
+  // One strand falls from z = 100 to 0, turns through a half circle (ending a
+  // little lower than it began) and rises
+  // again to z = 40: three segments with 3 mm gaps. The rising piece on its
+  // own looks like a strand falling from z = 40 (its E_ribb says reverse);
+  // its links through the turn must overrule that.
+  std::vector<StrandSegment> segments;
+  segments.push_back({Line({0, 0, 100}, {0, 0, 0})});
+  StrandSegment turn;
+  for (int k = 0; k <= 16; ++k) {
+    const float a = static_cast<float>(M_PI) * static_cast<float>(k) / 16.0f;  // from straight down to straight up
+    turn.points_mm.emplace_back(10.0f - 10.0f * std::cos(a), 0.0f, -3.0f - 10.0f * std::sin(a) - 0.05f * static_cast<float>(k));
+  }
+  segments.push_back(turn);
+  segments.push_back({Line({20, 0, -1}, {20, 0, 40})});
+  std::vector<StrandSegment> expected = segments;
+  for (uint32_t seed = 0; seed < 8; ++seed) {
+    std::vector<StrandSegment> shuffled = expected;
+    ShuffleOrders(&shuffled, seed);
+    const DirectionSummary summary = DirectSegments(&shuffled, nullptr, DirectionOptions{});
+    EXPECT_EQ(summary.links, 2) << "seed " << seed;
+    EXPECT_EQ(summary.unary_disagreements, 1) << "the rising piece goes against its own E_ribb, seed " << seed;
+    for (size_t i = 0; i < expected.size(); ++i) {
+      EXPECT_EQ(shuffled[i].points_mm.front(), expected[i].points_mm.front()) << "segment " << i << " seed " << seed;
+    }
+  }
+  // Without links, the rising piece follows its own E_ribb: the test above can fail.
+  DirectionOptions unlinked;
+  unlinked.alpha_link = 0;
+  std::vector<StrandSegment> alone = expected;
+  DirectSegments(&alone, nullptr, unlinked);
+  EXPECT_EQ(alone[2].points_mm.front(), expected[2].points_mm.back());
+}
+
+TEST(StrandDirection, TheScalpDistanceDirectsHairThatLeavesTheHeadSideways) {
+  // Level segments radiate from the side of an ellipsoid head: height says
+  // nothing, the distance to the scalp (zeta of Eq. 5) puts the root at the head.
+  HeadSpec spec;
+  spec.center_turntable_mm = {0, 0, 250};
+  spec.radii_mm = {80, 80, 100};
+  spec.scalp.defined = true;
+  spec.scalp.center_turntable_mm = spec.center_turntable_mm;
+  spec.scalp.parting = false;
+  spec.scalp.hairline_front_deg = spec.scalp.hairline_temple_deg = spec.scalp.hairline_ear_deg = -30;
+  spec.scalp.hairline_nape_deg = -30;
+  auto head = HeadModel::Build(spec);
+  ASSERT_TRUE(head.ok()) << head.status().ToString();
+  std::vector<StrandSegment> segments;
+  for (int k = 0; k < 12; ++k) {
+    const float a = static_cast<float>(2 * M_PI * k / 12.0);
+    const Eigen::Vector3f out(std::cos(a), std::sin(a), 0.0f), centre(0, 0, 250);
+    segments.push_back({Line(centre + 85.0f * out, centre + 140.0f * out)});
+  }
+  std::vector<StrandSegment> expected = segments;
+  ShuffleOrders(&segments, 3);
+  DirectSegments(&segments, head->get(), DirectionOptions{});
+  for (size_t i = 0; i < segments.size(); ++i) {
+    EXPECT_EQ(segments[i].points_mm.front(), expected[i].points_mm.front()) << "segment " << i;
+  }
+}
+
+}  // namespace
+}  // namespace hairrig

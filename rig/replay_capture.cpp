@@ -1,0 +1,47 @@
+#include "rig/replay_capture.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "rig/capture_calibration_input.h"
+#include "rig/replay.h"
+
+namespace hairrig {
+
+namespace fs = std::filesystem;
+
+Status ReplayCaptureOptions::Validate() const {
+  if (recorded_dir.empty()) return InvalidArgument("replay: the recorded capture folder is required");
+  if (!std::isfinite(speed) || speed < 0) return InvalidArgument("replay: --speed must be 0 or a positive number");
+  return Status::Ok();
+}
+
+nlohmann::json ReplayCaptureSummary::ToJson() const {
+  nlohmann::json out = capture.ToJson();
+  out["replayed_from"] = replayed_from;
+  out["recorded_frames"] = recorded_frames;
+  return out;
+}
+
+Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) {
+  HR_RETURN_IF_ERROR(options.Validate());
+  HR_ASSIGN_OR_RETURN(std::shared_ptr<ReplaySource> source,
+                      OpenReplaySource(options.recorded_dir, {.speed = options.speed}));
+  HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(options.recorded_dir));
+  CaptureOptions capture;
+  capture.config_path = config.path;
+  capture.config_relative_to = config.relative_to;
+  capture.out_dir = options.out_dir.empty() ? options.recorded_dir + "-replay" : options.out_dir;
+  capture.rig_build.register_backends = [source](DeviceRegistry* registry) { RegisterReplayBackends(registry, source); };
+  capture.rig_build.backend_override = "replay";
+  capture.rig_build.simulate = false;
+  ReplayCaptureSummary summary;
+  HR_ASSIGN_OR_RETURN(summary.capture, RunCapture(capture));
+  summary.replayed_from = options.recorded_dir;
+  summary.recorded_frames = ReplayFrameCount(*source);
+  return summary;
+}
+
+}  // namespace hairrig
