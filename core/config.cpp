@@ -164,7 +164,8 @@ Result<std::string> ReadConfigText(const std::string& path) {
 std::string QuotedExcerpt(std::string_view text) {
   constexpr size_t kMaxBytes = 60;
   size_t n = std::min(text.size(), kMaxBytes);
-  while (n < text.size() && n > 0 && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;  // whole UTF-8 characters
+  // Whole UTF-8 characters: back off from a continuation byte.
+  while (n < text.size() && n > 0 && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;
   std::string out = "'";
   for (size_t i = 0; i < n; ++i) {
     const auto c = static_cast<unsigned char>(text[i]);
@@ -226,8 +227,8 @@ void ConfigNode::Fail(std::string_view key, const std::string& what) const {
   YAML::Mark mark = impl_->node.Mark();
   if (!key.empty() && Has(key)) mark = impl_->node[std::string(key)].Mark();
   const std::string field = key.empty() ? impl_->path : JoinPath(impl_->path, key);
-  impl_->doc->first_error =
-      InvalidArgument(MarkText(file(), mark) + ": field " + (field.empty() ? "'<top>'" : QuotedExcerpt(field)) + ": " + what);
+  const std::string quoted = field.empty() ? "'<top>'" : QuotedExcerpt(field);
+  impl_->doc->first_error = InvalidArgument(MarkText(file(), mark) + ": field " + quoted + ": " + what);
 }
 
 namespace {

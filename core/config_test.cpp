@@ -146,7 +146,8 @@ TEST(Config, OnlyRegularFilesAreRead) {
     ASSERT_FALSE(root.ok()) << path;
     EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos) << root.status().message();
   }
-  const std::string fifo = (std::filesystem::temp_directory_path() / ("config_test_fifo_" + std::to_string(getpid()))).string();
+  const std::string fifo =
+      (std::filesystem::temp_directory_path() / ("config_test_fifo_" + std::to_string(getpid()))).string();
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
   auto root = ConfigNode::LoadFile(fifo);  // a blocking open would wait here for a writer
   unlink(fifo.c_str());

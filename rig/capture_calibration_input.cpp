@@ -53,7 +53,8 @@ Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::
   for (const std::string& name : nominal.Keys()) {
     bool known = false;
     for (const CalibrationCamera& camera : input->cameras) known = known || camera.name == name;
-    if (!known) nominal.Fail(name, "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + names + ")");
+    if (known) continue;
+    nominal.Fail(name, "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + names + ")");
   }
   return config.root.status();
 }

@@ -89,7 +89,8 @@ const Camera* CameraByName(const DeviceSet& devices, const std::string& name) {
 }
 
 std::string NoCameraMessage(const DeviceSet& devices, const std::string& name) {
-  return "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + NamesOf(devices.cameras) + ")";
+  return "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + NamesOf(devices.cameras) +
+         ")";
 }
 
 CaptureSettings ReadCameraSettings(const ConfigNode& plan) {
@@ -146,7 +147,8 @@ void ReadStopsTimesCameras(const ConfigNode& node, const DeviceSet& devices,
   for (double angle : angles) {
     const int stop = StopFor(plan, angle, lights);
     for (const Camera* c : cameras) {
-      if (!AddView(plan, stop, *c)) return node.Fail(node.Has("angles_deg") ? "angles_deg" : "cameras", TwiceMessage(*c, angle));
+      if (AddView(plan, stop, *c)) continue;
+      return node.Fail(node.Has("angles_deg") ? "angles_deg" : "cameras", TwiceMessage(*c, angle));
     }
   }
 }
