@@ -13,15 +13,15 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <deque>
 #include <mutex>
 #include <optional>
-#include <utility>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <modbus/modbus.h>
@@ -299,11 +299,11 @@ struct ModbusTurntableServer::Impl {
   void Answer(const uint8_t* query, int size, bool broadcast) {
     const int h = modbus_get_header_length(ctx);
     const int function = query[h];
-    const int address = Word(query + h + 1);
     if (function != kReadHolding && !IsWrite(function)) {
       Refuse(query, MODBUS_EXCEPTION_ILLEGAL_FUNCTION, broadcast);
       return;
     }
+    const int address = Word(query + h + 1);  // WellFormed: present for these functions
     RefreshStatus();
     if (function == kReadHolding) {
       modbus_reply(ctx, query, size, mapping);
