@@ -48,7 +48,7 @@ std::string Join(const std::vector<std::string>& lines) {
 // Values that stand where a number, a name or a section was.
 const std::vector<std::string> kHostileValues = {
     "1e12", "-1e308", "1e999", "99999999999999999999999", ".nan", ".inf", "-.inf", "0x7fffffff", "-0",
-    "[1, 2, 3]", "{a: 1}", "~", "''", "\"\\x00\"", "&a [*a]", "*nope", "!!binary AAAA", "yes",
+    "[1, 2, 3]", "[1e12, 3]", "[-5, 1e300, .nan]", "{a: 1}", "~", "''", "\"\\x00\"", "&a [*a]", "*nope", "!!binary AAAA", "yes",
     "/etc/passwd", std::string(300, 'w')};
 
 class Mutator {
