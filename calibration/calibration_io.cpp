@@ -304,6 +304,24 @@ Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, c
   return WriteFileAtomic(path, root.dump(1));
 }
 
+namespace {
+
+// A prior's standard deviations are finite and >= 0, or NaN (not known);
+// a negative one would silently drop that parameter's prior.
+Status CheckPriorStddev(const IntrinsicsPrior& prior) {
+  for (size_t k = 0; k < prior.stddev.size(); ++k) {
+    const double sd = prior.stddev[k];
+    if (std::isnan(sd) || (std::isfinite(sd) && sd >= 0)) continue;
+    std::ostringstream s;
+    s << prior.source << ": camera " << prior.serial << ": intrinsics_stddev." << CameraIntrinsics::kParamNames[k]
+      << " is " << sd << "; a standard deviation is >= 0";
+    return CorruptData(s.str());
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& path) {
   HR_ASSIGN_OR_RETURN(nlohmann::json root,
                       ReadJsonFile(path, "give a calibration.json or a file from `hairrig calibrate-intrinsics`"));
@@ -318,6 +336,7 @@ Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& pat
     prior.intrinsics = *intrinsics;
     prior.stddev = StddevFromJson(root.value("intrinsics_stddev", nlohmann::json()));
     prior.source = path;
+    HR_RETURN_IF_ERROR(CheckPriorStddev(prior));
     priors.push_back(prior);
     return priors;
   }
@@ -325,6 +344,7 @@ Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& pat
   for (const StoredCalibration::Camera& camera : calibration.cameras) {
     if (!camera.solved) continue;
     priors.push_back({camera.serial, camera.intrinsics, camera.intrinsics_stddev, path});
+    HR_RETURN_IF_ERROR(CheckPriorStddev(priors.back()));
   }
   return priors;
 }

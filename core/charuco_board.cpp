@@ -75,7 +75,7 @@ Result<ChArUcoBoard> MakeChArUcoBoard(const std::string& dictionary, int squares
     if (dictionary == text) name = &value;
     known += (known.empty() ? "" : ", ") + std::string(text);
   }
-  if (name == nullptr) return InvalidArgument("dictionary '" + dictionary + "' is not one of " + known);
+  if (name == nullptr) return InvalidArgument("dictionary " + QuotedExcerpt(dictionary) + " is not one of " + known);
   const cv::Ptr<cv::aruco::Dictionary> dict = cv::aruco::getPredefinedDictionary(*name);
   const int needed = squares_x * squares_y / 2;
   if (dict->bytesList.rows < needed)
@@ -112,8 +112,9 @@ Result<ChArUcoBoard> MakeChArUcoBoard(const std::string& dictionary, int squares
 
 Result<ChArUcoBoard> LoadChArUcoBoard(const std::string& path) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
+  root.AllowOnlyKeys({"dictionary", "squares", "square_mm", "marker_mm"});
   const std::string dictionary = root.String("dictionary", "DICT_5X5_100");
-  const std::vector<double> squares = root.Numbers("squares", 2);
+  const std::vector<double> squares = root.Numbers("squares", 2, {.min = 2, .max = 1000});
   const double square_mm = root.Number("square_mm", NumberRange{1e-3, 1e4});
   const double marker_mm = root.Number("marker_mm", NumberRange{1e-3, 1e4});
   HR_RETURN_IF_ERROR(root.status());

@@ -1,9 +1,17 @@
 #include "core/config.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
-#include <fstream>
+#include <cstring>
+#include <map>
 #include <sstream>
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 namespace hairrig {
@@ -33,12 +41,139 @@ std::string MarkText(const std::string& file, const YAML::Mark& mark) {
 
 std::string Describe(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsScalar()) return QuotedExcerpt(node.Scalar());
   if (node.IsSequence()) return "a list";
   return "a map";
 }
 
+// Walks a document's parse events before any node is built, throwing a
+// DocumentProblem at the first of: a second document, a key that is not text
+// or that its map already has, more than kMaxConfigValues values or
+// kMaxConfigDepth levels.
+class DocumentChecker : public YAML::EventHandler {
+ public:
+  struct DocumentProblem {
+    YAML::Mark mark;
+    std::string what;
+  };
+
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    if (++documents_ > 1) throw DocumentProblem{mark, "a second YAML document (after '---'); a config file holds one"};
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { Value(mark, nullptr); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { Value(mark, nullptr); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string& text) override {
+    Value(mark, &text);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    Open(mark, /*map=*/false);
+  }
+  void OnSequenceEnd() override { open_.pop_back(); }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    Open(mark, /*map=*/true);
+  }
+  void OnMapEnd() override { open_.pop_back(); }
+
+ private:
+  struct Collection {
+    bool map = false;
+    bool at_key = true;               // maps: the next value is a key
+    std::map<std::string, int> keys;  // key -> its line (1-based)
+  };
+
+  // A value inside the innermost open collection; `text` is null for anything but a scalar.
+  void Value(const YAML::Mark& mark, const std::string* text) {
+    if (++values_ > kMaxConfigValues) {
+      throw DocumentProblem{mark, "more than " + std::to_string(kMaxConfigValues) + " values; is this a config file?"};
+    }
+    if (open_.empty() || !open_.back().map) return;
+    Collection& map = open_.back();
+    map.at_key = !map.at_key;
+    if (map.at_key) return;  // that was the value of a key
+    if (text == nullptr) throw DocumentProblem{mark, "a map key must be text"};
+    const auto [first, inserted] = map.keys.emplace(*text, mark.line + 1);
+    if (!inserted) {
+      throw DocumentProblem{mark, "duplicate key " + QuotedExcerpt(*text) + " (first at line " +
+                                      std::to_string(first->second) + "); give each key once"};
+    }
+  }
+
+  void Open(const YAML::Mark& mark, bool map) {
+    Value(mark, nullptr);
+    if (static_cast<int>(open_.size()) >= kMaxConfigDepth) {
+      throw DocumentProblem{mark, "nested deeper than " + std::to_string(kMaxConfigDepth) + " levels"};
+    }
+    open_.push_back({map, true, {}});
+  }
+
+  int documents_ = 0;
+  int values_ = 0;
+  std::vector<Collection> open_;
+};
+
+// Checks `text` with a DocumentChecker; YAML syntax errors propagate as YAML::Exception.
+Status CheckDocument(const std::string& text, const std::string& origin) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentChecker checker;
+  try {
+    while (parser.HandleNextDocument(checker)) {
+    }
+  } catch (const DocumentChecker::DocumentProblem& p) {
+    return InvalidArgument(MarkText(origin, p.mark) + ": " + p.what);
+  }
+  return Status::Ok();
+}
+
+// The text of a regular file of at most kMaxConfigBytes. Opened without
+// blocking and checked on the open descriptor, so a FIFO or a device is
+// refused instead of waited on or read forever.
+Result<std::string> ReadConfigText(const std::string& path) {
+  const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const std::string what = path + ": cannot open the config file (" + std::strerror(errno) + "; check the path)";
+    return errno == ENOENT ? NotFound(what) : IoError(what);
+  }
+  struct stat info {};
+  std::string text;
+  Status status;
+  if (fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    status = InvalidArgument(path + ": not a regular file (a folder, device or pipe); give a YAML config file");
+  } else if (static_cast<unsigned long long>(info.st_size) > kMaxConfigBytes) {
+    status = InvalidArgument(path + ": " + std::to_string(info.st_size) + " bytes, more than a config file's " +
+                             std::to_string(kMaxConfigBytes) + "; is this the right file?");
+  } else {
+    text.resize(static_cast<size_t>(info.st_size));
+    size_t done = 0;
+    while (done < text.size()) {
+      const ssize_t n = read(fd, text.data() + done, text.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      done += static_cast<size_t>(n);
+    }
+    text.resize(done);  // a file that shrank while read
+  }
+  close(fd);
+  if (!status.ok()) return status;
+  return text;
+}
+
 }  // namespace
+
+std::string QuotedExcerpt(std::string_view text) {
+  constexpr size_t kMaxBytes = 60;
+  size_t n = std::min(text.size(), kMaxBytes);
+  // Whole UTF-8 characters: back off from a continuation byte.
+  while (n < text.size() && n > 0 && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;
+  std::string out = "'";
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    out += c < 0x20 || c == 0x7F ? '?' : text[i];
+  }
+  if (n == text.size()) return out + "'";
+  return out + "...' (" + std::to_string(text.size()) + " bytes)";
+}
 
 ConfigNode::ConfigNode() : impl_(std::make_shared<Impl>()) {
   impl_->doc = std::make_shared<DocumentErrors>();
@@ -48,9 +183,14 @@ ConfigNode::ConfigNode(const ConfigNode&) = default;
 ConfigNode& ConfigNode::operator=(const ConfigNode&) = default;
 
 Result<ConfigNode> ConfigNode::LoadString(const std::string& text, const std::string& origin) {
+  if (text.size() > kMaxConfigBytes) {
+    return InvalidArgument(origin + ": " + std::to_string(text.size()) + " bytes, more than a config's " +
+                           std::to_string(kMaxConfigBytes));
+  }
   ConfigNode root;
   root.impl_->doc->file = origin;
   try {
+    HR_RETURN_IF_ERROR(CheckDocument(text, origin));
     root.impl_->node = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     return InvalidArgument(MarkText(origin, e.mark) + ": not valid YAML: " + e.msg);
@@ -62,11 +202,8 @@ Result<ConfigNode> ConfigNode::LoadString(const std::string& text, const std::st
 }
 
 Result<ConfigNode> ConfigNode::LoadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return NotFound(path + ": cannot open the config file (check the path)");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return LoadString(buffer.str(), path);
+  HR_ASSIGN_OR_RETURN(const std::string text, ReadConfigText(path));
+  return LoadString(text, path);
 }
 
 bool ConfigNode::ok() const { return impl_->doc->first_error.ok(); }
@@ -90,8 +227,8 @@ void ConfigNode::Fail(std::string_view key, const std::string& what) const {
   YAML::Mark mark = impl_->node.Mark();
   if (!key.empty() && Has(key)) mark = impl_->node[std::string(key)].Mark();
   const std::string field = key.empty() ? impl_->path : JoinPath(impl_->path, key);
-  impl_->doc->first_error =
-      InvalidArgument(MarkText(file(), mark) + ": field '" + (field.empty() ? "<top>" : field) + "': " + what);
+  const std::string quoted = field.empty() ? "'<top>'" : QuotedExcerpt(field);
+  impl_->doc->first_error = InvalidArgument(MarkText(file(), mark) + ": field " + quoted + ": " + what);
 }
 
 namespace {
@@ -185,7 +322,7 @@ std::string ConfigNode::Choice(std::string_view key, std::initializer_list<const
   for (const char* c : choices) {
     if (value == c) return value;
   }
-  Fail(key, "'" + value + "' is not one of: " + listed);
+  Fail(key, QuotedExcerpt(value) + " is not one of: " + listed);
   return fallback;
 }
 
@@ -200,7 +337,7 @@ bool ConfigNode::Bool(std::string_view key, bool fallback) const {
   return fallback;
 }
 
-std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_size) const {
+std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_size, NumberRange range) const {
   if (!Has(key)) {
     Fail(key, "required list of numbers is missing");
     return {};
@@ -215,6 +352,10 @@ std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_si
     double v = 0.0;
     if (!ScalarToDouble(n[i], &v) || !std::isfinite(v)) {
       Fail(key, "element " + std::to_string(i) + " is not a finite number: " + Describe(n[i]));
+      return {};
+    }
+    if (v < range.min || v > range.max) {
+      Fail(key, "element " + std::to_string(i) + ": expected a number" + RangeText(range) + ", got " + Describe(n[i]));
       return {};
     }
     values.push_back(v);
@@ -315,8 +456,9 @@ void ConfigNode::AllowOnlyKeys(std::initializer_list<const char*> allowed) const
     }
     if (!known) {
       if (!ok()) return;
-      impl_->doc->first_error = InvalidArgument(MarkText(file(), kv.first.Mark()) + ": unknown field '" +
-                                                JoinPath(impl_->path, key) + "' (expected one of: " + listed + ")");
+      impl_->doc->first_error = InvalidArgument(MarkText(file(), kv.first.Mark()) + ": unknown field " +
+                                                QuotedExcerpt(JoinPath(impl_->path, key)) +
+                                                " (expected one of: " + listed + ")");
       return;
     }
   }

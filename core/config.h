@@ -9,8 +9,16 @@
 // the first error in state shared by every node of the document and returns a
 // neutral value (0, "", empty), so a loader reads all its fields and then checks
 // `status()` once. Optional fields take a fallback.
+//
+// A document is read whole or refused with its file:line: one YAML document
+// (a second one after `---` is an error), every map key text and given once
+// at any level (no first-wins), at most kMaxConfigBytes, kMaxConfigValues
+// values and kMaxConfigDepth levels; LoadFile reads regular files only (a
+// FIFO or a device is refused, never waited on). Messages quote a value with
+// QuotedExcerpt, never a whole file.
 #pragma once
 
+#include <cstddef>
 #include <initializer_list>
 #include <limits>
 #include <memory>
@@ -23,6 +31,16 @@
 #include "core/status.h"
 
 namespace hairrig {
+
+// Limits on one config document, checked before it is built into nodes
+// (hand-written configs are a few kilobytes and a few hundred values).
+inline constexpr size_t kMaxConfigBytes = size_t{1} << 20;
+inline constexpr int kMaxConfigValues = 100000;  // scalars, lists and maps
+inline constexpr int kMaxConfigDepth = 64;        // nested lists and maps
+
+// `text` quoted for an error message and cut to at most 60 bytes (control
+// characters shown as '?'): 'root:x:0:0:root:/root:/bin/bash daemo...' (1843 bytes).
+std::string QuotedExcerpt(std::string_view text);
 
 struct NumberRange {
   double min = -std::numeric_limits<double>::infinity();
@@ -60,7 +78,8 @@ class ConfigNode {
   std::string Choice(std::string_view key, std::initializer_list<const char*> choices,
                      const std::string& fallback = "") const;
   bool Bool(std::string_view key, bool fallback) const;
-  std::vector<double> Numbers(std::string_view key, size_t expected_size = 0) const;
+  // Every element finite and inside `range`; `expected_size` 0 takes any length.
+  std::vector<double> Numbers(std::string_view key, size_t expected_size = 0, NumberRange range = {}) const;
   std::vector<std::string> Strings(std::string_view key) const;
   Eigen::Vector3d Vec3(std::string_view key) const;
   Eigen::Vector3d Vec3(std::string_view key, const Eigen::Vector3d& fallback) const;

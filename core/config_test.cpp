@@ -1,5 +1,11 @@
 #include "core/config.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
 #include <gtest/gtest.h>
 
 namespace hairrig {
@@ -64,6 +70,89 @@ TEST(Config, ChoiceListsTheAllowedValues) {
   auto root = ConfigNode::LoadString("backend: sum\n", "f.yaml");
   root->Choice("backend", {"sim", "modbus"});
   EXPECT_NE(root->status().message().find("sim, modbus"), std::string::npos);
+}
+
+// The message of loading `text`, which must be refused.
+std::string Refusal(const std::string& text) {
+  auto root = ConfigNode::LoadString(text, "rig.yaml");
+  EXPECT_FALSE(root.ok()) << text;
+  return root.ok() ? "" : root.status().message();
+}
+
+TEST(Config, DuplicateKeysAreErrorsAtTheSecondOne) {
+  std::string m = Refusal("name: a\ndevices: {}\nname: b\n");
+  EXPECT_NE(m.find("rig.yaml:3:1: duplicate key 'name' (first at line 1)"), std::string::npos) << m;
+  m = Refusal("plan:\n  stops: 3\n  lights: {top: 1, top: 0}\n");
+  EXPECT_NE(m.find("rig.yaml:3:20: duplicate key 'top'"), std::string::npos) << m;
+  m = Refusal("sim: {a: 1}\nplan: {}\nsim: {b: 2}\n");
+  EXPECT_NE(m.find("rig.yaml:3:1: duplicate key 'sim'"), std::string::npos) << m;
+  // The same key in two maps is two keys.
+  EXPECT_TRUE(ConfigNode::LoadString("a: {x: 1}\nb: {x: 2}\nc: [{x: 1}, {x: 2}]\n", "rig.yaml").ok());
+}
+
+TEST(Config, ASecondDocumentIsAnError) {
+  const std::string m = Refusal("name: a\n---\nname: b\n");
+  EXPECT_NE(m.find("rig.yaml:2:1: a second YAML document"), std::string::npos) << m;
+  EXPECT_TRUE(ConfigNode::LoadString("---\nname: a\n...\n", "rig.yaml").ok());
+}
+
+TEST(Config, KeysMustBeText) {
+  EXPECT_NE(Refusal("? [a, b]\n: 1\n").find("rig.yaml:1:3: a map key must be text"), std::string::npos);
+}
+
+TEST(Config, SizeDepthAndValueCountAreBounded) {
+  std::string deep = "a: ";
+  for (int i = 0; i < 100; ++i) deep += "[";
+  EXPECT_NE(Refusal(deep + std::string(100, ']') + "\n").find("nested deeper than"), std::string::npos);
+  std::string many = "angles_deg: [";
+  for (int i = 0; i <= kMaxConfigValues; ++i) many += "0,";
+  EXPECT_NE(Refusal(many + "0]\n").find("more than"), std::string::npos);
+  EXPECT_NE(Refusal("a: '" + std::string(kMaxConfigBytes, 'x') + "'\n").find("bytes"), std::string::npos);
+}
+
+TEST(Config, MessagesQuoteAnExcerptNeverAWholeFile) {
+  const std::string file(5000, 'x');
+  std::string m = Refusal(file);
+  EXPECT_LT(m.size(), 200u) << m;
+  EXPECT_NE(m.find("(5000 bytes)"), std::string::npos) << m;
+  auto root = ConfigNode::LoadString("fx_px: \"" + std::string(3000, 'y') + "\"\n", "rig.yaml");
+  ASSERT_TRUE(root.ok());
+  root->Number("fx_px");
+  EXPECT_LT(root->status().message().size(), 200u) << root->status().message();
+  EXPECT_EQ(QuotedExcerpt("a\tb"), "'a?b'");
+  EXPECT_EQ(QuotedExcerpt(std::string(61, 'z')), "'" + std::string(60, 'z') + "...' (61 bytes)");
+  // A cut never splits a UTF-8 character: 'é' is 2 bytes, 59 + 2 crosses 60.
+  EXPECT_EQ(QuotedExcerpt(std::string(59, 'z') + "\xC3\xA9z"), "'" + std::string(59, 'z') + "...' (62 bytes)");
+}
+
+TEST(Config, ListElementsAreCheckedAgainstTheRange) {
+  auto root = ConfigNode::LoadString("angles_deg: [0, 1e12]\n", "rig.yaml");
+  ASSERT_TRUE(root.ok());
+  EXPECT_TRUE(root->Numbers("angles_deg", 0, {.min = -3600, .max = 3600}).empty());
+  const std::string m = root->status().message();
+  EXPECT_NE(m.find("element 1: expected a number in [-3600, 3600], got '1e12'"), std::string::npos) << m;
+}
+
+TEST(Config, UnknownKeysListTheKnownOnes) {
+  auto root = ConfigNode::LoadString("plan:\n  stpos: 3\n", "rig.yaml");
+  root->Child("plan").AllowOnlyKeys({"stops", "angles_deg"});
+  EXPECT_EQ(root->status().message(),
+            "rig.yaml:2:3: unknown field 'plan.stpos' (expected one of: stops, angles_deg)");
+}
+
+TEST(Config, OnlyRegularFilesAreRead) {
+  for (const char* path : {"/dev/zero", "/dev/urandom", "/"}) {
+    auto root = ConfigNode::LoadFile(path);
+    ASSERT_FALSE(root.ok()) << path;
+    EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos) << root.status().message();
+  }
+  const std::string fifo =
+      (std::filesystem::temp_directory_path() / ("config_test_fifo_" + std::to_string(getpid()))).string();
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  auto root = ConfigNode::LoadFile(fifo);  // a blocking open would wait here for a writer
+  unlink(fifo.c_str());
+  ASSERT_FALSE(root.ok());
+  EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos) << root.status().message();
 }
 
 }  // namespace

@@ -1,7 +1,11 @@
 #include "drivers/modbus_link.h"
 
+#include <netdb.h>
+#include <sys/socket.h>
+
 #include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <thread>
 
 #include <modbus/modbus.h>
@@ -47,6 +51,43 @@ const char* Advice(Failure failure, ModbusEndpoint::Transport transport) {
                  : "check that the USB-serial adapter is plugged in";
     default: return "see the controller's manual for this exception";
   }
+}
+
+// Why a connection to `e` failed, with what to check. `error` is errno after
+// modbus_connect, which leaves it unset when its connect() times out.
+std::string ConnectFailure(int error, const ModbusEndpoint& e) {
+  if (e.transport == ModbusEndpoint::Transport::kRtu) {
+    return std::string(error != 0 ? std::strerror(error) : "cannot open the port") + "; " +
+           Advice(Failure::kConnection, e.transport);
+  }
+  if (error == 0 || error == EINPROGRESS || error == ETIMEDOUT) {
+    return "no answer within " + std::to_string(e.timeout_ms) +
+           " ms; check that the controller is powered and on this network, and its address";
+  }
+  if (error == ECONNREFUSED) {
+    return "connection refused; check the port (Modbus TCP: 502) and that the controller's Modbus TCP server is on";
+  }
+  return std::string(std::strerror(error)) + "; " + Advice(Failure::kConnection, e.transport);
+}
+
+// True when `host` names an address (libmodbus reports a name that does not
+// resolve as a refused connection).
+bool Resolves(const std::string& host) {
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0) return false;
+  freeaddrinfo(found);
+  return true;
+}
+
+// A TCP peer that never gave a Modbus reply on its connection.
+Status NotAModbusServer(const ModbusEndpoint& e, Failure failure, int error) {
+  return Unavailable("cannot connect to Modbus " + e.Describe() + ": the peer there " +
+                     (failure == Failure::kMalformed ? "answers, but not in Modbus TCP ("
+                                                     : "closes the connection before any Modbus reply (") +
+                     modbus_strerror(error) + "); check that " + e.host + ":" + std::to_string(e.port) +
+                     " is the controller's address and Modbus TCP port, not another device's");
 }
 
 }  // namespace
@@ -96,6 +137,7 @@ ModbusLink::~ModbusLink() = default;
 
 Status ModbusLink::Connect() {
   std::lock_guard<std::mutex> lock(mutex_);
+  peer_spoke_modbus_ = false;
   return ConnectLocked();
 }
 
@@ -119,9 +161,13 @@ Status ModbusLink::ConnectLocked() {
   modbus_set_slave(c->ctx, endpoint_.slave_id);
   const int ms = endpoint_.timeout_ms;
   modbus_set_response_timeout(c->ctx, static_cast<uint32_t>(ms / 1000), static_cast<uint32_t>(ms % 1000) * 1000);
+  if (tcp && !Resolves(endpoint_.host)) {
+    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": the host name '" + endpoint_.host +
+                       "' does not resolve; check it, or give the controller's IP address");
+  }
+  errno = 0;
   if (modbus_connect(c->ctx) == -1) {
-    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": " + modbus_strerror(errno) + "; " +
-                       Advice(Failure::kConnection, endpoint_.transport));
+    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": " + ConnectFailure(errno, endpoint_));
   }
   c->connected = true;
   context_ = std::move(c);
@@ -139,13 +185,24 @@ Status ModbusLink::Transact(const std::string& what, Request request) {
       if (!last.ok()) continue;
     }
     ++stats_.requests;
-    if (request(context_->ctx) != -1) return Status::Ok();
+    if (request(context_->ctx) != -1) {
+      peer_spoke_modbus_ = true;
+      return Status::Ok();
+    }
     const int error = errno;
     const Failure failure = Classify(error);
     const std::string reason = what + " on Modbus " + endpoint_.Describe();
+    const bool tcp = endpoint_.transport == ModbusEndpoint::Transport::kTcp;
+    if (tcp && !peer_spoke_modbus_ && (failure == Failure::kMalformed || failure == Failure::kConnection)) {
+      // The peer has never answered in Modbus: it is not a Modbus TCP server.
+      last = NotAModbusServer(endpoint_, failure, error);
+      DisconnectLocked();
+      continue;
+    }
     switch (failure) {
       case Failure::kException:
       case Failure::kRetryableException: {
+        peer_spoke_modbus_ = true;
         const int code = error - MODBUS_ENOBASE;
         last = DeviceFault(reason + ": the controller answered Modbus exception " + std::to_string(code) + " (" +
                            ExceptionName(code) + "); " + Advice(failure, endpoint_.transport));
@@ -166,7 +223,6 @@ Status ModbusLink::Transact(const std::string& what, Request request) {
                            Advice(failure, endpoint_.transport));
         break;
     }
-    const bool tcp = endpoint_.transport == ModbusEndpoint::Transport::kTcp;
     if (failure == Failure::kConnection || (tcp && failure != Failure::kRetryableException)) {
       DisconnectLocked();
     } else if (failure == Failure::kMalformed || failure == Failure::kTimeout) {

@@ -2,6 +2,12 @@
 // a rig needs: register reads and writes that either succeed or return a
 // Status saying what went wrong and what to check.
 //
+// Connecting: Unavailable "cannot connect to Modbus tcp HOST:PORT unit N:
+// <why>; check <what>" for a name that does not resolve, a refused
+// connection, no answer within `timeout_ms`, and (TCP) a peer that has not
+// given one Modbus reply since Connect() and answers in something else or
+// hangs up (an HTTP server, a proxy): not a Modbus server.
+//
 // Failure handling, per request:
 //   - no reply within `timeout_ms`           -> retried; then Timeout
 //   - malformed reply (CRC, length, framing) -> line flushed, retried; then CorruptData
@@ -81,6 +87,7 @@ class ModbusLink {
   mutable std::mutex mutex_;
   std::unique_ptr<Context> context_;
   ModbusLinkStats stats_;
+  bool peer_spoke_modbus_ = false;  // a Modbus reply (data or exception) came since Connect()
 };
 
 }  // namespace hairrig

@@ -19,29 +19,42 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The rig config's nominal intrinsics of one camera (calibration.cameras.<name>).
+CameraIntrinsics ReadNominalIntrinsics(const ConfigNode& k) {
+  k.AllowOnlyKeys({"fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "p1", "p2", "k3"});
+  const NumberRange pixels{-1e5, 1e5};
+  const NumberRange coefficient{-1e3, 1e3};
+  CameraIntrinsics intrinsics;
+  intrinsics.fx_px = k.Number("fx_px", {.min = 1, .max = 1e6});
+  intrinsics.fy_px = k.Number("fy_px", {.min = 1, .max = 1e6});
+  intrinsics.cx_px = k.Number("cx_px", pixels);
+  intrinsics.cy_px = k.Number("cy_px", pixels);
+  intrinsics.k1 = k.Number("k1", 0.0, coefficient);
+  intrinsics.k2 = k.Number("k2", 0.0, coefficient);
+  intrinsics.p1 = k.Number("p1", 0.0, coefficient);
+  intrinsics.p2 = k.Number("p2", 0.0, coefficient);
+  intrinsics.k3 = k.Number("k3", 0.0, coefficient);
+  return intrinsics;  // the size is filled in from the frames
+}
+
 // Cameras from the config snapshot, each with its image size from its first frame.
 Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::map<std::string, int>* by_serial) {
   const ConfigNode nominal = config.root.OptionalChild("calibration").OptionalChild("cameras");
+  std::string names;
   for (const ConfigNode& cam : config.root.Child("devices").Items("cameras")) {
     CalibrationCamera camera;
     camera.name = cam.String("name");
     camera.serial = cam.String("serial");
-    if (nominal.IsMap() && nominal.Has(camera.name)) {
-      const ConfigNode k = nominal.Child(camera.name);
-      CameraIntrinsics intrinsics;
-      intrinsics.fx_px = k.Number("fx_px", {.min = 1});
-      intrinsics.fy_px = k.Number("fy_px", {.min = 1});
-      intrinsics.cx_px = k.Number("cx_px");
-      intrinsics.cy_px = k.Number("cy_px");
-      intrinsics.k1 = k.Number("k1", 0.0);
-      intrinsics.k2 = k.Number("k2", 0.0);
-      intrinsics.p1 = k.Number("p1", 0.0);
-      intrinsics.p2 = k.Number("p2", 0.0);
-      intrinsics.k3 = k.Number("k3", 0.0);
-      camera.nominal = intrinsics;  // the size is filled in from the frames
-    }
+    names += (names.empty() ? "" : ", ") + camera.name;
+    if (nominal.IsMap() && nominal.Has(camera.name)) camera.nominal = ReadNominalIntrinsics(nominal.Child(camera.name));
     (*by_serial)[camera.serial] = static_cast<int>(input->cameras.size());
     input->cameras.push_back(camera);
+  }
+  for (const std::string& name : nominal.Keys()) {
+    bool known = false;
+    for (const CalibrationCamera& camera : input->cameras) known = known || camera.name == name;
+    if (known) continue;
+    nominal.Fail(name, "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + names + ")");
   }
   return config.root.status();
 }

@@ -1,7 +1,8 @@
 #include "rig/capture_plan.h"
 
 #include <cmath>
-#include <set>
+#include <memory>
+#include <sstream>
 
 namespace hairrig {
 
@@ -12,6 +13,20 @@ double RetryPolicy::BackoffBefore(int attempt) const {
 
 namespace {
 
+constexpr double kMaxAngleDeg = 3600;  // ten turns either way
+constexpr int kMaxStops = 3600;
+
+// "top, bottom": the names of `devices`' lights or cameras, for messages.
+template <typename Device>
+std::string NamesOf(const std::vector<std::unique_ptr<Device>>& devices) {
+  std::string names;
+  for (const auto& d : devices) names += (names.empty() ? "" : ", ") + d->info().name;
+  return names.empty() ? "none" : names;
+}
+
+// Light name -> level from the map at `key`; a light the map leaves out is
+// off, a name that is no configured light is an error (a typo must not
+// switch a panel off).
 std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std::string& key,
                                               const DeviceSet& devices, const std::map<std::string, double>& fallback) {
   if (!node.Has(key)) return fallback;
@@ -20,8 +35,11 @@ std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std:
   for (const auto& light : devices.lights) {
     out[light->info().name] = levels.Number(light->info().name, 0.0, {.min = 0, .max = 1});
   }
-  for (const auto& [name, level] : fallback) {
-    if (!out.count(name)) levels.Fail(name, "no light of that name in the devices section");
+  for (const std::string& name : levels.Keys()) {
+    if (!out.count(name)) {
+      levels.Fail(name, "no light named " + QuotedExcerpt(name) + " in the devices section (lights: " +
+                            NamesOf(devices.lights) + ")");
+    }
   }
   return out;
 }
@@ -39,14 +57,28 @@ int StopFor(CapturePlan* plan, double angle_deg, const std::map<std::string, dou
   return stop.index;
 }
 
-void AddView(CapturePlan* plan, int stop, const Camera& camera) {
+// Adds `camera`'s view at `stop`; false (nothing added) when the stop has
+// that camera's view already: the same view twice.
+bool AddView(CapturePlan* plan, int stop, const Camera& camera) {
+  PlannedStop& s = plan->stops[static_cast<size_t>(stop)];
+  for (int view : s.views) {
+    if (plan->views[static_cast<size_t>(view)].camera_name == camera.info().name) return false;
+  }
   PlannedView v;
   v.index = static_cast<int>(plan->views.size());
   v.stop = stop;
   v.camera_name = camera.info().name;
   v.camera_serial = camera.info().serial;
-  plan->stops[static_cast<size_t>(stop)].views.push_back(v.index);
+  s.views.push_back(v.index);
   plan->views.push_back(v);
+  return true;
+}
+
+std::string TwiceMessage(const Camera& camera, double angle_deg) {
+  std::ostringstream s;
+  s << "camera '" << camera.info().name << "' at " << angle_deg
+    << " deg under the same lights is planned twice; each view is shot once";
+  return s.str();
 }
 
 const Camera* CameraByName(const DeviceSet& devices, const std::string& name) {
@@ -54,6 +86,11 @@ const Camera* CameraByName(const DeviceSet& devices, const std::string& name) {
     if (c->info().name == name) return c.get();
   }
   return nullptr;
+}
+
+std::string NoCameraMessage(const DeviceSet& devices, const std::string& name) {
+  return "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + NamesOf(devices.cameras) +
+         ")";
 }
 
 CaptureSettings ReadCameraSettings(const ConfigNode& plan) {
@@ -66,6 +103,54 @@ CaptureSettings ReadCameraSettings(const ConfigNode& plan) {
              : format == "bayer_rg8" ? PixelFormat::kBayerRG8
                                      : PixelFormat::kRgb8;
   return s;
+}
+
+// `views: [{angle_deg, camera, lights}, ...]`.
+void ReadExplicitViews(const ConfigNode& node, const DeviceSet& devices, const std::map<std::string, double>& lights,
+                       CapturePlan* plan) {
+  for (const ConfigNode& v : node.Items("views")) {
+    v.AllowOnlyKeys({"angle_deg", "camera", "lights"});
+    const double angle = v.Number("angle_deg", {.min = -kMaxAngleDeg, .max = kMaxAngleDeg});
+    const std::string name = v.String("camera");
+    const auto view_lights = ReadLightLevels(v, "lights", devices, lights);
+    const Camera* camera = CameraByName(devices, name);
+    if (!v.ok()) return;
+    if (!camera) return v.Fail("camera", NoCameraMessage(devices, name));
+    if (!AddView(plan, StopFor(plan, angle, view_lights), *camera)) return v.Fail("", TwiceMessage(*camera, angle));
+  }
+}
+
+// `stops: N` or `angles_deg: [...]`, times `cameras: [...]` (default: every camera).
+void ReadStopsTimesCameras(const ConfigNode& node, const DeviceSet& devices,
+                           const std::map<std::string, double>& lights, CapturePlan* plan) {
+  std::vector<double> angles;
+  if (node.Has("angles_deg")) {
+    angles = node.Numbers("angles_deg", 0, {.min = -kMaxAngleDeg, .max = kMaxAngleDeg});
+    if (angles.size() > static_cast<size_t>(kMaxStops)) {
+      return node.Fail("angles_deg", std::to_string(angles.size()) + " stops, more than " + std::to_string(kMaxStops));
+    }
+  } else {
+    const int stops = node.Integer("stops", 19, {.min = 1, .max = kMaxStops});
+    for (int s = 0; s < stops; ++s) angles.push_back(360.0 * s / stops);
+  }
+  std::vector<const Camera*> cameras;
+  if (node.Has("cameras")) {
+    for (const std::string& name : node.Strings("cameras")) {
+      const Camera* camera = CameraByName(devices, name);
+      if (!camera) return node.Fail("cameras", NoCameraMessage(devices, name));
+      cameras.push_back(camera);
+    }
+  } else {
+    for (const auto& c : devices.cameras) cameras.push_back(c.get());
+  }
+  if (!node.ok()) return;
+  for (double angle : angles) {
+    const int stop = StopFor(plan, angle, lights);
+    for (const Camera* c : cameras) {
+      if (AddView(plan, stop, *c)) continue;
+      return node.Fail(node.Has("angles_deg") ? "angles_deg" : "cameras", TwiceMessage(*c, angle));
+    }
+  }
 }
 
 }  // namespace
@@ -86,40 +171,9 @@ Result<CapturePlan> ReadCapturePlan(const ConfigNode& root, const DeviceSet& dev
   plan.trigger_pulse = std::chrono::microseconds(node.Integer("trigger_pulse_us", 100, {.min = 1, .max = 1000000}));
   const std::map<std::string, double> lights = ReadLightLevels(node, "lights", devices, all_on);
   if (node.Has("views")) {
-    for (const ConfigNode& v : node.Items("views")) {
-      v.AllowOnlyKeys({"angle_deg", "camera", "lights"});
-      const double angle = v.Number("angle_deg", {.min = -3600, .max = 3600});
-      const std::string name = v.String("camera");
-      const auto view_lights = ReadLightLevels(v, "lights", devices, lights);
-      const Camera* camera = CameraByName(devices, name);
-      if (!camera) {
-        if (v.ok()) v.Fail("camera", "no camera named '" + name + "' in the devices section");
-        continue;
-      }
-      if (v.ok()) AddView(&plan, StopFor(&plan, angle, view_lights), *camera);
-    }
+    ReadExplicitViews(node, devices, lights, &plan);
   } else {
-    std::vector<double> angles;
-    if (node.Has("angles_deg")) {
-      angles = node.Numbers("angles_deg");
-    } else {
-      const int stops = node.Integer("stops", 19, {.min = 1, .max = 3600});
-      for (int s = 0; s < stops; ++s) angles.push_back(360.0 * s / stops);
-    }
-    std::vector<const Camera*> cameras;
-    if (node.Has("cameras")) {
-      for (const std::string& name : node.Strings("cameras")) {
-        const Camera* camera = CameraByName(devices, name);
-        if (camera) cameras.push_back(camera);
-        else node.Fail("cameras", "no camera named '" + name + "' in the devices section");
-      }
-    } else {
-      for (const auto& c : devices.cameras) cameras.push_back(c.get());
-    }
-    for (double angle : angles) {
-      const int stop = StopFor(&plan, angle, lights);
-      for (const Camera* c : cameras) AddView(&plan, stop, *c);
-    }
+    ReadStopsTimesCameras(node, devices, lights, &plan);
   }
   if (!node.ok()) return node.status();
   if (plan.views.empty()) return InvalidArgument(node.Where() + ": the plan has no views");

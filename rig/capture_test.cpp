@@ -180,6 +180,29 @@ TEST(Capture, BrokenConfigCreatesNothing) {
   ExpectPlanRefused(FreshDir("capture_bad_config"), "plan: {stops: 0}\n", "plan.stops");
 }
 
+// Plan mistakes that used to pass silently (a typo switching a panel off, a
+// view shot twice) or only fail at their stop (an angle of 1e12 deg) are
+// refused when the config is read, before the capture folder exists.
+TEST(Capture, PlanMistakesAreRefusedBeforeAnythingIsShot) {
+  const std::string dir = FreshDir("capture_plan_mistakes");
+  ExpectPlanRefused(dir, "plan: {lights: {top: 1, botom: 1}}\n",
+                    "no light named 'botom' in the devices section (lights: top, bottom)");
+  ExpectPlanRefused(dir, "plan:\n  views:\n    - {angle_deg: 0, camera: upper, lights: {top: 1, botom: 0}}\n",
+                    "plan.views[0].lights.botom");
+  ExpectPlanRefused(dir, "plan: {angles_deg: [0, 1e12]}\n",
+                    "plan.angles_deg': element 1: expected a number in [-3600, 3600]");
+  ExpectPlanRefused(dir, "plan: {angles_deg: [0, 90, 0]}\n", "planned twice");
+  ExpectPlanRefused(dir, "plan: {stops: 2, cameras: [upper, lower, upper]}\n", "planned twice");
+  ExpectPlanRefused(dir,
+                    "plan:\n  views:\n    - {angle_deg: 90, camera: upper}\n    - {angle_deg: 90, camera: lower}\n"
+                    "    - {angle_deg: 90, camera: upper}\n",
+                    "plan.views[2]': camera 'upper' at 90 deg under the same lights is planned twice");
+  ExpectPlanRefused(dir, "plan: {cameras: [uper]}\n",
+                    "no camera named 'uper' in the devices section (cameras: upper, lower)");
+  ExpectPlanRefused(dir, "plan:\n  stops: 2\n  stops: 3\n", "duplicate key 'stops' (first at line");
+  ExpectPlanRefused(dir, "plan: {stops: 2}\n---\nplan: {stops: 3}\n", "a second YAML document");
+}
+
 TEST(Capture, TriggerPulseWidthIsAPlanField) {
   const std::string dir = FreshDir("capture_pulse");
   ExpectPlanRefused(dir, "plan: {trigger_pulse_us: 0}\n", "plan.trigger_pulse_us");

@@ -1,10 +1,12 @@
 #include "sim_hw/modbus_turntable_server.h"
 
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <pty.h>
 #include <sys/eventfd.h>
+#include <sys/select.h>
 #include <sys/socket.h>
 #include <termios.h>
 #include <unistd.h>
@@ -12,12 +14,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <deque>
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <modbus/modbus.h>
@@ -31,6 +35,10 @@ namespace {
 constexpr int kReadHolding = 0x03;
 constexpr int kWriteSingle = 0x06;
 constexpr int kWriteMultiple = 0x10;
+// TCP connections served at once; a real controller allows a handful.
+constexpr size_t kMaxTcpClients = 32;
+constexpr int kListenBacklog = 64;
+constexpr int kRtuCrcBytes = 2;
 
 uint16_t Word(const uint8_t* bytes) { return static_cast<uint16_t>((bytes[0] << 8) | bytes[1]); }
 
@@ -49,6 +57,40 @@ struct PendingFault {
   int exception_code;
 };
 
+using Clock = std::chrono::steady_clock;
+
+// A TCP client and the bytes of its request still on the way.
+struct TcpClient {
+  int fd = -1;
+  std::vector<uint8_t> pending;
+  bool spoke = false;  // has sent a request
+  Clock::time_point last_active;
+};
+
+// Bytes of the first Modbus TCP request at the front of `bytes` (MBAP header:
+// transaction, protocol 0, length of what follows, unit id): 0 while
+// incomplete, -1 when the bytes cannot be Modbus TCP.
+int CompleteTcpFrame(const std::vector<uint8_t>& bytes) {
+  if (bytes.size() < 6) return 0;
+  const int protocol = Word(&bytes[2]);
+  const int length = Word(&bytes[4]);
+  if (protocol != 0 || length < 2 || length > MODBUS_TCP_MAX_ADU_LENGTH - 6) return -1;
+  return bytes.size() >= static_cast<size_t>(6 + length) ? 6 + length : 0;
+}
+
+bool IsWrite(int function) { return function == kWriteSingle || function == kWriteMultiple; }
+
+// The request's PDU (after `header` bytes, before a `trailer` of `size`) is
+// as long as its function says: libmodbus' modbus_reply reads that many bytes.
+bool WellFormed(const uint8_t* query, int size, int header, int trailer) {
+  size -= trailer;
+  if (size <= header) return false;
+  const int function = query[header];
+  if (function == kReadHolding || function == kWriteSingle) return size == header + 5;
+  if (function == kWriteMultiple) return size >= header + 6 && size == header + 6 + query[header + 5];
+  return true;  // answered with exception 1 (illegal function) from the header alone
+}
+
 }  // namespace
 
 struct ModbusTurntableServer::Impl {
@@ -65,7 +107,7 @@ struct ModbusTurntableServer::Impl {
   int pty_master = -1;  // RTU
   int pty_slave = -1;   // RTU: kept open so the master never sees a hang-up
   int stop_fd = -1;     // eventfd that wakes the server thread
-  std::vector<int> clients;
+  std::vector<TcpClient> clients;
   std::thread thread;
   std::mutex mutex;
   std::deque<PendingFault> faults;
@@ -73,7 +115,7 @@ struct ModbusTurntableServer::Impl {
 
   ~Impl() {
     StopThread();
-    for (int fd : clients) close(fd);
+    for (const TcpClient& c : clients) close(c.fd);
     for (int fd : {listen_fd, pty_master, pty_slave, stop_fd}) {
       if (fd >= 0) close(fd);
     }
@@ -113,7 +155,7 @@ struct ModbusTurntableServer::Impl {
       std::vector<pollfd> fds = {{stop_fd, POLLIN, 0}};
       if (tcp) {
         fds.push_back({listen_fd, POLLIN, 0});
-        for (int c : clients) fds.push_back({c, POLLIN, 0});
+        for (const TcpClient& c : clients) fds.push_back({c.fd, POLLIN, 0});
       } else {
         fds.push_back({pty_master, POLLIN, 0});
       }
@@ -122,37 +164,103 @@ struct ModbusTurntableServer::Impl {
         return;
       }
       if (fds[0].revents != 0) return;
-      if (tcp && (fds[1].revents & POLLIN) != 0) Accept();
       for (size_t i = tcp ? 2 : 1; i < fds.size(); ++i) {
-        if (fds[i].revents != 0) Serve(fds[i].fd);
+        if (fds[i].revents == 0) continue;
+        if (tcp) {
+          ReceiveTcp(fds[i].fd);
+        } else {
+          ReceiveRtu();
+        }
       }
+      if (tcp && (fds[1].revents & POLLIN) != 0) AcceptAll();
     }
   }
 
-  void Accept() {
-    const int fd = accept(listen_fd, nullptr, nullptr);
-    if (fd >= 0) clients.push_back(fd);
+  // Accepts every pending connection. Past kMaxTcpClients the client idle
+  // longest goes, preferring one that never sent a request, so that a flood
+  // of silent connections cannot exhaust descriptors nor lock a driver out.
+  void AcceptAll() {
+    for (;;) {
+      const int fd = accept4(listen_fd, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+      if (fd < 0) return;
+      if (clients.size() >= kMaxTcpClients) DropClient(IdlestClient());
+      clients.push_back({fd, {}, false, Clock::now()});
+    }
+  }
+
+  int IdlestClient() const {
+    const TcpClient* idlest = &clients.front();
+    for (const TcpClient& c : clients) {
+      if (std::pair(c.spoke, c.last_active) < std::pair(idlest->spoke, idlest->last_active)) idlest = &c;
+    }
+    return idlest->fd;
+  }
+
+  TcpClient* FindClient(int fd) {
+    for (TcpClient& c : clients) {
+      if (c.fd == fd) return &c;
+    }
+    return nullptr;
   }
 
   void DropClient(int fd) {
     close(fd);
-    clients.erase(std::remove(clients.begin(), clients.end(), fd), clients.end());
+    clients.erase(std::remove_if(clients.begin(), clients.end(), [fd](const TcpClient& c) { return c.fd == fd; }),
+                  clients.end());
   }
 
-  void Serve(int fd) {
-    modbus_set_socket(ctx, fd);
-    uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
-    const int size = modbus_receive(ctx, query);
-    if (size < 0) {
-      if (tcp) DropClient(fd);  // closed by the client or broken; RTU: a garbled frame is dropped
-      return;
+  // Reads what the client sent, without blocking (libmodbus' modbus_receive
+  // select()s, which aborts on a descriptor past FD_SETSIZE), and serves each
+  // complete request. A client that sends what cannot be Modbus TCP is dropped.
+  void ReceiveTcp(int fd) {
+    uint8_t bytes[1024];
+    const ssize_t n = recv(fd, bytes, sizeof bytes, MSG_DONTWAIT);
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) return;
+    TcpClient* client = FindClient(fd);
+    if (client == nullptr) return;
+    if (n <= 0) return DropClient(fd);  // closed by the client or broken
+    client->pending.insert(client->pending.end(), bytes, bytes + n);
+    for (;;) {
+      const int size = CompleteTcpFrame(client->pending);
+      if (size < 0) return DropClient(fd);
+      if (size == 0) return;
+      client->spoke = true;
+      client->last_active = Clock::now();
+      const std::vector<uint8_t> query(client->pending.begin(), client->pending.begin() + size);
+      client->pending.erase(client->pending.begin(), client->pending.begin() + size);
+      Serve(fd, query.data(), size);
+      client = FindClient(fd);  // a fault may have dropped it
+      if (client == nullptr) return;
     }
-    if (size == 0) return;  // addressed to another unit
-    if (const auto fault = TakeFault()) {
+  }
+
+  void ReceiveRtu() {
+    modbus_set_socket(ctx, pty_master);
+    uint8_t query[MODBUS_RTU_MAX_ADU_LENGTH];
+    const int size = modbus_receive(ctx, query);
+    if (size > 0) Serve(pty_master, query, size);  // < 0: a garbled frame; 0: another unit's
+  }
+
+  // Serves a request addressed to this unit. Modbus over serial line (V1.02,
+  // 2.2): unit 0 is a broadcast, a write every server executes without a
+  // reply; the server answers only its own address. Modbus TCP (Messaging
+  // Implementation Guide V1.0b, 4.4.1.2) reaches a server by its IP address
+  // and has no broadcast: this server answers its own unit id only and
+  // ignores any other, 0 included (the client times out, as behind a gateway
+  // with no such unit).
+  void Serve(int fd, const uint8_t* query, int size) {
+    const int h = modbus_get_header_length(ctx);
+    if (!WellFormed(query, size, h, tcp ? 0 : kRtuCrcBytes)) return;
+    const int unit = query[h - 1];
+    const bool broadcast = !tcp && unit == MODBUS_BROADCAST_ADDRESS;
+    if (unit != options.slave_id && !broadcast) return;
+    if (broadcast && !IsWrite(query[h])) return;
+    modbus_set_socket(ctx, fd);
+    if (const auto fault = broadcast ? std::nullopt : TakeFault()) {
       InjectInto(fd, *fault, query);
       return;
     }
-    Answer(query, size);
+    Answer(query, size, broadcast);
   }
 
   void InjectInto(int fd, const PendingFault& f, const uint8_t* query) {
@@ -183,14 +291,19 @@ struct ModbusTurntableServer::Impl {
     (void)!write(fd, frame.data(), frame.size());
   }
 
-  void Answer(const uint8_t* query, int size) {
+  // Replies with `exception`, unless the request was a broadcast (no replies).
+  void Refuse(const uint8_t* query, unsigned exception, bool broadcast) {
+    if (!broadcast) modbus_reply_exception(ctx, query, exception);
+  }
+
+  void Answer(const uint8_t* query, int size, bool broadcast) {
     const int h = modbus_get_header_length(ctx);
     const int function = query[h];
-    const int address = Word(query + h + 1);
-    if (function != kReadHolding && function != kWriteSingle && function != kWriteMultiple) {
-      modbus_reply_exception(ctx, query, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+    if (function != kReadHolding && !IsWrite(function)) {
+      Refuse(query, MODBUS_EXCEPTION_ILLEGAL_FUNCTION, broadcast);
       return;
     }
+    const int address = Word(query + h + 1);  // WellFormed: present for these functions
     RefreshStatus();
     if (function == kReadHolding) {
       modbus_reply(ctx, query, size, mapping);
@@ -200,15 +313,16 @@ struct ModbusTurntableServer::Impl {
     const int count = function == kWriteSingle ? 1 : Word(query + h + 3);
     const uint8_t* values = query + h + (function == kWriteSingle ? 3 : 6);
     if (TouchesReadOnly(address, count)) {
-      modbus_reply_exception(ctx, query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+      Refuse(query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS, broadcast);
       return;
     }
     const int command_at = options.map.command - address;
     const bool writes_command = command_at >= 0 && command_at < count;
     if (writes_command && !KnownCommand(Word(values + 2 * command_at))) {
-      modbus_reply_exception(ctx, query, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+      Refuse(query, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE, broadcast);
       return;
     }
+    // libmodbus sends no reply to an RTU broadcast.
     if (modbus_reply(ctx, query, size, mapping) < 0) return;
     ++served;
     if (writes_command) Execute();
@@ -284,8 +398,8 @@ Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(s
   impl->ctx = modbus_new_tcp(host.c_str(), port);
   if (impl->ctx == nullptr) return InvalidArgument("Modbus server: bad address " + host + ": " + modbus_strerror(errno));
   HR_RETURN_IF_ERROR(impl->Setup());
-  impl->listen_fd = modbus_tcp_listen(impl->ctx, 8);
-  if (impl->listen_fd < 0) {
+  impl->listen_fd = modbus_tcp_listen(impl->ctx, kListenBacklog);
+  if (impl->listen_fd < 0 || fcntl(impl->listen_fd, F_SETFL, O_NONBLOCK) != 0) {
     return Unavailable("Modbus server: cannot listen on " + host + ":" + std::to_string(port) + ": " +
                        modbus_strerror(errno));
   }
@@ -310,6 +424,10 @@ Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartRtu(s
     return Unavailable(std::string("Modbus RTU server: openpty failed: ") + std::strerror(errno));
   }
   impl->pty_path = name;
+  if (impl->pty_master >= FD_SETSIZE) {  // libmodbus' modbus_receive select()s on it
+    return Unavailable("Modbus RTU server: descriptor " + std::to_string(impl->pty_master) +
+                       " is past FD_SETSIZE; this process has too many files open");
+  }
   termios raw{};
   tcgetattr(impl->pty_slave, &raw);
   cfmakeraw(&raw);

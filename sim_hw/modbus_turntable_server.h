@@ -11,10 +11,20 @@
 // registers get exception 2 (illegal data address), an unknown command code
 // exception 3 (illegal data value), any other function exception 1.
 //
-// Transports: TCP on 127.0.0.1 with an ephemeral port, several clients at
-// once; RTU over a pseudo-terminal pair (openpty) whose client end is
-// device_path(). Faults for tests are injected per request (InjectFault).
-// Runs on its own thread from Start*() until Stop() or destruction.
+// Unit ids: the server answers its own `slave_id` only. On RTU a request to
+// unit 0 (broadcast) that writes is executed without a reply (Modbus over
+// serial line V1.02, 2.2); on TCP, which has no broadcast, unit 0 is ignored
+// like any other unit's request.
+//
+// Transports: TCP on 127.0.0.1 with an ephemeral port, up to 32 clients at
+// once, read with poll() and non-blocking sockets (any number of connections
+// or descriptors); past 32 a new connection closes the one idle longest,
+// preferring one that never sent a request, so a flood of connections can
+// neither stop the server nor lock out a client that polls it. A client that
+// sends what is not Modbus TCP is disconnected. RTU over a pseudo-terminal
+// pair (openpty) whose client end is device_path(). Faults for tests are
+// injected per request (InjectFault). Runs on its own thread from Start*()
+// until Stop() or destruction.
 #pragma once
 
 #include <memory>

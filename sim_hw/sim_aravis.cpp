@@ -6,13 +6,26 @@
 #include <chrono>
 #include <deque>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include <opencv2/imgproc.hpp>
 
+#include "sim_hw/gvcp_guard.h"
 #include "sim_hw/sim_devices.h"
 
 namespace hairrig {
+
+namespace {
+
+// The buffer size Aravis' fake camera checks a buffer against before it is
+// filled, computed as it does (32-bit arithmetic: it wraps).
+uint64_t FakePayloadBytes(int width, int height, ArvPixelFormat format) {
+  const uint32_t bits = ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format);
+  return static_cast<uint32_t>(width) * static_cast<uint32_t>(height) * bits / 8u;
+}
+
+}  // namespace
 
 class SimAravisFeed::Impl {
  public:
@@ -147,6 +160,10 @@ class SimAravisFeed::Impl {
       }
       default: cv::cvtColor(*image, converted, cv::COLOR_BGR2GRAY); break;
     }
+    // Width, height and pixel format are registers a GigE client writes; the
+    // buffer holds at least what the fake computes from them, which may wrap.
+    const uint64_t bytes = static_cast<uint64_t>(w) * static_cast<uint64_t>(h) * CV_ELEM_SIZE(type);
+    if (w <= 0 || h <= 0 || bytes > FakePayloadBytes(w, h, format)) return;
     // The camera's region is its top-left w x h; outside the render is black.
     cv::Mat target(h, w, type, out);
     target.setTo(0);
@@ -206,12 +223,18 @@ class SimGigECamera::Impl {
 Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimWorld> world,
                                                             SimAravisOptions options) {
   auto impl = std::make_unique<Impl>(world, options);
-  impl->gv = arv_gv_fake_camera_new("127.0.0.1", options.serial.c_str());
+  const std::set<int> before = OpenDescriptors();
+  impl->gv = arv_gv_fake_camera_new(impl->address.c_str(), options.serial.c_str());
   if (impl->gv == nullptr || !arv_gv_fake_camera_is_running(impl->gv)) {
-    return Unavailable("simulated GigE Vision camera " + options.serial +
-                       ": Aravis cannot serve on 127.0.0.1:3956 (is the loopback interface up?)");
+    return Unavailable("simulated GigE Vision camera " + options.serial + ": Aravis cannot serve on " + impl->address +
+                       ":3956 (is the loopback interface up?)");
   }
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl->gv);
+  size_t genicam_bytes = 0;
+  arv_fake_camera_get_genicam_xml(fake, &genicam_bytes);
+  const GvcpMemoryLimits limits{static_cast<uint32_t>(ARV_FAKE_CAMERA_MEMORY_SIZE + genicam_bytes),
+                                ARV_FAKE_CAMERA_MEMORY_SIZE};
+  HR_RETURN_IF_ERROR(GuardGvFakeSockets(before, impl->address, limits).status());
   // The fake starts at 512 x 512; a client sees the scene camera's full frame.
   const auto& intrinsics = WorldRenderer(*world).scene().cameras.at(static_cast<size_t>(options.scene_camera)).intrinsics;
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, static_cast<guint32>(intrinsics.width_px));

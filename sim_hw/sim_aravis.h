@@ -5,7 +5,10 @@
 //     camera's serial, and opens it as an ArvCamera;
 //   - GigE Vision on 127.0.0.1: SimGigECamera runs Aravis' GigE fake camera
 //     (GVCP on port 3956, so one per machine at a time); the backend opens it
-//     by address like any GigE camera, over real UDP packets.
+//     by address like any GigE camera, over real UDP packets. Its sockets are
+//     guarded (sim_hw/gvcp_guard.h): a kernel filter drops control packets
+//     that would crash Aravis' fake, and its discovery socket (bound to
+//     255.255.255.255) is confined to the loopback interface.
 // Either way each frame is rendered when the fake camera produces it (a
 // software trigger, or a pulse on the world's trigger line when the camera is
 // in Line0 trigger mode), at the world's turntable angle and lights, and

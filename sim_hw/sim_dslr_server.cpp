@@ -1,6 +1,8 @@
 #include "sim_hw/sim_dslr_server.h"
 
+#include <signal.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -10,6 +12,7 @@
 #include <cstring>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -525,6 +528,53 @@ Status ExportSimDslrCamlibs() {
   return Status::Ok();
 }
 
+namespace {
+
+constexpr char kFolderPrefix[] = "hairrig-dslr-";
+constexpr char kOwnerFile[] = "owner.pid";
+
+// Whether something accepts connections on the Unix socket at `path`.
+bool SocketListens(const std::string& path) {
+  sockaddr_un address{};
+  if (path.size() >= sizeof address.sun_path) return false;
+  address.sun_family = AF_UNIX;
+  std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const bool listens = fd >= 0 && connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  if (fd >= 0) close(fd);
+  return listens;
+}
+
+// The process named in `folder`'s owner file; 0 when there is none.
+pid_t FolderOwner(const std::filesystem::path& folder) {
+  std::ifstream in(folder / kOwnerFile);
+  long pid = 0;
+  if (!(in >> pid) || pid <= 0) return 0;
+  return static_cast<pid_t>(pid);
+}
+
+bool IsStaleFolder(const std::filesystem::path& folder) {
+  struct stat info {};
+  if (lstat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != getuid()) return false;
+  const pid_t owner = FolderOwner(folder);
+  if (owner == 0 || kill(owner, 0) == 0 || errno != ESRCH) return false;
+  return !SocketListens((folder / proto::kSocketName).string());
+}
+
+}  // namespace
+
+int RemoveStaleSimDslrFolders(const std::string& parent) {
+  int removed = 0;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(parent, ec)) {
+    if (entry.path().filename().string().rfind(kFolderPrefix, 0) != 0 || !IsStaleFolder(entry.path())) continue;
+    std::error_code remove_error;
+    std::filesystem::remove_all(entry.path(), remove_error);
+    if (!remove_error) ++removed;
+  }
+  return removed;
+}
+
 Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimWorld> world, SimDslrOptions options) {
   if (options.serial.empty()) return InvalidArgument("simulated DSLR: a serial number is required");
   const Scene& scene = WorldRenderer(*world).scene();
@@ -534,13 +584,16 @@ Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimW
   }
   bool owns_folder = false;
   if (options.folder.empty()) {
-    std::string pattern = (std::filesystem::temp_directory_path() / "hairrig-dslr-XXXXXX").string();
+    const std::filesystem::path parent = std::filesystem::temp_directory_path();
+    RemoveStaleSimDslrFolders(parent.string());
+    std::string pattern = (parent / (std::string(kFolderPrefix) + "XXXXXX")).string();
     if (mkdtemp(pattern.data()) == nullptr) {
-      return IoError("simulated DSLR " + options.serial + ": cannot make a folder under " +
-                     std::filesystem::temp_directory_path().string() + ": " + std::strerror(errno));
+      return IoError("simulated DSLR " + options.serial + ": cannot make a folder under " + parent.string() + ": " +
+                     std::strerror(errno));
     }
     options.folder = pattern;
     owns_folder = true;
+    std::ofstream(std::filesystem::path(pattern) / kOwnerFile) << getpid() << "\n";
   } else {
     std::error_code ec;
     std::filesystem::create_directories(options.folder, ec);

@@ -37,7 +37,8 @@ struct SimDslrOptions {
   std::string serial;          // the camera's serial number (required)
   int scene_camera = 0;        // the scene camera whose view it renders
   std::string trigger_line;    // world trigger line that fires the shutter; "" for none
-  std::string folder;          // the port folder; "" makes a fresh one under $TMPDIR (removed on Stop)
+  std::string folder;          // the port folder; "" makes a fresh one under $TMPDIR (removed on Stop;
+                               // stale ones of killed processes are removed first)
   int reply_timeout_ms = 30000;  // the camlib's limit on waiting for any reply (told in HELLO)
 };
 
@@ -49,6 +50,13 @@ Result<std::string> SimDslrCamlibFolder();
 // loads its drivers. InvalidArgument when CAMLIBS is already set to a folder
 // without the simulated DSLR's camlib.
 Status ExportSimDslrCamlibs();
+
+// Removes the folders hairrig-dslr-* directly under `parent` that a killed
+// process left behind: owned by this user, not symbolic links, naming in
+// their owner.pid a process that no longer exists, with nothing listening on
+// their socket. A folder without owner.pid (one being made, or made by an
+// older build) is kept. Returns how many were removed.
+int RemoveStaleSimDslrFolders(const std::string& parent);
 
 class SimDslrServer {
  public:

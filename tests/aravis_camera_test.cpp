@@ -1,7 +1,10 @@
 // The `aravis` camera backend against Aravis' own fake camera fed with the
 // rendered world: in-process (ArvFakeDevice) and as a GigE Vision camera on
 // 127.0.0.1, over real GVCP/GVSP packets.
+#include <sys/socket.h>
+
 #include <cmath>
+#include <cstring>
 #include <memory>
 
 #include <gtest/gtest.h>
@@ -13,7 +16,9 @@
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_devices.h"
+#include "sim_hw/gvcp_guard.h"
 #include "tests/support/camera_checks.h"
+#include "tests/support/gvcp_packets.h"
 #include "tests/support/sim_world.h"
 
 namespace hairrig {
@@ -220,6 +225,39 @@ TEST(AravisGigE, StreamsRenderedFramesOverLoopbackWithoutLoss) {
   auto by_serial = MakeAravisCamera({DeviceKind::kCamera, "lower", "aravis", kSerial, "test"}, o);
   const Status found = by_serial->Open();
   EXPECT_TRUE(found.ok()) << found.ToString();
+}
+
+// One control packet with an address outside Aravis' fake camera's memory
+// (a READMEM at 0xFFFFFFF0) crashed the process it ran in; the guard drops
+// such packets in the kernel, and the fake keeps serving. Its discovery
+// socket (255.255.255.255:3956) is confined to the loopback interface.
+TEST(AravisGigE, HostileControlPacketsDoNotCrashTheFake) {
+  const World w{hairrig_test::MakeSimWorld({}, /*lights_on=*/true, "tests/data/small_scene.yaml")};
+  auto gige = SimGigECamera::Start(w.world, {kSerial, kSceneCamera, ""});
+  ASSERT_TRUE(gige.ok()) << gige.status().ToString();
+  const std::string host = (*gige)->address();
+  const auto read_test_register = hairrig_test::GvcpCommand(hairrig_test::kGvcpReadRegister,
+                                                            {hairrig_test::kFakeTestRegister});
+  ASSERT_EQ(hairrig_test::AskGvcp(host, read_test_register), 12);
+  for (const auto& packet : hairrig_test::HostileGvcpPackets()) {
+    EXPECT_EQ(hairrig_test::AskGvcp(host, packet, 100), -1) << "a hostile packet was answered";
+  }
+  EXPECT_EQ(hairrig_test::AskGvcp(host, read_test_register), 12);
+  int broadcast_sockets = 0;
+  for (int fd : OpenDescriptors()) {
+    sockaddr_in bound{};
+    socklen_t size = sizeof bound;
+    if (getsockname(fd, reinterpret_cast<sockaddr*>(&bound), &size) != 0 || bound.sin_family != AF_INET ||
+        ntohs(bound.sin_port) != kGvcpPort || bound.sin_addr.s_addr != htonl(INADDR_BROADCAST)) {
+      continue;
+    }
+    ++broadcast_sockets;
+    char device[32] = {};
+    socklen_t device_size = sizeof device;
+    ASSERT_EQ(getsockopt(fd, SOL_SOCKET, SO_BINDTODEVICE, device, &device_size), 0);
+    EXPECT_STREQ(device, "lo");
+  }
+  EXPECT_LE(broadcast_sockets, 1);
 }
 
 }  // namespace

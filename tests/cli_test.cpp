@@ -2,6 +2,8 @@
 // codes on bad input, JSON summaries with --json, files where it says.
 
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/command_run.h"
+#include "tests/support/gvcp_packets.h"
 
 namespace {
 
@@ -136,29 +139,50 @@ TEST(Cli, BadArgumentsAreRefused) {
   EXPECT_NE(Hairrig("frobnicate").exit_code, 0);
 }
 
+// A running `hairrig sim serve --no-rtu`, its stdout in `log`.
+struct SimServe {
+  pid_t pid = -1;
+  std::string log;
+  std::string modbus_port;  // empty when no endpoint was printed
+};
+
+SimServe StartSimServe(const std::string& name) {
+  SimServe serve;
+  serve.log = ::testing::TempDir() + "/" + name + ".out";
+  std::filesystem::remove(serve.log);
+  serve.pid = fork();
+  if (serve.pid == 0) {
+    std::freopen(serve.log.c_str(), "w", stdout);
+    execl(HAIRRIG_BIN, HAIRRIG_BIN, "sim", "serve", "--no-rtu", "--time-scale", "0.01", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  for (int i = 0; i < 600 && serve.pid > 0 && serve.modbus_port.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const std::string text = ReadText(serve.log);
+    const size_t at = text.find("127.0.0.1:");
+    const size_t end = text.find(' ', at);
+    if (at != std::string::npos && end != std::string::npos) serve.modbus_port = text.substr(at + 10, end - at - 10);
+  }
+  return serve;
+}
+
+// Stops it with SIGINT; its exit code, -1 when it did not exit by itself.
+int StopSimServe(const SimServe& serve) {
+  kill(serve.pid, SIGINT);
+  int status = 0;
+  if (waitpid(serve.pid, &status, 0) != serve.pid || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
 // `hairrig sim serve` runs the simulated Modbus controller for outside tools
 // until Ctrl-C, and says how to reach it.
 // Serves the Modbus controller, the DSLRs and the GigE Vision camera; outside
 // tools (mbpoll, Aravis' arv-camera-test) reach them until Ctrl-C.
 TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
-  const std::string log = ::testing::TempDir() + "/sim_serve.out";
-  std::filesystem::remove(log);
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    execl(HAIRRIG_BIN, HAIRRIG_BIN, "sim", "serve", "--no-rtu", "--time-scale", "0.01", static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  std::string port;
-  for (int i = 0; i < 600 && port.empty(); ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    const std::string text = ReadText(log);
-    const size_t at = text.find("127.0.0.1:");
-    const size_t end = text.find(' ', at);
-    if (at != std::string::npos && end != std::string::npos) port = text.substr(at + 10, end - at - 10);
-  }
-  ASSERT_FALSE(port.empty()) << "no endpoint printed:\n" << ReadText(log);
+  const SimServe serve = StartSimServe("sim_serve");
+  ASSERT_GT(serve.pid, 0);
+  const std::string& port = serve.modbus_port;
+  ASSERT_FALSE(port.empty()) << "no endpoint printed:\n" << ReadText(serve.log);
   const std::string mbpoll = "mbpoll -m tcp -p " + port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
   EXPECT_EQ(std::system(mbpoll.c_str()), 0) << mbpoll;
   // Aravis' own test client streams from the GigE fake for 4 s (then SIGINT, which it handles).
@@ -169,12 +193,8 @@ TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
   EXPECT_NE(arv_text.find("device serial number   = SIM-CAM-LOWER"), std::string::npos) << arv_text;
   EXPECT_NE(arv_text.find("image width            = 1200"), std::string::npos) << arv_text;
   EXPECT_NE(arv_text.find("n_completed_buffers"), std::string::npos) << arv_text;
-  kill(pid, SIGINT);
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
-  const std::string text = ReadText(log);
+  EXPECT_EQ(StopSimServe(serve), 0);
+  const std::string text = ReadText(serve.log);
   EXPECT_NE(text.find("try: mbpoll -m tcp -p " + port), std::string::npos) << text;
   EXPECT_NE(text.find("stopped (SIGINT)"), std::string::npos) << text;
   EXPECT_NE(text.find(": 1 requests served"), std::string::npos) << text;
@@ -182,6 +202,41 @@ TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
   EXPECT_NE(text.find("export CAMLIBS="), std::string::npos) << text;
   EXPECT_EQ(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: 0 frames"), std::string::npos) << text;
   EXPECT_NE(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: "), std::string::npos) << text;
+}
+
+// Whether the simulated DSLR serving `port` ("disk:<folder>") accepts a connection.
+bool DslrAccepts(const std::string& port) {
+  const std::string path = port.substr(5) + "/camera.sock";
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  std::snprintf(address.sun_path, sizeof address.sun_path, "%s", path.c_str());
+  const bool ok = fd >= 0 && connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+  if (fd >= 0) close(fd);
+  return ok;
+}
+
+// One GVCP packet at 0xFFFFFFF0 crashed Aravis' GigE fake and took the
+// Modbus and DSLR simulators of `sim serve` down with it.
+TEST(Cli, SimServeSurvivesHostileGigEControlPackets) {
+  const SimServe serve = StartSimServe("sim_serve_hostile");
+  ASSERT_GT(serve.pid, 0);
+  ASSERT_FALSE(serve.modbus_port.empty()) << "no endpoint printed:\n" << ReadText(serve.log);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // every simulator printed and serving
+  for (const auto& packet : hairrig_test::HostileGvcpPackets()) hairrig_test::AskGvcp("127.0.0.1", packet, 100);
+  EXPECT_EQ(waitpid(serve.pid, nullptr, WNOHANG), 0) << "sim serve died:\n" << ReadText(serve.log);
+  const auto read_test_register =
+      hairrig_test::GvcpCommand(hairrig_test::kGvcpReadRegister, {hairrig_test::kFakeTestRegister});
+  EXPECT_EQ(hairrig_test::AskGvcp("127.0.0.1", read_test_register), 12);
+  const std::string mbpoll =
+      "mbpoll -m tcp -p " + serve.modbus_port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
+  EXPECT_EQ(std::system(mbpoll.c_str()), 0) << mbpoll;
+  const std::string text = ReadText(serve.log);
+  const size_t disk = text.find("--port disk:");
+  ASSERT_NE(disk, std::string::npos) << text;
+  const std::string dslr_port = text.substr(disk + 7, text.find_first_of(" \n", disk + 7) - disk - 7);
+  EXPECT_TRUE(DslrAccepts(dslr_port)) << dslr_port;
+  EXPECT_EQ(StopSimServe(serve), 0);
 }
 
 }  // namespace

@@ -1,7 +1,11 @@
 // The `gphoto2` camera backend against the simulated DSLR, through the
 // unmodified libgphoto2 loading the project's camlib (CAMLIBS); and the
 // simulated DSLR against an independent client, the `gphoto2` command.
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -65,6 +69,51 @@ Bench StartBench(std::vector<SimFault> faults = {}, const std::string& trigger_l
   b.camera = MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"},
                                ClientOptions(*b.server));
   return b;
+}
+
+// A killed process leaves its port folder, socket and all; the next server
+// to start removes such folders whose owner is gone, and no other.
+TEST(SimDslrServer, RemovesTheFoldersKilledProcessesLeft) {
+  namespace fs = std::filesystem;
+  const fs::path parent = fs::path(::testing::TempDir()) / ("dslr_stale_" + std::to_string(getpid()));
+  fs::remove_all(parent);
+  fs::create_directories(parent);
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  ASSERT_EQ(waitpid(gone, nullptr, 0), gone);
+  const auto leave = [&](const std::string& name, pid_t owner) {
+    fs::create_directories(parent / name);
+    std::ofstream(parent / name / sim_dslr::kSocketName) << "";  // nothing listens on it
+    if (owner != 0) std::ofstream(parent / name / "owner.pid") << owner << "\n";
+  };
+  leave("hairrig-dslr-killed", gone);
+  leave("hairrig-dslr-running", getpid());
+  leave("hairrig-dslr-no-owner", 0);
+  leave("another-folder", gone);
+  const std::string tmpdir = std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "";
+  setenv("TMPDIR", parent.c_str(), 1);
+  SimDslrOptions options;
+  options.serial = kSerial;
+  auto server = SimDslrServer::Start(hairrig_test::MakeSimWorld(), options);
+  if (tmpdir.empty()) {
+    unsetenv("TMPDIR");
+  } else {
+    setenv("TMPDIR", tmpdir.c_str(), 1);
+  }
+  ASSERT_TRUE(server.ok()) << server.status().ToString();
+  EXPECT_FALSE(fs::exists(parent / "hairrig-dslr-killed"));
+  for (const char* kept : {"hairrig-dslr-running", "hairrig-dslr-no-owner", "another-folder"}) {
+    EXPECT_TRUE(fs::exists(parent / kept)) << kept;
+  }
+  const fs::path own = (*server)->folder();
+  EXPECT_EQ(own.parent_path(), parent);
+  std::ifstream owner(own / "owner.pid");
+  pid_t recorded = 0;
+  EXPECT_TRUE(owner >> recorded);
+  EXPECT_EQ(recorded, getpid());
+  (*server)->Stop();
+  EXPECT_FALSE(fs::exists(own));
+  fs::remove_all(parent);
 }
 
 TEST(Gphoto2Camera, OpensBySerialShootsAndDownloadsTheRenderedView) {

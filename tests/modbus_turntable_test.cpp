@@ -1,12 +1,20 @@
 // The `modbus` turntable driver against the simulated controller, a real
 // libmodbus server, over TCP on loopback and RTU over a pseudo-terminal pair;
 // and the server against an independent client, mbpoll.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <cstdio>
 #include <memory>
 #include <thread>
 
 #include <gtest/gtest.h>
 
+#include "drivers/modbus_link.h"
 #include "drivers/modbus_turntable.h"
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/scene.h"
@@ -211,6 +219,115 @@ TEST(ModbusTurntable, NoServerIsUnavailableNamingTheEndpoint) {
   const Status s = b.table->Open();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
   EXPECT_NE(s.message().find("127.0.0.1:" + std::to_string(port)), std::string::npos) << s.message();
+}
+
+// A listening TCP socket on 127.0.0.1 with an ephemeral port.
+int ListenOnLoopback(int backlog, int* port) {
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof a;
+  if (fd < 0 || bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || listen(fd, backlog) != 0 ||
+      getsockname(fd, reinterpret_cast<sockaddr*>(&a), &length) != 0) {
+    return -1;
+  }
+  *port = ntohs(a.sin_port);
+  return fd;
+}
+
+// A TCP peer that answers whatever it is sent in HTTP, then hangs up (what a
+// web server, or a proxy intercepting an unreachable address, does).
+class HttpPeer {
+ public:
+  HttpPeer() : fd_(ListenOnLoopback(8, &port_)), thread_([this] { Serve(); }) {}
+  ~HttpPeer() {
+    stop_ = true;
+    thread_.join();
+    close(fd_);
+  }
+  int port() const { return port_; }
+
+ private:
+  void Serve() {
+    while (!stop_) {
+      pollfd p{fd_, POLLIN, 0};
+      if (poll(&p, 1, 20) != 1) continue;
+      const int client = accept(fd_, nullptr, nullptr);
+      if (client < 0) continue;
+      pollfd c{client, POLLIN, 0};
+      char request[512];
+      if (poll(&c, 1, 1000) == 1 && recv(client, request, sizeof request, 0) > 0) {
+        const std::string reply = "HTTP/1.1 400 Bad Request\r\nconnection: close\r\ncontent-length: 0\r\n\r\n";
+        (void)!send(client, reply.data(), reply.size(), MSG_NOSIGNAL);
+      }
+      close(client);
+    }
+  }
+
+  int port_ = 0;
+  int fd_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+ModbusEndpoint LoopbackEndpoint(int port, int timeout_ms) {
+  ModbusEndpoint e;
+  e.host = "127.0.0.1";
+  e.port = port;
+  e.timeout_ms = timeout_ms;
+  e.retries = 1;
+  return e;
+}
+
+// Such a peer was reported as a Modbus controller sending a "malformed reply".
+TEST(ModbusLink, APeerThatDoesNotSpeakModbusIsCannotConnect) {
+  HttpPeer peer;
+  ModbusLink link(LoopbackEndpoint(peer.port(), 300));
+  ASSERT_TRUE(link.Connect().ok());  // TCP connects; the first request shows what answers
+  auto read = link.Read(100, 8);
+  ASSERT_FALSE(read.ok());
+  const std::string m = read.status().message();
+  EXPECT_EQ(read.status().code(), StatusCode::kUnavailable) << m;
+  const std::string endpoint = "127.0.0.1:" + std::to_string(peer.port());
+  EXPECT_NE(m.find("cannot connect to Modbus tcp " + endpoint), std::string::npos) << m;
+  EXPECT_NE(m.find("check that " + endpoint + " is the controller's address and Modbus TCP port"), std::string::npos)
+      << m;
+}
+
+// A listener whose accept queue is full drops further connection requests,
+// as an unreachable host does: the connection attempt times out.
+TEST(ModbusLink, AHostThatDoesNotAnswerIsCannotConnectWithinTheTimeout) {
+  int port = 0;
+  const int listener = ListenOnLoopback(0, &port);
+  ASSERT_GE(listener, 0);
+  std::vector<int> fillers;
+  for (int i = 0; i < 3; ++i) {
+    fillers.push_back(socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    (void)!connect(fillers.back(), reinterpret_cast<sockaddr*>(&a), sizeof a);
+  }
+  std::this_thread::sleep_for(milliseconds(100));
+  ModbusLink link(LoopbackEndpoint(port, 200));
+  const Status s = link.Connect();
+  for (int fd : fillers) close(fd);
+  close(listener);
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("cannot connect to Modbus tcp 127.0.0.1:" + std::to_string(port) +
+                             " unit 1: no answer within 200 ms; check"),
+            std::string::npos)
+      << s.message();
+}
+
+TEST(ModbusLink, AHostNameThatDoesNotResolveIsNamed) {
+  ModbusEndpoint e = LoopbackEndpoint(502, 200);
+  e.host = "no-such-controller.invalid";
+  const Status s = ModbusLink(e).Connect();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+  EXPECT_NE(s.message().find("'no-such-controller.invalid' does not resolve"), std::string::npos) << s.message();
 }
 
 TEST(ModbusTurntable, ServerRefusesReadOnlyRegistersAndUnknownCommands) {
