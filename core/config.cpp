@@ -1,10 +1,11 @@
 #include "core/config.h"
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
+
+#include "core/file_util.h"
 
 namespace hairrig {
 
@@ -62,11 +63,11 @@ Result<ConfigNode> ConfigNode::LoadString(const std::string& text, const std::st
 }
 
 Result<ConfigNode> ConfigNode::LoadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return NotFound(path + ": cannot open the config file (check the path)");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return LoadString(buffer.str(), path);
+  Result<std::string> text = ReadFileText(path, kMaxConfigFileBytes);
+  if (!text.ok() && text.status().code() == StatusCode::kNotFound)
+    return NotFound(path + ": cannot open the config file (check the path)");
+  if (!text.ok()) return text.status();
+  return LoadString(*text, path);
 }
 
 bool ConfigNode::ok() const { return impl_->doc->first_error.ok(); }

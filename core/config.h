@@ -11,6 +11,7 @@
 // `status()` once. Optional fields take a fallback.
 #pragma once
 
+#include <cstdint>
 #include <initializer_list>
 #include <limits>
 #include <memory>
@@ -29,8 +30,13 @@ struct NumberRange {
   double max = std::numeric_limits<double>::infinity();
 };
 
+// The largest config file LoadFile reads.
+inline constexpr uint64_t kMaxConfigFileBytes = uint64_t{4} << 20;
+
 class ConfigNode {
  public:
+  // A regular file of at most kMaxConfigFileBytes (core/file_util.h
+  // ReadFileChunks: a folder, FIFO or device such as /dev/zero is refused).
   static Result<ConfigNode> LoadFile(const std::string& path);
   // `origin` names the text in messages (a file name, "<command line>").
   static Result<ConfigNode> LoadString(const std::string& text, const std::string& origin);
