@@ -113,6 +113,10 @@ void JsonObject::Fail(std::string_view key, const std::string& what) const {
   if (error_->ok()) *error_ = CorruptData(Describe(key) + ": " + what);
 }
 
+void JsonObject::Record(const Status& status) const {
+  if (error_->ok() && !status.ok()) *error_ = CorruptData(status.message());
+}
+
 bool JsonObject::Has(std::string_view key) const {
   if (!j_->is_object()) return false;
   const auto it = j_->find(key);

@@ -97,6 +97,8 @@ class JsonObject {
 
   // Records `what` against field `key` ("" for this object) if nothing was recorded yet.
   void Fail(std::string_view key, const std::string& what) const;
+  // Records another reader's error (its message already names the field) as CorruptData.
+  void Record(const Status& status) const;
 
  private:
   JsonObject(const nlohmann::json* j, std::string where, std::string path, std::shared_ptr<Status> error);
