@@ -16,10 +16,11 @@ struct ReplayArgs {
 };
 
 Result<nlohmann::json> RunReplay(const ReplayArgs& a) {
-  HR_ASSIGN_OR_RETURN(std::shared_ptr<ReplaySource> source, OpenReplaySource(a.dir, {.speed = a.speed}));
   CaptureOptions options;
   options.config_path = a.dir + "/rig.yaml";
   options.out_dir = a.out.empty() ? a.dir + "-replay" : a.out;
+  HR_RETURN_IF_ERROR(CheckReplayOutDir(a.dir, options.out_dir));
+  HR_ASSIGN_OR_RETURN(std::shared_ptr<ReplaySource> source, OpenReplaySource(a.dir, {.speed = a.speed}));
   options.rig_build.register_backends = [source](DeviceRegistry* registry) { RegisterReplayBackends(registry, source); };
   options.rig_build.backend_override = "replay";
   options.rig_build.simulate = false;
