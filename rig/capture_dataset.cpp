@@ -140,7 +140,9 @@ Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal
   for (size_t i = 0; i < records.size(); ++i) {
     if (JournalEvent(records[i]) != "view_planned") continue;
     const std::string where = JournalLine(journal_path, i);
-    HR_ASSIGN_OR_RETURN(PlannedViewRecord view, PlannedViewRecord::FromJson(records[i], where));
+    Result<PlannedViewRecord> read = PlannedViewRecord::FromJson(records[i], where);
+    if (!read.ok()) return CorruptData(read.status().message() + "; " + kAlteredAdvice);
+    const PlannedViewRecord& view = *read;
     const auto [it, added] = planned.emplace(view.view, view);
     if (!added && !(it->second == view)) {
       return CorruptData(where + ": plans " + view.Describe() + ", an earlier line " + it->second.Describe() + "; " +
