@@ -380,7 +380,7 @@ TEST(CaptureDatasetHostile, ReplayOutputMayNotLieInsideTheRecording) {
   const std::string dir = DamageableCapture("dataset_replay_out");
   EXPECT_EQ(CheckReplayOutDir(dir, dir + "/frames/sub").code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(CheckReplayOutDir(dir, dir).code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(CheckReplayOutDir(dir + "/", dir + "/../c/x").code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(CheckReplayOutDir(dir, dir + "/../c/x").code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(CheckReplayOutDir(dir, dir + "-replay").ok());
 }
 

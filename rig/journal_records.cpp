@@ -58,8 +58,8 @@ std::string JournalEvent(const nlohmann::json& record) {
 }
 
 nlohmann::json CaptureMetadata::ToJson() const {
-  return {{"format", "hairrig-capture"}, {"version", 1},          {"config_source", config_source},
-          {"config_dir", config_dir},    {"subject", subject},    {"created_utc", created_utc}};
+  return {{"format", "hairrig-capture"}, {"version", 1},       {"config_source", config_source},
+          {"config_dir", config_dir},    {"subject", subject}, {"created_utc", created_utc}};
 }
 
 Result<CaptureMetadata> CaptureMetadata::FromJson(const nlohmann::json& j, const std::string& where) {
