@@ -1,8 +1,10 @@
 #include "calibration/calibration_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -63,11 +65,65 @@ ViewUncertainty UncertaintyFromJson(const nlohmann::json& j) {
   return u;
 }
 
-std::array<double, CameraIntrinsics::kNumParams> StddevFromJson(const nlohmann::json& j) {
+constexpr int64_t kMaxIndex = std::numeric_limits<int>::max();
+
+// Optional; each standard deviation finite and >= 0.
+std::array<double, CameraIntrinsics::kNumParams> StddevField(const JsonObject& j, const char* key) {
   std::array<double, CameraIntrinsics::kNumParams> sd{};
-  if (!j.is_object()) return sd;
-  for (size_t k = 0; k < sd.size(); ++k) sd[k] = j.value(CameraIntrinsics::kParamNames[k], 0.0);
+  if (!j.Has(key)) return sd;
+  const JsonObject o = j.Object(key);
+  for (size_t k = 0; k < sd.size(); ++k) sd[k] = o.NumberOr(CameraIntrinsics::kParamNames[k], 0.0, {.min = 0});
   return sd;
+}
+
+StoredCalibration::Camera CameraFromJson(const JsonObject& j) {
+  StoredCalibration::Camera camera;
+  camera.name = j.StringOr("name", "");
+  camera.serial = j.StringOr("serial", "");
+  camera.solved = j.BoolOr("solved", false);
+  if (!camera.solved) return camera;
+  camera.intrinsics = IntrinsicsField(j, "intrinsics");
+  camera.initial = IntrinsicsField(j, "intrinsics_initial");
+  camera.intrinsics_source = j.StringOr("intrinsics_source", "");
+  camera.intrinsics_stddev = StddevField(j, "intrinsics_stddev");
+  return camera;
+}
+
+StoredCalibration::Tag TagFromJson(const JsonObject& j) {
+  StoredCalibration::Tag t;
+  t.id = static_cast<int>(j.Integer("id", {.min = 0, .max = kMaxIndex}));
+  const nlohmann::json& corners = j.Raw("corners_px");
+  const auto is_uv = [](const nlohmann::json& c) {
+    return c.is_array() && c.size() == 2 && c[0].is_number() && c[1].is_number() &&
+           std::isfinite(c[0].get<double>()) && std::isfinite(c[1].get<double>());
+  };
+  if (!corners.is_array() || corners.size() != 4 || !std::all_of(corners.begin(), corners.end(), is_uv)) {
+    j.Fail("corners_px", "expected 4 corners [u, v] of finite numbers");
+    return t;
+  }
+  for (size_t k = 0; k < 4; ++k) t.corners_px[k] = {corners[k][0].get<double>(), corners[k][1].get<double>()};
+  return t;
+}
+
+StoredCalibration::View ViewFromJson(const JsonObject& j, size_t cameras) {
+  StoredCalibration::View view;
+  view.view = static_cast<int>(j.Integer("view", {.min = 0, .max = kMaxIndex}));
+  view.camera = static_cast<int>(j.Integer("camera", {.min = 0, .max = static_cast<int64_t>(cameras) - 1}));
+  view.frame = j.StringOr("frame", "");
+  view.solved = j.BoolOr("solved", false);
+  if (!view.solved) {
+    view.failure = j.StringOr("failure", "");
+    return view;
+  }
+  view.cam_from_box = PoseField(j, "cam_from_box");
+  view.cam_from_box_initial = PoseField(j, "cam_from_box_initial");
+  view.cam_from_object = PoseField(j, "cam_from_object");
+  view.rms_px = j.NumberOr("rms_px", 0.0, {.min = 0});
+  view.uncertainty = UncertaintyFromJson(j.Raw("uncertainty"));
+  if (j.Has("tags")) {
+    for (const JsonObject& tag : j.Objects("tags")) view.tags.push_back(TagFromJson(tag));
+  }
+  return view;
 }
 
 const char* ModeName(CalibrationMode mode) { return mode == CalibrationMode::kTurntable ? "turntable" : "free"; }
@@ -203,84 +259,21 @@ Status WriteCalibration(const std::string& dir, const CaptureCalibrationInput& i
 }
 
 Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
-  HR_ASSIGN_OR_RETURN(nlohmann::json root,
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j,
                       ReadJsonFile(calibration_json, "run `hairrig calibrate` on the capture first"));
-  const std::string& file = calibration_json;
-  if (root.value("format", "") != "hairrig-calibration" || root.value("version", 0) != 1)
-    return CorruptData(file + ": not a hairrig calibration of version 1");
-  if (!root.contains("cameras") || !root["cameras"].is_array() || !root.contains("views") || !root["views"].is_array())
-    return CorruptData(file + ": cameras and views must be arrays");
+  const JsonObject root(j, calibration_json);
+  if (root.StringOr("format", "") != "hairrig-calibration" || root.IntegerOr("version", 0) != 1 || !root.ok())
+    return CorruptData(calibration_json + ": not a hairrig calibration of version 1");
   StoredCalibration out;
-  out.mode = root.value("mode", "");
-  out.rms_px = root.value("rms_px", 0.0);
-  if (out.mode == "turntable") {
-    auto turntable_from_box = PoseFromJson(root.value("turntable_from_box", nlohmann::json()), file + ": turntable_from_box");
-    if (!turntable_from_box.ok()) return CorruptData(turntable_from_box.status().message());
-    out.turntable_from_box = *turntable_from_box;
+  out.mode = root.StringOr("mode", "");
+  out.rms_px = root.NumberOr("rms_px", 0.0, {.min = 0});
+  if (out.mode == "turntable") out.turntable_from_box = PoseField(root, "turntable_from_box");
+  for (const JsonObject& camera : root.Objects("cameras")) out.cameras.push_back(CameraFromJson(camera));
+  for (const JsonObject& view : root.Objects("views")) {
+    out.views.push_back(ViewFromJson(view, out.cameras.size()));
+    if (!root.ok()) break;
   }
-  for (size_t c = 0; c < root["cameras"].size(); ++c) {
-    const nlohmann::json& j = root["cameras"][c];
-    StoredCalibration::Camera camera;
-    camera.name = j.value("name", "");
-    camera.serial = j.value("serial", "");
-    if (j.value("solved", false)) {
-      auto intrinsics = IntrinsicsFromJson(j.value("intrinsics", nlohmann::json()),
-                                           file + ": cameras[" + std::to_string(c) + "].intrinsics");
-      if (!intrinsics.ok()) return CorruptData(intrinsics.status().message());
-      camera.intrinsics = *intrinsics;
-      auto initial = IntrinsicsFromJson(j.value("intrinsics_initial", nlohmann::json()),
-                                        file + ": cameras[" + std::to_string(c) + "].intrinsics_initial");
-      if (!initial.ok()) return CorruptData(initial.status().message());
-      camera.initial = *initial;
-      camera.intrinsics_source = j.value("intrinsics_source", "");
-      camera.intrinsics_stddev = StddevFromJson(j.value("intrinsics_stddev", nlohmann::json()));
-      camera.solved = true;
-    }
-    out.cameras.push_back(camera);
-  }
-  for (size_t v = 0; v < root["views"].size(); ++v) {
-    const nlohmann::json& j = root["views"][v];
-    const std::string where = file + ": views[" + std::to_string(v) + "]";
-    StoredCalibration::View view;
-    if (!j.contains("view") || !j["view"].is_number_integer() || !j.contains("camera") ||
-        !j["camera"].is_number_integer())
-      return CorruptData(where + ": view and camera must be integers");
-    view.view = j["view"].get<int>();
-    view.camera = j["camera"].get<int>();
-    if (view.camera < 0 || view.camera >= static_cast<int>(out.cameras.size()))
-      return CorruptData(where + ": camera " + std::to_string(view.camera) + " is not in cameras");
-    view.frame = j.value("frame", "");
-    view.solved = j.value("solved", false);
-    if (!view.solved) view.failure = j.value("failure", "");
-    if (view.solved) {
-      auto pose = PoseFromJson(j.value("cam_from_box", nlohmann::json()), where + ".cam_from_box");
-      if (!pose.ok()) return CorruptData(pose.status().message());
-      view.cam_from_box = *pose;
-      auto initial = PoseFromJson(j.value("cam_from_box_initial", nlohmann::json()), where + ".cam_from_box_initial");
-      if (!initial.ok()) return CorruptData(initial.status().message());
-      view.cam_from_box_initial = *initial;
-      auto object = PoseFromJson(j.value("cam_from_object", nlohmann::json()), where + ".cam_from_object");
-      if (!object.ok()) return CorruptData(object.status().message());
-      view.cam_from_object = *object;
-      view.rms_px = j.value("rms_px", 0.0);
-      view.uncertainty = UncertaintyFromJson(j.value("uncertainty", nlohmann::json()));
-      for (const nlohmann::json& tag : j.value("tags", nlohmann::json::array())) {
-        StoredCalibration::Tag t;
-        t.id = tag.value("id", -1);
-        const nlohmann::json corners = tag.value("corners_px", nlohmann::json::array());
-        if (t.id < 0 || !corners.is_array() || corners.size() != 4)
-          return CorruptData(where + ".tags: each tag needs an id and 4 corners_px");
-        for (size_t k = 0; k < 4; ++k) {
-          if (!corners[k].is_array() || corners[k].size() != 2 || !corners[k][0].is_number() || !corners[k][1].is_number())
-            return CorruptData(where + ".tags: corner " + std::to_string(k) + " of tag " + std::to_string(t.id) +
-                               " is not [u, v]");
-          t.corners_px[k] = {corners[k][0].get<double>(), corners[k][1].get<double>()};
-        }
-        view.tags.push_back(t);
-      }
-    }
-    out.views.push_back(view);
-  }
+  HR_RETURN_IF_ERROR(root.status());
   return out;
 }
 
@@ -304,49 +297,28 @@ Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, c
   return WriteFileAtomic(path, root.dump(1));
 }
 
-namespace {
-
-// A prior's standard deviations are finite and >= 0, or NaN (not known);
-// a negative one would silently drop that parameter's prior.
-Status CheckPriorStddev(const IntrinsicsPrior& prior) {
-  for (size_t k = 0; k < prior.stddev.size(); ++k) {
-    const double sd = prior.stddev[k];
-    if (std::isnan(sd) || (std::isfinite(sd) && sd >= 0)) continue;
-    std::ostringstream s;
-    s << prior.source << ": camera " << prior.serial << ": intrinsics_stddev." << CameraIntrinsics::kParamNames[k]
-      << " is " << sd << "; a standard deviation is >= 0";
-    return CorruptData(s.str());
-  }
-  return Status::Ok();
-}
-
-}  // namespace
-
 Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& path) {
-  HR_ASSIGN_OR_RETURN(nlohmann::json root,
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j,
                       ReadJsonFile(path, "give a calibration.json or a file from `hairrig calibrate-intrinsics`"));
-  std::vector<IntrinsicsPrior> priors;
-  if (root.value("format", "") == "hairrig-intrinsics") {
-    if (root.value("version", 0) != 1) return CorruptData(path + ": hairrig-intrinsics of an unknown version");
-    IntrinsicsPrior prior;
-    prior.serial = root.value("serial", "");
-    if (prior.serial.empty()) return CorruptData(path + ": serial is missing");
-    auto intrinsics = IntrinsicsFromJson(root.value("intrinsics", nlohmann::json()), path + ": intrinsics");
-    if (!intrinsics.ok()) return CorruptData(intrinsics.status().message());
-    prior.intrinsics = *intrinsics;
-    prior.stddev = StddevFromJson(root.value("intrinsics_stddev", nlohmann::json()));
-    prior.source = path;
-    HR_RETURN_IF_ERROR(CheckPriorStddev(prior));
-    priors.push_back(prior);
+  const JsonObject root(j, path);
+  if (root.StringOr("format", "") != "hairrig-intrinsics") {
+    HR_RETURN_IF_ERROR(root.status());
+    HR_ASSIGN_OR_RETURN(StoredCalibration calibration, ReadCalibration(path));
+    std::vector<IntrinsicsPrior> priors;
+    for (const StoredCalibration::Camera& camera : calibration.cameras) {
+      if (camera.solved) priors.push_back({camera.serial, camera.intrinsics, camera.intrinsics_stddev, path});
+    }
     return priors;
   }
-  HR_ASSIGN_OR_RETURN(StoredCalibration calibration, ReadCalibration(path));
-  for (const StoredCalibration::Camera& camera : calibration.cameras) {
-    if (!camera.solved) continue;
-    priors.push_back({camera.serial, camera.intrinsics, camera.intrinsics_stddev, path});
-    HR_RETURN_IF_ERROR(CheckPriorStddev(priors.back()));
-  }
-  return priors;
+  if (root.Integer("version") != 1 && root.ok()) return CorruptData(path + ": hairrig-intrinsics of an unknown version");
+  IntrinsicsPrior prior;
+  prior.serial = root.String("serial");
+  if (root.ok() && prior.serial.empty()) root.Fail("serial", "is empty");
+  prior.intrinsics = IntrinsicsField(root, "intrinsics");
+  prior.stddev = StddevField(root, "intrinsics_stddev");
+  prior.source = path;
+  HR_RETURN_IF_ERROR(root.status());
+  return std::vector<IntrinsicsPrior>{prior};
 }
 
 }  // namespace hairrig

@@ -165,6 +165,10 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
   ParallelFor(frames.size(), threads, [&] {
     auto tag_detector = TagDetector::Create(detector);
     return [&, tag_detector = std::move(tag_detector)](size_t f) {
+      if (!frames[f].unusable.empty()) {
+        (*failures)[f] = frames[f].unusable;
+        return;
+      }
       if (frames[f].observations) {
         observations[f] = *frames[f].observations;
         return;

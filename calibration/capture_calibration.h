@@ -42,6 +42,9 @@ struct CalibrationFrame {
   // Tags already detected and matched (during the capture, through the frame
   // sink): the image is then not read again.
   std::optional<ViewObservations> observations;
+  // Not empty: why the frame must not be used (its file does not match the
+  // checksum the capture recorded); the frame is reported as failed with it.
+  std::string unusable;
 };
 
 struct CaptureCalibrationInput {

@@ -1,18 +1,14 @@
 #include "core/config.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <sstream>
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
+
+#include "core/file_util.h"
 
 namespace hairrig {
 
@@ -126,38 +122,6 @@ Status CheckDocument(const std::string& text, const std::string& origin) {
   return Status::Ok();
 }
 
-// The text of a regular file of at most kMaxConfigBytes. Opened without
-// blocking and checked on the open descriptor, so a FIFO or a device is
-// refused instead of waited on or read forever.
-Result<std::string> ReadConfigText(const std::string& path) {
-  const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    const std::string what = path + ": cannot open the config file (" + std::strerror(errno) + "; check the path)";
-    return errno == ENOENT ? NotFound(what) : IoError(what);
-  }
-  struct stat info {};
-  std::string text;
-  Status status;
-  if (fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
-    status = InvalidArgument(path + ": not a regular file (a folder, device or pipe); give a YAML config file");
-  } else if (static_cast<unsigned long long>(info.st_size) > kMaxConfigBytes) {
-    status = InvalidArgument(path + ": " + std::to_string(info.st_size) + " bytes, more than a config file's " +
-                             std::to_string(kMaxConfigBytes) + "; is this the right file?");
-  } else {
-    text.resize(static_cast<size_t>(info.st_size));
-    size_t done = 0;
-    while (done < text.size()) {
-      const ssize_t n = read(fd, text.data() + done, text.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      done += static_cast<size_t>(n);
-    }
-    text.resize(done);  // a file that shrank while read
-  }
-  close(fd);
-  if (!status.ok()) return status;
-  return text;
-}
 
 }  // namespace
 
@@ -202,8 +166,11 @@ Result<ConfigNode> ConfigNode::LoadString(const std::string& text, const std::st
 }
 
 Result<ConfigNode> ConfigNode::LoadFile(const std::string& path) {
-  HR_ASSIGN_OR_RETURN(const std::string text, ReadConfigText(path));
-  return LoadString(text, path);
+  Result<std::string> text = ReadFileText(path, kMaxConfigBytes);
+  if (!text.ok() && text.status().code() == StatusCode::kNotFound)
+    return NotFound(path + ": cannot open the config file (check the path)");
+  if (!text.ok()) return text.status();
+  return LoadString(*text, path);
 }
 
 bool ConfigNode::ok() const { return impl_->doc->first_error.ok(); }

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <initializer_list>
 #include <limits>
 #include <memory>
@@ -49,6 +50,8 @@ struct NumberRange {
 
 class ConfigNode {
  public:
+  // A regular file of at most kMaxConfigBytes (core/file_util.h
+  // ReadFileChunks: a folder, FIFO or device such as /dev/zero is refused).
   static Result<ConfigNode> LoadFile(const std::string& path);
   // `origin` names the text in messages (a file name, "<command line>").
   static Result<ConfigNode> LoadString(const std::string& text, const std::string& origin);

@@ -3,26 +3,100 @@
 #include <atomic>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 
 namespace hairrig {
 
-Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return NotFound(path + ": cannot open for reading (" + std::strerror(errno) + ")");
-  const std::streamsize size = in.tellg();
-  if (size < 0) return IoError(path + ": cannot determine the file size");
-  std::vector<uint8_t> bytes(static_cast<size_t>(size));
-  in.seekg(0);
-  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size)) {
-    return IoError(path + ": read failed");
+namespace {
+
+const char* FileKind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+Status TooLarge(const std::string& path, uint64_t max_bytes) {
+  return OutOfRange(path + ": larger than " + std::to_string(max_bytes) + " bytes, the most this reader accepts");
+}
+
+// A file descriptor closed when it goes out of scope.
+class Descriptor {
+ public:
+  Descriptor() = default;
+  ~Descriptor() { reset(-1); }
+  Descriptor(const Descriptor&) = delete;
+  Descriptor& operator=(const Descriptor&) = delete;
+  int get() const { return fd_; }
+  void reset(int fd) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = fd;
   }
+
+ private:
+  int fd_ = -1;
+};
+
+// Opens `path` for reading if it is a regular file of at most `max_bytes`;
+// *size is its length. O_NONBLOCK: opening a FIFO with no writer returns at once.
+Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* fd, uint64_t* size) {
+  fd->reset(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY));
+  if (fd->get() < 0) {
+    const std::string why = std::strerror(errno);
+    if (errno == ENOENT) return NotFound(path + ": cannot open for reading (" + why + ")");
+    return IoError(path + ": cannot open for reading (" + why + ")");
+  }
+  struct stat st {};
+  if (::fstat(fd->get(), &st) != 0) return IoError(path + ": cannot read its file status (" + std::strerror(errno) + ")");
+  if (!S_ISREG(st.st_mode)) return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
+  *size = static_cast<uint64_t>(st.st_size);
+  if (*size > max_bytes) return TooLarge(path, max_bytes);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
+                      const std::function<void(const uint8_t* data, size_t size)>& chunk) {
+  Descriptor fd;
+  uint64_t size = 0;
+  HR_RETURN_IF_ERROR(OpenRegularFile(path, max_bytes, &fd, &size));
+  std::vector<uint8_t> buffer(size_t{1} << 16);
+  uint64_t total = 0;
+  for (;;) {
+    const ssize_t n = ::read(fd.get(), buffer.data(), buffer.size());
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return IoError(path + ": read failed (" + std::strerror(errno) + ")");
+    }
+    if (n == 0) return Status::Ok();
+    total += static_cast<uint64_t>(n);
+    if (total > max_bytes) return TooLarge(path, max_bytes);  // it grew while being read
+    chunk(buffer.data(), static_cast<size_t>(n));
+  }
+}
+
+Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, uint64_t max_bytes) {
+  std::vector<uint8_t> bytes;
+  HR_RETURN_IF_ERROR(ReadFileChunks(path, max_bytes, [&bytes](const uint8_t* data, size_t size) {
+    bytes.insert(bytes.end(), data, data + size);
+  }));
   return bytes;
+}
+
+Result<std::string> ReadFileText(const std::string& path, uint64_t max_bytes) {
+  std::string text;
+  HR_RETURN_IF_ERROR(ReadFileChunks(path, max_bytes, [&text](const uint8_t* data, size_t size) {
+    text.append(reinterpret_cast<const char*>(data), size);
+  }));
+  return text;
 }
 
 Status SyncFolder(const std::string& folder) {
@@ -39,7 +113,7 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
   // Unique per process and per call, so that two threads writing one path never share a temporary.
   static std::atomic<uint64_t> next_temporary{0};
   const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(next_temporary++);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) return IoError(tmp + ": cannot create (" + std::strerror(errno) + ")");
   const auto* p = static_cast<const uint8_t*>(bytes);
   size_t left = size;

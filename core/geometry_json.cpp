@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json_file.h"
+
 namespace hairrig {
 
 nlohmann::json PoseToJson(const Rigid3d& a_from_b) {
@@ -82,6 +84,30 @@ Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::stri
   double v[3];
   HR_RETURN_IF_ERROR(ReadNumbers(j, key.c_str(), where, v));
   return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+namespace {
+
+template <typename T>
+T FieldOr(const JsonObject& j, const Result<T>& read, T neutral) {
+  if (read.ok()) return *read;
+  j.Record(read.status());
+  return neutral;
+}
+
+}  // namespace
+
+Rigid3d PoseField(const JsonObject& j, std::string_view key) {
+  return FieldOr(j, PoseFromJson(j.Raw(key), j.Describe(key)), Rigid3d());
+}
+
+CameraIntrinsics IntrinsicsField(const JsonObject& j, std::string_view key) {
+  return FieldOr(j, IntrinsicsFromJson(j.Raw(key), j.Describe(key)), CameraIntrinsics());
+}
+
+Eigen::Vector3d Vector3Field(const JsonObject& j, std::string_view key) {
+  const std::vector<double> v = j.Numbers(key, 3);
+  return v.size() == 3 ? Eigen::Vector3d(v[0], v[1], v[2]) : Eigen::Vector3d::Zero();
 }
 
 }  // namespace hairrig

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -16,6 +17,8 @@
 #include "core/transform.h"
 
 namespace hairrig {
+
+class JsonObject;
 
 nlohmann::json PoseToJson(const Rigid3d& a_from_b);
 // Reads the quaternion and translation (the matrix is for people reading the
@@ -31,5 +34,12 @@ nlohmann::json Vector3ToJson(const Eigen::Vector3d& v);
 // j[key] as three finite numbers. InvalidArgument names `where` and the key
 // when it is missing, not three numbers, or not finite.
 Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key, const std::string& where);
+
+// The readers above applied to field `key` of `j` (core/json_file.h): a
+// problem is recorded in `j` as CorruptData naming the file and the field, and
+// a neutral value (identity, default intrinsics, zero) is returned.
+Rigid3d PoseField(const JsonObject& j, std::string_view key);
+CameraIntrinsics IntrinsicsField(const JsonObject& j, std::string_view key);
+Eigen::Vector3d Vector3Field(const JsonObject& j, std::string_view key);
 
 }  // namespace hairrig

@@ -6,32 +6,10 @@
 #include <nlohmann/json.hpp>
 
 #include "core/geometry_json.h"
+#include "core/json_file.h"
 
 namespace hairrig {
 namespace {
-
-// The geometry readers' InvalidArgument as what a damaged file is.
-Status AsCorrupt(const Status& s) { return s.ok() ? s : CorruptData(s.message()); }
-
-Status ReadVector(const nlohmann::json& j, const char* key, const std::string& where, Eigen::Vector3d* out) {
-  Result<Eigen::Vector3d> v = Vector3FromJson(j, key, where);
-  if (!v.ok()) return AsCorrupt(v.status());
-  *out = *v;
-  return Status::Ok();
-}
-
-Status ReadNumber(const nlohmann::json& j, const char* key, const std::string& where, double* out) {
-  if (!j.contains(key) || !j.at(key).is_number() || !std::isfinite(j.at(key).get<double>()))
-    return CorruptData(where + ": " + key + " is missing or not a finite number");
-  *out = j.at(key).get<double>();
-  return Status::Ok();
-}
-
-Status ReadBool(const nlohmann::json& j, const char* key, const std::string& where, bool* out) {
-  if (!j.contains(key) || !j.at(key).is_boolean()) return CorruptData(where + ": " + key + " is missing or not true/false");
-  *out = j.at(key).get<bool>();
-  return Status::Ok();
-}
 
 nlohmann::json ScalpToJson(const ScalpSpec& s) {
   return {{"defined", s.defined},
@@ -47,23 +25,23 @@ nlohmann::json ScalpToJson(const ScalpSpec& s) {
           {"parting_back_deg", s.parting_back_deg}};
 }
 
-Status ReadScalp(const nlohmann::json& j, const std::string& where, ScalpSpec* s) {
-  if (!j.is_object()) return CorruptData(where + " is not an object");
-  HR_RETURN_IF_ERROR(ReadBool(j, "defined", where, &s->defined));
-  HR_RETURN_IF_ERROR(ReadVector(j, "center_turntable_mm", where, &s->center_turntable_mm));
-  HR_RETURN_IF_ERROR(ReadVector(j, "face_dir", where, &s->face_dir));
-  if (Eigen::Vector2d(s->face_dir.x(), s->face_dir.y()).norm() < 1e-9)
-    return CorruptData(where + ": face_dir has no horizontal part");
-  HR_RETURN_IF_ERROR(ReadNumber(j, "hairline_front_deg", where, &s->hairline_front_deg));
-  HR_RETURN_IF_ERROR(ReadNumber(j, "hairline_temple_deg", where, &s->hairline_temple_deg));
-  HR_RETURN_IF_ERROR(ReadNumber(j, "hairline_ear_deg", where, &s->hairline_ear_deg));
-  HR_RETURN_IF_ERROR(ReadNumber(j, "hairline_nape_deg", where, &s->hairline_nape_deg));
-  HR_RETURN_IF_ERROR(ReadBool(j, "parting", where, &s->parting));
-  HR_RETURN_IF_ERROR(ReadNumber(j, "parting_offset_deg", where, &s->parting_offset_deg));
-  HR_RETURN_IF_ERROR(ReadNumber(j, "parting_width_mm", where, &s->parting_width_mm));
-  if (s->parting_width_mm < 0) return CorruptData(where + ": parting_width_mm is negative");
-  HR_RETURN_IF_ERROR(ReadNumber(j, "parting_back_deg", where, &s->parting_back_deg));
-  return Status::Ok();
+// Errors are recorded in `j`.
+ScalpSpec ScalpFromJson(const JsonObject& j) {
+  ScalpSpec s;
+  s.defined = j.Bool("defined");
+  s.center_turntable_mm = Vector3Field(j, "center_turntable_mm");
+  s.face_dir = Vector3Field(j, "face_dir");
+  if (j.ok() && Eigen::Vector2d(s.face_dir.x(), s.face_dir.y()).norm() < 1e-9)
+    j.Fail("face_dir", "has no horizontal part");
+  s.hairline_front_deg = j.Number("hairline_front_deg");
+  s.hairline_temple_deg = j.Number("hairline_temple_deg");
+  s.hairline_ear_deg = j.Number("hairline_ear_deg");
+  s.hairline_nape_deg = j.Number("hairline_nape_deg");
+  s.parting = j.Bool("parting");
+  s.parting_offset_deg = j.Number("parting_offset_deg");
+  s.parting_width_mm = j.Number("parting_width_mm", {.min = 0});
+  s.parting_back_deg = j.Number("parting_back_deg");
+  return s;
 }
 
 }  // namespace
@@ -82,25 +60,20 @@ nlohmann::json HeadSpecToJson(const HeadSpec& head, const std::string& mesh_file
 }
 
 Result<HeadSpec> HeadSpecFromJson(const nlohmann::json& j, const std::string& base_dir, const std::string& where) {
-  if (!j.is_object()) return CorruptData(where + " is not an object");
+  const JsonObject o(j, where);
   HeadSpec head;
-  if (j.contains("mesh_file")) {
-    const nlohmann::json& file = j.at("mesh_file");
-    if (!file.is_string() || file.get<std::string>().empty())
-      return CorruptData(where + ": mesh_file is not a file name");
-    const std::filesystem::path path(file.get<std::string>());
-    head.mesh_file =
-        path.is_absolute() ? path.string() : (std::filesystem::path(base_dir) / path).lexically_normal().string();
-    Result<Rigid3d> pose = PoseFromJson(j.value("turntable_from_mesh", nlohmann::json()), where + ": turntable_from_mesh");
-    if (!pose.ok()) return AsCorrupt(pose.status());
-    head.turntable_from_mesh = *pose;
+  if (o.Has("mesh_file")) {
+    const std::filesystem::path path(o.String("mesh_file"));
+    if (o.ok() && path.empty()) o.Fail("mesh_file", "is empty");
+    head.mesh_file = path.is_absolute() ? path.string() : (std::filesystem::path(base_dir) / path).lexically_normal().string();
+    head.turntable_from_mesh = PoseField(o, "turntable_from_mesh");
   }
-  HR_RETURN_IF_ERROR(ReadVector(j, "center_turntable_mm", where, &head.center_turntable_mm));
-  HR_RETURN_IF_ERROR(ReadVector(j, "radii_mm", where, &head.radii_mm));
-  if (head.radii_mm.minCoeff() <= 0) return CorruptData(where + ": radii_mm must all be positive");
-  HR_RETURN_IF_ERROR(ReadVector(j, "albedo", where, &head.albedo));
-  if (!j.contains("scalp")) return CorruptData(where + ": scalp is missing");
-  HR_RETURN_IF_ERROR(ReadScalp(j.at("scalp"), where + ".scalp", &head.scalp));
+  head.center_turntable_mm = Vector3Field(o, "center_turntable_mm");
+  head.radii_mm = Vector3Field(o, "radii_mm");
+  if (o.ok() && head.radii_mm.minCoeff() <= 0) o.Fail("radii_mm", "must all be positive");
+  head.albedo = Vector3Field(o, "albedo");
+  head.scalp = ScalpFromJson(o.Object("scalp"));
+  HR_RETURN_IF_ERROR(o.status());
   return head;
 }
 

@@ -85,7 +85,7 @@ TEST(HeadJson, ADamagedHeadIsCorruptDataNamingTheFileAndTheField) {
   expect_corrupt(j, "radii_mm");
   j = good;
   j["scalp"].erase("hairline_ear_deg");
-  expect_corrupt(j, "scalp: hairline_ear_deg");
+  expect_corrupt(j, "field 'scalp.hairline_ear_deg'");
   j = good;
   j["scalp"]["parting"] = "yes";
   expect_corrupt(j, "parting");

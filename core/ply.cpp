@@ -19,7 +19,6 @@ T Load(const uint8_t* raw) {
 
 }  // namespace
 
-
 Status PlyCorrupt(const std::string& name, const std::string& what) {
   return CorruptData(name + ": " + what + " (the file is truncated or not in the format its name says)");
 }
@@ -54,6 +53,30 @@ size_t PlyTypeSize(PlyType t) {
   }
   return 0;
 }
+
+namespace {
+
+// Every record takes at least its fixed bytes (binary) or a character and a
+// separator per value (ascii; the file's last value may lack its separator), so
+// the counts of all elements together are bounded by the body's size.
+Status CheckElementCounts(const PlyHeader& header, size_t body_bytes, const std::string& name) {
+  const bool ascii = header.encoding == PlyEncoding::kAscii;
+  uint64_t left = body_bytes + (ascii ? 1 : 0);
+  for (const PlyElement& e : header.elements) {
+    if (e.count == 0) continue;
+    if (e.properties.empty())
+      return PlyCorrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) + " records but has no properties");
+    const uint64_t per_record = ascii ? 2 * e.properties.size() : e.MinRecordBytes();
+    if (e.count > left / per_record) {
+      return PlyCorrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) + " records, more than the " +
+                                  std::to_string(body_bytes) + " bytes after the header hold");
+    }
+    left -= e.count * per_record;
+  }
+  return Status::Ok();
+}
+
+}  // namespace
 
 Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::string& name) {
   const std::string end_marker = "end_header";
@@ -118,6 +141,7 @@ Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::s
     }
   }
   if (!have_format) return PlyCorrupt(name, "header has no 'format' line");
+  HR_RETURN_IF_ERROR(CheckElementCounts(header, bytes.size() - header.data_offset, name));
   return header;
 }
 

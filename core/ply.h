@@ -46,7 +46,10 @@ struct PlyHeader {
   size_t data_offset = 0;
 };
 
-// The header of `bytes` (`name` is for messages).
+// The header of `bytes` (`name` is for messages). Element counts are checked
+// against the bytes after the header (each record takes at least its fixed
+// bytes, or two characters per value in ascii) and an element with records but
+// no properties is refused, so a reader may size its arrays from the counts.
 Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::string& name);
 
 // CorruptData: "<name>: <what> (the file is truncated or not in the format its name says)".

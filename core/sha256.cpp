@@ -4,6 +4,8 @@
 #include <cstring>
 #include <vector>
 
+#include "core/file_util.h"
+
 namespace hairrig {
 namespace {
 
@@ -115,16 +117,10 @@ std::string Sha256Hex(const void* data, size_t size) {
   return hash.HexDigest();
 }
 
-Result<std::string> Sha256OfFile(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return NotFound(path + ": cannot open to verify its checksum");
+Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes) {
   Sha256 hash;
-  std::vector<uint8_t> chunk(1 << 16);
-  size_t n;
-  while ((n = std::fread(chunk.data(), 1, chunk.size(), f)) > 0) hash.Update(chunk.data(), n);
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) return IoError(path + ": read error while verifying its checksum");
+  const Status read = ReadFileChunks(path, max_bytes, [&hash](const uint8_t* data, size_t size) { hash.Update(data, size); });
+  if (!read.ok()) return read.WithContext("verifying a checksum");
   return hash.HexDigest();
 }
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 
+#include "core/file_util.h"
 #include "core/status.h"
 
 namespace hairrig {
@@ -30,7 +31,8 @@ class Sha256 {
 };
 
 std::string Sha256Hex(const void* data, size_t size);
-// NotFound / IoError name the file.
-Result<std::string> Sha256OfFile(const std::string& path);
+// Of a regular file of at most `max_bytes` (core/file_util.h ReadFileChunks:
+// errors name the file; a folder, FIFO or device is refused, never read).
+Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes = kMaxFileBytes);
 
 }  // namespace hairrig

@@ -90,11 +90,15 @@ Result<StrandSet> DecodeHair(const std::vector<uint8_t>& bytes, const std::strin
   if (!in.Get(&h)) return Corrupt(name, "shorter than the 128-byte .hair header");
   if (std::memcmp(h.magic, "HAIR", 4) != 0) return Corrupt(name, "does not start with 'HAIR'");
   if (!(h.flags & kHairHasPoints)) return Corrupt(name, "header says the file holds no points array");
+  // Counts are checked against the bytes that follow before anything is allocated.
+  const uint64_t needed = uint64_t{h.point_count} * 12 + ((h.flags & kHairHasSegments) ? uint64_t{h.strand_count} * 2 : 0);
+  if (needed > in.remaining()) {
+    return Corrupt(name, "header claims " + std::to_string(h.strand_count) + " strands of " +
+                             std::to_string(h.point_count) + " points, more than the " +
+                             std::to_string(in.remaining()) + " bytes after it hold");
+  }
   StrandSet set;
   if (h.flags & kHairHasSegments) {
-    if (h.strand_count > in.remaining() / 2) {
-      return Corrupt(name, "header claims " + std::to_string(h.strand_count) + " strands, more than the file holds");
-    }
     set.point_counts.resize(h.strand_count);
     for (auto& c : set.point_counts) {
       uint16_t segments = 0;
@@ -216,12 +220,6 @@ Result<StrandSet> DecodePly(const std::vector<uint8_t>& bytes, const std::string
   bool have_vertices = false, have_strands = false;
   std::vector<std::array<double, 2>> edges;
   for (const PlyElement& e : header.elements) {
-    // Every record takes at least its fixed bytes (binary) or two characters per value (ascii).
-    const size_t min_bytes = header.encoding == PlyEncoding::kAscii ? 2 * e.properties.size() : e.MinRecordBytes();
-    if (min_bytes > 0 && e.count > reader.remaining() / min_bytes + 1) {
-      return Corrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) +
-                               " records, more than the file holds");
-    }
     const bool is_vertex = e.name == "vertex";
     const bool is_strand = e.name == "strand";
     const bool is_edge = e.name == "edge" && e.properties.size() == 2 && !e.properties[0].is_list &&

@@ -1,5 +1,6 @@
 #include "core/strand_io.h"
 
+#include <cstring>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -9,8 +10,6 @@
 
 namespace hairrig {
 namespace {
-
-
 
 TEST(StrandIo, WriteAndReadFilesThroughTheExtension) {
   StrandSet set;
@@ -37,6 +36,43 @@ TEST(StrandIo, CorruptCountsDoNotAllocateHugeBuffers) {
                           "property float y\nproperty float z\nelement strand 1\nproperty ushort nsegs\nend_header\n";
   auto p = DecodeStrands(std::vector<uint8_t>(ply.begin(), ply.end()), StrandFormat::kPlyBinary, "huge.ply");
   EXPECT_EQ(p.status().code(), StatusCode::kCorruptData);
+}
+
+// A bare 128-byte .hair header claiming 2^32-1 strands of one point each: refused
+// from the header alone (it used to allocate 16 GB of counts first).
+TEST(StrandIo, HairHeaderCountsAreCheckedBeforeAllocating) {
+  std::vector<uint8_t> header(128, 0);
+  std::memcpy(header.data(), "HAIR", 4);
+  const uint32_t huge = 0xffffffffu, points_only = 2;
+  std::memcpy(header.data() + 4, &huge, 4);   // strands
+  std::memcpy(header.data() + 8, &huge, 4);   // points
+  std::memcpy(header.data() + 12, &points_only, 4);
+  auto set = DecodeStrands(header, StrandFormat::kHair, "huge.hair");
+  EXPECT_EQ(set.status().code(), StatusCode::kCorruptData);
+  EXPECT_NE(set.status().message().find("huge.hair: header claims 4294967295 strands"), std::string::npos)
+      << set.status().ToString();
+}
+
+// An element without properties takes no bytes per record: its count is
+// refused by the header check (it used to loop over 9e18 empty records).
+TEST(StrandIo, PlyElementWithRecordsButNoPropertiesIsRefused) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement junk 9000000000000000000\nelement vertex 1\nproperty float x\n"
+      "property float y\nproperty float z\nelement strand 1\nproperty int nsegs\nend_header\n0 0 0\n0\n";
+  auto set = DecodeStrands(std::vector<uint8_t>(ply.begin(), ply.end()), StrandFormat::kPlyAscii, "junk.ply");
+  EXPECT_EQ(set.status().code(), StatusCode::kCorruptData);
+  EXPECT_NE(set.status().message().find("element 'junk'"), std::string::npos) << set.status().ToString();
+}
+
+// Counts of all elements together are bounded by the body, not each alone.
+TEST(StrandIo, PlyElementCountsAreBoundedTogether) {
+  const std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+                          "property float y\nproperty float z\nelement strand 5\nproperty uint nsegs\nend_header\n" +
+                          std::string(24 + 4, '\0');
+  auto set = DecodeStrands(std::vector<uint8_t>(ply.begin(), ply.end()), StrandFormat::kPlyBinary, "short.ply");
+  EXPECT_EQ(set.status().code(), StatusCode::kCorruptData);
+  EXPECT_NE(set.status().message().find("element 'strand' claims 5 records"), std::string::npos)
+      << set.status().ToString();
 }
 
 TEST(StrandIo, NanPointsAreRefused) {

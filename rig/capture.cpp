@@ -492,7 +492,7 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
       return false;
     }
     ++frames_;
-    bytes_ += stored->record.at("bytes").get<uint64_t>();
+    bytes_ += stored->record.bytes;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       last_frame_ = Clock::now();
@@ -504,7 +504,7 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
                       view.camera_name,
                       camera.info().serial,
                       stored->path,
-                      stored->record.at("sha256").get<std::string>(),
+                      stored->record.sha256,
                       shot.angle_commanded_deg,
                       shot.angle_measured_deg,
                       stored->image};
@@ -634,11 +634,11 @@ std::vector<PlannedTruthView> TruthViews(const CapturePlan& plan) {
 Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan) {
   std::vector<cv::Mat> thumbs;
   std::vector<std::string> labels;
-  for (const auto& r : dataset.VerifiedFrames()) {
-    cv::Mat image = cv::imread(dataset.dir() + "/" + r.at("file").get<std::string>(), cv::IMREAD_REDUCED_COLOR_4);
+  for (const FrameRecord& r : dataset.VerifiedFrames()) {
+    cv::Mat image = cv::imread(dataset.dir() + "/" + r.file, cv::IMREAD_REDUCED_COLOR_4);
     if (image.empty()) continue;
     thumbs.push_back(image);
-    labels.push_back(r.at("file").get<std::string>().substr(7));
+    labels.push_back(std::filesystem::path(r.file).filename().string());
   }
   if (thumbs.empty()) return Status::Ok();
   const int columns = std::max<int>(1, static_cast<int>(plan.views.size() / std::max<size_t>(1, plan.stops.size())) * 4);
@@ -653,8 +653,15 @@ std::string ReadText(const std::string& path) {
   return bytes.ok() ? std::string(bytes->begin(), bytes->end()) : std::string();
 }
 
-// The folder the original config's relative paths resolved against.
-std::string RecordedConfigFolder(const CaptureDataset& dataset) { return dataset.metadata().value("config_dir", ""); }
+// The plan as the journal's view_planned records.
+std::vector<PlannedViewRecord> PlannedViewRecords(const CapturePlan& plan) {
+  std::vector<PlannedViewRecord> records;
+  for (const PlannedView& v : plan.views) {
+    const PlannedStop& stop = plan.stops[static_cast<size_t>(v.stop)];
+    records.push_back({v.index, v.stop, stop.angle_deg, v.camera_name, v.camera_serial, stop.light_levels});
+  }
+  return records;
+}
 
 // Worst case of the frames' size on disk: raw pixels (PNG only shrinks them).
 double EstimatedBytes(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views) {
@@ -678,7 +685,7 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   std::string config_text;
   if (options.resume) {
     HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::OpenForResume(options.out_dir, dataset_options, &report));
-    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(dataset->ConfigSnapshotPath(), RecordedConfigFolder(*dataset)));
+    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(dataset->ConfigSnapshotPath(), dataset->metadata().config_dir));
   } else {
     if (fs::exists(options.out_dir)) {
       return FailedPrecondition(options.out_dir + " already exists: choose a new --out folder, or add --resume to continue it");
@@ -689,6 +696,9 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
+  const std::vector<PlannedViewRecord> planned_views = PlannedViewRecords(plan);
+  // A resumed capture's plan is checked before anything else is written.
+  if (options.resume) HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
   dataset_options.png_compression = policies.png_compression;
   if (rig->sim_world) dataset_options.simulated_full_after_frames = WorldDiskFullAfterFrames(*rig->sim_world);
 
@@ -708,15 +718,15 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
                    " MB (frames plus storage.min_free_mb): free space or choose another --out");
   }
   if (!options.resume) {
-    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text,
-                                                        {{"config_source", fs::absolute(config.path).lexically_normal().string()},
-                                                         {"config_dir", config.relative_to},
-                                                                            {"subject", options.subject}},
-                                                        dataset_options));
+    CaptureMetadata metadata;
+    metadata.config_source = fs::absolute(config.path).lexically_normal().string();
+    metadata.config_dir = config.relative_to;
+    metadata.subject = options.subject;
+    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text, metadata, dataset_options));
   } else {
     dataset->set_options(dataset_options);
   }
-  const std::string subject = options.resume ? dataset->metadata().value("subject", "") : options.subject;
+  const std::string subject = options.resume ? dataset->metadata().subject : options.subject;
   dataset->SetPlanSummary(static_cast<int>(plan.views.size()), subject, config.name);
   HR_RETURN_IF_ERROR(dataset->Append({{"event", "session_start"},
                                       {"resume", options.resume},
@@ -727,14 +737,7 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
                                       {"frames_verified", report.frames_verified},
                                       {"quarantined", report.quarantined},
                                       {"partial_removed", report.partial_removed.size()}}));
-  if (!options.resume) {
-    for (const PlannedView& v : plan.views) {
-      const PlannedStop& stop = plan.stops[static_cast<size_t>(v.stop)];
-      HR_RETURN_IF_ERROR(dataset->Append({{"event", "view_planned"}, {"view", v.index}, {"stop", v.stop},
-                                          {"angle_deg", stop.angle_deg}, {"camera", v.camera_name},
-                                          {"serial", v.camera_serial}, {"lights", stop.light_levels}}));
-    }
-  }
+  if (!options.resume) HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
   HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
   std::unique_ptr<CaptureGroundTruth> truth;
   if (rig->sim_world) {

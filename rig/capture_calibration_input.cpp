@@ -10,8 +10,9 @@
 #include "calibration/calibration_io.h"
 #include "calibration/tag_detection_sink.h"
 #include "core/json_file.h"
+#include "rig/capture_dataset.h"
+#include "rig/journal_records.h"
 #include "rig/rig_config.h"
-#include "rig/safe_names.h"
 
 namespace hairrig {
 
@@ -59,32 +60,37 @@ Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::
   return config.root.status();
 }
 
+// The manifest's frames; one whose file does not verify against the manifest
+// (VerifyFrameFile) is marked unusable and named in the calibration's report.
 Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest, const std::string& manifest_path,
                  const std::map<std::string, int>& by_serial, CaptureCalibrationInput* input) {
-  if (!manifest.contains("frames") || !manifest["frames"].is_array())
-    return CorruptData(manifest_path + ": frames is missing or not an array");
-  for (size_t i = 0; i < manifest["frames"].size(); ++i) {
-    const nlohmann::json& f = manifest["frames"][i];
-    const std::string where = manifest_path + ": frames[" + std::to_string(i) + "]";
-    if (!f.contains("file") || !f["file"].is_string() || !f.contains("serial") || !f["serial"].is_string() ||
-        !f.contains("view") || !f["view"].is_number_integer() || !f.contains("stop") || !f["stop"].is_number_integer() ||
-        !f.contains("angle_measured_deg") || !f["angle_measured_deg"].is_number())
-      return CorruptData(where + ": needs file, serial, view, stop and angle_measured_deg");
+  const JsonObject root(manifest, manifest_path);
+  for (const JsonObject& f : root.Objects("frames")) {
     CalibrationFrame frame;
-    frame.name = f["file"].get<std::string>();
+    frame.view = static_cast<int>(f.Integer("view", {.min = 0, .max = kMaxViewIndex}));
+    frame.stop = static_cast<int>(f.Integer("stop", {.min = 0, .max = kMaxViewIndex}));
+    frame.turntable_deg = f.Number("angle_measured_deg");
+    frame.name = f.String("file");
+    const std::string serial = f.String("serial");
+    const uint64_t bytes = static_cast<uint64_t>(f.Integer("bytes", {.min = 0}));
+    const std::string sha256 = f.String("sha256");
+    if (!f.ok()) break;
+    if (!IsFrameFileName(frame.name, frame.view, serial)) {
+      f.Fail("file", frame.name + " is not the file of view " + std::to_string(frame.view) + " from camera " + serial);
+      break;
+    }
+    const auto camera = by_serial.find(serial);
+    if (camera == by_serial.end()) {
+      f.Fail("serial", "camera " + serial + " is not in rig.yaml");
+      break;
+    }
+    if (const Status verified = VerifyFrameFile(capture_dir, frame.name, bytes, sha256); !verified.ok())
+      frame.unusable = verified.message() + " (`hairrig capture --resume` re-shoots it)";
     frame.path = (fs::path(capture_dir) / frame.name).lexically_normal().string();
-    if (!PathIsInside(frame.path, capture_dir))
-      return CorruptData(where + ": file " + frame.name + " is outside the capture folder; the manifest is damaged");
-    const auto camera = by_serial.find(f["serial"].get<std::string>());
-    if (camera == by_serial.end())
-      return CorruptData(where + ": camera serial " + f["serial"].get<std::string>() + " is not in rig.yaml");
     frame.camera = camera->second;
-    frame.view = f["view"].get<int>();
-    frame.stop = f["stop"].get<int>();
-    frame.turntable_deg = f["angle_measured_deg"].get<double>();
     input->frames.push_back(frame);
   }
-  return Status::Ok();
+  return root.status();
 }
 
 // Image sizes from each camera's first frame (header only would do; one read per camera).
@@ -92,7 +98,7 @@ void FillImageSizes(CaptureCalibrationInput* input) {
   for (size_t c = 0; c < input->cameras.size(); ++c) {
     CalibrationCamera& camera = input->cameras[c];
     for (const CalibrationFrame& frame : input->frames) {
-      if (frame.camera != static_cast<int>(c)) continue;
+      if (frame.camera != static_cast<int>(c) || !frame.unusable.empty()) continue;
       const cv::Mat image = cv::imread(frame.path, cv::IMREAD_UNCHANGED);
       if (image.empty()) continue;  // the calibration names the unreadable frame
       camera.width_px = image.cols;
@@ -119,9 +125,8 @@ Status ReadCalibrationSection(const RigConfig& config, CalibBox* box, double* bo
 }
 
 Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
-  HR_ASSIGN_OR_RETURN(nlohmann::json metadata, ReadJsonFile((fs::path(capture_dir) / "capture.json").string(),
-                                                            "is this a capture folder?"));
-  return LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(), metadata.value("config_dir", ""));
+  HR_ASSIGN_OR_RETURN(const CaptureMetadata metadata, ReadCaptureMetadata(capture_dir));
+  return LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(), metadata.config_dir);
 }
 
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {

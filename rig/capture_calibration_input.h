@@ -29,9 +29,11 @@ Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir);
 // errors name the file, line and field.
 Status ReadCalibrationSection(const RigConfig& config, CalibBox* box, double* box_height_mm);
 
-// Errors name the file and field: a missing manifest or rig.yaml, a frame
-// file outside the capture folder or missing, an unknown camera, a broken
-// calibration section. Only frames whose checksum the manifest records are used.
+// Errors name the file and field: a missing manifest or rig.yaml, a damaged
+// manifest frame entry, a frame file that does not verify against the size
+// and SHA-256 the manifest records (rig/capture_dataset.h VerifyFrameFile:
+// missing, changed, or leading outside the capture folder), an unknown
+// camera, a broken calibration section.
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir);
 
 // Holds every camera at the intrinsics the files give for its serial

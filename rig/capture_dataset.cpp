@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -10,10 +11,13 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <set>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/file_util.h"
+#include "core/json_file.h"
 #include "core/sha256.h"
 #include "rig/crash_points.h"
 #include "rig/safe_names.h"
@@ -40,6 +44,9 @@ namespace {
 constexpr const char* kJournal = "journal.jsonl";
 constexpr const char* kManifest = "manifest.json";
 constexpr const char* kMetadata = "capture.json";
+constexpr int64_t kMaxSeq = int64_t{1} << 50;  // far beyond any capture's record count
+constexpr const char* kAlteredAdvice =
+    "the journal was altered: keep a copy of it, then correct or remove that line by hand";
 
 Status WriteAll(int fd, const char* p, size_t size, const std::string& what) {
   while (size > 0) {
@@ -54,42 +61,126 @@ Status WriteAll(int fd, const char* p, size_t size, const std::string& what) {
   return Status::Ok();
 }
 
-// Moves `file` into <dir>/quarantine/ under a name not yet taken.
+bool Exists(const fs::path& path) {
+  std::error_code ec;
+  return fs::symlink_status(path, ec).type() != fs::file_type::not_found;
+}
+
+// Moves `file` (whatever it is; a symlink is moved, not followed) into
+// <dir>/quarantine/ under a name not yet taken.
 Result<std::string> Quarantine(const std::string& dir, const fs::path& file) {
   const fs::path q = fs::path(dir) / "quarantine";
   std::error_code ec;
   fs::create_directories(q, ec);
   fs::path target = q / file.filename();
-  for (int n = 1; fs::exists(target); ++n)
-    target = q / (file.filename().string() + "." + std::to_string(n));
+  for (int n = 1; Exists(target); ++n) target = q / (file.filename().string() + "." + std::to_string(n));
   fs::rename(file, target, ec);
   if (ec) return IoError(file.string() + ": cannot move it to quarantine/ (" + ec.message() + ")");
   return target.string();
 }
 
+// Resume writes into these; none may lead elsewhere.
+Status RefuseSymlinks(const std::string& dir) {
+  for (const char* name : {kJournal, "frames", "quarantine", "ground_truth"}) {
+    const fs::path path = fs::path(dir) / name;
+    std::error_code ec;
+    if (fs::is_symlink(fs::symlink_status(path, ec))) {
+      return FailedPrecondition(path.string() + " is a symlink (to " + fs::read_symlink(path, ec).string() +
+                                "); hairrig writes only into the capture folder itself: replace it by the " +
+                                (std::string(name) == kJournal ? "file" : "folder") + " it points to, then resume");
+    }
+  }
+  return Status::Ok();
+}
+
+Status CheckAgainstPlan(const FrameRecord& f, const std::map<int, PlannedViewRecord>& planned,
+                        const std::string& where) {
+  const auto plan = planned.find(f.view);
+  if (plan == planned.end()) {
+    return CorruptData(where + ": field 'view': no view_planned record plans view " + std::to_string(f.view) + "; " +
+                       kAlteredAdvice);
+  }
+  if (plan->second.serial != f.serial) {
+    return CorruptData(where + ": field 'serial': view " + std::to_string(f.view) + " is planned for camera " +
+                       plan->second.serial + ", the record names " + f.serial + "; " + kAlteredAdvice);
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
-Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path,
-                                                       size_t* cut_short_bytes) {
-  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(journal_path));
+Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path, size_t* cut_short_bytes) {
+  HR_ASSIGN_OR_RETURN(const std::string text, ReadFileText(journal_path, kMaxJsonFileBytes));
   std::vector<nlohmann::json> records;
   size_t line_start = 0;
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    if (bytes[i] != '\n') continue;
-    nlohmann::json record =
-        nlohmann::json::parse(bytes.begin() + static_cast<long>(line_start),
-                              bytes.begin() + static_cast<long>(i), nullptr, false);
-    if (record.is_discarded() || !record.is_object()) {
-      return CorruptData(
-          journal_path + ": line " + std::to_string(records.size() + 1) +
-          " is not a JSON record and is not the last one; the journal was altered. Keep a copy, "
-          "then remove that line by hand");
-    }
-    records.push_back(std::move(record));
-    line_start = i + 1;
+  for (size_t end = text.find('\n'); end != std::string::npos; end = text.find('\n', line_start)) {
+    const std::string where = JournalLine(journal_path, records.size());
+    Result<nlohmann::json> record = ParseJson(std::string_view(text).substr(line_start, end - line_start), where);
+    if (!record.ok()) return CorruptData(record.status().message() + " and is not the last line; " + kAlteredAdvice);
+    const JsonObject envelope(*record, where);
+    envelope.String("event");
+    envelope.Integer("seq", {.min = 0, .max = kMaxSeq});
+    if (!envelope.ok()) return CorruptData(envelope.status().message() + "; " + kAlteredAdvice);
+    records.push_back(std::move(record).value());
+    line_start = end + 1;
   }
-  if (cut_short_bytes) *cut_short_bytes = bytes.size() - line_start;
+  if (cut_short_bytes) *cut_short_bytes = text.size() - line_start;
   return records;
+}
+
+Result<CaptureMetadata> ReadCaptureMetadata(const std::string& capture_dir) {
+  const std::string path = (fs::path(capture_dir) / kMetadata).string();
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path, "is " + capture_dir + " a capture folder?"));
+  return CaptureMetadata::FromJson(j, path);
+}
+
+Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal_path,
+                                                      const std::vector<nlohmann::json>& records) {
+  std::map<int, PlannedViewRecord> planned;
+  for (size_t i = 0; i < records.size(); ++i) {
+    if (JournalEvent(records[i]) != "view_planned") continue;
+    const std::string where = JournalLine(journal_path, i);
+    Result<PlannedViewRecord> read = PlannedViewRecord::FromJson(records[i], where);
+    if (!read.ok()) return CorruptData(read.status().message() + "; " + kAlteredAdvice);
+    const PlannedViewRecord& view = *read;
+    const auto [it, added] = planned.emplace(view.view, view);
+    if (!added && !(it->second == view)) {
+      return CorruptData(where + ": plans " + view.Describe() + ", an earlier line " + it->second.Describe() + "; " +
+                         kAlteredAdvice);
+    }
+  }
+  return planned;
+}
+
+Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, uint64_t bytes,
+                       const std::string& sha256) {
+  HR_ASSIGN_OR_RETURN(const std::string path, ResolveInside((fs::path(capture_dir) / file).string(), capture_dir));
+  const Result<std::string> actual = Sha256OfFile(path, bytes);
+  if (actual.status().code() == StatusCode::kOutOfRange)
+    return CorruptData(path + ": larger than the " + std::to_string(bytes) + " bytes its record gives");
+  if (!actual.ok()) return actual.status();
+  if (*actual != sha256) return CorruptData(path + ": its SHA-256 does not match its record");
+  return Status::Ok();
+}
+
+Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir,
+                                                  const std::vector<nlohmann::json>& records) {
+  const std::string journal = (fs::path(capture_dir) / kJournal).string();
+  HR_ASSIGN_OR_RETURN(const auto planned, PlannedViews(journal, records));
+  std::map<int, FrameRecord> claimed;  // the last record per view
+  for (size_t i = 0; i < records.size(); ++i) {
+    if (JournalEvent(records[i]) != "frame_stored") continue;
+    const std::string where = JournalLine(journal, i);
+    Result<FrameRecord> frame = FrameRecord::FromJson(records[i], where);
+    if (!frame.ok()) return CorruptData(frame.status().message() + "; " + kAlteredAdvice);
+    HR_RETURN_IF_ERROR(CheckAgainstPlan(*frame, planned, where));
+    claimed[frame->view] = std::move(frame).value();
+  }
+  std::map<int, FrameRecord> verified;
+  for (auto& [view, frame] : claimed) {
+    if (VerifyFrameFile(capture_dir, frame.file, frame.bytes, frame.sha256).ok()) verified.emplace(view, std::move(frame));
+  }
+  return verified;
 }
 
 CaptureDataset::CaptureDataset(std::string dir, DatasetOptions options)
@@ -101,7 +192,7 @@ CaptureDataset::~CaptureDataset() {
 
 Status CaptureDataset::OpenJournal() {
   const std::string path = dir_ + "/" + kJournal;
-  journal_fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  journal_fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (journal_fd_ < 0)
     return IoError(path + ": cannot open for appending (" + std::strerror(errno) + ")");
   // One writer per capture: a second hairrig on the same folder is refused.
@@ -114,10 +205,10 @@ Status CaptureDataset::OpenJournal() {
 
 Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string& dir,
                                                                const std::string& config_text,
-                                                               nlohmann::json metadata,
+                                                               CaptureMetadata metadata,
                                                                const DatasetOptions& options) {
   std::error_code ec;
-  if (fs::exists(dir, ec)) {
+  if (Exists(dir)) {
     return FailedPrecondition(
         dir + " already exists: choose a new --out folder, or add --resume to continue it");
   }
@@ -131,10 +222,8 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string
   auto dataset = std::unique_ptr<CaptureDataset>(
       new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
   HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text));
-  metadata["format"] = "hairrig-capture";
-  metadata["version"] = 1;
-  metadata["created_utc"] = UtcNow();
-  HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata.dump(2) + "\n"));
+  metadata.created_utc = UtcNow();
+  HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata.ToJson().dump(2) + "\n"));
   dataset->metadata_ = std::move(metadata);
   HR_RETURN_IF_ERROR(dataset->OpenJournal());
   HR_RETURN_IF_ERROR(SyncFolder(parent.string()));
@@ -145,90 +234,109 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(const std:
                                                                       const DatasetOptions& options,
                                                                       ResumeReport* report) {
   std::error_code ec;
-  if (!fs::is_regular_file(fs::path(dir) / kJournal, ec)) {
+  if (fs::symlink_status(fs::path(dir) / kJournal, ec).type() == fs::file_type::not_found) {
     return NotFound(dir + " is not a capture folder (no " + kJournal + "): nothing to resume");
   }
   auto dataset = std::unique_ptr<CaptureDataset>(
       new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
-  const std::string metadata_path = dataset->dir_ + "/" + kMetadata;
-  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> metadata, ReadFileBytes(metadata_path));
-  dataset->metadata_ = nlohmann::json::parse(metadata.begin(), metadata.end(), nullptr, false);
-  if (!dataset->metadata_.is_object() ||
-      dataset->metadata_.value("format", "") != "hairrig-capture") {
-    return CorruptData(metadata_path +
-                       " is not a hairrig capture description: was the folder made by hairrig?");
-  }
+  HR_ASSIGN_OR_RETURN(dataset->metadata_, ReadCaptureMetadata(dataset->dir_));
   ResumeReport local;
   HR_RETURN_IF_ERROR(dataset->Repair(report ? report : &local));
   return dataset;
 }
 
-// Reads the journal, cuts a record left half-written, verifies frames and
-// clears out what no record vouches for.
+// Takes the journal's lock, reads it, cuts a record left half-written,
+// verifies frames and clears out what no record vouches for.
 Status CaptureDataset::Repair(ResumeReport* report) {
+  HR_RETURN_IF_ERROR(RefuseSymlinks(dir_));
+  HR_RETURN_IF_ERROR(OpenJournal());
   const std::string journal_path = dir_ + "/" + kJournal;
   HR_ASSIGN_OR_RETURN(records_, ReadJournalRecords(journal_path, &report->journal_bytes_dropped));
+  HR_ASSIGN_OR_RETURN(planned_, PlannedViews(journal_path, records_));
+  HR_ASSIGN_OR_RETURN(verified_, ::hairrig::VerifiedFrames(dir_, records_));
+  struct stat journal {};
   if (report->journal_bytes_dropped > 0 &&
-      ::truncate(journal_path.c_str(), static_cast<off_t>(fs::file_size(journal_path) -
-                                                          report->journal_bytes_dropped)) != 0) {
-    return IoError(journal_path + ": cannot cut the interrupted record (" + std::strerror(errno) +
-                   ")");
+      (::fstat(journal_fd_, &journal) != 0 ||
+       ::ftruncate(journal_fd_, journal.st_size - static_cast<off_t>(report->journal_bytes_dropped)) != 0)) {
+    return IoError(journal_path + ": cannot cut the interrupted record (" + std::strerror(errno) + ")");
   }
-  HR_RETURN_IF_ERROR(OpenJournal());
   for (const auto& r : records_) {
-    next_seq_ = std::max<int64_t>(next_seq_, r.value("seq", int64_t{0}) + 1);
-    if (r.value("event", "") == "frame_stored") ++frames_written_;
+    next_seq_ = std::max<int64_t>(next_seq_, r.value("seq", int64_t{0}) + 1);  // checked on reading
+    if (JournalEvent(r) == "frame_stored") ++frames_written_;
   }
   if (report->journal_bytes_dropped > 0) {
     HR_RETURN_IF_ERROR(AppendLocked({{"event", "journal_repaired"},
                                      {"bytes_dropped", report->journal_bytes_dropped},
                                      {"why", "a record was cut short by the interruption"}}));
   }
-  // Frames vouched for by the journal: the last record per view.
-  std::map<int, nlohmann::json> claimed;
-  for (const auto& r : records_) {
-    if (r.value("event", "") == "frame_stored") claimed[r.at("view").get<int>()] = r;
-  }
-  std::map<std::string, int> file_to_view;
-  for (const auto& [view, r] : claimed) {
-    const std::string path = dir_ + "/" + r.at("file").get<std::string>();
-    if (!PathIsInside(path, dir_))
-      return CorruptData(dir_ + "/" + kJournal + ": frame file outside the capture folder");
-    auto sha = Sha256OfFile(path);
-    if (sha.ok() && *sha == r.at("sha256").get<std::string>()) {
-      verified_[view] = r;
-      file_to_view[fs::path(path).filename().string()] = view;
-    }
-  }
   report->frames_verified = static_cast<int>(verified_.size());
-  for (const auto& entry : fs::directory_iterator(fs::path(dir_) / "frames")) {
-    const std::string name = entry.path().filename().string();
-    if (file_to_view.count(name)) continue;
-    if (name.find(".tmp.") != std::string::npos) {
-      fs::remove(entry.path());
-      report->partial_removed.push_back(name);
-      HR_RETURN_IF_ERROR(AppendLocked({{"event", "partial_removed"}, {"file", "frames/" + name}}));
-      continue;
-    }
-    HR_ASSIGN_OR_RETURN(std::string moved, Quarantine(dir_, entry.path()));
-    const std::string why = "no journal record vouches for it (or its checksum does not match)";
-    report->quarantined.push_back(name + ": " + why);
-    HR_RETURN_IF_ERROR(
-        AppendLocked({{"event", "file_quarantined"},
-                      {"file", "frames/" + name},
-                      {"moved_to", fs::path(moved).lexically_relative(dir_).string()},
-                      {"why", why}}));
-  }
-  for (const auto& entry : fs::directory_iterator(dir_)) {
-    if (entry.path().filename().string().find(".tmp.") != std::string::npos)
-      fs::remove(entry.path());
+  HR_RETURN_IF_ERROR(ClearFramesFolder(report));
+  // Temporaries of interrupted atomic writes (files) in the capture folder itself.
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir_, ec)) {
+    if (entry.path().filename().string().find(".tmp.") != std::string::npos && !entry.is_directory(ec))
+      fs::remove(entry.path(), ec);
   }
   return Status::Ok();
 }
 
-std::vector<nlohmann::json> CaptureDataset::Records() const {
+// frames/ keeps the verified frames only: temporaries of interrupted writes
+// are deleted, anything else moves to quarantine/. A missing frames/ is made.
+Status CaptureDataset::ClearFramesFolder(ResumeReport* report) {
+  const fs::path frames = fs::path(dir_) / "frames";
+  std::error_code ec;
+  if (!Exists(frames)) fs::create_directory(frames, ec);
+  if (!fs::is_directory(fs::symlink_status(frames, ec)))
+    return FailedPrecondition(frames.string() + " is not a folder: move it away, then resume");
+  std::set<std::string> kept;
+  for (const auto& [view, r] : verified_) kept.insert(fs::path(r.file).filename().string());
+  std::vector<fs::path> entries;
+  for (const auto& entry : fs::directory_iterator(frames, ec)) entries.push_back(entry.path());
+  if (ec) return IoError(frames.string() + ": cannot list the folder (" + ec.message() + ")");
+  for (const fs::path& entry : entries) {
+    const std::string name = entry.filename().string();
+    if (kept.count(name)) continue;
+    if (name.find(".tmp.") != std::string::npos && fs::is_regular_file(fs::symlink_status(entry, ec))) {
+      fs::remove(entry, ec);
+      report->partial_removed.push_back(name);
+      HR_RETURN_IF_ERROR(AppendLocked({{"event", "partial_removed"}, {"file", "frames/" + name}}));
+      continue;
+    }
+    HR_ASSIGN_OR_RETURN(std::string moved, Quarantine(dir_, entry));
+    const std::string why = "no journal record vouches for it (or its checksum does not match)";
+    report->quarantined.push_back(name + ": " + why);
+    HR_RETURN_IF_ERROR(AppendLocked({{"event", "file_quarantined"},
+                                     {"file", "frames/" + name},
+                                     {"moved_to", fs::path(moved).lexically_relative(dir_).string()},
+                                     {"why", why}}));
+  }
+  return Status::Ok();
+}
+
+Status CaptureDataset::JournalPlan(const std::vector<PlannedViewRecord>& plan) {
   std::lock_guard<std::mutex> lock(mutex_);
-  return records_;
+  const bool frames_stored = frames_written_ > 0;
+  std::map<int, const PlannedViewRecord*> wanted;
+  for (const PlannedViewRecord& v : plan) wanted[v.view] = &v;
+  const std::string advice =
+      ": the plan of a capture cannot change once it started. Restore the plan in " + ConfigSnapshotPath() +
+      " (journal.jsonl lists the original view_planned records), or start a new capture with another --out";
+  for (const auto& [view, journaled] : planned_) {
+    const auto now = wanted.find(view);
+    if (now == wanted.end())
+      return FailedPrecondition("the capture was started with " + journaled.Describe() + ", now not planned" + advice);
+    if (!(*now->second == journaled)) {
+      return FailedPrecondition("the capture was started with " + journaled.Describe() + ", now planned as " +
+                                now->second->Describe() + advice);
+    }
+  }
+  for (const PlannedViewRecord& v : plan) {
+    if (planned_.count(v.view)) continue;
+    if (frames_stored) return FailedPrecondition(v.Describe() + " was added to the plan" + advice);
+    HR_RETURN_IF_ERROR(AppendLocked(v.ToJson()));
+    planned_[v.view] = v;
+  }
+  return Status::Ok();
 }
 
 Status CaptureDataset::Append(nlohmann::json record) {
@@ -309,24 +417,44 @@ Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
     return FailedPrecondition("view " + std::to_string(context.view) +
                               " already has a verified frame; it is kept");
   }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto plan = planned_.find(context.view);
+    if (plan == planned_.end())
+      return Internal("view " + std::to_string(context.view) + " is not in the journaled plan (JournalPlan)");
+    if (plan->second.serial != frame.camera_serial) {
+      return CorruptData("view " + std::to_string(context.view) + " is planned for camera " + plan->second.serial +
+                         ", the frame came from " + frame.camera_serial);
+    }
+  }
   StoredFrameInfo info;
   std::string extension;
   HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
                       EncodeForStorage(frame, context, &info.image, &extension));
-  const std::string sha = Sha256Hex(bytes.data(), bytes.size());
-  char name[32];
-  std::snprintf(name, sizeof name, "%03d_", context.view);
-  const std::string file =
-      "frames/" + std::string(name) + FileNamePart(frame.camera_serial) + "." + extension;
-  info.path = dir_ + "/" + file;
-  if (!PathIsInside(info.path, dir_))
-    return Internal(info.path + ": frame path outside the capture folder");
+  FrameRecord& r = info.record;
+  r.view = context.view;
+  r.stop = context.stop;
+  r.camera = context.camera_name;
+  r.serial = frame.camera_serial;
+  r.file = FrameFileName(context.view, frame.camera_serial, extension);
+  r.bytes = bytes.size();
+  r.sha256 = Sha256Hex(bytes.data(), bytes.size());
+  r.width_px = info.image.cols;
+  r.height_px = info.image.rows;
+  r.pixel_format = PixelFormatName(frame.format);
+  r.exposure_s = frame.exposure_s;
+  r.gain_db = frame.gain_db;
+  r.trigger_time_ns = frame.trigger_time_ns;
+  r.received_time_ns = frame.received_time_ns;
+  r.angle_commanded_deg = context.angle_commanded_deg;
+  r.angle_measured_deg = context.angle_measured_deg;
+  info.path = dir_ + "/" + r.file;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (options_.simulated_full_after_frames >= 0 &&
         frames_written_ >= options_.simulated_full_after_frames) {
       return IoError(dir_ + ": no space left on device (simulated disk full) while writing " +
-                     file + ": free space, then run the capture again with --resume");
+                     r.file + ": free space, then run the capture again with --resume");
     }
     ++frames_written_;
   }
@@ -334,26 +462,9 @@ Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
     CrashPoint((std::string("frame_") + stage).c_str());
   }));
   CrashPoint("frame_before_journal");
-  info.record = {{"event", "frame_stored"},
-                 {"view", context.view},
-                 {"stop", context.stop},
-                 {"camera", context.camera_name},
-                 {"serial", frame.camera_serial},
-                 {"file", file},
-                 {"bytes", bytes.size()},
-                 {"sha256", sha},
-                 {"width_px", info.image.cols},
-                 {"height_px", info.image.rows},
-                 {"pixel_format", PixelFormatName(frame.format)},
-                 {"exposure_s", frame.exposure_s},
-                 {"gain_db", frame.gain_db},
-                 {"trigger_time_ns", frame.trigger_time_ns},
-                 {"received_time_ns", frame.received_time_ns},
-                 {"angle_commanded_deg", context.angle_commanded_deg},
-                 {"angle_measured_deg", context.angle_measured_deg}};
   std::lock_guard<std::mutex> lock(mutex_);
-  HR_RETURN_IF_ERROR(AppendLocked(info.record));
-  verified_[context.view] = info.record;
+  HR_RETURN_IF_ERROR(AppendLocked(r.ToJson()));
+  verified_[context.view] = r;
   HR_RETURN_IF_ERROR(WriteManifestLocked(last_status_));
   return info;
 }
@@ -363,9 +474,9 @@ bool CaptureDataset::HasVerifiedFrame(int view) const {
   return verified_.count(view) > 0;
 }
 
-std::vector<nlohmann::json> CaptureDataset::VerifiedFrames() const {
+std::vector<FrameRecord> CaptureDataset::VerifiedFrames() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  std::vector<nlohmann::json> out;
+  std::vector<FrameRecord> out;
   for (const auto& [view, r] : verified_) out.push_back(r);
   return out;
 }
@@ -378,7 +489,7 @@ int CaptureDataset::VerifiedFrameCount() const {
 uint64_t CaptureDataset::BytesStored() const {
   std::lock_guard<std::mutex> lock(mutex_);
   uint64_t total = 0;
-  for (const auto& [view, r] : verified_) total += r.at("bytes").get<uint64_t>();
+  for (const auto& [view, r] : verified_) total += r.bytes;
   return total;
 }
 
@@ -415,17 +526,17 @@ Status CaptureDataset::WriteManifestLocked(const std::string& status) {
   int faults = 0, sessions = 0;
   for (const auto& [view, r] : verified_) {
     frames.push_back({{"view", view},
-                      {"serial", r["serial"]},
-                      {"camera", r["camera"]},
-                      {"file", r["file"]},
-                      {"bytes", r["bytes"]},
-                      {"sha256", r["sha256"]},
-                      {"stop", r["stop"]},
-                      {"angle_measured_deg", r["angle_measured_deg"]}});
-    bytes += r.at("bytes").get<uint64_t>();
+                      {"serial", r.serial},
+                      {"camera", r.camera},
+                      {"file", r.file},
+                      {"bytes", r.bytes},
+                      {"sha256", r.sha256},
+                      {"stop", r.stop},
+                      {"angle_measured_deg", r.angle_measured_deg}});
+    bytes += r.bytes;
   }
   for (const auto& r : records_) {
-    const std::string event = r.value("event", "");
+    const std::string event = JournalEvent(r);
     faults += event == "fault" ? 1 : 0;
     sessions += event == "session_start" ? 1 : 0;
   }

@@ -12,10 +12,13 @@
 // "time_utc". Events: session_start, view_planned, position_reached,
 // frame_stored (view, serial, file, bytes, sha256, exposure, timestamps),
 // fault, session_end, journal_repaired, file_quarantined, partial_removed.
+// The records later sessions read back are typed in rig/journal_records.h.
 //
 // A frame counts only when its frame_stored record is in the journal, and it is
 // verified only when the file's size and SHA-256 match that record. Resume keeps
-// verified frames and never writes over them. Thread-safe: several cameras'
+// verified frames and never writes over them. No symlink is followed for
+// writing: a capture whose journal.jsonl, frames/, quarantine/ or
+// ground_truth/ is a symlink is refused. Thread-safe: several cameras'
 // collectors store frames at once.
 #pragma once
 
@@ -31,6 +34,7 @@
 
 #include "core/status.h"
 #include "drivers/camera.h"
+#include "rig/journal_records.h"
 
 namespace hairrig {
 
@@ -53,7 +57,7 @@ struct FrameContext {
 };
 
 struct StoredFrameInfo {
-  nlohmann::json record;  // the frame_stored journal record
+  FrameRecord record;     // the frame_stored journal record
   std::string path;       // absolute path of the frame file
   cv::Mat image;          // decoded pixels (BGR or single channel), for frame sinks
 };
@@ -69,12 +73,17 @@ struct ResumeReport {
 class CaptureDataset {
  public:
   // Creates `dir` (and its parents; FailedPrecondition if `dir` exists) with
-  // the config snapshot, capture.json and an empty journal.
+  // the config snapshot, capture.json (metadata with its creation time) and
+  // an empty journal.
   static Result<std::unique_ptr<CaptureDataset>> Create(const std::string& dir, const std::string& config_text,
-                                                        nlohmann::json metadata, const DatasetOptions& options);
-  // Opens an interrupted (or finished) capture: drops a journal record cut
-  // short, verifies every stored frame against its record, moves unvouched
-  // files to quarantine/ and deletes temporaries of interrupted writes.
+                                                        CaptureMetadata metadata, const DatasetOptions& options);
+  // Opens an interrupted (or finished) capture: takes the journal's lock,
+  // drops a journal record cut short, verifies every stored frame against its
+  // record (VerifiedFrames), moves unvouched files in frames/ to quarantine/
+  // and deletes temporaries of interrupted writes. FailedPrecondition for a
+  // symlinked journal.jsonl, frames/, quarantine/ or ground_truth/ or another
+  // process writing the capture; CorruptData naming file, line and field for
+  // a damaged capture.json or journal record. A missing frames/ is made anew.
   static Result<std::unique_ptr<CaptureDataset>> OpenForResume(const std::string& dir, const DatasetOptions& options,
                                                                ResumeReport* report);
   ~CaptureDataset();
@@ -86,12 +95,18 @@ class CaptureDataset {
     options_ = options;
   }
   std::string ConfigSnapshotPath() const { return dir_ + "/rig.yaml"; }
-  const nlohmann::json& metadata() const { return metadata_; }  // capture.json
+  const CaptureMetadata& metadata() const { return metadata_; }  // capture.json
   // Records of earlier sessions (OpenForResume) and this one, in order.
   std::vector<nlohmann::json> Records() const;
 
   // Appends one record (fills seq and time_utc) and fsyncs the journal.
   Status Append(nlohmann::json record);
+  // Journals the plan's view_planned records in a new capture. In a resumed
+  // one, checks them against the journal's: FailedPrecondition naming the
+  // first view that differs when the plan (the rig.yaml snapshot) changed, or
+  // gained views after frames were stored; journals the views an interrupted
+  // start left out.
+  Status JournalPlan(const std::vector<PlannedViewRecord>& plan);
   // Checks the frame (raw: byte count matches the geometry; encoded: decodes,
   // right size), encodes raw frames as PNG, hashes, writes atomically, journals
   // frame_stored and rewrites the manifest. CorruptData for a bad frame,
@@ -101,7 +116,7 @@ class CaptureDataset {
 
   bool HasVerifiedFrame(int view) const;
   // frame_stored records of the verified frames, in view order.
-  std::vector<nlohmann::json> VerifiedFrames() const;
+  std::vector<FrameRecord> VerifiedFrames() const;
   int VerifiedFrameCount() const;
   uint64_t BytesStored() const;  // of verified frames
   // Free bytes on the capture's file system (0 once a simulated disk is full).
@@ -117,27 +132,53 @@ class CaptureDataset {
   Status AppendLocked(nlohmann::json record);
   Status WriteManifestLocked(const std::string& status);
   Status Repair(ResumeReport* report);
+  Status ClearFramesFolder(ResumeReport* report);
   Result<std::vector<uint8_t>> EncodeForStorage(const Frame& frame, const FrameContext& context, cv::Mat* image,
                                                 std::string* extension) const;
 
   std::string dir_;
   DatasetOptions options_;
-  nlohmann::json metadata_;
+  CaptureMetadata metadata_;
   int journal_fd_ = -1;
   mutable std::mutex mutex_;
   std::vector<nlohmann::json> records_;
-  std::map<int, nlohmann::json> verified_;  // view -> frame_stored record
+  std::map<int, FrameRecord> verified_;        // view -> frame_stored record
+  std::map<int, PlannedViewRecord> planned_;  // view -> view_planned record
   int64_t next_seq_ = 0;
   int frames_written_ = 0;  // files written into frames/ over the capture's life
   int views_planned_ = 0;
   std::string subject_, rig_name_, last_status_ = "in_progress";
 };
 
-// The records of a capture's journal.jsonl, read only. A last line without its
-// newline (a record cut short by an interruption) is left out and its size is
-// put in *cut_short_bytes; a complete line that is not a JSON object is
-// CorruptData naming the file and line.
+// The records of a capture's journal.jsonl, read only; record i is line i + 1.
+// A last line without its newline (a record cut short by an interruption) is
+// left out and its size is put in *cut_short_bytes; a complete line that is
+// not a JSON object with a string "event" and an integer "seq" in [0, 2^50] is
+// CorruptData naming the file, line and field.
 Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path, size_t* cut_short_bytes = nullptr);
+
+// capture.json of a capture folder (a regular file; CorruptData naming it and the field).
+Result<CaptureMetadata> ReadCaptureMetadata(const std::string& capture_dir);
+
+// The view_planned records of a journal, by view. CorruptData naming the line
+// and field for a damaged record or a view planned twice differently.
+Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal_path,
+                                                      const std::vector<nlohmann::json>& records);
+
+// Whether a frame file matches what vouches for it: `file` (relative to the
+// capture folder) resolved with its symlinks stays inside the folder, is a
+// regular file of `bytes` bytes and has SHA-256 `sha256`. The Status says why not.
+Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, uint64_t bytes,
+                       const std::string& sha256);
+
+// The frames of a capture that count, decided in one way for resume and
+// replay: per view, the last frame_stored record of `records` (the capture's
+// journal), if its file verifies (VerifyFrameFile). CorruptData naming the
+// journal line and field for a damaged record (FrameRecord::FromJson), a frame
+// of a view no view_planned record plans, or of another camera than the one
+// planned for its view (a record copied onto another view).
+Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir,
+                                                  const std::vector<nlohmann::json>& records);
 
 // Current UTC time as ISO 8601 with milliseconds ("2026-11-22T10:04:05.123Z").
 std::string UtcNow();

@@ -2,11 +2,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include <gtest/gtest.h>
 
 #include "core/file_util.h"
 #include "rig/capture_test_util.h"
+#include "rig/replay.h"
 
 namespace hairrig {
 namespace {
@@ -24,11 +26,22 @@ Frame RawFrame(int width, int height, uint8_t value = 90) {
   return f;
 }
 
+// Ten views of camera CAM-1, one per stop.
+std::vector<PlannedViewRecord> TestPlan() {
+  std::vector<PlannedViewRecord> plan;
+  for (int v = 0; v < 10; ++v) plan.push_back({v, v, 36.0 * v, "cam", "CAM-1", {{"top", 1.0}}});
+  return plan;
+}
+
 std::unique_ptr<CaptureDataset> NewDataset(const std::string& name) {
   const std::string dir = FreshDir(name) + "/c";
-  auto d = CaptureDataset::Create(dir, "name: test\n", {{"config_dir", "/"}}, {});
+  CaptureMetadata metadata;
+  metadata.config_dir = "/";
+  auto d = CaptureDataset::Create(dir, "name: test\n", metadata, {});
   EXPECT_TRUE(d.ok()) << d.status().ToString();
-  return d.ok() ? std::move(d).value() : nullptr;
+  if (!d.ok()) return nullptr;
+  EXPECT_TRUE((*d)->JournalPlan(TestPlan()).ok());
+  return std::move(d).value();
 }
 
 TEST(CaptureDataset, StoresAVerifiedFrameAndRefusesToOverwriteIt) {
@@ -36,11 +49,11 @@ TEST(CaptureDataset, StoresAVerifiedFrameAndRefusesToOverwriteIt) {
   ASSERT_TRUE(d);
   auto stored = d->StoreFrame(RawFrame(64, 48), {3, 1, "cam", 10, 10.001, 64, 48});
   ASSERT_TRUE(stored.ok()) << stored.status().ToString();
-  EXPECT_EQ(stored->record["file"], "frames/003_CAM-1.png");
+  EXPECT_EQ(stored->record.file, "frames/003_CAM-1.png");
   EXPECT_TRUE(d->HasVerifiedFrame(3));
   const auto again = d->StoreFrame(RawFrame(64, 48, 7), {3, 1, "cam", 10, 10, 64, 48});
   EXPECT_EQ(again.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_EQ(VerifiedFramesOnDisk(d->dir()).at(3)["sha256"], stored->record["sha256"]);
+  EXPECT_EQ(VerifiedFramesOnDisk(d->dir()).at(3)["sha256"], stored->record.sha256);
 }
 
 TEST(CaptureDataset, BadFramesAreRefusedAndNothingIsWritten) {
@@ -77,7 +90,7 @@ TEST(CaptureDataset, ResumeRepairsWhatAnInterruptionLeft) {
     auto d = NewDataset("dataset_repair");
     ASSERT_TRUE(d);
     dir = d->dir();
-    sha_kept = d->StoreFrame(RawFrame(64, 48, 1), {0, 0, "cam", 0, 0, 64, 48})->record["sha256"];
+    sha_kept = d->StoreFrame(RawFrame(64, 48, 1), {0, 0, "cam", 0, 0, 64, 48})->record.sha256;
     ASSERT_TRUE(d->StoreFrame(RawFrame(64, 48, 2), {1, 0, "cam", 0, 0, 64, 48}).ok());
   }
   // Frame 1 altered after the fact, an unjournalled file, a temporary, half a record.
@@ -127,6 +140,248 @@ TEST(CaptureDataset, AJournalAlteredInTheMiddleIsRefused) {
   ASSERT_FALSE(d.ok());
   EXPECT_EQ(d.status().code(), StatusCode::kCorruptData);
   EXPECT_NE(d.status().message().find("line 1"), std::string::npos) << d.status().ToString();
+}
+
+
+// ---- hostile or damaged capture folders -----------------------------------
+
+// A closed capture with verified frames of views 0 and 1, copied to a fresh
+// folder per call; its path.
+std::string DamageableCapture(const std::string& name) {
+  static const std::string original = [] {
+    auto d = NewDataset("dataset_hostile_original");
+    EXPECT_TRUE(d->StoreFrame(RawFrame(64, 48, 1), {0, 0, "cam", 0, 0, 64, 48}).ok());
+    EXPECT_TRUE(d->StoreFrame(RawFrame(64, 48, 2), {1, 1, "cam", 36, 36, 64, 48}).ok());
+    return d->dir();
+  }();
+  const std::string dir = FreshDir(name) + "/c";
+  fs::copy(original, dir, fs::copy_options::recursive);
+  return dir;
+}
+
+void WriteJournal(const std::string& dir, const std::vector<nlohmann::json>& records) {
+  std::string text;
+  for (const auto& r : records) text += r.dump() + "\n";
+  ASSERT_TRUE(WriteFileAtomic(dir + "/journal.jsonl", text).ok());
+}
+
+// Index of the first frame_stored record.
+size_t FirstFrameRecord(const std::vector<nlohmann::json>& records) {
+  size_t i = 0;
+  while (i < records.size() && records[i]["event"] != "frame_stored") ++i;
+  return i;
+}
+
+// Each damaged record gives CorruptData naming the journal line and the field:
+// these used to end in std::terminate (missing or mistyped fields) or in a
+// "complete" capture with an invalid manifest (no serial) or 39 of 38 views
+// (a negative or fractional view).
+TEST(CaptureDatasetHostile, DamagedFrameRecordsAreRefusedNamingLineAndField) {
+  using Edit = std::function<void(nlohmann::json&)>;
+  const std::vector<std::pair<Edit, std::string>> cases = {
+      {[](nlohmann::json& r) { r.erase("sha256"); }, "field 'sha256': is missing"},
+      {[](nlohmann::json& r) { r["sha256"] = 5; }, "field 'sha256': expected a string, got 5"},
+      {[](nlohmann::json& r) { r["sha256"] = "abc"; }, "field 'sha256': expected 64"},
+      {[](nlohmann::json& r) { r["view"] = "x"; }, "field 'view': expected an integer"},
+      {[](nlohmann::json& r) { r["view"] = -1; }, "field 'view': expected an integer in [0, 99999], got -1"},
+      {[](nlohmann::json& r) { r["view"] = 2.5; }, "field 'view': expected an integer in [0, 99999], got 2.5"},
+      {[](nlohmann::json& r) { r["bytes"] = -1; }, "field 'bytes'"},
+      {[](nlohmann::json& r) { r["file"] = 3; }, "field 'file': expected a string"},
+      {[](nlohmann::json& r) { r["file"] = "../../outside/victim.png"; }, "field 'file'"},
+      {[](nlohmann::json& r) { r.erase("serial"); }, "field 'serial': is missing"},
+      {[](nlohmann::json& r) { r["serial"] = ""; }, "field 'serial': is empty"},
+      {[](nlohmann::json& r) { r["seq"] = "7"; }, "field 'seq'"},
+      {[](nlohmann::json& r) {
+         r["serial"] = "CAM-2";
+         r["file"] = "frames/000_CAM-2.png";
+       },
+       "field 'serial': view 0 is planned for camera CAM-1"},
+  };
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string dir = DamageableCapture("dataset_bad_record");
+    auto records = ReadJournal(dir);
+    const size_t index = FirstFrameRecord(records);
+    cases[c].first(records[index]);
+    WriteJournal(dir, records);
+    ResumeReport report;
+    const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+    ASSERT_FALSE(d.ok()) << "case " << c;
+    EXPECT_EQ(d.status().code(), StatusCode::kCorruptData) << d.status().ToString();
+    const std::string line = dir + "/journal.jsonl: line " + std::to_string(index + 1) + ": ";
+    EXPECT_NE(d.status().message().find(line + cases[c].second), std::string::npos) << d.status().ToString();
+    EXPECT_NE(d.status().message().find("by hand"), std::string::npos) << d.status().ToString();
+    EXPECT_TRUE(fs::exists(dir + "/frames/001_CAM-1.png")) << "nothing is moved when resume is refused";
+  }
+}
+
+// A copy of view 0's record relabelled as view 1 used to get view 1's genuine
+// frame quarantined and view 0's image accepted for view 1.
+TEST(CaptureDatasetHostile, ARecordCopiedOntoAnotherViewIsRefused) {
+  const std::string dir = DamageableCapture("dataset_duplicate");
+  auto records = ReadJournal(dir);
+  nlohmann::json copy = records[FirstFrameRecord(records)];
+  copy["view"] = 1;
+  copy["seq"] = 1000;
+  records.push_back(copy);
+  WriteJournal(dir, records);
+  ResumeReport report;
+  const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(d.status().message().find("line " + std::to_string(records.size()) + ": field 'file'"), std::string::npos)
+      << d.status().ToString();
+  EXPECT_TRUE(fs::exists(dir + "/frames/001_CAM-1.png"));
+  EXPECT_FALSE(fs::exists(dir + "/quarantine"));
+}
+
+// Resume writes into journal.jsonl, frames/ and quarantine/: a symlink there
+// used to send truncation, re-shot frames or quarantined files outside the capture.
+TEST(CaptureDatasetHostile, SymlinksAreRefusedForWriting) {
+  for (const std::string entry : {"journal.jsonl", "frames", "quarantine"}) {
+    const std::string dir = DamageableCapture("dataset_symlink");
+    const std::string outside = fs::path(dir).parent_path().string() + "/outside_" + entry;
+    if (entry == "quarantine") {
+      fs::create_directory(outside);
+    } else {
+      fs::rename(dir + "/" + entry, outside);
+    }
+    fs::create_symlink(outside, dir + "/" + entry);
+    std::ofstream(dir + "/journal.jsonl", std::ios::app) << "{\"event\":\"cut sh";  // would be truncated
+    std::ofstream(dir + "/frames/009_CAM-1.png") << "unvouched";                    // would be quarantined
+    const auto before = ReadFileBytes(dir + "/journal.jsonl");
+    ResumeReport report;
+    const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+    ASSERT_FALSE(d.ok()) << entry;
+    EXPECT_EQ(d.status().code(), StatusCode::kFailedPrecondition) << d.status().ToString();
+    EXPECT_NE(d.status().message().find(dir + "/" + entry + " is a symlink"), std::string::npos) << d.status().ToString();
+    EXPECT_EQ(*ReadFileBytes(dir + "/journal.jsonl"), *before) << entry;
+    EXPECT_TRUE(fs::exists(dir + "/frames/009_CAM-1.png")) << entry;
+  }
+}
+
+// A frame replaced by a symlink to /dev/zero used to hang resume while hashing it.
+TEST(CaptureDatasetHostile, AFrameLeadingOutsideIsNotReadAndIsQuarantined) {
+  const std::string dir = DamageableCapture("dataset_frame_symlink");
+  fs::remove(dir + "/frames/000_CAM-1.png");
+  fs::create_symlink("/dev/zero", dir + "/frames/000_CAM-1.png");
+  ResumeReport report;
+  const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_TRUE(d.ok()) << d.status().ToString();
+  EXPECT_FALSE((*d)->HasVerifiedFrame(0));
+  EXPECT_TRUE((*d)->HasVerifiedFrame(1));
+  EXPECT_TRUE(fs::is_symlink(dir + "/quarantine/000_CAM-1.png"));
+  const auto verified = VerifiedFrames(dir, ReadJournal(dir));
+  ASSERT_TRUE(verified.ok());
+  EXPECT_EQ(verified->count(0), 0u);
+}
+
+// A missing frames/ and folders where files were expected used to end in an
+// uncaught filesystem_error.
+TEST(CaptureDatasetHostile, MissingFramesFolderAndForeignFoldersAreHandled) {
+  std::string dir = DamageableCapture("dataset_no_frames");
+  fs::remove_all(dir + "/frames");
+  ResumeReport report;
+  auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_TRUE(d.ok()) << d.status().ToString();
+  EXPECT_EQ(report.frames_verified, 0);
+  EXPECT_TRUE(fs::is_directory(dir + "/frames"));
+  d = Result<std::unique_ptr<CaptureDataset>>(Internal("closed"));
+
+  dir = DamageableCapture("dataset_foreign_folders");
+  fs::create_directories(dir + "/x.tmp.5");
+  std::ofstream(dir + "/x.tmp.5/keep") << "not hairrig's";
+  fs::create_directories(dir + "/frames/sub.tmp.3");
+  std::ofstream(dir + "/frames/sub.tmp.3/a") << "x";
+  d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_TRUE(d.ok()) << d.status().ToString();
+  EXPECT_TRUE(fs::exists(dir + "/x.tmp.5/keep"));
+  EXPECT_TRUE(fs::exists(dir + "/quarantine/sub.tmp.3/a"));
+}
+
+// capture.json as a folder used to end in bad_alloc; a non-string config_dir
+// in a type_error.
+TEST(CaptureDatasetHostile, DamagedCaptureJsonIsNamed) {
+  std::string dir = DamageableCapture("dataset_metadata_folder");
+  fs::remove(dir + "/capture.json");
+  fs::create_directory(dir + "/capture.json");
+  ResumeReport report;
+  auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(d.status().message().find(dir + "/capture.json is a folder"), std::string::npos) << d.status().ToString();
+
+  dir = DamageableCapture("dataset_metadata_type");
+  ASSERT_TRUE(WriteFileAtomic(dir + "/capture.json", R"({"format": "hairrig-capture", "version": 1, "config_dir": 5})").ok());
+  d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(d.status().message().find("capture.json: field 'config_dir': expected a string"), std::string::npos)
+      << d.status().ToString();
+}
+
+TEST(CaptureDatasetHostile, AChangedPlanIsRefused) {
+  const std::string dir = DamageableCapture("dataset_plan");
+  ResumeReport report;
+  auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_TRUE(d.ok()) << d.status().ToString();
+  std::vector<PlannedViewRecord> moved = TestPlan();
+  moved[3].angle_deg = 100;
+  Status s = (*d)->JournalPlan(moved);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(s.message().find("view 3 (stop 3 at 108 deg"), std::string::npos) << s.ToString();
+  EXPECT_NE(s.message().find("now planned as view 3 (stop 3 at 100 deg"), std::string::npos) << s.ToString();
+  std::vector<PlannedViewRecord> grown = TestPlan();
+  grown.push_back({10, 10, 0, "cam", "CAM-1", {}});
+  s = (*d)->JournalPlan(grown);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(s.message().find("view 10 (stop 10 at 0 deg, camera cam CAM-1, lights) was added"), std::string::npos)
+      << s.ToString();
+  EXPECT_TRUE((*d)->JournalPlan(TestPlan()).ok());
+}
+
+// Killed between creating the capture and journalling its whole plan: resume completes the plan.
+TEST(CaptureDatasetHostile, AnInterruptedStartGetsItsPlanCompleted) {
+  const std::string dir = FreshDir("dataset_plan_interrupted") + "/c";
+  {
+    auto d = CaptureDataset::Create(dir, "name: test\n", {}, {});
+    ASSERT_TRUE(d.ok());
+    const std::vector<PlannedViewRecord> plan = TestPlan();
+    ASSERT_TRUE((*d)->JournalPlan(std::vector<PlannedViewRecord>(plan.begin(), plan.begin() + 4)).ok());
+  }
+  ResumeReport report;
+  auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_TRUE(d.ok()) << d.status().ToString();
+  ASSERT_TRUE((*d)->JournalPlan(TestPlan()).ok());
+  EXPECT_EQ(CountEvents(ReadJournal(dir), "view_planned"), 10);
+  EXPECT_TRUE((*d)->StoreFrame(RawFrame(64, 48), {7, 7, "cam", 0, 0, 64, 48}).ok());
+}
+
+// Replay decides with the same VerifiedFrames: a record naming a file outside
+// the capture (with that file's true checksum) used to be served.
+TEST(CaptureDatasetHostile, ReplayServesOnlyVerifiedFramesInsideTheCapture) {
+  const std::string dir = DamageableCapture("dataset_replay_escape");
+  const std::string victim = fs::path(dir).parent_path().string() + "/victim.png";
+  fs::copy_file(dir + "/frames/000_CAM-1.png", victim);
+  auto records = ReadJournal(dir);
+  records[FirstFrameRecord(records)]["file"] = "../victim.png";
+  WriteJournal(dir, records);
+  auto source = OpenReplaySource(dir, {});
+  ASSERT_FALSE(source.ok());
+  EXPECT_NE(source.status().message().find("field 'file'"), std::string::npos) << source.status().ToString();
+
+  const std::string linked = DamageableCapture("dataset_replay_symlink");
+  for (const char* frame : {"/frames/000_CAM-1.png", "/frames/001_CAM-1.png"}) {
+    fs::copy_file(linked + frame, victim, fs::copy_options::overwrite_existing);
+    fs::remove(linked + frame);
+    fs::create_symlink(victim, linked + frame);
+  }
+  source = OpenReplaySource(linked, {});
+  EXPECT_EQ(source.status().code(), StatusCode::kNotFound) << source.status().ToString();
+}
+
+TEST(CaptureDatasetHostile, ReplayOutputMayNotLieInsideTheRecording) {
+  const std::string dir = DamageableCapture("dataset_replay_out");
+  EXPECT_EQ(CheckReplayOutDir(dir, dir + "/frames/sub").code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(CheckReplayOutDir(dir, dir).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(CheckReplayOutDir(dir, dir + "/../c/x").code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(CheckReplayOutDir(dir, dir + "-replay").ok());
 }
 
 }  // namespace

@@ -78,7 +78,9 @@ void ExpectGroundTruthOfEveryView(const std::string& capture_dir, int views) {
   EXPECT_EQ(read->head->radii_mm, scene->head.radii_mm);
   EXPECT_EQ(read->head->scalp.defined, scene->head.scalp.defined);
   EXPECT_EQ(read->head->mesh_file.empty(), scene->head.mesh_file.empty());
-  if (!scene->head.mesh_file.empty()) EXPECT_TRUE(fs::exists(read->head->mesh_file)) << read->head->mesh_file;
+  if (!scene->head.mesh_file.empty()) {
+    EXPECT_TRUE(fs::exists(read->head->mesh_file)) << read->head->mesh_file;
+  }
   auto renderer = Renderer::Create(*scene);
   ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
   for (const auto& v : truth["views"]) {
@@ -223,6 +225,34 @@ TEST(Capture, ExplicitViewsPlan) {
   EXPECT_EQ(s.views_planned, 3);
   EXPECT_EQ(CountEvents(ReadJournal(s.dir), "position_reached"), 2);
   ExpectConsistent(s);
+}
+
+// The snapshot's plan edited between sessions: resume refuses to mix two
+// plans in one capture (it used to shoot the new views into the old capture).
+TEST(Capture, ResumeRefusesAChangedPlan) {
+  const std::string dir = FreshDir("capture_plan_changed");
+  const CaptureSummary s = Capture(WriteSmallRig(dir, {{"plan", "plan: {stops: 2}\n"}}), dir + "/c");
+  ASSERT_EQ(s.status, "complete");
+  std::string snapshot;
+  {
+    std::ifstream in(s.dir + "/rig.yaml");
+    snapshot.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const size_t at = snapshot.find("stops: 2");
+  ASSERT_NE(at, std::string::npos);
+  snapshot.replace(at, 8, "stops: 3");
+  std::ofstream(s.dir + "/rig.yaml", std::ios::trunc) << snapshot;
+  const size_t records = ReadJournal(s.dir).size();
+  CaptureOptions o;
+  o.out_dir = s.dir;
+  o.resume = true;
+  const auto resumed = RunCapture(o);
+  ASSERT_FALSE(resumed.ok());
+  EXPECT_EQ(resumed.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(resumed.status().message().find("the plan of a capture cannot change"), std::string::npos)
+      << resumed.status().ToString();
+  EXPECT_NE(resumed.status().message().find("another --out"), std::string::npos);
+  EXPECT_EQ(ReadJournal(s.dir).size(), records) << "nothing journalled for a refused session";
 }
 
 std::map<std::string, std::string> SimWithFaults(const std::string& faults) {

@@ -171,10 +171,11 @@ Result<nlohmann::json> EvalIntrinsics(const std::string& dir) {
   const std::string truth_path = (fs::path(dir) / "ground_truth.json").string();
   HR_ASSIGN_OR_RETURN(nlohmann::json truth,
                       ReadJsonFile(truth_path, "only image sets from `hairrig sim charuco` have a ground truth"));
-  if (truth.value("format", "") != "hairrig-charuco-truth")
+  const JsonObject fields(truth, truth_path);
+  if (fields.StringOr("format", "") != "hairrig-charuco-truth" || !fields.ok())
     return CorruptData(truth_path + ": not a ChArUco ground truth (format hairrig-charuco-truth)");
-  HR_ASSIGN_OR_RETURN(CameraIntrinsics k_true,
-                      IntrinsicsFromJson(truth.value("intrinsics", nlohmann::json()), truth_path + ": intrinsics"));
+  const CameraIntrinsics k_true = IntrinsicsField(fields, "intrinsics");
+  HR_RETURN_IF_ERROR(fields.status());
   const std::string solved_path = (fs::path(dir) / "intrinsics.json").string();
   HR_ASSIGN_OR_RETURN(std::vector<IntrinsicsPrior> solved, ReadIntrinsicsPriors(solved_path));
   if (solved.size() != 1) return CorruptData(solved_path + ": not the result of `hairrig calibrate-intrinsics`");

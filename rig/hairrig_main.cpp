@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <exception>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -6,7 +7,10 @@
 #include "core/log.h"
 #include "rig/cli.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+// The command line's own work: parse, dispatch, print.
+int Run(int argc, char** argv) {
   using namespace hairrig;
   CLI::App app{
       "hairrig: capture rig control and hair pipeline.\n"
@@ -51,4 +55,19 @@ int main(int argc, char** argv) {
     dispatch.print_human(*result);
   }
   return dispatch.exit_code ? dispatch.exit_code(*result) : 0;
+}
+
+}  // namespace
+
+// The libraries report failures as Status; anything thrown that reaches here
+// is a bug, reported as an error instead of std::terminate.
+int main(int argc, char** argv) {
+  try {
+    return Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hairrig: error: internal error (please report it): %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "hairrig: error: internal error (please report it): unknown exception\n");
+  }
+  return 1;
 }

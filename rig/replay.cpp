@@ -1,5 +1,6 @@
 #include "rig/replay.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -14,6 +15,8 @@
 #include "drivers/camera_support.h"
 #include "drivers/trigger_bus.h"
 #include "rig/capture_dataset.h"
+#include "rig/journal_records.h"
+#include "rig/safe_names.h"
 
 namespace hairrig {
 
@@ -47,6 +50,8 @@ using LightState = std::map<std::string, double>;  // light name -> level
 
 struct RecordedFrame {
   std::string path;
+  std::string sha256;  // checked again when the frame is served
+  uint64_t bytes = 0;
   LightState lights;  // the panels when it was shot (from its view_planned record)
   std::string extension;
   double commanded_deg = 0;
@@ -117,52 +122,72 @@ class ReplaySource {
   LightState lights_;
 };
 
+namespace {
+
+// The recorded stops: each commanded angle once, with its measured angle and
+// the wall time from the previous arrival in the same session.
+Status AddStops(const std::string& journal_path, const std::vector<nlohmann::json>& records, ReplaySource* source) {
+  double previous_arrival = 0;
+  for (size_t i = 0; i < records.size(); ++i) {
+    const std::string event = JournalEvent(records[i]);
+    if (event == "session_start") previous_arrival = 0;
+    if (event != "position_reached") continue;
+    HR_ASSIGN_OR_RETURN(const PositionRecord p, PositionRecord::FromJson(records[i], JournalLine(journal_path, i)));
+    const double t = UtcSeconds(p.time_utc);
+    const RecordedStop stop{p.commanded_deg, p.measured_deg, previous_arrival > 0 ? t - previous_arrival : 0};
+    previous_arrival = t;
+    if (!source->FindStop(stop.commanded_deg)) source->stops.push_back(stop);
+  }
+  return Status::Ok();
+}
+
+// Recorded trigger-to-arrival time, within [0, 60] s: a journal's time stamps
+// cannot make a replayed camera wait longer than that.
+double DownloadSeconds(const FrameRecord& r) {
+  const double s = 1e-9 * (static_cast<double>(r.received_time_ns) - static_cast<double>(r.trigger_time_ns));
+  return std::clamp(s, 0.0, 60.0);
+}
+
+}  // namespace
+
 Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir,
                                                        const ReplayOptions& options) {
   if (!(options.speed >= 0) || !std::isfinite(options.speed)) {
     return InvalidArgument("replay speed must be 0 (as fast as possible) or a positive factor");
   }
   // Read-only: the recorded folder is never modified (OpenForResume would repair it).
-  HR_ASSIGN_OR_RETURN(std::vector<nlohmann::json> records,
-                      ReadJournalRecords(capture_dir + "/journal.jsonl"));
+  const std::string journal_path = capture_dir + "/journal.jsonl";
+  HR_ASSIGN_OR_RETURN(const std::vector<nlohmann::json> records, ReadJournalRecords(journal_path));
+  HR_ASSIGN_OR_RETURN(const auto planned, PlannedViews(journal_path, records));
+  HR_ASSIGN_OR_RETURN(const auto verified, VerifiedFrames(capture_dir, records));
   auto source = std::make_shared<ReplaySource>();
   source->options = options;
-  double previous_arrival = 0;
-  std::map<int, LightState> view_lights;
-  for (const nlohmann::json& r : records) {
-    const std::string event = r.value("event", "");
-    if (event == "position_reached") {
-      const double t = UtcSeconds(r.value("time_utc", ""));
-      RecordedStop stop{r.at("commanded_deg").get<double>(), r.at("measured_deg").get<double>(),
-                        previous_arrival > 0 ? t - previous_arrival : 0};
-      previous_arrival = t;
-      if (!source->FindStop(stop.commanded_deg)) source->stops.push_back(stop);
-    } else if (event == "session_start") {
-      previous_arrival = 0;
-    } else if (event == "view_planned") {
-      view_lights[r.at("view").get<int>()] = r.value("lights", LightState{});
-    } else if (event == "frame_stored") {
-      const std::string file = r.at("file").get<std::string>();
-      const std::string path = capture_dir + "/" + file;
-      auto sha = Sha256OfFile(path);
-      if (!sha.ok() || *sha != r.at("sha256").get<std::string>())
-        continue;  // not verified: not served
-      const std::string serial = r.at("serial").get<std::string>();
-      RecordedFrame f{path,
-                      view_lights[r.at("view").get<int>()],
-                      FileExtension(file),
-                      r.at("angle_commanded_deg").get<double>(),
-                      r.value("exposure_s", 0.0),
-                      r.value("gain_db", 0.0),
-                      1e-9 * static_cast<double>(r.value("received_time_ns", int64_t{0}) -
-                                                 r.value("trigger_time_ns", int64_t{0}))};
-      source->frames.emplace(serial, f);
-      source->sizes[serial] = {r.value("width_px", 0), r.value("height_px", 0)};
-    }
+  HR_RETURN_IF_ERROR(AddStops(journal_path, records, source.get()));
+  for (const auto& [view, r] : verified) {
+    const RecordedFrame f{capture_dir + "/" + r.file,
+                          r.sha256,
+                          r.bytes,
+                          planned.at(view).lights,  // VerifiedFrames checked that the view is planned
+                          FileExtension(r.file),
+                          r.angle_commanded_deg,
+                          r.exposure_s,
+                          r.gain_db,
+                          DownloadSeconds(r)};
+    source->frames.emplace(r.serial, f);
+    source->sizes[r.serial] = {r.width_px, r.height_px};
   }
   if (source->frames.empty())
     return NotFound(capture_dir + ": the capture has no verified frames to replay");
   return source;
+}
+
+Status CheckReplayOutDir(const std::string& recorded_dir, const std::string& out_dir) {
+  // A file inside out_dir resolves inside the recording exactly when out_dir is the recording or lies inside it.
+  if (ResolveInside(out_dir + "/x", recorded_dir).ok()) {
+    return InvalidArgument("--out " + out_dir + " lies inside the recording " + recorded_dir +
+                           ", which replay never writes into: choose a folder outside it");
+  }
+  return Status::Ok();
 }
 
 int ReplayFrameCount(const ReplaySource& source) { return static_cast<int>(source.frames.size()); }
@@ -336,7 +361,9 @@ class ReplayCamera : public ReplayDevice<Camera> {
       return NotFound(Describe() + ": the recording has no frame of this camera at " +
                       std::to_string(next.angle_deg) + " deg under the current light state");
     }
-    HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(next.frame->path));
+    HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(next.frame->path, next.frame->bytes));
+    if (Sha256Hex(bytes.data(), bytes.size()) != next.frame->sha256)
+      return CorruptData(next.frame->path + ": changed since the replay verified it");
     Frame f;
     f.camera_serial = info().serial;
     f.sequence = next.sequence;

@@ -25,10 +25,16 @@ struct ReplayOptions {
   double speed = 0;  // 0: as fast as possible; 1: recorded timing; 2: twice as fast
 };
 
-// Reads the capture's journal (verified frames only: each file is checked
-// against its SHA-256). NotFound / CorruptData name the folder and file.
+// Reads the capture's journal and serves its verified frames only
+// (rig/capture_dataset.h VerifiedFrames: inside the folder, size and SHA-256
+// as recorded; checked again when a frame is served). NotFound / CorruptData
+// name the folder, file, journal line and field.
 Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir, const ReplayOptions& options);
 int ReplayFrameCount(const ReplaySource& source);
+
+// InvalidArgument when `out_dir` (symlinks resolved) is the recording or lies
+// inside it: replay never writes into what it replays.
+Status CheckReplayOutDir(const std::string& recorded_dir, const std::string& out_dir);
 
 // Registers the `replay` backend of every device kind, serving `source`.
 void RegisterReplayBackends(DeviceRegistry* registry, std::shared_ptr<ReplaySource> source);

@@ -27,13 +27,15 @@ nlohmann::json ReplayCaptureSummary::ToJson() const {
 
 Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) {
   HR_RETURN_IF_ERROR(options.Validate());
+  const std::string out_dir = options.out_dir.empty() ? options.recorded_dir + "-replay" : options.out_dir;
+  HR_RETURN_IF_ERROR(CheckReplayOutDir(options.recorded_dir, out_dir));
   HR_ASSIGN_OR_RETURN(std::shared_ptr<ReplaySource> source,
                       OpenReplaySource(options.recorded_dir, {.speed = options.speed}));
   HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(options.recorded_dir));
   CaptureOptions capture;
   capture.config_path = config.path;
   capture.config_relative_to = config.relative_to;
-  capture.out_dir = options.out_dir.empty() ? options.recorded_dir + "-replay" : options.out_dir;
+  capture.out_dir = out_dir;
   capture.rig_build.register_backends = [source](DeviceRegistry* registry) { RegisterReplayBackends(registry, source); };
   capture.rig_build.backend_override = "replay";
   capture.rig_build.simulate = false;

@@ -62,4 +62,16 @@ bool PathIsInside(const std::string& path, const std::string& folder) {
   return !rel.empty() && *rel.begin() != ".." && rel.is_relative() && rel != ".";
 }
 
+Result<std::string> ResolveInside(const std::string& path, const std::string& folder) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path resolved = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  if (ec) return IoError(path + ": cannot resolve the path (" + ec.message() + ")");
+  const fs::path root = fs::weakly_canonical(fs::absolute(folder, ec), ec);
+  if (ec) return IoError(folder + ": cannot resolve the path (" + ec.message() + ")");
+  if (!PathIsInside(resolved.string(), root.string()))
+    return CorruptData(path + " leads to " + resolved.string() + ", outside " + root.string());
+  return resolved.string();
+}
+
 }  // namespace hairrig

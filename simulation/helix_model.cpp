@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"
+#include "core/geometry_json.h"
+#include "core/json_file.h"
 
 namespace hairrig {
 
@@ -15,13 +19,18 @@ constexpr int kModelVersion = 1;
 
 nlohmann::json Vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-bool ReadVec(const nlohmann::json& j, const char* key, Eigen::Vector3d* out) {
-  if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3) return false;
-  for (int i = 0; i < 3; ++i) {
-    if (!j[key][static_cast<size_t>(i)].is_number()) return false;
-    (*out)[i] = j[key][static_cast<size_t>(i)].get<double>();
-  }
-  return out->allFinite();
+constexpr int64_t kMaxIndex = std::numeric_limits<int>::max();
+
+// Errors are recorded in `e` (JsonObject).
+HelixElement ElementFromJson(const JsonObject& e) {
+  HelixElement element;
+  element.start_mm = Vector3Field(e, "start_mm");
+  element.start_tangent = Vector3Field(e, "start_tangent");
+  element.darboux_per_mm = Vector3Field(e, "darboux_per_mm");
+  element.length_mm = e.Number("length_mm", {.min = 0});
+  if (e.ok() && !(element.length_mm > 0)) e.Fail("length_mm", "must be positive");
+  if (e.ok() && std::abs(element.start_tangent.norm() - 1) > 1e-6) e.Fail("start_tangent", "is not a unit vector");
+  return element;
 }
 }  // namespace
 
@@ -106,42 +115,30 @@ Status WriteHelixModel(const std::string& path, const HelixModel& model, const F
 }
 
 Result<HelixModel> ReadHelixModel(const std::string& path) {
-  HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(path));
-  const nlohmann::json j = nlohmann::json::parse(bytes.begin(), bytes.end(), nullptr, false);
-  if (!j.is_object() || j.value("format", "") != "hairrig-helix-model") {
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path, "give a model written by `hairrig fit`"));
+  const JsonObject root(j, path);
+  if (root.StringOr("format", "") != "hairrig-helix-model" || !root.ok()) {
     return CorruptData(path + ": not a hairrig helix model (made by `hairrig fit`)");
   }
-  if (j.value("version", 0) != kModelVersion) {
-    return CorruptData(path + ": model version " + std::to_string(j.value("version", 0)) + ", this build reads version " +
+  const int64_t version = root.Integer("version");
+  if (root.ok() && version != kModelVersion) {
+    return CorruptData(path + ": model version " + std::to_string(version) + ", this build reads version " +
                        std::to_string(kModelVersion) + ": fit the strands again with this build");
   }
   HelixModel model;
-  model.source = j.value("source", "");
-  if (!j.contains("guides") || !j["guides"].is_array()) return CorruptData(path + ": field 'guides' is missing");
-  for (size_t g = 0; g < j["guides"].size(); ++g) {
-    const auto& guide = j["guides"][g];
-    const std::string where = path + ": guides[" + std::to_string(g) + "]";
-    if (!guide.contains("elements") || !guide["elements"].is_array() || guide["elements"].empty()) {
-      return CorruptData(where + ".elements is missing or empty");
-    }
+  model.source = root.StringOr("source", "");
+  for (const JsonObject& guide : root.Objects("guides")) {
     PiecewiseHelix helix;
-    for (size_t k = 0; k < guide["elements"].size(); ++k) {
-      const auto& e = guide["elements"][k];
-      HelixElement element;
-      const bool ok = ReadVec(e, "start_mm", &element.start_mm) && ReadVec(e, "start_tangent", &element.start_tangent) &&
-                      ReadVec(e, "darboux_per_mm", &element.darboux_per_mm) && e.contains("length_mm") &&
-                      e["length_mm"].is_number() && e["length_mm"].get<double>() > 0;
-      if (!ok || std::abs(element.start_tangent.norm() - 1) > 1e-6) {
-        return CorruptData(where + ".elements[" + std::to_string(k) +
-                           "]: needs finite start_mm, unit start_tangent, darboux_per_mm and a positive length_mm");
-      }
-      element.length_mm = e["length_mm"].get<double>();
-      helix.elements.push_back(element);
-    }
+    const std::vector<JsonObject> elements = guide.Objects("elements");
+    if (elements.empty()) guide.Fail("elements", "is empty");
+    for (const JsonObject& e : elements) helix.elements.push_back(ElementFromJson(e));
     model.guides.push_back(std::move(helix));
-    model.guide_strands.push_back(guide.value("strand", -1));
+    model.guide_strands.push_back(static_cast<int>(guide.IntegerOr("strand", -1, {.min = -1, .max = kMaxIndex})));
+    if (!root.ok()) break;
   }
-  model.cluster_of_strand = j.value("cluster_of_strand", std::vector<int>{});
+  for (int64_t g : root.IntegersOr("cluster_of_strand", {.min = -1, .max = static_cast<int64_t>(model.guides.size()) - 1}))
+    model.cluster_of_strand.push_back(static_cast<int>(g));
+  HR_RETURN_IF_ERROR(root.status());
   return model;
 }
 

@@ -61,6 +61,32 @@ TEST(HelixModel, BadModelsAreRefusedWithTheReason) {
   EXPECT_FALSE(ReadHelixModel(dir + "/other.json").ok());
 }
 
+// A mistyped field gives CorruptData naming the file and the field (a string
+// cluster_of_strand used to end in std::terminate).
+TEST(HelixModel, MistypedFieldsAreNamed) {
+  const std::string dir = ::testing::TempDir();
+  const std::string element =
+      R"({"start_mm": [0, 0, 0], "start_tangent": [1, 0, 0], "darboux_per_mm": [0, 0, 0], "length_mm": 1})";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"("guides": [{"strand": 0, "elements": [E]}], "cluster_of_strand": "abc")", "field 'cluster_of_strand'"},
+      {R"("guides": [{"strand": 0, "elements": [E]}], "cluster_of_strand": [0, 1])", "field 'cluster_of_strand': item 1"},
+      {R"("guides": [{"strand": "x", "elements": [E]}])", "field 'guides[0].strand'"},
+      {R"("guides": {"a": 1})", "field 'guides'"},
+      {R"("guides": [{"elements": [3]}])", "field 'guides[0].elements[0]'"},
+      {R"("guides": [{"elements": [E]}], "source": 7)", "field 'source'"},
+  };
+  for (const auto& [fields, expected] : cases) {
+    std::string text = R"({"format": "hairrig-helix-model", "version": 1, )" + fields + "}";
+    const size_t at = text.find('E');
+    if (at != std::string::npos && text.compare(at - 1, 3, "[E]") == 0) text.replace(at, 1, element);
+    ASSERT_TRUE(WriteFileAtomic(dir + "/typed.json", text).ok());
+    const auto r = ReadHelixModel(dir + "/typed.json");
+    ASSERT_FALSE(r.ok()) << text;
+    EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
+    EXPECT_NE(r.status().message().find(dir + "/typed.json: " + expected), std::string::npos) << r.status().ToString();
+  }
+}
+
 TEST(HelixModel, DegenerateStrandsAreNamed) {
   StrandSet set = Curls();
   set.AddStrand({{0, 0, 0}, {0, 0, 0}, {0, 0, 0}});  // zero length

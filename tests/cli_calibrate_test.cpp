@@ -199,10 +199,11 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
   fs::copy_file(capture_ + "/capture.json", fake + "/capture.json");
   std::ofstream(fake + "/manifest.json")
       << R"({"frames": [{"file": "../../etc/passwd", "serial": "SIM-CAM-UPPER", "view": 0, "stop": 0,
-                          "angle_measured_deg": 0}]})";
+                          "angle_measured_deg": 0, "bytes": 10, "sha256": "00"}]})";
   r = Hairrig("calibrate " + fake);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find("outside the capture folder"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("field 'frames[0].file': ../../etc/passwd is not the file of view 0"), std::string::npos)
+      << r.output;
 
   // A corrupt frame: named, the rest still solved.
   const std::string damaged = ::testing::TempDir() + "/cli_calibrate_damaged";
@@ -212,13 +213,16 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
   r = Hairrig("eval calibration " + damaged);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("run `hairrig calibrate`"), std::string::npos) << r.output;
-  std::ofstream(damaged + "/frames/005_SIM-CAM-LOWER.png", std::ios::trunc) << "not a png";
+  // Half a frame: still a PNG header, but not the checksum the manifest records.
+  std::filesystem::resize_file(damaged + "/frames/005_SIM-CAM-LOWER.png",
+                               std::filesystem::file_size(damaged + "/frames/005_SIM-CAM-LOWER.png") / 2);
   r = Hairrig("--log-level warning calibrate " + damaged + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json summary = LastLineJson(r.output);
   EXPECT_EQ(summary["verdict"], "check these views");
   EXPECT_EQ(summary["views_solved"], 37);
   EXPECT_NE(summary["reasons"].dump().find("005_SIM-CAM-LOWER.png"), std::string::npos) << summary.dump();
+  EXPECT_NE(summary["reasons"].dump().find("SHA-256 does not match"), std::string::npos) << summary.dump();
 }
 
 }  // namespace

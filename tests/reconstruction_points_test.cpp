@@ -116,9 +116,9 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   EXPECT_GT(bao_qi.all.directed[1].precision, 0.8);
   EXPECT_GT(bao_qi.all.directed[1].recall, 0.35);
   EXPECT_GT(bao_qi.all.directed[1].f1, 1.3 * naive.all.directed[1].f1) << "the structure analysis pays";
-  for (const StrandEvaluation* e : {&bao_qi, &naive}) {
-    ASSERT_TRUE(e->rooted_on_scalp_fraction.has_value());
-    EXPECT_GT(*e->rooted_on_scalp_fraction, 0.98);
+  for (const StrandEvaluation* method : {&bao_qi, &naive}) {
+    ASSERT_TRUE(method->rooted_on_scalp_fraction.has_value());
+    EXPECT_GT(*method->rooted_on_scalp_fraction, 0.98);
   }
   
 

@@ -1,0 +1,165 @@
+// The command line on hostile or damaged input, as a careless user or an
+// attacker hands it in: every case ends with exit code 1 and a message naming
+// the file and the field ("hairrig: error: ..."), never a crash (exit 134), a
+// hang, a write outside the capture folder or a success on a damaged dataset.
+
+#include <sys/stat.h>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/command_run.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using hairrig_test::CommandRun;
+using hairrig_test::Hairrig;
+
+// Every command runs under `timeout`: a hang fails the test (exit 124) instead of blocking ctest.
+CommandRun Hostile(const std::string& args) { return Hairrig("--log-level error " + args, "timeout -k 5 60 "); }
+
+void ExpectCleanError(const CommandRun& r, const std::string& expected) {
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("hairrig: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(expected), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("terminate called"), std::string::npos) << r.output;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+class CliHostile : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = ::testing::TempDir() + "/hairrig_cli_hostile";
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    const CommandRun r = Hostile("capture --config tests/data/small_rig.yaml --out " + root_ + "/recorded");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  // A fresh copy of the recorded capture.
+  static std::string Copy(const std::string& name) {
+    const std::string dir = root_ + "/" + name;
+    fs::remove_all(dir);
+    fs::copy(root_ + "/recorded", dir, fs::copy_options::recursive);
+    return dir;
+  }
+  // Applies `edit` to the capture's first frame_stored record.
+  static void EditFirstFrameRecord(const std::string& dir, const std::function<void(nlohmann::json&)>& edit) {
+    std::ifstream in(dir + "/journal.jsonl");
+    std::string line, text;
+    bool done = false;
+    while (std::getline(in, line)) {
+      nlohmann::json r = nlohmann::json::parse(line);
+      if (!done && r["event"] == "frame_stored") {
+        edit(r);
+        done = true;
+      }
+      text += r.dump() + "\n";
+    }
+    std::ofstream(dir + "/journal.jsonl", std::ios::trunc) << text;
+  }
+  static std::string root_;
+};
+std::string CliHostile::root_;
+
+TEST_F(CliHostile, DamagedFrameRecordsStopResumeWithLineAndField) {
+  const std::vector<std::pair<std::function<void(nlohmann::json&)>, std::string>> cases = {
+      {[](nlohmann::json& r) { r.erase("sha256"); }, "field 'sha256': is missing"},
+      {[](nlohmann::json& r) { r["file"] = 7; }, "field 'file'"},
+      {[](nlohmann::json& r) { r.erase("serial"); }, "field 'serial': is missing"},
+      {[](nlohmann::json& r) { r["view"] = -1; }, "field 'view'"},
+      {[](nlohmann::json& r) { r["view"] = 2.5; }, "field 'view'"},
+      {[](nlohmann::json& r) { r["seq"] = "x"; }, "field 'seq'"},
+  };
+  for (const auto& [edit, expected] : cases) {
+    const std::string dir = Copy("bad_record");
+    EditFirstFrameRecord(dir, edit);
+    const std::string manifest = ReadText(dir + "/manifest.json");
+    ExpectCleanError(Hostile("capture --resume --out " + dir), "journal.jsonl: line ");
+    ExpectCleanError(Hostile("replay " + dir + " --out " + dir + "-replay"), expected);
+    EXPECT_EQ(ReadText(dir + "/manifest.json"), manifest) << "a refused resume leaves the manifest alone";
+    EXPECT_FALSE(nlohmann::json::parse(manifest, nullptr, false).is_discarded());
+  }
+}
+
+TEST_F(CliHostile, DamagedCaptureJsonIsNamed) {
+  std::string dir = Copy("capture_json_folder");
+  fs::remove(dir + "/capture.json");
+  fs::create_directory(dir + "/capture.json");
+  ExpectCleanError(Hostile("capture --resume --out " + dir), "capture.json is a folder");
+  dir = Copy("capture_json_type");
+  std::ofstream(dir + "/capture.json", std::ios::trunc)
+      << R"({"format": "hairrig-capture", "version": 1, "config_dir": 5})";
+  ExpectCleanError(Hostile("capture --resume --out " + dir), "field 'config_dir'");
+}
+
+TEST_F(CliHostile, ResumeFollowsNoSymlinkOutOfTheCapture) {
+  const std::string dir = Copy("journal_symlink");
+  const std::string outside = root_ + "/outside_journal.jsonl";
+  fs::rename(dir + "/journal.jsonl", outside);
+  fs::create_symlink(outside, dir + "/journal.jsonl");
+  const std::string before = ReadText(outside);
+  ExpectCleanError(Hostile("capture --resume --out " + dir), "journal.jsonl is a symlink");
+  EXPECT_EQ(ReadText(outside), before);
+
+  const std::string frames = Copy("frame_to_dev_zero");
+  fs::remove(frames + "/frames/000_SIM-CAM-UPPER.png");
+  fs::create_symlink("/dev/zero", frames + "/frames/000_SIM-CAM-UPPER.png");
+  const CommandRun replay = Hostile("replay " + frames + " --out " + frames + "-replay --json");
+  EXPECT_EQ(replay.exit_code, 3) << replay.output;  // incomplete: view 0 is not served
+  EXPECT_NE(replay.output.find("\"missing_views\":[0]"), std::string::npos) << replay.output;
+}
+
+TEST_F(CliHostile, ReplayStaysInsideTheRecording) {
+  const std::string dir = Copy("replay_escape");
+  fs::copy_file(dir + "/frames/001_SIM-CAM-LOWER.png", root_ + "/victim.png", fs::copy_options::overwrite_existing);
+  EditFirstFrameRecord(dir, [](nlohmann::json& r) { r["file"] = "../victim.png"; });
+  ExpectCleanError(Hostile("replay " + dir + " --out " + root_ + "/escape_out"), "field 'file'");
+  EXPECT_FALSE(fs::exists(root_ + "/escape_out"));
+  ExpectCleanError(Hostile("replay " + root_ + "/recorded --out " + root_ + "/recorded/frames/x"),
+                   "lies inside the recording");
+  EXPECT_FALSE(fs::exists(root_ + "/recorded/frames/x"));
+}
+
+TEST_F(CliHostile, OnlyRegularFilesAreRead) {
+  const std::string fifo = root_ + "/config.fifo";
+  fs::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  ExpectCleanError(Hostile("devices --config " + fifo), "is a FIFO");
+  ExpectCleanError(Hostile("devices --config /dev/zero"), "is a character device");
+  ExpectCleanError(Hostile("devices --config " + root_), "is a folder");
+}
+
+TEST_F(CliHostile, HostileStrandFilesAndModelsAreRefused) {
+  // A bare .hair header claiming 2^32-1 strands (it used to allocate 16 GB).
+  std::vector<char> header(128, 0);
+  std::memcpy(header.data(), "HAIR", 4);
+  const uint32_t huge = 0xffffffffu, points_only = 2;
+  std::memcpy(header.data() + 4, &huge, 4);
+  std::memcpy(header.data() + 8, &huge, 4);
+  std::memcpy(header.data() + 12, &points_only, 4);
+  std::ofstream(root_ + "/huge.hair", std::ios::binary).write(header.data(), 128);
+  ExpectCleanError(Hostile("fit " + root_ + "/huge.hair --out " + root_ + "/m.json"), "header claims 4294967295 strands");
+  // A PLY element of 9e18 empty records (it used to loop for ever).
+  std::ofstream(root_ + "/junk.ply") << "ply\nformat ascii 1.0\nelement junk 9000000000000000000\nelement vertex 1\n"
+                                        "property float x\nproperty float y\nproperty float z\nelement strand 1\n"
+                                        "property int nsegs\nend_header\n0 0 0\n0\n";
+  ExpectCleanError(Hostile("fit " + root_ + "/junk.ply --out " + root_ + "/m.json"), "element 'junk'");
+  // A helix model whose cluster_of_strand is a string (it used to end in std::terminate).
+  std::ofstream(root_ + "/model.json")
+      << R"({"format": "hairrig-helix-model", "version": 1, "guides": [{"strand": 0, "elements": [{"start_mm": [0, 0, 0],
+            "start_tangent": [1, 0, 0], "darboux_per_mm": [0, 0, 0], "length_mm": 1}]}], "cluster_of_strand": "abc"})";
+  ExpectCleanError(Hostile("simulate " + root_ + "/model.json --out " + root_ + "/sim"), "field 'cluster_of_strand'");
+}
+
+}  // namespace
