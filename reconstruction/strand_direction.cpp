@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <limits>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <utility>
@@ -17,9 +18,23 @@ namespace hairrig {
 namespace {
 
 using PairKey = std::pair<uint32_t, uint32_t>;
-// Per pair of segments, the signed weight of their relations, summed: + where
-// their vertex orders agree (the same label is compatible), - where they oppose.
-using PairWeights = std::map<PairKey, double>;
+// The signed weight of one relation between two segments (lower index
+// first): + where their vertex orders agree (the same label is compatible),
+// - where they oppose. MergePairs sums the relations of each pair.
+using PairWeights = std::vector<std::pair<PairKey, double>>;
+
+void MergePairs(PairWeights* pairs) {
+  std::sort(pairs->begin(), pairs->end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  size_t out = 0;
+  for (size_t i = 0; i < pairs->size(); ++i) {
+    if (out > 0 && (*pairs)[out - 1].first == (*pairs)[i].first) {
+      (*pairs)[out - 1].second += (*pairs)[i].second;
+    } else {
+      (*pairs)[out++] = (*pairs)[i];
+    }
+  }
+  pairs->resize(out);
+}
 
 // Distance to the scalp (zeta of Eq. 5): to the nearest of a dense sample of it.
 class ScalpDistance {
@@ -67,59 +82,127 @@ Eigen::Vector3f Tangent(const std::vector<Eigen::Vector3f>& p, size_t i) {
   return d.norm() > 0 ? Eigen::Vector3f(d.normalized()) : Eigen::Vector3f::Zero();
 }
 
-// E_close (Eq. 7): side-by-side segments, weighted by their overlap share.
-void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
-                 PairWeights* pairs, int64_t* count) {
-  std::vector<Eigen::Vector3f> vertices;
-  std::vector<uint32_t> owner, index;
+// Every segment's vertices in one table, with their tangents and owners.
+struct VertexTable {
+  std::vector<Eigen::Vector3f> positions, tangents;
+  std::vector<uint32_t> owner;
+  std::vector<uint32_t> first;  // per segment, its first row; one past the end last
+};
+
+VertexTable TabulateVertices(const std::vector<StrandSegment>& segments) {
+  VertexTable t;
   for (uint32_t s = 0; s < segments.size(); ++s) {
-    for (uint32_t k = 0; k < segments[s].points_mm.size(); ++k) {
-      vertices.push_back(segments[s].points_mm[k]);
-      owner.push_back(s);
-      index.push_back(k);
+    t.first.push_back(static_cast<uint32_t>(t.positions.size()));
+    const auto& points = segments[s].points_mm;
+    for (size_t k = 0; k < points.size(); ++k) {
+      t.positions.push_back(points[k]);
+      t.tangents.push_back(Tangent(points, k));
+      t.owner.push_back(s);
     }
   }
-  const PointGrid grid(vertices, o.overlap_mm);
-  // Per segment: for each other segment, its vertices overlapped and the vote of their tangents.
-  std::vector<std::map<uint32_t, std::pair<int, int>>> seen(segments.size());
-  ParallelFor(segments.size(), o.threads, [&] {
-    return [&](size_t s) {
-      const auto& points = segments[s].points_mm;
-      for (size_t k = 0; k < points.size(); ++k) {
-        const Eigen::Vector3f t = Tangent(points, k);
-        struct Near {
-          uint32_t segment;
-          double d2;
-          float dot;
-        };
-        std::vector<Near> nearest;  // per other segment: its nearest vertex
-        grid.ForEachWithin(points[k], o.overlap_mm, [&](uint32_t v, double d2) {
-          const uint32_t other = owner[v];
-          if (other == s) return;
-          auto it = std::find_if(nearest.begin(), nearest.end(), [&](const Near& n) { return n.segment == other; });
-          if (it == nearest.end()) it = nearest.insert(nearest.end(), {other, d2 + 1, 0.0f});
-          if (it->d2 <= d2) return;
-          it->d2 = d2;
-          it->dot = t.dot(Tangent(segments[other].points_mm, index[v]));
-        });
-        for (const Near& n : nearest) {
-          auto& entry = seen[s][n.segment];
-          ++entry.first;
-          entry.second += n.dot >= 0 ? 1 : -1;
+  t.first.push_back(static_cast<uint32_t>(t.positions.size()));
+  return t;
+}
+
+// Per other segment that a segment overlaps: how many of its queried vertices
+// have that segment within reach, and the vote of their tangents (+1 agree, -1 oppose).
+struct OverlapTally {
+  uint32_t other = 0;
+  int overlapped = 0, votes = 0;
+};
+
+// Tallies one segment's overlaps at a time. Per-segment marks (which query,
+// which tally last saw that segment) make every lookup O(1); one per thread.
+class OverlapTallier {
+ public:
+  OverlapTallier(const VertexTable& table, const PointGrid& grid, const DirectionOptions& o)
+      : table_(table), grid_(grid), o_(o) {
+    const size_t n = table.first.size() - 1;
+    query_mark_.assign(n, kNone);
+    query_slot_.assign(n, 0);
+    tally_mark_.assign(n, kNone);
+    tally_slot_.assign(n, 0);
+  }
+
+  std::vector<OverlapTally> Tally(uint32_t s) {
+    std::vector<OverlapTally> tallies;
+    const uint32_t stride = static_cast<uint32_t>(o_.overlap_stride);
+    for (uint32_t v = table_.first[s]; v < table_.first[s + 1]; v += stride) {
+      NearestOthers(s, v);
+      for (const Near& n : nearest_) {
+        if (tally_mark_[n.segment] != s) {
+          tally_mark_[n.segment] = s;
+          tally_slot_[n.segment] = static_cast<uint32_t>(tallies.size());
+          tallies.push_back({n.segment, 0, 0});
         }
+        OverlapTally& t = tallies[tally_slot_[n.segment]];
+        ++t.overlapped;
+        t.votes += table_.tangents[v].dot(table_.tangents[n.vertex]) >= 0 ? 1 : -1;
       }
-    };
+    }
+    std::sort(tallies.begin(), tallies.end(), [](const OverlapTally& a, const OverlapTally& b) { return a.other < b.other; });
+    return tallies;
+  }
+
+ private:
+  static constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+  struct Near {
+    uint32_t segment, vertex;
+    double d2;
+  };
+
+  // nearest_: per other segment within reach of vertex v, its nearest vertex.
+  void NearestOthers(uint32_t s, uint32_t v) {
+    nearest_.clear();
+    ++query_id_;
+    grid_.ForEachWithin(table_.positions[v], o_.overlap_mm, [&](uint32_t u, double d2) {
+      const uint32_t other = table_.owner[u];
+      if (other == s) return;
+      if (query_mark_[other] != query_id_) {
+        query_mark_[other] = query_id_;
+        query_slot_[other] = static_cast<uint32_t>(nearest_.size());
+        nearest_.push_back({other, u, d2});
+      } else if (d2 < nearest_[query_slot_[other]].d2) {
+        nearest_[query_slot_[other]].vertex = u;
+        nearest_[query_slot_[other]].d2 = d2;
+      }
+    });
+  }
+
+  const VertexTable& table_;
+  const PointGrid& grid_;
+  const DirectionOptions& o_;
+  std::vector<uint32_t> query_mark_, query_slot_, tally_mark_, tally_slot_;
+  std::vector<Near> nearest_;
+  uint32_t query_id_ = 0;
+};
+
+// E_close (Eq. 7): side-by-side segments, weighted by their overlap share
+// (of the vertices queried: every overlap_stride-th).
+void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
+                 PairWeights* pairs, int64_t* count) {
+  const VertexTable table = TabulateVertices(segments);
+  const PointGrid grid(table.positions, o.overlap_mm);
+  std::vector<std::vector<OverlapTally>> seen(segments.size());
+  ParallelFor(segments.size(), o.threads, [&] {
+    auto tallier = std::make_shared<OverlapTallier>(table, grid, o);
+    return [&seen, tallier](size_t s) { seen[s] = tallier->Tally(static_cast<uint32_t>(s)); };
   });
+  const auto queried = [&](uint32_t s) {
+    const uint32_t n = table.first[s + 1] - table.first[s];
+    return (n + static_cast<uint32_t>(o.overlap_stride) - 1) / static_cast<uint32_t>(o.overlap_stride);
+  };
+  const auto by_other = [](const OverlapTally& t, uint32_t other) { return t.other < other; };
   for (uint32_t s = 0; s < segments.size(); ++s) {
-    for (const auto& [other, entry] : seen[s]) {
-      if (other < s) continue;  // each pair once, from its lower index; the other side's count joins it
-      int overlapped = entry.first, votes = entry.second;
-      const auto back = seen[other].find(s);
-      if (back != seen[other].end()) overlapped += back->second.first, votes += back->second.second;
-      const double eta =
-          static_cast<double>(overlapped) / static_cast<double>(segments[s].points_mm.size() + segments[other].points_mm.size());
+    for (const OverlapTally& tally : seen[s]) {
+      if (tally.other < s) continue;  // each pair once, from its lower index; the other side's count joins it
+      int overlapped = tally.overlapped, votes = tally.votes;
+      const auto& back_list = seen[tally.other];
+      const auto back = std::lower_bound(back_list.begin(), back_list.end(), s, by_other);
+      if (back != back_list.end() && back->other == s) overlapped += back->overlapped, votes += back->votes;
       if (votes == 0) continue;
-      (*pairs)[{s, other}] += (votes > 0 ? 1 : -1) * o.alpha_close * eta;
+      const double eta = static_cast<double>(overlapped) / static_cast<double>(queried(s) + queried(tally.other));
+      pairs->push_back({{s, tally.other}, (votes > 0 ? 1 : -1) * o.alpha_close * eta});
       ++*count;
     }
   }
@@ -148,7 +231,7 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
       }
       // A last end meeting a first end keeps both orders; two firsts or two lasts oppose them.
       const bool aligned = (e % 2) != (f % 2);
-      (*pairs)[{e / 2, f / 2}] += (aligned ? 1 : -1) * o.alpha_link;
+      pairs->push_back({{e / 2, f / 2}, (aligned ? 1 : -1) * o.alpha_link});
       ++*count;
     });
   }
@@ -156,10 +239,9 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
 
 // Orientation flips (+1 keep, -1 reverse) that make every edge of a maximum
 // spanning tree of |weight| aligned.
-std::vector<int> SpanningTreeOrientation(size_t n, const PairWeights& pairs) {
-  std::vector<std::pair<double, PairKey>> edges;
-  for (const auto& [key, weight] : pairs) edges.emplace_back(std::abs(weight), key);
-  std::sort(edges.begin(), edges.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+std::vector<int> SpanningTreeOrientation(size_t n, PairWeights pairs) {
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const auto& a, const auto& b) { return std::abs(a.second) > std::abs(b.second); });
   std::vector<uint32_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0u);
   const auto find = [&](uint32_t x) {
@@ -167,11 +249,11 @@ std::vector<int> SpanningTreeOrientation(size_t n, const PairWeights& pairs) {
     return x;
   };
   std::vector<std::vector<std::pair<uint32_t, int>>> tree(n);
-  for (const auto& [weight, key] : edges) {
+  for (const auto& [key, weight] : pairs) {
     const uint32_t a = find(key.first), b = find(key.second);
     if (a == b) continue;
     parent[a] = b;
-    const int sign = pairs.at(key) >= 0 ? 1 : -1;
+    const int sign = weight >= 0 ? 1 : -1;
     tree[key.first].emplace_back(key.second, sign);
     tree[key.second].emplace_back(key.first, sign);
   }
@@ -199,6 +281,7 @@ std::vector<int> SpanningTreeOrientation(size_t n, const PairWeights& pairs) {
 Status DirectionOptions::Check() const {
   if (!(height_scale_mm > 0)) return InvalidArgument("direction height_scale_mm must be positive");
   if (!(alpha_link >= 0) || !(alpha_close >= 0)) return InvalidArgument("direction weights must be non-negative");
+  if (overlap_stride < 1) return InvalidArgument("direction overlap_stride must be at least 1");
   if (!(link_gap_mm > 0) || !(overlap_mm > 0)) return InvalidArgument("direction link_gap_mm and overlap_mm must be positive");
   if (!(link_cos >= 0 && link_cos <= 1)) return InvalidArgument("direction link_cos must lie in 0..1");
   if (!(std::abs(down.norm() - 1) < 1e-3)) return InvalidArgument("direction down must be a unit vector");
@@ -215,6 +298,7 @@ DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const Head
   PairWeights pairs;
   AddOverlaps(*segments, o, &pairs, &summary.overlaps);
   AddLinks(*segments, o, &pairs, &summary.links);
+  MergePairs(&pairs);
   const std::vector<int> orient = SpanningTreeOrientation(n, pairs);
 
   // Labels relative to the tree's orientation: 0 (source side) keeps it, 1 reverses it.

@@ -40,6 +40,9 @@ struct DirectionOptions {
   double link_gap_mm = 10;          // ends this close may link
   double link_cos = 0.8;            // |tangent . tangent'| and the gap's alignment for a link
   double overlap_mm = 3.0;          // vertices this close overlap
+  // Overlaps are looked for from every overlap_stride-th vertex of each
+  // segment (1: every vertex, as Eq. 7 counts them).
+  int overlap_stride = 1;
   Eigen::Vector3f down{0, 0, -1};   // H's direction (unit)
   int threads = 2;
 

@@ -4,9 +4,26 @@
 #include <cmath>
 #include <limits>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/camera_model.h"
+
 namespace hairrig {
+
+namespace {
+
+// A segment's colour: red x, green y, blue z of its unit direction's magnitudes (BGR).
+cv::Scalar DirectionColour(const Eigen::Vector3f& from, const Eigen::Vector3f& to) {
+  const Eigen::Vector3f d = (to - from).normalized().cwiseAbs();
+  return cv::Scalar(40 + 200 * d.z(), 40 + 200 * d.y(), 40 + 200 * d.x());
+}
+
+size_t StrandStep(const StrandSet& set, int max_strands) {
+  return std::max<size_t>(1, set.num_strands() / static_cast<size_t>(std::max(max_strands, 1)));
+}
+
+}  // namespace
 
 cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const std::vector<std::string>& labels,
                             const StrandPreviewOptions& o) {
@@ -22,7 +39,7 @@ cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const s
   for (size_t m = 0; m < models.size(); ++m) {
     const StrandSet& set = *models[m];
     const std::vector<size_t> offsets = set.Offsets();
-    const size_t step = std::max<size_t>(1, set.num_strands() / static_cast<size_t>(std::max(o.max_strands, 1)));
+    const size_t step = StrandStep(set, o.max_strands);
     for (int c = 0; c < cols; ++c) {
       const double a = o.azimuths_deg[c] * M_PI / 180;
       // The camera looks at the centre from azimuth a (0: from -y, the face side), +z up.
@@ -35,9 +52,8 @@ cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const s
       };
       for (size_t s = 0; s < set.num_strands(); s += step) {
         for (size_t k = offsets[s] + 1; k < offsets[s + 1]; ++k) {
-          const Eigen::Vector3f d = (set.points_mm[k] - set.points_mm[k - 1]).normalized().cwiseAbs();
-          const cv::Scalar colour(40 + 200 * d.z(), 40 + 200 * d.y(), 40 + 200 * d.x());
-          cv::line(canvas, project(set.points_mm[k - 1]), project(set.points_mm[k]), colour, 1, cv::LINE_AA);
+          cv::line(canvas, project(set.points_mm[k - 1]), project(set.points_mm[k]),
+                   DirectionColour(set.points_mm[k - 1], set.points_mm[k]), 1, cv::LINE_AA);
         }
       }
     }
@@ -47,6 +63,72 @@ cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const s
     }
   }
   return canvas;
+}
+
+namespace {
+
+// The square about the strands' region in the view, grown by a fifth on every
+// side and kept inside the image (the whole image when no strand is in front).
+cv::Rect StrandRegion(const std::vector<cv::Point2f>& drawn, const cv::Size& image) {
+  if (drawn.empty()) return cv::Rect(cv::Point(0, 0), image);
+  const cv::Rect box = cv::boundingRect(drawn);
+  const int side = std::max(box.width, box.height) * 7 / 5;
+  const cv::Rect grown(box.x + box.width / 2 - side / 2, box.y + box.height / 2 - side / 2, side, side);
+  const cv::Rect clipped = grown & cv::Rect(cv::Point(0, 0), image);
+  return clipped.area() > 0 ? clipped : cv::Rect(cv::Point(0, 0), image);
+}
+
+// The view's image with the strands drawn over it, cropped about them and
+// scaled to `view_px` wide.
+Result<cv::Mat3b> OverlayOneView(const ReconstructionView& view, const StrandSet& strands, const StrandOverlayOptions& o) {
+  const cv::Mat3b image = cv::imread(view.image_path, cv::IMREAD_COLOR);
+  if (image.empty()) return NotFound(view.image_path + ": cannot read the image of view " + view.name);
+  cv::Mat3b lines = image.clone();
+  const std::vector<size_t> offsets = strands.Offsets();
+  const auto pixel = [&](const Eigen::Vector3f& p, cv::Point2f* uv) {
+    Eigen::Vector2d px;
+    if (!ProjectChecked(view.camera, view.cam_from_object * p.cast<double>(), &px)) return false;
+    *uv = cv::Point2f(static_cast<float>(px.x()), static_cast<float>(px.y()));
+    return true;
+  };
+  std::vector<cv::Point2f> drawn;
+  const int thickness = std::max(1, image.cols / 600);
+  for (size_t s = 0; s < strands.num_strands(); s += StrandStep(strands, o.max_strands)) {
+    for (size_t k = offsets[s] + 1; k < offsets[s + 1]; ++k) {
+      cv::Point2f a, b;
+      if (!pixel(strands.points_mm[k - 1], &a) || !pixel(strands.points_mm[k], &b)) continue;
+      cv::line(lines, a, b, DirectionColour(strands.points_mm[k - 1], strands.points_mm[k]), thickness, cv::LINE_AA);
+      drawn.push_back(b);
+    }
+  }
+  cv::Mat3b blended;
+  cv::addWeighted(lines, o.opacity, image, 1 - o.opacity, 0, blended);
+  const cv::Rect region = StrandRegion(drawn, image.size());
+  const double scale = static_cast<double>(o.view_px) / region.width;
+  cv::Mat3b out;
+  cv::resize(blended(region), out, cv::Size(o.view_px, static_cast<int>(std::lround(region.height * scale))), 0, 0,
+             cv::INTER_AREA);
+  cv::putText(out, view.name, cv::Point(8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return out;
+}
+
+}  // namespace
+
+Result<cv::Mat> RenderStrandsOverViews(const std::vector<ReconstructionView>& views, const StrandSet& strands,
+                                       const StrandOverlayOptions& o) {
+  std::vector<cv::Mat3b> tiles;
+  for (const ReconstructionView& view : views) {
+    HR_ASSIGN_OR_RETURN(cv::Mat3b tile, OverlayOneView(view, strands, o));
+    tiles.push_back(tile);
+  }
+  if (tiles.empty()) return cv::Mat();
+  int height = 0;
+  for (const cv::Mat3b& t : tiles) height = std::max(height, t.rows);
+  cv::Mat3b canvas(height, o.view_px * static_cast<int>(tiles.size()), cv::Vec3b(0, 0, 0));
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    tiles[i].copyTo(canvas(cv::Rect(static_cast<int>(i) * o.view_px, 0, tiles[i].cols, tiles[i].rows)));
+  }
+  return cv::Mat(canvas);
 }
 
 }  // namespace hairrig

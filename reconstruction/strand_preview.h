@@ -1,4 +1,4 @@
-// A turntable preview of strand models: each model drawn as lines in
+// Pictures of strand models. A turntable preview: each model drawn as lines in
 // orthographic views from a few azimuths about the turntable axis (+z up),
 // coloured by the strand's direction (red x, green y, blue z of |d|), one row
 // per model, so a reconstruction can be shown beside the ground truth.
@@ -9,7 +9,9 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "core/status.h"
 #include "core/strands.h"
+#include "reconstruction/views.h"
 
 namespace hairrig {
 
@@ -23,5 +25,19 @@ struct StrandPreviewOptions {
 // empty model gives an empty row with its label.
 cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const std::vector<std::string>& labels,
                             const StrandPreviewOptions& options);
+
+struct StrandOverlayOptions {
+  int view_px = 480;       // each view, cropped to the strands, is scaled to this width
+  int max_strands = 1500;  // drawn (evenly chosen)
+  double opacity = 0.7;    // of the strand lines over the image
+};
+
+// The strands projected into the given views (each view's image with its lens
+// model and pose; the strands in the views' object frame), side by side:
+// a check that the model sits on the captured hair. Each view is cropped to
+// a square about the strands it shows (grown by a fifth on every side). Strand vertices behind a
+// camera are not drawn. Errors name an image that cannot be read.
+Result<cv::Mat> RenderStrandsOverViews(const std::vector<ReconstructionView>& views, const StrandSet& strands,
+                                       const StrandOverlayOptions& options);
 
 }  // namespace hairrig

@@ -11,6 +11,7 @@
 #include "rig/capture_calibration_input.h"
 #include "rig/capture.h"
 #include "rig/cli.h"
+#include "rig/reconstruct_capture.h"
 #include "rig/rig_config.h"
 #include "rig/safe_names.h"
 
@@ -23,6 +24,7 @@ struct CaptureArgs {
   std::string subject;
   bool resume = false;
   bool calibrate = false;
+  bool reconstruct = false;
   std::vector<std::string> priors;  // --intrinsics for the calibration
 };
 
@@ -99,6 +101,12 @@ Result<nlohmann::json> RunCaptureCommand(const CaptureArgs& a) {
   nlohmann::json out = summary.ToJson();
   if (sink && out["status"] == "complete") {
     HR_ASSIGN_OR_RETURN(out["calibration"], CalibrateAfterCapture(options.out_dir, a.priors, *sink));
+    if (a.reconstruct && out["calibration"]["verdict"] != "failed") {
+      ReconstructCaptureOptions reconstruct;
+      reconstruct.dir = options.out_dir;
+      HR_ASSIGN_OR_RETURN(const ReconstructCaptureSummary reconstruction, ReconstructCapture(reconstruct));
+      out["reconstruction"] = reconstruction.ToJson();
+    }
   }
   return out;
 }
@@ -120,6 +128,7 @@ void PrintCaptureSummary(const nlohmann::json& j) {
                 j["calibration"]["delay_after_last_frame_s"].get<double>(),
                 j["calibration"]["frames_detected_during_capture"].get<int>());
   }
+  if (j.contains("reconstruction")) std::printf("%s", j["reconstruction"]["brief"].get<std::string>().c_str());
 }
 
 }  // namespace
@@ -134,11 +143,15 @@ void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
   cmd->add_flag("--resume", args->resume, "continue an interrupted capture: keep verified frames, shoot the rest");
   cmd->add_flag("--calibrate", args->calibrate,
                 "detect the box's tags as frames land and calibrate the capture when it completes (as `calibrate`)");
+  cmd->add_flag("--reconstruct", args->reconstruct,
+                "with --calibrate: reconstruct the hair (points, then strands) when the calibration is not failed, "
+                "as `reconstruct`");
   cmd->add_option("--intrinsics", args->priors, "with --calibrate: intrinsics held, as `calibrate --intrinsics`")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     if (!args->priors.empty() && !args->calibrate) throw CLI::ValidationError("capture", "--intrinsics needs --calibrate");
+    if (args->reconstruct && !args->calibrate) throw CLI::ValidationError("capture", "--reconstruct needs --calibrate");
     dispatch.action = [args] { return RunCaptureCommand(*args); };
     dispatch.print_human = PrintCaptureSummary;
     dispatch.exit_code = [](const nlohmann::json& j) { return j["status"] == "complete" ? 0 : 3; };

@@ -3,7 +3,6 @@
 // rooted on the subject's scalp (reconstruction/strand_reconstruction.h).
 #include <unistd.h>
 
-#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <cstdio>
@@ -12,11 +11,8 @@
 #include <CLI/CLI.hpp>
 
 #include "core/log.h"
-#include "reconstruction/colmap_model.h"
-#include "reconstruction/point_reconstruction.h"
-#include "reconstruction/strand_reconstruction.h"
 #include "rig/cli.h"
-#include "rig/reconstruction_input.h"
+#include "rig/reconstruct_capture.h"
 
 namespace hairrig {
 namespace {
@@ -34,20 +30,6 @@ struct ReconstructArgs {
   int stride = LineMvsOptions{}.stride_px;
   int iterations = LineMvsOptions{}.iterations;
 };
-
-// Keeps the listed view ids; an id that is not among the views is an error.
-Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input) {
-  if (ids.empty()) return Status::Ok();
-  std::vector<ReconstructionView> kept;
-  for (int id : ids) {
-    const auto it = std::find_if(input->views.begin(), input->views.end(),
-                                 [id](const ReconstructionView& v) { return v.id == id; });
-    if (it == input->views.end()) return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
-    kept.push_back(*it);
-  }
-  input->views = std::move(kept);
-  return Status::Ok();
-}
 
 // One line per stage on a terminal (rewritten in place), with the stage's ETA.
 ReconstructionProgress ProgressPrinter() {
@@ -81,56 +63,27 @@ ReconstructionProgress ProgressPrinter() {
   };
 }
 
-Result<nlohmann::json> RunPoints(const ReconstructArgs& a) {
-  ReconstructionInput input;
-  if (!a.colmap.empty()) {
-    if (a.images.empty()) return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
-    ColmapReadOptions colmap;
-    colmap.images_dir = a.images;
-    colmap.masks_dir = a.masks;
-    HR_ASSIGN_OR_RETURN(input, ReadColmapModel(a.colmap, colmap));
-  } else {
-    HR_ASSIGN_OR_RETURN(input, LoadCaptureReconstructionInput(a.dir));
-  }
-  HR_RETURN_IF_ERROR(SelectViews(a.views, &input));
-  PointReconstructionOptions options;
-  options.threads = a.threads;
-  options.mvs.stride_px = a.stride;
-  options.mvs.iterations = a.iterations;
-  options.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
-                     : a.cost == "photometric" ? MvsCost::kPhotometric
-                                               : MvsCost::kBoth;
-  HR_ASSIGN_OR_RETURN(const PointReconstructionSummary summary,
-                      ReconstructPoints(input, a.dir + "/reconstruction", options, ProgressPrinter()));
-  nlohmann::json j = summary.ToJson();
-  j["brief"] = summary.BriefReport();
-  return j;
-}
-
-Result<nlohmann::json> RunStrands(const ReconstructArgs& a) {
-  if (!a.colmap.empty() && a.head.empty()) {
-    return InvalidArgument("strands from a COLMAP model need --head FILE (the head in the model's frame)");
-  }
-  HR_ASSIGN_OR_RETURN(const SubjectHead head, LoadCaptureHead(a.dir, a.head));
-  StrandReconstructionOptions options;
-  HR_ASSIGN_OR_RETURN(options.method, ParseStrandMethod(a.method));
-  options.strands = a.strands;
-  options.threads = a.threads;
-  LogInfo("reconstruct: strands (" + a.method + ") from " + a.dir + "/reconstruction/points.ply");
-  HR_ASSIGN_OR_RETURN(const StrandReconstructionSummary summary,
-                      ReconstructStrands(a.dir + "/reconstruction", head.spec, head.source, options));
-  nlohmann::json j = summary.ToJson();
-  j["brief"] = summary.BriefReport();
-  return j;
-}
-
 Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
-  if (a.stage == "points") return RunPoints(a);
-  if (a.stage == "strands") return RunStrands(a);
-  HR_ASSIGN_OR_RETURN(nlohmann::json points, RunPoints(a));
-  HR_ASSIGN_OR_RETURN(nlohmann::json strands, RunStrands(a));
-  const std::string brief = points["brief"].get<std::string>() + strands["brief"].get<std::string>();
-  return nlohmann::json{{"points", std::move(points)}, {"strands", std::move(strands)}, {"brief", brief}};
+  ReconstructCaptureOptions options;
+  options.dir = a.dir;
+  HR_ASSIGN_OR_RETURN(options.stage, ParseReconstructStage(a.stage));
+  options.colmap_dir = a.colmap;
+  options.images_dir = a.images;
+  options.masks_dir = a.masks;
+  options.views = a.views;
+  options.head_file = a.head;
+  options.points.threads = a.threads;
+  options.points.mvs.stride_px = a.stride;
+  options.points.mvs.iterations = a.iterations;
+  options.points.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
+                            : a.cost == "photometric" ? MvsCost::kPhotometric
+                                                      : MvsCost::kBoth;
+  HR_ASSIGN_OR_RETURN(options.strands.method, ParseStrandMethod(a.method));
+  options.strands.strands = a.strands;
+  options.strands.threads = a.threads;
+  options.progress = ProgressPrinter();
+  HR_ASSIGN_OR_RETURN(const ReconstructCaptureSummary summary, ReconstructCapture(options));
+  return summary.ToJson();
 }
 
 }  // namespace

@@ -1,0 +1,121 @@
+#include "rig/reconstruct_capture.h"
+
+#include <algorithm>
+
+#include <nlohmann/json.hpp>
+
+#include "core/image_file.h"
+#include "core/log.h"
+#include "core/strand_io.h"
+#include "reconstruction/colmap_model.h"
+#include "reconstruction/strand_preview.h"
+#include "rig/reconstruction_input.h"
+
+namespace hairrig {
+
+namespace {
+
+// Keeps the listed view ids; an id that is not among the views is an error.
+Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input) {
+  if (ids.empty()) return Status::Ok();
+  std::vector<ReconstructionView> kept;
+  for (int id : ids) {
+    const auto it = std::find_if(input->views.begin(), input->views.end(),
+                                 [id](const ReconstructionView& v) { return v.id == id; });
+    if (it == input->views.end()) return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
+    kept.push_back(*it);
+  }
+  input->views = std::move(kept);
+  return Status::Ok();
+}
+
+Result<ReconstructionInput> LoadInput(const ReconstructCaptureOptions& o) {
+  ReconstructionInput input;
+  if (!o.colmap_dir.empty()) {
+    ColmapReadOptions colmap;
+    colmap.images_dir = o.images_dir;
+    colmap.masks_dir = o.masks_dir;
+    HR_ASSIGN_OR_RETURN(input, ReadColmapModel(o.colmap_dir, colmap));
+  } else {
+    HR_ASSIGN_OR_RETURN(input, LoadCaptureReconstructionInput(o.dir));
+  }
+  HR_RETURN_IF_ERROR(SelectViews(o.views, &input));
+  return input;
+}
+
+// Four views evenly spread through the list (a turntable capture lists them by angle).
+std::vector<ReconstructionView> SpreadViews(const std::vector<ReconstructionView>& views, size_t count) {
+  std::vector<ReconstructionView> chosen;
+  const size_t n = std::min(count, views.size());
+  for (size_t i = 0; i < n; ++i) chosen.push_back(views[i * views.size() / n]);
+  return chosen;
+}
+
+Result<std::string> WriteOverViews(const ReconstructionInput& input, const std::string& strands_dir) {
+  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(strands_dir + "/strands.ply"));
+  HR_ASSIGN_OR_RETURN(const cv::Mat picture,
+                      RenderStrandsOverViews(SpreadViews(input.views, 4), strands, StrandOverlayOptions{}));
+  if (picture.empty()) return std::string();
+  const std::string path = strands_dir + "/over_views.jpg";
+  HR_RETURN_IF_ERROR(WriteImageAtomic(path, picture));
+  return path;
+}
+
+Result<StrandReconstructionSummary> RunStrands(const ReconstructCaptureOptions& o) {
+  HR_ASSIGN_OR_RETURN(const SubjectHead head, LoadCaptureHead(o.dir, o.head_file));
+  LogInfo("reconstruct: strands (" + std::string(StrandMethodName(o.strands.method)) + ") from " + o.dir +
+          "/reconstruction/points.ply");
+  return ReconstructStrands(o.dir + "/reconstruction", head.spec, head.source, o.strands);
+}
+
+}  // namespace
+
+Result<ReconstructStage> ParseReconstructStage(const std::string& name) {
+  if (name == "points") return ReconstructStage::kPoints;
+  if (name == "strands") return ReconstructStage::kStrands;
+  if (name == "all") return ReconstructStage::kAll;
+  return InvalidArgument("reconstruct stage '" + name + "' is not one of points, strands, all");
+}
+
+Status ReconstructCaptureOptions::Validate() const {
+  if (dir.empty()) return InvalidArgument("reconstruct: the capture folder is required");
+  if (!colmap_dir.empty() && images_dir.empty()) {
+    return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
+  }
+  if (!colmap_dir.empty() && stage != ReconstructStage::kPoints && head_file.empty()) {
+    return InvalidArgument("strands from a COLMAP model need --head FILE (the head in the model's frame)");
+  }
+  if (stage != ReconstructStage::kPoints) HR_RETURN_IF_ERROR(strands.Check());
+  return Status::Ok();
+}
+
+nlohmann::json ReconstructCaptureSummary::ToJson() const {
+  nlohmann::json j = nlohmann::json::object();
+  if (points) j["points"] = points->ToJson();
+  if (strands) j["strands"] = strands->ToJson();
+  if (!over_views_picture.empty()) j["over_views_picture"] = over_views_picture;
+  j["brief"] = BriefReport();
+  return j;
+}
+
+std::string ReconstructCaptureSummary::BriefReport() const {
+  std::string brief = (points ? points->BriefReport() : "") + (strands ? strands->BriefReport() : "");
+  if (!over_views_picture.empty()) brief += "  strands over the input views: " + over_views_picture + "\n";
+  return brief;
+}
+
+Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOptions& o) {
+  HR_RETURN_IF_ERROR(o.Validate());
+  HR_ASSIGN_OR_RETURN(const ReconstructionInput input, LoadInput(o));
+  ReconstructCaptureSummary summary;
+  if (o.stage != ReconstructStage::kStrands) {
+    HR_ASSIGN_OR_RETURN(summary.points, ReconstructPoints(input, o.dir + "/reconstruction", o.points, o.progress));
+  }
+  if (o.stage != ReconstructStage::kPoints) {
+    HR_ASSIGN_OR_RETURN(summary.strands, RunStrands(o));
+    HR_ASSIGN_OR_RETURN(summary.over_views_picture, WriteOverViews(input, summary.strands->output_dir));
+  }
+  return summary;
+}
+
+}  // namespace hairrig

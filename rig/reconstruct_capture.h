@@ -1,0 +1,54 @@
+// `hairrig reconstruct` and `capture --reconstruct` as one library call: a
+// calibrated capture (or a COLMAP text model) to oriented points, then
+// strands rooted on the subject's scalp, into <dir>/reconstruction/.
+//
+// Besides what the two stages write (reconstruction/point_reconstruction.h,
+// reconstruction/strand_reconstruction.h), the strands stage writes
+// reconstruction/strands/over_views.jpg: the strands projected over four of
+// the input views, spread around the turntable.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "core/status.h"
+#include "reconstruction/point_reconstruction.h"
+#include "reconstruction/strand_reconstruction.h"
+
+namespace hairrig {
+
+enum class ReconstructStage { kPoints, kStrands, kAll };
+// "points", "strands", "all"; InvalidArgument listing them.
+Result<ReconstructStage> ParseReconstructStage(const std::string& name);
+
+struct ReconstructCaptureOptions {
+  std::string dir;  // a calibrated capture folder; with colmap_dir, where reconstruction/ is written
+  ReconstructStage stage = ReconstructStage::kAll;
+  // A COLMAP text model instead of a capture: its folder, its images and
+  // (optional) hair masks named <image name>.png. Strands then need head_file.
+  std::string colmap_dir, images_dir, masks_dir;
+  std::vector<int> views;  // only these view numbers (capture) or IMAGE_IDs (COLMAP); empty: all
+  std::string head_file;   // the subject's head; empty: the capture's rig.yaml head
+  PointReconstructionOptions points;
+  StrandReconstructionOptions strands;
+  ReconstructionProgress progress;  // optional
+
+  Status Validate() const;  // InvalidArgument naming the option
+};
+
+struct ReconstructCaptureSummary {
+  std::optional<PointReconstructionSummary> points;
+  std::optional<StrandReconstructionSummary> strands;
+  std::string over_views_picture;  // empty when the strands stage did not run
+  nlohmann::json ToJson() const;
+  std::string BriefReport() const;
+};
+
+// Errors: as the stages' (no calibration, no points for --stage strands, no
+// head), a --views id that is not usable, an image the overlay cannot read.
+Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOptions& options);
+
+}  // namespace hairrig
