@@ -222,7 +222,7 @@ Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input
     return FailedPrecondition("calibration: no camera can be solved (" + why + ")");
   }
   if (options.mode == CalibrationMode::kTurntable) {
-    auto axis = FitTurntableAxis(ba.views, input.box_height_mm);
+    auto axis = FitTurntableAxis(ba.views, input.box_height_mm, input.box_yaw_deg);
     if (!axis.ok())
       return FailedPrecondition("calibration: " + axis.status().message() +
                                 "; for a capture without turntable motion use --mode free");

@@ -54,6 +54,12 @@ struct CaptureCalibrationInput {
   // Height of the box origin along the turntable axis (turntable mode): the
   // cameras cannot see it, the rig config gives it.
   double box_height_mm = 0;
+  // The box's turn about the turntable axis (deg, +z right-handed) from the
+  // turntable's x axis to the box's: the cameras cannot see where the
+  // turntable's azimuth zero is, the rig config says how the box is mounted.
+  // The solved turntable frame is the rig's, so that what the rig config
+  // places in it (the head) lines up with what is reconstructed in it.
+  double box_yaw_deg = 0;
 };
 
 struct CaptureCalibrationOptions {

@@ -48,7 +48,8 @@ Circle FitCircle(const std::vector<Eigen::Vector3d>& points) {
 
 }  // namespace
 
-Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views, double height_mm) {
+Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views, double height_mm,
+                                          double yaw_deg) {
   // Camera centres in the box frame, per camera, ordered by turntable angle.
   std::map<int, std::map<double, Eigen::Vector3d>> centres;
   for (const CalibrationView& v : views) {
@@ -78,6 +79,7 @@ Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& vi
   Eigen::Vector3d x = Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(z) * z;
   if (x.norm() < 1e-3) x = Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitY().dot(z) * z;
   x.normalize();
+  x = Eigen::AngleAxisd(-yaw_deg * M_PI / 180, z) * x;  // the box's x axis lies yaw_deg past the turntable's
   Eigen::Matrix3d box_from_turntable_rotation;
   box_from_turntable_rotation << x, z.cross(x), z;
   // Origin on the axis, placed so that the box origin sits at `height_mm`.

@@ -7,7 +7,9 @@
 // about its z axis, so in the box frame a camera moves by -theta about it;
 // that fixes the axis' sign. The axis' height (the origin along it) is not
 // seen by the cameras and is taken from `height_mm` (the box origin's height
-// in the turntable frame, from the rig config).
+// in the turntable frame, from the rig config); so is its azimuth: the
+// turntable's x axis is the box's x axis (projected across the axis) turned
+// back by `yaw_deg`, the box's mounting turn about the axis.
 #pragma once
 
 #include <vector>
@@ -27,6 +29,7 @@ struct TurntableAxisFit {
 
 // FailedPrecondition if no camera has views at 3 or more distinct stops that
 // span more than a few degrees.
-Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views, double height_mm);
+Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views, double height_mm,
+                                          double yaw_deg = 0);
 
 }  // namespace hairrig

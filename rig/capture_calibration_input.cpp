@@ -114,14 +114,16 @@ void FillImageSizes(CaptureCalibrationInput* input) {
 
 }  // namespace
 
-Status ReadCalibrationSection(const RigConfig& config, CalibBox* box, double* box_height_mm) {
+Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config) {
   const ConfigNode section = config.root.Child("calibration");
-  section.AllowOnlyKeys({"box", "box_height_mm", "cameras"});
+  section.AllowOnlyKeys({"box", "box_height_mm", "box_yaw_deg", "cameras"});
   const std::string box_file = section.String("box");
-  *box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
+  CalibrationSection out;
+  out.box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
+  out.box_yaw_deg = section.Number("box_yaw_deg", 0.0, {.min = -360, .max = 360});
   HR_RETURN_IF_ERROR(config.root.status());
-  HR_ASSIGN_OR_RETURN(*box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
-  return Status::Ok();
+  HR_ASSIGN_OR_RETURN(out.box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
+  return out;
 }
 
 Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
@@ -134,7 +136,10 @@ Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& c
   HR_ASSIGN_OR_RETURN(nlohmann::json manifest, ReadJsonFile(manifest_path, "is this a capture folder?"));
   HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(capture_dir));
   CaptureCalibrationInput input;
-  HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &input.box, &input.box_height_mm));
+  HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+  input.box = section.box;
+  input.box_height_mm = section.box_height_mm;
+  input.box_yaw_deg = section.box_yaw_deg;
   std::map<std::string, int> by_serial;
   HR_RETURN_IF_ERROR(AddCameras(config, &input, &by_serial));
   HR_RETURN_IF_ERROR(AddFrames(capture_dir, manifest, manifest_path, by_serial, &input));

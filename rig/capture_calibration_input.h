@@ -7,6 +7,7 @@
 //   calibration:
 //     box: calib-box.yaml        # the box model (required)
 //     box_height_mm: 600         # box origin above the turntable plate, along the axis
+//     box_yaw_deg: 10            # the box's turn about the axis from the turntable's x axis (default 0)
 //     cameras:                   # optional nominal intrinsics by camera name;
 //       upper: {fx_px: .., fy_px: .., cx_px: .., cy_px: .., k1: 0, ...}  # else from the views
 #pragma once
@@ -25,9 +26,14 @@ namespace hairrig {
 // A capture's rig.yaml snapshot, paths relative to the config it was taken from.
 Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir);
 
-// The box model and its height of a rig config's `calibration` section;
-// errors name the file, line and field.
-Status ReadCalibrationSection(const RigConfig& config, CalibBox* box, double* box_height_mm);
+// A rig config's `calibration` section: the box model and where it hangs in the turntable frame.
+struct CalibrationSection {
+  CalibBox box;
+  double box_height_mm = 0;
+  double box_yaw_deg = 0;
+};
+// Errors name the file, line and field.
+Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config);
 
 // Errors name the file and field: a missing manifest or rig.yaml, a damaged
 // manifest frame entry, a frame file that does not verify against the size

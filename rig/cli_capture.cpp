@@ -90,10 +90,8 @@ Result<nlohmann::json> RunCaptureCommand(const CaptureArgs& a) {
   if (a.calibrate) {
     HR_ASSIGN_OR_RETURN(RigConfig config,
                         a.resume ? LoadCaptureRigConfig(options.out_dir) : LoadRigConfig(options.config_path));
-    CalibBox box;
-    double height = 0;
-    HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &box, &height));
-    sink = std::make_unique<TagDetectionSink>(box, TagDetectorOptions{}, 2);
+    HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+    sink = std::make_unique<TagDetectionSink>(section.box, TagDetectorOptions{}, 2);
     options.sink = sink.get();
   }
   HR_ASSIGN_OR_RETURN(CaptureSummary summary, RunCapture(options));

@@ -121,9 +121,8 @@ Result<nlohmann::json> EvalCalibration(const std::string& dir) {
     if (v.solved) rms.values.push_back(v.rms_px);
   out["solved"]["reprojection_rms_px"] = rms.ToJson();
   HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(dir));
-  CalibBox box;
-  double box_height_mm = 0;
-  HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &box, &box_height_mm));
+  HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+  const CalibBox& box = section.box;
   out["corner_noise_px"] = CornerNoise(calibration, truth, box);
   out["overall_rms_px"] = calibration.rms_px;
   if (out["corner_noise_px"].is_number())

@@ -32,9 +32,8 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
   const std::string calibration_file = (capture / "calibration" / "calibration.json").string();
   HR_ASSIGN_OR_RETURN(const StoredCalibration calibration, ReadCalibration(calibration_file));
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
-  CalibBox box;
-  double box_height_mm = 0;
-  HR_RETURN_IF_ERROR(ReadCalibrationSection(config, &box, &box_height_mm));
+  HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+  const CalibBox& box = section.box;
   const std::array<Eigen::Vector3d, 8> corners = BoxCornerPoints(0.5 * box.size_mm);
   const std::vector<Eigen::Vector3d> box_corners(corners.begin(), corners.end());
 

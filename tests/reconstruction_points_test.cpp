@@ -5,6 +5,7 @@
 // a frame of the wrong size): they are left out by name and the rest is
 // reconstructed. The true strands, given as the reconstruction's strands,
 // check the strand protocol's plumbing (frames, true samples, the true head).
+// The reconstructed strand files are read back and fitted as `fit` does.
 #include <cstdio>
 #include <filesystem>
 
@@ -22,6 +23,7 @@
 #include "reconstruction/point_reconstruction.h"
 #include "reconstruction/strand_reconstruction.h"
 #include "reconstruction/reconstruction_evaluation.h"
+#include "simulation/helix_model.h"
 #include "tests/support/reconstruction_scene.h"
 
 namespace hairrig {
@@ -120,7 +122,29 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
     ASSERT_TRUE(method->rooted_on_scalp_fraction.has_value());
     EXPECT_GT(*method->rooted_on_scalp_fraction, 0.98);
   }
-  
+
+  // The three strand files hold the same model, and `fit` takes them as they are.
+  const std::string strands_dir = dir + "/reconstruction/strands";
+  auto from_ply = ReadStrands(strands_dir + "/strands.ply");
+  ASSERT_TRUE(from_ply.ok()) << from_ply.status().ToString();
+  EXPECT_EQ(from_ply->num_strands(), 4000u);
+  for (const char* other : {"/strands.hair", "/strands.data"}) {
+    auto read = ReadStrands(strands_dir + other);
+    ASSERT_TRUE(read.ok()) << read.status().ToString();
+    EXPECT_EQ(read->point_counts, from_ply->point_counts) << other;
+    EXPECT_EQ(read->points_mm, from_ply->points_mm) << other;
+  }
+  FitOptions fit;
+  fit.guides.num_guides = 60;
+  FitSummary fitted;
+  auto model = FitHairModel(*from_ply, fit, &fitted);
+  ASSERT_TRUE(model.ok()) << model.status().ToString();
+  std::printf("fit of the reconstructed strands: %d guides, %.1f elements per guide, error mean %.3f mm, max %.3f mm\n",
+              fitted.guides, fitted.mean_elements, fitted.mean_error_mm, fitted.max_error_mm);
+  EXPECT_EQ(fitted.strands, 4000);
+  EXPECT_EQ(fitted.guides, 60);
+  EXPECT_LT(fitted.mean_error_mm, 0.5);
+
 
   // The true strands given as the reconstruction's (its object frame is the
   // turntable frame here): the strand protocol scores them 1, on the same

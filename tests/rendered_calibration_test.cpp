@@ -17,6 +17,7 @@
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
 #include "tests/support/rendered_observations.h"
+#include "tests/support/scene_calibration_input.h"
 
 namespace hairrig {
 namespace {
@@ -83,7 +84,8 @@ TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
   }
   ASSERT_GE(input.views.size(), 30u);
   // The axis from the circle the camera centres trace, instead of the nominal box pose.
-  auto axis = FitTurntableAxis(input.views, scene->turntable_from_box.translation.z());
+  auto axis = FitTurntableAxis(input.views, scene->turntable_from_box.translation.z(),
+                               hairrig_test::SceneBoxYawDeg(*scene));
   ASSERT_TRUE(axis.ok()) << axis.status().ToString();
   const Eigen::Vector3d axis_true = scene->turntable_from_box.Inverse().rotation * Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d axis_fit = axis->turntable_from_box.Inverse().rotation * Eigen::Vector3d::UnitZ();
@@ -95,6 +97,10 @@ TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
               axis->camera, axis->radius_mm, axis->circle_rms_mm, axis_deg, axis_offset_mm);
   EXPECT_LT(axis_deg, 0.2);
   EXPECT_LT(axis_offset_mm, 2.0);
+  // With the box's mounting yaw from the rig config, the whole turntable frame is the scene's.
+  const Eigen::AngleAxisd frame_error(scene->turntable_from_box.rotation.inverse() * axis->turntable_from_box.rotation);
+  std::printf("turntable frame rotation error %.4f deg\n", frame_error.angle() * 180 / 3.14159265358979);
+  EXPECT_LT(frame_error.angle() * 180 / 3.14159265358979, 0.3);
   input.turntable_from_box_init = axis->turntable_from_box;
   // Three solves: both modes from the wrong intrinsics, and the turntable mode
   // with the intrinsics held at a prior (the true values stand in for a
