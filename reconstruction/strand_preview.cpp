@@ -25,6 +25,41 @@ size_t StrandStep(const StrandSet& set, int max_strands) {
 
 }  // namespace
 
+namespace {
+
+// One strand edge of a preview view: its end points in pixels, its depth
+// (larger is nearer the viewer) and its colour.
+struct PreviewEdge {
+  cv::Point2f a, b;
+  float depth;
+  cv::Scalar colour;
+};
+
+// The edges of `set` seen from azimuth a (0: from -y, the face side; +z up),
+// orthographic about `centre`, nearest last (the painter's order).
+std::vector<PreviewEdge> ViewEdges(const StrandSet& set, size_t step, double azimuth_rad, const Eigen::Vector3f& centre,
+                                   double scale, const cv::Point2f& origin) {
+  const Eigen::Vector3f right(static_cast<float>(std::cos(azimuth_rad)), static_cast<float>(std::sin(azimuth_rad)), 0);
+  const Eigen::Vector3f towards_viewer = right.cross(Eigen::Vector3f::UnitZ());
+  const std::vector<size_t> offsets = set.Offsets();
+  const auto project = [&](const Eigen::Vector3f& p) {
+    const Eigen::Vector3f d = p - centre;
+    return origin + cv::Point2f(static_cast<float>(scale * d.dot(right)), static_cast<float>(-scale * d.z()));
+  };
+  std::vector<PreviewEdge> edges;
+  for (size_t s = 0; s < set.num_strands(); s += step) {
+    for (size_t k = offsets[s] + 1; k < offsets[s + 1]; ++k) {
+      const Eigen::Vector3f& p = set.points_mm[k - 1];
+      const Eigen::Vector3f& q = set.points_mm[k];
+      edges.push_back({project(p), project(q), (0.5f * (p + q) - centre).dot(towards_viewer), DirectionColour(p, q)});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const PreviewEdge& x, const PreviewEdge& y) { return x.depth < y.depth; });
+  return edges;
+}
+
+}  // namespace
+
 cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const std::vector<std::string>& labels,
                             const StrandPreviewOptions& o) {
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
@@ -38,23 +73,14 @@ cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const s
   cv::Mat3b canvas(static_cast<int>(models.size()) * o.view_px, std::max(cols, 1) * o.view_px, cv::Vec3b(24, 24, 24));
   for (size_t m = 0; m < models.size(); ++m) {
     const StrandSet& set = *models[m];
-    const std::vector<size_t> offsets = set.Offsets();
-    const size_t step = StrandStep(set, o.max_strands);
     for (int c = 0; c < cols; ++c) {
-      const double a = o.azimuths_deg[c] * M_PI / 180;
-      // The camera looks at the centre from azimuth a (0: from -y, the face side), +z up.
-      const Eigen::Vector3f right(static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a)), 0);
       const cv::Point2f origin(static_cast<float>(c * o.view_px + o.view_px / 2),
                                static_cast<float>(static_cast<int>(m) * o.view_px + o.view_px / 2));
-      const auto project = [&](const Eigen::Vector3f& p) {
-        const Eigen::Vector3f d = p - centre;
-        return origin + cv::Point2f(static_cast<float>(scale * d.dot(right)), static_cast<float>(-scale * d.z()));
-      };
-      for (size_t s = 0; s < set.num_strands(); s += step) {
-        for (size_t k = offsets[s] + 1; k < offsets[s + 1]; ++k) {
-          cv::line(canvas, project(set.points_mm[k - 1]), project(set.points_mm[k]),
-                   DirectionColour(set.points_mm[k - 1], set.points_mm[k]), 1, cv::LINE_AA);
-        }
+      for (const PreviewEdge& e :
+           ViewEdges(set, StrandStep(set, o.max_strands), o.azimuths_deg[c] * M_PI / 180, centre, scale, origin)) {
+        // Depth cueing: the far side at 35 % brightness, the near side at full.
+        const double brightness = 0.35 + 0.65 * std::clamp(0.5 + 0.5 * e.depth / radius, 0.0, 1.0);
+        cv::line(canvas, e.a, e.b, e.colour * brightness, 1, cv::LINE_AA);
       }
     }
     if (m < labels.size()) {

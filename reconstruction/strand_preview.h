@@ -1,7 +1,8 @@
 // Pictures of strand models. A turntable preview: each model drawn as lines in
 // orthographic views from a few azimuths about the turntable axis (+z up),
 // coloured by the strand's direction (red x, green y, blue z of |d|), one row
-// per model, so a reconstruction can be shown beside the ground truth.
+// per model, so a reconstruction can be shown beside the ground truth; edges
+// are drawn far to near and darkened with distance from the viewer.
 #pragma once
 
 #include <string>

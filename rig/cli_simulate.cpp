@@ -10,6 +10,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/file_util.h"
+#include "core/head_config.h"
+#include "core/head_model.h"
 #include "core/log.h"
 #include "core/strand_io.h"
 #include "rig/cli.h"
@@ -31,6 +33,7 @@ struct SimulateArgs {
   double fps = 30;
   double time_step_s = 1.0 / 240;
   std::string scene;
+  std::string head_file;
   bool no_head = false;
   std::vector<double> up{0, 0, 1};
   int preview_every = 1;
@@ -76,6 +79,10 @@ Result<HairSimulationOptions> MakeOptions(const SimulateArgs& a, const Scene& sc
   o.has_head = !a.no_head;
   o.head_center_mm = scene.head.center_turntable_mm;
   o.head_radii_mm = scene.head.radii_mm;
+  if (o.has_head && !a.head_file.empty()) {
+    HR_ASSIGN_OR_RETURN(std::unique_ptr<HeadModel> head, HeadModel::Build(scene.head));
+    o.head_surface = std::move(head);
+  }
   return o;
 }
 
@@ -102,6 +109,9 @@ Result<nlohmann::json> RunSimulate(const SimulateArgs& a) {
     HR_ASSIGN_OR_RETURN(scene_path, EtcPath("scenes/default.yaml"));
   }
   HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(scene_path));
+  if (!a.head_file.empty()) {
+    HR_ASSIGN_OR_RETURN(scene.head, LoadHeadFile(a.head_file));  // for contact and in the previews
+  }
   HR_ASSIGN_OR_RETURN(HairSimulationOptions options, MakeOptions(a, scene));
   HR_ASSIGN_OR_RETURN(std::unique_ptr<HairSimulation> sim, HairSimulation::Create(model, options));
 
@@ -195,6 +205,10 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
   cmd->add_option("--dt", args->time_step_s, "time step of the dynamics (s)")->capture_default_str();
   cmd->add_option("--solver", args->solver, "linear solver of Eq. 11: cg (paper) or cholesky")->capture_default_str();
   cmd->add_option("--scene", args->scene, "scene giving the head and the preview camera (default: etc/scenes/default.yaml)");
+  cmd->add_option("--head", args->head_file,
+                  "head file (core/head_config.h) for contact with its surface and in the previews, e.g. the one the "
+                  "strands were reconstructed on (default: the scene's ellipsoid for contact)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--no-head", args->no_head, "no contact with the head");
   cmd->add_option("--up", args->up, "world up direction (x y z)")->expected(3)->capture_default_str();
   cmd->add_option("--preview-every", args->preview_every, "render a preview every N frames (0: none)")

@@ -93,6 +93,7 @@ Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(const HelixModel&
     dynamics_options.use_head = true;
     dynamics_options.head.center_m = 1e-3 * options.head_center_mm;
     dynamics_options.head.radii_m = 1e-3 * options.head_radii_mm;
+    dynamics_options.head_surface = options.head_surface;
   }
   if (!dynamics_options.IsValid(&why)) return InvalidArgument("simulation options: " + why);
   if (!options.up.allFinite() || std::abs(options.up.norm() - 1) > 1e-6) {
@@ -110,6 +111,7 @@ Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(const HelixModel&
     auto strand = SuperHelixFromPiecewiseHelix(model.guides[g], options.up, &q);
     if (!strand.ok()) return InvalidArgument("guide " + std::to_string(g) + ": " + strand.status().message());
     m.dynamics.emplace_back(*strand, options.material, dynamics_options);
+    if (options.contact_from_rest) m.dynamics.back().HoldContactAtRest(q);
     if (options.inverse_statics) {
       InverseStaticsReport report;
       HR_RETURN_IF_ERROR(SolveInverseStatics(at_rest, q, &m.dynamics.back(), &report));

@@ -31,10 +31,18 @@ struct HairSimulationOptions {
   bool has_head = false;
   Eigen::Vector3d head_center_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d head_radii_mm = Eigen::Vector3d::Ones();
+  // With has_head: contact with this head's surface (world frame, mm; e.g. the
+  // mesh strands were reconstructed on) instead of the ellipsoid above, which
+  // stays the shake's pivot (its centre).
+  std::shared_ptr<const HeadModel> head_surface;
   double shake_amplitude_deg = 30;  // head-shake: a turn about `up` through the head centre
   double shake_frequency_hz = 1.5;
   Eigen::Vector3d wind_m_s{2.0, 0, 0};  // wind: mean air velocity, gusting +-40 % at 0.7 Hz
   bool inverse_statics = true;      // Sec. VI: the fitted shape is the rest state
+  // Contact holds each point of a guide no nearer the head than it rests
+  // (SuperHelixDynamics::HoldContactAtRest), so a guide fitted onto or into
+  // the head starts without contact forces; false: the margin everywhere.
+  bool contact_from_rest = true;
   int threads = 0;                  // 0: one per core
 };
 

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include "core/head_model.h"
 #include "simulation/guide_interpolation.h"
 #include "simulation/helix.h"
 
@@ -62,6 +63,41 @@ TEST(HairSimulation, FittedStyleHoldsStillUnderGravity) {
   ASSERT_TRUE(sag.ok());
   ASSERT_TRUE((*sag)->Advance(1.0).ok());
   EXPECT_GT(MaxTipMove(start, (*sag)->GuideCurves(4)), 5.0);
+}
+
+// The same style inside a larger head surface (radius 100 mm, a HeadModel as
+// `hairrig simulate --head` gives): a fit that lies in the head.
+HairSimulationOptions InsideLargerHeadSurface(bool contact_from_rest) {
+  HairSimulationOptions o = WithHead();
+  HeadSpec spec;
+  spec.center_turntable_mm = Eigen::Vector3d::Zero();
+  spec.radii_mm = Eigen::Vector3d(100, 100, 100);
+  auto head = HeadModel::Build(spec);
+  EXPECT_TRUE(head.ok()) << head.status().ToString();
+  o.head_surface = std::move(*head);
+  o.contact_from_rest = contact_from_rest;
+  return o;
+}
+
+TEST(HairSimulation, ContactIsWithTheHeadSurfaceAndHeldFromRest) {
+  // The guides start 81 mm from the centre, inside the 100 mm surface. Held
+  // from rest: no contact and no more rest change than gravity alone needs.
+  auto free = HairSimulation::Create(SmallHairstyle(8), HairSimulationOptions{});
+  auto held = HairSimulation::Create(SmallHairstyle(8), InsideLargerHeadSurface(true));
+  ASSERT_TRUE(free.ok() && held.ok()) << held.status().ToString();
+  const auto start = (*held)->GuideCurves(4);
+  ASSERT_TRUE((*held)->Advance(0.5).ok());
+  EXPECT_LT(MaxTipMove(start, (*held)->GuideCurves(4)), 0.5);  // mm
+  EXPECT_EQ((*held)->stats().contact_samples, 0);
+  EXPECT_NEAR((*held)->stats().max_inverse_statics_change, (*free)->stats().max_inverse_statics_change, 1e-9);
+
+  // With the plain margin the surface pushes on every buried sample, and the
+  // rest curvatures must change far more to hold the fit against it.
+  auto pushed = HairSimulation::Create(SmallHairstyle(8), InsideLargerHeadSurface(false));
+  ASSERT_TRUE(pushed.ok()) << pushed.status().ToString();
+  ASSERT_TRUE((*pushed)->Advance(0.5).ok());
+  EXPECT_GT((*pushed)->stats().contact_samples, 0);
+  EXPECT_GT((*pushed)->stats().max_inverse_statics_change, 2 * (*free)->stats().max_inverse_statics_change);
 }
 
 TEST(HairSimulation, HeadShakeCarriesRootsAndSwingsTips) {

@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
+#include "core/head_model.h"
 #include "simulation/helix.h"
 
 namespace hairrig {
@@ -106,6 +107,16 @@ SuperHelixDynamics::SuperHelixDynamics(const SuperHelix& strand, const HairMater
     for (size_t k = 0; k < nodes.size(); ++k) samples_.push_back({e, nodes[k] * length, weights[k] * length});
   }
   first_sample_.push_back(static_cast<int>(samples_.size()));
+  contact_margin_m_.assign(samples_.size(), options_.contact_margin_m);
+}
+
+void SuperHelixDynamics::HoldContactAtRest(const Eigen::VectorXd& q_rest) {
+  if (!options_.use_head) return;
+  const std::vector<Eigen::Vector3d> rest = SamplePositions(q_rest);
+  for (size_t i = 0; i < rest.size(); ++i) {
+    Eigen::Vector3d normal;
+    contact_margin_m_[i] = std::min(options_.contact_margin_m, HeadDistance(rest[i], &normal));
+  }
 }
 
 // Positions of the quadrature points, without Jacobians.
@@ -271,7 +282,8 @@ std::vector<Eigen::Vector3d> SuperHelixDynamics::SampleVelocities(const Eigen::V
   return out;
 }
 
-Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, const Eigen::Vector3d& r) const {
+Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, size_t sample) const {
+  const Eigen::Vector3d& r = positions_[sample];
   const double rho_s = material_.LinearDensity();
   const Eigen::Vector3d& w = env.frame_angular_velocity;
   const Eigen::Vector3d arm = r - env.pivot_m;
@@ -283,18 +295,23 @@ Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, const Ei
   force += options_.air_drag * (env.air_velocity_m_s - w.cross(arm));
   if (options_.use_head) {
     Eigen::Vector3d normal;
-    const double distance = options_.head.Distance(r, &normal);
-    if (distance < options_.contact_margin_m) {
-      force += options_.contact_stiffness * (options_.contact_margin_m - distance) * normal;
+    const double distance = HeadDistance(r, &normal);
+    if (distance < contact_margin_m_[sample]) {
+      force += options_.contact_stiffness * (contact_margin_m_[sample] - distance) * normal;
     }
   }
   return force;
 }
 
+double SuperHelixDynamics::HeadDistance(const Eigen::Vector3d& p_m, Eigen::Vector3d* normal) const {
+  if (!options_.head_surface) return options_.head.Distance(p_m, normal);
+  return 1e-3 * options_.head_surface->SignedDistance(1e3 * p_m, normal);
+}
+
 Eigen::VectorXd SuperHelixDynamics::StaticForces(const Environment& environment, const Eigen::VectorXd& q) {
   Evaluate(q);
   std::vector<Eigen::Vector3d> forces(samples_.size());
-  for (size_t i = 0; i < samples_.size(); ++i) forces[i] = StaticForce(environment, positions_[i]);
+  for (size_t i = 0; i < samples_.size(); ++i) forces[i] = StaticForce(environment, i);
   return GeneralisedForce(forces);
 }
 
@@ -367,11 +384,11 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   int contacts = 0;
   for (size_t i = 0; i < samples_.size(); ++i) {
-    forces[i] = StaticForce(env, positions_[i]) -
+    forces[i] = StaticForce(env, i) -
                 rho_s * (velocity_acceleration[i] + 2 * env.frame_angular_velocity.cross(velocities[i]));
     if (!options_.use_head) continue;
     Eigen::Vector3d normal;
-    if (options_.head.Distance(positions_[i], &normal) < options_.contact_margin_m) {
+    if (HeadDistance(positions_[i], &normal) < contact_margin_m_[i]) {
       ++contacts;
       const Eigen::Matrix3d nn = normal * normal.transpose();
       const double w = samples_[i].weight;

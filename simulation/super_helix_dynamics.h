@@ -29,6 +29,7 @@
 // are part of F.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,6 +38,8 @@
 #include "simulation/super_helix.h"
 
 namespace hairrig {
+
+class HeadModel;  // core/head_model.h
 
 enum class TimeIntegrator { kImplicitEuler, kTrapezoidal };
 enum class LinearSolver { kConjugateGradient, kCholesky };
@@ -62,6 +65,10 @@ struct DynamicsOptions {
   double air_drag = 1e-4;           // nu of Eq. 10, N s / m^2 (force per length per velocity)
   bool use_head = false;
   HeadEllipsoid head;
+  // When set (with use_head), contact is with this head's surface (its
+  // signed distance; mm in the same frame as the simulation's metres)
+  // instead of the ellipsoid: the head strands were reconstructed or grown on.
+  std::shared_ptr<const HeadModel> head_surface;
   double contact_margin_m = 0.5e-3;     // hair keeps this far from the head
   double contact_stiffness = 50;        // N / m^2: force per length per metre of penetration
   double contact_friction = 2e-3;       // viscous friction along the head, N s / m^2
@@ -109,6 +116,13 @@ class SuperHelixDynamics {
   // finite after the step (the state is left unchanged).
   Status Step(const Environment& environment, StrandState* state, StepReport* report = nullptr);
 
+  // Samples that rest nearer the head than contact_margin_m in `q_rest` (or
+  // inside it, as a fitted strand lying on the head can) get their rest
+  // distance as their margin: the rest state carries no contact force, and
+  // no sample is pushed further in than where it rests. Without this call
+  // every sample keeps contact_margin_m. No effect without use_head.
+  void HoldContactAtRest(const Eigen::VectorXd& q_rest);
+
   // Generalised forces Q of gravity and contact at rest (q' = 0).
   Eigen::VectorXd StaticForces(const Environment& environment, const Eigen::VectorXd& q);
   Eigen::VectorXd ElasticForces(const Eigen::VectorXd& q) const;  // -K (q - q^0)
@@ -127,8 +141,11 @@ class SuperHelixDynamics {
   };
   void Evaluate(const Eigen::VectorXd& q);
   std::vector<Eigen::Vector3d> SamplePositions(const Eigen::VectorXd& q) const;
-  // Force per unit length at a point at rest (gravity, frame motion, wind, contact).
-  Eigen::Vector3d StaticForce(const Environment& environment, const Eigen::Vector3d& position) const;
+  // Force per unit length at sample i (positions_ from Evaluate) at rest
+  // (gravity, frame motion, wind, contact).
+  Eigen::Vector3d StaticForce(const Environment& environment, size_t sample) const;
+  // Signed distance (m) to the head and its outward normal at p (m).
+  double HeadDistance(const Eigen::Vector3d& p_m, Eigen::Vector3d* normal) const;
   // The kinetic metric in two parts: int J^T J ds (translational, without
   // rho S) and int rho J_w^T I J_w ds (rotational).
   void KineticMetrics(Eigen::MatrixXd* translational, Eigen::MatrixXd* rotational) const;
@@ -145,6 +162,7 @@ class SuperHelixDynamics {
   Eigen::VectorXd stiffness_;  // diagonal of K
   std::vector<Sample> samples_;
   std::vector<int> first_sample_;  // per element, and one past the last sample
+  std::vector<double> contact_margin_m_;  // per sample (HoldContactAtRest)
   Eigen::VectorXd previous_dv_;    // warm start of the conjugate gradient
   // Filled by Evaluate(q). Per element p, for any point r beyond it:
   //   dr/dq_p = move_[p] - [r]x turn_[p],  its frame turns by turn_[p] dq_p.
