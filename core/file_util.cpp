@@ -61,6 +61,31 @@ Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* 
   return Status::Ok();
 }
 
+// Writes all `size` bytes through `write_call` (::write when empty), retrying
+// on EINTR and after short writes.
+Status WriteAll(int fd, const std::string& path, const uint8_t* p, size_t size, const WriteCall& write_call) {
+  while (size > 0) {
+    const ssize_t n = write_call ? write_call(fd, p, size) : ::write(fd, p, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return IoErrorFromErrno(path + ": write failed", errno);
+    }
+    p += n;
+    size -= static_cast<size_t>(n);
+  }
+  return Status::Ok();
+}
+
+// WriteAll in two parts, with on_stage("half_written") between them.
+Status WriteInHalves(int fd, const std::string& path, const void* bytes, size_t size, const StageHook& on_stage,
+                     const WriteCall& write_call) {
+  const auto* p = static_cast<const uint8_t*>(bytes);
+  const size_t first = size - size / 2;
+  HR_RETURN_IF_ERROR(WriteAll(fd, path, p, first, write_call));
+  if (on_stage) on_stage("half_written");
+  return WriteAll(fd, path, p + first, size - first, write_call);
+}
+
 }  // namespace
 
 Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
@@ -108,45 +133,44 @@ Status SyncFolder(const std::string& folder) {
   return Status::Ok();
 }
 
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
-                       const std::function<void(const char* stage)>& on_stage) {
+Status IoErrorFromErrno(const std::string& what, int error_number) {
+  return IoError(what + " (" + std::strerror(error_number) + ")");
+}
+
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size, const StageHook& on_stage,
+                       const WriteCall& write_call) {
   // Unique per process and per call, so that two threads writing one path never share a temporary.
   static std::atomic<uint64_t> next_temporary{0};
   const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(next_temporary++);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (fd < 0) return IoError(tmp + ": cannot create (" + std::strerror(errno) + ")");
-  const auto* p = static_cast<const uint8_t*>(bytes);
-  size_t left = size;
-  bool reported_half = !on_stage;
-  while (left > 0) {
-    if (!reported_half && left <= size / 2) {
-      on_stage("half_written");
-      reported_half = true;
-    }
-    const size_t chunk = reported_half ? left : left - size / 2;
-    const ssize_t n = ::write(fd, p, chunk);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const std::string why = std::strerror(errno);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return IoError(path + ": write failed (" + why + ")");
-    }
-    p += n;
-    left -= static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+  if (fd < 0) return IoErrorFromErrno(tmp + ": cannot create", errno);
+  Status s = WriteInHalves(fd, path, bytes, size, on_stage, write_call);
+  if (s.ok() && ::fsync(fd) != 0) s = IoErrorFromErrno(path + ": fsync failed", errno);
+  if (::close(fd) != 0 && s.ok()) s = IoErrorFromErrno(path + ": close failed", errno);
+  if (!s.ok()) {
     ::unlink(tmp.c_str());
-    return IoError(path + ": fsync/close failed (" + std::strerror(errno) + ")");
+    return s;
   }
   if (on_stage) on_stage("before_rename");
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
+    const int error_number = errno;
     ::unlink(tmp.c_str());
-    return IoError(path + ": rename into place failed (" + why + ")");
+    return IoErrorFromErrno(path + ": rename into place failed", error_number);
   }
   const size_t slash = path.find_last_of('/');
   return SyncFolder(slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash));
+}
+
+Status AppendDurably(int fd, const std::string& path, const void* bytes, size_t size, const StageHook& on_stage,
+                     const WriteCall& write_call) {
+  struct stat before {};
+  if (::fstat(fd, &before) != 0) return IoErrorFromErrno(path + ": cannot read its file status", errno);
+  Status s = WriteInHalves(fd, path, bytes, size, on_stage, write_call);
+  if (s.ok() && ::fdatasync(fd) != 0) s = IoErrorFromErrno(path + ": fsync failed", errno);
+  if (!s.ok() && ::ftruncate(fd, before.st_size) != 0) {
+    return IoErrorFromErrno(s.message() + "; cutting the file back to its former length failed too", errno);
+  }
+  return s;
 }
 
 std::string FileExtension(const std::string& path) {

@@ -1,6 +1,8 @@
 // Small file helpers shared by every module that writes results.
 #pragma once
 
+#include <sys/types.h>
+
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -25,16 +27,34 @@ Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
 // The whole file, with the checks of ReadFileChunks.
 Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, uint64_t max_bytes = kMaxFileBytes);
 Result<std::string> ReadFileText(const std::string& path, uint64_t max_bytes);
+// IoError "<what> (<strerror(error_number)>)", e.g. "<path>: write failed (No
+// space left on device)": the one message every writer here builds from errno.
+Status IoErrorFromErrno(const std::string& what, int error_number);
+// The write(2) the writers below call: writes up to `size` bytes, returns how
+// many, or -1 with errno set. Empty: ::write. A stand-in keeps that contract
+// (a full disk: some bytes, then -1 with errno ENOSPC).
+using WriteCall = std::function<ssize_t(int fd, const void* data, size_t size)>;
+// Called with the name of a stage a writer reached; crash-safety tests stop
+// the process there.
+using StageHook = std::function<void(const char* stage)>;
 // Writes `bytes` to `path` atomically: a temporary file in the same folder is
 // written, fsync'd and renamed over `path`, so a reader (or a crash) never sees
 // half a file under the final name.
 // The folder is fsync'd after the rename so the new name survives power loss.
 // The temporary is created anew (never through an existing name or symlink),
 // and the rename replaces a symlink at `path` instead of writing through it.
-// `on_stage`, when given, is called with "half_written" and "before_rename"
-// (crash-safety tests stop the process there).
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
-                       const std::function<void(const char* stage)>& on_stage = {});
+// On failure the temporary is removed and `path` is as it was; IoError names
+// `path` and the errno (IoErrorFromErrno).
+// `on_stage`, when given, is called with "half_written" and "before_rename".
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size, const StageHook& on_stage = {},
+                       const WriteCall& write_call = {});
+// Appends `size` bytes to `fd`, a file opened with O_APPEND that `path` names
+// in messages, and fdatasyncs it. `on_stage`, when given, is called with
+// "half_written" once the first half is written. A failed append (IoError
+// naming `path` and the errno) cuts the file back to its length before the
+// call, so no part of the bytes stays in it; only a crash can leave a part.
+Status AppendDurably(int fd, const std::string& path, const void* bytes, size_t size, const StageHook& on_stage = {},
+                     const WriteCall& write_call = {});
 // fsync of a folder, so that renames and new entries in it are durable.
 Status SyncFolder(const std::string& folder);
 inline Status WriteFileAtomic(const std::string& path, const std::string& text) {

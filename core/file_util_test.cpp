@@ -1,10 +1,15 @@
 #include "core/file_util.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -73,6 +78,45 @@ TEST(FileUtil, WriteFileAtomicReplacesASymlinkInsteadOfFollowingIt) {
   EXPECT_EQ(ReadFileText(victim, 100).value(), "keep me");
   EXPECT_FALSE(fs::is_symlink(dir + "/manifest.json"));
   EXPECT_EQ(ReadFileText(dir + "/manifest.json", 100).value(), "new");
+}
+
+// A write(2) that takes `room` bytes, then fails as on a full disk.
+WriteCall FullAfter(size_t room) {
+  return [room](int fd, const void* data, size_t size) mutable -> ssize_t {
+    if (room == 0) {
+      errno = ENOSPC;
+      return -1;
+    }
+    const ssize_t n = ::write(fd, data, std::min(size, room));
+    if (n > 0) room -= static_cast<size_t>(n);
+    return n;
+  };
+}
+
+// The writers' clean-up after a failed write(2): no temporary, no part of a
+// record, the old content intact, and the errno in the message.
+TEST(FileUtil, WritersLeaveNothingBehindWhenTheDiskIsFull) {
+  const std::string dir = TestDir("full");
+  const std::string path = dir + "/manifest.json";
+  ASSERT_TRUE(WriteFileAtomic(path, "old").ok());
+  const std::string text(100, 'n');
+  const Status atomic = WriteFileAtomic(path, text.data(), text.size(), {}, FullAfter(30));
+  EXPECT_EQ(atomic.code(), StatusCode::kIoError);
+  EXPECT_EQ(atomic.message(), path + ": write failed (" + std::strerror(ENOSPC) + ")");
+  EXPECT_EQ(ReadFileText(path, 100).value(), "old");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1) << "a temporary was left";
+
+  const std::string journal = dir + "/journal.jsonl";
+  const int fd = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  ASSERT_GE(fd, 0);
+  int stages = 0;
+  const std::string record = "{\"event\": \"fault\"}\n";
+  EXPECT_TRUE(AppendDurably(fd, journal, record.data(), record.size(), [&](const char*) { ++stages; }).ok());
+  EXPECT_EQ(stages, 1);
+  const Status append = AppendDurably(fd, journal, record.data(), record.size(), {}, FullAfter(5));
+  EXPECT_EQ(append.message(), IoErrorFromErrno(journal + ": write failed", ENOSPC).message());
+  EXPECT_EQ(ReadFileText(journal, 100).value(), record) << "part of the record stayed";
+  ::close(fd);
 }
 
 }  // namespace

@@ -111,6 +111,7 @@ class Sequencer {
   // --- bookkeeping -------------------------------------------------------------
   void RecordFault(const Device* device, const Status& status, const std::string& action, int view = -1);
   void StopRun(const std::string& why);
+  void StopForStorage(const Status& status, const Device* device, int view = -1);
   bool Stopping() const { return stop_run_.load() || estop_.load(); }
   std::vector<int> MissingViews() const;
   void Progress(const std::string& step, int stop);
@@ -130,6 +131,7 @@ class Sequencer {
 
   std::atomic<bool> stop_run_{false};
   std::atomic<bool> estop_{false};
+  std::atomic<bool> storage_failed_{false};  // nothing more is written
   std::string stop_reason_;  // guarded by mutex_
   std::atomic<int> faults_{0};
   std::atomic<int> frames_{0};
@@ -159,6 +161,15 @@ void Sequencer::StopRun(const std::string& why) {
   if (stop_reason_.empty()) stop_reason_ = why;
   stop_run_ = true;
   cv_.notify_all();
+}
+
+// The run stops before the fault is journalled, so that no position_reached
+// record follows it (ShootStop journals those under mutex_ unless stopping).
+void Sequencer::StopForStorage(const Status& status, const Device* device, int view) {
+  storage_failed_ = true;
+  StopRun("storage: " + status.ToString() + ". The frames stored so far are kept; free space on the disk of " +
+          dataset_.dir() + ", then continue with --resume");
+  RecordFault(device, status, "stop the run", view);
 }
 
 double Sequencer::ExpectedFrameWallS(const Camera& camera) const {
@@ -346,15 +357,9 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
 
 // Shoots the views of one stop; false when the run must end.
 bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views) {
-  auto free_bytes = dataset_.FreeBytes();
-  const double min_free = policies_.min_free_mb * 1e6;
-  if (!free_bytes.ok() || static_cast<double>(*free_bytes) < min_free) {
-    const Status s = free_bytes.ok() ? IoError(dataset_.dir() + ": only " + std::to_string(*free_bytes / 1000000) +
-                                               " MB free, below storage.min_free_mb (" +
-                                               std::to_string(static_cast<int>(policies_.min_free_mb)) + ")")
-                                     : free_bytes.status();
-    RecordFault(nullptr, s, "stop the run");
-    StopRun("disk nearly full: " + s.ToString() + ". Free space, then continue with --resume");
+  if (Stopping()) return false;
+  if (const Status s = dataset_.CheckFreeSpace(0); !s.ok()) {
+    StopForStorage(s, nullptr);
     return false;
   }
   std::vector<CameraSlot*> shooting;
@@ -381,8 +386,12 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
     return false;
   }
   lower_bound_s_ += LowerBoundOfStop(from, stop);
-  (void)dataset_.Append({{"event", "position_reached"}, {"stop", stop.index},
-                         {"commanded_deg", stop.angle_deg}, {"measured_deg", measured}});
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (Stopping()) return false;
+    (void)dataset_.Append({{"event", "position_reached"}, {"stop", stop.index},
+                           {"commanded_deg", stop.angle_deg}, {"measured_deg", measured}});
+  }
   if (const Status s = SetLights(stop.light_levels); !s.ok()) {
     StopRun(s.ToString() + ": cannot light the views; check the panel's power and connection");
     return false;
@@ -448,6 +457,7 @@ void Sequencer::CollectorLoop(CameraSlot& slot) {
 
 bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
   Camera& camera = *slot.camera;
+  if (storage_failed_) return false;  // the view stays missing for --resume
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (slot.needs_reopen) {
@@ -486,9 +496,11 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
                          caps.width_px, caps.height_px};
     auto stored = dataset_.StoreFrame(*frame, context);
     if (!stored.ok()) {
-      const bool storage = stored.status().code() == StatusCode::kIoError;
-      RecordFault(&camera, stored.status(), storage ? "stop the run" : "re-shoot later", shot.view);
-      if (storage) StopRun("storage failed: " + stored.status().ToString());
+      if (stored.status().code() == StatusCode::kIoError) {
+        StopForStorage(stored.status(), &camera, shot.view);
+      } else {
+        RecordFault(&camera, stored.status(), "re-shoot later", shot.view);
+      }
       return false;
     }
     ++frames_;
@@ -630,7 +642,8 @@ std::vector<PlannedTruthView> TruthViews(const CapturePlan& plan) {
   return views;
 }
 
-// <capture>/contact_sheet.png from the verified frames, in plan order.
+// <capture>/contact_sheet.png from the verified frames, in plan order, unless
+// it would leave less than storage.min_free_mb free.
 Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan) {
   std::vector<cv::Mat> thumbs;
   std::vector<std::string> labels;
@@ -645,7 +658,8 @@ Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan)
   const cv::Mat sheet = MakeContactSheet(thumbs, labels, columns, 240);
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", sheet, png)) return Internal("contact sheet: PNG encoding failed");
-  return WriteFileAtomic(dataset.dir() + "/contact_sheet.png", png.data(), png.size());
+  HR_RETURN_IF_ERROR(dataset.CheckFreeSpace(png.size()).WithContext("contact sheet not written"));
+  return dataset.storage().WriteFileAtomic(dataset.dir() + "/contact_sheet.png", png.data(), png.size(), {});
 }
 
 std::string ReadText(const std::string& path) {
@@ -663,68 +677,73 @@ std::vector<PlannedViewRecord> PlannedViewRecords(const CapturePlan& plan) {
   return records;
 }
 
-// Worst case of the frames' size on disk: raw pixels (PNG only shrinks them).
-double EstimatedBytes(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views) {
-  double total = 0;
-  for (int v : views) {
-    const Camera* c = devices.FindCameraBySerial(plan.views[static_cast<size_t>(v)].camera_serial);
-    const CameraCapabilities caps = c->capabilities();
-    total += static_cast<double>(caps.width_px) * caps.height_px * std::max(1, BytesPerPixel(plan.camera_settings.format));
+// The config of this session: the rig config, or a resumed capture's
+// snapshot (*config_text is left empty then).
+Result<RigConfig> LoadSessionConfig(const CaptureOptions& options, std::string* config_text) {
+  if (options.resume) {
+    HR_ASSIGN_OR_RETURN(const CaptureMetadata metadata, ReadResumableCapture(options.out_dir));
+    const fs::path snapshot = fs::absolute(options.out_dir).lexically_normal() / "rig.yaml";
+    return LoadRigConfig(snapshot.string(), metadata.config_dir);
   }
-  return total;
+  if (fs::exists(options.out_dir)) {
+    return FailedPrecondition(options.out_dir +
+                              " already exists: choose a new --out folder, or add --resume to continue it");
+  }
+  HR_ASSIGN_OR_RETURN(RigConfig config, LoadRigConfig(options.config_path, options.config_relative_to));
+  *config_text = ReadText(options.config_path);
+  return config;
+}
+
+// Room on the capture's disk for the views left to shoot: all of them, or
+// those of a resumed capture (`resumed`) without a verified frame.
+Status CheckSpaceToFinish(const CaptureStorage& storage, const std::string& out_dir, const CapturePlan& plan,
+                          const DeviceSet& devices, const CapturePolicies& policies, const CaptureDataset* resumed) {
+  std::vector<int> left;
+  for (const PlannedView& v : plan.views) {
+    if (!resumed || !resumed->HasVerifiedFrame(v.index)) left.push_back(v.index);
+  }
+  // The file system the capture lands on: the nearest folder that exists.
+  fs::path probe = fs::absolute(out_dir);
+  while (!fs::exists(probe) && probe.has_parent_path() && probe != probe.parent_path()) probe = probe.parent_path();
+  HR_ASSIGN_OR_RETURN(const uint64_t free, storage.FreeBytes(probe.string()));
+  const uint64_t needed = BytesNeededToFinish(plan, devices, left, policies);
+  if (free >= needed) return Status::Ok();
+  return IoError(probe.string() + ": " + std::to_string(free / 1000000) + " MB free, the " +
+                 std::to_string(left.size()) + " views left to shoot need up to " + std::to_string(needed / 1000000) +
+                 " MB (their frames plus storage.min_free_mb): " +
+                 (resumed ? "free space, then run --resume again" : "free space or choose another --out"));
 }
 
 }  // namespace
 
 Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   if (options.out_dir.empty()) return InvalidArgument("--out is required: the folder the capture is written to");
-  std::unique_ptr<CaptureDataset> dataset;
-  RigConfig config;
-  ResumeReport report;
-  DatasetOptions dataset_options;
   std::string config_text;
-  if (options.resume) {
-    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::OpenForResume(options.out_dir, dataset_options, &report));
-    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(dataset->ConfigSnapshotPath(), dataset->metadata().config_dir));
-  } else {
-    if (fs::exists(options.out_dir)) {
-      return FailedPrecondition(options.out_dir + " already exists: choose a new --out folder, or add --resume to continue it");
-    }
-    HR_ASSIGN_OR_RETURN(config, LoadRigConfig(options.config_path, options.config_relative_to));
-    config_text = ReadText(options.config_path);
-  }
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadSessionConfig(options, &config_text));
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
-  const std::vector<PlannedViewRecord> planned_views = PlannedViewRecords(plan);
-  // A resumed capture's plan is checked before anything else is written.
-  if (options.resume) HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
+  const std::shared_ptr<CaptureStorage> storage =
+      options.storage ? options.storage : rig->capture_storage ? rig->capture_storage : DefaultCaptureStorage();
+  DatasetOptions dataset_options;
   dataset_options.png_compression = policies.png_compression;
-  if (rig->sim_world) dataset_options.simulated_full_after_frames = WorldDiskFullAfterFrames(*rig->sim_world);
-
-  // Space for the whole plan, checked before anything is written.
-  std::vector<int> all_views;
-  for (const PlannedView& v : plan.views) all_views.push_back(v.index);
-  // The file system the capture will land on: the nearest folder that exists.
-  fs::path probe = fs::absolute(options.out_dir);
-  while (!fs::exists(probe) && probe.has_parent_path() && probe != probe.parent_path()) probe = probe.parent_path();
-  const std::string probe_dir = probe.string();
-  std::error_code ec;
-  const fs::space_info space = fs::space(probe_dir, ec);
-  const double needed = EstimatedBytes(plan, rig->devices, all_views) + policies.min_free_mb * 1e6;
-  if (!ec && static_cast<double>(space.available) < needed) {
-    return IoError(probe_dir + ": " + std::to_string(space.available / 1000000) + " MB free, the plan needs up to " +
-                   std::to_string(static_cast<uint64_t>(needed / 1e6)) +
-                   " MB (frames plus storage.min_free_mb): free space or choose another --out");
+  dataset_options.min_free_bytes = policies.MinFreeBytes();
+  const std::vector<PlannedViewRecord> planned_views = PlannedViewRecords(plan);
+  std::unique_ptr<CaptureDataset> dataset;
+  ResumeReport report;
+  if (options.resume) {
+    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::OpenForResume(options.out_dir, dataset_options, &report, storage));
+    // A resumed capture's plan is checked before anything else is written.
+    HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
   }
+  HR_RETURN_IF_ERROR(CheckSpaceToFinish(*storage, options.out_dir, plan, rig->devices, policies, dataset.get()));
   if (!options.resume) {
     CaptureMetadata metadata;
     metadata.config_source = fs::absolute(config.path).lexically_normal().string();
     metadata.config_dir = config.relative_to;
     metadata.subject = options.subject;
-    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text, metadata, dataset_options));
-  } else {
-    dataset->set_options(dataset_options);
+    HR_ASSIGN_OR_RETURN(dataset,
+                        CaptureDataset::Create(options.out_dir, config_text, metadata, dataset_options, storage));
   }
   const std::string subject = options.resume ? dataset->metadata().subject : options.subject;
   dataset->SetPlanSummary(static_cast<int>(plan.views.size()), subject, config.name);

@@ -11,17 +11,25 @@
 // Faults: a frame that does not arrive, arrives corrupt, or a camera that
 // drops off the bus marks the view for a re-shoot pass after the first sweep
 // (a camera is reopened with back-off first); a move that times out is
-// re-commanded; a turntable fault, an e-stop or interlock, a full disk stop
-// the run at once. Every fault is journalled; the dataset stays consistent and
-// `--resume` continues it.
+// re-commanded; a turntable fault, an e-stop or interlock stop the run at
+// once. So does the first storage failure (a write's IoError, such as ENOSPC)
+// and a frame that would leave less than storage.min_free_mb free: no stop is
+// shot after it and frames still waiting to be stored are dropped. Every fault
+// is journalled; the dataset stays consistent and `--resume` continues it.
+//
+// Before anything is written, the capture's disk must have room for the views
+// left to shoot (BytesNeededToFinish in rig/capture_plan.h: all of them, or on
+// a resume those without a verified frame); else RunCapture returns IoError.
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/capture_storage.h"
 #include "core/frame_sink.h"
 #include "core/status.h"
 #include "rig/rig_config.h"
@@ -49,6 +57,9 @@ struct CaptureOptions {
   FrameSink* sink = nullptr;                                // optional
   std::function<void(const CaptureProgress&)> on_progress;  // optional, called from the sequencer thread
   RigBuildOptions rig_build;  // how devices are made (the replay command swaps in its backend)
+  // Where the capture's files are written (core/capture_storage.h). Null: the
+  // rig's own (Rig::capture_storage: the simulated rig's disk), else the file system.
+  std::shared_ptr<CaptureStorage> storage;
 };
 
 struct CaptureSummary {

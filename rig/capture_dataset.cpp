@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
-#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -48,17 +47,12 @@ constexpr int64_t kMaxSeq = int64_t{1} << 50;  // far beyond any capture's recor
 constexpr const char* kAlteredAdvice =
     "the journal was altered: keep a copy of it, then correct or remove that line by hand";
 
-Status WriteAll(int fd, const char* p, size_t size, const std::string& what) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, p, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return IoError(what + ": write failed (" + std::strerror(errno) + ")");
-    }
-    p += n;
-    size -= static_cast<size_t>(n);
-  }
-  return Status::Ok();
+// "0.998 MB", "9.500 MB", "200.0 MB": three decimals below 10 MB.
+std::string MegabytesText(uint64_t bytes) {
+  char text[48];
+  const double mb = static_cast<double>(bytes) / 1e6;
+  std::snprintf(text, sizeof text, mb < 10 ? "%.3f MB" : "%.1f MB", mb);
+  return text;
 }
 
 bool Exists(const fs::path& path) {
@@ -134,6 +128,13 @@ Result<CaptureMetadata> ReadCaptureMetadata(const std::string& capture_dir) {
   return CaptureMetadata::FromJson(j, path);
 }
 
+Result<CaptureMetadata> ReadResumableCapture(const std::string& capture_dir) {
+  if (!Exists(fs::path(capture_dir) / kJournal)) {
+    return NotFound(capture_dir + " is not a capture folder (no " + kJournal + "): nothing to resume");
+  }
+  return ReadCaptureMetadata(capture_dir);
+}
+
 Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal_path,
                                                       const std::vector<nlohmann::json>& records) {
   std::map<int, PlannedViewRecord> planned;
@@ -183,8 +184,8 @@ Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir
   return verified;
 }
 
-CaptureDataset::CaptureDataset(std::string dir, DatasetOptions options)
-    : dir_(std::move(dir)), options_(options) {}
+CaptureDataset::CaptureDataset(std::string dir, DatasetOptions options, std::shared_ptr<CaptureStorage> storage)
+    : dir_(std::move(dir)), options_(options), storage_(storage ? std::move(storage) : DefaultCaptureStorage()) {}
 
 CaptureDataset::~CaptureDataset() {
   if (journal_fd_ >= 0) ::close(journal_fd_);
@@ -206,7 +207,8 @@ Status CaptureDataset::OpenJournal() {
 Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string& dir,
                                                                const std::string& config_text,
                                                                CaptureMetadata metadata,
-                                                               const DatasetOptions& options) {
+                                                               const DatasetOptions& options,
+                                                               std::shared_ptr<CaptureStorage> storage) {
   std::error_code ec;
   if (Exists(dir)) {
     return FailedPrecondition(
@@ -220,10 +222,13 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string
     return IoError(dir + ": cannot create the capture folder (" + ec.message() + ")");
   }
   auto dataset = std::unique_ptr<CaptureDataset>(
-      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
-  HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text));
+      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
+  CaptureStorage& out = *dataset->storage_;
+  HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text.data(), config_text.size(), {}));
   metadata.created_utc = UtcNow();
-  HR_RETURN_IF_ERROR(WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata.ToJson().dump(2) + "\n"));
+  const std::string metadata_text = metadata.ToJson().dump(2) + "\n";
+  HR_RETURN_IF_ERROR(
+      out.WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata_text.data(), metadata_text.size(), {}));
   dataset->metadata_ = std::move(metadata);
   HR_RETURN_IF_ERROR(dataset->OpenJournal());
   HR_RETURN_IF_ERROR(SyncFolder(parent.string()));
@@ -232,14 +237,11 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string
 
 Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(const std::string& dir,
                                                                       const DatasetOptions& options,
-                                                                      ResumeReport* report) {
-  std::error_code ec;
-  if (fs::symlink_status(fs::path(dir) / kJournal, ec).type() == fs::file_type::not_found) {
-    return NotFound(dir + " is not a capture folder (no " + kJournal + "): nothing to resume");
-  }
+                                                                      ResumeReport* report,
+                                                                      std::shared_ptr<CaptureStorage> storage) {
   auto dataset = std::unique_ptr<CaptureDataset>(
-      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options));
-  HR_ASSIGN_OR_RETURN(dataset->metadata_, ReadCaptureMetadata(dataset->dir_));
+      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
+  HR_ASSIGN_OR_RETURN(dataset->metadata_, ReadResumableCapture(dataset->dir_));
   ResumeReport local;
   HR_RETURN_IF_ERROR(dataset->Repair(report ? report : &local));
   return dataset;
@@ -348,13 +350,8 @@ Status CaptureDataset::AppendLocked(nlohmann::json record) {
   record["seq"] = next_seq_;
   record["time_utc"] = UtcNow();
   const std::string line = record.dump() + "\n";
-  const std::string what = dir_ + "/" + kJournal;
-  const size_t half = line.size() / 2;
-  HR_RETURN_IF_ERROR(WriteAll(journal_fd_, line.data(), half, what));
-  CrashPoint("journal_half_written");
-  HR_RETURN_IF_ERROR(WriteAll(journal_fd_, line.data() + half, line.size() - half, what));
-  if (::fdatasync(journal_fd_) != 0)
-    return IoError(what + ": fsync failed (" + std::strerror(errno) + ")");
+  HR_RETURN_IF_ERROR(storage_->AppendDurably(journal_fd_, dir_ + "/" + kJournal, line.data(), line.size(),
+                                             [](const char*) { CrashPoint("journal_half_written"); }));
   ++next_seq_;
   records_.push_back(std::move(record));
   return Status::Ok();
@@ -449,21 +446,16 @@ Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
   r.angle_commanded_deg = context.angle_commanded_deg;
   r.angle_measured_deg = context.angle_measured_deg;
   info.path = dir_ + "/" + r.file;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (options_.simulated_full_after_frames >= 0 &&
-        frames_written_ >= options_.simulated_full_after_frames) {
-      return IoError(dir_ + ": no space left on device (simulated disk full) while writing " +
-                     r.file + ": free space, then run the capture again with --resume");
-    }
-    ++frames_written_;
-  }
-  HR_RETURN_IF_ERROR(WriteFileAtomic(info.path, bytes.data(), bytes.size(), [](const char* stage) {
+  HR_RETURN_IF_ERROR(ReserveSpace(bytes.size()));
+  const Status written = storage_->WriteFileAtomic(info.path, bytes.data(), bytes.size(), [](const char* stage) {
     CrashPoint((std::string("frame_") + stage).c_str());
-  }));
+  });
+  ReleaseSpace(bytes.size());
+  HR_RETURN_IF_ERROR(written);
   CrashPoint("frame_before_journal");
   std::lock_guard<std::mutex> lock(mutex_);
   HR_RETURN_IF_ERROR(AppendLocked(r.ToJson()));
+  ++frames_written_;
   verified_[context.view] = r;
   HR_RETURN_IF_ERROR(WriteManifestLocked(last_status_));
   return info;
@@ -493,17 +485,35 @@ uint64_t CaptureDataset::BytesStored() const {
   return total;
 }
 
-Result<uint64_t> CaptureDataset::FreeBytes() const {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (options_.simulated_full_after_frames >= 0 &&
-        frames_written_ >= options_.simulated_full_after_frames)
-      return 0;
-  }
-  struct statvfs st {};
-  if (::statvfs(dir_.c_str(), &st) != 0)
-    return IoError(dir_ + ": cannot read the free space (" + std::strerror(errno) + ")");
-  return static_cast<uint64_t>(st.f_bavail) * st.f_frsize;
+Result<uint64_t> CaptureDataset::FreeBytes() const { return storage_->FreeBytes(dir_); }
+
+Status CaptureDataset::CheckFreeSpace(uint64_t bytes) const {
+  std::lock_guard<std::mutex> lock(space_mutex_);
+  return CheckFreeSpaceLocked(bytes);
+}
+
+Status CaptureDataset::ReserveSpace(uint64_t bytes) {
+  std::lock_guard<std::mutex> lock(space_mutex_);
+  HR_RETURN_IF_ERROR(CheckFreeSpaceLocked(bytes));
+  reserved_bytes_ += bytes;
+  return Status::Ok();
+}
+
+void CaptureDataset::ReleaseSpace(uint64_t bytes) {
+  std::lock_guard<std::mutex> lock(space_mutex_);
+  reserved_bytes_ -= bytes;
+}
+
+Status CaptureDataset::CheckFreeSpaceLocked(uint64_t bytes) const {
+  HR_ASSIGN_OR_RETURN(const uint64_t free, FreeBytes());
+  const uint64_t min_free = options_.min_free_bytes;
+  // Frames being written by other collectors count as written.
+  const uint64_t left = free > reserved_bytes_ ? free - reserved_bytes_ : 0;
+  if (left >= bytes && left - bytes >= min_free) return Status::Ok();
+  const std::string limit = "the " + MegabytesText(min_free) + " storage.min_free_mb keeps free";
+  if (bytes == 0) return IoError(dir_ + ": " + MegabytesText(free) + " free, less than " + limit);
+  return IoError(dir_ + ": " + MegabytesText(free) + " free; a frame of " + MegabytesText(bytes) +
+                 " would leave less than " + limit);
 }
 
 void CaptureDataset::SetPlanSummary(int views_planned, const std::string& subject,
@@ -554,7 +564,7 @@ Status CaptureDataset::WriteManifestLocked(const std::string& status) {
                                    {"updated_utc", UtcNow()},
                                    {"frames", frames}};
   const std::string text = manifest.dump(2) + "\n";
-  return WriteFileAtomic(dir_ + "/" + kManifest, text.data(), text.size(), [](const char* stage) {
+  return storage_->WriteFileAtomic(dir_ + "/" + kManifest, text.data(), text.size(), [](const char* stage) {
     if (std::string(stage) == "half_written") CrashPoint("manifest_half_written");
   });
 }

@@ -20,6 +20,11 @@
 // writing: a capture whose journal.jsonl, frames/, quarantine/ or
 // ground_truth/ is a symlink is refused. Thread-safe: several cameras'
 // collectors store frames at once.
+//
+// Every file write (frames, journal records, manifest, rig.yaml,
+// capture.json) and the free-space reading go through the dataset's
+// CaptureStorage (core/capture_storage.h): the file system unless the caller
+// gives another.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +37,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
 
+#include "core/capture_storage.h"
 #include "core/status.h"
 #include "drivers/camera.h"
 #include "rig/journal_records.h"
@@ -40,9 +46,9 @@ namespace hairrig {
 
 struct DatasetOptions {
   int png_compression = 1;          // raw frames are stored as PNG, 0-9
-  // Simulated disk full (sim fault disk_full): after this many frames stored in
-  // the folder, FreeBytes() is 0 and writes fail like ENOSPC. -1: off.
-  int simulated_full_after_frames = -1;
+  // Bytes a frame must leave free on the capture's disk (the rig config's
+  // storage.min_free_mb): StoreFrame refuses a frame that would leave less.
+  uint64_t min_free_bytes = 0;
 };
 
 // What the sequencer knows about a frame beyond the frame itself.
@@ -74,9 +80,10 @@ class CaptureDataset {
  public:
   // Creates `dir` (and its parents; FailedPrecondition if `dir` exists) with
   // the config snapshot, capture.json (metadata with its creation time) and
-  // an empty journal.
+  // an empty journal. `storage` null: DefaultCaptureStorage(), the file system.
   static Result<std::unique_ptr<CaptureDataset>> Create(const std::string& dir, const std::string& config_text,
-                                                        CaptureMetadata metadata, const DatasetOptions& options);
+                                                        CaptureMetadata metadata, const DatasetOptions& options,
+                                                        std::shared_ptr<CaptureStorage> storage = nullptr);
   // Opens an interrupted (or finished) capture: takes the journal's lock,
   // drops a journal record cut short, verifies every stored frame against its
   // record (VerifiedFrames), moves unvouched files in frames/ to quarantine/
@@ -84,17 +91,17 @@ class CaptureDataset {
   // symlinked journal.jsonl, frames/, quarantine/ or ground_truth/ or another
   // process writing the capture; CorruptData naming file, line and field for
   // a damaged capture.json or journal record. A missing frames/ is made anew.
+  // The repair's journal records are written through `storage` (null: the
+  // file system).
   static Result<std::unique_ptr<CaptureDataset>> OpenForResume(const std::string& dir, const DatasetOptions& options,
-                                                               ResumeReport* report);
+                                                               ResumeReport* report,
+                                                               std::shared_ptr<CaptureStorage> storage = nullptr);
   ~CaptureDataset();
 
   const std::string& dir() const { return dir_; }
-  // Options read from the snapshot after OpenForResume.
-  void set_options(const DatasetOptions& options) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    options_ = options;
-  }
   std::string ConfigSnapshotPath() const { return dir_ + "/rig.yaml"; }
+  // Where the dataset writes; also for other files of the capture folder.
+  CaptureStorage& storage() const { return *storage_; }
   const CaptureMetadata& metadata() const { return metadata_; }  // capture.json
   // Records of earlier sessions (OpenForResume) and this one, in order.
   std::vector<nlohmann::json> Records() const;
@@ -108,10 +115,12 @@ class CaptureDataset {
   // start left out.
   Status JournalPlan(const std::vector<PlannedViewRecord>& plan);
   // Checks the frame (raw: byte count matches the geometry; encoded: decodes,
-  // right size), encodes raw frames as PNG, hashes, writes atomically, journals
-  // frame_stored and rewrites the manifest. CorruptData for a bad frame,
-  // FailedPrecondition if the view already has a verified frame, IoError for
-  // storage failures (disk full names the folder).
+  // right size), encodes raw frames as PNG, hashes, checks the free space
+  // (CheckFreeSpace), writes atomically, journals frame_stored and rewrites
+  // the manifest. CorruptData for a bad frame, FailedPrecondition if the view
+  // already has a verified frame, IoError for a frame that would leave less
+  // than min_free_bytes free and for storage failures (a write's IoError names
+  // the file and the errno: "No space left on device" on a full disk).
   Result<StoredFrameInfo> StoreFrame(const Frame& frame, const FrameContext& context);
 
   bool HasVerifiedFrame(int view) const;
@@ -119,33 +128,46 @@ class CaptureDataset {
   std::vector<FrameRecord> VerifiedFrames() const;
   int VerifiedFrameCount() const;
   uint64_t BytesStored() const;  // of verified frames
-  // Free bytes on the capture's file system (0 once a simulated disk is full).
+  // Free bytes on the capture's disk, as its storage reports them.
   Result<uint64_t> FreeBytes() const;
+  // Ok when `bytes` more (0: none), beside the frames being written, leave at
+  // least options.min_free_bytes free on the capture's disk. IoError naming
+  // the folder, the free MB and the limit (storage.min_free_mb) otherwise, or
+  // why the free space is unknown.
+  Status CheckFreeSpace(uint64_t bytes) const;
 
   // Manifest fields the sequencer owns.
   void SetPlanSummary(int views_planned, const std::string& subject, const std::string& rig_name);
   Status WriteManifest(const std::string& status);
 
  private:
-  CaptureDataset(std::string dir, DatasetOptions options);
+  CaptureDataset(std::string dir, DatasetOptions options, std::shared_ptr<CaptureStorage> storage);
   Status OpenJournal();
   Status AppendLocked(nlohmann::json record);
   Status WriteManifestLocked(const std::string& status);
   Status Repair(ResumeReport* report);
+  // CheckFreeSpace, then counts `bytes` as written until ReleaseSpace, so
+  // that frames written at once cannot pass the check together.
+  Status ReserveSpace(uint64_t bytes);
+  void ReleaseSpace(uint64_t bytes);
+  Status CheckFreeSpaceLocked(uint64_t bytes) const;
   Status ClearFramesFolder(ResumeReport* report);
   Result<std::vector<uint8_t>> EncodeForStorage(const Frame& frame, const FrameContext& context, cv::Mat* image,
                                                 std::string* extension) const;
 
   std::string dir_;
   DatasetOptions options_;
+  std::shared_ptr<CaptureStorage> storage_;  // never null
   CaptureMetadata metadata_;
   int journal_fd_ = -1;
   mutable std::mutex mutex_;
+  mutable std::mutex space_mutex_;  // guards reserved_bytes_; taken without mutex_
+  uint64_t reserved_bytes_ = 0;     // frames being written
   std::vector<nlohmann::json> records_;
   std::map<int, FrameRecord> verified_;        // view -> frame_stored record
   std::map<int, PlannedViewRecord> planned_;  // view -> view_planned record
   int64_t next_seq_ = 0;
-  int frames_written_ = 0;  // files written into frames/ over the capture's life
+  int frames_written_ = 0;  // frame_stored records over the capture's life
   int views_planned_ = 0;
   std::string subject_, rig_name_, last_status_ = "in_progress";
 };
@@ -159,6 +181,10 @@ Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journa
 
 // capture.json of a capture folder (a regular file; CorruptData naming it and the field).
 Result<CaptureMetadata> ReadCaptureMetadata(const std::string& capture_dir);
+// ReadCaptureMetadata of a capture to resume, read only: NotFound (nothing to
+// resume) when `capture_dir` has no journal.jsonl. Its config snapshot is
+// <capture_dir>/rig.yaml, relative paths resolving against metadata.config_dir.
+Result<CaptureMetadata> ReadResumableCapture(const std::string& capture_dir);
 
 // The view_planned records of a journal, by view. CorruptData naming the line
 // and field for a damaged record or a view planned twice differently.

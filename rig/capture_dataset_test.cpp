@@ -9,6 +9,7 @@
 #include "core/file_util.h"
 #include "rig/capture_test_util.h"
 #include "rig/replay.h"
+#include "sim_hw/quota_storage.h"
 
 namespace hairrig {
 namespace {
@@ -382,6 +383,55 @@ TEST(CaptureDatasetHostile, ReplayOutputMayNotLieInsideTheRecording) {
   EXPECT_EQ(CheckReplayOutDir(dir, dir).code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(CheckReplayOutDir(dir, dir + "/../c/x").code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(CheckReplayOutDir(dir, dir + "-replay").ok());
+}
+
+// A dataset on a disk of `quota_bytes` (sim_hw/quota_storage.h).
+std::unique_ptr<CaptureDataset> DatasetOnDisk(const std::string& name, std::shared_ptr<QuotaStorage> disk,
+                                              const DatasetOptions& options = {}) {
+  auto d = CaptureDataset::Create(FreshDir(name) + "/c", "name: test\n", {}, options, std::move(disk));
+  EXPECT_TRUE(d.ok()) << d.status().ToString();
+  if (!d.ok()) return nullptr;
+  EXPECT_TRUE((*d)->JournalPlan(TestPlan()).ok());
+  return std::move(d).value();
+}
+
+// A journal record that no longer fits leaves no part of itself behind: the
+// journal stays whole and the capture resumes without a repair.
+TEST(CaptureDatasetFullDisk, ARecordThatDoesNotFitLeavesTheJournalWhole) {
+  auto disk = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = 1'000'000});
+  auto d = DatasetOnDisk("dataset_full_journal", disk);
+  ASSERT_TRUE(d);
+  ASSERT_TRUE(d->StoreFrame(RawFrame(64, 48), {0, 0, "cam", 0, 0, 64, 48}).ok());
+  disk->Consume(1'000'000 - disk->used_bytes() - 20);  // 20 bytes left: half a record fits
+  const Status full = d->Append({{"event", "fault"}, {"what", "a record longer than twenty bytes"}});
+  EXPECT_EQ(full.code(), StatusCode::kIoError);
+  EXPECT_NE(full.message().find("No space left on device"), std::string::npos) << full.message();
+  const std::string dir = d->dir();
+  d.reset();
+  size_t cut_short = 0;
+  ASSERT_TRUE(ReadJournalRecords(dir + "/journal.jsonl", &cut_short).ok());
+  EXPECT_EQ(cut_short, 0u) << "part of the record stayed in the journal";
+  ResumeReport report;
+  ASSERT_TRUE(CaptureDataset::OpenForResume(dir, {}, &report).ok());
+  EXPECT_EQ(report.journal_bytes_dropped, 0u);
+  EXPECT_EQ(report.frames_verified, 1);
+}
+
+// storage.min_free_mb holds for each frame: one that would leave less free
+// is refused before a byte of it is written.
+TEST(CaptureDatasetFullDisk, AFrameThatWouldLeaveLessThanTheMinimumIsNotWritten) {
+  // 100 bytes above the limit: creating the capture takes more.
+  auto disk = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = 1'000'100});
+  auto d = DatasetOnDisk("dataset_min_free", disk, {.min_free_bytes = 1'000'000});
+  ASSERT_TRUE(d);
+  const auto refused = d->StoreFrame(RawFrame(64, 48), {0, 0, "cam", 0, 0, 64, 48});
+  EXPECT_EQ(refused.status().code(), StatusCode::kIoError);
+  EXPECT_NE(refused.status().message().find(d->dir() + ": "), std::string::npos) << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find("MB free"), std::string::npos) << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find("1.000 MB storage.min_free_mb"), std::string::npos)
+      << refused.status().ToString();
+  EXPECT_TRUE(fs::is_empty(d->dir() + "/frames"));
+  EXPECT_EQ(CountEvents(ReadJournal(d->dir()), "frame_stored"), 0);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 #include "rig/capture_plan.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -9,6 +11,27 @@ namespace hairrig {
 double RetryPolicy::BackoffBefore(int attempt) const {
   if (attempt <= 1) return 0;
   return backoff_s * std::pow(backoff_factor, attempt - 2);
+}
+
+uint64_t CapturePolicies::MinFreeBytes() const {
+  constexpr uint64_t kMax = std::numeric_limits<uint64_t>::max();
+  const double bytes = min_free_mb * 1e6;
+  if (!(bytes < static_cast<double>(kMax))) return kMax;  // also NaN
+  return bytes > 0 ? static_cast<uint64_t>(bytes) : 0;
+}
+
+uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views,
+                             const CapturePolicies& policies) {
+  const uint64_t bytes_per_pixel = static_cast<uint64_t>(std::max(1, BytesPerPixel(plan.camera_settings.format)));
+  uint64_t total = policies.MinFreeBytes();
+  for (int v : views) {
+    const Camera* camera = devices.FindCameraBySerial(plan.views.at(static_cast<size_t>(v)).camera_serial);
+    const CameraCapabilities caps = camera->capabilities();
+    const uint64_t frame = static_cast<uint64_t>(std::max(0, caps.width_px)) *
+                           static_cast<uint64_t>(std::max(0, caps.height_px)) * bytes_per_pixel;
+    total = frame > std::numeric_limits<uint64_t>::max() - total ? std::numeric_limits<uint64_t>::max() : total + frame;
+  }
+  return total;
 }
 
 namespace {

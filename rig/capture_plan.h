@@ -9,7 +9,7 @@
 #pragma once
 
 #include <chrono>
-
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -63,13 +63,23 @@ struct CapturePolicies {
   double frame_timeout_s = 20;      // wall seconds a frame may be late: beyond exposure + readout + download
                                     // after its trigger, or after the camera's previous frame when frames queue
   double move_timeout_s = 60;       // wall seconds beyond the move's expected duration
-  double min_free_mb = 200;         // keep at least this much free on the capture's disk
+  double min_free_mb = 200;         // keep at least this much free on the capture's disk (1 MB = 10^6 bytes)
   int png_compression = 1;          // 0-9 for raw frames stored as PNG
+  uint64_t MinFreeBytes() const;    // min_free_mb in bytes; UINT64_MAX when larger
 };
 
 // Reads `plan`, `retries` and `storage` from the rig config root, checking
 // camera and light names against `devices`. Errors name file, line and field.
 Result<CapturePlan> ReadCapturePlan(const ConfigNode& root, const DeviceSet& devices);
 Result<CapturePolicies> ReadCapturePolicies(const ConfigNode& root);
+
+// Bytes the capture's disk must have free before shooting `views` (indices
+// into plan.views; on a resume, the views without a verified frame): each
+// view's frame at its largest (its camera's width x height x bytes per pixel
+// of the plan's format, at least 1; PNG stores raw pixels smaller) plus
+// policies.MinFreeBytes(). UINT64_MAX when larger. Every view's camera must be
+// in `devices` (ReadCapturePlan checked the plan against them).
+uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views,
+                             const CapturePolicies& policies);
 
 }  // namespace hairrig

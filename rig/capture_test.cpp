@@ -4,13 +4,17 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <numeric>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/truth_maps.h"
+#include "rig/capture_plan.h"
 #include "rig/capture_test_util.h"
 #include "sim_hw/ground_truth.h"
+#include "sim_hw/quota_storage.h"
 #include "sim_hw/renderer.h"
 
 namespace hairrig {
@@ -365,13 +369,197 @@ TEST(CaptureFaults, EstopStopsMotionAndSwitchesLightsOff) {
   ExpectConsistent(s);
 }
 
-TEST(CaptureFaults, FullDiskStopsTheRunWithEveryStoredFrameIntact) {
+// Index of the first record of `event` in `journal`; journal.size() if none.
+size_t FirstEvent(const std::vector<nlohmann::json>& journal, const std::string& event) {
+  for (size_t i = 0; i < journal.size(); ++i) {
+    if (journal[i].value("event", "") == event) return i;
+  }
+  return journal.size();
+}
+
+// The run stopped at its first fault: no stop was reached after it.
+void ExpectNoStopAfterTheFirstFault(const std::vector<nlohmann::json>& journal) {
+  const size_t fault = FirstEvent(journal, "fault");
+  ASSERT_LT(fault, journal.size()) << "no fault journalled";
+  EXPECT_EQ(journal[fault]["action"], "stop the run") << journal[fault].dump();
+  for (size_t i = fault + 1; i < journal.size(); ++i) {
+    EXPECT_NE(journal[i]["event"], "position_reached") << "a stop was shot after the fault: " << journal[i].dump();
+  }
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The disk fills up at the 11th frame: its write fails with ENOSPC inside
+// write(2) (sim_hw/quota_storage.h). The run stops there, the 10 frames
+// stored verify, and once space is free (the fault taken out of the
+// snapshot) --resume completes the capture without touching them.
+TEST(CaptureFaults, FullDiskStopsTheRunAndResumeFinishesIt) {
   const std::string dir = FreshDir("fault_disk");
-  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: disk_full, at: 10}")), dir + "/c");
+  const std::string fault = "    - {kind: disk_full, at: 10}";
+  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults(fault)), dir + "/c");
   EXPECT_EQ(s.status, "stopped");
-  EXPECT_NE(s.message.find("space"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("No space left on device"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("free space"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
   EXPECT_EQ(s.views_completed, 10);
+  EXPECT_EQ(s.frames, 10);
   ExpectConsistent(s);
+  const auto journal = ReadJournal(s.dir);
+  ExpectNoStopAfterTheFirstFault(journal);
+  const size_t fault_at = FirstEvent(journal, "fault");
+  ASSERT_LT(fault_at, journal.size());
+  EXPECT_NE(journal[fault_at]["what"].get<std::string>().find("No space left on device"), std::string::npos)
+      << journal[fault_at].dump();
+  const auto kept = VerifiedFramesOnDisk(s.dir);
+  ASSERT_EQ(kept.size(), 10u);
+
+  std::string snapshot = ReadFile(s.dir + "/rig.yaml");
+  const std::string faults = "  faults:\n" + fault + "\n";
+  const size_t at = snapshot.find(faults);
+  ASSERT_NE(at, std::string::npos) << snapshot;
+  std::ofstream(s.dir + "/rig.yaml", std::ios::trunc) << snapshot.erase(at, faults.size());
+  CaptureOptions o;
+  o.out_dir = s.dir;
+  o.resume = true;
+  const auto resumed = RunCapture(o);
+  ASSERT_TRUE(resumed.ok()) << resumed.status().ToString();
+  EXPECT_EQ(resumed->status, "complete") << resumed->message;
+  EXPECT_EQ(resumed->views_kept, 10);
+  EXPECT_EQ(resumed->frames, 28);
+  ExpectConsistent(*resumed);
+  const auto after = VerifiedFramesOnDisk(s.dir);
+  for (const auto& [view, record] : kept) EXPECT_EQ(after.at(view)["sha256"], record["sha256"]) << "view " << view;
+}
+
+// The plan, devices and policies of a rig config, as RunCapture reads them.
+struct PlanOfRig {
+  std::unique_ptr<Rig> rig;
+  CapturePlan plan;
+  CapturePolicies policies;
+};
+PlanOfRig ReadPlanOfRig(const std::string& config_path) {
+  PlanOfRig out;
+  auto config = LoadRigConfig(config_path);
+  EXPECT_TRUE(config.ok()) << config.status().ToString();
+  if (!config.ok()) return out;
+  auto rig = BuildRig(*config);
+  EXPECT_TRUE(rig.ok()) << rig.status().ToString();
+  if (!rig.ok()) return out;
+  out.rig = std::move(rig).value();
+  auto plan = ReadCapturePlan(config->root, out.rig->devices);
+  auto policies = ReadCapturePolicies(config->root);
+  EXPECT_TRUE(plan.ok() && policies.ok());
+  if (plan.ok()) out.plan = *plan;
+  if (policies.ok()) out.policies = *policies;
+  return out;
+}
+
+std::vector<int> AllViews(int count) {
+  std::vector<int> views(static_cast<size_t>(count));
+  std::iota(views.begin(), views.end(), 0);
+  return views;
+}
+
+// BytesNeededToFinish for `views` of the rig config at `config_path`.
+uint64_t BytesNeeded(const std::string& config_path, const std::vector<int>& views) {
+  const PlanOfRig p = ReadPlanOfRig(config_path);
+  return p.rig ? BytesNeededToFinish(p.plan, p.rig->devices, views, p.policies) : 0;
+}
+
+TEST(CaptureSpace, BytesNeededToFinishCountsOnlyTheViewsLeft) {
+  const std::string dir = FreshDir("space_needed");
+  const PlanOfRig p = ReadPlanOfRig(WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 10}\n"}}));
+  ASSERT_TRUE(p.rig);
+  const DeviceSet& devices = p.rig->devices;
+  const uint64_t frame = 300 * 400 * 3;  // the small scene's cameras, rgb8
+  const uint64_t min_free = 10'000'000;
+  EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {}, p.policies), min_free);
+  EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {3, 17, 30, 36, 37}, p.policies), min_free + 5 * frame);
+  EXPECT_EQ(BytesNeededToFinish(p.plan, devices, AllViews(38), p.policies), min_free + 38 * frame);
+  CapturePolicies huge = p.policies;
+  huge.min_free_mb = 1e300;
+  EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {0}, huge), std::numeric_limits<uint64_t>::max());
+}
+
+// A capture stopped by a full disk with 33 of 38 views stored resumes on a
+// disk with room for its 5 missing views, far less than the whole plan needs.
+TEST(CaptureSpace, ResumeNeedsRoomOnlyForTheMissingViews) {
+  const std::string dir = FreshDir("space_resume");
+  const std::string config = WriteSmallRig(dir, SimWithFaults("    - {kind: disk_full, at: 33}"));
+  const CaptureSummary first = Capture(config, dir + "/c");
+  ASSERT_EQ(first.status, "stopped") << first.message;
+  ASSERT_EQ(first.views_completed, 33);
+  const uint64_t for_missing = BytesNeeded(config, first.missing_views);
+  const uint64_t for_all = BytesNeeded(config, AllViews(38));
+  ASSERT_GT(for_missing, 0u);
+  const uint64_t disk_bytes = for_missing + 1'000'000;  // a little for the journal and manifest
+  ASSERT_LT(disk_bytes, for_all);
+  CaptureOptions o;
+  o.out_dir = first.dir;
+  o.resume = true;
+  o.storage = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = disk_bytes});
+  const auto resumed = RunCapture(o);
+  ASSERT_TRUE(resumed.ok()) << resumed.status().ToString();
+  EXPECT_EQ(resumed->status, "complete") << resumed->message;
+  EXPECT_EQ(resumed->frames, 5);
+  ExpectConsistent(*resumed);
+}
+
+// Another program fills the capture's disk while frames are written: after
+// the 4th frame it leaves room for about two more above storage.min_free_mb.
+class DiskFiller : public FrameSink {
+ public:
+  DiskFiller(std::shared_ptr<QuotaStorage> disk, uint64_t min_free) : disk_(std::move(disk)), min_free_(min_free) {}
+  void OnFrameStored(const StoredFrame& frame) override {
+    if (++frames_ != 4) return;
+    const uint64_t frame_bytes = fs::file_size(frame.path);
+    const auto free = disk_->FreeBytes(fs::path(frame.path).parent_path().string());
+    ASSERT_TRUE(free.ok());
+    const uint64_t keep = min_free_ + 5 * frame_bytes / 2;
+    if (*free > keep) disk_->Consume(*free - keep);
+  }
+  void OnCaptureFinished() override {}
+
+ private:
+  std::shared_ptr<QuotaStorage> disk_;
+  uint64_t min_free_;
+  std::atomic<int> frames_{0};
+};
+
+// storage.min_free_mb is checked before every frame is written, not only
+// when a stop is shot: the run stops (resumable) before a frame would leave
+// less free, and says where, how much is free and the limit.
+TEST(CaptureSpace, MinFreeSpaceIsKeptWhileFramesAreWritten) {
+  const std::string dir = FreshDir("space_min_free");
+  const std::string config = WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 1}\n"}});
+  const uint64_t for_all = BytesNeeded(config, AllViews(38));
+  ASSERT_GT(for_all, 0u);
+  const uint64_t min_free = 1'000'000;
+  auto disk = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = for_all + 2'000'000});
+  DiskFiller filler(disk, min_free);
+  CaptureOptions o;
+  o.config_path = config;
+  o.out_dir = dir + "/c";
+  o.sink = &filler;
+  o.storage = disk;
+  const auto s = RunCapture(o);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_EQ(s->status, "stopped") << s->message;
+  EXPECT_GE(s->views_completed, 4);
+  EXPECT_LT(s->views_completed, 38);
+  EXPECT_NE(s->message.find(s->dir + ": "), std::string::npos) << s->message;
+  EXPECT_NE(s->message.find("MB free"), std::string::npos) << s->message;
+  EXPECT_NE(s->message.find("1.000 MB storage.min_free_mb"), std::string::npos) << s->message;
+  EXPECT_NE(s->message.find("--resume"), std::string::npos) << s->message;
+  const auto free = disk->FreeBytes(s->dir);
+  ASSERT_TRUE(free.ok());
+  // Below the limit only by what the journal and manifest took after the stop.
+  EXPECT_GE(*free + 65536, min_free) << "the frames went below storage.min_free_mb";
+  ExpectConsistent(*s);
+  ExpectNoStopAfterTheFirstFault(ReadJournal(s->dir));
 }
 
 TEST(CaptureFaults, NotEnoughSpaceForThePlanIsRefusedBeforeStarting) {

@@ -214,6 +214,7 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
     HR_ASSIGN_OR_RETURN(options.faults, ParseSimFaults(config.root.Child("sim")));
     HR_ASSIGN_OR_RETURN(rig->sim_world, CreateSimWorld(scene, options));
     RegisterSimBackends(&registry, rig->sim_world);
+    rig->capture_storage = MakeWorldCaptureStorage(*rig->sim_world);
   }
   HR_ASSIGN_OR_RETURN(rig->devices, BuildDevices(config.root.Child("devices"), registry, build.backend_override));
   for (const ConfigNode& camera : config.root.Child("devices").Items("cameras")) {

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "core/capture_storage.h"
 #include "core/config.h"
 #include "core/head_spec.h"
 #include "drivers/registry.h"
@@ -45,6 +46,9 @@ Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& rela
 struct Rig {
   RigConfig config;
   std::shared_ptr<SimWorld> sim_world;  // set when the config has a sim section
+  // The disk captures with this rig are written to, when the rig brings its
+  // own: the simulated rig's with a `disk_full` fault. Null: the file system.
+  std::shared_ptr<CaptureStorage> capture_storage;
   // Protocol-level simulators this rig talks to (declared before `devices`,
   // so they outlive the devices connected to them).
   std::vector<std::unique_ptr<ModbusTurntableServer>> sim_modbus_servers;

@@ -13,6 +13,7 @@
 #include "drivers/camera_support.h"
 #include "drivers/polled_turntable.h"
 #include "drivers/trigger_bus.h"
+#include "sim_hw/quota_storage.h"
 #include "sim_hw/sim_turntable_controller.h"
 
 namespace hairrig {
@@ -62,11 +63,11 @@ class SimWorld {
     }
     return nullptr;
   }
-  int DiskFullAfterFrames() const {
+  const SimFault* FindFault(SimFaultKind kind) const {
     for (const SimFault& f : options_.faults) {
-      if (f.kind == SimFaultKind::kDiskFull) return f.at;
+      if (f.kind == kind) return &f;
     }
-    return -1;
+    return nullptr;
   }
   const Renderer& renderer() const { return *renderer_; }
   const Scene& scene() const { return renderer_->scene(); }
@@ -217,7 +218,13 @@ Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWo
 const Renderer& WorldRenderer(const SimWorld& world) { return world.renderer(); }
 double WorldTimeScale(const SimWorld& world) { return world.time_scale(); }
 double WorldTurntableAngleDeg(const SimWorld& world) { return world.AngleDeg(); }
-int WorldDiskFullAfterFrames(const SimWorld& world) { return world.DiskFullAfterFrames(); }
+std::shared_ptr<CaptureStorage> MakeWorldCaptureStorage(const SimWorld& world) {
+  const SimFault* full = world.FindFault(SimFaultKind::kDiskFull);
+  if (!full) return nullptr;
+  QuotaStorageOptions options;
+  options.frame_files = full->at;
+  return std::make_shared<QuotaStorage>(options);
+}
 SimTurntableController& WorldTurntableController(SimWorld& world) { return world.turntable_controller(); }
 TriggerBus& WorldTriggers(SimWorld& world) { return world.triggers(); }
 void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder) { world.SetTruthRecorder(std::move(recorder)); }

@@ -20,6 +20,7 @@
 #include <functional>
 #include <memory>
 
+#include "core/capture_storage.h"
 #include "drivers/registry.h"
 #include "drivers/trigger_bus.h"
 #include "sim_hw/renderer.h"
@@ -40,9 +41,10 @@ Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWo
 const Renderer& WorldRenderer(const SimWorld& world);
 double WorldTimeScale(const SimWorld& world);  // wall seconds per simulated second
 double WorldTurntableAngleDeg(const SimWorld& world);  // measured angle now
-// Number of stored frames after which the simulated disk is full (a
-// `disk_full` fault); -1 when no such fault is configured.
-int WorldDiskFullAfterFrames(const SimWorld& world);
+// The disk the world's captures are written to: with a `disk_full` fault, a
+// new QuotaStorage (sim_hw/quota_storage.h) that holds the fault's `at` frame
+// files; null without one (captures write to the file system).
+std::shared_ptr<CaptureStorage> MakeWorldCaptureStorage(const SimWorld& world);
 // The world's turntable controller (sim_hw/sim_turntable_controller.h), which
 // the `sim` turntable and the simulated Modbus controller drive.
 class SimTurntableController;

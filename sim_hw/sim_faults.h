@@ -13,12 +13,15 @@
 //       - {kind: turntable_timeout, at: 4, count: 1}   # the 4th move never reaches position
 //       - {kind: turntable_stall, at: 6}               # the 6th move ends in a controller fault
 //       - {kind: estop, at: 3}                         # e-stop pressed during the 3rd move
-//       - {kind: disk_full, at: 10}                    # storage full after 10 stored frames
+//       - {kind: disk_full, at: 10}                    # the capture's disk holds 10 frame files:
+//                                 # writing the 11th fails with ENOSPC (sim_hw/quota_storage.h)
 //
 // `at` counts events of the device from 1 (triggers of that camera, moves of
-// the turntable, frames stored) over the life of the simulated world, so a
-// fault fires once even when a capture retries. `count` is how many
-// consecutive events it affects (default 1).
+// the turntable) over the life of the simulated world, so a fault fires once
+// even when a capture retries. `count` is how many consecutive events it
+// affects (default 1). A disk_full fault's `at` is the frame files the disk
+// holds, counted over the life of the rig built with the fault (BuildRig):
+// a session resumed with the same fault stores `at` more frames.
 #pragma once
 
 #include <string>
