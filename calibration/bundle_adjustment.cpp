@@ -188,12 +188,16 @@ void FillUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdju
       covariance.Compute(std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem);
   for (size_t c = 0; c < blocks.intrinsics.size(); ++c) {
     const double* intr = blocks.intrinsics[c].data();
-    if (!problem.HasParameterBlock(intr) || problem.IsParameterBlockConstant(intr)) continue;
-    double block[CameraIntrinsics::kNumParams * CameraIntrinsics::kNumParams];
-    const bool have = ok && covariance.GetCovarianceBlock(intr, intr, block);
+    if (!problem.HasParameterBlock(intr) || problem.IsParameterBlockConstant(intr)) {
+      result->intrinsics_covariance[c].setZero();
+      continue;
+    }
+    IntrinsicsCovariance block;  // symmetric: Ceres' row-major order reads the same
+    const bool have = ok && covariance.GetCovarianceBlock(intr, intr, block.data());
+    if (have) result->intrinsics_covariance[c] = sigma_px * sigma_px * block;
     for (int i = 0; i < CameraIntrinsics::kNumParams; ++i)
       result->intrinsics_stddev[c][static_cast<size_t>(i)] =
-          have ? sigma_px * std::sqrt(std::max(0.0, block[i * CameraIntrinsics::kNumParams + i])) : NAN;
+          have ? sigma_px * std::sqrt(std::max(0.0, block(i, i))) : NAN;
   }
   if (!ok) return;
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
@@ -399,6 +403,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   const double dof = 2.0 * static_cast<double>(total_corners) - summary.num_effective_parameters;
   result.residual_sigma_px = dof > 0 ? std::sqrt(total_sq / dof) : NAN;
   result.intrinsics_stddev.assign(input.cameras.size(), {});
+  result.intrinsics_covariance.assign(input.cameras.size(), IntrinsicsCovariance::Constant(NAN));
   result.view_uncertainty.assign(input.views.size(), {});
   FillUncertainties(problem, b, input, &result);
   return result;

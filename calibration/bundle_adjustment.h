@@ -79,6 +79,8 @@ struct ViewUncertainty {
   Eigen::Matrix3d centre_cov_mm2 = Eigen::Matrix3d::Constant(NAN);
 };
 
+using IntrinsicsCovariance = Eigen::Matrix<double, CameraIntrinsics::kNumParams, CameraIntrinsics::kNumParams>;
+
 struct BundleAdjustmentResult {
   std::vector<CameraIntrinsics> cameras;
   std::vector<Rigid3d> cam_from_box;    // per view
@@ -91,6 +93,9 @@ struct BundleAdjustmentResult {
   // held parameters) from the covariance of the estimate, with the residuals'
   // own variance (residual_sigma_px, per coordinate) as the noise model.
   std::vector<std::array<double, CameraIntrinsics::kNumParams>> intrinsics_stddev;
+  // The same covariance's whole block per camera (kParamNames order; rows and
+  // columns of held parameters 0; NaN when it cannot be computed).
+  std::vector<IntrinsicsCovariance> intrinsics_covariance;
   std::vector<ViewUncertainty> view_uncertainty;  // per view
   double residual_sigma_px = 0;
   int iterations = 0;

@@ -40,6 +40,23 @@ std::string Format(const char* format, double a, double b = 0) {
   return buffer;
 }
 
+// A prior the views reject fails the calibration: every view of that camera
+// was solved with intrinsics that are not its own.
+void JudgePriors(const CaptureCalibrationInput& input, const CaptureCalibration& result, CalibrationVerdict* verdict) {
+  for (size_t c = result.cameras.size(); c-- > 0;) {
+    const PriorCheck& check = result.cameras[c].prior_check;
+    if (!check.rejected) continue;
+    const CalibrationCamera& camera = input.cameras[c];
+    const std::string file = camera.prior_source.empty() ? "its intrinsics prior" : camera.prior_source;
+    verdict->level = CalibrationVerdict::Level::kFailed;
+    verdict->reasons.insert(verdict->reasons.begin(),
+                            "camera " + camera.name + " (" + camera.serial + "): its views reject the intrinsics of " +
+                                file + ": " + DescribePriorCheck(check) + "; check that " + file +
+                                " belongs to camera " + camera.serial +
+                                ", or recalibrate its intrinsics (`hairrig calibrate-intrinsics`)");
+  }
+}
+
 }  // namespace
 
 CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
@@ -70,6 +87,7 @@ CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const 
     verdict.level = CalibrationVerdict::Level::kFailed;
     verdict.reasons.insert(verdict.reasons.begin(), Format("overall RMS %.2f px is above %.1f px", result.rms_px, kFailedRmsPx));
   }
+  JudgePriors(input, result, &verdict);
   return verdict;
 }
 
@@ -138,7 +156,7 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
       << Format(", overall RMS %.3f px, residual sigma %.3f px", result.rms_px, result.residual_sigma_px)
       << ", " << result.iterations << " iterations" << (result.converged ? "" : " (NOT converged)") << "\n";
   out << Format("time: detection %.2f s, initialisation %.2f s", result.detect_s, result.init_s)
-      << Format(", bundle adjustment %.2f s\n\ncameras:\n", result.solve_s);
+      << Format(", bundle adjustment %.2f s, prior check %.2f s\n\ncameras:\n", result.solve_s, result.prior_check_s);
   for (size_t c = 0; c < result.cameras.size(); ++c) {
     const CameraCalibration& cam = result.cameras[c];
     out << "  " << input.cameras[c].name << " (" << input.cameras[c].serial << "): ";
@@ -148,6 +166,11 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
     }
     const auto params = cam.intrinsics.ToParams();
     out << "start from " << cam.intrinsics_source << "\n";
+    const std::string& source = input.cameras[c].prior_source;
+    if (cam.prior_check.tested || !cam.prior_check.not_tested.empty())
+      out << "    prior" << (source.empty() ? "" : " " + source) << " against the views alone: "
+          << (cam.prior_check.rejected ? "REJECTED, " : cam.prior_check.tested ? "consistent, " : "")
+          << DescribePriorCheck(cam.prior_check) << "\n";
     for (size_t k = 0; k < params.size(); ++k)
       out << "    " << CameraIntrinsics::kParamNames[k] << Format(" = %.6g +- %.3g\n", params[k], cam.intrinsics_stddev[k]);
   }

@@ -27,7 +27,9 @@ struct CalibrationVerdict {
 };
 
 // Outlier: a view whose RMS exceeds max(3 x the median view RMS, 0.5 px).
-// Failed: less than half the views solved, or an overall RMS above 2 px.
+// Failed: less than half the views solved, an overall RMS above 2 px, or a
+// camera's intrinsics prior rejected by its views (PriorCheck::rejected; the
+// reason names the camera, the prior's file and the parameter that disagrees).
 CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const CaptureCalibration& result);
 
 // Writes the files above under `dir` (created). IoError names the file.

@@ -17,6 +17,19 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// A prior is only valid at the image size it was calibrated at.
+Status CheckPriorImageSize(const CalibrationCamera& camera, const CaptureCalibrationOptions& options) {
+  const CameraIntrinsics& prior = *camera.nominal;
+  if (!options.fix_intrinsics || camera.width_px <= 0 || camera.height_px <= 0 ||
+      (prior.width_px == camera.width_px && prior.height_px == camera.height_px))
+    return Status::Ok();
+  const std::string from = camera.prior_source.empty() ? "" : " (" + camera.prior_source + ")";
+  return InvalidArgument("calibration: camera " + camera.name + ": the intrinsics prior" + from + " is for " +
+                         std::to_string(prior.width_px) + " x " + std::to_string(prior.height_px) +
+                         " px images, the camera's frames are " + std::to_string(camera.width_px) + " x " +
+                         std::to_string(camera.height_px) + "; pass the file calibrated at the frames' size");
+}
+
 Status ValidateInput(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options) {
   if (input.cameras.empty()) return InvalidArgument("calibration: no camera");
   if (input.frames.empty()) return InvalidArgument("calibration: no frame to calibrate from");
@@ -28,6 +41,7 @@ Status ValidateInput(const CaptureCalibrationInput& input, const CaptureCalibrat
     if (camera.nominal) {
       const Status valid = camera.nominal->Validate();
       if (!valid.ok()) return InvalidArgument("calibration: camera " + camera.name + ": " + valid.message());
+      HR_RETURN_IF_ERROR(CheckPriorImageSize(camera, options));
     }
   }
   for (const CalibrationFrame& frame : input.frames) {
@@ -155,6 +169,31 @@ void CopySolution(const BundleAdjustmentResult& solution, const SolveMap& map, C
   out->converged = solution.converged;
 }
 
+// Step 4: the bundle adjustment again with free intrinsics, from the solved
+// poses and the priors, and each camera's prior tested against the
+// intrinsics it gives.
+void CheckPriors(const BundleAdjustmentInput& ba, const BundleAdjustmentResult& solution,
+                 const BundleAdjustmentOptions& ba_options, const SolveMap& map,
+                 const CaptureCalibrationOptions& options, CaptureCalibration* out) {
+  BundleAdjustmentInput views_only = ba;
+  views_only.prior_stddev.clear();
+  for (size_t v = 0; v < views_only.views.size(); ++v) views_only.views[v].cam_from_box_init = solution.cam_from_box[v];
+  if (ba_options.mode == CalibrationMode::kTurntable) views_only.turntable_from_box_init = solution.turntable_from_box;
+  BundleAdjustmentOptions free_options = ba_options;
+  free_options.fix_intrinsics = false;
+  const auto solved = RunBundleAdjustment(views_only, free_options);
+  for (size_t k = 0; k < map.camera_of.size(); ++k) {
+    PriorCheck& check = out->cameras[static_cast<size_t>(map.camera_of[k])].prior_check;
+    if (!solved.ok()) {
+      check.prior = ba.cameras[k];
+      check.not_tested = "the views alone cannot be solved (" + solved.status().message() + ")";
+      continue;
+    }
+    check = CheckIntrinsicsPrior(ba.cameras[k], ba.prior_stddev[k], solved->cameras[k],
+                                 solved->intrinsics_covariance[k], options.prior_check);
+  }
+}
+
 }  // namespace
 
 std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames, const CalibBox& box,
@@ -240,6 +279,12 @@ Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input
   HR_ASSIGN_OR_RETURN(BundleAdjustmentResult solution, RunBundleAdjustment(ba, ba_options));
   CopySolution(solution, map, &out);
   out.solve_s = SecondsSince(start);
+
+  if (options.fix_intrinsics && options.check_priors) {
+    start = std::chrono::steady_clock::now();
+    CheckPriors(ba, solution, ba_options, map, options, &out);
+    out.prior_check_s = SecondsSince(start);
+  }
   return out;
 }
 

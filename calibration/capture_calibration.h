@@ -3,7 +3,8 @@
 // prior, or the views themselves), a pose per view, the turntable axis from
 // the camera centres' circle, then the bundle adjustment. Frames that cannot
 // be used are named with the reason and the rest is still solved; a camera
-// whose views all fail is named and left out.
+// whose views all fail is named and left out. Intrinsics held at a prior are
+// then tested against what the views alone support (calibration/prior_check.h).
 //
 // The library sees image files and numbers, never a device or a rig config;
 // rig/ builds the input from a capture folder. Frames as in
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "calibration/bundle_adjustment.h"
+#include "calibration/prior_check.h"
 #include "calibration/view_pose.h"
 #include "core/calib_box.h"
 
@@ -30,6 +32,8 @@ struct CalibrationCamera {
   // Standard deviations of a prior's values (kParamNames order; all 0 when
   // unknown): with fix_intrinsics they hold the camera by a Gaussian prior.
   std::array<double, CameraIntrinsics::kNumParams> nominal_stddev{};
+  // Where the prior came from (its file), for the messages that name it.
+  std::string prior_source;
 };
 
 struct CalibrationFrame {
@@ -70,6 +74,10 @@ struct CaptureCalibrationOptions {
   TagDetectorOptions detector;
   ViewPoseOptions pose;
   double huber_px = 1.0;
+  // With fix_intrinsics: solve the views once more with free intrinsics and
+  // test each camera's prior against them (CameraCalibration::prior_check).
+  bool check_priors = true;
+  PriorCheckOptions prior_check;
 };
 
 struct FrameCalibration {
@@ -93,6 +101,7 @@ struct CameraCalibration {
   CameraIntrinsics intrinsics;    // solved
   std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
   Rigid3d cam_from_world;         // turntable mode
+  PriorCheck prior_check;         // with fix_intrinsics and check_priors
 };
 
 struct CaptureCalibration {
@@ -104,7 +113,7 @@ struct CaptureCalibration {
   double residual_sigma_px = 0;
   int iterations = 0;
   bool converged = false;
-  double detect_s = 0, init_s = 0, solve_s = 0;  // wall time of each step
+  double detect_s = 0, init_s = 0, solve_s = 0, prior_check_s = 0;  // wall time of each step
 };
 
 // Tags of every frame, matched to the box, over `threads` threads; a frame
@@ -118,7 +127,9 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
 // FailedPrecondition when nothing can be solved (no camera with usable views,
 // no turntable axis in turntable mode: the message says what to try);
 // InvalidArgument for bad input (no frames, a frame of an unknown camera,
-// fix_intrinsics without values, invalid nominal intrinsics, a NaN angle).
+// fix_intrinsics without values, invalid nominal intrinsics, a prior for
+// another image size, a NaN angle). A prior the views reject is not an
+// error: CameraCalibration::prior_check says so and JudgeCalibration fails it.
 Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input,
                                             const CaptureCalibrationOptions& options);
 

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -145,6 +147,17 @@ Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::s
   return header;
 }
 
+namespace {
+
+// A double as float, beyond float's range as infinity (a plain cast would be undefined there).
+float ToFloat(double v) {
+  if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max()))
+    return v > 0 ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
+  return static_cast<float>(v);
+}
+
+}  // namespace
+
 bool PlyValueReader::Next(PlyType type, double* value, float* as_float) {
   if (encoding_ == PlyEncoding::kAscii) return NextAscii(type, value, as_float);
   const size_t n = PlyTypeSize(type);
@@ -168,7 +181,7 @@ bool PlyValueReader::Next(PlyType type, double* value, float* as_float) {
     }
     case PlyType::kFloat64: *value = Load<double>(raw); break;
   }
-  if (as_float && type != PlyType::kFloat32) *as_float = static_cast<float>(*value);
+  if (as_float && type != PlyType::kFloat32) *as_float = ToFloat(*value);
   return true;
 }
 
@@ -186,7 +199,7 @@ bool PlyValueReader::NextAscii(PlyType type, double* value, float* as_float) {
     *value = f;
   } else {
     *value = std::strtod(token.c_str(), &end);
-    if (as_float) *as_float = static_cast<float>(*value);
+    if (as_float) *as_float = ToFloat(*value);
   }
   return end == token.c_str() + token.size();
 }

@@ -1,7 +1,9 @@
 #include "core/strand_io.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -89,6 +91,58 @@ TEST(StrandIo, NanPointsAreRefused) {
   auto back = DecodeStrands(poisoned, StrandFormat::kData, "nan.data");
   EXPECT_EQ(back.status().code(), StatusCode::kCorruptData);
   EXPECT_NE(back.status().message().find("not finite"), std::string::npos);
+}
+
+// Replaces every occurrence of `from` in `bytes` by `to` (same length or text).
+std::vector<uint8_t> Replaced(std::vector<uint8_t> bytes, const std::string& from, const std::string& to) {
+  std::string text(bytes.begin(), bytes.end());
+  for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return std::vector<uint8_t>(text.begin(), text.end());
+}
+
+std::string FloatBytes(float v) {
+  std::string out(4, '\0');
+  std::memcpy(out.data(), &v, 4);
+  return out;
+}
+
+// A coordinate near float's largest (3.4e38), where differences between
+// points overflow, is refused on reading in every format, naming the file, the
+// strand and the vertex in it; so is an infinite one.
+TEST(StrandIo, CoordinatesThatOverflowAreRefusedWithStrandAndVertex) {
+  constexpr float kMarker = 1234.5f;  // appears once in each encoding
+  StrandSet set;
+  set.AddStrand({{0, 0, 0}, {1, 0, 0}});
+  set.AddStrand({{0, 1, 0}, {1, 1, 0}, {2, 1, 0}});
+  set.AddStrand({{0, 2, 0}, {1, 2, 0}, {2, 2, kMarker}, {3, 2, 0}});
+  for (const StrandFormat format :
+       {StrandFormat::kData, StrandFormat::kHair, StrandFormat::kPlyBinary, StrandFormat::kPlyAscii}) {
+    auto good = EncodeStrands(set, format);
+    ASSERT_TRUE(good.ok()) << good.status().ToString();
+    const bool ascii = format == StrandFormat::kPlyAscii;
+    const std::string name = std::string("big.") + StrandFormatName(format);
+    const struct {
+      float binary;
+      const char* text;
+      const char* expected;
+    } cases[] = {{3.4e38f, "3.4e38", "overflow"}, {-2e9f, "-2e9", "overflow"},
+                 {std::numeric_limits<float>::infinity(), "1e39", "not finite"}};
+    for (const auto& bad : cases) {
+      const auto bytes =
+          Replaced(*good, ascii ? "1234.5" : FloatBytes(kMarker), ascii ? bad.text : FloatBytes(bad.binary));
+      ASSERT_NE(bytes, *good) << name;
+      const auto read = DecodeStrands(bytes, format, name);
+      ASSERT_FALSE(read.ok()) << name << " with " << bad.text;
+      EXPECT_EQ(read.status().code(), StatusCode::kCorruptData);
+      EXPECT_NE(read.status().message().find(name + ": strand 2 vertex 2 (point 7): z "), std::string::npos)
+          << read.status().ToString();
+      EXPECT_NE(read.status().message().find(bad.expected), std::string::npos) << read.status().ToString();
+    }
+    // Large but harmless (1000 km) is read.
+    const auto far = Replaced(*good, ascii ? "1234.5" : FloatBytes(kMarker), ascii ? "1e9" : FloatBytes(1e9f));
+    EXPECT_TRUE(DecodeStrands(far, format, name).ok()) << name;
+  }
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "core/strands.h"
 
+#include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace hairrig {
@@ -15,6 +17,27 @@ void StrandSet::AddStrand(const std::vector<Eigen::Vector3f>& points) {
   point_counts.push_back(static_cast<uint32_t>(points.size()));
 }
 
+namespace {
+
+// A point's coordinates are finite and small enough that differences between points do not overflow.
+Status CheckCoordinates(const Eigen::Vector3f& p, size_t strand, uint32_t vertex, size_t point) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const float value = p[axis];
+    if (std::isfinite(value) && std::abs(value) <= kMaxStrandCoordinateMm) continue;
+    char what[160];
+    if (std::isfinite(value))
+      std::snprintf(what, sizeof what, "%c = %.3g mm is beyond +-%.0e mm, where distances between points overflow",
+                    "xyz"[axis], static_cast<double>(value), static_cast<double>(kMaxStrandCoordinateMm));
+    else
+      std::snprintf(what, sizeof what, "%c is not finite (NaN or inf)", "xyz"[axis]);
+    return CorruptData("strand " + std::to_string(strand) + " vertex " + std::to_string(vertex) + " (point " +
+                       std::to_string(point) + "): " + what + " (damaged data, or not millimetres)");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status StrandSet::Validate() const {
   size_t total = 0;
   for (size_t i = 0; i < point_counts.size(); ++i) {
@@ -25,8 +48,10 @@ Status StrandSet::Validate() const {
     return CorruptData("strand point counts add up to " + std::to_string(total) + " but there are " +
                        std::to_string(points_mm.size()) + " points");
   }
-  for (size_t i = 0; i < points_mm.size(); ++i) {
-    if (!points_mm[i].allFinite()) return CorruptData("point " + std::to_string(i) + " is not finite (NaN or inf)");
+  size_t point = 0;
+  for (size_t strand = 0; strand < point_counts.size(); ++strand) {
+    for (uint32_t vertex = 0; vertex < point_counts[strand]; ++vertex, ++point)
+      HR_RETURN_IF_ERROR(CheckCoordinates(points_mm[point], strand, vertex, point));
   }
   if (!colors.empty() && colors.size() != points_mm.size()) {
     return CorruptData("there are " + std::to_string(colors.size()) + " colours for " +

@@ -13,6 +13,10 @@
 
 namespace hairrig {
 
+// The largest coordinate a strand point may have (mm, 1000 km): within it the
+// differences and squared distances of points stay finite in float arithmetic.
+inline constexpr float kMaxStrandCoordinateMm = 1e9f;
+
 struct StrandSet {
   // All points of all strands, strand after strand, root first.
   std::vector<Eigen::Vector3f> points_mm;
@@ -27,7 +31,9 @@ struct StrandSet {
   // Offset of each strand's first point; size num_strands()+1.
   std::vector<size_t> Offsets() const;
   void AddStrand(const std::vector<Eigen::Vector3f>& points);
-  // Counts consistent, every point finite, colours absent or one per point.
+  // Counts consistent, every coordinate finite and within
+  // +-kMaxStrandCoordinateMm, colours absent or one per point. CorruptData
+  // names the strand and the vertex in it (0-based, in the set's order).
   Status Validate() const;
   // Polyline length of every strand (mm).
   std::vector<double> StrandLengths() const;

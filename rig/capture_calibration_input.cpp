@@ -166,6 +166,7 @@ Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_paths, Captur
                              std::to_string(camera.width_px) + " x " + std::to_string(camera.height_px));
     camera.nominal = prior.intrinsics;
     camera.nominal_stddev = prior.stddev;
+    camera.prior_source = prior.source;
   }
   return Status::Ok();
 }

@@ -27,6 +27,31 @@ struct CalibrateArgs {
 
 }  // namespace
 
+namespace {
+
+// Each held camera's prior against the views alone (calibration/prior_check.h).
+nlohmann::json PriorChecksJson(const CalibratedFolder& done) {
+  nlohmann::json checks = nlohmann::json::array();
+  for (size_t c = 0; c < done.result.cameras.size(); ++c) {
+    const PriorCheck& check = done.result.cameras[c].prior_check;
+    if (!check.tested && check.not_tested.empty()) continue;
+    nlohmann::json j{{"serial", done.input.cameras[c].serial},
+                     {"file", done.input.cameras[c].prior_source},
+                     {"tested", check.tested},
+                     {"rejected", check.rejected},
+                     {"summary", DescribePriorCheck(check)}};
+    if (check.tested) {
+      j["chi2"] = check.chi2;
+      j["dof"] = check.dof;
+      j["sigma"] = check.sigma;
+    }
+    checks.push_back(std::move(j));
+  }
+  return checks;
+}
+
+}  // namespace
+
 nlohmann::json CalibrationSummaryJson(const CalibratedFolder& done) {
   int solved = 0;
   for (const FrameCalibration& f : done.result.frames) solved += f.solved;
@@ -41,6 +66,8 @@ nlohmann::json CalibrationSummaryJson(const CalibratedFolder& done) {
                         {"detect_s", done.result.detect_s},
                         {"init_s", done.result.init_s},
                         {"solve_s", done.result.solve_s},
+                        {"prior_checks", PriorChecksJson(done)},
+                        {"prior_check_s", done.result.prior_check_s},
                         {"write_s", done.write_s},
                         {"report_s", done.report_s},
                         {"report", done.out_dir + "/report/report.txt"}};

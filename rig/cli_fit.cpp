@@ -40,7 +40,9 @@ Result<nlohmann::json> RunFit(const FitArgs& a) {
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);
   if (ec) return IoError(parent.string() + ": cannot create the folder for --out (" + ec.message() + ")");
   FitSummary s;
-  HR_ASSIGN_OR_RETURN(HelixModel model, FitHairModel(strands, options, &s));
+  Result<HelixModel> fitted = FitHairModel(strands, options, &s);
+  if (!fitted.ok()) return fitted.status().WithContext(a.strands);
+  HelixModel model = std::move(fitted).value();
   model.source = a.strands;
   HR_RETURN_IF_ERROR(WriteHelixModel(a.out, model, s));
   return nlohmann::json{{"out", a.out},

@@ -226,6 +226,7 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
     rig->camera_trigger_lines[camera.String("name")] = line;
   }
   if (!config.root.ok()) return config.root.status();
+  if (build.on_built) build.on_built(*rig);
   return rig;
 }
 

@@ -66,6 +66,9 @@ struct RigBuildOptions {
   std::function<void(DeviceRegistry*)> register_backends;
   std::string backend_override;  // build every device with this backend
   bool simulate = true;          // create the sim world when the config has a `sim` section
+  // Called with the built rig (devices closed, simulated peers serving), for
+  // observers such as a test that reaches a simulated peer.
+  std::function<void(const Rig&)> on_built;
 };
 
 // Builds every device (closed). The sim backend is available when the config

@@ -41,15 +41,17 @@ double Distance2(const Features& f, int a, const Eigen::RowVectorXf& b, int samp
   return static_cast<double>((f.row(a) - b).squaredNorm()) / samples;
 }
 
-// The guide is the member nearest the mean; fills sum_squared.
+// The guide is the member nearest the mean (the first member where no
+// distance compares); fills sum_squared.
 void ChooseGuide(const Features& f, int samples, Cluster* c) {
   Eigen::RowVectorXf mean = Eigen::RowVectorXf::Zero(f.cols());
   for (int m : c->members) mean += f.row(m);
   mean /= static_cast<float>(c->members.size());
-  double best = std::numeric_limits<double>::infinity();
+  c->guide = c->members.front();
+  double best = Distance2(f, c->guide, mean, samples);
   for (int m : c->members) {
     const double d = Distance2(f, m, mean, samples);
-    if (d < best) {
+    if (d < best || std::isnan(best)) {
       best = d;
       c->guide = m;
     }

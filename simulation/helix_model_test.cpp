@@ -94,7 +94,41 @@ TEST(HelixModel, DegenerateStrandsAreNamed) {
   o.guides.num_guides = 13;  // every strand a guide
   auto model = FitHairModel(set, o, nullptr);
   ASSERT_FALSE(model.ok());
-  EXPECT_NE(model.status().ToString().find("strand 12"), std::string::npos) << model.status().ToString();
+  EXPECT_NE(model.status().message().find("strand 12: fewer than 2 distinct points"), std::string::npos)
+      << model.status().ToString();
+}
+
+// A zero-length strand among others is named by its own index, whichever
+// guide it becomes, with the guides chosen by the target RMS.
+TEST(HelixModel, AZeroLengthGuideIsNamedByItsStrandIndex) {
+  StrandSet set;
+  const StrandSet curls = Curls();
+  const auto offsets = curls.Offsets();
+  for (size_t s = 0; s < 5; ++s) {
+    set.AddStrand(std::vector<Eigen::Vector3f>(curls.points_mm.begin() + static_cast<long>(offsets[s]),
+                                               curls.points_mm.begin() + static_cast<long>(offsets[s + 1])));
+  }
+  set.AddStrand({{500, 500, 0}, {500, 500, 0}});  // strand 5, far from the others: its own guide
+  FitOptions o;
+  o.guides.target_rms_mm = 1;
+  auto model = FitHairModel(set, o, nullptr);
+  ASSERT_FALSE(model.ok());
+  EXPECT_NE(model.status().message().find("strand 5: fewer than 2 distinct points"), std::string::npos)
+      << model.status().ToString();
+}
+
+// Coordinates near float's largest (3.4e38), where differences between points
+// overflow, are refused before the guides are chosen, naming the strand and
+// the vertex, never a strand -1.
+TEST(HelixModel, CoordinatesThatOverflowNameTheStrandAndVertex) {
+  StrandSet set = Curls();
+  set.points_mm[static_cast<size_t>(5 * 80 + 2)].x() = 3.4e38f;  // strand 5, vertex 2
+  FitOptions o;
+  o.guides.num_guides = 4;
+  auto model = FitHairModel(set, o, nullptr);
+  ASSERT_FALSE(model.ok());
+  EXPECT_NE(model.status().message().find("strand 5 vertex 2"), std::string::npos) << model.status().ToString();
+  EXPECT_EQ(model.status().message().find("strand -1"), std::string::npos) << model.status().ToString();
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 
 namespace hairrig {
 
@@ -20,12 +21,13 @@ constexpr double kGaussOffset = 0.2113248654051871;  // (1 - 1/sqrt(3)) / 2
 
 Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& points_mm) {
   StrandSpline s;
-  for (const auto& p : points_mm) {
-    if (!p.allFinite()) return InvalidArgument("strand has a point that is not a finite number");
+  for (size_t i = 0; i < points_mm.size(); ++i) {
+    const Eigen::Vector3d& p = points_mm[i];
+    if (!p.allFinite()) return InvalidArgument("vertex " + std::to_string(i) + " is not a finite point");
     if (s.points_.empty() || (p - s.points_.back()).norm() > 1e-9) s.points_.push_back(p);
   }
   if (s.points_.size() < 2)
-    return InvalidArgument("strand has fewer than 2 distinct points (zero length)");
+    return InvalidArgument("fewer than 2 distinct points (zero length): remove or repair this strand");
   const int n = static_cast<int>(s.points_.size());
   // Catmull-Rom tangents scaled by the neighbouring chord lengths (C1 at joints).
   std::vector<Eigen::Vector3d> tangent(static_cast<size_t>(n));

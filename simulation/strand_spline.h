@@ -14,8 +14,9 @@ namespace hairrig {
 
 class StrandSpline {
  public:
-  // InvalidArgument for fewer than 2 points, non-finite points, or a strand of
-  // zero length. Consecutive duplicate points are dropped.
+  // InvalidArgument for fewer than 2 points, non-finite points (named by
+  // vertex), or a strand of zero length; the message does not name the
+  // strand, the caller adds it. Consecutive duplicate points are dropped.
   static Result<StrandSpline> Create(const std::vector<Eigen::Vector3d>& points_mm);
 
   double length_mm() const { return cumulative_mm_.back(); }

@@ -4,12 +4,14 @@
 // intrinsics from the views and with a ChArUco-like Gaussian prior. Corners
 // here are the true projections plus Gaussian noise, so this checks the
 // bundle adjustment's statistics; bench/calibration_uncertainty_bench.cpp
-// does the same on rendered, detected captures.
+// does the same on rendered, detected captures. The same captures show that
+// the views pass each camera's own intrinsics prior and reject the other's.
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
 
+#include "calibration/calibration_report.h"
 #include "calibration/capture_calibration.h"
 #include "calibration/uncertainty_check.h"
 #include "tests/support/scene_calibration_input.h"
@@ -80,6 +82,7 @@ void AddNoisyPriors(const Scene& scene, uint64_t seed, CaptureCalibrationInput* 
 
 UncertaintyRatios RatiosOverCaptures(const Scene& scene, bool with_prior, CalibrationMode mode) {
   std::vector<UncertaintySample> samples;
+  double worst_prior_sigma = -INFINITY;  // the priors' check against the views (all the cameras' own)
   for (int seed = 1; seed <= kCaptures; ++seed) {
     CaptureCalibrationInput input = NoisyCapture(scene, static_cast<uint64_t>(seed));
     CaptureCalibrationOptions options;
@@ -91,6 +94,12 @@ UncertaintyRatios RatiosOverCaptures(const Scene& scene, bool with_prior, Calibr
     auto result = CalibrateCapture(input, options);
     EXPECT_TRUE(result.ok()) << result.status().ToString();
     if (!result.ok()) continue;
+    for (size_t c = 0; with_prior && c < result->cameras.size(); ++c) {
+      const PriorCheck& check = result->cameras[c].prior_check;
+      EXPECT_TRUE(check.tested) << check.not_tested;
+      EXPECT_FALSE(check.rejected) << "seed " << seed << ": " << DescribePriorCheck(check);
+      worst_prior_sigma = std::max(worst_prior_sigma, check.sigma);
+    }
     for (size_t f = 0; f < input.frames.size(); ++f) {
       if (!result->frames[f].solved) continue;
       samples.push_back(MakeUncertaintySample(result->frames[f].cam_from_box,
@@ -104,6 +113,7 @@ UncertaintyRatios RatiosOverCaptures(const Scene& scene, bool with_prior, Calibr
               with_prior ? "Gaussian prior" : "intrinsics from the views",
               mode == CalibrationMode::kTurntable ? "turntable" : "free", kCaptures, r.views, r.rotation, r.centre,
               r.rotation_mahalanobis, r.centre_mahalanobis);
+  if (with_prior) std::printf("  the priors' largest disagreement with the views: %.2f sigma\n", worst_prior_sigma);
   return r;
 }
 
@@ -135,6 +145,65 @@ TEST_F(CalibrationUncertainty, GaussianChArUcoPrior) {
 
 TEST_F(CalibrationUncertainty, FreeMode) {
   ExpectTrustworthy(RatiosOverCaptures(scene_, false, CalibrationMode::kFree));
+}
+
+// The upper camera's intrinsics file relabelled as the lower camera's: its
+// views reject it, held softly or exactly, and the verdict fails naming the
+// camera, the file and the parameter; each camera's own prior passes.
+TEST_F(CalibrationUncertainty, TheViewsRejectAPriorOfTheOtherCamera) {
+  CaptureCalibrationInput own = NoisyCapture(scene_, 1);
+  AddNoisyPriors(scene_, 1, &own);
+  for (CalibrationCamera& camera : own.cameras) camera.prior_source = camera.serial + "/intrinsics.json";
+  CaptureCalibrationOptions options;
+  options.fix_intrinsics = true;
+  const auto good = CalibrateCapture(own, options);
+  ASSERT_TRUE(good.ok()) << good.status().ToString();
+  for (const CameraCalibration& camera : good->cameras) {
+    std::printf("own prior: %s\n", DescribePriorCheck(camera.prior_check).c_str());
+    EXPECT_TRUE(camera.prior_check.tested) << camera.prior_check.not_tested;
+    EXPECT_FALSE(camera.prior_check.rejected) << DescribePriorCheck(camera.prior_check);
+  }
+  const CalibrationVerdict good_verdict = JudgeCalibration(own, *good);
+  EXPECT_EQ(good_verdict.level, CalibrationVerdict::Level::kGood)
+      << (good_verdict.reasons.empty() ? "" : good_verdict.reasons[0]);
+
+  ASSERT_EQ(own.cameras.size(), 2u);
+  ASSERT_EQ(own.cameras[1].serial, "SIM-CAM-LOWER");
+  CaptureCalibrationInput relabelled = own;
+  relabelled.cameras[1].nominal = own.cameras[0].nominal;
+  relabelled.cameras[1].nominal_stddev = own.cameras[0].nominal_stddev;
+  relabelled.cameras[1].prior_source = "upper_as_lower.json";
+  for (const bool hard : {false, true}) {
+    options.hard_prior = hard;
+    const auto bad = CalibrateCapture(relabelled, options);
+    ASSERT_TRUE(bad.ok()) << bad.status().ToString();
+    const PriorCheck& check = bad->cameras[1].prior_check;
+    std::printf("%s prior of the other camera: %s\n", hard ? "hard" : "soft", DescribePriorCheck(check).c_str());
+    EXPECT_TRUE(check.rejected) << DescribePriorCheck(check);
+    EXPECT_GT(check.sigma, 1.5 * options.prior_check.reject_sigma) << "not a clear rejection";
+    EXPECT_FALSE(bad->cameras[0].prior_check.rejected) << DescribePriorCheck(bad->cameras[0].prior_check);
+    const CalibrationVerdict verdict = JudgeCalibration(relabelled, *bad);
+    EXPECT_EQ(verdict.level, CalibrationVerdict::Level::kFailed);
+    ASSERT_FALSE(verdict.reasons.empty());
+    const std::string& reason = verdict.reasons[0];
+    for (const char* part : {"camera SIM-CAM-LOWER", "upper_as_lower.json", " sigma",
+                             "check that upper_as_lower.json belongs to camera SIM-CAM-LOWER"})
+      EXPECT_NE(reason.find(part), std::string::npos) << part << " not in: " << reason;
+  }
+}
+
+// A prior for another image size is refused before anything is solved.
+TEST_F(CalibrationUncertainty, APriorForAnotherImageSizeIsRefused) {
+  CaptureCalibrationInput input = NoisyCapture(scene_, 2);
+  AddNoisyPriors(scene_, 2, &input);
+  input.cameras[0].nominal->width_px = 2 * input.cameras[0].width_px;
+  input.cameras[0].prior_source = "half_size.json";
+  CaptureCalibrationOptions options;
+  options.fix_intrinsics = true;
+  const auto result = CalibrateCapture(input, options);
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(result.status().message().find("half_size.json"), std::string::npos) << result.status().message();
 }
 
 }  // namespace

@@ -159,6 +159,31 @@ TEST_F(CliCalibrate, ChArUcoPriorsGiveTheTargetAccuracy) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("no file gives camera SIM-CAM-LOWER"), std::string::npos) << r.output;
 
+  // The upper camera's file relabelled as the lower camera's: the lower
+  // camera's views reject it and the calibration fails, naming both.
+  const std::string upper_file = boards + "/SIM-CAM-UPPER/intrinsics.json";
+  nlohmann::json upper = nlohmann::json::parse(std::ifstream(upper_file));
+  upper["serial"] = "SIM-CAM-LOWER";
+  const std::string relabelled = boards + "/upper_as_lower.json";
+  std::ofstream(relabelled) << upper.dump();
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + upper_file + " --intrinsics " +
+              relabelled + " --json");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  const nlohmann::json rejected = LastLineJson(r.output);
+  EXPECT_EQ(rejected["verdict"], "failed") << rejected.dump();
+  ASSERT_FALSE(rejected["reasons"].empty()) << rejected.dump();
+  const std::string reason = rejected["reasons"][0].get<std::string>();
+  EXPECT_NE(reason.find("check that " + relabelled + " belongs to camera SIM-CAM-LOWER"), std::string::npos) << reason;
+  std::printf("relabelled prior: %s\n", reason.c_str());
+  // ... and refused outright when it was calibrated at another image size.
+  upper["intrinsics"]["width_px"] = 1280;
+  std::ofstream(relabelled) << upper.dump();
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + upper_file + " --intrinsics " +
+              relabelled);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find(relabelled + ": camera SIM-CAM-LOWER was calibrated at 1280 x 1600 px"), std::string::npos)
+      << r.output;
+
   r = Hairrig("--log-level warning calibrate " + capture_ + priors + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(LastLineJson(r.output)["verdict"], "good");

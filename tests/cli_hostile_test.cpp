@@ -5,11 +5,13 @@
 
 #include <sys/stat.h>
 
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -160,6 +162,34 @@ TEST_F(CliHostile, HostileStrandFilesAndModelsAreRefused) {
       << R"({"format": "hairrig-helix-model", "version": 1, "guides": [{"strand": 0, "elements": [{"start_mm": [0, 0, 0],
             "start_tangent": [1, 0, 0], "darboux_per_mm": [0, 0, 0], "length_mm": 1}]}], "cluster_of_strand": "abc"})";
   ExpectCleanError(Hostile("simulate " + root_ + "/model.json --out " + root_ + "/sim"), "field 'cluster_of_strand'");
+}
+
+// A USC-HairSalon .data file of the given strands.
+void WriteData(const std::string& path, const std::vector<std::vector<std::array<float, 3>>>& strands) {
+  std::ofstream out(path, std::ios::binary);
+  const auto put = [&](const auto& value) { out.write(reinterpret_cast<const char*>(&value), sizeof value); };
+  put(static_cast<int32_t>(strands.size()));
+  for (const auto& strand : strands) {
+    put(static_cast<int32_t>(strand.size()));
+    for (const auto& p : strand) put(p);
+  }
+}
+
+// Strand-level errors name the file, the strand (0-based, in the file's
+// order) and, for a coordinate, the vertex: near float's largest (3.4e38)
+// differences overflow, which once reached the fit as "strand -1".
+TEST_F(CliHostile, StrandErrorsNameTheFileAndTheStrand) {
+  const std::vector<std::array<float, 3>> straight = {{0, 0, 0}, {0, 0, -10}, {0, 0, -20}, {0, 0, -30}};
+  const std::string huge = root_ + "/huge_coordinate.data";
+  WriteData(huge, {straight, straight, {{0, 0, 0}, {0, 0, -10}, {3.4e38f, 0, -20}}});
+  CommandRun r = Hostile("fit " + huge + " --out " + root_ + "/m.json");
+  ExpectCleanError(r, huge + ": strand 2 vertex 2 (point 10): x = 3.4e+38 mm");
+  EXPECT_EQ(r.output.find("strand -1"), std::string::npos) << r.output;
+
+  const std::string flat = root_ + "/zero_length.data";
+  WriteData(flat, {straight, {{5, 5, 0}, {5, 5, 0}}, straight});
+  ExpectCleanError(Hostile("fit " + flat + " --guides 3 --out " + root_ + "/m.json"),
+                   flat + ": strand 1: fewer than 2 distinct points");
 }
 
 }  // namespace
