@@ -96,10 +96,14 @@ Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points, const std::
   std::vector<Ribbon> ribbons = CoverWithRibbons(points, segments, o.ribbons, &summary->ribbons);
   summary->seconds_ribbons = SecondsSince(t);
   t = SteadyNowNs();
-  std::vector<RibbonLink> links = ConnectRibbons(ribbons, segments, o.connections, &summary->connections);
+  ConnectionOptions connections = o.connections;
+  connections.threads = o.threads;
+  std::vector<RibbonLink> links = ConnectRibbons(ribbons, segments, connections, &summary->connections);
   summary->seconds_connections = SecondsSince(t);
   t = SteadyNowNs();
-  summary->ribbon_direction = DirectRibbons(&ribbons, &links, &head, o.ribbon_direction);
+  RibbonDirectionOptions ribbon_direction = o.ribbon_direction;
+  ribbon_direction.threads = o.threads;
+  summary->ribbon_direction = DirectRibbons(&ribbons, &links, &head, ribbon_direction);
   summary->seconds_direction = SecondsSince(t);
   t = SteadyNowNs();
   HR_ASSIGN_OR_RETURN(const std::vector<Wisp> wisps,
@@ -166,7 +170,7 @@ nlohmann::json LuoJson(const StrandReconstructionSummary& s) {
            {{"pairs_tried", s.connections.pairs_tried},
             {"links", s.connections.links},
             {"rejected", {{"rms", s.connections.rejected_rms}, {"curvature", s.connections.rejected_curvature},
-                          {"torsion", s.connections.rejected_torsion}, {"overlap", s.connections.rejected_overlap}}}}},
+                          {"torsion", s.connections.rejected_torsion}, {"overlap", s.connections.rejected_overlap}, {"direction", s.connections.rejected_direction}}}}},
           {"ribbon_direction",
            {{"links", s.ribbon_direction.links},
             {"compatible_links", s.ribbon_direction.compatible_links},
