@@ -1,7 +1,7 @@
 // Reconstruction II on a capture of the simulated rig whose points exist
 // (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
 // timed, side by side. Run from the repository root:
-//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,naive] [--strands N] [--head FILE]
+//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE]
 // The strands go to CAPTURE/bench-strands-<method>/strands/ (the capture's own
 // reconstruction is left alone); preview.jpg beside them shows the model over
 // the ground truth's strands.
@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   using namespace hairrig;
   namespace fs = std::filesystem;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,naive] [--strands N] [--head FILE]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE]\n", argv[0]);
     return 2;
   }
   const std::string capture = argv[1];

@@ -42,6 +42,33 @@ class PointGrid {
         }
   }
 
+  // Whether some point within `radius_mm` of q (<=) satisfies
+  // accept(index, squared distance); stops at the first, looking in q's own
+  // cell before the others.
+  template <typename Accept>
+  bool AnyWithin(const Eigen::Vector3f& q, double radius_mm, Accept&& accept) const {
+    const double radius2 = radius_mm * radius_mm;
+    const int64_t reach = static_cast<int64_t>(std::ceil(radius_mm / cell_mm_));
+    const int64_t cx = CellOf(q.x()), cy = CellOf(q.y()), cz = CellOf(q.z());
+    const auto any_in_cell = [&](int64_t x, int64_t y, int64_t z) {
+      const auto cell = cells_.find(Key(x, y, z));
+      if (cell == cells_.end()) return false;
+      for (uint32_t k = cell->second.first; k < cell->second.second; ++k) {
+        const uint32_t i = order_[k];
+        const double d2 = (positions_[i] - q).cast<double>().squaredNorm();
+        if (d2 <= radius2 && accept(i, d2)) return true;
+      }
+      return false;
+    };
+    if (any_in_cell(cx, cy, cz)) return true;
+    for (int64_t dz = -reach; dz <= reach; ++dz)
+      for (int64_t dy = -reach; dy <= reach; ++dy)
+        for (int64_t dx = -reach; dx <= reach; ++dx) {
+          if ((dx != 0 || dy != 0 || dz != 0) && any_in_cell(cx + dx, cy + dy, cz + dz)) return true;
+        }
+    return false;
+  }
+
   // The nearest point within `radius_mm` (-1 when none) and its squared distance.
   int64_t Nearest(const Eigen::Vector3f& q, double radius_mm, double* distance2 = nullptr) const;
 

@@ -16,10 +16,10 @@
 // The pairwise terms are made submodular by orienting the segments along a
 // maximum spanning tree of the pair graph first; the few that stay
 // non-submodular are truncated (Rother et al. 2005's truncation), so the cut
-// is exact for the truncated energy.
+// is exact for the truncated energy (binary_mrf.h).
 //
-// Links here join segment ends directly; Luo's circle fits between segments
-// (Sec. 6.1) are not implemented.
+// Links here join segment ends directly; the circle fits of Sec. 6.1 link
+// ribbons (ribbons.h), whose MRF is the same over ribbons.
 #pragma once
 
 #include <cstdint>
@@ -54,7 +54,9 @@ struct DirectionSummary {
   int64_t reversed = 0;                 // segments whose vertex order was flipped
   int64_t truncated_pairs = 0;          // non-submodular pairs truncated
   int64_t unary_disagreements = 0;      // segments whose label goes against their own E_ribb
-  double energy = 0;                    // Eq. 4 at the solution (truncated energy)
+  // Eq. 4's truncated energy at the solution less its floor (the minimum cut;
+  // BinaryMrfSolution::cut).
+  double energy = 0;
 };
 
 // Reverses the segments whose root is at their last vertex, so every

@@ -25,29 +25,190 @@ StrandSet SegmentsAsStrands(const std::vector<StrandSegment>& segments) {
   return set;
 }
 
-Status WriteOutputs(const std::string& dir, const StrandSet& strands, const std::vector<StrandSegment>& segments,
-                    const StrandReconstructionSummary& summary) {
+// Every isocurve of every grid as a strand.
+template <typename Grid>
+StrandSet IsocurvesAsStrands(const std::vector<Grid>& grids) {
+  StrandSet set;
+  for (const Grid& grid : grids)
+    for (const std::vector<Eigen::Vector3f>& isocurve : grid.isocurves) set.AddStrand(isocurve);
+  return set;
+}
+
+StrandSet WispCentres(const std::vector<Wisp>& wisps) {
+  StrandSet set;
+  for (const Wisp& wisp : wisps) set.AddStrand(wisp.center());
+  return set;
+}
+
+// What a method gives the outputs; ribbons and wisps are luo's.
+struct StrandModel {
+  StrandSet strands, segments, ribbons, wisps, wisp_centres;
+  bool structure = false;  // ribbons and wisps are written
+};
+
+Status WriteOutputs(const std::string& dir, const StrandModel& model, const StrandReconstructionSummary& summary) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
   if (error) return IoError(dir + ": cannot create the strands folder: " + error.message());
   for (const char* name : {"strands.ply", "strands.hair", "strands.data"}) {
-    HR_RETURN_IF_ERROR(WriteStrands(dir + "/" + name, strands));
+    HR_RETURN_IF_ERROR(WriteStrands(dir + "/" + name, model.strands));
   }
-  const StrandSet segment_set = SegmentsAsStrands(segments);
-  HR_RETURN_IF_ERROR(WriteStrands(dir + "/segments.ply", segment_set));
-  const cv::Mat preview = RenderStrandPreview({&segment_set, &strands}, {"segments", "strands"}, StrandPreviewOptions{});
+  HR_RETURN_IF_ERROR(WriteStrands(dir + "/segments.ply", model.segments));
+  std::vector<const StrandSet*> rows = {&model.segments, &model.strands};
+  std::vector<std::string> labels = {"segments", "strands"};
+  if (model.structure) {
+    HR_RETURN_IF_ERROR(WriteStrands(dir + "/ribbons.ply", model.ribbons));
+    HR_RETURN_IF_ERROR(WriteStrands(dir + "/wisps.ply", model.wisps));
+    rows.insert(rows.begin() + 1, &model.wisp_centres);
+    labels.insert(labels.begin() + 1, "wisps");
+  }
+  const cv::Mat preview = RenderStrandPreview(rows, labels, StrandPreviewOptions{});
   HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/preview.jpg", preview));
   return WriteFileAtomic(dir + "/summary.json", summary.ToJson().dump(1));
 }
 
+void SummariseStrands(const StrandSet& strands, StrandGrowthSummary* summary) {
+  summary->strands = static_cast<int64_t>(strands.num_strands());
+  summary->vertices = static_cast<int64_t>(strands.num_points());
+  const std::vector<double> lengths = strands.StrandLengths();
+  double total = 0;
+  for (double length : lengths) total += length;
+  summary->mean_length_mm = lengths.empty() ? 0 : total / static_cast<double>(lengths.size());
+}
+
+Result<std::vector<StrandSegment>> GrowSegments(const std::vector<OrientedPoint>& points,
+                                                const std::string& points_file, const StrandReconstructionOptions& o,
+                                                StrandReconstructionSummary* summary) {
+  const int64_t t = SteadyNowNs();
+  std::vector<StrandSegment> segments = GrowStrandSegments(points, o.segments, &summary->segments);
+  summary->seconds_segments = SecondsSince(t);
+  if (segments.empty()) {
+    return InvalidArgument(points_file + ": the points give no strand segment (too few or too sparse)");
+  }
+  return segments;
+}
+
+// Luo 2013 Sec. 5.2-7.3 on the undirected segments.
+Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points, const std::vector<StrandSegment>& segments,
+                           const HeadModel& head, const StrandReconstructionOptions& o,
+                           StrandReconstructionSummary* summary) {
+  int64_t t = SteadyNowNs();
+  std::vector<Ribbon> ribbons = CoverWithRibbons(points, segments, o.ribbons, &summary->ribbons);
+  summary->seconds_ribbons = SecondsSince(t);
+  t = SteadyNowNs();
+  ConnectionOptions connections = o.connections;
+  connections.threads = o.threads;
+  std::vector<RibbonLink> links = ConnectRibbons(ribbons, segments, connections, &summary->connections);
+  summary->seconds_connections = SecondsSince(t);
+  t = SteadyNowNs();
+  RibbonDirectionOptions ribbon_direction = o.ribbon_direction;
+  ribbon_direction.threads = o.threads;
+  summary->ribbon_direction = DirectRibbons(&ribbons, &links, &head, ribbon_direction);
+  summary->seconds_direction = SecondsSince(t);
+  t = SteadyNowNs();
+  HR_ASSIGN_OR_RETURN(const std::vector<Wisp> wisps,
+                      BuildWisps(points, ribbons, links, head, o.wisps, &summary->wisps));
+  summary->seconds_wisps = SecondsSince(t);
+  t = SteadyNowNs();
+  StrandModel model;
+  model.strands = SynthesizeStrands(wisps, o.strands, o.seed, o.synthesis);
+  summary->seconds_growth = SecondsSince(t);
+  SummariseStrands(model.strands, &summary->growth);
+  model.segments = SegmentsAsStrands(segments);
+  model.ribbons = IsocurvesAsStrands(ribbons);
+  model.wisps = IsocurvesAsStrands(wisps);
+  model.wisp_centres = WispCentres(wisps);
+  model.structure = true;
+  return model;
+}
+
+// Bao & Qi 2017 on the segments directed by the MRF.
+Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadModel& head,
+                             const std::vector<DirectedRoot>& roots, const StrandReconstructionOptions& o,
+                             StrandReconstructionSummary* summary) {
+  int64_t t = SteadyNowNs();
+  DirectionOptions direction = o.direction;
+  direction.threads = o.threads;
+  summary->direction = DirectSegments(&segments, &head, direction);
+  summary->seconds_direction = SecondsSince(t);
+  t = SteadyNowNs();
+  HR_ASSIGN_OR_RETURN(const HybridOrientationField field,
+                      HybridOrientationField::Build(segments, roots, &head, o.field));
+  summary->seconds_field = SecondsSince(t);
+  t = SteadyNowNs();
+  StrandGrowthOptions growth = o.growth;
+  growth.threads = o.threads;
+  StrandModel model;
+  model.strands = GrowStrandsInField(field, roots, &head, growth, &summary->growth);
+  summary->seconds_growth = SecondsSince(t);
+  model.segments = SegmentsAsStrands(segments);
+  return model;
+}
+
+// The baseline: no structure.
+StrandModel RunNaive(const std::vector<OrientedPoint>& points, const HeadModel& head,
+                     const std::vector<DirectedRoot>& roots, const StrandReconstructionOptions& o,
+                     StrandReconstructionSummary* summary) {
+  const int64_t t = SteadyNowNs();
+  StrandGrowthOptions growth = o.growth;
+  growth.threads = o.threads;
+  const PointOrientationField field(points, o.segments.sigma_mm);
+  StrandModel model;
+  model.strands = GrowStrandsAlongPoints(field, roots, &head, growth, &summary->growth);
+  summary->seconds_growth = SecondsSince(t);
+  return model;
+}
+
+nlohmann::json LuoJson(const StrandReconstructionSummary& s) {
+  return {{"ribbons",
+           {{"count", s.ribbons.ribbons},
+            {"covered_segments", s.ribbons.covered_segments},
+            {"uncovered_segments", s.ribbons.uncovered_segments},
+            {"mean_width", s.ribbons.mean_width},
+            {"mean_length_mm", s.ribbons.mean_length_mm}}},
+          {"connections",
+           {{"pairs_tried", s.connections.pairs_tried},
+            {"links", s.connections.links},
+            {"rejected", {{"rms", s.connections.rejected_rms}, {"curvature", s.connections.rejected_curvature},
+                          {"torsion", s.connections.rejected_torsion}, {"overlap", s.connections.rejected_overlap}, {"direction", s.connections.rejected_direction}}}}},
+          {"ribbon_direction",
+           {{"links", s.ribbon_direction.links},
+            {"compatible_links", s.ribbon_direction.compatible_links},
+            {"incompatible_links", s.ribbon_direction.incompatible_links},
+            {"overlapping_pairs", s.ribbon_direction.overlapping_pairs},
+            {"reversed", s.ribbon_direction.reversed},
+            {"energy", s.ribbon_direction.energy}}},
+          {"wisps",
+           {{"count", s.wisps.wisps},
+            {"connections", s.wisps.connections},
+            {"removed_covered", s.wisps.removed_covered},
+            {"removed_outliers", s.wisps.removed_outliers},
+            {"attached", s.wisps.attached},
+            {"unattached", s.wisps.unattached},
+            {"interior", s.wisps.interior},
+            {"covered_points", s.wisps.covered_points},
+            {"mean_length_mm", s.wisps.mean_length_mm}}}};
+}
+
 }  // namespace
 
-const char* StrandMethodName(StrandMethod method) { return method == StrandMethod::kNaive ? "naive" : "bao-qi"; }
+const char* StrandMethodName(StrandMethod method) {
+  switch (method) {
+    case StrandMethod::kNaive:
+      return "naive";
+    case StrandMethod::kLuo:
+      return "luo";
+    case StrandMethod::kBaoQi:
+      break;
+  }
+  return "bao-qi";
+}
 
 Result<StrandMethod> ParseStrandMethod(const std::string& name) {
-  if (name == "bao-qi") return StrandMethod::kBaoQi;
-  if (name == "naive") return StrandMethod::kNaive;
-  return InvalidArgument("strand method '" + name + "': expected bao-qi or naive");
+  for (const StrandMethod method : {StrandMethod::kBaoQi, StrandMethod::kNaive, StrandMethod::kLuo}) {
+    if (name == StrandMethodName(method)) return method;
+  }
+  return InvalidArgument("strand method '" + name + "': expected bao-qi, naive or luo");
 }
 
 Status StrandReconstructionOptions::Check() const {
@@ -56,52 +217,78 @@ Status StrandReconstructionOptions::Check() const {
   HR_RETURN_IF_ERROR(segments.Check());
   HR_RETURN_IF_ERROR(direction.Check());
   HR_RETURN_IF_ERROR(field.Check());
-  return growth.Check();
+  HR_RETURN_IF_ERROR(growth.Check());
+  HR_RETURN_IF_ERROR(ribbons.Check());
+  HR_RETURN_IF_ERROR(connections.Check());
+  HR_RETURN_IF_ERROR(ribbon_direction.Check());
+  HR_RETURN_IF_ERROR(wisps.Check());
+  return synthesis.Check();
 }
 
 nlohmann::json StrandReconstructionSummary::ToJson() const {
-  return {{"format", "hairrig-reconstruction-strands"},
-          {"version", 1},
-          {"method", method},
-          {"head", head_source},
-          {"points", points},
-          {"segments",
-           {{"count", segments.segments},
-            {"seeds_grown", segments.seeds_grown},
-            {"vertices", segments.vertices},
-            {"mean_length_mm", segments.mean_length_mm},
-            {"splits", segments.splits},
-            {"stops", {{"turn", segments.stops_turn}, {"hole", segments.stops_hole}, {"mls", segments.stops_mls},
-                       {"length", segments.stops_length}}}}},
-          {"direction",
-           {{"links", direction.links},
-            {"overlaps", direction.overlaps},
-            {"reversed", direction.reversed},
-            {"truncated_pairs", direction.truncated_pairs},
-            {"against_own_height_and_scalp", direction.unary_disagreements},
-            {"energy", direction.energy}}},
-          {"strands",
-           {{"count", growth.strands},
-            {"vertices", growth.vertices},
-            {"mean_length_mm", growth.mean_length_mm},
-            {"stopped_at_volume", growth.stopped_volume},
-            {"stopped_at_max_length", growth.stopped_length},
-            {"dropped_short", growth.dropped_short}}},
-          {"seconds",
-           {{"segments", seconds_segments},
-            {"direction", seconds_direction},
-            {"field", seconds_field},
-            {"growth", seconds_growth},
-            {"total", seconds_total}}},
-          {"output_dir", output_dir}};
+  nlohmann::json j = {
+      {"format", "hairrig-reconstruction-strands"},
+      {"version", 1},
+      {"method", method},
+      {"head", head_source},
+      {"points", points},
+      {"segments",
+       {{"count", segments.segments},
+        {"seeds_grown", segments.seeds_grown},
+        {"vertices", segments.vertices},
+        {"mean_length_mm", segments.mean_length_mm},
+        {"splits", segments.splits},
+        {"stops", {{"turn", segments.stops_turn}, {"hole", segments.stops_hole}, {"mls", segments.stops_mls},
+                   {"length", segments.stops_length}}}}},
+      {"direction",
+       {{"links", direction.links},
+        {"overlaps", direction.overlaps},
+        {"reversed", direction.reversed},
+        {"truncated_pairs", direction.truncated_pairs},
+        {"against_own_height_and_scalp", direction.unary_disagreements},
+        {"energy", direction.energy}}},
+      {"strands",
+       {{"count", growth.strands},
+        {"vertices", growth.vertices},
+        {"mean_length_mm", growth.mean_length_mm},
+        {"stopped_at_volume", growth.stopped_volume},
+        {"stopped_at_max_length", growth.stopped_length},
+        {"dropped_short", growth.dropped_short}}},
+      {"seconds",
+       {{"segments", seconds_segments},
+        {"direction", seconds_direction},
+        {"field", seconds_field},
+        {"growth", seconds_growth},
+        {"ribbons", seconds_ribbons},
+        {"connections", seconds_connections},
+        {"wisps", seconds_wisps},
+        {"total", seconds_total}}},
+      {"output_dir", output_dir}};
+  if (method == StrandMethodName(StrandMethod::kLuo)) j.update(LuoJson(*this));
+  return j;
 }
 
 std::string StrandReconstructionSummary::BriefReport() const {
+  const bool luo = method == StrandMethodName(StrandMethod::kLuo);
   std::ostringstream s;
   s.precision(3);
   s << "strands (" << method << ", head: " << head_source << "): " << growth.strands << " strands, mean "
     << growth.mean_length_mm << " mm, from " << segments.segments << " segments (mean " << segments.mean_length_mm
-    << " mm; " << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
+    << " mm; ";
+  if (luo) {
+    s << ribbons.ribbons << " ribbons, " << connections.links << " links, " << ribbon_direction.reversed
+      << " ribbons reversed by the direction MRF) of " << points << " points\n";
+    s << "  wisps: " << wisps.wisps << " (" << wisps.attached << " attached, " << wisps.interior << " interior; "
+      << wisps.connections << " connections; removed " << wisps.removed_covered << " covered, "
+      << wisps.removed_outliers << " outliers), mean " << wisps.mean_length_mm << " mm\n";
+    s << "  time: segments " << seconds_segments << " s, ribbons " << seconds_ribbons << " s, connections "
+      << seconds_connections << " s, direction " << seconds_direction << " s, wisps " << seconds_wisps
+      << " s, synthesis " << seconds_growth << " s, total " << seconds_total << " s\n";
+    s << "  written: " << output_dir
+      << "/strands.{ply,hair,data}, segments.ply, ribbons.ply, wisps.ply, summary.json\n";
+    return s.str();
+  }
+  s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
   s << "  time: segments " << seconds_segments << " s, direction " << seconds_direction << " s, field "
     << seconds_field << " s, growth " << seconds_growth << " s, total " << seconds_total << " s\n";
   s << "  written: " << output_dir << "/strands.{ply,hair,data}, segments.ply, summary.json\n";
@@ -125,40 +312,20 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
   summary.points = static_cast<int64_t>(points.size());
   HR_ASSIGN_OR_RETURN(const std::unique_ptr<HeadModel> head, HeadModel::Build(head_spec));
 
-  int64_t t = SteadyNowNs();
-  std::vector<StrandSegment> segments;
-  if (o.method != StrandMethod::kNaive) {  // the baseline uses no structure
-    segments = GrowStrandSegments(points, o.segments, &summary.segments);
-    summary.seconds_segments = SecondsSince(t);
-    if (segments.empty()) {
-      return InvalidArgument(points_file + ": the points give no strand segment (too few or too sparse)");
-    }
-    t = SteadyNowNs();
-    DirectionOptions direction = o.direction;
-    direction.threads = o.threads;
-    summary.direction = DirectSegments(&segments, head.get(), direction);
-    summary.seconds_direction = SecondsSince(t);
-  }
-
-  const std::vector<DirectedRoot> roots = SampleScalpRoots(*head, o.strands, o.seed);
-  StrandGrowthOptions growth = o.growth;
-  growth.threads = o.threads;
-  StrandSet strands;
-  if (o.method == StrandMethod::kBaoQi) {
-    t = SteadyNowNs();
-    HR_ASSIGN_OR_RETURN(const HybridOrientationField field,
-                        HybridOrientationField::Build(segments, roots, head.get(), o.field));
-    summary.seconds_field = SecondsSince(t);
-    t = SteadyNowNs();
-    strands = GrowStrandsInField(field, roots, head.get(), growth, &summary.growth);
+  StrandModel model;
+  if (o.method == StrandMethod::kNaive) {
+    model = RunNaive(points, *head, SampleScalpRoots(*head, o.strands, o.seed), o, &summary);
   } else {
-    t = SteadyNowNs();
-    const PointOrientationField field(points, o.segments.sigma_mm);
-    strands = GrowStrandsAlongPoints(field, roots, head.get(), growth, &summary.growth);
+    HR_ASSIGN_OR_RETURN(std::vector<StrandSegment> segments, GrowSegments(points, points_file, o, &summary));
+    if (o.method == StrandMethod::kLuo) {
+      HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
+    } else {
+      HR_ASSIGN_OR_RETURN(model, RunBaoQi(std::move(segments), *head, SampleScalpRoots(*head, o.strands, o.seed), o,
+                                          &summary));
+    }
   }
-  summary.seconds_growth = SecondsSince(t);
   summary.seconds_total = SecondsSince(start);
-  HR_RETURN_IF_ERROR(WriteOutputs(summary.output_dir, strands, segments, summary));
+  HR_RETURN_IF_ERROR(WriteOutputs(summary.output_dir, model, summary));
   return summary;
 }
 

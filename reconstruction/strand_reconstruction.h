@@ -1,19 +1,29 @@
 // Reconstruction II: the full hair model as strands from the oriented points
 // (points.ply, point_reconstruction.h) and the head:
-//   points -> strand segments (Luo 2013 Sec. 5.1, strand_segments.h)
-//          -> root-to-tip directions (Luo Sec. 6.2's MRF, strand_direction.h)
-//          -> strands from roots on the scalp, by
-//               bao-qi: the hybrid orientation field (Bao & Qi 2017 Sec. IV,
-//                       hybrid_field.h, strand_growth.h), or
-//               naive:  along the points' orientation, no structure analysis
-//                       (the baseline each step's gain is measured against).
+//   points -> strand segments (Luo 2013 Sec. 5.1, strand_segments.h), then by
+//     bao-qi: root-to-tip directions per segment (Luo Sec. 6.2's MRF,
+//             strand_direction.h), then strands from roots on the scalp in the
+//             hybrid orientation field (Bao & Qi 2017 Sec. IV, hybrid_field.h,
+//             strand_growth.h);
+//     luo:    Luo's structure analysis on the undirected segments: ribbons
+//             (Sec. 5.2), links between them (Sec. 6.1) and their directions
+//             (Sec. 6.2; ribbons.h), wisps connected up and attached to the
+//             scalp, interior wisps (Sec. 6.3, 7.1, 7.2; wisps.h), strands
+//             synthesised in the wisps (Sec. 7.3);
+//     naive:  strands from roots on the scalp along the points' orientation,
+//             no structure analysis (the baseline each step's gain is
+//             measured against).
 // Everything in mm in the points' frame (the turntable frame for a capture of
 // this rig); the head must be given in that frame.
 //
 // Outputs in <reconstruction_dir>/strands/:
 //   strands.ply, strands.hair, strands.data   the hair model (core/strand_io.h)
-//   segments.ply                              the directed segments (root to tip; none for naive)
-//   preview.jpg                               segments and strands from four sides
+//   segments.ply                              the segments (bao-qi: directed root to tip; luo:
+//                                             undirected; none for naive)
+//   ribbons.ply, wisps.ply                    luo only: every isocurve of the directed ribbons
+//                                             and of the wisps as a polyline (root to tip)
+//   preview.jpg                               segments, wisps (luo: centre isocurves) and
+//                                             strands from four sides
 //   summary.json                              options, counts, timings
 #pragma once
 
@@ -25,25 +35,32 @@
 #include "core/head_spec.h"
 #include "core/status.h"
 #include "reconstruction/hybrid_field.h"
+#include "reconstruction/ribbons.h"
 #include "reconstruction/strand_direction.h"
 #include "reconstruction/strand_growth.h"
 #include "reconstruction/strand_segments.h"
+#include "reconstruction/wisps.h"
 
 namespace hairrig {
 
-enum class StrandMethod { kBaoQi, kNaive };
-const char* StrandMethodName(StrandMethod method);  // "bao-qi", "naive"
+enum class StrandMethod { kBaoQi, kNaive, kLuo };
+const char* StrandMethodName(StrandMethod method);  // "bao-qi", "naive", "luo"
 // InvalidArgument listing the choices.
 Result<StrandMethod> ParseStrandMethod(const std::string& name);
 
 struct StrandReconstructionOptions {
   StrandMethod method = StrandMethod::kBaoQi;
-  int strands = 20000;  // roots on the scalp
-  uint64_t seed = 1;    // root sampling
+  int strands = 20000;  // roots on the scalp (luo: strands synthesised)
+  uint64_t seed = 1;    // root sampling (luo: synthesis)
   SegmentGrowthOptions segments;
-  DirectionOptions direction;
-  HybridFieldOptions field;
-  StrandGrowthOptions growth;
+  DirectionOptions direction;           // bao-qi
+  HybridFieldOptions field;             // bao-qi
+  StrandGrowthOptions growth;           // bao-qi, naive
+  RibbonOptions ribbons;                // luo
+  ConnectionOptions connections;        // luo
+  RibbonDirectionOptions ribbon_direction;  // luo
+  WispOptions wisps;                    // luo
+  SynthesisOptions synthesis;           // luo
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
@@ -57,8 +74,15 @@ struct StrandReconstructionSummary {
   int64_t points = 0;
   SegmentGrowthSummary segments;
   DirectionSummary direction;
-  StrandGrowthSummary growth;
+  StrandGrowthSummary growth;           // luo: the synthesised strands' count, vertices and mean length
+  RibbonSummary ribbons;
+  ConnectionSummary connections;
+  RibbonDirectionSummary ribbon_direction;
+  WispSummary wisps;
+  // seconds_direction: the segments' MRF (bao-qi) or the ribbons' (luo);
+  // seconds_growth: growing (bao-qi, naive) or synthesising (luo) the strands.
   double seconds_segments = 0, seconds_direction = 0, seconds_field = 0, seconds_growth = 0, seconds_total = 0;
+  double seconds_ribbons = 0, seconds_connections = 0, seconds_wisps = 0;
 
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
@@ -67,7 +91,7 @@ struct StrandReconstructionSummary {
 // Reads <reconstruction_dir>/points.ply, writes <reconstruction_dir>/strands/.
 // NotFound when there are no points (run the points stage first);
 // InvalidArgument for bad options, a head whose mesh cannot be loaded (naming
-// it) or points that give no strand segment.
+// it), points that give no strand segment, or (luo) no wisp.
 Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir, const HeadSpec& head,
                                                        const std::string& head_source,
                                                        const StrandReconstructionOptions& options);

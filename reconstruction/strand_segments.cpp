@@ -5,7 +5,7 @@
 #include <numeric>
 
 #include <Eigen/Eigenvalues>
-#include <Eigen/Sparse>
+#include <Eigen/SparseCore>
 
 namespace hairrig {
 
@@ -135,38 +135,136 @@ double StrandSegment::Length() const {
 
 std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points, double alpha_position,
                                             double alpha_orientation, double alpha_curvature) {
+  PolylineSmoothing smoothing;
+  smoothing.alpha_position = alpha_position;
+  smoothing.alpha_orientation = alpha_orientation;
+  smoothing.alpha_curvature = alpha_curvature;
+  return SmoothPolyline(points, smoothing);
+}
+
+namespace {
+
+// Eq. 3's normal equations, Q p = b, one Q shared by x, y and z.
+struct NormalEquations {
+  std::vector<Eigen::Triplet<double>> q;
+  Eigen::MatrixXd b;  // n x 3
+};
+
+NormalEquations Eq3NormalEquations(const std::vector<Eigen::Vector3f>& points, const PolylineSmoothing& o) {
   const int n = static_cast<int>(points.size());
-  if (n < 3) return points;
-  // Normal equations of Eq. 3, one banded system shared by x, y and z.
-  std::vector<Eigen::Triplet<double>> entries;
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
-  const auto add = [&](int r, int c, double v) { entries.emplace_back(r, c, v); };
+  const bool own_edges = o.edges.size() == points.size() - 1;
+  NormalEquations eq;
+  eq.b = Eigen::MatrixXd::Zero(n, 3);
+  const auto add = [&](int r, int c, double v) { eq.q.emplace_back(r, c, v); };
   for (int i = 0; i < n; ++i) {
-    add(i, i, alpha_position);
-    rhs.row(i) += alpha_position * points[i].cast<double>().transpose();
+    add(i, i, o.alpha_position);
+    eq.b.row(i) += o.alpha_position * points[i].cast<double>().transpose();
   }
-  for (int i = 0; i + 1 < n; ++i) {  // alpha1 |p_{i+1} - p_i - e_i|^2, e_i the initial edge
-    const Eigen::RowVector3d e = (points[i + 1] - points[i]).cast<double>().transpose();
-    add(i, i, alpha_orientation);
-    add(i + 1, i + 1, alpha_orientation);
-    add(i, i + 1, -alpha_orientation);
-    add(i + 1, i, -alpha_orientation);
-    rhs.row(i + 1) += alpha_orientation * e;
-    rhs.row(i) -= alpha_orientation * e;
+  for (int i = 0; i + 1 < n; ++i) {  // alpha1 |p_{i+1} - p_i - e_i|^2
+    const Eigen::Vector3f edge = own_edges ? o.edges[i] : Eigen::Vector3f(points[i + 1] - points[i]);
+    const Eigen::RowVector3d e = edge.cast<double>().transpose();
+    add(i, i, o.alpha_orientation);
+    add(i + 1, i + 1, o.alpha_orientation);
+    add(i, i + 1, -o.alpha_orientation);
+    add(i + 1, i, -o.alpha_orientation);
+    eq.b.row(i + 1) += o.alpha_orientation * e;
+    eq.b.row(i) -= o.alpha_orientation * e;
   }
   for (int i = 1; i + 1 < n; ++i) {  // alpha2 |p_{i-1} - 2 p_i + p_{i+1}|^2
     const int idx[3] = {i - 1, i, i + 1};
     const double coef[3] = {1, -2, 1};
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) add(idx[a], idx[b], alpha_curvature * coef[a] * coef[b]);
+      for (int c = 0; c < 3; ++c) add(idx[a], idx[c], o.alpha_curvature * coef[a] * coef[c]);
   }
-  Eigen::SparseMatrix<double> system(n, n);
-  system.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(system);
-  if (solver.info() != Eigen::Success) return points;
-  const Eigen::MatrixXd solved = solver.solve(rhs);
+  return eq;
+}
+
+// Solves the symmetric positive definite system given by its entries
+// (duplicates summed) for every column of `rhs` in place: LDL^T on band
+// storage, O(size bandwidth^2), the bandwidth the entries' largest distance
+// from the diagonal. False when a pivot is not positive.
+bool SolveBanded(int size, const std::vector<Eigen::Triplet<double>>& entries, Eigen::MatrixXd* rhs) {
+  int b = 0;
+  for (const Eigen::Triplet<double>& t : entries) b = std::max(b, std::abs(t.row() - t.col()));
+  Eigen::MatrixXd band = Eigen::MatrixXd::Zero(size, b + 1);  // band(i, k) = A(i, i - k)
+  for (const Eigen::Triplet<double>& t : entries) {
+    if (t.row() >= t.col()) band(t.row(), t.row() - t.col()) += t.value();
+  }
+  // In place: band(i, 0) becomes D_i, band(i, k) becomes L(i, i - k).
+  for (int i = 0; i < size; ++i) {
+    for (int k = std::min(b, i); k >= 1; --k) {
+      const int j = i - k;
+      double value = band(i, k);
+      for (int m = std::max(0, i - b); m < j; ++m) value -= band(i, i - m) * band(m, 0) * band(j, j - m);
+      band(i, k) = value / band(j, 0);
+    }
+    double pivot = band(i, 0);
+    for (int k = 1; k <= std::min(b, i); ++k) pivot -= band(i, k) * band(i, k) * band(i - k, 0);
+    if (!(pivot > 0)) return false;
+    band(i, 0) = pivot;
+  }
+  for (int c = 0; c < rhs->cols(); ++c) {
+    auto x = rhs->col(c);
+    for (int i = 0; i < size; ++i)
+      for (int k = 1; k <= std::min(b, i); ++k) x(i) -= band(i, k) * x(i - k);
+    for (int i = 0; i < size; ++i) x(i) /= band(i, 0);
+    for (int i = size - 1; i >= 0; --i)
+      for (int k = 1; k <= std::min(b, size - 1 - i); ++k) x(i) -= band(i + k, k) * x(i + k);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points,
+                                            const PolylineSmoothing& smoothing,
+                                            const std::vector<VertexFieldTerm>& field_terms) {
+  const int n = static_cast<int>(points.size());
+  if (n < 3) return points;
+  const NormalEquations eq = Eq3NormalEquations(points, smoothing);
+  const bool any_fixed = smoothing.fixed.size() == points.size();
+  const auto is_fixed = [&](int i) { return any_fixed && smoothing.fixed[i] != 0; };
+  // Fixed vertices leave the unknowns: their columns move to the right-hand
+  // side and their rows become p_i = p_i^(0), which keeps the system symmetric.
+  // Coordinates are interleaved (3 i + axis) when field terms couple them.
+  const int axes = field_terms.empty() ? 1 : 3;
+  const int size = n * axes;
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(size, 4 - axes);  // 3 columns, or 1 column of interleaved coordinates
+  const auto rhs_at = [&](int vertex, int axis) -> double& {
+    return axes == 1 ? rhs(vertex, axis) : rhs(3 * vertex + axis, 0);
+  };
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) rhs_at(i, k) = is_fixed(i) ? points[i][k] : eq.b(i, k);
+  for (const Eigen::Triplet<double>& t : eq.q) {
+    const int r = t.row(), c = t.col();
+    if (is_fixed(r)) continue;
+    if (is_fixed(c)) {
+      for (int k = 0; k < 3; ++k) rhs_at(r, k) -= t.value() * points[c][k];
+      continue;
+    }
+    for (int k = 0; k < axes; ++k) entries.emplace_back(r * axes + k, c * axes + k, t.value());
+  }
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < axes; ++k)
+      if (is_fixed(i)) entries.emplace_back(i * axes + k, i * axes + k, 1.0);
+  for (const VertexFieldTerm& term : field_terms) {
+    if (term.vertex < 0 || term.vertex >= n || is_fixed(term.vertex)) continue;
+    const Eigen::Vector3d g = term.gradient.cast<double>();
+    for (int a = 0; a < 3; ++a) {
+      rhs_at(term.vertex, a) += term.weight * term.target * g[a];
+      for (int c = 0; c < 3; ++c) {
+        entries.emplace_back(3 * term.vertex + a, 3 * term.vertex + c, term.weight * g[a] * g[c]);
+      }
+    }
+  }
+  Eigen::MatrixXd solved = rhs;
+  if (!SolveBanded(size, entries, &solved)) return points;
   std::vector<Eigen::Vector3f> out(n);
-  for (int i = 0; i < n; ++i) out[i] = solved.row(i).transpose().cast<float>();
+  for (int i = 0; i < n; ++i) {
+    out[i] = axes == 1 ? Eigen::Vector3f(solved.row(i).transpose().cast<float>())
+                       : Eigen::Vector3f(solved.block<3, 1>(3 * i, 0).cast<float>());
+  }
   return out;
 }
 

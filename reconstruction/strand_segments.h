@@ -101,6 +101,37 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
 std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points, double alpha_position,
                                             double alpha_orientation, double alpha_curvature);
 
+// The general form of Eq. 3 behind SmoothPolyline, for the variants Luo uses
+// later: transitions between ribbons whose orientation term follows the
+// orientation field and whose ends stay put (Sec. 6.3), and interior strands
+// with the interior term of Eq. 13 (Sec. 7.1).
+struct PolylineSmoothing {
+  double alpha_position = 0.1, alpha_orientation = 1.0, alpha_curvature = 5.0;  // Eq. 3's weights
+  // The orientation term's target edges t_i delta (mm), one per edge (n - 1
+  // of them); empty: the initial edges, as SmoothPolyline.
+  std::vector<Eigen::Vector3f> edges;
+  // Per vertex, non-zero to keep it at its initial position; empty: none kept.
+  std::vector<uint8_t> fixed;
+};
+
+// weight (gradient . p_vertex - target)^2: a scalar field's term linearised
+// at a vertex (Eq. 13's alpha_int B (i / N - I(p_i))^2 is one per vertex).
+struct VertexFieldTerm {
+  int vertex = 0;
+  Eigen::Vector3f gradient = Eigen::Vector3f::Zero();  // per mm
+  double target = 0;
+  double weight = 0;
+};
+
+// Minimises Eq. 3 with `smoothing`'s edges and fixed vertices plus the field
+// terms (which couple x, y and z; without them the three coordinates share
+// one banded system). Polylines of fewer than 3 points, and any whose system
+// cannot be factored, are returned unchanged; `edges` or `fixed` of another
+// size than n - 1 or n count as empty.
+std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points,
+                                            const PolylineSmoothing& smoothing,
+                                            const std::vector<VertexFieldTerm>& field_terms = {});
+
 // The plausibility check: heights H = p . down; the turning points are the
 // local extrema of H (with 1 mm hysteresis) and the ends; the polyline is cut
 // at every turning point next to a rise or fall larger than split_height_mm.

@@ -99,8 +99,10 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_option("--stage", args->stage, "points, strands (from the points already there), or all")
       ->check(CLI::IsMember({"points", "strands", "all"}))
       ->capture_default_str();
-  cmd->add_option("--method", args->method, "strands: bao-qi (hybrid orientation field) or naive (the baseline)")
-      ->check(CLI::IsMember({"bao-qi", "naive"}))
+  cmd->add_option("--method", args->method,
+                  "strands: bao-qi (hybrid orientation field), luo (ribbons and wisps, Luo et al. 2013) or naive "
+                  "(the baseline)")
+      ->check(CLI::IsMember({"bao-qi", "luo", "naive"}))
       ->capture_default_str();
   cmd->add_option("--head", args->head, "the subject's head (a YAML file with a head: map; default: the rig config's)")
       ->check(CLI::ExistingFile);
