@@ -189,7 +189,7 @@ Result<HybridOrientationField> HybridOrientationField::Build(const std::vector<S
     for (int z = 0; z < g.size.z(); ++z)
       for (int y = 0; y < g.size.y(); ++y)
         for (int x = 0; x < g.size.x(); ++x) {
-          const Eigen::Vector3d p = (f.origin_ + Eigen::Vector3f(x, y, z) * static_cast<float>(o.voxel_mm)).cast<double>();
+          const Eigen::Vector3d p = (f.origin_ + Eigen::Vector3i(x, y, z).cast<float>() * static_cast<float>(o.voxel_mm)).cast<double>();
           if (head->SignedDistance(p, nullptr) < 0.5 * o.voxel_mm) hair_boundary[g.Index(x, y, z)] = 1;
         }
   }
