@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "core/head_spec.h"
+#include "tests/support/ellipsoid_head.h"
 
 namespace hairrig {
 namespace {
@@ -83,14 +84,7 @@ TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
 TEST(StrandDirection, TheScalpDistanceDirectsHairThatLeavesTheHeadSideways) {
   // Level segments radiate from the side of an ellipsoid head: height says
   // nothing, the distance to the scalp (zeta of Eq. 5) puts the root at the head.
-  HeadSpec spec;
-  spec.center_turntable_mm = {0, 0, 250};
-  spec.radii_mm = {80, 80, 100};
-  spec.scalp.defined = true;
-  spec.scalp.center_turntable_mm = spec.center_turntable_mm;
-  spec.scalp.parting = false;
-  spec.scalp.hairline_front_deg = spec.scalp.hairline_temple_deg = spec.scalp.hairline_ear_deg = -30;
-  spec.scalp.hairline_nape_deg = -30;
+  const HeadSpec spec = hairrig_test::EllipsoidHeadWithWideScalp();
   auto head = HeadModel::Build(spec);
   ASSERT_TRUE(head.ok()) << head.status().ToString();
   std::vector<StrandSegment> segments;

@@ -21,6 +21,7 @@
 #include "rig/capture.h"
 #include "rig/capture_test_util.h"
 #include "tests/support/modbus_tcp_peer.h"
+#include "tests/support/open_file_limit.h"
 
 namespace hairrig {
 namespace {
@@ -36,16 +37,6 @@ constexpr int kStops = 4;  // 8 views
 // below FD_SETSIZE to the capture (libmodbus' client select()s on its socket;
 // on a real rig a flood's descriptors are another host's, not this process').
 constexpr int kFloodFdBase = FD_SETSIZE + 64;
-
-// Raises this process' soft limit on open files to `wanted` (up to the hard limit).
-bool AllowOpenFiles(rlim_t wanted) {
-  rlimit limit{};
-  if (getrlimit(RLIMIT_NOFILE, &limit) != 0) return false;
-  if (limit.rlim_cur >= wanted) return true;
-  if (limit.rlim_max != RLIM_INFINITY && limit.rlim_max < wanted) return false;
-  limit.rlim_cur = wanted;
-  return setrlimit(RLIMIT_NOFILE, &limit) == 0;
-}
 
 // Connections to one address from a thread: kHeld opened as fast as they go,
 // then the oldest kChurnBatch replaced every kChurnPeriod until Stop().
@@ -121,7 +112,7 @@ class ConnectionFlood {
 };
 
 TEST(CaptureUnderModbusFlood, CompletesWithEveryViewVerified) {
-  if (!AllowOpenFiles(kFloodFdBase + kHeld + 512)) GTEST_SKIP() << "cannot open " << kHeld << " more files in this process";
+  if (!hairrig_test::AllowOpenFiles(kFloodFdBase + kHeld + 512)) GTEST_SKIP() << "cannot open " << kHeld << " more files in this process";
   const std::string dir = FreshDir("capture_modbus_flood");
   CaptureOptions options;
   options.config_path = WriteSmallRig(

@@ -15,6 +15,7 @@
 
 #include "drivers/modbus_link.h"
 #include "tests/support/modbus_tcp_peer.h"
+#include "tests/support/open_file_limit.h"
 
 namespace hairrig {
 namespace {
@@ -23,18 +24,8 @@ using namespace hairrig_test;
 
 constexpr int kFlood = 1200;
 
-// Raises this process' soft limit on open files to `wanted` (up to the hard limit).
-bool AllowOpenFiles(rlim_t wanted) {
-  rlimit limit{};
-  if (getrlimit(RLIMIT_NOFILE, &limit) != 0) return false;
-  if (limit.rlim_cur >= wanted) return true;
-  if (limit.rlim_max != RLIM_INFINITY && limit.rlim_max < wanted) return false;
-  limit.rlim_cur = wanted;
-  return setrlimit(RLIMIT_NOFILE, &limit) == 0;
-}
-
 TEST(ModbusServerFlood, HeldConnectionFloodNeitherStopsTheServerNorLocksOutItsClient) {
-  if (!AllowOpenFiles(kFlood + 512)) GTEST_SKIP() << "cannot open " << kFlood << " files in this process";
+  if (!hairrig_test::AllowOpenFiles(kFlood + 512)) GTEST_SKIP() << "cannot open " << kFlood << " files in this process";
   TcpServerBench b;
   ModbusEndpoint endpoint;
   endpoint.host = b.server->host();
