@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "reconstruction/interior_field.h"
+#include "reconstruction/scalp_distance.h"
 #include "reconstruction/scalp_guide.h"
 #include "reconstruction/strand_segments.h"
 #include "reconstruction/wisp_attachment.h"
@@ -122,8 +123,9 @@ struct Predecessor {
 // Sec. 6.3's connecting up, one wisp per starting ribbon.
 class RibbonConnector {
  public:
+  // `rootward` (may be null: no progress rule) ranks points by H + zeta.
   RibbonConnector(const std::vector<Ribbon>& ribbons, const std::vector<RibbonLink>& links,
-                  const PointOrientationField& bridge_field, const WispOptions& options);
+                  const PointOrientationField& bridge_field, const ScalpDistance* rootward, const WispOptions& options);
 
   // The wisp started from ribbon `start`; marks the ribbons each connection
   // joins in `connected` and counts the connections.
@@ -139,6 +141,8 @@ class RibbonConnector {
               Predecessor* found);
   // Psi of the links: the smaller number of distinct segments on either side.
   int Strength(const std::vector<LinkCandidate>& group) const;
+  // H + zeta at p (Eq. 5's ranking from the root).
+  double RootRank(const Eigen::Vector3f& p) const;
   // eta(a, b) and whether their directions are compatible (cached).
   const std::pair<double, bool>& Overlap(int a, int b);
 
@@ -157,20 +161,30 @@ class RibbonConnector {
   const std::vector<RibbonLink>& links_;
   const PointOrientationField& bridge_field_;
   const WispOptions& o_;
+  const ScalpDistance* rootward_;
+  std::vector<double> root_rank_;             // per ribbon: H + zeta of its centre's root end
   std::vector<Eigen::Vector3f> link_points_;  // 2 k + side: links_[k].link_point[side].closest
   std::unique_ptr<PointGrid> link_grid_;
   std::map<std::pair<int, int>, std::pair<double, bool>> overlaps_;
 };
 
 RibbonConnector::RibbonConnector(const std::vector<Ribbon>& ribbons, const std::vector<RibbonLink>& links,
-                                 const PointOrientationField& bridge_field, const WispOptions& options)
-    : ribbons_(ribbons), links_(links), bridge_field_(bridge_field), o_(options) {
+                                 const PointOrientationField& bridge_field, const ScalpDistance* rootward,
+                                 const WispOptions& options)
+    : ribbons_(ribbons), links_(links), bridge_field_(bridge_field), o_(options), rootward_(rootward) {
+  if (rootward_ && o_.min_progress_mm >= 0) {
+    for (const Ribbon& r : ribbons_) root_rank_.push_back(r.isocurves.empty() ? 0.0 : RootRank(r.center().front()));
+  }
   link_points_.reserve(2 * links.size());
   for (const RibbonLink& link : links) {
     link_points_.push_back(link.link_point[0].closest);
     link_points_.push_back(link.link_point[1].closest);
   }
   link_grid_ = std::make_unique<PointGrid>(link_points_, o_.link_distance_mm);
+}
+
+double RibbonConnector::RootRank(const Eigen::Vector3f& p) const {
+  return static_cast<double>(p.dot(o_.down)) + (*rootward_)(p);
 }
 
 const std::pair<double, bool>& RibbonConnector::Overlap(int a, int b) {
@@ -199,6 +213,7 @@ bool RibbonConnector::FindPredecessor(int current, const std::vector<double>& wi
                                       Predecessor* found) {
   const Eigen::Vector3f start = IsocurvePoint(ribbons_[current].isocurves, widths[widths.size() / 2], 0);
   const double reach2 = o_.link_distance_mm * o_.link_distance_mm;
+  const double start_rank = root_rank_.empty() ? 0.0 : RootRank(start);
   std::vector<LinkCandidate> direct, via_overlap;
   link_grid_->ForEachWithin(start, o_.link_distance_mm, [&](uint32_t id, double d2) {
     if (d2 >= reach2) return;
@@ -208,6 +223,7 @@ bool RibbonConnector::FindPredecessor(int current, const std::vector<double>& wi
     if (predecessor == current || predecessor == entered) return;
     if (ribbons_[predecessor].length() < 1 || ribbons_[entered].length() < 1) return;
     if (std::find(in_wisp.begin(), in_wisp.end(), predecessor) != in_wisp.end()) return;
+    if (!root_rank_.empty() && root_rank_[static_cast<size_t>(predecessor)] > start_rank - o_.min_progress_mm) return;
     if (!EntersAt(link, side) || EntersAt(link, 1 - side)) return;
     (entered == current ? direct : via_overlap).push_back({k, side, d2});
   });
@@ -398,10 +414,11 @@ double BoundingDiagonal(const std::vector<OrientedPoint>& points) {
 // Sec. 6.3: every usable ribbon connected up, then outliers and covered wisps removed.
 std::vector<ConnectedWisp> ConnectRibbonsIntoWisps(const std::vector<OrientedPoint>& points,
                                                    const std::vector<Ribbon>& ribbons,
-                                                   const std::vector<RibbonLink>& links, const WispOptions& o,
-                                                   WispSummary* s) {
+                                                   const std::vector<RibbonLink>& links, const HeadModel& head,
+                                                   const WispOptions& o, WispSummary* s) {
   const PointOrientationField bridge_field(points, o.bridge_sigma_mm);
-  RibbonConnector connector(ribbons, links, bridge_field, o);
+  const ScalpDistance rootward(&head);
+  RibbonConnector connector(ribbons, links, bridge_field, &rootward, o);
   std::vector<uint8_t> connected(ribbons.size(), 0);
   std::vector<ConnectedWisp> wisps;
   for (size_t r = 0; r < ribbons.size(); ++r) {
@@ -484,7 +501,7 @@ Result<std::vector<Wisp>> BuildWisps(const std::vector<OrientedPoint>& points, c
   const ScalpGuide guide(head, o.down);
   if (guide.empty()) return InvalidArgument("the head has no scalp to attach wisps to (see head.scalp's hairline)");
   WispSummary s;
-  std::vector<ConnectedWisp> connected = ConnectRibbonsIntoWisps(points, ribbons, links, o, &s);
+  std::vector<ConnectedWisp> connected = ConnectRibbonsIntoWisps(points, ribbons, links, head, o, &s);
 
   InteriorFieldOptions field_options;
   field_options.voxel_mm = o.voxel_mm;

@@ -77,6 +77,12 @@ struct WispOptions {
   // A lone ribbon (no connection) covering at least this many segments is
   // kept as a wisp; 0: every lone ribbon is removed as an outlier (the paper).
   int keep_lone_ribbon_segments = 0;
+  // Connecting up must lead towards the root: a predecessor's root end must
+  // rank lower than the wisp's current start by H + zeta (height along
+  // `down` plus the distance to the scalp, the quantity of Eq. 5) by at least
+  // this much (mm). Negative: off (the paper, which lets chains of links wander
+  // down and up again across neighbouring strands).
+  double min_progress_mm = 0;
 
   Status Check() const;
 };

@@ -149,6 +149,26 @@ TEST(Wisps, TwoLinkedRibbonsBecomeOneWispRunningFromTheScalpToTheTip) {
   EXPECT_EQ(unlinked.removed_outliers, 2);
 }
 
+TEST(Wisps, ConnectingUpMustLeadTowardsTheRoot) {
+  // A link that would make the lower ribbon the upper one's predecessor:
+  // followed, the wisp would climb down to the lower ribbon's top and hang
+  // its whole length again below the upper ribbon's root.
+  const auto head = EllipsoidHead();
+  ASSERT_NE(head, nullptr);
+  TwoRibbons t = HangingPair();
+  t.links = {LinkInto(kUpper, t.ribbons, kLower)};
+  WispOptions guard = NoInteriorWisps();
+  guard.keep_lone_ribbon_segments = 1;  // so the unconnected ribbons stay wisps
+  WispSummary guarded, paper;
+  auto kept = BuildWisps(t.points, t.ribbons, t.links, *head, guard, &guarded);
+  ASSERT_TRUE(kept.ok()) << kept.status().ToString();
+  EXPECT_EQ(guarded.connections, 0);
+  WispOptions unconstrained = guard;
+  unconstrained.min_progress_mm = -1;
+  ASSERT_TRUE(BuildWisps(t.points, t.ribbons, t.links, *head, unconstrained, &paper).ok());
+  EXPECT_EQ(paper.connections, 1);
+}
+
 TEST(Wisps, LoneRibbonsAreOutliersAndRibbonsInsideAnotherWispAreCovered) {
   const auto head = EllipsoidHead();
   ASSERT_NE(head, nullptr);
