@@ -1,4 +1,4 @@
-// A capture's calibration end to end (issue 5): tags detected on every frame
+// A capture's calibration end to end: tags detected on every frame
 // in parallel, matched to the box, intrinsics initialised (nominal values, a
 // prior, or the views themselves), a pose per view, the turntable axis from
 // the camera centres' circle, then the bundle adjustment. Frames that cannot

@@ -1,4 +1,4 @@
-// One camera's intrinsics from images of a ChArUco board (issue 5, item 4):
+// One camera's intrinsics from images of a ChArUco board:
 // `hairrig calibrate-intrinsics`, for the technician who recalibrates a camera
 // alone. The result can be held fixed in the box calibration
 // (`hairrig calibrate --intrinsics`), where the principal point is otherwise

@@ -1,5 +1,5 @@
 // A camera's intrinsics from its own views of the calibration box, with no
-// starting guess (issue 5, step 2): every box face seen with two or more tags
+// starting guess: every box face seen with two or more tags
 // in a view is a planar target, and OpenCV's calibrateCamera (Zhang's method,
 // then Levenberg-Marquardt) solves pinhole + k1, k2, p1, p2 from them, k3
 // held at 0. This is also the OpenCV-only baseline's intrinsics.

@@ -1,4 +1,4 @@
-// Tag detection during a capture (issue 5, item 1): a FrameSink that detects
+// Tag detection during a capture: a FrameSink that detects
 // and matches the box's tags on each frame as soon as it is stored, on its own
 // worker threads, so that when the last frame lands most of the calibration's
 // detection is done. CalibrationFrame::observations takes the results.

@@ -1,4 +1,4 @@
-// The turntable axis from the views themselves (issue 5, step 2): as the
+// The turntable axis from the views themselves: as the
 // turntable turns, each fixed camera's centre, seen from the box, traces a
 // circle about the axis. A plane and circle fitted to those centres give the
 // axis in the box frame, hence turntable_from_box, without a hand-set guess.

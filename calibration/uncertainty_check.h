@@ -1,4 +1,4 @@
-// Whether a calibration's stated uncertainty can be trusted (issue 5): the
+// Whether a calibration's stated uncertainty can be trusted: the
 // errors of solved views against the truth, compared with the errors their
 // covariance predicts (calibration/bundle_adjustment.h, ViewUncertainty).
 // A ratio of 1 means the stated uncertainty is right; above 1 it is

@@ -1,5 +1,5 @@
 // One view's tag detections matched to the calibration box model, and the
-// view's pose from them (issue 5, steps 1-2): the initialisation of the bundle
+// view's pose from them: the initialisation of the bundle
 // adjustment, which needs no hand-tuned guess.
 //
 // Matching: a detection whose id is not on the box, or an id seen twice in one

@@ -1,6 +1,6 @@
 // A ChArUco board (a chessboard whose white squares hold ArUco markers), the
 // target a technician waves in front of one camera to calibrate its
-// intrinsics alone (issue 5, item 4). Loaded from a file such as
+// intrinsics alone. Loaded from a file such as
 // etc/charuco-board.yaml; the layout is OpenCV's (contrib aruco, 4.6), so the
 // board that OpenCV detects and the one the simulated rig renders are one.
 //

@@ -1,6 +1,6 @@
 // Views of a ChArUco board held in front of one simulated camera, as a
 // technician records them to calibrate that camera's intrinsics alone
-// (issue 5, item 4), with the ground truth of every chessboard corner.
+//, with the ground truth of every chessboard corner.
 //
 // The board is ray-cast per pixel through the inverse of the camera's lens
 // model and its pattern edges are integrated with stratified samples, as the

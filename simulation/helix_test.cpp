@@ -29,7 +29,7 @@ TEST(Helix, Equation8IsAUnitSpeedCurveWithTheGivenCurvatureAndTorsion) {
   }
 }
 
-// Issue 6 criterion (c): an exact helix is recovered with one element to 1e-6 relative.
+// An exact helix is recovered with one element to 1e-6 relative.
 TEST(Helix, ExactHelixIsRecoveredFromItsEndsToOnePartPerMillion) {
   struct Case {
     double k, tau, length;

@@ -1,5 +1,5 @@
 // Validation of the super-helix dynamics against references computed here,
-// independently of the code under test (issue 6, tests a, b, e).
+// independently of the code under test.
 #include <cmath>
 #include <cstdio>
 #include <vector>

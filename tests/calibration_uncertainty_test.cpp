@@ -1,4 +1,4 @@
-// The calibration's stated uncertainty can be trusted (issue 5): over 20
+// The calibration's stated uncertainty can be trusted: over 20
 // captures of the default rig with different corner noise, the errors of the
 // solved views against the truth match what the covariance predicts, with
 // intrinsics from the views and with a ChArUco-like Gaussian prior. Corners

@@ -1,4 +1,4 @@
-// ChArUco intrinsics (issue 5, item 4) against the simulated rig: the
+// ChArUco intrinsics against the simulated rig: the
 // rendered board is detected where the camera model projects its corners,
 // and 20 views recover the camera's intrinsics within their stated
 // uncertainty. Bad input gets a message naming the images and what to do.

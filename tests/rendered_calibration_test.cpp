@@ -144,8 +144,8 @@ TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
   // RMS 0.10 px everywhere. The box stays near the image centre as it turns,
   // so the principal point trades against the view's rotation (0.087 deg is
   // 2.7 px at f = 1750 px) at the same RMS: the covariance predicts a
-  // principal-point standard deviation of 0.8-1.6 px. Issue 5's 0.02 deg needs
-  // more variety or an intrinsics prior, which then meets it.
+  // principal-point standard deviation of 0.8-1.6 px. Reaching 0.02 deg needs
+  // more variety or an intrinsics prior (a ChArUco board's), which then meets it.
   EXPECT_LT(errors[0].rotation_median_deg, 0.15);
   EXPECT_LT(errors[0].centre_median_mm, 0.8);
   EXPECT_LT(errors[0].focal_max_percent, 0.15);
