@@ -2,7 +2,8 @@
 // (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
 // timed, side by side. Run from the repository root:
 //   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE]
-// The strands go to CAPTURE/bench-strands-<method>/strands/ (the capture's own
+//                                    [--volume-bound B] [--out-suffix S]
+// The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
 // reconstruction is left alone); preview.jpg beside them shows the model over
 // the ground truth's strands.
 #include <cstdio>
@@ -22,13 +23,13 @@ int main(int argc, char** argv) {
   using namespace hairrig;
   namespace fs = std::filesystem;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE] [--volume-bound B] [--out-suffix S]\n", argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
   std::vector<std::string> methods = {"bao-qi", "naive"};
   StrandReconstructionOptions options;
-  std::string head_file;
+  std::string head_file, out_suffix;
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--methods") == 0) {
       methods.clear();
@@ -38,6 +39,10 @@ int main(int argc, char** argv) {
       options.strands = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--head") == 0) {
       head_file = argv[i + 1];
+    } else if (std::strcmp(argv[i], "--volume-bound") == 0) {
+      options.growth.volume_bound = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--out-suffix") == 0) {
+      out_suffix = argv[i + 1];
     }
   }
   auto head = LoadCaptureHead(capture, head_file);
@@ -53,7 +58,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     options.method = *method;
-    const std::string dir = capture + "/bench-strands-" + name;
+    const std::string dir = capture + "/bench-strands-" + name + out_suffix;
     fs::create_directories(dir);
     fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply", fs::copy_options::overwrite_existing);
     auto summary = ReconstructStrands(dir, head->spec, head->source, options);
