@@ -11,47 +11,12 @@
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
+#include "tests/support/calibration_documents.h"
 
 namespace hairrig {
 namespace {
 
 using nlohmann::json;
-
-CameraIntrinsics Intrinsics() {
-  CameraIntrinsics k;
-  k.width_px = 640;
-  k.height_px = 480;
-  k.fx_px = k.fy_px = 800;
-  k.cx_px = 320;
-  k.cy_px = 240;
-  return k;
-}
-
-json IntrinsicsFile() {
-  return {{"format", "hairrig-intrinsics"},
-          {"version", 1},
-          {"serial", "CAM-UPPER"},
-          {"intrinsics", IntrinsicsToJson(Intrinsics())},
-          {"intrinsics_stddev", {{"fx_px", 0.5}, {"fy_px", 0.5}}}};
-}
-
-json CalibrationFile() {
-  const json camera = {{"name", "upper"},
-                       {"serial", "CAM-UPPER"},
-                       {"solved", true},
-                       {"intrinsics", IntrinsicsToJson(Intrinsics())},
-                       {"intrinsics_initial", IntrinsicsToJson(Intrinsics())}};
-  const json view = {{"view", 0},
-                     {"camera", 0},
-                     {"frame", "frames/000_CAM-UPPER.png"},
-                     {"solved", true},
-                     {"cam_from_box", PoseToJson(Rigid3d())},
-                     {"cam_from_box_initial", PoseToJson(Rigid3d())},
-                     {"cam_from_object", PoseToJson(Rigid3d())},
-                     {"rms_px", 0.3},
-                     {"tags", {{{"id", 4}, {"corners_px", {{1, 2}, {3, 4}, {5, 6}, {7, 8}}}}}}};
-  return {{"format", "hairrig-calibration"}, {"version", 1}, {"mode", "free"}, {"cameras", {camera}}, {"views", {view}}};
-}
 
 std::string Write(const std::string& name, const json& j) {
   const std::string path = ::testing::TempDir() + "/" + name;
@@ -60,14 +25,14 @@ std::string Write(const std::string& name, const json& j) {
 }
 
 TEST(CalibrationIo, ReadsWhatItWrites) {
-  const auto priors = ReadIntrinsicsPriors(Write("intrinsics.json", IntrinsicsFile()));
+  const auto priors = ReadIntrinsicsPriors(Write("intrinsics.json", hairrig_test::IntrinsicsDocument()));
   ASSERT_TRUE(priors.ok()) << priors.status().ToString();
   ASSERT_EQ(priors->size(), 1u);
   EXPECT_EQ(priors->at(0).serial, "CAM-UPPER");
   EXPECT_EQ(priors->at(0).stddev[0], 0.5);
-  const auto calibration = ReadCalibration(Write("calibration.json", CalibrationFile()));
+  const auto calibration = ReadCalibration(Write("calibration.json", hairrig_test::CalibrationDocument()));
   ASSERT_TRUE(calibration.ok()) << calibration.status().ToString();
-  ASSERT_EQ(calibration->views.size(), 1u);
+  ASSERT_EQ(calibration->views.size(), 2u);  // a solved and a failed view
   EXPECT_EQ(calibration->views[0].tags.at(0).corners_px[3].y(), 8);
 }
 
@@ -84,7 +49,7 @@ TEST(CalibrationIo, DamagedIntrinsicsFilesNameTheField) {
       {[](json& j) { j = json::array(); }, "expected an object"},
   };
   for (const auto& [damage, expected] : cases) {
-    json j = IntrinsicsFile();
+    json j = hairrig_test::IntrinsicsDocument();
     damage(j);
     const std::string path = Write("damaged_intrinsics.json", j);
     const auto priors = ReadIntrinsicsPriors(path);
@@ -105,7 +70,7 @@ TEST(CalibrationIo, DamagedCalibrationFilesNameTheField) {
       {[](json& j) { j["views"] = 3; }, "field 'views': expected a list"},
   };
   for (const auto& [damage, expected] : cases) {
-    json j = CalibrationFile();
+    json j = hairrig_test::CalibrationDocument();
     damage(j);
     const std::string path = Write("damaged_calibration.json", j);
     const auto calibration = ReadCalibration(path);

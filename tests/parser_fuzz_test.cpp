@@ -34,6 +34,7 @@
 #include "rig/journal_records.h"
 #include "rig/replay.h"
 #include "simulation/helix_model.h"
+#include "tests/support/calibration_documents.h"
 
 namespace hairrig {
 namespace {
@@ -214,54 +215,6 @@ void FuzzJsonFile(const std::string& what, const json& seed, int iterations, uin
 
 // ---- seeds ------------------------------------------------------------------
 
-CameraIntrinsics Intrinsics() {
-  CameraIntrinsics k;
-  k.width_px = 640;
-  k.height_px = 480;
-  k.fx_px = k.fy_px = 800;
-  k.cx_px = 320;
-  k.cy_px = 240;
-  k.k1 = -0.1;
-  return k;
-}
-
-json CalibrationSeed() {
-  const json camera = {{"name", "upper"},
-                       {"serial", "CAM-UPPER"},
-                       {"solved", true},
-                       {"intrinsics", IntrinsicsToJson(Intrinsics())},
-                       {"intrinsics_initial", IntrinsicsToJson(Intrinsics())},
-                       {"intrinsics_stddev", {{"fx_px", 0.5}, {"k1", 0.01}}}};
-  const json view = {{"view", 0},
-                     {"camera", 0},
-                     {"frame", "frames/000_CAM-UPPER.png"},
-                     {"solved", true},
-                     {"cam_from_box", PoseToJson(Rigid3d())},
-                     {"cam_from_box_initial", PoseToJson(Rigid3d())},
-                     {"cam_from_object", PoseToJson(Rigid3d())},
-                     {"rms_px", 0.3},
-                     {"uncertainty", {{"rotation_sd_deg", 0.01}, {"centre_sd_mm", 0.1}}},
-                     {"tags", {{{"id", 4}, {"corners_px", {{1, 2}, {3, 4}, {5, 6}, {7, 8}}}}}}};
-  const json failed = {{"view", 1}, {"camera", 0}, {"frame", "frames/001_CAM-UPPER.png"}, {"solved", false},
-                       {"failure", "no tags"}};
-  return {{"format", "hairrig-calibration"},
-          {"version", 1},
-          {"mode", "turntable"},
-          {"rms_px", 0.3},
-          {"turntable_from_box", PoseToJson(Rigid3d())},
-          {"cameras", {camera}},
-          {"views", {view, failed}}};
-}
-
-json IntrinsicsSeed() {
-  return {{"format", "hairrig-intrinsics"},
-          {"version", 1},
-          {"serial", "CAM-UPPER"},
-          {"intrinsics", IntrinsicsToJson(Intrinsics())},
-          {"intrinsics_stddev", {{"fx_px", 0.5}, {"fy_px", 0.5}}},
-          {"rms_px", 0.2}};
-}
-
 json HelixSeed() {
   const json element = {{"start_mm", {0, 0, 0}}, {"start_tangent", {0, 0, -1}}, {"darboux_per_mm", {0.1, 0, 0.02}},
                         {"length_mm", 4.5}};
@@ -308,7 +261,7 @@ TEST(ParserFuzz, CaptureJson) {
 }
 
 TEST(ParserFuzz, CalibrationJson) {
-  FuzzJsonFile("calibration", CalibrationSeed(), 600, kSeed + 2, [](const std::string& path) {
+  FuzzJsonFile("calibration", hairrig_test::CalibrationDocument(), 600, kSeed + 2, [](const std::string& path) {
     const auto read = ReadCalibration(path);
     if (read.ok()) {
       for (const auto& view : read->views) {
@@ -320,7 +273,7 @@ TEST(ParserFuzz, CalibrationJson) {
 }
 
 TEST(ParserFuzz, IntrinsicsFiles) {
-  FuzzJsonFile("intrinsics", IntrinsicsSeed(), 600, kSeed + 3, [](const std::string& path) {
+  FuzzJsonFile("intrinsics", hairrig_test::IntrinsicsDocument(), 600, kSeed + 3, [](const std::string& path) {
     const auto read = ReadIntrinsicsPriors(path);
     if (read.ok()) {
       for (const IntrinsicsPrior& prior : *read) {
