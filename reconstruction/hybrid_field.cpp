@@ -7,6 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "reconstruction/central_gradient.h"
+
 namespace hairrig {
 
 namespace {
@@ -264,14 +266,7 @@ double HybridOrientationField::Distance(const Eigen::Vector3f& p) const {
 }
 
 Eigen::Vector3f HybridOrientationField::DistanceGradient(const Eigen::Vector3f& p) const {
-  const float h = static_cast<float>(voxel_mm_);
-  Eigen::Vector3f grad;
-  for (int a = 0; a < 3; ++a) {
-    Eigen::Vector3f e = Eigen::Vector3f::Zero();
-    e[a] = h;
-    grad[a] = static_cast<float>((Distance(p + e) - Distance(p - e)) / (2 * h));
-  }
-  return grad;
+  return CentralGradient([this](const Eigen::Vector3f& q) { return Distance(q); }, p, static_cast<float>(voxel_mm_));
 }
 
 double HybridOrientationField::RibbonDistance(const Eigen::Vector3f& p) const {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "reconstruction/central_gradient.h"
 #include "reconstruction/hybrid_field.h"
 
 namespace hairrig {
@@ -90,14 +91,7 @@ double InteriorField::At(const Eigen::Vector3f& p) const {
 }
 
 Eigen::Vector3f InteriorField::Gradient(const Eigen::Vector3f& p) const {
-  const float h = static_cast<float>(voxel_mm_);
-  Eigen::Vector3f g;
-  for (int k = 0; k < 3; ++k) {
-    Eigen::Vector3f e = Eigen::Vector3f::Zero();
-    e[k] = h;
-    g[k] = static_cast<float>((At(p + e) - At(p - e)) / (2 * voxel_mm_));
-  }
-  return g;
+  return CentralGradient([this](const Eigen::Vector3f& q) { return At(q); }, p, static_cast<float>(voxel_mm_));
 }
 
 }  // namespace hairrig

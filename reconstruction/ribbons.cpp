@@ -105,12 +105,26 @@ struct CellRange {
 // Every cell of the range as two triangles; a cell on the last isocurve of
 // the rows (a 1-isocurve ribbon) or past the last vertex degenerates to a
 // segment.
-void ProjectOnCells(const Curves& curves, const CellRange& range, const Eigen::Vector3f& p, SurfacePoint* best) {
+// With `skip_far_cells`, a cell whose bounding ball about its corners'
+// centroid lies no nearer than the best point so far is skipped: its
+// triangles cannot do better, so the result is the same.
+void ProjectOnCells(const Curves& curves, const CellRange& range, const Eigen::Vector3f& p, SurfacePoint* best,
+                    bool skip_far_cells = false) {
   const int last_i = static_cast<int>(curves[static_cast<size_t>(range.lo)].size()) - 1;
+  const auto at = [&](int j, int i) -> const Eigen::Vector3f& {
+    return curves[static_cast<size_t>(j)][static_cast<size_t>(i)];
+  };
   for (int j = range.j_begin; j < range.j_end; ++j) {
     const int j2 = std::min(j + 1, range.hi);
     for (int i = range.i_begin; i < range.i_end; ++i) {
       const int i2 = std::min(i + 1, last_i);
+      if (skip_far_cells) {
+        const Eigen::Vector3f centre = 0.25f * (at(j, i) + at(j, i2) + at(j2, i2) + at(j2, i));
+        const float radius = std::sqrt(std::max({(at(j, i) - centre).squaredNorm(), (at(j, i2) - centre).squaredNorm(),
+                                                 (at(j2, i2) - centre).squaredNorm(), (at(j2, i) - centre).squaredNorm()}));
+        const float gap = (p - centre).norm() - radius;
+        if (gap > 0 && static_cast<double>(gap) * gap >= best->distance2) continue;
+      }
       ProjectOnTriangle(curves, {{j, i}, {j, i2}, {j2, i2}}, p, best);
       if (j2 != j && i2 != i) ProjectOnTriangle(curves, {{j, i}, {j2, i2}, {j2, i}}, p, best);
     }
@@ -839,7 +853,17 @@ void ReverseRibbons(const std::vector<uint8_t>& reverse, std::vector<Ribbon>* ri
 RibbonCoordinates ProjectOntoRibbon(const Ribbon& ribbon, const Eigen::Vector3f& p) {
   SurfacePoint best;
   if (ribbon.isocurves.empty() || ribbon.isocurves[0].empty()) return ToCoordinates(best, p, 0);
-  ProjectOnCells(ribbon.isocurves, AllCells(ribbon.isocurves, 0, ribbon.width()), p, &best);
+  // The cells around the nearest vertex first, so that most others are skipped.
+  GridIndex nearest{0, 0};
+  float nearest2 = std::numeric_limits<float>::max();
+  for (int j = 0; j <= ribbon.width(); ++j) {
+    for (int i = 0; i <= ribbon.length(); ++i) {
+      const float d2 = (ribbon.isocurves[static_cast<size_t>(j)][static_cast<size_t>(i)] - p).squaredNorm();
+      if (d2 < nearest2) nearest2 = d2, nearest = {j, i};
+    }
+  }
+  ProjectOnCells(ribbon.isocurves, CellsAround(ribbon.isocurves, 0, ribbon.width(), nearest.j, nearest.i), p, &best);
+  ProjectOnCells(ribbon.isocurves, AllCells(ribbon.isocurves, 0, ribbon.width()), p, &best, true);
   return ToCoordinates(best, p, 0);
 }
 
