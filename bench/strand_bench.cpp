@@ -2,10 +2,11 @@
 // (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
 // timed, side by side. Run from the repository root:
 //   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE]
-//                                    [--volume-bound B] [--out-suffix S]
+//                                    [--volume-bound B] [--out-suffix S] [--score yes|no]
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
-// reconstruction is left alone); preview.jpg beside them shows the model over
-// the ground truth's strands.
+// reconstruction is left alone); preview_truth.jpg beside them shows the
+// model over the ground truth's strands, and each method's strands are scored
+// by the strand protocol of `hairrig eval reconstruction` (unless --score no).
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +16,7 @@
 
 #include "core/image_file.h"
 #include "core/strand_io.h"
+#include "reconstruction/reconstruction_evaluation.h"
 #include "reconstruction/strand_preview.h"
 #include "reconstruction/strand_reconstruction.h"
 #include "rig/reconstruction_input.h"
@@ -23,13 +25,14 @@ int main(int argc, char** argv) {
   using namespace hairrig;
   namespace fs = std::filesystem;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE] [--volume-bound B] [--out-suffix S]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE] [--volume-bound B] [--out-suffix S] [--score yes|no]\n", argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
   std::vector<std::string> methods = {"bao-qi", "naive"};
   StrandReconstructionOptions options;
   std::string head_file, out_suffix;
+  bool score = true;
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--methods") == 0) {
       methods.clear();
@@ -43,6 +46,8 @@ int main(int argc, char** argv) {
       options.growth.volume_bound = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--out-suffix") == 0) {
       out_suffix = argv[i + 1];
+    } else if (std::strcmp(argv[i], "--score") == 0) {
+      score = std::strcmp(argv[i + 1], "no") != 0;
     }
   }
   auto head = LoadCaptureHead(capture, head_file);
@@ -71,6 +76,15 @@ int main(int argc, char** argv) {
     if (!strands.ok()) return 1;
     const cv::Mat preview = RenderStrandPreview({&*strands, &*truth}, {name, "ground truth"}, StrandPreviewOptions{});
     if (!WriteImageAtomic(dir + "/strands/preview_truth.jpg", preview).ok()) return 1;
+    if (!score) continue;
+    ReconstructionEvalOptions eval;
+    eval.strands_dir = dir;
+    auto scored = EvaluateReconstruction(capture, eval);
+    if (!scored.ok() || !scored->strands) {
+      std::fprintf(stderr, "%s: %s\n", name.c_str(), scored.ok() ? "no strands scored" : scored.status().ToString().c_str());
+      return 1;
+    }
+    std::printf("%s scored as `hairrig eval reconstruction` does:\n%s", name.c_str(), scored->strands->BriefReport().c_str());
   }
   return 0;
 }

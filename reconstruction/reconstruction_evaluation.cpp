@@ -265,7 +265,8 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   out.visible_truth_samples = scores.subset_size;
   out.all = std::move(scores.all);
   out.visible = std::move(scores.subset);
-  HR_ASSIGN_OR_RETURN(out.strands, EvaluateStrandsFile(dir, capture_dir, truth, truth_from_estimate, true_strands,
+  HR_ASSIGN_OR_RETURN(out.strands, EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir,
+                                                       capture_dir, truth, truth_from_estimate, true_strands,
                                                        all_truth, truth_sample_strand, visible, options));
   return out;
 }

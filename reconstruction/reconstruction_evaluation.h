@@ -30,6 +30,9 @@ namespace hairrig {
 
 struct ReconstructionEvalOptions {
   std::string reconstruction_dir;       // what to score; empty: <capture>/reconstruction
+  // Where strands/strands.ply is read from (e.g. a strand bench's output
+  // folder for one method); empty: the reconstruction folder.
+  std::string strands_dir;
   double truth_step_mm = 1.0;           // true strands sampled every this far
   double visibility_tolerance_mm = 2.0; // a camera sees a true sample within this of its true depth map
   int min_visible_views = 2;            // the visible surface: samples seen by at least this many cameras
