@@ -14,14 +14,13 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/contact_sheet.h"
 #include "core/file_util.h"
 #include "core/log.h"
 #include "drivers/camera_support.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
-#include "sim_hw/capture_truth.h"
-#include "sim_hw/view_set.h"
 
 namespace hairrig {
 
@@ -674,15 +673,6 @@ CaptureSummary Sequencer::Run() {
   return summary;
 }
 
-// The planned views as the simulated rig's ground truth lists them.
-std::vector<PlannedTruthView> TruthViews(const CapturePlan& plan) {
-  std::vector<PlannedTruthView> views;
-  for (const PlannedView& v : plan.views) {
-    views.push_back({v.index, v.stop, v.camera_serial, plan.stops[static_cast<size_t>(v.stop)].angle_deg});
-  }
-  return views;
-}
-
 // <capture>/contact_sheet.png from the verified frames, in plan order, unless
 // it would leave less than storage.min_free_mb free.
 Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan) {
@@ -719,18 +709,22 @@ std::vector<PlannedViewRecord> PlannedViewRecords(const CapturePlan& plan) {
 }
 
 // The config of this session: the rig config, or a resumed capture's
-// snapshot (*config_text is left empty then).
+// snapshot (*config_text is left empty then). A rig built without its
+// extensions (a replay) ignores the config sections they would read.
 Result<RigConfig> LoadSessionConfig(const CaptureOptions& options, std::string* config_text) {
+  const UnclaimedSections unclaimed =
+      options.rig_build.attach_extensions ? UnclaimedSections::kRefuse : UnclaimedSections::kIgnore;
   if (options.resume) {
     HR_ASSIGN_OR_RETURN(const CaptureMetadata metadata, ReadResumableCapture(options.out_dir));
     const fs::path snapshot = fs::absolute(options.out_dir).lexically_normal() / "rig.yaml";
-    return LoadRigConfig(snapshot.string(), metadata.config_dir);
+    return LoadRigConfig(snapshot.string(), metadata.config_dir, unclaimed);
   }
   if (fs::exists(options.out_dir)) {
     return FailedPrecondition(options.out_dir +
                               " already exists: choose a new --out folder, or add --resume to continue it");
   }
-  HR_ASSIGN_OR_RETURN(RigConfig config, LoadRigConfig(options.config_path, options.config_relative_to));
+  HR_ASSIGN_OR_RETURN(RigConfig config,
+                      LoadRigConfig(options.config_path, options.config_relative_to, unclaimed));
   *config_text = ReadText(options.config_path);
   return config;
 }
@@ -799,16 +793,20 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
                                       {"partial_removed", report.partial_removed.size()}}));
   if (!options.resume) HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
   HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
-  std::unique_ptr<CaptureGroundTruth> truth;
-  if (rig->sim_world) {
-    HR_ASSIGN_OR_RETURN(truth, CaptureGroundTruth::Begin(*rig->sim_world, TruthViews(plan), dataset->dir()));
+  for (const auto& observer : rig->capture_observers) {
+    HR_RETURN_IF_ERROR(observer->OnCaptureBegin(plan, dataset->dir()));
   }
   Sequencer sequencer(*rig, plan, policies, *dataset, options);
   CaptureSummary summary = sequencer.Run();
   rig->devices.CloseAll();
-  if (truth) HR_RETURN_IF_ERROR(truth->Finish());
-  if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   summary.dir = dataset->dir();
+  Status ended = Status::Ok();
+  for (const auto& observer : rig->capture_observers) {
+    const Status s = observer->OnCaptureEnd(summary);
+    if (ended.ok()) ended = s;
+  }
+  HR_RETURN_IF_ERROR(ended);
+  if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   return summary;
 }
 

@@ -14,6 +14,7 @@
 #include "core/truth_maps.h"
 #include "rig/capture_plan.h"
 #include "rig/capture_test_util.h"
+#include "rig/sim_rig.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/quota_storage.h"
 #include "sim_hw/renderer.h"
@@ -23,6 +24,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace hairrig::testing;
+
+// The rigs these tests build are simulated ones (rig/sim_rig.h).
+[[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 class CountingSink : public FrameSink {
  public:
