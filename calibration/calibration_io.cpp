@@ -297,6 +297,30 @@ Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, c
   return WriteFileAtomic(path, root.dump(1));
 }
 
+Status WriteMrcalCorners(const std::string& path, const ChArUcoBoard& board,
+                         const ChArUcoCalibration& result) {
+  std::string text = "# filename x y level\n";
+  const size_t grid = board.corners_board_mm.size();
+  for (const ChArUcoImage& image : result.images) {
+    if (!image.used) continue;
+    std::vector<const Eigen::Vector2d*> at(grid, nullptr);
+    for (size_t k = 0; k < image.detected.ids.size(); ++k) {
+      const size_t id = static_cast<size_t>(image.detected.ids[k]);
+      if (id < grid) at[id] = &image.detected.corners_px[k];
+    }
+    const std::string name = std::filesystem::path(image.path).filename().string();
+    for (const Eigen::Vector2d* c : at) {
+      char line[64];
+      if (c)
+        std::snprintf(line, sizeof line, " %.4f %.4f 0\n", c->x(), c->y());
+      else
+        std::snprintf(line, sizeof line, " - - -\n");
+      text += name + line;
+    }
+  }
+  return WriteFileAtomic(path, text);
+}
+
 Result<std::vector<IntrinsicsPrior>> ReadIntrinsicsPriors(const std::string& path) {
   HR_ASSIGN_OR_RETURN(const nlohmann::json j,
                       ReadJsonFile(path, "give a calibration.json or a file from `hairrig calibrate-intrinsics`"));

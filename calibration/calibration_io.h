@@ -76,6 +76,15 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json);
 Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, const std::string& board,
                            const ChArUcoCalibration& result);
 
+// The used images' chessboard corners as mrcal's corners cache, the input of
+// `mrcal-calibrate-cameras --corners-cache`: a vnl table "# filename x y level",
+// for each used image one row per corner of the board in id order (the rows of
+// the board's inner grid in turn), "x y 0" in px (OpenCV convention) or
+// "- - -" for a corner not detected, the filename without its folder.
+// Written atomically; IoError names the file.
+Status WriteMrcalCorners(const std::string& path, const ChArUcoBoard& board,
+                         const ChArUcoCalibration& result);
+
 // Intrinsics to hold fixed in a box calibration, by camera serial.
 struct IntrinsicsPrior {
   std::string serial;

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "core/charuco_board.h"
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "tests/support/calibration_documents.h"
@@ -112,6 +113,37 @@ TEST(CalibrationIo, ANegativeStandardDeviationIsRefusedNamingTheField) {
   EXPECT_EQ(priors.status().code(), StatusCode::kCorruptData);
   EXPECT_NE(priors.status().message().find("cx_px"), std::string::npos)
       << priors.status().message();
+}
+
+// mrcal's corners cache: every corner of the board for each used image, in id
+// order, "- - -" where a corner was not detected; unused images left out.
+TEST(CalibrationIo, MrcalCornersListEveryBoardCornerOfTheUsedImages) {
+  auto board = MakeChArUcoBoard("DICT_5X5_100", 4, 3, 30, 22);  // 3 x 2 inner corners
+  ASSERT_TRUE(board.ok()) << board.status().ToString();
+  ASSERT_EQ(board->corners_board_mm.size(), 6u);
+  ChArUcoCalibration result;
+  ChArUcoImage used;
+  used.path = "/somewhere/view_000.png";
+  used.used = true;
+  used.detected.ids = {4, 1};
+  used.detected.corners_px = {Eigen::Vector2d(10.25, 20.5), Eigen::Vector2d(1, 2.125)};
+  ChArUcoImage unused = used;
+  unused.path = "/somewhere/view_001.png";
+  unused.used = false;
+  result.images = {used, unused};
+  const std::string path = ::testing::TempDir() + "/corners.vnl";
+  ASSERT_TRUE(WriteMrcalCorners(path, *board, result).ok());
+  const auto text = ReadFileText(path, 1 << 20);
+  fs::remove(path);
+  ASSERT_TRUE(text.ok()) << text.status().ToString();
+  EXPECT_EQ(*text,
+            "# filename x y level\n"
+            "view_000.png - - -\n"
+            "view_000.png 1.0000 2.1250 0\n"
+            "view_000.png - - -\n"
+            "view_000.png - - -\n"
+            "view_000.png 10.2500 20.5000 0\n"
+            "view_000.png - - -\n");
 }
 
 }  // namespace

@@ -8,8 +8,11 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "calibration/calibration_io.h"
+#include "calibration/prior_check.h"
 #include "calibration/tag_detection_sink.h"
 #include "core/json_file.h"
+#include "core/string_format.h"
+#include "core/truth_maps.h"
 #include "rig/capture_dataset.h"
 #include "rig/journal_records.h"
 #include "rig/rig_config.h"
@@ -172,6 +175,70 @@ Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_paths, Captur
   return Status::Ok();
 }
 
+namespace {
+
+// Each held camera's prior against the views alone (calibration/prior_check.h).
+nlohmann::json PriorChecksJson(const CalibratedFolder& done) {
+  nlohmann::json checks = nlohmann::json::array();
+  for (size_t c = 0; c < done.result.cameras.size(); ++c) {
+    const PriorCheck& check = done.result.cameras[c].prior_check;
+    if (!check.tested && check.not_tested.empty()) continue;
+    nlohmann::json j{{"serial", done.input.cameras[c].serial},
+                     {"file", done.input.cameras[c].prior_source},
+                     {"tested", check.tested},
+                     {"rejected", check.rejected},
+                     {"summary", DescribePriorCheck(check)}};
+    if (check.tested) {
+      j["chi2"] = check.chi2;
+      j["dof"] = check.dof;
+      j["sigma"] = check.sigma;
+    }
+    checks.push_back(std::move(j));
+  }
+  return checks;
+}
+
+int SolvedViews(const CaptureCalibration& result) {
+  int solved = 0;
+  for (const FrameCalibration& f : result.frames) solved += f.solved;
+  return solved;
+}
+
+}  // namespace
+
+nlohmann::json CalibratedFolder::ToJson() const {
+  return nlohmann::json{{"dir", out_dir},
+                        {"mode", result.mode == CalibrationMode::kFree ? "free" : "turntable"},
+                        {"verdict", verdict.name()},
+                        {"reasons", verdict.reasons},
+                        {"views", result.frames.size()},
+                        {"views_solved", SolvedViews(result)},
+                        {"rms_px", result.rms_px},
+                        {"converged", result.converged},
+                        {"detect_s", result.detect_s},
+                        {"init_s", result.init_s},
+                        {"solve_s", result.solve_s},
+                        {"prior_checks", PriorChecksJson(*this)},
+                        {"prior_check_s", result.prior_check_s},
+                        {"write_s", write_s},
+                        {"report_s", report_s},
+                        {"report", out_dir + "/report/report.txt"}};
+}
+
+std::string CalibratedFolder::BriefReport() const {
+  std::string text =
+      StringPrintf("calibration %s (%s mode): %s\n", out_dir.c_str(),
+                   result.mode == CalibrationMode::kFree ? "free" : "turntable", verdict.name());
+  for (const std::string& reason : verdict.reasons) text += "  - " + reason + "\n";
+  text += StringPrintf(
+      "  %d of %d views solved, RMS %.3f px; detection %.2f s, initialisation %.2f s, bundle "
+      "adjustment %.2f s, writing %.2f s + report %.2f s\n",
+      SolvedViews(result), static_cast<int>(result.frames.size()), result.rms_px, result.detect_s,
+      result.init_s, result.solve_s, write_s, report_s);
+  text += "  report: " + out_dir + "/report/report.txt\n";
+  return text;
+}
+
 Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, const CalibrateFolderOptions& options) {
   CalibratedFolder done;
   HR_ASSIGN_OR_RETURN(done.input, LoadCaptureCalibrationInput(capture_dir));
@@ -196,6 +263,28 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, 
   HR_RETURN_IF_ERROR(WriteCalibrationReport(done.out_dir + "/report", done.input, done.result, done.verdict));
   done.report_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count() - done.write_s;
   return done;
+}
+
+Status CaptureCalibrationEvalOptions::Validate() const {
+  if (capture_dir.empty())
+    return InvalidArgument("eval calibration: capture_dir (the capture folder) is required");
+  return Status::Ok();
+}
+
+Result<CalibrationEvaluation> EvaluateCaptureCalibration(
+    const CaptureCalibrationEvalOptions& options) {
+  HR_RETURN_IF_ERROR(options.Validate());
+  const std::string& dir = options.capture_dir;
+  HR_ASSIGN_OR_RETURN(
+      const StoredCalibration calibration,
+      ReadCalibration((fs::path(dir) / "calibration" / "calibration.json").string()));
+  HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(dir));
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(dir));
+  HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+  Result<CalibrationEvaluation> evaluation = EvaluateCalibration(calibration, truth, section.box);
+  if (!evaluation.ok()) return evaluation.status().WithContext(dir);
+  evaluation->dir = dir;
+  return evaluation;
 }
 
 }  // namespace hairrig

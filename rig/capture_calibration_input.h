@@ -17,6 +17,9 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
+#include "calibration/calibration_evaluation.h"
 #include "calibration/calibration_report.h"
 #include "calibration/capture_calibration.h"
 #include "rig/rig_config.h"
@@ -65,10 +68,29 @@ struct CalibratedFolder {
   CalibrationVerdict verdict;
   double write_s = 0;   // writing calibration.json and the exports
   double report_s = 0;  // writing the report
+
+  // `hairrig calibrate`'s summary: verdict and reasons, views solved, RMS,
+  // timings, each held prior's check against the views, the report's path.
+  nlohmann::json ToJson() const;
+  std::string BriefReport() const;
 };
 
 // `hairrig calibrate`: loads the capture, solves it and writes
 // <capture>/calibration/ with its report.
 Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, const CalibrateFolderOptions& options);
+
+struct CaptureCalibrationEvalOptions {
+  std::string capture_dir;  // a calibrated capture of the simulated rig
+
+  Status Validate() const;  // InvalidArgument naming the field
+};
+
+// `hairrig eval calibration`: <capture>/calibration/calibration.json against
+// <capture>/ground_truth/ (calibration/calibration_evaluation.h), with the box
+// of the capture's rig.yaml. Errors: no calibration (run `hairrig calibrate`),
+// no ground truth (not a simulated capture), a broken rig.yaml, no solved view
+// in the ground truth (named by the capture folder).
+Result<CalibrationEvaluation> EvaluateCaptureCalibration(
+    const CaptureCalibrationEvalOptions& options);
 
 }  // namespace hairrig

@@ -2,8 +2,12 @@
 // libraries and writes; no algorithm lives here (design.md section 7).
 #pragma once
 
+#include <cstdio>
 #include <functional>
+#include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -31,10 +35,21 @@ struct Dispatch {
   std::function<int(const nlohmann::json&)> exit_code;
 };
 
-struct CalibratedFolder;
-// `calibrate`'s summary (also printed by `capture --calibrate`).
-nlohmann::json CalibrationSummaryJson(const CalibratedFolder& done);
-void PrintCalibrationSummary(const nlohmann::json& summary);
+// Sets `dispatch` to run `run`, the subcommand's one library call (returning
+// Result<Summary>), and to print its summary: Summary::ToJson() with --json,
+// else Summary::BriefReport().
+template <typename Run>
+void DispatchSummary(Dispatch& dispatch, Run run) {
+  using Summary = std::decay_t<decltype(std::declval<Run&>()().value())>;
+  auto summary = std::make_shared<Summary>();
+  dispatch.action = [run = std::move(run), summary]() mutable -> Result<nlohmann::json> {
+    HR_ASSIGN_OR_RETURN(*summary, run());
+    return summary->ToJson();
+  };
+  dispatch.print_human = [summary](const nlohmann::json&) {
+    std::fputs(summary->BriefReport().c_str(), stdout);
+  };
+}
 
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);

@@ -63,7 +63,7 @@ ReconstructionProgress ProgressPrinter() {
   };
 }
 
-Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
+Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   ReconstructCaptureOptions options;
   options.dir = a.dir;
   HR_ASSIGN_OR_RETURN(options.stage, ParseReconstructStage(a.stage));
@@ -82,8 +82,7 @@ Result<nlohmann::json> RunReconstruct(const ReconstructArgs& a) {
   options.strands.strands = a.strands;
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
-  HR_ASSIGN_OR_RETURN(const ReconstructCaptureSummary summary, ReconstructCapture(options));
-  return summary.ToJson();
+  return ReconstructCapture(options);
 }
 
 }  // namespace
@@ -128,10 +127,8 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
       ->check(CLI::Range(1, 50))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
-  cmd->callback([args, &dispatch] {
-    dispatch.action = [args] { return RunReconstruct(*args); };
-    dispatch.print_human = [](const nlohmann::json& j) { std::printf("%s", j["brief"].get<std::string>().c_str()); };
-  });
+  cmd->callback(
+      [args, &dispatch] { DispatchSummary(dispatch, [args] { return RunReconstruct(*args); }); });
 }
 
 }  // namespace hairrig

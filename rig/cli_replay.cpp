@@ -1,27 +1,9 @@
-#include <cstdio>
-
 #include <CLI/CLI.hpp>
 
 #include "rig/cli.h"
 #include "rig/replay_capture.h"
 
 namespace hairrig {
-namespace {
-
-Result<nlohmann::json> RunReplay(const ReplayCaptureOptions& options) {
-  HR_ASSIGN_OR_RETURN(ReplayCaptureSummary summary, ReplayCapture(options));
-  return summary.ToJson();
-}
-
-void PrintReplay(const nlohmann::json& j) {
-  std::printf("replayed %s (%d recorded frames) into %s: %s\n", j["replayed_from"].get<std::string>().c_str(),
-              j["recorded_frames"].get<int>(), j["dir"].get<std::string>().c_str(), j["status"].get<std::string>().c_str());
-  std::printf("  views %d of %d, %d frames, %.2f s\n", j["views_completed"].get<int>(), j["views_planned"].get<int>(),
-              j["frames"].get<int>(), j["wall_s"].get<double>());
-  if (!j["message"].get<std::string>().empty()) std::printf("  %s\n", j["message"].get<std::string>().c_str());
-}
-
-}  // namespace
 
 void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto* cmd = app.add_subcommand(
@@ -33,8 +15,7 @@ void AddReplayCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) 
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
-    dispatch.action = [args] { return RunReplay(*args); };
-    dispatch.print_human = PrintReplay;
+    DispatchSummary(dispatch, [args] { return ReplayCapture(*args); });
     dispatch.exit_code = [](const nlohmann::json& j) { return j["status"] == "complete" ? 0 : 3; };
   });
 }

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/string_format.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/replay.h"
 
@@ -23,6 +24,16 @@ nlohmann::json ReplayCaptureSummary::ToJson() const {
   out["replayed_from"] = replayed_from;
   out["recorded_frames"] = recorded_frames;
   return out;
+}
+
+std::string ReplayCaptureSummary::BriefReport() const {
+  std::string text =
+      StringPrintf("replayed %s (%d recorded frames) into %s: %s\n", replayed_from.c_str(),
+                   recorded_frames, capture.dir.c_str(), capture.status.c_str());
+  text += StringPrintf("  views %d of %d, %d frames, %.2f s\n", capture.views_completed,
+                       capture.views_planned, capture.frames, capture.wall_s);
+  if (!capture.message.empty()) text += "  " + capture.message + "\n";
+  return text;
 }
 
 Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) {

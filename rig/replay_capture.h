@@ -24,6 +24,7 @@ struct ReplayCaptureSummary {
   std::string replayed_from;
   int recorded_frames = 0;
   nlohmann::json ToJson() const;  // the capture's summary plus replayed_from and recorded_frames
+  std::string BriefReport() const;
 };
 
 // Runs the recording's own config snapshot (rig.yaml, its relative paths

@@ -12,6 +12,8 @@
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
+#include "core/parallel.h"
+#include "core/string_format.h"
 #include "sim_hw/render_support.h"
 
 namespace hairrig {
@@ -193,6 +195,81 @@ Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, 
   }
   summary.ground_truth = (std::filesystem::path(dir) / "ground_truth.json").string();
   HR_RETURN_IF_ERROR(WriteFileAtomic(summary.ground_truth, truth.dump(1)));
+  return summary;
+}
+
+namespace {
+
+// The scene indices of the cameras named by serial; every camera for none.
+Result<std::vector<int>> SelectCameras(const Scene& scene, const ChArUcoSetsOptions& options) {
+  std::vector<int> cameras;
+  for (const std::string& serial : options.serials) {
+    const int index = scene.FindCamera(serial);
+    if (index < 0)
+      return NotFound("--camera " + serial + " is not a camera of " + options.scene_file);
+    cameras.push_back(index);
+  }
+  if (cameras.empty())
+    for (size_t c = 0; c < scene.cameras.size(); ++c) cameras.push_back(static_cast<int>(c));
+  return cameras;
+}
+
+}  // namespace
+
+Status ChArUcoSetsOptions::Validate() const {
+  if (scene_file.empty()) return InvalidArgument("sim charuco: scene_file is required");
+  if (board_file.empty()) return InvalidArgument("sim charuco: board_file is required");
+  if (out_dir.empty()) return InvalidArgument("sim charuco: out_dir (--out) is required");
+  if (views < 1)
+    return InvalidArgument("sim charuco: views must be at least 1, got " + std::to_string(views));
+  if (threads < 1)
+    return InvalidArgument("sim charuco: threads must be at least 1, got " +
+                           std::to_string(threads));
+  return Status::Ok();
+}
+
+nlohmann::json ChArUcoSetsSummary::ToJson() const {
+  nlohmann::json out{{"out", out_dir}, {"board", board_file}, {"cameras", nlohmann::json::array()}};
+  for (const Camera& c : cameras) {
+    out["cameras"].push_back({{"serial", c.serial},
+                              {"dir", c.set.dir},
+                              {"images", c.set.images.size()},
+                              {"ground_truth", c.set.ground_truth}});
+  }
+  return out;
+}
+
+std::string ChArUcoSetsSummary::BriefReport() const {
+  std::string text;
+  for (const Camera& c : cameras) {
+    text += StringPrintf(
+        "%s: %d images of the board in %s (ground truth: %s)\n  calibrate: hairrig "
+        "calibrate-intrinsics %s --board %s --serial %s\n",
+        c.serial.c_str(), static_cast<int>(c.set.images.size()), c.set.dir.c_str(),
+        c.set.ground_truth.c_str(), c.set.dir.c_str(), board_file.c_str(), c.serial.c_str());
+  }
+  return text;
+}
+
+Result<ChArUcoSetsSummary> WriteChArUcoSets(const ChArUcoSetsOptions& options) {
+  HR_RETURN_IF_ERROR(options.Validate());
+  HR_ASSIGN_OR_RETURN(const Scene scene, LoadScene(options.scene_file));
+  HR_ASSIGN_OR_RETURN(const ChArUcoBoard board, LoadChArUcoBoard(options.board_file));
+  HR_ASSIGN_OR_RETURN(const std::vector<int> cameras, SelectCameras(scene, options));
+  std::vector<Result<ChArUcoSetSummary>> sets(cameras.size(), Internal("not rendered"));
+  ParallelFor(cameras.size(), options.threads, [&] {
+    return [&](size_t i) {
+      const SceneCamera& camera = scene.cameras[static_cast<size_t>(cameras[i])];
+      sets[i] = WriteChArUcoSet(scene, cameras[i], board, options.views,
+                                options.seed + static_cast<uint64_t>(cameras[i]),
+                                (std::filesystem::path(options.out_dir) / camera.serial).string());
+    };
+  });
+  ChArUcoSetsSummary summary{options.out_dir, options.board_file, {}};
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    HR_RETURN_IF_ERROR(sets[i].status());
+    summary.cameras.push_back({scene.cameras[static_cast<size_t>(cameras[i])].serial, *sets[i]});
+  }
   return summary;
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
 #include <opencv2/core/mat.hpp>
 
 #include "core/charuco_board.h"
@@ -58,5 +59,39 @@ struct ChArUcoSetSummary {
 // camera index outside the scene; IoError names the file it cannot write.
 Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, const ChArUcoBoard& board, int views,
                                           uint64_t seed, const std::string& dir);
+
+// `hairrig sim charuco`: WriteChArUcoSet for several cameras of a scene, each
+// into <out_dir>/<serial>/, rendered in parallel.
+struct ChArUcoSetsOptions {
+  std::string scene_file;  // the scene (sim_hw/scene.h)
+  std::string board_file;  // the board (core/charuco_board.h LoadChArUcoBoard)
+  std::string out_dir;
+  std::vector<std::string> serials;  // the cameras; empty: every camera of the scene
+  int views = 25;                    // images per camera, at least 1
+  uint64_t seed = 1;                 // board poses and noise; camera c uses seed + c
+  int threads = 2;                   // cameras rendered at once, at least 1
+
+  // InvalidArgument naming the field and its range.
+  Status Validate() const;
+};
+
+struct ChArUcoSetsSummary {
+  struct Camera {
+    std::string serial;
+    ChArUcoSetSummary set;
+  };
+  std::string out_dir;
+  std::string board_file;
+  std::vector<Camera> cameras;
+
+  // out, board, cameras (each serial, dir, images (a count), ground_truth).
+  nlohmann::json ToJson() const;
+  // Per camera where its images are and the calibrate-intrinsics command for them.
+  std::string BriefReport() const;
+};
+
+// Errors: the scene's or the board's (named), a serial that is not a camera
+// of the scene, a camera's set that cannot be written (the first, in order).
+Result<ChArUcoSetsSummary> WriteChArUcoSets(const ChArUcoSetsOptions& options);
 
 }  // namespace hairrig

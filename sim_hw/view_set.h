@@ -1,11 +1,15 @@
 // Renders every view of the default plan of a scene to a folder, with a
-// contact sheet and the ground truth: what `hairrig sim render --all` does.
+// contact sheet and the ground truth (`hairrig sim render --all`), or one
+// view to an image file (`hairrig sim render --view N`).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
 #include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
 
 #include "core/status.h"
 #include "sim_hw/renderer.h"
@@ -32,6 +36,57 @@ struct RenderViewsSummary {
 // view in <out>/views/ (sim_hw/ground_truth.h). `out` must exist.
 Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::string& out_dir,
                                           const RenderViewsOptions& options);
+
+struct RenderSceneViewsOptions {
+  std::string scene_file;  // the scene (sim_hw/scene.h)
+  std::string out_dir;     // created
+  RenderViewsOptions render;
+
+  // InvalidArgument naming the field: no scene or folder, render.threads < 1.
+  Status Validate() const;
+};
+
+struct RenderSceneViewsSummary {
+  std::string out_dir;
+  RenderViewsSummary views;
+  size_t strands = 0;  // of the scene's wig
+
+  // views, out, contact_sheet and ground_truth (paths under out), strands,
+  // wall_s, seconds_per_view.
+  nlohmann::json ToJson() const;
+  std::string BriefReport() const;
+};
+
+// RenderAllViews of the scene's renderer into out_dir. Errors: the scene's
+// (named), a folder or file that cannot be written (named).
+Result<RenderSceneViewsSummary> RenderSceneViews(const RenderSceneViewsOptions& options);
+
+struct RenderViewFileOptions {
+  std::string scene_file;           // the scene (sim_hw/scene.h)
+  int view = 0;                     // in the scene's default plan: stop * cameras + camera
+  std::string out_file;             // .png, .tif, .tiff or .jpg
+  bool noise = true;                // sensor noise, seeded by the scene's seed and the view
+  std::optional<cv::Rect> crop_px;  // only these pixels, at full resolution; inside the view
+
+  // InvalidArgument naming the field: no scene, an output that is not an image file name.
+  Status Validate() const;
+};
+
+struct RenderViewFileSummary {
+  int view = 0;
+  std::string camera_serial;
+  double turntable_deg = 0;
+  std::string out_file;
+  int width_px = 0, height_px = 0;  // of the image written
+  int tags_unoccluded = 0;          // the box's tags the view sees whole
+
+  nlohmann::json ToJson() const;
+  std::string BriefReport() const;
+};
+
+// Errors: the scene's (named), a view outside the plan or a crop outside the
+// view (InvalidArgument with the allowed range), the file's (named).
+Result<RenderViewFileSummary> RenderViewFile(const RenderViewFileOptions& options);
 
 // "007_SIM-CAM-UPPER.png"
 std::string ViewFileName(int view, const std::string& serial);
