@@ -8,11 +8,13 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/core/persistence.hpp>
 
 #include "core/charuco_board.h"
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "tests/support/calibration_documents.h"
+#include "tests/support/synthetic_calibration.h"
 
 namespace hairrig {
 namespace {
@@ -144,6 +146,44 @@ TEST(CalibrationIo, MrcalCornersListEveryBoardCornerOfTheUsedImages) {
             "view_000.png - - -\n"
             "view_000.png 10.2500 20.5000 0\n"
             "view_000.png - - -\n");
+}
+
+// Each camera's opencv/<serial>.yaml, read by OpenCV's own cv::FileStorage,
+// holds the solved intrinsics: the image size, the camera matrix and the
+// distortion coefficients in OpenCV's order (k1 k2 p1 p2 k3), to the last
+// digit the text keeps.
+TEST(CalibrationIo, OpenCvYamlReadsBackWithFileStorage) {
+  const hairrig_test::SyntheticCalibration s = hairrig_test::MakeSyntheticCalibration();
+  const fs::path dir = fs::path(::testing::TempDir()) / ("opencv_yaml_" + std::to_string(getpid()));
+  ASSERT_TRUE(WriteCalibration(dir.string(), s.input, s.result).ok());
+  for (size_t c = 0; c < s.input.cameras.size(); ++c) {
+    const std::string path = (dir / "opencv" / (s.input.cameras[c].serial + ".yaml")).string();
+    const cv::FileStorage yaml(path, cv::FileStorage::READ);
+    ASSERT_TRUE(yaml.isOpened()) << path;
+    const CameraIntrinsics& k = s.result.cameras[c].intrinsics;
+    EXPECT_EQ(static_cast<int>(yaml["image_width"]), k.width_px) << path;
+    EXPECT_EQ(static_cast<int>(yaml["image_height"]), k.height_px) << path;
+    cv::Mat matrix, distortion;
+    yaml["camera_matrix"] >> matrix;
+    yaml["distortion_coefficients"] >> distortion;
+    ASSERT_EQ(matrix.type(), CV_64F) << path;
+    ASSERT_EQ(distortion.type(), CV_64F) << path;
+    ASSERT_EQ(matrix.rows * matrix.cols, 9) << path;
+    ASSERT_EQ(distortion.rows * distortion.cols, 5) << path;
+    const double expected_matrix[9] = {k.fx_px, 0, k.cx_px, 0, k.fy_px, k.cy_px, 0, 0, 1};
+    const double expected_distortion[5] = {k.k1, k.k2, k.p1, k.p2, k.k3};
+    for (int i = 0; i < 9; ++i) {
+      const double tolerance = 1e-15 * std::abs(expected_matrix[i]);
+      EXPECT_NEAR(matrix.at<double>(i / 3, i % 3), expected_matrix[i], tolerance)
+          << path << " camera_matrix[" << i << "]";
+    }
+    for (int i = 0; i < 5; ++i) {
+      const double tolerance = 1e-15 * std::abs(expected_distortion[i]);
+      EXPECT_NEAR(distortion.at<double>(i), expected_distortion[i], tolerance)
+          << path << " distortion_coefficients[" << i << "]";
+    }
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

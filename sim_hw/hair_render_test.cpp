@@ -121,8 +121,9 @@ TEST(HairRender, GroundTruthMapsAgreeWithTheGeometry) {
   EXPECT_GT(head, 500);
   EXPECT_EQ(label_id_mismatch, 0);
   EXPECT_EQ(far_from_strand, 0);
-  EXPECT_LE(bad_angle, hair / 200) << "a segment nearest in 3D is the drawn one, save at joints";
-  EXPECT_LE(off_head, head / 100);
+  // Measured: 9 of 16,359 hair pixels (0.06 %) off by more than 1 deg, no head pixel off.
+  EXPECT_LE(bad_angle, hair / 1000) << "a segment nearest in 3D is the drawn one, save at joints";
+  EXPECT_EQ(off_head, 0);
 }
 
 // An ellipsoid head and the same ellipsoid as a mesh head cover the same
@@ -203,7 +204,7 @@ TEST(HairRender, HairCastsAShadowOnTheHead) {
   std::printf("skin pixels near hair: %d; mean brightness with the hair's shadow %.1f, without %.1f\n", n,
               sum_with / std::max(1, n) / 3, sum_without / std::max(1, n) / 3);
   ASSERT_GT(n, 500);
-  EXPECT_LT(sum_with, 0.85 * sum_without);
+  EXPECT_LT(sum_with, 0.7 * sum_without);  // measured: 0.48 as bright
 }
 
 }  // namespace

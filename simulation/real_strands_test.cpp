@@ -59,9 +59,10 @@ TEST(FloatingTangents, RealStrandsFitAdaptiveAndFixed) {
     mean_of[v++] = mean_sum / fitted;
     EXPECT_LT(g1, 1e-3);
   }
-  // Measured: paper 0.82 mm (these gently curved bangs get N_min = 3), ours
-  // 0.041 mm with 15.8 elements, fixed N = 15 0.053 mm.
+  // Measured: paper 0.725 mm (these gently curved bangs get N_min = 3), ours
+  // 0.040 mm with 17.1 elements, fixed N = 15 0.054 mm.
   EXPECT_LT(mean_of[0], 1.3);
+  EXPECT_LT(mean_of[1], 0.08);
   EXPECT_LE(mean_of[1], mean_of[2]) << "ours is no worse than the fixed-N baseline";
   EXPECT_LT(mean_of[2], 0.1);
 }
@@ -85,7 +86,9 @@ TEST(Guides, MoreGuidesLessErrorOnRealStrands) {
 }
 
 // (d) A fitted real strand, after inverse statics, drifts less than 0.5 mm at
-// its tip over 2 s under gravity; without inverse statics it sags. The bangs
+// its tip over 2 s under gravity; without inverse statics it sags by more
+// than 2.5 mm. Measured: 0.34 mm for the longest strand, under 0.0001 mm for
+// the other four; 5.3-105 mm without. The bangs
 // hang along -x in their (CT scanner) frame, so that is down here.
 TEST(InverseStatics, FittedRealStrandsDoNotSag) {
   const std::string path = "../shared/data/strands/Bangs_100.hair";
@@ -130,7 +133,7 @@ TEST(InverseStatics, FittedRealStrandsDoNotSag) {
                 k, lengths[k], strand->num_elements(), drift[1], drift[0]);
     EXPECT_LT(drift[1], 0.5);
     if (lengths[k] > 60) {
-      EXPECT_GT(drift[0], 0.5) << "without inverse statics a long strand sags";
+      EXPECT_GT(drift[0], 2.5) << "without inverse statics a long strand sags";
     }
   }
 }

@@ -1,5 +1,5 @@
-// Test helper: runs the hairrig binary (HAIRRIG_BIN, set by tests/CMakeLists.txt)
-// and captures what it prints. Header-only, for tests/.
+// Test helper: runs a command, or the hairrig binary (HAIRRIG_BIN, set by
+// tests/CMakeLists.txt), and captures what it prints. Header-only, for tests/.
 #pragma once
 
 #include <sys/wait.h>
@@ -17,9 +17,9 @@ struct CommandRun {
   std::string output;  // stdout and stderr
 };
 
-// `env` is prefixed to the command line ("NAME=value ").
-inline CommandRun Hairrig(const std::string& args, const std::string& env = "") {
-  const std::string cmd = env + std::string(HAIRRIG_BIN) + " " + args + " 2>&1";
+// Runs a shell command line; exit_code is -1 when the shell could not be started.
+inline CommandRun RunCommand(const std::string& command_line) {
+  const std::string cmd = command_line + " 2>&1";
   CommandRun run;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return run;
@@ -30,6 +30,13 @@ inline CommandRun Hairrig(const std::string& args, const std::string& env = "") 
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
 }
+
+#ifdef HAIRRIG_BIN
+// `env` is prefixed to the command line ("NAME=value ").
+inline CommandRun Hairrig(const std::string& args, const std::string& env = "") {
+  return RunCommand(env + std::string(HAIRRIG_BIN) + " " + args);
+}
+#endif
 
 // The JSON summary a command prints last with --json.
 inline nlohmann::json LastLineJson(const std::string& output) {
