@@ -57,8 +57,9 @@ class BatchEngine {
  public:
   virtual ~BatchEngine() = default;
   // Starts the submission's jobs. `record` saves the submission (with its job
-  // ids or runner filled in) in the batch folder; the engine calls it once,
-  // as soon as the jobs can be looked up, and fails if it fails.
+  // ids or runner filled in) in the batch folder; the engine calls it as soon
+  // as the jobs can be looked up (the local engine again when they ended),
+  // and fails if it fails.
   virtual Status Submit(const SubmitPlan& plan, Submission* submission, const std::function<Status()>& record) = 0;
   // The engine's view of the submission's jobs. Errors: the engine cannot be
   // asked (Slurm's commands missing or failing).

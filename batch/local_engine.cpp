@@ -7,6 +7,7 @@
 #include <system_error>
 
 #include "batch/process.h"
+#include "batch/stage_record.h"
 #include "core/log.h"
 #include "core/parallel.h"
 
@@ -41,6 +42,12 @@ void RunCaptureStages(const SubmitPlan& plan, const Submission& submission, size
                  std::to_string(run->exit_code) + "; log: " + log + ")");
       return;
     }
+    const Result<StageRecord> record = ReadStageRecord(capture, stage);
+    if (!record.ok() || record->run_id != submission.run_id || !record->ok()) {
+      LogWarning(std::string(StageName(stage)) + " of " + capture + " ended without a successful result (log: " +
+                 log + ")");
+      return;
+    }
     LogInfo(std::string(StageName(stage)) + " of " + capture + ": done");
   }
 }
@@ -59,12 +66,14 @@ Status LocalEngine::Submit(const SubmitPlan& plan, Submission* submission, const
   const size_t count = plan.capture_dirs.size();
   const int workers = submission->max_parallel > 0 ? submission->max_parallel : static_cast<int>(count);
   ParallelFor(count, workers, [&] { return [&](size_t index) { RunCaptureStages(plan, *submission, index); }; });
-  return Status::Ok();
+  submission->runner_pid = 0;  // ended: stages without a result now count as failed or blocked
+  submission->runner_start_ticks = 0;
+  return record();
 }
 
 Result<JobViews> LocalEngine::View(const Submission& submission) {
   JobViews views;
-  const bool runs = submission.runner_host == ThisHost() &&
+  const bool runs = submission.runner_pid > 0 && submission.runner_host == ThisHost() &&
                     ProcessRuns(static_cast<pid_t>(submission.runner_pid), submission.runner_start_ticks);
   if (!runs) return views;
   for (Stage stage : submission.stages) {

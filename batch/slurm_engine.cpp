@@ -108,7 +108,7 @@ JobPhase PhaseOfSlurmState(const std::string& state) {
 
 std::string SlurmJobScript(const SubmitPlan& plan, const Submission& submission, Stage stage) {
   std::string script = "#!/bin/bash\n";
-  script += "# hairrig batch " + plan.batch_dir + ", submission " + submission.run_id + ": the " + StageName(stage) +
+  script += "# hairrig batch submission " + submission.run_id + ": the " + StageName(stage) +
             " stage;\n# element i of the job array runs it on captures[i].\n";
   script += "captures=(\n";
   for (const std::string& capture : plan.capture_dirs) script += "  " + ShellQuote(capture) + "\n";
