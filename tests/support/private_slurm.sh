@@ -113,8 +113,8 @@ EOF
   export SLURM_CONF="$dir/slurm.conf"
   slurmctld -f "$SLURM_CONF"
   slurmd -f "$SLURM_CONF" -N "$host"
-  local tries
-  for tries in $(seq 1 100); do
+  local _
+  for _ in $(seq 1 100); do
     if [ "$(sinfo --noheader --nodes="$host" --format=%T 2>/dev/null)" = idle ]; then
       echo "SLURM_CONF=$SLURM_CONF"
       return 0
@@ -132,8 +132,8 @@ stop() {
   export SLURM_CONF="$dir/slurm.conf"
   if [ -f "$dir/run/slurmctld.pid" ] && runs "$(cat "$dir/run/slurmctld.pid")"; then
     scancel --user="$(id -un)" 2>/dev/null || true
-    local tries
-    for tries in $(seq 1 50); do
+    local _
+    for _ in $(seq 1 50); do
       [ -z "$(squeue --noheader --user="$(id -un)" 2>/dev/null)" ] && break
       sleep 0.2
     done
@@ -144,7 +144,7 @@ stop() {
     pid=$(cat "$dir/run/$daemon.pid")
     runs "$pid" || continue
     kill -TERM "$pid" 2>/dev/null || true
-    for tries in $(seq 1 50); do
+    for _ in $(seq 1 50); do
       runs "$pid" || break
       sleep 0.2
     done
