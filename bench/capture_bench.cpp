@@ -21,6 +21,7 @@
 #include "rig/capture.h"
 #include "rig/capture_dataset.h"
 #include "rig/rig_config.h"
+#include "rig/sim_rig.h"
 #include "sim_hw/renderer.h"
 
 namespace fs = std::filesystem;
@@ -120,6 +121,7 @@ int Ingest() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  RegisterSimRig();  // the captures are the simulated rig's
   bool efficiency = argc == 1, ingest = argc == 1;
   for (int i = 1; i < argc; ++i) {
     efficiency = efficiency || std::string(argv[i]) == "efficiency";

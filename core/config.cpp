@@ -412,14 +412,18 @@ std::vector<std::string> ConfigNode::Keys() const {
 }
 
 void ConfigNode::AllowOnlyKeys(std::initializer_list<const char*> allowed) const {
+  AllowOnlyKeys(std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+void ConfigNode::AllowOnlyKeys(const std::vector<std::string>& allowed) const {
   if (!impl_->node.IsMap()) return;
   for (const auto& kv : impl_->node) {
     const std::string key = kv.first.Scalar();
     bool known = false;
     std::string listed;
-    for (const char* a : allowed) {
+    for (const std::string& a : allowed) {
       known = known || key == a;
-      listed += (listed.empty() ? "" : ", ") + std::string(a);
+      listed += (listed.empty() ? "" : ", ") + a;
     }
     if (!known) {
       if (!ok()) return;

@@ -96,6 +96,7 @@ class ConfigNode {
   std::vector<std::string> Keys() const;
   // Records an error for any key of this map not in `allowed` (catches typos).
   void AllowOnlyKeys(std::initializer_list<const char*> allowed) const;
+  void AllowOnlyKeys(const std::vector<std::string>& allowed) const;
   // Records an error at this node's field `key` (or the node itself for "").
   void Fail(std::string_view key, const std::string& what) const;
 

@@ -229,7 +229,7 @@ class AravisCamera : public Camera {
       auto connected = options_.connect();
       if (!connected.ok()) return Fault(connected.status());
       camera = *connected;
-      id = "the simulated camera";
+      id = options_.connect_name.empty() ? "the camera the rig connected" : options_.connect_name;
     } else if (id.empty()) {
       arv_update_device_list();
       std::string seen;

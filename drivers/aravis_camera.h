@@ -49,10 +49,11 @@ struct AravisCameraOptions {
   int buffers = 8;
   int packet_size = 0;  // 0: negotiated
   std::string trigger_source = "Line0";
-  // Opens the camera instead of the search by address or serial (a
-  // simulated rig opens Aravis' in-process fake camera); the serial is still
+  // Opens the camera instead of the search by address or serial (a hook
+  // supplies it: Aravis' in-process fake camera, for one); the serial is still
   // checked. The device takes the returned reference.
   std::function<Result<ArvCamera*>()> connect;
+  std::string connect_name;  // how messages name the camera `connect` opens
 };
 
 Result<AravisCameraOptions> ParseAravisCameraOptions(const ConfigNode& device);

@@ -226,15 +226,16 @@ int UsbRelayChannels(const std::string& product) {
   return channels >= 1 && channels <= kUsbRelayMaxChannels ? channels : 0;
 }
 
-Result<UsbRelayLightOptions> ParseUsbRelayLightOptions(const ConfigNode& device) {
-  device.AllowOnlyKeys({"name", "backend", "serial", "board", "channel", "bus", "light"});
+Result<UsbRelayLightOptions> ParseUsbRelayLightOptions(
+    const ConfigNode& device, const std::vector<std::string>& hook_fields) {
+  std::vector<std::string> allowed{"name", "backend", "serial", "board", "channel", "bus"};
+  allowed.insert(allowed.end(), hook_fields.begin(), hook_fields.end());
+  device.AllowOnlyKeys(allowed);
   UsbRelayLightOptions o;
   o.board_id = device.String("board");
   if (o.board_id.size() > 5) device.Fail("board", "a relay board's id has at most 5 characters");
   o.channel = device.Integer("channel", {.min = 1, .max = kUsbRelayMaxChannels});
-  o.simulated = device.Choice("bus", {"usb", "sim"}, "usb") == "sim";
-  o.sim_light = device.String("light", "");
-  if (!o.simulated && !o.sim_light.empty()) device.Fail("light", "names a scene light: only with bus: sim");
+  o.bus_name = device.String("bus", kLibusbRelayBusName);
   if (!device.ok()) return device.status();
   return o;
 }
@@ -243,17 +244,23 @@ std::unique_ptr<Light> MakeUsbRelayLight(const DeviceInfo& info, UsbRelayLightOp
   return std::make_unique<UsbRelayLight>(info, std::move(options));
 }
 
-void RegisterUsbRelayBackend(DeviceRegistry* registry, UsbRelayOptionsHook hook) {
-  registry->AddBackend<Light>(DeviceKind::kLight, "usbrelay", [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
-    HR_ASSIGN_OR_RETURN(UsbRelayLightOptions options, ParseUsbRelayLightOptions(c.node));
-    if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
-    if (options.simulated && !options.bus) {
-      return InvalidArgument(c.node.Where() + ": bus 'sim' needs the rig config's sim section");
-    }
-    return MakeUsbRelayLight(
-        c.Info("USB relay board " + options.board_id + " channel " + std::to_string(options.channel)),
-        std::move(options));
-  });
+void RegisterUsbRelayBackend(DeviceRegistry* registry, UsbRelayOptionsHook hook,
+                             std::vector<std::string> hook_fields) {
+  registry->AddBackend<Light>(
+      DeviceKind::kLight, "usbrelay",
+      [hook, hook_fields](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
+        HR_ASSIGN_OR_RETURN(UsbRelayLightOptions options,
+                            ParseUsbRelayLightOptions(c.node, hook_fields));
+        if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        if (options.bus_name != kLibusbRelayBusName && !options.bus) {
+          return InvalidArgument(
+              c.node.Where() + ": bus " + QuotedExcerpt(options.bus_name) +
+              " is not a bus of this rig; use bus: usb (the boards on this machine's USB)");
+        }
+        return MakeUsbRelayLight(c.Info("USB relay board " + options.board_id + " channel " +
+                                        std::to_string(options.channel)),
+                                 std::move(options));
+      });
 }
 
 }  // namespace hairrig

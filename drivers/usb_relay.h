@@ -1,7 +1,6 @@
 // The `usbrelay` light backend: an LED panel's power on one channel of a HID
 // USB relay board (drivers/usb_relay_protocol.h), through a bus interface
-// that is libusb on a real rig and a simulated bus (sim_hw/sim_usb_relay.h)
-// in tests.
+// (UsbRelayBus): libusb, or one the backend's hook supplies.
 //
 // Config fields (devices.lights[i]):
 //   serial:  the panel's asset tag (a relay channel has no serial of its own)
@@ -9,8 +8,8 @@
 //            devices --discover` prints it), so the board is found whichever
 //            USB socket it is in; several lights can share a board
 //   channel: 1..N, the relay the panel is wired to
-//   bus:     usb (default) | sim: a simulated board powering the scene light
-//            `light` (default: the device's name), on a rig with a sim section
+//   bus:     usb (default: libusb) or the name of a bus the backend's hook
+//            supplies; the hook may read further fields (`hook_fields`)
 //
 // SetOn switches the channel and reads the board's state back: a channel that
 // did not follow is a DeviceFault (a welded contact, a board that lost power).
@@ -49,19 +48,28 @@ std::shared_ptr<UsbRelayBus> MakeLibusbRelayBus();
 // The channel count a product string names ("USBRelay2" -> 2), or 0.
 int UsbRelayChannels(const std::string& product);
 
+inline constexpr char kLibusbRelayBusName[] = "usb";
+
 struct UsbRelayLightOptions {
   std::string board_id;
   int channel = 1;
-  std::shared_ptr<UsbRelayBus> bus;  // null: libusb
-  // `bus: sim` (a simulated board on the simulated rig; the rig's hook sets
-  // `bus`) and `light:` the scene light its channel powers (default: the name).
-  bool simulated = false;
-  std::string sim_light;
+  std::string bus_name = kLibusbRelayBusName;  // the config's `bus`
+  // The boards' bus. Null: libusb, for bus_name "usb"; any other bus_name
+  // needs a hook that sets it.
+  std::shared_ptr<UsbRelayBus> bus;
 };
-Result<UsbRelayLightOptions> ParseUsbRelayLightOptions(const ConfigNode& device);
+// `hook_fields`: further fields of the device's map that the backend's hook
+// reads (allowed here, not read).
+Result<UsbRelayLightOptions> ParseUsbRelayLightOptions(
+    const ConfigNode& device, const std::vector<std::string>& hook_fields = {});
 std::unique_ptr<Light> MakeUsbRelayLight(const DeviceInfo& info, UsbRelayLightOptions options);
 
+// Runs before each light is built; may set `bus` for the buses it supplies
+// and fail (the light is not built).
 using UsbRelayOptionsHook = std::function<Status(const DeviceConfig&, UsbRelayLightOptions*)>;
-void RegisterUsbRelayBackend(DeviceRegistry* registry, UsbRelayOptionsHook hook = nullptr);
+// A light whose bus_name is neither "usb" nor given a bus by `hook` is refused
+// (InvalidArgument at the device's file:line).
+void RegisterUsbRelayBackend(DeviceRegistry* registry, UsbRelayOptionsHook hook = nullptr,
+                             std::vector<std::string> hook_fields = {});
 
 }  // namespace hairrig

@@ -14,14 +14,13 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/contact_sheet.h"
 #include "core/file_util.h"
 #include "core/log.h"
 #include "drivers/camera_support.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
-#include "sim_hw/capture_truth.h"
-#include "sim_hw/view_set.h"
 
 namespace hairrig {
 
@@ -115,6 +114,9 @@ class Sequencer {
   bool Stopping() const { return stop_run_.load() || estop_.load(); }
   std::vector<int> MissingViews() const;
   void Progress(const std::string& step, int stop);
+  void PlanEta(const std::map<int, std::vector<int>>& views_by_stop);
+  void CountStopDone(int stop);
+  double EtaLocked() const;
   double ExpectedFrameWallS(const Camera& camera) const;
   double LowerBoundOfStop(double from_deg, const PlannedStop& stop) const;
 
@@ -142,6 +144,10 @@ class Sequencer {
   std::atomic<int> stops_done_{0}, stops_total_{0};
   int pass_ = 0;
   std::mutex progress_mutex_;
+  // The ETA, guarded by progress_mutex_: the lower bound of each stop this
+  // pass has still to shoot, and of the stops done since the sweep began.
+  std::map<int, double> bound_left_s_;
+  double bound_done_s_ = 0;
 };
 
 void Sequencer::RecordFault(const Device* device, const Status& status, const std::string& action, int view) {
@@ -376,7 +382,10 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
   double measured = 0;
   const auto before = rig_.devices.turntable->ReadStatus();
   const double from = before.ok() ? before->position_deg : stop.angle_deg;
-  if (sweep_start_ == Clock::time_point{}) sweep_start_ = Clock::now();
+  {
+    std::lock_guard<std::mutex> lock(progress_mutex_);
+    if (sweep_start_ == Clock::time_point{}) sweep_start_ = Clock::now();
+  }
   const Status moved = Move(stop.angle_deg, &measured);
   if (!moved.ok()) {
     if (!Stopping()) {
@@ -554,11 +563,41 @@ void Sequencer::Progress(const std::string& step, int stop) {
   p.stops_total = static_cast<int>(plan_.stops.size());
   p.step = step;
   p.faults = faults_.load();
-  if (stops_done_ > 0 && sweep_start_ != Clock::time_point{}) {
-    const double per_stop = std::chrono::duration<double>(Clock::now() - sweep_start_).count() / stops_done_;
-    p.eta_s = per_stop * std::max(0, stops_total_.load() - stops_done_.load());
-  }
+  p.eta_s = EtaLocked();
   options_.on_progress(p);
+}
+
+// The lower bound of the stops left, times the pace so far (wall seconds per
+// second of lower bound, at least 1; 1 before the first stop is done).
+double Sequencer::EtaLocked() const {
+  double pace = 1;
+  if (bound_done_s_ > 0 && sweep_start_ != Clock::time_point{}) {
+    pace = std::max(1.0, std::chrono::duration<double>(Clock::now() - sweep_start_).count() / bound_done_s_);
+  }
+  double left = 0;
+  for (const auto& [stop, bound] : bound_left_s_) left += bound;
+  return left * pace;
+}
+
+void Sequencer::PlanEta(const std::map<int, std::vector<int>>& views_by_stop) {
+  const auto status = rig_.devices.turntable->ReadStatus();
+  double from = status.ok() ? status->position_deg : plan_.stops[static_cast<size_t>(views_by_stop.begin()->first)].angle_deg;
+  std::lock_guard<std::mutex> lock(progress_mutex_);
+  bound_left_s_.clear();
+  for (const auto& [stop, views] : views_by_stop) {
+    const PlannedStop& planned = plan_.stops[static_cast<size_t>(stop)];
+    bound_left_s_[stop] = LowerBoundOfStop(from, planned);
+    from = planned.angle_deg;
+  }
+}
+
+void Sequencer::CountStopDone(int stop) {
+  ++stops_done_;
+  std::lock_guard<std::mutex> lock(progress_mutex_);
+  const auto it = bound_left_s_.find(stop);
+  if (it == bound_left_s_.end()) return;
+  bound_done_s_ += it->second;
+  bound_left_s_.erase(it);
 }
 
 void Sequencer::RunPass(const std::vector<int>& views, int pass) {
@@ -566,13 +605,14 @@ void Sequencer::RunPass(const std::vector<int>& views, int pass) {
   std::map<int, std::vector<int>> by_stop;
   for (int v : views) by_stop[plan_.views[static_cast<size_t>(v)].stop].push_back(v);
   stops_total_ = stops_done_.load() + static_cast<int>(by_stop.size());
+  PlanEta(by_stop);
   if (pass > 1) {
     (void)dataset_.Append({{"event", "reshoot_pass"}, {"pass", pass}, {"views", views}});
     Progress("re-shooting " + std::to_string(views.size()) + " views", by_stop.begin()->first);
   }
   for (const auto& [stop, stop_views] : by_stop) {
     if (!ShootStop(plan_.stops[static_cast<size_t>(stop)], stop_views)) break;
-    ++stops_done_;
+    CountStopDone(stop);
   }
   Progress("waiting for the last frames", static_cast<int>(plan_.stops.size()) - 1);
   WaitCollectorsIdle();
@@ -633,15 +673,6 @@ CaptureSummary Sequencer::Run() {
   return summary;
 }
 
-// The planned views as the simulated rig's ground truth lists them.
-std::vector<PlannedTruthView> TruthViews(const CapturePlan& plan) {
-  std::vector<PlannedTruthView> views;
-  for (const PlannedView& v : plan.views) {
-    views.push_back({v.index, v.stop, v.camera_serial, plan.stops[static_cast<size_t>(v.stop)].angle_deg});
-  }
-  return views;
-}
-
 // <capture>/contact_sheet.png from the verified frames, in plan order, unless
 // it would leave less than storage.min_free_mb free.
 Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan) {
@@ -678,18 +709,22 @@ std::vector<PlannedViewRecord> PlannedViewRecords(const CapturePlan& plan) {
 }
 
 // The config of this session: the rig config, or a resumed capture's
-// snapshot (*config_text is left empty then).
+// snapshot (*config_text is left empty then). A rig built without its
+// extensions (a replay) ignores the config sections they would read.
 Result<RigConfig> LoadSessionConfig(const CaptureOptions& options, std::string* config_text) {
+  const UnclaimedSections unclaimed =
+      options.rig_build.attach_extensions ? UnclaimedSections::kRefuse : UnclaimedSections::kIgnore;
   if (options.resume) {
     HR_ASSIGN_OR_RETURN(const CaptureMetadata metadata, ReadResumableCapture(options.out_dir));
     const fs::path snapshot = fs::absolute(options.out_dir).lexically_normal() / "rig.yaml";
-    return LoadRigConfig(snapshot.string(), metadata.config_dir);
+    return LoadRigConfig(snapshot.string(), metadata.config_dir, unclaimed);
   }
   if (fs::exists(options.out_dir)) {
     return FailedPrecondition(options.out_dir +
                               " already exists: choose a new --out folder, or add --resume to continue it");
   }
-  HR_ASSIGN_OR_RETURN(RigConfig config, LoadRigConfig(options.config_path, options.config_relative_to));
+  HR_ASSIGN_OR_RETURN(RigConfig config,
+                      LoadRigConfig(options.config_path, options.config_relative_to, unclaimed));
   *config_text = ReadText(options.config_path);
   return config;
 }
@@ -758,16 +793,20 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
                                       {"partial_removed", report.partial_removed.size()}}));
   if (!options.resume) HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
   HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
-  std::unique_ptr<CaptureGroundTruth> truth;
-  if (rig->sim_world) {
-    HR_ASSIGN_OR_RETURN(truth, CaptureGroundTruth::Begin(*rig->sim_world, TruthViews(plan), dataset->dir()));
+  for (const auto& observer : rig->capture_observers) {
+    HR_RETURN_IF_ERROR(observer->OnCaptureBegin(plan, dataset->dir()));
   }
   Sequencer sequencer(*rig, plan, policies, *dataset, options);
   CaptureSummary summary = sequencer.Run();
   rig->devices.CloseAll();
-  if (truth) HR_RETURN_IF_ERROR(truth->Finish());
-  if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   summary.dir = dataset->dir();
+  Status ended = Status::Ok();
+  for (const auto& observer : rig->capture_observers) {
+    const Status s = observer->OnCaptureEnd(summary);
+    if (ended.ok()) ended = s;
+  }
+  HR_RETURN_IF_ERROR(ended);
+  if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   return summary;
 }
 

@@ -32,6 +32,7 @@
 #include "core/capture_storage.h"
 #include "core/frame_sink.h"
 #include "core/status.h"
+#include "rig/capture_plan.h"
 #include "rig/rig_config.h"
 
 namespace hairrig {
@@ -42,7 +43,7 @@ struct CaptureProgress {
   int stop = 0;         // current stop (0-based)
   int stops_total = 0;
   std::string step;     // "moving to 37.9 deg", "exposing", "re-shooting 2 views", ...
-  double eta_s = 0;     // wall seconds left, estimated from the stops so far
+  double eta_s = 0;     // wall seconds left: the plan's lower bound of the stops left times the pace so far
   int faults = 0;
 };
 
@@ -80,9 +81,24 @@ struct CaptureSummary {
   nlohmann::json ToJson() const;
 };
 
+// Told when a capture begins and ends. The rig's extensions add theirs to the
+// Rig they build (Rig::capture_observers): the simulated rig's writes the
+// capture's ground truth. RunCapture calls them from its own thread.
+class CaptureObserver {
+ public:
+  virtual ~CaptureObserver() = default;
+  // Once the capture folder `capture_dir` holds the journalled `plan`, before
+  // anything moves; on a resume too. An error ends RunCapture with it.
+  virtual Status OnCaptureBegin(const CapturePlan& plan, const std::string& capture_dir) = 0;
+  // After the session's last frame, with the devices closed, whether the run
+  // completed or not. An error is RunCapture's (each observer is still told).
+  virtual Status OnCaptureEnd(const CaptureSummary& summary) = 0;
+};
+
 // Runs (or resumes) a capture. An error Status means nothing was captured
-// (bad config, unusable folder, devices that cannot be opened); a run that
-// starts returns a summary, also when a fault stopped it.
+// (bad config, unusable folder, devices that cannot be opened) or a capture
+// observer failed; a run that starts returns a summary, also when a fault
+// stopped it.
 Result<CaptureSummary> RunCapture(const CaptureOptions& options);
 
 }  // namespace hairrig

@@ -128,7 +128,8 @@ Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config) {
 
 Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
   HR_ASSIGN_OR_RETURN(const CaptureMetadata metadata, ReadCaptureMetadata(capture_dir));
-  return LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(), metadata.config_dir);
+  return LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(), metadata.config_dir,
+                       UnclaimedSections::kIgnore);
 }
 
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {

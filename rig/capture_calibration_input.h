@@ -23,7 +23,9 @@
 
 namespace hairrig {
 
-// A capture's rig.yaml snapshot, paths relative to the config it was taken from.
+// A capture's rig.yaml snapshot, paths relative to the config it was taken
+// from; sections no registered rig extension reads are ignored (the simulated
+// rig's `sim` where it is not registered).
 Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir);
 
 // A rig config's `calibration` section: the box model and where it hangs in the turntable frame.

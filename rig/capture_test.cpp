@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -13,6 +14,7 @@
 #include "core/truth_maps.h"
 #include "rig/capture_plan.h"
 #include "rig/capture_test_util.h"
+#include "rig/sim_rig.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/quota_storage.h"
 #include "sim_hw/renderer.h"
@@ -22,6 +24,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace hairrig::testing;
+
+// The rigs these tests build are simulated ones (rig/sim_rig.h).
+[[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 class CountingSink : public FrameSink {
  public:
@@ -34,11 +39,13 @@ class CountingSink : public FrameSink {
   std::atomic<bool> finished{false};
 };
 
-CaptureSummary Capture(const std::string& config, const std::string& out, FrameSink* sink = nullptr) {
+CaptureSummary Capture(const std::string& config, const std::string& out, FrameSink* sink = nullptr,
+                       std::function<void(const CaptureProgress&)> on_progress = nullptr) {
   CaptureOptions o;
   o.config_path = config;
   o.out_dir = out;
   o.sink = sink;
+  o.on_progress = std::move(on_progress);
   auto summary = RunCapture(o);
   EXPECT_TRUE(summary.ok()) << summary.status().ToString();
   return summary.ok() ? *summary : CaptureSummary{};
@@ -148,13 +155,24 @@ TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
 TEST(Capture, LowerBoundAndEfficiencyAtRealisticTimings) {
   const std::string dir = FreshDir("capture_efficiency");
   const double scale = 0.2;
+  std::vector<CaptureProgress> progress;  // on_progress calls are serialised
   const CaptureSummary s = Capture(
       WriteSmallRig(dir, {{"sim", "sim:\n  scene: small_scene.yaml\n  time_scale: " + std::to_string(scale) + "\n"}}),
-      dir + "/c");
+      dir + "/c", nullptr, [&](const CaptureProgress& p) { progress.push_back(p); });
   ASSERT_EQ(s.status, "complete") << s.message;
   const double move_s = (360.0 / 19) / 30 + 30.0 / 60;
   const double expected = scale * (18 * (move_s + 0.5) + 19 * 0.02 + 0.05 + 0.25);
   EXPECT_NEAR(s.lower_bound_s, expected, 1e-9);
+  // The ETA starts at the plan's bound (moves, settles, exposures), stays
+  // above 0 while a stop is being shot and is 0 once every stop is shot.
+  ASSERT_GE(progress.size(), 19u);
+  EXPECT_NEAR(progress.front().eta_s, scale * (18 * (move_s + 0.5) + 19 * 0.02), 1e-9);
+  for (const CaptureProgress& p : progress) {  // the sequencer's own steps, before their stop is done
+    if (p.step == "exposing" || p.step.rfind("moving", 0) == 0) {
+      EXPECT_GT(p.eta_s, 0) << p.step << " at stop " << p.stop;
+    }
+  }
+  EXPECT_EQ(progress.back().eta_s, 0) << progress.back().step;
   EXPECT_GT(s.wall_s, 0.9 * s.lower_bound_s);  // the sweep cannot beat physics (10 % for clock granularity)
   std::printf("small rig at time_scale %.1f: sweep %.3f s, lower bound %.3f s, efficiency %.3f\n", scale, s.wall_s,
               s.lower_bound_s, s.efficiency);

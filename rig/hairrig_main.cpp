@@ -7,12 +7,14 @@
 #include "core/log.h"
 #include "core/version.h"
 #include "rig/cli.h"
+#include "rig/sim_rig.h"
 
 namespace {
 
 // The command line's own work: parse, dispatch, print.
 int Run(int argc, char** argv) {
   using namespace hairrig;
+  RegisterSimRig();  // rig configs with a `sim` section build the simulated rig
   CLI::App app{
       "hairrig: capture rig control and hair pipeline.\n"
       "With no --config, the rig is the simulated one in etc/ (etc/sim-rig.yaml)."};

@@ -38,7 +38,7 @@ Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) 
   capture.out_dir = out_dir;
   capture.rig_build.register_backends = [source](DeviceRegistry* registry) { RegisterReplayBackends(registry, source); };
   capture.rig_build.backend_override = "replay";
-  capture.rig_build.simulate = false;
+  capture.rig_build.attach_extensions = false;
   ReplayCaptureSummary summary;
   HR_ASSIGN_OR_RETURN(summary.capture, RunCapture(capture));
   summary.replayed_from = options.recorded_dir;

@@ -9,12 +9,16 @@
 #include "rig/capture.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_test_util.h"
+#include "rig/sim_rig.h"
 
 namespace hairrig {
 namespace {
 
 namespace fs = std::filesystem;
 using namespace hairrig::testing;
+
+// The recordings are made with the simulated rig (rig/sim_rig.h).
+[[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 Result<CaptureSummary> Replay(const std::string& recorded, const std::string& out, double speed) {
   auto summary = ReplayCapture({.recorded_dir = recorded, .out_dir = out, .speed = speed});

@@ -7,10 +7,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "rig/rig_config.h"
+#include "rig/sim_rig.h"
 #include "tests/support/camera_checks.h"
 
 namespace hairrig {
 namespace {
+
+// The rigs these tests build are simulated ones (rig/sim_rig.h).
+[[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 using std::chrono::milliseconds;
 // A liveness bound, not a speed check: sanitizer builds render slowly.
@@ -38,7 +42,7 @@ std::unique_ptr<Rig> OpenRigFromText(const std::string& devices_yaml) {
   EXPECT_TRUE(root.ok()) << root.status().ToString();
   RigConfig config;
   config.path = "etc/test-rig.yaml";
-  config.sim_scene_path = "etc/scenes/default.yaml";
+  config.relative_to = "etc";  // sim.scene resolves against it
   config.root = *root;
   auto rig = BuildRig(config);
   EXPECT_TRUE(rig.ok()) << rig.status().ToString();
@@ -141,7 +145,7 @@ TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
   ASSERT_TRUE(root.ok());
   RigConfig config;
   config.path = "etc/test-rig.yaml";
-  config.sim_scene_path = "etc/scenes/default.yaml";
+  config.relative_to = "etc";  // sim.scene resolves against it
   config.root = *root;
   auto rig = BuildRig(config);
   ASSERT_FALSE(rig.ok());
@@ -173,6 +177,27 @@ TEST(SimDevices, RelaySwitchedPanelsLightTheView) {
   ASSERT_TRUE(dark.ok() && lit.ok());
   EXPECT_LT(MeanDn(*dark), 2.0);
   EXPECT_GT(MeanDn(*lit), 20.0);
+}
+
+// `light:` names the scene light of a simulated board's channel: a board on the USB has none.
+TEST(SimDevices, ASceneLightNeedsTheSimulatedRelayBus) {
+  auto root = ConfigNode::LoadString(
+      "name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n"
+      "  lights:\n"
+      "    - {name: top, backend: usbrelay, serial: PANEL-1, board: RLY01, channel: 1, light: top}\n"
+      "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n",
+      "etc/test-rig.yaml");
+  ASSERT_TRUE(root.ok());
+  RigConfig config;
+  config.path = "etc/test-rig.yaml";
+  config.relative_to = "etc";
+  config.root = *root;
+  auto rig = BuildRig(config);
+  ASSERT_FALSE(rig.ok());
+  EXPECT_NE(rig.status().message().find("only with bus: sim"), std::string::npos)
+      << rig.status().ToString();
+  EXPECT_NE(rig.status().message().find("devices.lights[0].light"), std::string::npos)
+      << rig.status().ToString();
 }
 
 // etc/rig-example.yaml documents a real rig; it must stay a valid config.

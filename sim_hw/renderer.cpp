@@ -652,6 +652,16 @@ struct Renderer::Impl {
   }
 };
 
+namespace {
+
+Status CheckCameraIndex(const Scene& scene, int camera_index) {
+  if (camera_index >= 0 && camera_index < static_cast<int>(scene.cameras.size())) return Status::Ok();
+  return OutOfRange("camera index " + std::to_string(camera_index) + " is outside the scene's " +
+                    std::to_string(scene.cameras.size()) + " cameras");
+}
+
+}  // namespace
+
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Renderer::~Renderer() = default;
 const Scene& Renderer::scene() const { return impl_->scene; }
@@ -682,10 +692,7 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const Scene& scene) {
 
 Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, const RenderOptions& options) const {
   const Scene& scene = impl_->scene;
-  if (camera_index < 0 || camera_index >= static_cast<int>(scene.cameras.size())) {
-    return OutOfRange("camera index " + std::to_string(camera_index) + " is outside the scene's " +
-                      std::to_string(scene.cameras.size()) + " cameras");
-  }
+  HR_RETURN_IF_ERROR(CheckCameraIndex(scene, camera_index));
   if (!std::isfinite(turntable_deg)) return InvalidArgument("turntable angle is not a finite number");
   std::vector<double> levels = options.light_levels;
   if (levels.empty()) levels.assign(scene.lights.size(), 1.0);
@@ -732,7 +739,21 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, co
   out.tags = impl_->TagTruths(v);
   out.image = impl_->Expose(v, options);
   if (options.ground_truth) out.truth = impl_->TruthMaps(v);
+  if (options.keep_radiance) out.radiance = std::move(v.radiance);
   return out;
+}
+
+Result<cv::Mat> Renderer::Expose(int camera_index, const cv::Mat3f& radiance, const RenderOptions& options) const {
+  const Scene& scene = impl_->scene;
+  HR_RETURN_IF_ERROR(CheckCameraIndex(scene, camera_index));
+  const SceneCamera& camera = scene.cameras[static_cast<size_t>(camera_index)];
+  if (radiance.cols != camera.intrinsics.width_px || radiance.rows != camera.intrinsics.height_px) {
+    return InvalidArgument("radiance of " + std::to_string(radiance.cols) + "x" + std::to_string(radiance.rows) +
+                           " px for camera " + camera.serial + " of " + std::to_string(camera.intrinsics.width_px) +
+                           "x" + std::to_string(camera.intrinsics.height_px) + " px");
+  }
+  return render_support::ExposeRadiance(radiance, camera, options.exposure_s, options.gain_db, options.noise,
+                                        options.noise_seed);
 }
 
 }  // namespace hairrig

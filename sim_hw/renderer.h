@@ -41,6 +41,7 @@ struct RenderOptions {
   bool ground_truth = false;         // fill RenderedView::truth
   bool shade_hair = true;            // false: fibres drawn unlit and no shadow maps built (for
                                      // ground-truth maps alone: the geometry is the same, the image is not)
+  bool keep_radiance = false;        // fill RenderedView::radiance
 };
 
 // Ground truth of one tag in one rendered view.
@@ -56,6 +57,7 @@ struct RenderedView {
   cv::Mat image;  // CV_8UC3, BGR
   std::vector<TagTruth> tags;
   ViewTruthMaps truth;  // with RenderOptions::ground_truth only
+  cv::Mat3f radiance;   // linear scene radiance before exposure; with RenderOptions::keep_radiance only
 };
 
 class HeadModel;
@@ -79,6 +81,11 @@ class Renderer {
   // buffers of up to two finished renders are kept for the next ones (a few
   // hundred MB for a 50,000-strand wig), for as long as the renderer lives.
   Result<RenderedView> Render(int camera_index, double turntable_deg, const RenderOptions& options) const;
+  // The 8-bit BGR image camera `camera_index` records of `radiance` (a
+  // RenderedView::radiance of that camera) with `options`' exposure, gain and
+  // noise: the same image Render gives for those options. OutOfRange for a
+  // camera outside the scene, InvalidArgument for a radiance of another size.
+  Result<cv::Mat> Expose(int camera_index, const cv::Mat3f& radiance, const RenderOptions& options) const;
 
  private:
   struct Impl;

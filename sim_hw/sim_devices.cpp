@@ -185,7 +185,29 @@ class SimWorld {
     return truth_recorder_;
   }
 
+  // --- the last radiance each scene camera rendered -----------------------
+  // A frame of an unchanged world (same turntable angle and light levels) is
+  // exposed again from it, with its own noise, instead of rendered again.
+  struct CachedRadiance {
+    WorldExposure world;
+    cv::Mat3f radiance;
+  };
+  std::shared_ptr<const CachedRadiance> CachedRadianceFor(int scene_camera, const WorldExposure& exposure) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = radiance_cache_.find(scene_camera);
+    if (it == radiance_cache_.end() || !SameWorld(it->second->world, exposure)) return nullptr;
+    return it->second;
+  }
+  void CacheRadiance(int scene_camera, const WorldExposure& exposure, cv::Mat3f radiance) const {
+    auto entry = std::make_shared<const CachedRadiance>(CachedRadiance{exposure, std::move(radiance)});
+    std::lock_guard<std::mutex> lock(mutex_);
+    radiance_cache_[scene_camera] = std::move(entry);
+  }
+
  private:
+  static bool SameWorld(const WorldExposure& a, const WorldExposure& b) {
+    return std::abs(a.angle_deg - b.angle_deg) < 1e-9 && a.light_levels == b.light_levels;
+  }
   double AngleLocked() const {
     return move_start_deg_ + TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_,
                                                SimSecondsSince(move_start_));
@@ -206,6 +228,7 @@ class SimWorld {
   std::thread estop_timer_;
   std::unique_ptr<SimTurntableController> turntable_controller_;
   std::shared_ptr<const WorldTruthRecorder> truth_recorder_;
+  mutable std::map<int, std::shared_ptr<const CachedRadiance>> radiance_cache_;
 };
 
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options) {
@@ -245,9 +268,16 @@ Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, con
   o.noise = world.noise();
   o.noise_seed = noise_seed;
   const auto recorder = world.truth_recorder();
+  if (!recorder) {  // with a recorder every frame renders its maps
+    if (auto cached = world.CachedRadianceFor(scene_camera, exposure)) {
+      return world.renderer().Expose(scene_camera, cached->radiance, o);
+    }
+  }
   o.ground_truth = recorder != nullptr;
+  o.keep_radiance = true;
   HR_ASSIGN_OR_RETURN(RenderedView view, world.renderer().Render(scene_camera, exposure.angle_deg, o));
   if (recorder) (*recorder)(scene_camera, exposure.angle_deg, view.truth);
+  world.CacheRadiance(scene_camera, exposure, std::move(view.radiance));
   return std::move(view.image);
 }
 

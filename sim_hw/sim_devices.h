@@ -70,7 +70,10 @@ using WorldTruthRecorder = std::function<void(int scene_camera, double turntable
 // also compute their maps.
 void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder);
 // Renders scene camera `scene_camera` for `exposure` as 8-bit BGR, with the
-// world's noise setting; the same seed gives the same noise.
+// world's noise setting; the same seed gives the same noise. The camera's last
+// radiance is kept: a frame of the same turntable angle and light levels is
+// only exposed again (bit-identical to a new render), unless a truth recorder
+// is installed.
 Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
                                     double exposure_s, double gain_db, uint64_t noise_seed);
 // The RGGB Bayer mosaic a colour sensor would record of an 8-bit BGR image.

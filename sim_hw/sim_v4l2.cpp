@@ -168,6 +168,17 @@ class SimV4l2Device::Impl {
     std::lock_guard<std::mutex> lock(mutex_);
     corrupt_left_ += count;
   }
+  bool WaitUntilQueuedBuffersFilled(std::chrono::milliseconds timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return cv_.wait_for(lock, timeout, [this] {
+      bool filled = false;
+      for (const Buffer& b : buffers_) {
+        if (b.state == Buffer::State::kQueued) return false;
+        filled = filled || b.state == Buffer::State::kFilled;
+      }
+      return filled;
+    });
+  }
   int delivered() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return delivered_;
@@ -392,6 +403,9 @@ int SimV4l2Device::PollReadable(int fd, int timeout_ms) { return impl_->PollRead
 void SimV4l2Device::Unplug() { impl_->Unplug(); }
 void SimV4l2Device::Replug() { impl_->Replug(); }
 void SimV4l2Device::CorruptNextFrames(int count) { impl_->CorruptNextFrames(count); }
+bool SimV4l2Device::WaitUntilQueuedBuffersFilled(std::chrono::milliseconds timeout) {
+  return impl_->WaitUntilQueuedBuffersFilled(timeout);
+}
 int SimV4l2Device::frames_delivered() const { return impl_->delivered(); }
 int SimV4l2Device::frames_dropped() const { return impl_->dropped(); }
 

@@ -18,6 +18,7 @@
 // the camera takes are truncated MJPEG that does not decode.
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -51,6 +52,9 @@ class SimV4l2Device : public V4l2Io {
   void Unplug();
   void Replug();
   void CorruptNextFrames(int count);
+  // Waits until every buffer queued to the camera holds a frame (none is
+  // waiting to be filled); false if that has not happened within `timeout`.
+  bool WaitUntilQueuedBuffersFilled(std::chrono::milliseconds timeout);
   int frames_delivered() const;  // dequeued with a picture
   int frames_dropped() const;    // no queued buffer at the frame's time
 

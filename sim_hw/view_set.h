@@ -33,10 +33,6 @@ struct RenderViewsSummary {
 Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::string& out_dir,
                                           const RenderViewsOptions& options);
 
-// Thumbnails in a grid, each labelled; `columns` per row.
-cv::Mat MakeContactSheet(const std::vector<cv::Mat>& images, const std::vector<std::string>& labels, int columns,
-                         int thumb_width_px);
-
 // "007_SIM-CAM-UPPER.png"
 std::string ViewFileName(int view, const std::string& serial);
 

@@ -20,6 +20,7 @@
 
 #include "rig/capture.h"
 #include "rig/capture_test_util.h"
+#include "rig/sim_rig.h"
 #include "tests/support/modbus_tcp_peer.h"
 #include "tests/support/open_file_limit.h"
 
@@ -28,6 +29,9 @@ namespace {
 
 using namespace hairrig::testing;
 using Ms = std::chrono::milliseconds;
+
+// The rig these tests build is the simulated one (rig/sim_rig.h).
+[[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 constexpr size_t kHeld = 1000;
 constexpr int kChurnBatch = 20;
@@ -134,9 +138,11 @@ TEST(CaptureUnderModbusFlood, CompletesWithEveryViewVerified) {
   sockaddr_in server{};
   std::string served_by;
   options.rig_build.on_built = [&](const Rig& rig) {
-    ASSERT_EQ(rig.sim_modbus_servers.size(), 1u);
-    server = hairrig_test::ServerAddress(*rig.sim_modbus_servers[0]);
-    served_by = rig.sim_modbus_servers[0]->Describe();
+    const SimRigState* sim = FindSimRigState(rig);
+    ASSERT_NE(sim, nullptr);
+    ASSERT_EQ(sim->modbus_servers.size(), 1u);
+    server = hairrig_test::ServerAddress(*sim->modbus_servers[0]);
+    served_by = sim->modbus_servers[0]->Describe();
   };
   // The flood starts when the first move is announced (the turntable is open
   // and homed), and the capture goes on once every held connection is open.

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <memory>
-#include <thread>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -104,7 +103,7 @@ TEST(V4l2Camera, FramesQueuedBeforeTheTriggerAreSkipped) {
   ASSERT_TRUE(b.camera->Configure(s).ok());
   for (const char* light : {"top", "bottom"}) ASSERT_TRUE(SetWorldLightLevel(*b.world, light, 0.0).ok());
   ASSERT_TRUE(b.camera->Arm().ok());
-  std::this_thread::sleep_for(milliseconds(100));  // every buffer now holds a dark frame
+  ASSERT_TRUE(b.fake->WaitUntilQueuedBuffersFilled(kFrameWait));  // every buffer holds a dark frame
   for (const char* light : {"top", "bottom"}) ASSERT_TRUE(SetWorldLightLevel(*b.world, light, 1.0).ok());
   ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
   auto frame = b.camera->WaitFrame(kFrameWait);
@@ -148,7 +147,8 @@ TEST(V4l2Camera, ACorruptFrameIsReportedAndTheNextOneIsFine) {
   ASSERT_TRUE(b.camera->Open().ok());
   ASSERT_TRUE(b.camera->Configure({}).ok());
   ASSERT_TRUE(b.camera->Arm().ok());
-  std::this_thread::sleep_for(milliseconds(100));  // the buffers hold good frames taken before the trigger
+  // The buffers hold good frames taken before the trigger.
+  ASSERT_TRUE(b.fake->WaitUntilQueuedBuffersFilled(kFrameWait));
   b.fake->CorruptNextFrames(1);
   ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
   auto bad = b.camera->WaitFrame(kFrameWait);
