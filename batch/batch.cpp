@@ -11,6 +11,7 @@
 #include "batch/engine.h"
 #include "batch/stage_record.h"
 #include "core/file_util.h"
+#include "core/log.h"
 #include "rig/capture_dataset.h"
 
 namespace hairrig {
@@ -98,7 +99,14 @@ Result<SubmitSummary> SubmitLocked(const std::string& batch_dir, BatchState stat
   summary.stages = added->stages;
   summary.captures = plan.capture_dirs;
   summary.job_ids = added->job_ids;
-  HR_ASSIGN_OR_RETURN(summary.report, ReportBatch(batch_dir));
+  // The submission stands even when its jobs cannot be looked at just now.
+  Result<BatchReport> report = ReportBatch(batch_dir);
+  if (report.ok()) {
+    summary.report = *std::move(report);
+  } else {
+    LogWarning("submitted, but the batch's state cannot be read now: " + report.status().ToString());
+    summary.report.batch_dir = batch_dir;
+  }
   return summary;
 }
 

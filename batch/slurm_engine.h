@@ -8,7 +8,7 @@
 // It shells out to Slurm's commands from argument vectors (never a shell
 // line): sbatch --parsable to submit, squeue and scontrol with plain format
 // strings (not --json, whose shape changes between Slurm versions) to look at
-// the jobs. Slurm's states only say whether a job is still queued or running;
+// the jobs (squeue --me: look from the account that submitted). Slurm's states only say whether a job is still queued or running;
 // the result files decide whether it succeeded (batch/batch.h).
 //
 // Each stage's job script, <run dir>/<stage>.sbatch, lists the captures and

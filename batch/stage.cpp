@@ -62,7 +62,7 @@ Status AddCaptureFiles(const std::string& capture_dir, InputFiles* files) {
   std::error_code ec;
   if (!fs::is_directory(frames, ec)) return FailedPrecondition(frames.string() + " is missing: " + capture_made);
   for (const fs::directory_entry& entry : fs::directory_iterator(frames, ec)) {
-    if (entry.is_regular_file()) (*files)["frames/" + entry.path().filename().string()] = entry.path().string();
+    if (entry.is_regular_file(ec)) (*files)["frames/" + entry.path().filename().string()] = entry.path().string();
   }
   if (ec) return IoError(frames.string() + ": cannot list (" + ec.message() + ")");
   return Status::Ok();
@@ -204,10 +204,14 @@ Result<nlohmann::json> RunSimulate(const std::string& dir, const SimulateSetting
   fs::remove_all(partial, ec);
   fs::create_directories(folder, ec);
   if (ec) return IoError(folder.string() + ": cannot create (" + ec.message() + ")");
+  // Absolute: the dynamics run in the model's folder.
   SimulateStageRequest request;
-  request.model = (fs::path(dir) / kModelFile).string();
-  request.out_dir = partial.string();
+  request.model = fs::absolute(fs::path(dir) / kModelFile).string();
+  request.out_dir = fs::absolute(partial).string();
   HR_ASSIGN_OR_RETURN(request.settings, ResolvedSimulateSettings(dir, s));
+  for (std::string* file : {&request.settings.head, &request.settings.scene}) {
+    if (!file->empty()) *file = fs::absolute(*file).string();
+  }
   request.hairrig_exe = exe;
   HR_ASSIGN_OR_RETURN(nlohmann::json summary, RunSimulateForStage(request));
   fs::remove_all(out, ec);
