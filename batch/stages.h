@@ -21,9 +21,11 @@
 //                    "head": "", "scene": ""}}
 //
 // Relative file names resolve against the options file's folder. A stage's
-// options enter its input hash, except `threads` (the results do not depend
-// on it, with one exception: calibration with more than one thread sums in a
-// varying order, so calibration.json is bit-reproducible only with 1).
+// options enter its input hash, except `threads` and file names (the files'
+// contents do: batch/stage.h). Calibration with more than one thread sums in
+// a varying order, so its solution repeats bit for bit only with 1; its
+// uncertainties' last bits vary between runs in any case (Ceres orders the
+// covariance's parameter blocks by their memory addresses).
 #pragma once
 
 #include <array>
