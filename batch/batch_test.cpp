@@ -23,8 +23,9 @@ std::string ReadText(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// Normalised, as FindCaptures gives the captures under it.
 std::string FreshDir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "/batch_test/" + name;
+  const std::string dir = (fs::path(::testing::TempDir()) / "batch_test" / name).lexically_normal().string();
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
