@@ -22,7 +22,9 @@ namespace fs = std::filesystem;
 constexpr int kDefaultMaxParallel = 2;
 constexpr const char* kStates[] = {"done", "skipped", "failed", "blocked", "pending", "running"};
 
-std::string AbsoluteFolder(const std::string& dir) { return fs::absolute(dir).lexically_normal().string(); }
+std::string AbsoluteFolder(const std::string& dir) {
+  return fs::absolute(dir).lexically_normal().string();
+}
 
 // Entries "VALUE" (every stage) or "STAGE=VALUE" over `values`.
 Status ApplyPerStage(const std::vector<std::string>& entries, const char* option,
@@ -45,7 +47,7 @@ Result<StageSettings> SubmissionSettings(const std::string& batch_dir, const Sub
   return StageSettings{};
 }
 
-// The new submission of `captures`, its settings taken from `o` over the batch's latest submission's.
+// The new submission of `captures`: `o`'s settings over the batch's latest submission's.
 Result<Submission> NewSubmission(const BatchState& state, const std::vector<size_t>& captures,
                                  const SubmitOptions& o) {
   const Submission* latest = state.submissions.empty() ? nullptr : &state.submissions.back();
@@ -53,11 +55,13 @@ Result<Submission> NewSubmission(const BatchState& state, const std::vector<size
   s.run_id = NewRunId(state.submissions.size() + 1);
   s.engine = o.engine ? *o.engine : latest ? latest->engine : EngineKind::kLocal;
   s.stages = !o.stages.empty() ? o.stages
-             : latest        ? latest->stages
-                             : std::vector<Stage>(kAllStages.begin(), kAllStages.end());
+             : latest          ? latest->stages
+                               : std::vector<Stage>(kAllStages.begin(), kAllStages.end());
   s.captures = captures;
   s.submitted_utc = UtcNow();
-  s.max_parallel = o.max_parallel ? *o.max_parallel : latest ? latest->max_parallel : kDefaultMaxParallel;
+  s.max_parallel = o.max_parallel ? *o.max_parallel
+                   : latest       ? latest->max_parallel
+                                  : kDefaultMaxParallel;
   if (s.max_parallel < 0) return InvalidArgument("--max-parallel must be 0 (no limit) or more");
   s.partition = o.partition ? *o.partition : latest ? latest->partition : "";
   if (latest != nullptr) {
@@ -70,9 +74,10 @@ Result<Submission> NewSubmission(const BatchState& state, const std::vector<size
 }
 
 // Runs one new submission of `captures` with the batch folder locked.
-Result<SubmitSummary> SubmitLocked(const std::string& batch_dir, BatchState state, const std::vector<size_t>& captures,
-                                   const SubmitOptions& o) {
-  if (o.hairrig_exe.empty()) return InvalidArgument("the hairrig binary's path is needed for the jobs");
+Result<SubmitSummary> SubmitLocked(const std::string& batch_dir, BatchState state,
+                                   const std::vector<size_t>& captures, const SubmitOptions& o) {
+  if (o.hairrig_exe.empty())
+    return InvalidArgument("the hairrig binary's path is needed for the jobs");
   HR_ASSIGN_OR_RETURN(Submission submission, NewSubmission(state, captures, o));
   const Submission* latest = state.submissions.empty() ? nullptr : &state.submissions.back();
   HR_ASSIGN_OR_RETURN(const StageSettings settings, SubmissionSettings(batch_dir, o, latest));
@@ -85,12 +90,14 @@ Result<SubmitSummary> SubmitLocked(const std::string& batch_dir, BatchState stat
   std::error_code ec;
   fs::create_directories(submission.RunDir(batch_dir), ec);
   if (ec) return IoError(submission.RunDir(batch_dir) + ": cannot create (" + ec.message() + ")");
-  HR_RETURN_IF_ERROR(WriteFileAtomic(submission.OptionsFile(batch_dir), settings.ToJson().dump(2) + "\n"));
+  HR_RETURN_IF_ERROR(
+      WriteFileAtomic(submission.OptionsFile(batch_dir), settings.ToJson().dump(2) + "\n"));
 
   state.submissions.push_back(std::move(submission));
   Submission* added = &state.submissions.back();
   const std::unique_ptr<BatchEngine> engine = MakeBatchEngine(added->engine);
-  HR_RETURN_IF_ERROR(engine->Submit(plan, added, [&] { return WriteBatchState(batch_dir, state); }));
+  HR_RETURN_IF_ERROR(
+      engine->Submit(plan, added, [&] { return WriteBatchState(batch_dir, state); }));
 
   SubmitSummary summary;
   summary.batch_dir = batch_dir;
@@ -104,27 +111,30 @@ Result<SubmitSummary> SubmitLocked(const std::string& batch_dir, BatchState stat
   if (report.ok()) {
     summary.report = *std::move(report);
   } else {
-    LogWarning("submitted, but the batch's state cannot be read now: " + report.status().ToString());
+    LogWarning("submitted, but the batch's state cannot be read now: " +
+               report.status().ToString());
     summary.report.batch_dir = batch_dir;
   }
   return summary;
 }
 
-Result<BatchState> StartOrReadBatch(const std::string& batch_dir, const std::string& captures_source) {
+Result<BatchState> StartOrReadBatch(const std::string& batch_dir,
+                                    const std::string& captures_source) {
   Result<BatchState> read = ReadBatchState(batch_dir);
   if (!read.ok() && read.status().code() != StatusCode::kNotFound) return read.status();
   if (read.ok()) {
     if (!captures_source.empty()) {
       HR_ASSIGN_OR_RETURN(const std::vector<std::string> captures, FindCaptures(captures_source));
       if (captures != read->captures) {
-        return InvalidArgument(batch_dir + " holds a batch of other captures than " + captures_source +
-                               ": start a new batch in another --batch folder");
+        return InvalidArgument(batch_dir + " holds a batch of other captures than " +
+                               captures_source + ": start a new batch in another --batch folder");
       }
     }
     return read;
   }
   if (captures_source.empty()) {
-    return InvalidArgument(batch_dir + " holds no batch yet: give its captures with --captures FILE_OR_FOLDER");
+    return InvalidArgument(batch_dir +
+                           " holds no batch yet: give its captures with --captures FILE_OR_FOLDER");
   }
   BatchState state;
   state.created_utc = UtcNow();
@@ -149,8 +159,8 @@ class EngineViews {
 };
 
 // One cell from the stage's result file and the engine's view of its job.
-StageCell DecideCell(const std::string& capture, Stage stage, const Submission& submission, const JobView& view,
-                     const std::string& blocked_by) {
+StageCell DecideCell(const std::string& capture, Stage stage, const Submission& submission,
+                     const JobView& view, const std::string& blocked_by) {
   StageCell cell;
   cell.run_id = submission.run_id;
   const Result<StageRecord> record = ReadStageRecord(capture, stage);
@@ -167,7 +177,8 @@ StageCell DecideCell(const std::string& capture, Stage stage, const Submission& 
       cell.state = "running";
     } else {
       cell.state = "failed";
-      cell.error = "the stage started but never finished (killed, out of time or out of memory?)" + engine_words;
+      cell.error = "the stage started but never finished (killed, out of time or out of memory?)" +
+                   engine_words;
     }
     return cell;
   }
@@ -181,14 +192,16 @@ StageCell DecideCell(const std::string& capture, Stage stage, const Submission& 
   } else {
     cell.state = "failed";
     cell.error = "the job ended without writing its result" + engine_words;
-    if (!record.ok() && record.status().code() != StatusCode::kNotFound) cell.error += ": " + record.status().message();
+    if (!record.ok() && record.status().code() != StatusCode::kNotFound)
+      cell.error += ": " + record.status().message();
   }
   return cell;
 }
 
 // The earliest stage of `submission` before `stage` whose cell (of this
 // submission) failed or was blocked; "" when none.
-std::string BlockingStage(const Submission& submission, Stage stage, const std::map<Stage, StageCell>& cells) {
+std::string BlockingStage(const Submission& submission, Stage stage,
+                          const std::map<Stage, StageCell>& cells) {
   for (Stage earlier : submission.stages) {
     if (earlier == stage) break;
     const auto it = cells.find(earlier);
@@ -283,8 +296,9 @@ nlohmann::json BatchReport::ToJson() const {
     }
     rows.push_back({{"capture", c.capture}, {"stages", cells}});
   }
-  return {{"batch", batch_dir},           {"stages", stage_names}, {"finished", Finished()},
-          {"all_succeeded", AllSucceeded()}, {"counts", counts},      {"captures", rows},
+  return {{"batch", batch_dir},     {"stages", stage_names},
+          {"finished", Finished()}, {"all_succeeded", AllSucceeded()},
+          {"counts", counts},       {"captures", rows},
           {"brief", BriefReport()}};
 }
 
@@ -293,11 +307,14 @@ std::string BatchReport::Table() const {
   std::vector<std::string> names;
   size_t width = std::string("capture").size();
   for (const CaptureReport& c : captures) {
-    names.push_back(common.empty() ? c.capture : fs::path(c.capture).lexically_relative(common).string());
+    names.push_back(common.empty() ? c.capture
+                                   : fs::path(c.capture).lexically_relative(common).string());
     width = std::max(width, names.back().size());
   }
   std::string text = common.empty() ? "" : "captures in " + common.string() + "\n";
-  auto pad = [](const std::string& s, size_t n) { return s + std::string(n > s.size() ? n - s.size() : 0, ' '); };
+  auto pad = [](const std::string& s, size_t n) {
+    return s + std::string(n > s.size() ? n - s.size() : 0, ' ');
+  };
   text += pad("capture", width);
   for (Stage stage : stages) text += "  " + pad(StageName(stage), 12);
   text += "\n";
@@ -308,7 +325,8 @@ std::string BatchReport::Table() const {
       const StageCell& cell = captures[r].stages[k];
       text += "  " + pad(cell.state.empty() ? "-" : cell.state, 12);
       if (cell.state == "failed") {
-        failures += "  " + names[r] + " " + StageName(stages[k]) + ": " + cell.error + "\n    log: " + cell.log + "\n";
+        failures += "  " + names[r] + " " + StageName(stages[k]) + ": " + cell.error +
+                    "\n    log: " + cell.log + "\n";
       }
     }
     text += "\n";
@@ -318,7 +336,8 @@ std::string BatchReport::Table() const {
 }
 
 std::string BatchReport::BriefReport() const {
-  std::string text = std::to_string(captures.size()) + " captures x " + std::to_string(stages.size()) + " stages:";
+  std::string text =
+      std::to_string(captures.size()) + " captures x " + std::to_string(stages.size()) + " stages:";
   bool first = true;
   for (const char* state : kStates) {
     const int n = Count(state);
@@ -333,8 +352,9 @@ std::string BatchReport::BriefReport() const {
 nlohmann::json SubmitSummary::ToJson() const {
   nlohmann::json stage_names = nlohmann::json::array();
   for (Stage stage : stages) stage_names.push_back(StageName(stage));
-  return {{"batch", batch_dir}, {"run_id", run_id},   {"engine", EngineName(engine)}, {"stages", stage_names},
-          {"captures", captures}, {"job_ids", job_ids}, {"report", report.ToJson()}};
+  return {{"batch", batch_dir},       {"run_id", run_id},     {"engine", EngineName(engine)},
+          {"stages", stage_names},    {"captures", captures}, {"job_ids", job_ids},
+          {"report", report.ToJson()}};
 }
 
 Result<SubmitSummary> SubmitBatch(const SubmitOptions& options) {
@@ -358,8 +378,9 @@ Result<SubmitSummary> ResubmitFailed(const SubmitOptions& options) {
   std::vector<size_t> failed;
   for (size_t c = 0; c < report.captures.size(); ++c) {
     const auto& cells = report.captures[c].stages;
-    if (std::any_of(cells.begin(), cells.end(),
-                    [](const StageCell& cell) { return cell.state == "failed" || cell.state == "blocked"; })) {
+    if (std::any_of(cells.begin(), cells.end(), [](const StageCell& cell) {
+          return cell.state == "failed" || cell.state == "blocked";
+        })) {
       failed.push_back(c);
     }
   }
@@ -383,7 +404,8 @@ Result<BatchReport> WaitForBatch(const std::string& batch_dir, double timeout_s,
   while (true) {
     HR_ASSIGN_OR_RETURN(BatchReport report, ReportBatch(batch_dir));
     if (report.Finished()) return report;
-    const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (timeout_s > 0 && waited >= timeout_s) {
       char text[64];
       std::snprintf(text, sizeof text, "%.0f s", waited);

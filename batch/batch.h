@@ -36,7 +36,7 @@ struct SubmitOptions {
   std::vector<Stage> stages;         // empty: the batch's latest submission's, else every stage
   // The stage options file (batch/stages.h); empty: the latest submission's, else the defaults.
   std::string stage_options;
-  std::optional<int> max_parallel;   // captures at once; unset: the latest submission's, else 2
+  std::optional<int> max_parallel;       // captures at once; unset: the latest submission's, else 2
   std::optional<std::string> partition;  // Slurm; unset: the latest submission's
   // Slurm's --time and --mem: "VALUE" for every stage or "STAGE=VALUE", each
   // entry over the latest submission's; empty: the latest submission's.
@@ -106,6 +106,7 @@ Result<BatchReport> ReportBatch(const std::string& batch_dir);
 
 // Polls ReportBatch every `poll_s` until it is finished; Timeout after
 // `timeout_s` (<= 0: no limit) saying how many jobs remain.
-Result<BatchReport> WaitForBatch(const std::string& batch_dir, double timeout_s, double poll_s = 2.0);
+Result<BatchReport> WaitForBatch(const std::string& batch_dir, double timeout_s,
+                                 double poll_s = 2.0);
 
 }  // namespace hairrig

@@ -26,22 +26,26 @@ namespace fs = std::filesystem;
 constexpr const char* kFormat = "hairrig-batch";
 constexpr int kVersion = 1;
 
-std::string StatePath(const std::string& batch_dir) { return (fs::path(batch_dir) / "batch.json").string(); }
+std::string StatePath(const std::string& batch_dir) {
+  return (fs::path(batch_dir) / "batch.json").string();
+}
 
 nlohmann::json SubmissionToJson(const Submission& s) {
   nlohmann::json stages = nlohmann::json::array();
   for (Stage stage : s.stages) stages.push_back(StageName(stage));
-  return nlohmann::json{{"run_id", s.run_id},
-                        {"engine", EngineName(s.engine)},
-                        {"stages", stages},
-                        {"captures", s.captures},
-                        {"submitted_utc", s.submitted_utc},
-                        {"max_parallel", s.max_parallel},
-                        {"partition", s.partition},
-                        {"time_limit", s.time_limit},
-                        {"mem", s.mem},
-                        {"job_ids", s.job_ids},
-                        {"runner", {{"host", s.runner_host}, {"pid", s.runner_pid}, {"start_ticks", s.runner_start_ticks}}}};
+  return nlohmann::json{
+      {"run_id", s.run_id},
+      {"engine", EngineName(s.engine)},
+      {"stages", stages},
+      {"captures", s.captures},
+      {"submitted_utc", s.submitted_utc},
+      {"max_parallel", s.max_parallel},
+      {"partition", s.partition},
+      {"time_limit", s.time_limit},
+      {"mem", s.mem},
+      {"job_ids", s.job_ids},
+      {"runner",
+       {{"host", s.runner_host}, {"pid", s.runner_pid}, {"start_ticks", s.runner_start_ticks}}}};
 }
 
 std::map<std::string, std::string> StringMap(const JsonObject& o, const char* key) {
@@ -70,7 +74,8 @@ Submission SubmissionFromJson(const JsonObject& o, size_t capture_count) {
     }
     s.stages.push_back(*stage);
   }
-  for (int64_t index : o.IntegersOr("captures", {.min = 0, .max = static_cast<int64_t>(capture_count) - 1})) {
+  for (int64_t index :
+       o.IntegersOr("captures", {.min = 0, .max = static_cast<int64_t>(capture_count) - 1})) {
     s.captures.push_back(static_cast<size_t>(index));
   }
   s.submitted_utc = o.StringOr("submitted_utc", "");
@@ -108,7 +113,8 @@ Result<std::vector<std::string>> ReadCaptureList(const std::string& list_file) {
   int line_number = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_number;
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) line.pop_back();
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
+      line.pop_back();
     const size_t start = line.find_first_not_of(" \t");
     if (start == std::string::npos || line[start] == '#') continue;
     const fs::path path = (base / line.substr(start)).lexically_normal();
@@ -123,7 +129,9 @@ Result<std::vector<std::string>> ReadCaptureList(const std::string& list_file) {
 
 }  // namespace
 
-const char* EngineName(EngineKind engine) { return engine == EngineKind::kSlurm ? "slurm" : "local"; }
+const char* EngineName(EngineKind engine) {
+  return engine == EngineKind::kSlurm ? "slurm" : "local";
+}
 
 Result<EngineKind> ParseEngine(const std::string& name) {
   if (name == "local") return EngineKind::kLocal;
@@ -131,7 +139,9 @@ Result<EngineKind> ParseEngine(const std::string& name) {
   return InvalidArgument("unknown engine '" + name + "' (engines: local, slurm)");
 }
 
-bool Submission::Holds(Stage stage) const { return std::find(stages.begin(), stages.end(), stage) != stages.end(); }
+bool Submission::Holds(Stage stage) const {
+  return std::find(stages.begin(), stages.end(), stage) != stages.end();
+}
 
 int Submission::IndexOf(size_t capture) const {
   const auto it = std::find(captures.begin(), captures.end(), capture);
@@ -147,7 +157,8 @@ std::string Submission::OptionsFile(const std::string& batch_dir) const {
 }
 
 std::string Submission::LogFile(const std::string& batch_dir, Stage stage, size_t index) const {
-  return (fs::path(RunDir(batch_dir)) / "logs" / (std::string(StageName(stage)) + "_" + std::to_string(index) + ".log"))
+  return (fs::path(RunDir(batch_dir)) / "logs" /
+          (std::string(StageName(stage)) + "_" + std::to_string(index) + ".log"))
       .string();
 }
 
@@ -168,7 +179,9 @@ Result<BatchState> ReadBatchState(const std::string& batch_dir) {
   const std::string path = StatePath(batch_dir);
   std::error_code ec;
   if (!fs::exists(path, ec)) {
-    return NotFound(batch_dir + " holds no batch (no batch.json): start one with `hairrig batch submit --captures`");
+    return NotFound(
+        batch_dir +
+        " holds no batch (no batch.json): start one with `hairrig batch submit --captures`");
   }
   HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path));
   const JsonObject o(j, path);
@@ -212,7 +225,8 @@ Result<BatchLock> BatchLock::Acquire(const std::string& batch_dir) {
     const int error = errno;
     ::close(fd);
     if (error == EWOULDBLOCK) {
-      return FailedPrecondition(batch_dir + " is in use by another `hairrig batch` command (a submit still running?)");
+      return FailedPrecondition(
+          batch_dir + " is in use by another `hairrig batch` command (a submit still running?)");
     }
     return IoErrorFromErrno(path + ": cannot lock", error);
   }
@@ -245,12 +259,15 @@ Result<std::vector<std::string>> FindCaptures(const std::string& source) {
   for (std::string& capture : captures) {
     if (!capture.empty() && capture.back() == '/') capture.pop_back();
     if (capture.find('\n') != std::string::npos) {
-      return InvalidArgument(capture + ": a capture path with a newline cannot be listed in a job script");
+      return InvalidArgument(capture +
+                             ": a capture path with a newline cannot be listed in a job script");
     }
-    if (!seen.insert(capture).second) return InvalidArgument(source + ": " + capture + " is listed twice");
+    if (!seen.insert(capture).second)
+      return InvalidArgument(source + ": " + capture + " is listed twice");
   }
   if (captures.empty()) {
-    return InvalidArgument(source + ": no capture folder (a folder with journal.jsonl and capture.json) found");
+    return InvalidArgument(
+        source + ": no capture folder (a folder with journal.jsonl and capture.json) found");
   }
   return captures;
 }

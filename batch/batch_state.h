@@ -4,11 +4,13 @@
 //     {"format": "hairrig-batch", "version": 1, "created_utc": "...",
 //      "captures": ["/archive/cap1", ...],        absolute paths
 //      "submissions": [{"run_id": "r1-20261124T101500-3fa2c1", "engine": "slurm",
-//                       "stages": ["calibrate", ...], "captures": [0, 2, ...],   indices into captures
+//                       "stages": ["calibrate", ...],
+//                       "captures": [0, 2, ...],                 indices into captures
 //                       "submitted_utc": "...", "max_parallel": 4, "partition": "",
 //                       "time_limit": {"reconstruct": "2:00:00"}, "mem": {"*": "8G"},
-//                       "job_ids": {"calibrate": "1041", ...},                   Slurm array job ids
-//                       "runner": {"host": "...", "pid": 4242, "start_ticks": 123}}]}   the local runner
+//                       "job_ids": {"calibrate": "1041", ...},   Slurm array job ids
+//                       "runner": {"host": "...", "pid": 4242, "start_ticks": 123}}]}
+//                                                                the local runner
 //   DIR/batch.lock     held (flock) by a command that changes batch.json
 //   DIR/runs/<run id>/ one submission: stage_options.json (every option, as the jobs read them),
 //                      logs/<stage>_<i>.log (i: the capture's place in the submission's list),
@@ -38,11 +40,12 @@ Result<EngineKind> ParseEngine(const std::string& name);
 struct Submission {
   std::string run_id;
   EngineKind engine = EngineKind::kLocal;
-  std::vector<Stage> stages;     // in pipeline order
-  std::vector<size_t> captures;  // indices into BatchState::captures; a job's index is the place here
+  std::vector<Stage> stages;  // in pipeline order
+  std::vector<size_t>
+      captures;  // indices into BatchState::captures; a job's index is the place here
   std::string submitted_utc;
-  int max_parallel = 0;          // captures processed at once (Slurm: the array's %K); 0: no limit
-  std::string partition;         // Slurm
+  int max_parallel = 0;   // captures processed at once (Slurm: the array's %K); 0: no limit
+  std::string partition;  // Slurm
   // Per stage name ("*": every stage without its own), Slurm's --time and --mem.
   std::map<std::string, std::string> time_limit, mem;
   std::map<std::string, std::string> job_ids;  // Slurm: stage name -> array job id

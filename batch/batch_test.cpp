@@ -25,7 +25,8 @@ std::string ReadText(const std::string& path) {
 
 // Normalised, as FindCaptures gives the captures under it.
 std::string FreshDir(const std::string& name) {
-  const std::string dir = (fs::path(::testing::TempDir()) / "batch_test" / name).lexically_normal().string();
+  const std::string dir =
+      (fs::path(::testing::TempDir()) / "batch_test" / name).lexically_normal().string();
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -44,14 +45,20 @@ std::string FakeHairrig(const std::string& dir) {
   const std::string path = dir + "/fake_hairrig";
   std::ofstream(path) << R"(#!/bin/bash
 stage=$2 capture=$4 run=$8
-case $stage in calibrate) folder=calibration ;; reconstruct) folder=reconstruction ;; *) folder=$stage ;; esac
+case $stage in
+  calibrate) folder=calibration ;;
+  reconstruct) folder=reconstruction ;;
+  *) folder=$stage ;;
+esac
 echo "$stage" >> "$capture/order.txt"
 [ -f "$capture/silent_$stage" ] && exit 0
 status=ok error=""
 if [ -f "$capture/fail_$stage" ]; then status=failed error="made to fail"; fi
 mkdir -p "$capture/$folder"
-printf '{"format": "hairrig-stage-result", "version": 1, "stage": "%s", "status": "%s", "run_id": "%s", "error": "%s", "input_hash": "h-%s"}\n' \
-  "$stage" "$status" "$run" "$error" "$stage" > "$capture/$folder/result.json"
+printf '{"format": "hairrig-stage-result", "version": 1, "stage": "%s", "status": "%s", ' \
+  "$stage" "$status" > "$capture/$folder/result.json"
+printf '"run_id": "%s", "error": "%s", "input_hash": "h-%s"}\n' \
+  "$run" "$error" "$stage" >> "$capture/$folder/result.json"
 [ "$status" = ok ]
 )";
   fs::permissions(path, fs::perms::owner_all);
@@ -98,13 +105,15 @@ TEST(FindCaptures, FoldersAreSearchedAndListsRead) {
   ASSERT_TRUE(found.ok()) << found.status().ToString();
   EXPECT_EQ(*found, a.captures);
 
-  std::ofstream(a.root + "/list.txt") << "# the archive\narchive/b/cap2\n\n" << a.captures[0] << "/\n";
+  std::ofstream(a.root + "/list.txt") << "# the archive\narchive/b/cap2\n\n"
+                                      << a.captures[0] << "/\n";
   const Result<std::vector<std::string>> listed = FindCaptures(a.root + "/list.txt");
   ASSERT_TRUE(listed.ok()) << listed.status().ToString();
   EXPECT_EQ(*listed, (std::vector<std::string>{a.captures[2], a.captures[0]}));
 
   std::ofstream(a.root + "/twice.txt") << "archive/b/cap2\narchive/b/../b/cap2\n";
-  EXPECT_NE(FindCaptures(a.root + "/twice.txt").status().message().find("listed twice"), std::string::npos);
+  EXPECT_NE(FindCaptures(a.root + "/twice.txt").status().message().find("listed twice"),
+            std::string::npos);
   std::ofstream(a.root + "/wrong.txt") << "archive/empty\n";
   const Status wrong = FindCaptures(a.root + "/wrong.txt").status();
   EXPECT_NE(wrong.message().find("wrong.txt:1"), std::string::npos) << wrong.ToString();
@@ -188,7 +197,8 @@ TEST(LocalBatch, StagesRunInOrderAndAFailureBlocksTheLaterOnes) {
   EXPECT_EQ(resubmitted->captures, (std::vector<std::string>{a.captures[1], a.captures[2]}));
   EXPECT_TRUE(resubmitted->report.AllSucceeded()) << resubmitted->report.Table();
   EXPECT_EQ(ReadText(a.captures[0] + "/order.txt"), "calibrate\nreconstruct\nfit\nsimulate\n");
-  EXPECT_NE(Cell(resubmitted->report, 1, Stage::kFit).run_id, Cell(resubmitted->report, 0, Stage::kFit).run_id);
+  EXPECT_NE(Cell(resubmitted->report, 1, Stage::kFit).run_id,
+            Cell(resubmitted->report, 0, Stage::kFit).run_id);
 
   const Result<SubmitSummary> nothing = ResubmitFailed(again);
   ASSERT_TRUE(nothing.ok());

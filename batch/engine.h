@@ -23,7 +23,8 @@ enum class JobPhase { kQueued, kRunning, kEnded };
 
 struct JobView {
   JobPhase phase = JobPhase::kEnded;
-  std::string detail;  // the engine's own words, for reports ("Slurm: CANCELLED (DependencyNeverSatisfied)")
+  // The engine's own words, for reports ("Slurm: CANCELLED (DependencyNeverSatisfied)").
+  std::string detail;
 };
 
 // The engine's view of a submission's jobs, by stage and the capture's place
@@ -44,14 +45,14 @@ class JobViews {
 // what its jobs need.
 struct SubmitPlan {
   std::string batch_dir;
-  std::string hairrig_exe;                 // the absolute path every job runs
-  std::vector<std::string> capture_dirs;   // the submission's captures, in its order
-  StageSettings settings;                  // as written to the submission's options file
+  std::string hairrig_exe;                // the absolute path every job runs
+  std::vector<std::string> capture_dirs;  // the submission's captures, in its order
+  StageSettings settings;                 // as written to the submission's options file
 };
 
 // The job of one stage of one capture: hairrig's arguments after the binary.
-std::vector<std::string> StageJobArguments(const SubmitPlan& plan, const Submission& submission, Stage stage,
-                                           const std::string& capture_dir);
+std::vector<std::string> StageJobArguments(const SubmitPlan& plan, const Submission& submission,
+                                           Stage stage, const std::string& capture_dir);
 
 class BatchEngine {
  public:
@@ -60,7 +61,8 @@ class BatchEngine {
   // ids or runner filled in) in the batch folder; the engine calls it as soon
   // as the jobs can be looked up (the local engine again when they ended),
   // and fails if it fails.
-  virtual Status Submit(const SubmitPlan& plan, Submission* submission, const std::function<Status()>& record) = 0;
+  virtual Status Submit(const SubmitPlan& plan, Submission* submission,
+                        const std::function<Status()>& record) = 0;
   // The engine's view of the submission's jobs. Errors: the engine cannot be
   // asked (Slurm's commands missing or failing).
   virtual Result<JobViews> View(const Submission& submission) = 0;

@@ -27,7 +27,8 @@ void RunCaptureStages(const SubmitPlan& plan, const Submission& submission, size
   for (Stage stage : submission.stages) {
     const std::string log = submission.LogFile(plan.batch_dir, stage, index);
     std::vector<std::string> argv{plan.hairrig_exe};
-    for (std::string& arg : StageJobArguments(plan, submission, stage, capture)) argv.push_back(std::move(arg));
+    for (std::string& arg : StageJobArguments(plan, submission, stage, capture))
+      argv.push_back(std::move(arg));
     ProcessOptions options;
     options.output_file = log;
     const Result<ProcessResult> run = RunProcess(argv, options);
@@ -44,8 +45,8 @@ void RunCaptureStages(const SubmitPlan& plan, const Submission& submission, size
     }
     const Result<StageRecord> record = ReadStageRecord(capture, stage);
     if (!record.ok() || record->run_id != submission.run_id || !record->ok()) {
-      LogWarning(std::string(StageName(stage)) + " of " + capture + " ended without a successful result (log: " +
-                 log + ")");
+      LogWarning(std::string(StageName(stage)) + " of " + capture +
+                 " ended without a successful result (log: " + log + ")");
       return;
     }
     LogInfo(std::string(StageName(stage)) + " of " + capture + ": done");
@@ -54,7 +55,8 @@ void RunCaptureStages(const SubmitPlan& plan, const Submission& submission, size
 
 }  // namespace
 
-Status LocalEngine::Submit(const SubmitPlan& plan, Submission* submission, const std::function<Status()>& record) {
+Status LocalEngine::Submit(const SubmitPlan& plan, Submission* submission,
+                           const std::function<Status()>& record) {
   const fs::path logs = fs::path(submission->RunDir(plan.batch_dir)) / "logs";
   std::error_code ec;
   fs::create_directories(logs, ec);
@@ -64,8 +66,10 @@ Status LocalEngine::Submit(const SubmitPlan& plan, Submission* submission, const
   submission->runner_start_ticks = ProcessStartTicks(::getpid());
   HR_RETURN_IF_ERROR(record());
   const size_t count = plan.capture_dirs.size();
-  const int workers = submission->max_parallel > 0 ? submission->max_parallel : static_cast<int>(count);
-  ParallelFor(count, workers, [&] { return [&](size_t index) { RunCaptureStages(plan, *submission, index); }; });
+  const int workers =
+      submission->max_parallel > 0 ? submission->max_parallel : static_cast<int>(count);
+  ParallelFor(count, workers,
+              [&] { return [&](size_t index) { RunCaptureStages(plan, *submission, index); }; });
   submission->runner_pid = 0;  // ended: stages without a result now count as failed or blocked
   submission->runner_start_ticks = 0;
   return record();
@@ -73,12 +77,15 @@ Status LocalEngine::Submit(const SubmitPlan& plan, Submission* submission, const
 
 Result<JobViews> LocalEngine::View(const Submission& submission) {
   JobViews views;
-  const bool runs = submission.runner_pid > 0 && submission.runner_host == ThisHost() &&
-                    ProcessRuns(static_cast<pid_t>(submission.runner_pid), submission.runner_start_ticks);
+  const bool runs =
+      submission.runner_pid > 0 && submission.runner_host == ThisHost() &&
+      ProcessRuns(static_cast<pid_t>(submission.runner_pid), submission.runner_start_ticks);
   if (!runs) return views;
   for (Stage stage : submission.stages) {
     for (size_t index = 0; index < submission.captures.size(); ++index) {
-      views.Set(stage, index, JobView{JobPhase::kQueued, "local runner pid " + std::to_string(submission.runner_pid)});
+      views.Set(
+          stage, index,
+          JobView{JobPhase::kQueued, "local runner pid " + std::to_string(submission.runner_pid)});
     }
   }
   return views;

@@ -14,7 +14,8 @@ namespace hairrig {
 
 class LocalEngine : public BatchEngine {
  public:
-  Status Submit(const SubmitPlan& plan, Submission* submission, const std::function<Status()>& record) override;
+  Status Submit(const SubmitPlan& plan, Submission* submission,
+                const std::function<Status()>& record) override;
   // Queued while the runner runs (a stage that started shows as running by
   // its result.json); ended once it is gone.
   Result<JobViews> View(const Submission& submission) override;

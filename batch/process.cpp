@@ -87,7 +87,8 @@ Status DrainPipes(int out_fd, int err_fd, size_t max_bytes, std::string* out, st
         continue;
       }
       std::string& sink = *sinks[k];
-      if (sink.size() < max_bytes) sink.append(buffer.data(), std::min(static_cast<size_t>(n), max_bytes - sink.size()));
+      if (sink.size() < max_bytes)
+        sink.append(buffer.data(), std::min(static_cast<size_t>(n), max_bytes - sink.size()));
     }
   }
   return Status::Ok();
@@ -114,7 +115,8 @@ std::string LastLine(const std::string& text) {
   const size_t end = text.find_last_not_of("\n\r ");
   if (end == std::string::npos) return "";
   const size_t start = text.rfind('\n', end);
-  return text.substr(start == std::string::npos ? 0 : start + 1, end + 1 - (start == std::string::npos ? 0 : start + 1));
+  return text.substr(start == std::string::npos ? 0 : start + 1,
+                     end + 1 - (start == std::string::npos ? 0 : start + 1));
 }
 
 }  // namespace
@@ -124,7 +126,8 @@ std::string ProcessResult::Describe() const {
   return line.empty() ? "exit code " + std::to_string(exit_code) : line;
 }
 
-Result<ProcessResult> RunProcess(const std::vector<std::string>& argv, const ProcessOptions& options) {
+Result<ProcessResult> RunProcess(const std::vector<std::string>& argv,
+                                 const ProcessOptions& options) {
   if (argv.empty() || argv[0].empty()) return InvalidArgument("RunProcess: no program given");
   FileActions actions;
   ::posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0);
@@ -137,8 +140,10 @@ Result<ProcessResult> RunProcess(const std::vector<std::string>& argv, const Pro
     ::posix_spawn_file_actions_adddup2(actions.get(), err.write_end.get(), STDERR_FILENO);
   } else {
     // Opened here, so a file that cannot be written is reported by name.
-    log_file.Reset(::open(options.output_file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644));
-    if (log_file.get() < 0) return IoErrorFromErrno(options.output_file + ": cannot open the log file", errno);
+    log_file.Reset(
+        ::open(options.output_file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644));
+    if (log_file.get() < 0)
+      return IoErrorFromErrno(options.output_file + ": cannot open the log file", errno);
     ::posix_spawn_file_actions_adddup2(actions.get(), log_file.get(), STDOUT_FILENO);
     ::posix_spawn_file_actions_adddup2(actions.get(), log_file.get(), STDERR_FILENO);
   }
@@ -147,7 +152,8 @@ Result<ProcessResult> RunProcess(const std::vector<std::string>& argv, const Pro
   }
   std::vector<char*> args = ArgvPointers(argv);
   pid_t pid = -1;
-  const int spawn_error = ::posix_spawnp(&pid, argv[0].c_str(), actions.get(), nullptr, args.data(), environ);
+  const int spawn_error =
+      ::posix_spawnp(&pid, argv[0].c_str(), actions.get(), nullptr, args.data(), environ);
   if (spawn_error != 0) {
     const std::string where = options.working_dir.empty() ? "" : " in " + options.working_dir;
     return NotFound(argv[0] + ": cannot be started" + where + " (" + std::strerror(spawn_error) +
@@ -159,7 +165,8 @@ Result<ProcessResult> RunProcess(const std::vector<std::string>& argv, const Pro
   ProcessResult result;
   Status drained = Status::Ok();
   if (options.output_file.empty()) {
-    drained = DrainPipes(out.read_end.get(), err.read_end.get(), options.max_capture_bytes, &result.out, &result.err);
+    drained = DrainPipes(out.read_end.get(), err.read_end.get(), options.max_capture_bytes,
+                         &result.out, &result.err);
   }
   HR_ASSIGN_OR_RETURN(result.exit_code, WaitForChild(pid));
   HR_RETURN_IF_ERROR(drained);
@@ -181,7 +188,8 @@ std::string ShellQuote(const std::string& text) {
 Result<std::string> SelfExecutable() {
   std::array<char, PATH_MAX> path;
   const ssize_t n = ::readlink("/proc/self/exe", path.data(), path.size() - 1);
-  if (n <= 0) return IoErrorFromErrno("/proc/self/exe: cannot read the running program's path", errno);
+  if (n <= 0)
+    return IoErrorFromErrno("/proc/self/exe: cannot read the running program's path", errno);
   return std::string(path.data(), static_cast<size_t>(n));
 }
 

@@ -40,7 +40,8 @@ struct ProcessResult {
 // program when it cannot be found or executed; IoError naming the output file
 // or the failed system call. A program that runs and fails is not an error:
 // its exit code is in the result.
-Result<ProcessResult> RunProcess(const std::vector<std::string>& argv, const ProcessOptions& options = {});
+Result<ProcessResult> RunProcess(const std::vector<std::string>& argv,
+                                 const ProcessOptions& options = {});
 
 // `text` as one word for a POSIX shell: single-quoted, with each ' written '\''.
 std::string ShellQuote(const std::string& text);

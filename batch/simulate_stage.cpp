@@ -15,10 +15,21 @@ std::string NumberText(double value) { return nlohmann::json(value).dump(); }
 
 std::vector<std::string> SimulateArgv(const SimulateStageRequest& r) {
   const SimulateSettings& s = r.settings;
-  std::vector<std::string> argv{r.hairrig_exe, "--log-level",   "warning",  "simulate",
-                                r.model,       "--out",         r.out_dir,  "--scenario",
-                                s.scenario,    "--seconds",     NumberText(s.seconds),
-                                "--fps",       NumberText(s.fps), "--preview-every", std::to_string(s.preview_every),
+  std::vector<std::string> argv{r.hairrig_exe,
+                                "--log-level",
+                                "warning",
+                                "simulate",
+                                r.model,
+                                "--out",
+                                r.out_dir,
+                                "--scenario",
+                                s.scenario,
+                                "--seconds",
+                                NumberText(s.seconds),
+                                "--fps",
+                                NumberText(s.fps),
+                                "--preview-every",
+                                std::to_string(s.preview_every),
                                 "--json"};
   if (!s.head.empty()) argv.insert(argv.end(), {"--head", s.head});
   if (!s.scene.empty()) argv.insert(argv.end(), {"--scene", s.scene});
@@ -28,11 +39,13 @@ std::vector<std::string> SimulateArgv(const SimulateStageRequest& r) {
 }  // namespace
 
 Result<nlohmann::json> RunSimulateForStage(const SimulateStageRequest& request) {
-  if (request.hairrig_exe.empty()) return InvalidArgument("the simulate stage needs the hairrig binary's path");
+  if (request.hairrig_exe.empty())
+    return InvalidArgument("the simulate stage needs the hairrig binary's path");
   ProcessOptions options;
   options.working_dir = fs::path(request.model).parent_path().string();
   HR_ASSIGN_OR_RETURN(const ProcessResult run, RunProcess(SimulateArgv(request), options));
-  if (run.exit_code != 0) return FailedPrecondition("hairrig simulate " + request.model + ": " + run.Describe());
+  if (run.exit_code != 0)
+    return FailedPrecondition("hairrig simulate " + request.model + ": " + run.Describe());
   const size_t end = run.out.find_last_not_of('\n');
   const size_t start = end == std::string::npos ? std::string::npos : run.out.rfind('\n', end);
   const std::string last_line =

@@ -14,10 +14,10 @@
 namespace hairrig {
 
 struct SimulateStageRequest {
-  std::string model;           // a helix model written by the fit stage
-  std::string out_dir;         // written by the dynamics; absent or empty
-  SimulateSettings settings;   // head and scene: files, or empty for the command's defaults
-  std::string hairrig_exe;     // the hairrig binary
+  std::string model;          // a helix model written by the fit stage
+  std::string out_dir;        // written by the dynamics; absent or empty
+  SimulateSettings settings;  // head and scene: files, or empty for the command's defaults
+  std::string hairrig_exe;    // the hairrig binary
 };
 
 // The summary `hairrig simulate --json` prints (also in <out_dir>/summary.json).

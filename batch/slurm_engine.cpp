@@ -52,7 +52,8 @@ Status Cancel(const SlurmCommands& commands, const std::vector<std::string>& job
   std::vector<std::string> argv{commands.scancel};
   argv.insert(argv.end(), job_ids.begin(), job_ids.end());
   HR_ASSIGN_OR_RETURN(const ProcessResult run, RunProcess(argv));
-  if (run.exit_code != 0) return Unavailable("scancel " + job_ids.front() + " ...: " + run.Describe());
+  if (run.exit_code != 0)
+    return Unavailable("scancel " + job_ids.front() + " ...: " + run.Describe());
   return Status::Ok();
 }
 
@@ -69,7 +70,8 @@ Status WriteJobScript(const std::string& path, const std::string& text) {
 Result<std::string> ParseSbatchJobId(const std::string& output) {
   const std::string line = Trim(output.substr(0, output.find('\n')));
   const std::string id = line.substr(0, line.find(';'));
-  if (!AllDigits(id)) return CorruptData("sbatch --parsable printed '" + Trim(output) + "', not a job id");
+  if (!AllDigits(id))
+    return CorruptData("sbatch --parsable printed '" + Trim(output) + "', not a job id");
   return id;
 }
 
@@ -90,16 +92,19 @@ SlurmArrayStates ParseScontrolArrayStates(const std::string& output) {
     std::istringstream words(line);
     for (std::string word; words >> word;) {
       const size_t equals = word.find('=');
-      if (equals != std::string::npos) fields.emplace(word.substr(0, equals), word.substr(equals + 1));
+      if (equals != std::string::npos)
+        fields.emplace(word.substr(0, equals), word.substr(equals + 1));
     }
-    AddState(fields["ArrayJobId"], fields["ArrayTaskId"], {fields["JobState"], fields["Reason"]}, &states);
+    AddState(fields["ArrayJobId"], fields["ArrayTaskId"], {fields["JobState"], fields["Reason"]},
+             &states);
   }
   return states;
 }
 
 JobPhase PhaseOfSlurmState(const std::string& state) {
-  static const std::set<std::string> kQueued = {"PENDING",      "CONFIGURING", "REQUEUED", "REQUEUE_HOLD",
-                                                "REQUEUE_FED", "RESIZING",    "SUSPENDED", "STOPPED"};
+  static const std::set<std::string> kQueued = {"PENDING",      "CONFIGURING", "REQUEUED",
+                                                "REQUEUE_HOLD", "REQUEUE_FED", "RESIZING",
+                                                "SUSPENDED",    "STOPPED"};
   static const std::set<std::string> kRunning = {"RUNNING", "COMPLETING", "SIGNALING", "STAGE_OUT"};
   if (kQueued.count(state) > 0) return JobPhase::kQueued;
   if (kRunning.count(state) > 0) return JobPhase::kRunning;
@@ -114,13 +119,16 @@ std::string SlurmJobScript(const SubmitPlan& plan, const Submission& submission,
   for (const std::string& capture : plan.capture_dirs) script += "  " + ShellQuote(capture) + "\n";
   script += ")\nexec " + ShellQuote(plan.hairrig_exe);
   for (const std::string& arg : StageJobArguments(plan, submission, stage, kCapturePlaceholder)) {
-    script += " " + (arg == kCapturePlaceholder ? std::string("\"${captures[$SLURM_ARRAY_TASK_ID]}\"") : ShellQuote(arg));
+    script +=
+        " " + (arg == kCapturePlaceholder ? std::string("\"${captures[$SLURM_ARRAY_TASK_ID]}\"")
+                                          : ShellQuote(arg));
   }
   return script + "\n";
 }
 
-std::vector<std::string> SbatchArguments(const SubmitPlan& plan, const Submission& submission, Stage stage,
-                                         const std::string& script_path, const std::string& previous_job_id) {
+std::vector<std::string> SbatchArguments(const SubmitPlan& plan, const Submission& submission,
+                                         Stage stage, const std::string& script_path,
+                                         const std::string& previous_job_id) {
   const std::string last = std::to_string(plan.capture_dirs.size() - 1);
   std::string array = "--array=0-" + last;
   if (submission.max_parallel > 0) array += "%" + std::to_string(submission.max_parallel);
@@ -144,9 +152,11 @@ std::vector<std::string> SbatchArguments(const SubmitPlan& plan, const Submissio
   return args;
 }
 
-Status SlurmEngine::Submit(const SubmitPlan& plan, Submission* submission, const std::function<Status()>& record) {
+Status SlurmEngine::Submit(const SubmitPlan& plan, Submission* submission,
+                           const std::function<Status()>& record) {
   if (plan.batch_dir.find('%') != std::string::npos) {
-    return InvalidArgument(plan.batch_dir + ": a batch folder for Slurm must not have '%' in its path "
+    return InvalidArgument(plan.batch_dir +
+                           ": a batch folder for Slurm must not have '%' in its path "
                            "(sbatch expands it in log file names)");
   }
   const fs::path logs = fs::path(submission->RunDir(plan.batch_dir)) / "logs";
@@ -159,7 +169,8 @@ Status SlurmEngine::Submit(const SubmitPlan& plan, Submission* submission, const
     const Result<std::string> id = SubmitStage(plan, *submission, stage, previous);
     if (!id.ok()) {
       const Status cancelled = Cancel(commands_, submitted);
-      if (!cancelled.ok()) LogError("cancelling the arrays already submitted: " + cancelled.ToString());
+      if (!cancelled.ok())
+        LogError("cancelling the arrays already submitted: " + cancelled.ToString());
       return id.status();
     }
     submission->job_ids[StageName(stage)] = *id;
@@ -168,9 +179,10 @@ Status SlurmEngine::Submit(const SubmitPlan& plan, Submission* submission, const
   return record();
 }
 
-Result<std::string> SlurmEngine::SubmitStage(const SubmitPlan& plan, const Submission& submission, Stage stage,
-                                             const std::string& previous_job_id) {
-  const std::string script = (fs::path(submission.RunDir(plan.batch_dir)) / StageName(stage)).string() + ".sbatch";
+Result<std::string> SlurmEngine::SubmitStage(const SubmitPlan& plan, const Submission& submission,
+                                             Stage stage, const std::string& previous_job_id) {
+  const std::string script =
+      (fs::path(submission.RunDir(plan.batch_dir)) / StageName(stage)).string() + ".sbatch";
   HR_RETURN_IF_ERROR(WriteJobScript(script, SlurmJobScript(plan, submission, stage)));
   std::vector<std::string> argv{commands_.sbatch};
   for (std::string& arg : SbatchArguments(plan, submission, stage, script, previous_job_id)) {
@@ -197,7 +209,8 @@ Result<JobViews> SlurmEngine::View(const Submission& submission) {
   // explains a job that ended without a result. Unknown ids are not an error.
   SlurmArrayStates ended;
   for (const std::string& id : gone_arrays) {
-    const Result<ProcessResult> shown = RunProcess({commands_.scontrol, "show", "job", "--oneliner", id});
+    const Result<ProcessResult> shown =
+        RunProcess({commands_.scontrol, "show", "job", "--oneliner", id});
     if (shown.ok() && shown->exit_code == 0) ended.merge(ParseScontrolArrayStates(shown->out));
   }
   JobViews views;

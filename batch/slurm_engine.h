@@ -8,7 +8,8 @@
 // It shells out to Slurm's commands from argument vectors (never a shell
 // line): sbatch --parsable to submit, squeue and scontrol with plain format
 // strings (not --json, whose shape changes between Slurm versions) to look at
-// the jobs (squeue --me: look from the account that submitted). Slurm's states only say whether a job is still queued or running;
+// the jobs (squeue --me: look from the account that submitted). Slurm's
+// states only say whether a job is still queued or running;
 // the result files decide whether it succeeded (batch/batch.h).
 //
 // Each stage's job script, <run dir>/<stage>.sbatch, lists the captures and
@@ -42,7 +43,8 @@ class SlurmEngine : public BatchEngine {
   // sbatch fails, the arrays already submitted are cancelled (scancel) and
   // its error is returned. The batch folder's path must not contain '%'
   // (sbatch expands it in --output).
-  Status Submit(const SubmitPlan& plan, Submission* submission, const std::function<Status()>& record) override;
+  Status Submit(const SubmitPlan& plan, Submission* submission,
+                const std::function<Status()>& record) override;
   Result<JobViews> View(const Submission& submission) override;
 
  private:
@@ -78,7 +80,8 @@ JobPhase PhaseOfSlurmState(const std::string& state);
 std::string SlurmJobScript(const SubmitPlan& plan, const Submission& submission, Stage stage);
 // sbatch's arguments after the program name, for the stage's array chained
 // to `previous_job_id` ("" for the first stage).
-std::vector<std::string> SbatchArguments(const SubmitPlan& plan, const Submission& submission, Stage stage,
-                                         const std::string& script_path, const std::string& previous_job_id);
+std::vector<std::string> SbatchArguments(const SubmitPlan& plan, const Submission& submission,
+                                         Stage stage, const std::string& script_path,
+                                         const std::string& previous_job_id);
 
 }  // namespace hairrig

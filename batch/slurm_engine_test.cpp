@@ -45,14 +45,15 @@ TEST(SlurmOutput, SbatchJobIds) {
 }
 
 TEST(SlurmOutput, SqueueAndScontrolArrayStates) {
-  const SlurmArrayStates queued =
-      ParseSqueueArrayStates("7|0|RUNNING|None\n7|1|PENDING|Dependency\n9|N/A|PENDING|Priority\ngarbage\n");
+  const SlurmArrayStates queued = ParseSqueueArrayStates(
+      "7|0|RUNNING|None\n7|1|PENDING|Dependency\n9|N/A|PENDING|Priority\ngarbage\n");
   ASSERT_EQ(queued.size(), 2u);
   EXPECT_EQ(queued.at({"7", 0}).state, "RUNNING");
   EXPECT_EQ(queued.at({"7", 1}).reason, "Dependency");
 
   const SlurmArrayStates shown = ParseScontrolArrayStates(
-      "JobId=12 ArrayJobId=8 ArrayTaskId=1 ArrayTaskThrottle=2 JobName=hairrig-fit JobState=CANCELLED "
+      "JobId=12 ArrayJobId=8 ArrayTaskId=1 ArrayTaskThrottle=2 JobName=hairrig-fit "
+      "JobState=CANCELLED "
       "Reason=DependencyNeverSatisfied Dependency=aftercorr:7_*(failed)\n"
       "JobId=8 ArrayJobId=8 ArrayTaskId=2-5%2 JobState=PENDING Reason=Dependency\n");
   ASSERT_EQ(shown.size(), 1u);
@@ -62,7 +63,8 @@ TEST(SlurmOutput, SqueueAndScontrolArrayStates) {
   EXPECT_EQ(PhaseOfSlurmState("PENDING"), JobPhase::kQueued);
   EXPECT_EQ(PhaseOfSlurmState("RUNNING"), JobPhase::kRunning);
   EXPECT_EQ(PhaseOfSlurmState("COMPLETING"), JobPhase::kRunning);
-  for (const char* ended : {"COMPLETED", "FAILED", "CANCELLED", "TIMEOUT", "OUT_OF_MEMORY", "NODE_FAIL"}) {
+  for (const char* ended :
+       {"COMPLETED", "FAILED", "CANCELLED", "TIMEOUT", "OUT_OF_MEMORY", "NODE_FAIL"}) {
     EXPECT_EQ(PhaseOfSlurmState(ended), JobPhase::kEnded) << ended;
   }
 }
@@ -107,20 +109,24 @@ TEST(SlurmJobScript, EachElementRunsTheStageOnItsCaptureVerbatim) {
 
 TEST(SlurmJobScript, SbatchArgumentsChainTheArraysElementByElement) {
   const PlanFixture f = TwoCaptures("/batch", "/bin/hairrig");
-  const std::vector<std::string> first = SbatchArguments(f.plan, f.submission, Stage::kCalibrate, "/b/c.sbatch", "");
-  const std::vector<std::string> expected_first{"--parsable",
-                                                "--array=0-1%2",
-                                                "--job-name=hairrig-calibrate",
-                                                "--output=/batch/runs/r1-test/logs/calibrate_%a.log",
-                                                "--chdir=/batch/runs/r1-test",
-                                                "--cpus-per-task=2",
-                                                "--partition=short",
-                                                "--time=10:00",
-                                                "/b/c.sbatch"};
+  const std::vector<std::string> first =
+      SbatchArguments(f.plan, f.submission, Stage::kCalibrate, "/b/c.sbatch", "");
+  const std::vector<std::string> expected_first{
+      "--parsable",
+      "--array=0-1%2",
+      "--job-name=hairrig-calibrate",
+      "--output=/batch/runs/r1-test/logs/calibrate_%a.log",
+      "--chdir=/batch/runs/r1-test",
+      "--cpus-per-task=2",
+      "--partition=short",
+      "--time=10:00",
+      "/b/c.sbatch"};
   EXPECT_EQ(first, expected_first);
   const std::vector<std::string> second =
       SbatchArguments(f.plan, f.submission, Stage::kReconstruct, "/b/r.sbatch", "1041");
-  auto has = [&](const std::string& arg) { return std::find(second.begin(), second.end(), arg) != second.end(); };
+  auto has = [&](const std::string& arg) {
+    return std::find(second.begin(), second.end(), arg) != second.end();
+  };
   EXPECT_TRUE(has("--dependency=aftercorr:1041"));
   EXPECT_TRUE(has("--kill-on-invalid-dep=yes"));
   EXPECT_TRUE(has("--cpus-per-task=3"));
@@ -132,25 +138,33 @@ TEST(SlurmJobScript, SbatchArgumentsChainTheArraysElementByElement) {
 // Stand-ins for sbatch, squeue, scontrol and scancel that log their calls in `dir`.
 SlurmCommands FakeSlurm(const std::string& dir) {
   SlurmCommands c;
-  c.sbatch = WriteScript(dir + "/sbatch",
-                         "echo \"$*\" >> '" + dir + "/sbatch.calls'\n"
-                         "n=$(wc -l < '" + dir + "/sbatch.calls')\n"
-                         "if [ -f '" + dir + "/fail_at_'$n ]; then\n"
-                         "  echo 'sbatch: error: Batch job submission failed: Invalid partition name specified' >&2\n"
-                         "  exit 1\n"
-                         "fi\n"
-                         "echo \"$((100 + n));hairrigtest\"\n");
+  c.sbatch = WriteScript(dir + "/sbatch", "echo \"$*\" >> '" + dir +
+                                              "/sbatch.calls'\n"
+                                              "n=$(wc -l < '" +
+                                              dir +
+                                              "/sbatch.calls')\n"
+                                              "if [ -f '" +
+                                              dir +
+                                              "/fail_at_'$n ]; then\n"
+                                              "  echo 'sbatch: error: Batch job submission failed: "
+                                              "Invalid partition name specified' >&2\n"
+                                              "  exit 1\n"
+                                              "fi\n"
+                                              "echo \"$((100 + n));hairrigtest\"\n");
   c.scancel = WriteScript(dir + "/scancel", "echo \"$*\" >> '" + dir + "/scancel.calls'\n");
   c.squeue = WriteScript(dir + "/squeue",
-                         "echo \"$*\" >> '" + dir + "/squeue.calls'\n"
-                         "echo '101|0|RUNNING|None'\necho '102|0|PENDING|Dependency'\n");
-  c.scontrol = WriteScript(dir + "/scontrol",
-                           "echo \"$*\" >> '" + dir + "/scontrol.calls'\n"
-                           "if [ \"$4\" = 101 ]; then\n"
-                           "  echo 'JobId=105 ArrayJobId=101 ArrayTaskId=1 JobState=FAILED Reason=NonZeroExitCode'\n"
-                           "else\n"
-                           "  echo 'slurm_load_jobs error: Invalid job id specified' >&2; exit 1\n"
-                           "fi\n");
+                         "echo \"$*\" >> '" + dir +
+                             "/squeue.calls'\n"
+                             "echo '101|0|RUNNING|None'\necho '102|0|PENDING|Dependency'\n");
+  c.scontrol = WriteScript(
+      dir + "/scontrol",
+      "echo \"$*\" >> '" + dir +
+          "/scontrol.calls'\n"
+          "if [ \"$4\" = 101 ]; then\n"
+          "  echo 'JobId=105 ArrayJobId=101 ArrayTaskId=1 JobState=FAILED Reason=NonZeroExitCode'\n"
+          "else\n"
+          "  echo 'slurm_load_jobs error: Invalid job id specified' >&2; exit 1\n"
+          "fi\n");
   return c;
 }
 
@@ -159,13 +173,22 @@ TEST(SlurmEngine, SubmitsOneArrayPerStageChainedToThePrevious) {
   PlanFixture f = TwoCaptures(dir + "/batch", "/bin/hairrig");
   SlurmEngine engine(FakeSlurm(dir));
   int recorded = 0;
-  ASSERT_TRUE(engine.Submit(f.plan, &f.submission, [&] { ++recorded; return Status::Ok(); }).ok());
+  ASSERT_TRUE(engine
+                  .Submit(f.plan, &f.submission,
+                          [&] {
+                            ++recorded;
+                            return Status::Ok();
+                          })
+                  .ok());
   EXPECT_EQ(recorded, 1);
-  const std::map<std::string, std::string> ids{{"calibrate", "101"}, {"reconstruct", "102"}, {"fit", "103"}};
+  const std::map<std::string, std::string> ids{
+      {"calibrate", "101"}, {"reconstruct", "102"}, {"fit", "103"}};
   EXPECT_EQ(f.submission.job_ids, ids);
   const std::string calls = ReadText(dir + "/sbatch.calls");
-  EXPECT_NE(calls.find("--dependency=aftercorr:101 --kill-on-invalid-dep=yes"), std::string::npos) << calls;
-  EXPECT_NE(calls.find("--dependency=aftercorr:102 --kill-on-invalid-dep=yes"), std::string::npos) << calls;
+  EXPECT_NE(calls.find("--dependency=aftercorr:101 --kill-on-invalid-dep=yes"), std::string::npos)
+      << calls;
+  EXPECT_NE(calls.find("--dependency=aftercorr:102 --kill-on-invalid-dep=yes"), std::string::npos)
+      << calls;
   EXPECT_EQ(calls.find("aftercorr:103"), std::string::npos) << calls;
   EXPECT_TRUE(fs::exists(f.submission.RunDir(f.plan.batch_dir) + "/reconstruct.sbatch"));
   EXPECT_TRUE(fs::is_directory(f.submission.RunDir(f.plan.batch_dir) + "/logs"));
@@ -177,7 +200,10 @@ TEST(SlurmEngine, AFailedSbatchCancelsTheArraysAlreadySubmitted) {
   PlanFixture f = TwoCaptures(dir + "/batch", "/bin/hairrig");
   SlurmEngine engine(FakeSlurm(dir));
   int recorded = 0;
-  const Status s = engine.Submit(f.plan, &f.submission, [&] { ++recorded; return Status::Ok(); });
+  const Status s = engine.Submit(f.plan, &f.submission, [&] {
+    ++recorded;
+    return Status::Ok();
+  });
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("Invalid partition name"), std::string::npos) << s.ToString();
   EXPECT_EQ(recorded, 0);

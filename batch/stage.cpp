@@ -36,7 +36,8 @@ constexpr const char* kModelSource = "../reconstruction/strands/strands.ply";
 
 using InputFiles = std::map<std::string, std::string>;
 
-Status Require(const std::string& capture_dir, const std::string& name, const char* written_by, InputFiles* files) {
+Status Require(const std::string& capture_dir, const std::string& name, const char* written_by,
+               InputFiles* files) {
   const fs::path path = fs::path(capture_dir) / name;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) {
@@ -48,7 +49,8 @@ Status Require(const std::string& capture_dir, const std::string& name, const ch
 
 Status AddOptionFile(const std::string& key, const std::string& path, InputFiles* files) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return NotFound(path + " (the option '" + key + "'): no such file");
+  if (!fs::is_regular_file(path, ec))
+    return NotFound(path + " (the option '" + key + "'): no such file");
   (*files)[key] = path;
   return Status::Ok();
 }
@@ -60,9 +62,11 @@ Status AddCaptureFiles(const std::string& capture_dir, InputFiles* files) {
   HR_RETURN_IF_ERROR(Require(capture_dir, "manifest.json", capture_made, files));
   const fs::path frames = fs::path(capture_dir) / "frames";
   std::error_code ec;
-  if (!fs::is_directory(frames, ec)) return FailedPrecondition(frames.string() + " is missing: " + capture_made);
+  if (!fs::is_directory(frames, ec))
+    return FailedPrecondition(frames.string() + " is missing: " + capture_made);
   for (const fs::directory_entry& entry : fs::directory_iterator(frames, ec)) {
-    if (entry.is_regular_file(ec)) (*files)["frames/" + entry.path().filename().string()] = entry.path().string();
+    if (entry.is_regular_file(ec))
+      (*files)["frames/" + entry.path().filename().string()] = entry.path().string();
   }
   if (ec) return IoError(frames.string() + ": cannot list (" + ec.message() + ")");
   return Status::Ok();
@@ -73,11 +77,13 @@ Status AddCaptureFiles(const std::string& capture_dir, InputFiles* files) {
 Result<std::string> CaptureHeadFile(const std::string& capture_dir) {
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
   if (!config.root.HasScalar("head")) return std::string();
-  return ResolveBesideFile((fs::path(config.relative_to) / "rig.yaml").string(), config.root.String("head"));
+  return ResolveBesideFile((fs::path(config.relative_to) / "rig.yaml").string(),
+                           config.root.String("head"));
 }
 
 // The simulate stage's settings with its head and scene files resolved.
-Result<SimulateSettings> ResolvedSimulateSettings(const std::string& capture_dir, const SimulateSettings& s) {
+Result<SimulateSettings> ResolvedSimulateSettings(const std::string& capture_dir,
+                                                  const SimulateSettings& s) {
   SimulateSettings resolved = s;
   if (resolved.head.empty()) {
     HR_ASSIGN_OR_RETURN(resolved.head, CaptureHeadFile(capture_dir));
@@ -126,7 +132,8 @@ std::string InjectedFault(Stage stage, const std::string& capture_dir) {
 
 Result<nlohmann::json> RunCalibrate(const std::string& dir, const CalibrateSettings& s) {
   CalibrateFolderOptions options;
-  options.calibration.mode = s.mode == "free" ? CalibrationMode::kFree : CalibrationMode::kTurntable;
+  options.calibration.mode =
+      s.mode == "free" ? CalibrationMode::kFree : CalibrationMode::kTurntable;
   options.calibration.threads = s.threads;
   options.calibration.hard_prior = s.hard_prior;
   options.prior_files = s.intrinsics;
@@ -136,12 +143,13 @@ Result<nlohmann::json> RunCalibrate(const std::string& dir, const CalibrateSetti
   const std::string report = done.out_dir + "/report/report.txt";
   if (done.verdict.level == CalibrationVerdict::Level::kFailed) {
     std::string reasons;
-    for (const std::string& reason : done.verdict.reasons) reasons += (reasons.empty() ? "" : "; ") + reason;
+    for (const std::string& reason : done.verdict.reasons)
+      reasons += (reasons.empty() ? "" : "; ") + reason;
     return FailedPrecondition("calibration failed: " + reasons + " (see " + report + ")");
   }
-  return nlohmann::json{{"verdict", done.verdict.name()},  {"reasons", done.verdict.reasons},
+  return nlohmann::json{{"verdict", done.verdict.name()},     {"reasons", done.verdict.reasons},
                         {"views", done.result.frames.size()}, {"views_solved", solved},
-                        {"rms_px", done.result.rms_px},     {"report", report}};
+                        {"rms_px", done.result.rms_px},       {"report", report}};
 }
 
 Result<nlohmann::json> RunReconstruct(const std::string& dir, const ReconstructSettings& s) {
@@ -181,7 +189,8 @@ Result<nlohmann::json> RunFit(const std::string& dir, const FitSettings& s) {
   const std::string out = (fs::path(dir) / kModelFile).string();
   std::error_code ec;
   fs::create_directories(fs::path(out).parent_path(), ec);
-  if (ec) return IoError(fs::path(out).parent_path().string() + ": cannot create (" + ec.message() + ")");
+  if (ec)
+    return IoError(fs::path(out).parent_path().string() + ": cannot create (" + ec.message() + ")");
   HR_RETURN_IF_ERROR(WriteHelixModel(out, model, summary));
   return nlohmann::json{{"out", out},
                         {"strands", summary.strands},
@@ -196,7 +205,8 @@ Result<nlohmann::json> RunFit(const std::string& dir, const FitSettings& s) {
 // The dynamics write into a fresh folder beside the final one, which then
 // replaces simulation/<scenario>/: a failed run never leaves half a result
 // under the final name.
-Result<nlohmann::json> RunSimulate(const std::string& dir, const SimulateSettings& s, const std::string& exe) {
+Result<nlohmann::json> RunSimulate(const std::string& dir, const SimulateSettings& s,
+                                   const std::string& exe) {
   const fs::path folder = fs::path(dir) / StageFolder(Stage::kSimulate);
   const fs::path out = folder / s.scenario;
   const fs::path partial = folder / ("." + s.scenario + ".partial");
@@ -216,17 +226,23 @@ Result<nlohmann::json> RunSimulate(const std::string& dir, const SimulateSetting
   HR_ASSIGN_OR_RETURN(nlohmann::json summary, RunSimulateForStage(request));
   fs::remove_all(out, ec);
   fs::rename(partial, out, ec);
-  if (ec) return IoError(partial.string() + ": cannot rename to " + out.string() + " (" + ec.message() + ")");
+  if (ec)
+    return IoError(partial.string() + ": cannot rename to " + out.string() + " (" + ec.message() +
+                   ")");
   summary["out"] = out.string();
   return summary;
 }
 
 Result<nlohmann::json> RunStageWork(const StageOptions& o) {
   switch (o.stage) {
-    case Stage::kCalibrate: return RunCalibrate(o.capture_dir, o.settings.calibrate);
-    case Stage::kReconstruct: return RunReconstruct(o.capture_dir, o.settings.reconstruct);
-    case Stage::kFit: return RunFit(o.capture_dir, o.settings.fit);
-    case Stage::kSimulate: return RunSimulate(o.capture_dir, o.settings.simulate, o.hairrig_exe);
+    case Stage::kCalibrate:
+      return RunCalibrate(o.capture_dir, o.settings.calibrate);
+    case Stage::kReconstruct:
+      return RunReconstruct(o.capture_dir, o.settings.reconstruct);
+    case Stage::kFit:
+      return RunFit(o.capture_dir, o.settings.fit);
+    case Stage::kSimulate:
+      return RunSimulate(o.capture_dir, o.settings.simulate, o.hairrig_exe);
   }
   return Internal("unknown stage");
 }
@@ -244,28 +260,32 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 nlohmann::json StageResult::ToJson() const {
-  return nlohmann::json{{"stage", StageName(stage)},   {"capture", capture_dir},   {"status", "ok"},
-                        {"skipped", skipped},          {"input_hash", input_hash}, {"seconds", seconds},
-                        {"result_file", result_file}, {"summary", summary}};
+  return nlohmann::json{
+      {"stage", StageName(stage)},  {"capture", capture_dir},   {"status", "ok"},
+      {"skipped", skipped},         {"input_hash", input_hash}, {"seconds", seconds},
+      {"result_file", result_file}, {"summary", summary}};
 }
 
 std::string StageResult::BriefReport() const {
   char seconds_text[32];
   std::snprintf(seconds_text, sizeof seconds_text, "%.1f", seconds);
   return std::string(StageName(stage)) + " of " + capture_dir + ": " +
-         (skipped ? "skipped (inputs unchanged since its last success)" : std::string("ok in ") + seconds_text + " s") +
+         (skipped ? "skipped (inputs unchanged since its last success)"
+                  : std::string("ok in ") + seconds_text + " s") +
          " (result: " + result_file + ")";
 }
 
 std::string CaptureName(const std::string& capture_dir) {
   fs::path path = fs::path(capture_dir).lexically_normal();
   if (path.filename().empty()) path = path.parent_path();
-  if (path.filename() == "." || path.filename().empty()) path = fs::absolute(path).lexically_normal();
+  if (path.filename() == "." || path.filename().empty())
+    path = fs::absolute(path).lexically_normal();
   if (path.filename().empty()) path = path.parent_path();
   return path.filename().string();
 }
 
-Result<InputFiles> StageInputFiles(Stage stage, const std::string& capture_dir, const StageSettings& settings) {
+Result<InputFiles> StageInputFiles(Stage stage, const std::string& capture_dir,
+                                   const StageSettings& settings) {
   std::error_code ec;
   if (!fs::is_directory(capture_dir, ec)) return NotFound(capture_dir + ": no such capture folder");
   InputFiles files;
@@ -279,19 +299,22 @@ Result<InputFiles> StageInputFiles(Stage stage, const std::string& capture_dir, 
       break;
     case Stage::kReconstruct:
       HR_RETURN_IF_ERROR(AddCaptureFiles(capture_dir, &files));
-      HR_RETURN_IF_ERROR(
-          Require(capture_dir, "calibration/calibration.json", "run the calibrate stage first", &files));
+      HR_RETURN_IF_ERROR(Require(capture_dir, "calibration/calibration.json",
+                                 "run the calibrate stage first", &files));
       if (!settings.reconstruct.head.empty()) {
         HR_RETURN_IF_ERROR(AddOptionFile("head", settings.reconstruct.head, &files));
       }
       break;
     case Stage::kFit:
-      HR_RETURN_IF_ERROR(Require(capture_dir, kStrandsFile, "run the reconstruct stage first", &files));
+      HR_RETURN_IF_ERROR(
+          Require(capture_dir, kStrandsFile, "run the reconstruct stage first", &files));
       break;
     case Stage::kSimulate: {
       HR_RETURN_IF_ERROR(Require(capture_dir, kModelFile, "run the fit stage first", &files));
-      HR_RETURN_IF_ERROR(Require(capture_dir, kStrandsFile, "run the reconstruct stage first", &files));
-      HR_ASSIGN_OR_RETURN(const SimulateSettings resolved, ResolvedSimulateSettings(capture_dir, settings.simulate));
+      HR_RETURN_IF_ERROR(
+          Require(capture_dir, kStrandsFile, "run the reconstruct stage first", &files));
+      HR_ASSIGN_OR_RETURN(const SimulateSettings resolved,
+                          ResolvedSimulateSettings(capture_dir, settings.simulate));
       if (!resolved.head.empty()) HR_RETURN_IF_ERROR(AddOptionFile("head", resolved.head, &files));
       HR_RETURN_IF_ERROR(AddOptionFile("scene", resolved.scene, &files));
       break;
@@ -303,7 +326,8 @@ Result<InputFiles> StageInputFiles(Stage stage, const std::string& capture_dir, 
 Result<StageResult> RunStage(const StageOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   std::error_code ec;
-  if (!fs::is_directory(o.capture_dir, ec)) return NotFound(o.capture_dir + ": no such capture folder");
+  if (!fs::is_directory(o.capture_dir, ec))
+    return NotFound(o.capture_dir + ": no such capture folder");
   const std::string context = std::string(StageName(o.stage)) + " of " + o.capture_dir;
   StageResult result;
   result.stage = o.stage;
@@ -327,14 +351,15 @@ Result<StageResult> RunStage(const StageOptions& o) {
     const Status written = WriteStageRecord(o.capture_dir, o.stage, record);
     const Status failed = status.WithContext(context);
     if (written.ok()) return failed;
-    return Status(failed.code(), failed.message() + " (and the result was not recorded: " + written.message() + ")");
+    return Status(failed.code(), failed.message() + " (and the result was not recorded: " +
+                                     written.message() + ")");
   };
 
   const std::string fault = InjectedFault(o.stage, o.capture_dir);
   if (!fault.empty()) {
     record.injected_fault = true;
-    return fail(FailedPrecondition(std::string("injected fault (") + kStageFaultVariable + " has " + fault +
-                                   "): this stage fails on purpose, for tests"));
+    return fail(FailedPrecondition(std::string("injected fault (") + kStageFaultVariable + " has " +
+                                   fault + "): this stage fails on purpose, for tests"));
   }
   Result<HashedInputs> inputs = HashInputs(o);
   if (!inputs.ok()) return fail(inputs.status());

@@ -44,9 +44,10 @@ struct StageOptions {
   Stage stage = Stage::kCalibrate;
   std::string capture_dir;
   StageSettings settings;
-  std::string run_id;       // recorded in result.json: the batch submission running the stage
-  bool force = false;       // run even when the inputs are unchanged
-  std::string hairrig_exe;  // the hairrig binary; the simulate stage runs it (batch/simulate_stage.h)
+  std::string run_id;  // recorded in result.json: the batch submission running the stage
+  bool force = false;  // run even when the inputs are unchanged
+  std::string
+      hairrig_exe;  // the hairrig binary; the simulate stage runs it (batch/simulate_stage.h)
 };
 
 struct StageResult {
@@ -54,9 +55,9 @@ struct StageResult {
   std::string capture_dir;
   std::string result_file;  // the record written
   std::string input_hash;
-  bool skipped = false;     // inputs unchanged since the last success: nothing ran
-  double seconds = 0;       // of this call
-  nlohmann::json summary;   // the stage's summary (a skipped stage: the last success's)
+  bool skipped = false;    // inputs unchanged since the last success: nothing ran
+  double seconds = 0;      // of this call
+  nlohmann::json summary;  // the stage's summary (a skipped stage: the last success's)
 
   nlohmann::json ToJson() const;
   // One line: "reconstruct of /x/cap1: ok in 12.3 s (result: ...)".
@@ -70,7 +71,8 @@ std::string CaptureName(const std::string& capture_dir);
 // The input files of `stage` for `capture_dir` with `settings`: name -> path
 // (names as listed above). FailedPrecondition names a missing input and the
 // stage that writes it; NotFound for a missing capture folder.
-Result<std::map<std::string, std::string>> StageInputFiles(Stage stage, const std::string& capture_dir,
+Result<std::map<std::string, std::string>> StageInputFiles(Stage stage,
+                                                           const std::string& capture_dir,
                                                            const StageSettings& settings);
 
 // Runs the stage (above). A failure is returned as its Status, prefixed with

@@ -17,22 +17,13 @@ constexpr int kVersion = 1;
 }  // namespace
 
 nlohmann::json StageRecord::ToJson() const {
-  nlohmann::json j{{"format", kFormat},
-                   {"version", kVersion},
-                   {"stage", stage},
-                   {"status", status},
-                   {"skipped", skipped},
-                   {"hairrig_version", hairrig_version},
-                   {"input_hash", input_hash},
-                   {"inputs", inputs},
-                   {"options", options},
-                   {"run_id", run_id},
-                   {"host", host},
-                   {"pid", pid},
-                   {"start_utc", start_utc},
-                   {"end_utc", end_utc},
-                   {"seconds", seconds},
-                   {"summary", summary}};
+  nlohmann::json j{
+      {"format", kFormat},        {"version", kVersion}, {"stage", stage},
+      {"status", status},         {"skipped", skipped},  {"hairrig_version", hairrig_version},
+      {"input_hash", input_hash}, {"inputs", inputs},    {"options", options},
+      {"run_id", run_id},         {"host", host},        {"pid", pid},
+      {"start_utc", start_utc},   {"end_utc", end_utc},  {"seconds", seconds},
+      {"summary", summary}};
   if (!checked_utc.empty()) j["checked_utc"] = checked_utc;
   if (!error.empty()) j["error"] = error;
   if (injected_fault) j["injected_fault"] = true;
@@ -50,7 +41,8 @@ Result<StageRecord> ReadStageRecord(const std::string& capture_dir, Stage stage)
   HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path));
   const JsonObject o(j, path);
   if (o.StringOr("format", "") != kFormat || o.IntegerOr("version", 0) != kVersion) {
-    return CorruptData(path + ": not a hairrig stage result of version " + std::to_string(kVersion));
+    return CorruptData(path + ": not a hairrig stage result of version " +
+                       std::to_string(kVersion));
   }
   StageRecord r;
   r.stage = o.String("stage");
@@ -75,7 +67,8 @@ Result<StageRecord> ReadStageRecord(const std::string& capture_dir, Stage stage)
   r.summary = o.Raw("summary").is_object() ? o.Raw("summary") : nlohmann::json::object();
   HR_RETURN_IF_ERROR(o.status());
   if (r.stage != StageName(stage)) {
-    return CorruptData(path + ": field 'stage': '" + r.stage + "', expected '" + StageName(stage) + "'");
+    return CorruptData(path + ": field 'stage': '" + r.stage + "', expected '" + StageName(stage) +
+                       "'");
   }
   return r;
 }
@@ -84,7 +77,9 @@ Status WriteStageRecord(const std::string& capture_dir, Stage stage, const Stage
   const std::string path = StageRecordPath(capture_dir, stage);
   std::error_code ec;
   fs::create_directories(fs::path(path).parent_path(), ec);
-  if (ec) return IoError(fs::path(path).parent_path().string() + ": cannot create (" + ec.message() + ")");
+  if (ec)
+    return IoError(fs::path(path).parent_path().string() + ": cannot create (" + ec.message() +
+                   ")");
   return WriteFileAtomic(path, record.ToJson().dump(2) + "\n");
 }
 

@@ -4,12 +4,12 @@
 //
 //   {"format": "hairrig-stage-result", "version": 1,
 //    "stage": "reconstruct", "status": "ok" | "failed" | "running",
-//    "skipped": false,            // true: the inputs were unchanged since this success; nothing ran
+//    "skipped": false,            // true: inputs unchanged since this success; nothing ran
 //    "hairrig_version": "0.1.0",
-//    "input_hash": "<sha256>",    // over the version, the stage, its options and its inputs' contents
+//    "input_hash": "<sha256>",    // over the version, stage, options and inputs' contents
 //    "inputs": {"frames/000_SIM-CAM-UPPER.png": "<sha256>", ...},   // the inputs' own hashes
 //    "options": {...},            // the stage's options (batch/stages.h StageSettings::StageJson)
-//    "run_id": "r1-...",          // the batch submission that ran (or skipped) it; "" outside a batch
+//    "run_id": "r1-...",          // the batch submission that ran or skipped it; "" outside one
 //    "host": "node12", "pid": 4242,
 //    "start_utc": "...", "end_utc": "...", "seconds": 12.5,   // the run that made the outputs
 //    "checked_utc": "...",        // when a skipped run found the inputs unchanged

@@ -27,7 +27,8 @@ StrandSet Curls(int count) {
     for (int k = 0; k < 60; ++k) {
       const float a = 0.25f * static_cast<float>(k);
       p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a),
-                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a), -0.6f * static_cast<float>(k));
+                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
+                     -0.6f * static_cast<float>(k));
     }
     set.AddStrand(p);
   }
@@ -56,7 +57,9 @@ StageOptions FitOptionsFor(const std::string& dir, int guides = 2) {
 // Sets HAIRRIG_STAGE_FAULT for one scope.
 class FaultVariable {
  public:
-  explicit FaultVariable(const std::string& value) { ::setenv(kStageFaultVariable, value.c_str(), 1); }
+  explicit FaultVariable(const std::string& value) {
+    ::setenv(kStageFaultVariable, value.c_str(), 1);
+  }
   ~FaultVariable() { ::unsetenv(kStageFaultVariable); }
 };
 
@@ -129,8 +132,10 @@ TEST(Stage, TheFaultHookFailsOneStageOfOneCapture) {
     const FaultVariable fault("reconstruct:cap_fault,fit:cap_fault");
     const Result<StageResult> r = RunStage(FitOptionsFor(dir));
     ASSERT_FALSE(r.ok());
-    EXPECT_NE(r.status().message().find("injected fault"), std::string::npos) << r.status().ToString();
-    EXPECT_NE(r.status().message().find("fit of " + dir), std::string::npos) << r.status().ToString();
+    EXPECT_NE(r.status().message().find("injected fault"), std::string::npos)
+        << r.status().ToString();
+    EXPECT_NE(r.status().message().find("fit of " + dir), std::string::npos)
+        << r.status().ToString();
     const Result<StageRecord> record = ReadStageRecord(dir, Stage::kFit);
     ASSERT_TRUE(record.ok()) << record.status().ToString();
     EXPECT_EQ(record->status, "failed");
@@ -163,7 +168,8 @@ TEST(Stage, AMissingInputFailsNamingItAndTheStageThatWritesIt) {
   calibrate.capture_dir = dir;
   const Result<StageResult> c = RunStage(calibrate);
   ASSERT_FALSE(c.ok());
-  EXPECT_NE(c.status().message().find("rig.yaml is missing"), std::string::npos) << c.status().ToString();
+  EXPECT_NE(c.status().message().find("rig.yaml is missing"), std::string::npos)
+      << c.status().ToString();
 
   StageOptions nowhere = FitOptionsFor(dir + "/absent");
   EXPECT_EQ(RunStage(nowhere).status().code(), StatusCode::kNotFound);
@@ -210,7 +216,8 @@ TEST(StageSettings, MistakesNameTheFileAndField) {
 }
 
 TEST(StageNames, ListsComeBackInPipelineOrder) {
-  const Result<std::vector<Stage>> stages = ParseStageList({"simulate,calibrate", "fit", "calibrate"});
+  const Result<std::vector<Stage>> stages =
+      ParseStageList({"simulate,calibrate", "fit", "calibrate"});
   ASSERT_TRUE(stages.ok());
   EXPECT_EQ(*stages, (std::vector<Stage>{Stage::kCalibrate, Stage::kFit, Stage::kSimulate}));
   EXPECT_EQ(ParseStageList({})->size(), 4u);

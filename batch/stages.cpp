@@ -41,7 +41,8 @@ void CheckKnownKeys(const JsonObject& o, std::initializer_list<const char*> know
   }
 }
 
-std::vector<std::string> FileListOr(const JsonObject& o, const char* key, std::vector<std::string> fallback) {
+std::vector<std::string> FileListOr(const JsonObject& o, const char* key,
+                                    std::vector<std::string> fallback) {
   if (!o.Has(key)) return fallback;
   const nlohmann::json& list = o.Raw(key);
   std::vector<std::string> files;
@@ -78,7 +79,8 @@ void ReadCalibrate(const JsonObject& o, const std::string& base_dir, CalibrateSe
 }
 
 void ReadReconstruct(const JsonObject& o, const std::string& base_dir, ReconstructSettings* s) {
-  CheckKnownKeys(o, {"method", "strands", "head", "stride_px", "iterations", "hull_voxel_mm", "threads"});
+  CheckKnownKeys(
+      o, {"method", "strands", "head", "stride_px", "iterations", "hull_voxel_mm", "threads"});
   s->method = o.StringOr("method", s->method);
   CheckChoice(o, "method", s->method, {"bao-qi", "luo", "naive"});
   s->strands = static_cast<int>(o.IntegerOr("strands", s->strands, {.min = 1, .max = 2000000}));
@@ -99,10 +101,12 @@ void ReadFit(const JsonObject& o, FitSettings* s) {
 void ReadSimulate(const JsonObject& o, const std::string& base_dir, SimulateSettings* s) {
   CheckKnownKeys(o, {"scenario", "seconds", "fps", "preview_every", "head", "scene"});
   s->scenario = o.StringOr("scenario", s->scenario);
-  if (o.ok() && !ParseScenario(s->scenario).ok()) o.Fail("scenario", ParseScenario(s->scenario).status().message());
+  if (o.ok() && !ParseScenario(s->scenario).ok())
+    o.Fail("scenario", ParseScenario(s->scenario).status().message());
   s->seconds = o.NumberOr("seconds", s->seconds, {.min = 1e-3, .max = 3600});
   s->fps = o.NumberOr("fps", s->fps, {.min = 1e-3, .max = 10000});
-  s->preview_every = static_cast<int>(o.IntegerOr("preview_every", s->preview_every, {.min = 0, .max = 1000000}));
+  s->preview_every =
+      static_cast<int>(o.IntegerOr("preview_every", s->preview_every, {.min = 0, .max = 1000000}));
   s->head = ResolveAgainst(base_dir, o.StringOr("head", s->head));
   s->scene = ResolveAgainst(base_dir, o.StringOr("scene", s->scene));
 }
@@ -111,20 +115,28 @@ void ReadSimulate(const JsonObject& o, const std::string& base_dir, SimulateSett
 
 const char* StageName(Stage stage) {
   switch (stage) {
-    case Stage::kCalibrate: return "calibrate";
-    case Stage::kReconstruct: return "reconstruct";
-    case Stage::kFit: return "fit";
-    case Stage::kSimulate: return "simulate";
+    case Stage::kCalibrate:
+      return "calibrate";
+    case Stage::kReconstruct:
+      return "reconstruct";
+    case Stage::kFit:
+      return "fit";
+    case Stage::kSimulate:
+      return "simulate";
   }
   return "?";
 }
 
 const char* StageFolder(Stage stage) {
   switch (stage) {
-    case Stage::kCalibrate: return "calibration";
-    case Stage::kReconstruct: return "reconstruction";
-    case Stage::kFit: return "fit";
-    case Stage::kSimulate: return "simulation";
+    case Stage::kCalibrate:
+      return "calibration";
+    case Stage::kReconstruct:
+      return "reconstruction";
+    case Stage::kFit:
+      return "fit";
+    case Stage::kSimulate:
+      return "simulation";
   }
   return "?";
 }
@@ -133,7 +145,8 @@ Result<Stage> ParseStage(const std::string& name) {
   for (Stage stage : kAllStages) {
     if (name == StageName(stage)) return stage;
   }
-  return InvalidArgument("unknown stage '" + name + "' (stages: calibrate, reconstruct, fit, simulate)");
+  return InvalidArgument("unknown stage '" + name +
+                         "' (stages: calibrate, reconstruct, fit, simulate)");
 }
 
 Result<std::vector<Stage>> ParseStageList(const std::vector<std::string>& names) {
@@ -158,12 +171,17 @@ nlohmann::json StageSettings::StageJson(Stage stage) const {
               {"hard_prior", calibrate.hard_prior},
               {"threads", calibrate.threads}};
     case Stage::kReconstruct:
-      return {{"method", reconstruct.method},     {"strands", reconstruct.strands},
-              {"head", reconstruct.head},         {"stride_px", reconstruct.stride_px},
-              {"iterations", reconstruct.iterations}, {"hull_voxel_mm", reconstruct.hull_voxel_mm},
+      return {{"method", reconstruct.method},
+              {"strands", reconstruct.strands},
+              {"head", reconstruct.head},
+              {"stride_px", reconstruct.stride_px},
+              {"iterations", reconstruct.iterations},
+              {"hull_voxel_mm", reconstruct.hull_voxel_mm},
               {"threads", reconstruct.threads}};
     case Stage::kFit:
-      return {{"guides", fit.guides}, {"target_error_mm", fit.target_error_mm}, {"threads", fit.threads}};
+      return {{"guides", fit.guides},
+              {"target_error_mm", fit.target_error_mm},
+              {"threads", fit.threads}};
     case Stage::kSimulate:
       return {{"scenario", simulate.scenario}, {"seconds", simulate.seconds},
               {"fps", simulate.fps},           {"preview_every", simulate.preview_every},
@@ -180,10 +198,14 @@ nlohmann::json StageSettings::ToJson() const {
 
 int StageSettings::Threads(Stage stage) const {
   switch (stage) {
-    case Stage::kCalibrate: return calibrate.threads;
-    case Stage::kReconstruct: return reconstruct.threads;
-    case Stage::kFit: return fit.threads;
-    case Stage::kSimulate: return 1;
+    case Stage::kCalibrate:
+      return calibrate.threads;
+    case Stage::kReconstruct:
+      return reconstruct.threads;
+    case Stage::kFit:
+      return fit.threads;
+    case Stage::kSimulate:
+      return 1;
   }
   return 1;
 }
@@ -197,8 +219,10 @@ Result<StageSettings> StageSettingsFromJson(const nlohmann::json& j, const std::
     return root.status();
   }
   CheckKnownKeys(root, {"calibrate", "reconstruct", "fit", "simulate"});
-  if (HasSection(root, "calibrate")) ReadCalibrate(root.Object("calibrate"), base_dir, &s.calibrate);
-  if (HasSection(root, "reconstruct")) ReadReconstruct(root.Object("reconstruct"), base_dir, &s.reconstruct);
+  if (HasSection(root, "calibrate"))
+    ReadCalibrate(root.Object("calibrate"), base_dir, &s.calibrate);
+  if (HasSection(root, "reconstruct"))
+    ReadReconstruct(root.Object("reconstruct"), base_dir, &s.reconstruct);
   if (HasSection(root, "fit")) ReadFit(root.Object("fit"), &s.fit);
   if (HasSection(root, "simulate")) ReadSimulate(root.Object("simulate"), base_dir, &s.simulate);
   HR_RETURN_IF_ERROR(root.status());

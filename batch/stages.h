@@ -1,11 +1,11 @@
 // The pipeline's stages as batch jobs (design.md section 10) and their
 // options. Each stage reads and writes inside one capture folder:
 //
-//   stage        writes (inside the capture)          as the command line does
-//   calibrate    calibration/                         hairrig calibrate DIR
-//   reconstruct  reconstruction/                      hairrig reconstruct DIR
-//   fit          fit/model.json                       hairrig fit DIR/reconstruction/strands/strands.ply
-//   simulate     simulation/<scenario>/               hairrig simulate DIR/fit/model.json
+//   stage        writes (inside the capture)   as the command line does
+//   calibrate    calibration/                  hairrig calibrate DIR
+//   reconstruct  reconstruction/               hairrig reconstruct DIR
+//   fit          fit/model.json                hairrig fit DIR/reconstruction/strands/strands.ply
+//   simulate     simulation/<scenario>/        hairrig simulate DIR/fit/model.json
 //
 // and records its run in <folder>/result.json (batch/stage_record.h).
 //
@@ -13,7 +13,8 @@
 // optional (the defaults are the command line's, and scripts/demo's for fit
 // and simulate):
 //
-//   {"calibrate":   {"mode": "turntable", "intrinsics": ["cam.json"], "hard_prior": false, "threads": 2},
+//   {"calibrate":   {"mode": "turntable", "intrinsics": ["cam.json"], "hard_prior": false,
+//                    "threads": 2},
 //    "reconstruct": {"method": "bao-qi", "strands": 20000, "head": "", "stride_px": 3,
 //                    "iterations": 4, "hull_voxel_mm": 2.0, "threads": 2},
 //    "fit":         {"guides": 300, "target_error_mm": 0.05, "threads": 2},
@@ -44,8 +45,8 @@ namespace hairrig {
 enum class Stage { kCalibrate, kReconstruct, kFit, kSimulate };
 
 // Every stage, in pipeline order: a stage reads what the earlier ones wrote.
-inline constexpr std::array<Stage, 4> kAllStages = {Stage::kCalibrate, Stage::kReconstruct, Stage::kFit,
-                                                    Stage::kSimulate};
+inline constexpr std::array<Stage, 4> kAllStages = {Stage::kCalibrate, Stage::kReconstruct,
+                                                    Stage::kFit, Stage::kSimulate};
 
 // "calibrate", "reconstruct", "fit", "simulate".
 const char* StageName(Stage stage);
@@ -59,26 +60,29 @@ Result<Stage> ParseStage(const std::string& name);
 Result<std::vector<Stage>> ParseStageList(const std::vector<std::string>& names);
 
 struct CalibrateSettings {
-  std::string mode = "turntable";       // turntable or free (`calibrate --mode`)
-  std::vector<std::string> intrinsics;  // files whose intrinsics are held (`calibrate --intrinsics`)
-  bool hard_prior = false;              // `calibrate --hard-prior`
-  int threads = 2;                      // detection and solver threads
+  std::string mode = "turntable";  // turntable or free (`calibrate --mode`)
+  std::vector<std::string>
+      intrinsics;           // files whose intrinsics are held (`calibrate --intrinsics`)
+  bool hard_prior = false;  // `calibrate --hard-prior`
+  int threads = 2;          // detection and solver threads
 };
 
 struct ReconstructSettings {
   std::string method = "bao-qi";  // bao-qi, luo or naive (`reconstruct --method`)
   int strands = StrandReconstructionOptions{}.strands;  // strands grown (`reconstruct --strands`)
   std::string head;  // the subject's head file; empty: the capture's rig.yaml head
-  int stride_px = LineMvsOptions{}.stride_px;       // stereo on every N-th pixel (`reconstruct --stride`)
-  int iterations = LineMvsOptions{}.iterations;     // stereo PatchMatch iterations (`reconstruct --iterations`)
+  int stride_px =
+      LineMvsOptions{}.stride_px;  // stereo on every N-th pixel (`reconstruct --stride`)
+  int iterations =
+      LineMvsOptions{}.iterations;  // stereo PatchMatch iterations (`reconstruct --iterations`)
   double hull_voxel_mm = VisualHullOptions{}.voxel_mm;  // the visual hull's voxel size
   int threads = 2;
 };
 
 struct FitSettings {
-  int guides = 300;                // guide strands K (`fit --guides`)
-  double target_error_mm = 0.05;   // `fit --target-error`
-  int threads = 2;                 // guides fitted in parallel
+  int guides = 300;               // guide strands K (`fit --guides`)
+  double target_error_mm = 0.05;  // `fit --target-error`
+  int threads = 2;                // guides fitted in parallel
 };
 
 struct SimulateSettings {

@@ -41,19 +41,26 @@ void AddStageCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   CLI::App* cmd = app.add_subcommand(
       "stage",
       "run one pipeline stage of one capture (calibrate, reconstruct, fit, simulate), record it in "
-      "DIR/<stage folder>/result.json; skipped when its inputs are unchanged since its last success");
+      "DIR/<stage folder>/result.json; skipped when its inputs are unchanged since its last "
+      "success");
   cmd->add_option("STAGE", args->stage, "calibrate, reconstruct, fit or simulate")
       ->required()
       ->check(CLI::IsMember({"calibrate", "reconstruct", "fit", "simulate"}));
-  cmd->add_option("--capture", args->capture, "the capture folder")->required()->check(CLI::ExistingDirectory);
-  cmd->add_option("--options", args->options, "stage options (a JSON file, batch/stages.h; default: the defaults)")
+  cmd->add_option("--capture", args->capture, "the capture folder")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--options", args->options,
+                  "stage options (a JSON file, batch/stages.h; default: the defaults)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--run-id", args->run_id, "recorded in result.json (`hairrig batch` passes its submission's)");
+  cmd->add_option("--run-id", args->run_id,
+                  "recorded in result.json (`hairrig batch` passes its submission's)");
   cmd->add_flag("--force", args->force, "run even when the inputs are unchanged");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     dispatch.action = [args] { return RunStageCommand(*args); };
-    dispatch.print_human = [](const nlohmann::json& j) { std::printf("%s\n", j["brief"].get<std::string>().c_str()); };
+    dispatch.print_human = [](const nlohmann::json& j) {
+      std::printf("%s\n", j["brief"].get<std::string>().c_str());
+    };
   });
 }
 

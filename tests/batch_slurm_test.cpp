@@ -71,7 +71,8 @@ HairrigRun Hairrig(std::vector<std::string> args) {
   const size_t end = run.out.find_last_not_of('\n');
   if (end != std::string::npos) {
     const size_t start = run.out.rfind('\n', end);
-    r.summary = nlohmann::json::parse(run.out.substr(start == std::string::npos ? 0 : start + 1), nullptr, false);
+    r.summary = nlohmann::json::parse(run.out.substr(start == std::string::npos ? 0 : start + 1),
+                                      nullptr, false);
   }
   return r;
 }
@@ -190,7 +191,8 @@ class BatchSlurm : public ::testing::Test {
   static std::string work_, cluster_, skip_reason_, setup_error_;
   static bool started_;
 };
-std::string BatchSlurm::work_, BatchSlurm::cluster_, BatchSlurm::skip_reason_, BatchSlurm::setup_error_;
+std::string BatchSlurm::work_, BatchSlurm::cluster_, BatchSlurm::skip_reason_,
+    BatchSlurm::setup_error_;
 bool BatchSlurm::started_ = false;
 
 TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch) {
@@ -198,8 +200,8 @@ TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch
   const std::string archive = work_ + "/slurm", local_archive = work_ + "/local";
   for (int c = 1; c <= kCaptures; ++c) {
     const std::string name = "cap" + std::to_string(c);
-    const HairrigRun capture =
-        Hairrig({"capture", "--config", RigVariant(work_, 15 * (c - 1)), "--out", work_ + "/raw/" + name});
+    const HairrigRun capture = Hairrig(
+        {"capture", "--config", RigVariant(work_, 15 * (c - 1)), "--out", work_ + "/raw/" + name});
     ASSERT_EQ(capture.exit_code, 0) << capture.err;
   }
   fs::copy(work_ + "/raw", archive, fs::copy_options::recursive);
@@ -209,26 +211,29 @@ TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch
   const std::string batch = work_ + "/slurm_batch";
 
   ::setenv(hairrig::kStageFaultVariable, (std::string("reconstruct:") + kFaultyCapture).c_str(), 1);
-  const HairrigRun submitted = Hairrig({"batch", "submit", "--batch", batch, "--captures", archive,
-                                        "--engine", "slurm", "--max-parallel", "2", "--stage-options", options,
-                                        "--time", "10:00"});
+  const HairrigRun submitted =
+      Hairrig({"batch", "submit", "--batch", batch, "--captures", archive, "--engine", "slurm",
+               "--max-parallel", "2", "--stage-options", options, "--time", "10:00"});
   ::unsetenv(hairrig::kStageFaultVariable);  // the jobs have the environment of their sbatch
   ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
   ASSERT_EQ(submitted.summary["job_ids"].size(), 4u) << submitted.summary.dump();
   const HairrigRun status = Hairrig({"batch", "status", "--batch", batch});
   ASSERT_EQ(status.exit_code, 0) << status.err;
 
-  HairrigRun waited = Hairrig({"batch", "wait", "--batch", batch, "--timeout", "600", "--poll", "1"});
+  HairrigRun waited =
+      Hairrig({"batch", "wait", "--batch", batch, "--timeout", "600", "--poll", "1"});
   EXPECT_EQ(waited.exit_code, 3) << waited.err;  // a failure
   const nlohmann::json& first = waited.summary;
   ASSERT_TRUE(first.value("finished", false)) << first.dump(1);
   for (const char* done : {"cap1", "cap3"}) {
-    for (Stage stage : kAllStages) EXPECT_EQ(StateOf(first, done, stage), "done") << done << " " << StageName(stage);
+    for (Stage stage : kAllStages)
+      EXPECT_EQ(StateOf(first, done, stage), "done") << done << " " << StageName(stage);
     EXPECT_TRUE(fs::exists(archive + "/" + done + "/simulation/head-shake/summary.json")) << done;
   }
   EXPECT_EQ(StateOf(first, kFaultyCapture, Stage::kCalibrate), "done");
   EXPECT_EQ(StateOf(first, kFaultyCapture, Stage::kReconstruct), "failed");
-  const std::string error = CaptureRow(first, kFaultyCapture)["stages"]["reconstruct"].value("error", "");
+  const std::string error =
+      CaptureRow(first, kFaultyCapture)["stages"]["reconstruct"].value("error", "");
   EXPECT_NE(error.find("injected fault"), std::string::npos) << error;
   EXPECT_EQ(StateOf(first, kFaultyCapture, Stage::kFit), "blocked");
   EXPECT_EQ(StateOf(first, kFaultyCapture, Stage::kSimulate), "blocked");
@@ -237,12 +242,14 @@ TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch
   // Slurm itself cancels the blocked elements: aftercorr can never be satisfied.
   const std::string fit_array = submitted.summary["job_ids"]["fit"];
   std::string shown;
-  for (int tries = 0; tries < 60 && shown.find("DependencyNeverSatisfied") == std::string::npos; ++tries) {
+  for (int tries = 0; tries < 60 && shown.find("DependencyNeverSatisfied") == std::string::npos;
+       ++tries) {
     if (tries > 0) std::this_thread::sleep_for(std::chrono::milliseconds(500));
     shown = RunCommand({"scontrol", "show", "job", "--oneliner", fit_array}).out;
   }
   EXPECT_NE(shown.find("ArrayTaskId=1 "), std::string::npos) << shown;
-  EXPECT_NE(shown.find("JobState=CANCELLED Reason=DependencyNeverSatisfied"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("JobState=CANCELLED Reason=DependencyNeverSatisfied"), std::string::npos)
+      << shown;
 
   // The human report names the failure and its log.
   const ProcessResult table = RunCommand({HAIRRIG_BIN, "batch", "report", "--batch", batch});
@@ -256,14 +263,16 @@ TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch
   EXPECT_EQ(waited.exit_code, 0) << waited.err << waited.summary.dump(1);
   const nlohmann::json& second = waited.summary;
   EXPECT_TRUE(second.value("all_succeeded", false)) << second.dump(1);
-  EXPECT_EQ(StateOf(second, kFaultyCapture, Stage::kCalibrate), "skipped");  // unchanged since the first run
+  EXPECT_EQ(StateOf(second, kFaultyCapture, Stage::kCalibrate),
+            "skipped");  // unchanged since the first run
   for (Stage stage : {Stage::kReconstruct, Stage::kFit, Stage::kSimulate}) {
     EXPECT_EQ(StateOf(second, kFaultyCapture, stage), "done") << StageName(stage);
   }
 
   // The local engine on the other copy: the same inputs at every stage.
-  const HairrigRun local = Hairrig({"batch", "submit", "--batch", work_ + "/local_batch", "--captures",
-                                    local_archive, "--max-parallel", "2", "--stage-options", options});
+  const HairrigRun local =
+      Hairrig({"batch", "submit", "--batch", work_ + "/local_batch", "--captures", local_archive,
+               "--max-parallel", "2", "--stage-options", options});
   ASSERT_EQ(local.exit_code, 0) << local.err;
   EXPECT_TRUE(local.summary["report"].value("all_succeeded", false)) << local.summary.dump(1);
   for (int c = 1; c <= kCaptures; ++c) {
@@ -274,7 +283,8 @@ TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch
             Record(local_archive + "/cap2", Stage::kCalibrate).input_hash);
 
   // One stage by hand: unchanged, so skipped.
-  const HairrigRun again = Hairrig({"stage", "fit", "--capture", local_archive + "/cap1", "--options", options});
+  const HairrigRun again =
+      Hairrig({"stage", "fit", "--capture", local_archive + "/cap1", "--options", options});
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_TRUE(again.summary.value("skipped", false)) << again.summary.dump();
 }
