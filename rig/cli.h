@@ -60,5 +60,7 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
 void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddStageCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddBatchCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

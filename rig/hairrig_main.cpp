@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "core/log.h"
+#include "core/version.h"
 #include "rig/cli.h"
 #include "rig/sim_rig.h"
 
@@ -18,6 +19,7 @@ int Run(int argc, char** argv) {
       "hairrig: capture rig control and hair pipeline.\n"
       "With no --config, the rig is the simulated one in etc/ (etc/sim-rig.yaml)."};
   app.require_subcommand(1);
+  app.set_version_flag("--version", HairrigVersion());
   CommonOptions common;
   app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")->capture_default_str();
   Dispatch dispatch;
@@ -30,6 +32,8 @@ int Run(int argc, char** argv) {
   AddReconstructCommand(app, common, dispatch);
   AddEvalCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
+  AddStageCommand(app, common, dispatch);
+  AddBatchCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
