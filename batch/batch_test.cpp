@@ -48,6 +48,7 @@ stage=$2 capture=$4 run=$8
 case $stage in
   calibrate) folder=calibration ;;
   reconstruct) folder=reconstruction ;;
+  simulate) folder=simulation ;;
   *) folder=$stage ;;
 esac
 echo "$stage" >> "$capture/order.txt"

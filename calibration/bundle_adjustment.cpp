@@ -1,9 +1,11 @@
 #include "calibration/bundle_adjustment.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
 #include <string>
+#include <utility>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -77,11 +79,12 @@ bool HasStddev(const std::array<double, CameraIntrinsics::kNumParams>& sd) {
   return false;
 }
 
-// A pose as Ceres parameter blocks: quaternion (Eigen order x, y, z, w) and translation.
+// A pose as two Ceres parameter blocks in Blocks' arena: quaternion (Eigen
+// order x, y, z, w) and translation.
 struct PoseBlock {
-  double q[4];
-  double t[3];
-  explicit PoseBlock(const Rigid3d& pose = Rigid3d()) {
+  double* q = nullptr;
+  double* t = nullptr;
+  void Set(const Rigid3d& pose) {
     const Eigen::Quaterniond r = pose.rotation.normalized();
     q[0] = r.x(), q[1] = r.y(), q[2] = r.z(), q[3] = r.w();
     t[0] = pose.translation.x(), t[1] = pose.translation.y(), t[2] = pose.translation.z();
@@ -89,30 +92,54 @@ struct PoseBlock {
   Rigid3d ToRigid() const { return Rigid3d(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(t[0], t[1], t[2])); }
 };
 
-// Every parameter block of the problem.
+// Every parameter block of the problem, all in one arena laid out in a fixed
+// order (intrinsics per camera, view poses, turntable_from_box, cam_from_world
+// per camera, stop angles): Ceres orders parameter blocks by address (its
+// default linear-solver ordering and its covariance), so blocks in separate
+// allocations would give a solution whose last bits vary from run to run.
 struct Blocks {
+  Blocks(const BundleAdjustmentInput& input, bool turntable_mode) : turntable(turntable_mode) {
+    std::set<int> stops;
+    for (const CalibrationView& v : input.views) stops.insert(v.stop);
+    const size_t cameras = input.cameras.size(), views = turntable ? 0 : input.views.size();
+    const size_t poses = views + (turntable ? 1 + cameras : 0);
+    arena.assign(cameras * CameraIntrinsics::kNumParams + poses * 7 + (turntable ? stops.size() : 0), 0.0);
+    double* next = arena.data();
+    auto take = [&next](size_t n) { return std::exchange(next, next + n); };
+    auto take_pose = [&take]() { return PoseBlock{take(4), take(3)}; };
+    for (size_t c = 0; c < cameras; ++c) intrinsics.push_back(take(CameraIntrinsics::kNumParams));
+    for (size_t v = 0; v < views; ++v) view_poses.push_back(take_pose());
+    if (!turntable) return;
+    turntable_from_box = take_pose();
+    for (size_t c = 0; c < cameras; ++c) cam_from_world.push_back(take_pose());
+    for (int stop : stops) stop_rad[stop] = take(1);
+  }
+  Blocks(const Blocks&) = delete;
+  Blocks& operator=(const Blocks&) = delete;
+
   bool turntable = false;
-  std::vector<std::array<double, CameraIntrinsics::kNumParams>> intrinsics;  // per camera
+  std::vector<double> arena;              // sized once: the pointers below point into it
+  std::vector<double*> intrinsics;        // per camera, CameraIntrinsics::kNumParams each
   std::vector<PoseBlock> view_poses;      // free mode, per view
   PoseBlock turntable_from_box;           // turntable mode
   std::vector<PoseBlock> cam_from_world;  // turntable mode, per camera
-  std::map<int, double> stop_rad;         // turntable mode, per stop
+  std::map<int, double*> stop_rad;        // turntable mode, per stop
 
   Rigid3d CamFromBox(const CalibrationView& v, size_t view_index) const {
     if (!turntable) return view_poses[view_index].ToRigid();
-    return cam_from_world[static_cast<size_t>(v.camera)].ToRigid() * WorldFromTurntable(stop_rad.at(v.stop) / kDegToRad) *
+    return cam_from_world[static_cast<size_t>(v.camera)].ToRigid() * WorldFromTurntable(*stop_rad.at(v.stop) / kDegToRad) *
            turntable_from_box.ToRigid();
   }
 
   // The blocks (pointer, ambient size) a view's pose and projections depend on.
   std::vector<std::pair<double*, int>> Of(const CalibrationView& v, size_t view_index) {
-    std::vector<std::pair<double*, int>> out{{intrinsics[static_cast<size_t>(v.camera)].data(), CameraIntrinsics::kNumParams}};
+    std::vector<std::pair<double*, int>> out{{intrinsics[static_cast<size_t>(v.camera)], CameraIntrinsics::kNumParams}};
     if (!turntable) {
       out.insert(out.end(), {{view_poses[view_index].q, 4}, {view_poses[view_index].t, 3}});
       return out;
     }
     PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
-    out.insert(out.end(), {{cw.q, 4}, {cw.t, 3}, {&stop_rad.at(v.stop), 1}, {turntable_from_box.q, 4}, {turntable_from_box.t, 3}});
+    out.insert(out.end(), {{cw.q, 4}, {cw.t, 3}, {stop_rad.at(v.stop), 1}, {turntable_from_box.q, 4}, {turntable_from_box.t, 3}});
     return out;
   }
 };
@@ -120,7 +147,7 @@ struct Blocks {
 // Sum of the squared corner reprojection errors of one view (px^2).
 double ViewSquaredError(const Blocks& blocks, const CalibrationView& v, size_t view_index) {
   const Rigid3d pose = blocks.CamFromBox(v, view_index);
-  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)].data(), 1, 1);
+  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)], 1, 1);
   double sq = 0;
   for (const TagObservation& tag : v.tags)
     for (size_t i = 0; i < 4; ++i) sq += (Project(k, pose * tag.corners_box_mm[i]) - tag.corners_px[i]).squaredNorm();
@@ -144,7 +171,7 @@ double CornerResidualSigma(const Blocks& blocks, const BundleAdjustmentInput& in
 // projections of the view's observed corners (px).
 Eigen::VectorXd Predict(const Blocks& blocks, const CalibrationView& v, size_t view_index, const Rigid3d& reference) {
   const Rigid3d pose = blocks.CamFromBox(v, view_index);
-  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)].data(), 1, 1);
+  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)], 1, 1);
   Eigen::VectorXd out(6 + 8 * static_cast<Eigen::Index>(v.tags.size()));
   const Eigen::AngleAxisd delta(pose.rotation * reference.rotation.conjugate());
   out.head<3>() = delta.angle() * delta.axis();
@@ -187,7 +214,7 @@ void FillUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdju
   const bool ok =
       covariance.Compute(std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem);
   for (size_t c = 0; c < blocks.intrinsics.size(); ++c) {
-    const double* intr = blocks.intrinsics[c].data();
+    const double* intr = blocks.intrinsics[c];
     if (!problem.HasParameterBlock(intr) || problem.IsParameterBlockConstant(intr)) {
       result->intrinsics_covariance[c].setZero();
       continue;
@@ -272,26 +299,29 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   HR_RETURN_IF_ERROR(ValidateInput(input));
   const bool turntable = options.mode == CalibrationMode::kTurntable;
   ceres::Problem problem;
-  Blocks b;
-  b.turntable = turntable;
-  for (const CameraIntrinsics& c : input.cameras) b.intrinsics.push_back(c.ToParams());
-  for (const CalibrationView& v : input.views) b.view_poses.emplace_back(v.cam_from_box_init);
+  Blocks b(input, turntable);
+  for (size_t c = 0; c < input.cameras.size(); ++c) {
+    const auto params = input.cameras[c].ToParams();
+    std::copy(params.begin(), params.end(), b.intrinsics[c]);
+  }
+  for (size_t v = 0; v < b.view_poses.size(); ++v) b.view_poses[v].Set(input.views[v].cam_from_box_init);
 
   // Turntable mode: cameras from their best-observed view, angles from the encoder.
-  b.turntable_from_box = PoseBlock(input.turntable_from_box_init);
-  b.cam_from_world.resize(input.cameras.size());
   auto& intrinsics = b.intrinsics;
   auto& view_poses = b.view_poses;
   auto& turntable_from_box = b.turntable_from_box;
   auto& cam_from_world = b.cam_from_world;
   auto& stop_rad = b.stop_rad;
   if (turntable) {
+    turntable_from_box.Set(input.turntable_from_box_init);
+    for (PoseBlock& cw : cam_from_world) cw.Set(Rigid3d());
+    std::set<int> stops_set;
     std::vector<size_t> best_tags(input.cameras.size(), 0);
     for (const CalibrationView& v : input.views) {
-      stop_rad.emplace(v.stop, v.turntable_deg * kDegToRad);
+      if (stops_set.insert(v.stop).second) *stop_rad.at(v.stop) = v.turntable_deg * kDegToRad;  // the first view's
       if (v.tags.size() <= best_tags[static_cast<size_t>(v.camera)]) continue;
       best_tags[static_cast<size_t>(v.camera)] = v.tags.size();
-      cam_from_world[static_cast<size_t>(v.camera)] = PoseBlock(
+      cam_from_world[static_cast<size_t>(v.camera)].Set(
           v.cam_from_box_init * input.turntable_from_box_init.Inverse() * WorldFromTurntable(v.turntable_deg).Inverse());
     }
   }
@@ -299,14 +329,14 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   ceres::LossFunction* loss = new ceres::HuberLoss(options.huber_px);  // shared; the problem deletes it once
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
     const CalibrationView& v = input.views[vi];
-    double* intr = intrinsics[static_cast<size_t>(v.camera)].data();
+    double* intr = intrinsics[static_cast<size_t>(v.camera)];
     for (const TagObservation& tag : v.tags) {
       for (size_t k = 0; k < 4; ++k) {
         if (turntable) {
           auto* cost = new ceres::AutoDiffCostFunction<TurntableCorner, 2, 9, 4, 3, 1, 4, 3>(
               new TurntableCorner{tag.corners_px[k], tag.corners_box_mm[k]});
           PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
-          problem.AddResidualBlock(cost, loss, intr, cw.q, cw.t, &stop_rad[v.stop], turntable_from_box.q,
+          problem.AddResidualBlock(cost, loss, intr, cw.q, cw.t, stop_rad.at(v.stop), turntable_from_box.q,
                                    turntable_from_box.t);
         } else {
           auto* cost = new ceres::AutoDiffCostFunction<FreeCorner, 2, 9, 4, 3>(
@@ -320,7 +350,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   double prior_sigma_px = 1.0;  // the corner noise the prior weighs against; updated after a first solve
   bool soft_prior = false;
   for (size_t c = 0; c < intrinsics.size(); ++c) {
-    double* intr = intrinsics[c].data();
+    double* intr = intrinsics[c];
     if (!problem.HasParameterBlock(intr)) continue;
     const bool has_sd = c < input.prior_stddev.size() && HasStddev(input.prior_stddev[c]);
     if (!options.fix_intrinsics) {
@@ -328,7 +358,8 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     } else if (options.hard_prior || !has_sd) {
       problem.SetParameterBlockConstant(intr);
     } else {
-      IntrinsicsPrior prior{intrinsics[c], {}, &prior_sigma_px};
+      IntrinsicsPrior prior{{}, {}, &prior_sigma_px};
+      std::copy(intr, intr + CameraIntrinsics::kNumParams, prior.prior.begin());
       std::vector<int> held;
       for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
         const double sd = input.prior_stddev[c][static_cast<size_t>(i)];
@@ -349,7 +380,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     }
     problem.SetManifold(turntable_from_box.q, new ceres::EigenQuaternionManifold);
     problem.SetManifold(turntable_from_box.t, new ceres::SubsetManifold(3, {2}));  // height along the axis
-    problem.SetParameterBlockConstant(&stop_rad.begin()->second);                 // the turn about the axis
+    problem.SetParameterBlockConstant(stop_rad.begin()->second);                 // the turn about the axis
   } else {
     for (PoseBlock& p : view_poses) {
       if (problem.HasParameterBlock(p.q)) problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
@@ -378,7 +409,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   result.iterations = static_cast<int>(summary.iterations.size());
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   for (size_t c = 0; c < input.cameras.size(); ++c) {
-    result.cameras.push_back(CameraIntrinsics::FromParams(intrinsics[c].data(), input.cameras[c].width_px,
+    result.cameras.push_back(CameraIntrinsics::FromParams(intrinsics[c], input.cameras[c].width_px,
                                                           input.cameras[c].height_px));
   }
   if (turntable) {
@@ -386,7 +417,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     for (const PoseBlock& cw : cam_from_world) result.cam_from_world.push_back(cw.ToRigid());
     int last_stop = stop_rad.empty() ? -1 : stop_rad.rbegin()->first;
     result.stop_deg.assign(static_cast<size_t>(last_stop + 1), NAN);
-    for (const auto& [stop, rad] : stop_rad) result.stop_deg[static_cast<size_t>(stop)] = rad / kDegToRad;
+    for (const auto& [stop, rad] : stop_rad) result.stop_deg[static_cast<size_t>(stop)] = *rad / kDegToRad;
   }
   double total_sq = 0;
   size_t total_corners = 0;
