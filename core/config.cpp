@@ -35,17 +35,64 @@ std::string MarkText(const std::string& file, const YAML::Mark& mark) {
   return file + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
 }
 
+// A scalar as an error message shows it: quoted when short, single-line text;
+// otherwise only its length, so that a message never repeats the content of a
+// file named by mistake (a whole /etc/passwd reads as one long scalar).
+std::string DescribeScalar(const std::string& text) {
+  constexpr size_t kMaxQuotedBytes = 40;
+  const bool plain = std::none_of(text.begin(), text.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u < 0x20 || u == 0x7F;
+  });
+  if (plain && text.size() <= kMaxQuotedBytes) return QuotedExcerpt(text);
+  return "text of " + std::to_string(text.size()) + " bytes";
+}
+
 std::string Describe(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsScalar()) return QuotedExcerpt(node.Scalar());
+  if (node.IsScalar()) return DescribeScalar(node.Scalar());
   if (node.IsSequence()) return "a list";
   return "a map";
 }
 
+// Whether `text` is well-formed UTF-8 (RFC 3629: no overlong forms, no
+// surrogates, nothing above U+10FFFF).
+bool IsValidUtf8(std::string_view text) {
+  size_t i = 0;
+  while (i < text.size()) {
+    const auto lead = static_cast<unsigned char>(text[i]);
+    size_t length = 1;
+    unsigned char low = 0x80, high = 0xBF;  // the allowed range of the second byte
+    if (lead < 0x80) {
+      ++i;
+      continue;
+    } else if (lead >= 0xC2 && lead <= 0xDF) {
+      length = 2;
+    } else if (lead >= 0xE0 && lead <= 0xEF) {
+      length = 3;
+      if (lead == 0xE0) low = 0xA0;
+      if (lead == 0xED) high = 0x9F;
+    } else if (lead >= 0xF0 && lead <= 0xF4) {
+      length = 4;
+      if (lead == 0xF0) low = 0x90;
+      if (lead == 0xF4) high = 0x8F;
+    } else {
+      return false;
+    }
+    if (text.size() - i < length) return false;
+    for (size_t k = 1; k < length; ++k) {
+      const auto c = static_cast<unsigned char>(text[i + k]);
+      if (c < (k == 1 ? low : 0x80) || c > (k == 1 ? high : 0xBF)) return false;
+    }
+    i += length;
+  }
+  return true;
+}
+
 // Walks a document's parse events before any node is built, throwing a
 // DocumentProblem at the first of: a second document, a key that is not text
-// or that its map already has, more than kMaxConfigValues values or
-// kMaxConfigDepth levels.
+// or that its map already has, text that is not valid UTF-8 (it could not be
+// written to JSON), more than kMaxConfigValues values or kMaxConfigDepth levels.
 class DocumentChecker : public YAML::EventHandler {
  public:
   struct DocumentProblem {
@@ -76,18 +123,39 @@ class DocumentChecker : public YAML::EventHandler {
     bool map = false;
     bool at_key = true;               // maps: the next value is a key
     std::map<std::string, int> keys;  // key -> its line (1-based)
+    std::string current;              // the key (map) or "[index]" (list) of the latest value
+    int items = 0;                    // lists: values so far
   };
+
+  // The dotted path of the latest value, as ConfigNode names fields; without
+  // the innermost collection's part when `parent_only`.
+  std::string FieldPath(bool parent_only) const {
+    std::string path;
+    const size_t n = open_.size() - (parent_only && !open_.empty() ? 1 : 0);
+    for (size_t i = 0; i < n; ++i) {
+      const std::string& part = open_[i].current;
+      path += path.empty() || part.rfind('[', 0) == 0 ? part : "." + part;
+    }
+    return path.empty() ? "'<top>'" : QuotedExcerpt(path);
+  }
 
   // A value inside the innermost open collection; `text` is null for anything but a scalar.
   void Value(const YAML::Mark& mark, const std::string* text) {
     if (++values_ > kMaxConfigValues) {
       throw DocumentProblem{mark, "more than " + std::to_string(kMaxConfigValues) + " values; is this a config file?"};
     }
+    const bool is_key = !open_.empty() && open_.back().map && open_.back().at_key;
+    if (!open_.empty() && !open_.back().map) open_.back().current = "[" + std::to_string(open_.back().items++) + "]";
+    if (text != nullptr && !IsValidUtf8(*text)) {
+      throw DocumentProblem{mark, (is_key ? "a key in " : "field ") + FieldPath(is_key) +
+                                      ": text that is not valid UTF-8; save the file as UTF-8"};
+    }
     if (open_.empty() || !open_.back().map) return;
     Collection& map = open_.back();
     map.at_key = !map.at_key;
     if (map.at_key) return;  // that was the value of a key
     if (text == nullptr) throw DocumentProblem{mark, "a map key must be text"};
+    map.current = *text;
     const auto [first, inserted] = map.keys.emplace(*text, mark.line + 1);
     if (!inserted) {
       throw DocumentProblem{mark, "duplicate key " + QuotedExcerpt(*text) + " (first at line " +
@@ -100,7 +168,7 @@ class DocumentChecker : public YAML::EventHandler {
     if (static_cast<int>(open_.size()) >= kMaxConfigDepth) {
       throw DocumentProblem{mark, "nested deeper than " + std::to_string(kMaxConfigDepth) + " levels"};
     }
-    open_.push_back({map, true, {}});
+    open_.push_back({map, true, {}, {}, 0});
   }
 
   int documents_ = 0;
@@ -289,7 +357,7 @@ std::string ConfigNode::Choice(std::string_view key, std::initializer_list<const
   for (const char* c : choices) {
     if (value == c) return value;
   }
-  Fail(key, QuotedExcerpt(value) + " is not one of: " + listed);
+  Fail(key, DescribeScalar(value) + " is not one of: " + listed);
   return fallback;
 }
 

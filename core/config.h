@@ -14,8 +14,9 @@
 // (a second one after `---` is an error), every map key text and given once
 // at any level (no first-wins), at most kMaxConfigBytes, kMaxConfigValues
 // values and kMaxConfigDepth levels; LoadFile reads regular files only (a
-// FIFO or a device is refused, never waited on). Messages quote a value with
-// QuotedExcerpt, never a whole file.
+// FIFO or a device is refused, never waited on), every text (key or value)
+// valid UTF-8. Messages quote a short value with QuotedExcerpt and give a long
+// one (over 40 bytes, or with control characters) by its length only.
 #pragma once
 
 #include <cstddef>

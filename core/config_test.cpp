@@ -114,7 +114,11 @@ TEST(Config, MessagesQuoteAnExcerptNeverAWholeFile) {
   const std::string file(5000, 'x');
   std::string m = Refusal(file);
   EXPECT_LT(m.size(), 200u) << m;
-  EXPECT_NE(m.find("(5000 bytes)"), std::string::npos) << m;
+  EXPECT_NE(m.find("got text of 5000 bytes"), std::string::npos) << m;
+  // A file named by mistake reads as one long scalar: its content is never repeated.
+  m = Refusal("root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n");
+  EXPECT_EQ(m, "rig.yaml: expected a YAML map at the top level, got text of 79 bytes");
+  EXPECT_NE(Refusal("a\tb\n").find("got text of 3 bytes"), std::string::npos);
   auto root = ConfigNode::LoadString("fx_px: \"" + std::string(3000, 'y') + "\"\n", "rig.yaml");
   ASSERT_TRUE(root.ok());
   root->Number("fx_px");
@@ -123,6 +127,20 @@ TEST(Config, MessagesQuoteAnExcerptNeverAWholeFile) {
   EXPECT_EQ(QuotedExcerpt(std::string(61, 'z')), "'" + std::string(60, 'z') + "...' (61 bytes)");
   // A cut never splits a UTF-8 character: 'é' is 2 bytes, 59 + 2 crosses 60.
   EXPECT_EQ(QuotedExcerpt(std::string(59, 'z') + "\xC3\xA9z"), "'" + std::string(59, 'z') + "...' (62 bytes)");
+}
+
+// Config text ends up in JSON files (capture.json, reports), which hold UTF-8
+// only: text that is not is refused where it is read, naming its field.
+TEST(Config, TextMustBeValidUtf8) {
+  std::string m = Refusal("name: ok\nrig:\n  name: caf\xE9\n");
+  EXPECT_EQ(m, "rig.yaml:3:9: field 'rig.name': text that is not valid UTF-8; save the file as UTF-8");
+  m = Refusal("cameras:\n  - {serial: \"\xC0\xAF\"}\n");  // an overlong '/'
+  EXPECT_NE(m.find("rig.yaml:2:14: field 'cameras[0].serial': text that is not valid UTF-8"), std::string::npos) << m;
+  m = Refusal("a:\n  - [1, \"x\xED\xA0\x80y\"]\n");  // a UTF-16 surrogate
+  EXPECT_NE(m.find("field 'a[0][1]'"), std::string::npos) << m;
+  EXPECT_NE(Refusal("caf\xE9: 1\n").find("rig.yaml:1:1: a key in '<top>'"), std::string::npos);
+  EXPECT_NE(Refusal("name: \"\xF4\x90\x80\x80\"\n").find("not valid UTF-8"), std::string::npos);  // > U+10FFFF
+  EXPECT_TRUE(ConfigNode::LoadString("name: caf\xC3\xA9 \xF0\x9F\x98\x80\n", "rig.yaml").ok());
 }
 
 TEST(Config, ListElementsAreCheckedAgainstTheRange) {

@@ -35,6 +35,8 @@ class Descriptor {
   Descriptor(const Descriptor&) = delete;
   Descriptor& operator=(const Descriptor&) = delete;
   int get() const { return fd_; }
+  // Gives up ownership without closing.
+  void release() { fd_ = -1; }
   void reset(int fd) {
     if (fd_ >= 0) ::close(fd_);
     fd_ = fd;
@@ -87,6 +89,24 @@ Status WriteInHalves(int fd, const std::string& path, const void* bytes, size_t 
 }
 
 }  // namespace
+
+Result<int> OpenRegularFileForAppend(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISLNK(st.st_mode))
+    return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
+  // O_NONBLOCK: should a FIFO take the checked name meanwhile, opening it fails at once.
+  Descriptor fd;
+  fd.reset(::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK | O_NOCTTY, 0644));
+  if (fd.get() < 0) return IoErrorFromErrno(path + ": cannot open for appending", errno);
+  if (::fstat(fd.get(), &st) != 0) return IoErrorFromErrno(path + ": cannot read its file status", errno);
+  if (!S_ISREG(st.st_mode)) return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
+  const int flags = ::fcntl(fd.get(), F_GETFL);
+  if (flags < 0 || ::fcntl(fd.get(), F_SETFL, flags & ~O_NONBLOCK) != 0)
+    return IoErrorFromErrno(path + ": cannot set blocking writes", errno);
+  const int opened = fd.get();
+  fd.release();
+  return opened;
+}
 
 Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
                       const std::function<void(const uint8_t* data, size_t size)>& chunk) {

@@ -27,6 +27,12 @@ Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
 // The whole file, with the checks of ReadFileChunks.
 Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, uint64_t max_bytes = kMaxFileBytes);
 Result<std::string> ReadFileText(const std::string& path, uint64_t max_bytes);
+// Opens `path` for appending (O_APPEND, created with mode 0644 when absent,
+// never through a symlink) and returns the descriptor, which the caller closes.
+// Never blocks on opening and never opens anything but a regular file:
+// InvalidArgument names the file and what it is (a folder, a FIFO, a device, a
+// socket), as ReadFileChunks does; IoError names the file and the errno.
+Result<int> OpenRegularFileForAppend(const std::string& path);
 // IoError "<what> (<strerror(error_number)>)", e.g. "<path>: write failed (No
 // space left on device)": the one message every writer here builds from errno.
 Status IoErrorFromErrno(const std::string& what, int error_number);

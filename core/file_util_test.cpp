@@ -55,6 +55,32 @@ TEST(FileUtil, OnlyRegularFilesAreRead) {
   EXPECT_FALSE(ReadFileBytes("/dev/urandom").ok());
 }
 
+// The capture journal is opened for appending this way: a FIFO under its name
+// used to block the open until a reader came, forever.
+TEST(FileUtil, AppendingOpensRegularFilesOnly) {
+  const std::string dir = TestDir("append");
+  const std::string fifo = dir + "/journal.jsonl";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const auto& [path, kind] : std::vector<std::pair<std::string, std::string>>{
+           {fifo, "is a FIFO"}, {dir, "is a folder"}, {"/dev/null", "is a character device"}}) {
+    const Result<int> fd = OpenRegularFileForAppend(path);
+    EXPECT_EQ(fd.status().code(), StatusCode::kInvalidArgument) << path;
+    EXPECT_NE(fd.status().message().find(path + " " + kind), std::string::npos) << fd.status().ToString();
+    if (fd.ok()) ::close(*fd);
+  }
+  const std::string file = dir + "/new.jsonl";
+  Result<int> fd = OpenRegularFileForAppend(file);
+  ASSERT_TRUE(fd.ok()) << fd.status().ToString();
+  EXPECT_EQ(::write(*fd, "a", 1), 1);
+  ::close(*fd);
+  fd = OpenRegularFileForAppend(file);
+  ASSERT_TRUE(fd.ok()) << fd.status().ToString();
+  EXPECT_EQ(::fcntl(*fd, F_GETFL) & O_NONBLOCK, 0);
+  EXPECT_EQ(::write(*fd, "b", 1), 1);
+  ::close(*fd);
+  EXPECT_EQ(*ReadFileText(file, 10), "ab");
+}
+
 TEST(FileUtil, FilesAboveTheLimitAreRefusedBeforeReading) {
   const std::string path = TestDir("limit") + "/big.bin";
   std::ofstream(path) << std::string(100, 'x');

@@ -117,10 +117,15 @@ std::string Sha256Hex(const void* data, size_t size) {
   return hash.HexDigest();
 }
 
-Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes) {
+Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes, uint64_t* bytes_hashed) {
   Sha256 hash;
-  const Status read = ReadFileChunks(path, max_bytes, [&hash](const uint8_t* data, size_t size) { hash.Update(data, size); });
+  uint64_t total = 0;
+  const Status read = ReadFileChunks(path, max_bytes, [&](const uint8_t* data, size_t size) {
+    hash.Update(data, size);
+    total += size;
+  });
   if (!read.ok()) return read.WithContext("verifying a checksum");
+  if (bytes_hashed != nullptr) *bytes_hashed = total;
   return hash.HexDigest();
 }
 

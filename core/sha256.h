@@ -33,6 +33,8 @@ class Sha256 {
 std::string Sha256Hex(const void* data, size_t size);
 // Of a regular file of at most `max_bytes` (core/file_util.h ReadFileChunks:
 // errors name the file; a folder, FIFO or device is refused, never read).
-Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes = kMaxFileBytes);
+// `bytes_hashed`, when given, receives the number of bytes hashed.
+Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes = kMaxFileBytes,
+                                 uint64_t* bytes_hashed = nullptr);
 
 }  // namespace hairrig

@@ -156,10 +156,14 @@ Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal
 Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, uint64_t bytes,
                        const std::string& sha256) {
   HR_ASSIGN_OR_RETURN(const std::string path, ResolveInside((fs::path(capture_dir) / file).string(), capture_dir));
-  const Result<std::string> actual = Sha256OfFile(path, bytes);
+  uint64_t file_bytes = 0;
+  const Result<std::string> actual = Sha256OfFile(path, bytes, &file_bytes);
   if (actual.status().code() == StatusCode::kOutOfRange)
     return CorruptData(path + ": larger than the " + std::to_string(bytes) + " bytes its record gives");
   if (!actual.ok()) return actual.status();
+  if (file_bytes != bytes) {
+    return CorruptData(path + ": " + std::to_string(file_bytes) + " bytes, its record gives " + std::to_string(bytes));
+  }
   if (*actual != sha256) return CorruptData(path + ": its SHA-256 does not match its record");
   return Status::Ok();
 }
@@ -193,9 +197,7 @@ CaptureDataset::~CaptureDataset() {
 
 Status CaptureDataset::OpenJournal() {
   const std::string path = dir_ + "/" + kJournal;
-  journal_fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (journal_fd_ < 0)
-    return IoError(path + ": cannot open for appending (" + std::strerror(errno) + ")");
+  HR_ASSIGN_OR_RETURN(journal_fd_, OpenRegularFileForAppend(path));
   // One writer per capture: a second hairrig on the same folder is refused.
   if (::flock(journal_fd_, LOCK_EX | LOCK_NB) != 0) {
     return FailedPrecondition(

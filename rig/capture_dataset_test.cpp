@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "core/file_util.h"
+#include "core/sha256.h"
 #include "rig/capture_test_util.h"
 #include "rig/replay.h"
 #include "sim_hw/quota_storage.h"
@@ -273,6 +274,21 @@ TEST(CaptureDatasetHostile, AFrameLeadingOutsideIsNotReadAndIsQuarantined) {
   const auto verified = VerifiedFrames(dir, ReadJournal(dir));
   ASSERT_TRUE(verified.ok());
   EXPECT_EQ(verified->count(0), 0u);
+}
+
+// A record vouches for the exact size: a larger `bytes` with the right SHA-256
+// is refused as much as a smaller one.
+TEST(CaptureDatasetHostile, AFrameMustHaveExactlyTheRecordedSize) {
+  const std::string dir = FreshDir("dataset_frame_size");
+  const std::string content = "frame bytes";
+  std::ofstream(dir + "/f.png", std::ios::binary) << content;
+  const std::string sha256 = Sha256Hex(content.data(), content.size());
+  EXPECT_TRUE(VerifyFrameFile(dir, "f.png", content.size(), sha256).ok());
+  for (const uint64_t bytes : {content.size() + 1, uint64_t{1} << 20, content.size() - 1}) {
+    const Status s = VerifyFrameFile(dir, "f.png", bytes, sha256);
+    EXPECT_EQ(s.code(), StatusCode::kCorruptData) << bytes << ": " << s.ToString();
+    EXPECT_NE(s.message().find("f.png"), std::string::npos) << s.ToString();
+  }
 }
 
 // A missing frames/ and folders where files were expected used to end in an

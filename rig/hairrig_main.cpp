@@ -37,7 +37,10 @@ int Run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version end here with CLI11's exit code 0; every argument error is exit 1.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "hairrig: error: %s\n", e.what());
+    return 1;
   }
   LogLevel level;
   if (!ParseLogLevel(common.log_level, &level)) {

@@ -164,6 +164,77 @@ TEST_F(CliHostile, HostileStrandFilesAndModelsAreRefused) {
   ExpectCleanError(Hostile("simulate " + root_ + "/model.json --out " + root_ + "/sim"), "field 'cluster_of_strand'");
 }
 
+// A FIFO under the journal's name used to block `capture --resume` for ever
+// (opening it for appending waited for a reader); replay refused it already.
+TEST_F(CliHostile, ResumeRefusesAJournalThatIsNotARegularFile) {
+  const std::string dir = Copy("journal_fifo");
+  fs::remove(dir + "/journal.jsonl");
+  ASSERT_EQ(::mkfifo((dir + "/journal.jsonl").c_str(), 0600), 0);
+  ExpectCleanError(Hostile("capture --resume --out " + dir), "journal.jsonl is a FIFO");
+  ExpectCleanError(Hostile("replay " + dir + " --out " + dir + "-replay"), "journal.jsonl is a FIFO");
+}
+
+// A frame record vouches for the frame's exact size: one claiming more bytes
+// than the file holds (with the file's SHA-256) does not verify.
+TEST_F(CliHostile, AFrameLargerOnRecordThanOnDiskIsNotTrusted) {
+  const std::string dir = Copy("frame_bytes_larger");
+  std::string file;
+  EditFirstFrameRecord(dir, [&file](nlohmann::json& r) {
+    r["bytes"] = r["bytes"].get<uint64_t>() + 1;
+    file = r["file"].get<std::string>();
+  });
+  const CommandRun replay = Hostile("replay " + dir + " --out " + dir + "-replay --json");
+  EXPECT_EQ(replay.exit_code, 3) << replay.output;  // incomplete: view 0 is not served
+  EXPECT_NE(replay.output.find("\"missing_views\":[0]"), std::string::npos) << replay.output;
+  const CommandRun resume = Hostile("capture --resume --out " + dir);
+  EXPECT_EQ(resume.exit_code, 0) << resume.output;  // the frame is shot again
+  EXPECT_TRUE(fs::exists(dir + "/quarantine/" + fs::path(file).filename().string())) << file;
+}
+
+// The small test rig named `rig_name` on the scene file `scene`, written as `file`.
+std::string SmallRigVariant(const std::string& file, const std::string& rig_name, const std::string& scene) {
+  std::string text = ReadText("tests/data/small_rig.yaml");
+  const auto replace = [&text](const std::string& from, const std::string& to) {
+    text.replace(text.find(from), from.size(), to);
+  };
+  replace("name: small simulated rig", "name: " + rig_name);
+  replace("scene: small_scene.yaml", "scene: " + scene);
+  const std::string path = ::testing::TempDir() + "/hairrig_cli_hostile_" + file;
+  std::ofstream(path, std::ios::trunc) << text;
+  return path;
+}
+
+// Config text is written to JSON (capture.json): text that is not UTF-8 used
+// to end in "internal error" from the JSON writer; it is refused on reading.
+TEST_F(CliHostile, ConfigTextThatIsNotUtf8IsRefusedNamingTheField) {
+  const std::string config =
+      SmallRigVariant("latin1.yaml", "caf\xE9 rig", fs::absolute("tests/data/small_scene.yaml").string());
+  const CommandRun r = Hostile("capture --config " + config + " --out " + root_ + "/latin1_capture");
+  ExpectCleanError(r, config + ":3:7: field 'name': text that is not valid UTF-8");
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+}
+
+// A file that is not a config, named where one is expected, is refused without
+// its content appearing in the message.
+TEST_F(CliHostile, AForeignFileNamedAsASceneIsNotQuoted) {
+  const std::string foreign = root_ + "/passwd";
+  std::ofstream(foreign) << "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n";
+  const std::string config = SmallRigVariant("foreign_scene.yaml", "small simulated rig", foreign);
+  const CommandRun r = Hostile("capture --config " + config + " --out " + root_ + "/foreign_capture");
+  ExpectCleanError(r, foreign + ": expected a YAML map at the top level, got text of 79 bytes");
+  EXPECT_EQ(r.output.find("root:x"), std::string::npos) << r.output;
+}
+
+// Argument errors, CLI11's existence checks included, end as every other error.
+TEST_F(CliHostile, ArgumentErrorsExitOneWithTheErrorForm) {
+  ExpectCleanError(Hostile("calibrate " + root_ + "/recorded --intrinsics " + root_ + "/absent.json"),
+                   "File does not exist");
+  ExpectCleanError(Hostile("calibrate " + root_ + "/recorded --intrinsics " + root_), root_);
+  ExpectCleanError(Hostile("simulate " + root_ + "/absent_model.json --out " + root_ + "/sim"), "absent_model.json");
+  ExpectCleanError(Hostile("capture --no-such-option"), "--no-such-option");
+  EXPECT_EQ(Hostile("--help").exit_code, 0);
+}
+
 // A USC-HairSalon .data file of the given strands.
 void WriteData(const std::string& path, const std::vector<std::vector<std::array<float, 3>>>& strands) {
   std::ofstream out(path, std::ios::binary);
