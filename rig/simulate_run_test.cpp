@@ -9,6 +9,7 @@
 #include "core/file_util.h"
 #include "core/json_file.h"
 #include "core/strand_io.h"
+#include "core/strand_test_util.h"
 #include "rig/capture_test_util.h"
 #include "simulation/fit_strand_file.h"
 
@@ -20,17 +21,7 @@ using hairrig::testing::FreshDir;
 
 // Four guides fitted to twelve curls, in `dir`; the model's path.
 std::string CurlsModel(const std::string& dir) {
-  StrandSet set;
-  for (int s = 0; s < 12; ++s) {
-    std::vector<Eigen::Vector3f> p;
-    for (int k = 0; k < 40; ++k) {
-      const float a = 0.3f * static_cast<float>(k);
-      p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a),
-                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
-                     -0.8f * static_cast<float>(k));
-    }
-    set.AddStrand(p);
-  }
+  const StrandSet set = TwelveCurls();
   FitStrandFileOptions fit;
   fit.strands_file = dir + "/curls.hair";
   fit.out_file = dir + "/model.json";

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/strand_io.h"
+#include "core/strand_test_util.h"
 
 namespace hairrig {
 namespace {
@@ -15,17 +16,7 @@ namespace fs = std::filesystem;
 
 // Twelve curls in a strand file; its path.
 std::string CurlsFile() {
-  StrandSet set;
-  for (int s = 0; s < 12; ++s) {
-    std::vector<Eigen::Vector3f> p;
-    for (int k = 0; k < 40; ++k) {
-      const float a = 0.3f * static_cast<float>(k);
-      p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a),
-                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
-                     -0.8f * static_cast<float>(k));
-    }
-    set.AddStrand(p);
-  }
+  const StrandSet set = TwelveCurls();
   const std::string path = ::testing::TempDir() + "/fit_strand_file_curls.hair";
   EXPECT_TRUE(WriteStrands(path, set).ok());
   return path;
