@@ -24,6 +24,7 @@ rig="${HAIRRIG_BENCH_RIG:-tests/data/batch_rig.yaml}"
 options="${HAIRRIG_BENCH_OPTIONS:-bench/batch_bench_options.json}"
 hairrig="$(cd "$(dirname "$hairrig")" && pwd)/$(basename "$hairrig")"
 work="$(mktemp -d /tmp/hairrig_batch_bench_XXXXXX)"
+chmod 0755 "$work"  # munged wants every folder above its socket searchable by all
 cluster=""
 cleanup() {
   if [ -n "$cluster" ]; then bash tests/support/private_slurm.sh stop "$cluster" || true; fi
