@@ -116,7 +116,8 @@ class Sequencer {
   void Progress(const std::string& step, int stop);
   void PlanEta(const std::map<int, std::vector<int>>& views_by_stop);
   void CountStopDone(int stop);
-  double EtaLocked() const;
+  double EtaLocked(int views_left) const;
+  double PlannedBoundLeftLocked() const;
   double ExpectedFrameWallS(const Camera& camera) const;
   double LowerBoundOfStop(double from_deg, const PlannedStop& stop) const;
 
@@ -563,20 +564,28 @@ void Sequencer::Progress(const std::string& step, int stop) {
   p.stops_total = static_cast<int>(plan_.stops.size());
   p.step = step;
   p.faults = faults_.load();
-  p.eta_s = EtaLocked();
+  p.eta_s = EtaLocked(p.views_total - p.views_done);
   options_.on_progress(p);
 }
 
-// The lower bound of the stops left, times the pace so far (wall seconds per
-// second of lower bound, at least 1; 1 before the first stop is done).
-double Sequencer::EtaLocked() const {
-  double pace = 1;
-  if (bound_done_s_ > 0 && sweep_start_ != Clock::time_point{}) {
-    pace = std::max(1.0, std::chrono::duration<double>(Clock::now() - sweep_start_).count() / bound_done_s_);
-  }
+// The longer of the sweep's and the storage's time left: the lower bound of
+// the stops left times the sweep's pace so far (wall seconds per second of
+// lower bound, at least 1; 1 before the first stop is done), and the views
+// left times the wall time per view stored so far (downloads, decoding and
+// writing may lag the sweep).
+double Sequencer::EtaLocked(int views_left) const {
+  if (sweep_start_ == Clock::time_point{}) return PlannedBoundLeftLocked();
+  const double elapsed_s = std::chrono::duration<double>(Clock::now() - sweep_start_).count();
+  const double pace = bound_done_s_ > 0 ? std::max(1.0, elapsed_s / bound_done_s_) : 1.0;
+  const int stored = frames_.load();
+  const double storage_s = stored > 0 ? elapsed_s / stored * std::max(0, views_left) : 0.0;
+  return std::max(PlannedBoundLeftLocked() * pace, storage_s);
+}
+
+double Sequencer::PlannedBoundLeftLocked() const {
   double left = 0;
   for (const auto& [stop, bound] : bound_left_s_) left += bound;
-  return left * pace;
+  return left;
 }
 
 void Sequencer::PlanEta(const std::map<int, std::vector<int>>& views_by_stop) {

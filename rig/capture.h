@@ -43,7 +43,9 @@ struct CaptureProgress {
   int stop = 0;         // current stop (0-based)
   int stops_total = 0;
   std::string step;     // "moving to 37.9 deg", "exposing", "re-shooting 2 views", ...
-  double eta_s = 0;     // wall seconds left: the plan's lower bound of the stops left times the pace so far
+  double eta_s = 0;     // wall seconds left: the longer of the sweep's (the plan's lower bound of the
+                        // stops left times its pace so far) and the storage's (views left times the
+                        // wall time per view stored so far)
   int faults = 0;
 };
 

@@ -1,6 +1,7 @@
 #include "rig/capture.h"
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -119,7 +120,21 @@ void ExpectGroundTruthOfEveryView(const std::string& capture_dir, int views) {
 TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
   const std::string dir = FreshDir("capture_complete");
   CountingSink sink;
-  const CaptureSummary s = Capture(WriteSmallRig(dir), dir + "/c", &sink);
+  // When half the views are stored: the ETA and the wall time it gave.
+  double eta_at_half = -1;
+  std::chrono::steady_clock::time_point half;
+  const CaptureSummary s = Capture(WriteSmallRig(dir), dir + "/c", &sink, [&](const CaptureProgress& p) {
+    if (p.step.rfind("stored", 0) == 0 && p.views_done == 19 && eta_at_half < 0) {
+      eta_at_half = p.eta_s;
+      half = std::chrono::steady_clock::now();
+    }
+  });
+  // The renders (storage) lag the sweep here: the ETA follows them. A ratio
+  // within one run, with room for a shared machine's noise.
+  ASSERT_GE(eta_at_half, 0);
+  const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - half).count();
+  EXPECT_GT(eta_at_half, took_s / 3) << "ETA " << eta_at_half << " s, took " << took_s << " s";
+  EXPECT_LT(eta_at_half, took_s * 3) << "ETA " << eta_at_half << " s, took " << took_s << " s";
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_planned, 38);
   EXPECT_EQ(s.views_completed, 38);
