@@ -1,5 +1,6 @@
 #include "core/camera_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -32,6 +33,13 @@ Status CameraIntrinsics::Validate() const {
   }
   if (width_px <= 0 || height_px <= 0) return InvalidArgument("camera intrinsics: image size must be positive");
   if (fx_px <= 0 || fy_px <= 0) return InvalidArgument("camera intrinsics: fx_px and fy_px must be positive");
+  // 1000 x the long side is a field of view under 0.06 deg: beyond any lens.
+  const double max_focal_px = 1000.0 * std::max(width_px, height_px);
+  if (fx_px > max_focal_px || fy_px > max_focal_px) {
+    return InvalidArgument("camera intrinsics: fx_px and fy_px must be at most 1000 x the image's long side (" +
+                           std::to_string(static_cast<long long>(max_focal_px)) + " px; a field of view under 0.06 deg "
+                           "is no lens): check the file or the lens' focal length");
+  }
   if (cx_px < 0 || cx_px > width_px || cy_px < 0 || cy_px > height_px) {
     return InvalidArgument("camera intrinsics: principal point (cx_px, cy_px) lies outside the image");
   }

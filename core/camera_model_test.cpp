@@ -1,5 +1,6 @@
 #include "core/camera_model.h"
 
+#include <algorithm>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -91,6 +92,12 @@ TEST(CameraModel, ValidateNamesTheBadParameter) {
   c.k2 = 0;
   c.fx_px = -1;
   EXPECT_FALSE(c.Validate().ok());
+  c.fx_px = 1e308;  // finite, but no lens
+  const Status huge = c.Validate();
+  EXPECT_FALSE(huge.ok());
+  EXPECT_NE(huge.message().find("1000 x the image's long side"), std::string::npos) << huge.message();
+  c.fx_px = 999.0 * std::max(c.width_px, c.height_px);
+  EXPECT_TRUE(c.Validate().ok());
 }
 
 }  // namespace
