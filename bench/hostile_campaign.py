@@ -350,6 +350,17 @@ def json_pointers(value, here=()):
             yield from json_pointers(child, here + (index,))
 
 
+def with_field(document, path, value):
+    """A deep copy of `document` with the field at `path` set to `value` (DELETE removes it)."""
+    doc = json.loads(json.dumps(document))
+    parent = json_get(doc, path[:-1])
+    if value is DELETE:
+        del parent[path[-1]]
+    else:
+        parent[path[-1]] = value
+    return doc
+
+
 def json_get(value, pointer):
     for key in pointer:
         value = value[key]
@@ -1368,13 +1379,7 @@ def calibration_variants(c, rng, random_count):
                                 [calibrate_probe(c, accept, ("upper", "lower"), damaged)], core, strict))
 
     def changed(path, value):
-        doc = json.loads(json.dumps(upper))
-        parent = json_get(doc, path[:-1])
-        if value is DELETE:
-            del parent[path[-1]]
-        else:
-            parent[path[-1]] = value
-        return doc
+        return with_field(upper, path, value)
 
     add("serial=7", changed(("serial",), 7), ERROR, core=True)
     add("serial=''", changed(("serial",), ""), ERROR)
@@ -1566,13 +1571,7 @@ def helix_variants(c, rng, random_count):
         variants.append(Variant("helix models", name, prepare, [simulate_probe(c, accept)], core))
 
     def changed(path, value):
-        doc = json.loads(json.dumps(model))
-        parent = json_get(doc, path[:-1])
-        if value is DELETE:
-            del parent[path[-1]]
-        else:
-            parent[path[-1]] = value
-        return doc
+        return with_field(model, path, value)
 
     element = ("guides", 0, "elements", 0)
     for path, values in [
