@@ -11,17 +11,13 @@
 
 #include <gtest/gtest.h>
 
+#include "batch/batch_test_util.h"
 #include "batch/stage_record.h"
 
 namespace hairrig {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 // Normalised, as FindCaptures gives the captures under it.
 std::string FreshDir(const std::string& name) {

@@ -11,17 +11,13 @@
 
 #include <gtest/gtest.h>
 
+#include "batch/batch_test_util.h"
 #include "batch/process.h"
 
 namespace hairrig {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 std::string WriteScript(const std::string& path, const std::string& body) {
   std::ofstream(path) << "#!/bin/bash\n" << body;
