@@ -7,7 +7,7 @@
 //   images per camera, own noise), and the same prior held exactly. Per way:
 //   median rotation / centre error, the observed over predicted error ratios
 //   pooled over every view, the reprojection RMS over the corner noise of the
-//   same detections, and the OpenCV-only baseline (calibrateCamera + PnP)
+//   same detections, and the planar start (Zhang + per-view IPPE, as OpenCV's calibrateCamera + PnP)
 //   error over ours.
 // speed: AprilTag detection per view at the default 1200 x 1600 and at 24 MP
 //   (the same scene camera scaled), and the bundle adjustment of 38 views.
@@ -169,7 +169,7 @@ int Uncertainty(int captures) {
   std::printf("# rot_deg: median rotation error; sd_med, sd_max: predicted rotation sd (deg) over the views\n");
   std::printf("# ratios: observed / predicted error over all views (1 = stated uncertainty right); "
               "rms/noise: reprojection RMS over the detections' corner noise (median over captures); "
-              "OpenCV-only: its median error over ours\n");
+              "start: the planar start's median error over ours\n");
   std::printf("%-22s %8s %8s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg", "sd_med", "sd_max",
               "ctr_mm", "r_rot", "r_ctr", "m_rot", "m_ctr", "rms/noise", "cv_rot", "cv_ctr");
   for (const Way* way : {&views, &free_views, &soft, &hard}) Report(*way);

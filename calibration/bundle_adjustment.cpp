@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <utility>
@@ -11,35 +12,13 @@
 #include <ceres/rotation.h>
 #include <Eigen/Geometry>
 
+#include "calibration/corner_cost.h"
+
 namespace hairrig {
 
 namespace {
 
 constexpr double kDegToRad = 3.14159265358979323846 / 180;
-
-template <typename T>
-using Vec3 = Eigen::Matrix<T, 3, 1>;
-
-template <typename T>
-bool ProjectResidual(const T* intrinsics, const Vec3<T>& p_cam, const Eigen::Vector2d& observed, T* residual) {
-  T uv[2];
-  ProjectCamPoint(intrinsics, p_cam.data(), uv);
-  residual[0] = uv[0] - T(observed.x());
-  residual[1] = uv[1] - T(observed.y());
-  return true;
-}
-
-// A box corner seen in a view of the free mode: cam_from_box directly.
-struct FreeCorner {
-  Eigen::Vector2d observed;
-  Eigen::Vector3d p_box;
-  template <typename T>
-  bool operator()(const T* intrinsics, const T* q_cam_from_box, const T* t_cam_from_box, T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q(q_cam_from_box);
-    const Vec3<T> p_cam = q * p_box.cast<T>() + Eigen::Map<const Vec3<T>>(t_cam_from_box);
-    return ProjectResidual(intrinsics, p_cam, observed, residual);
-  }
-};
 
 // A box corner in the turntable mode: cam_from_world * Rz(theta) * turntable_from_box.
 struct TurntableCorner {
@@ -49,11 +28,11 @@ struct TurntableCorner {
   bool operator()(const T* intrinsics, const T* q_cam_from_world, const T* t_cam_from_world, const T* theta_rad,
                   const T* q_turntable_from_box, const T* t_turntable_from_box, T* residual) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q_tb(q_turntable_from_box);
-    const Vec3<T> p_tt = q_tb * p_box.cast<T>() + Eigen::Map<const Vec3<T>>(t_turntable_from_box);
+    const CornerVec3<T> p_tt = q_tb * p_box.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_turntable_from_box);
     const T c = cos(theta_rad[0]), s = sin(theta_rad[0]);
-    const Vec3<T> p_world(c * p_tt.x() - s * p_tt.y(), s * p_tt.x() + c * p_tt.y(), p_tt.z());
+    const CornerVec3<T> p_world(c * p_tt.x() - s * p_tt.y(), s * p_tt.x() + c * p_tt.y(), p_tt.z());
     const Eigen::Map<const Eigen::Quaternion<T>> q_cw(q_cam_from_world);
-    const Vec3<T> p_cam = q_cw * p_world + Eigen::Map<const Vec3<T>>(t_cam_from_world);
+    const CornerVec3<T> p_cam = q_cw * p_world + Eigen::Map<const CornerVec3<T>>(t_cam_from_world);
     return ProjectResidual(intrinsics, p_cam, observed, residual);
   }
 };
@@ -143,6 +122,23 @@ struct Blocks {
     return out;
   }
 };
+
+// The free mode's Schur ordering: the views' rotation blocks (no two share
+// a residual) eliminated first, then translations and intrinsics. Explicit,
+// because Ceres' own choice of an independent set depends on the blocks'
+// addresses and with it the last bits of the solution.
+std::shared_ptr<ceres::ParameterBlockOrdering> ViewRotationsFirst(const ceres::Problem& problem,
+                                                                  const Blocks& blocks) {
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (const PoseBlock& pose : blocks.view_poses) {
+    if (!problem.HasParameterBlock(pose.q)) continue;
+    ordering->AddElementToGroup(pose.q, 0);
+    ordering->AddElementToGroup(pose.t, 1);
+  }
+  for (double* intrinsics : blocks.intrinsics)
+    if (problem.HasParameterBlock(intrinsics)) ordering->AddElementToGroup(intrinsics, 1);
+  return ordering;
+}
 
 // Sum of the squared corner reprojection errors of one view (px^2).
 double ViewSquaredError(const Blocks& blocks, const CalibrationView& v, size_t view_index) {
@@ -339,8 +335,8 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
           problem.AddResidualBlock(cost, loss, intr, cw.q, cw.t, stop_rad.at(v.stop), turntable_from_box.q,
                                    turntable_from_box.t);
         } else {
-          auto* cost = new ceres::AutoDiffCostFunction<FreeCorner, 2, 9, 4, 3>(
-              new FreeCorner{tag.corners_px[k], tag.corners_box_mm[k]});
+          auto* cost = new ceres::AutoDiffCostFunction<PosedCorner, 2, 9, 4, 3>(
+              new PosedCorner{tag.corners_px[k], tag.corners_box_mm[k]});
           problem.AddResidualBlock(cost, loss, intr, view_poses[vi].q, view_poses[vi].t);
         }
       }
@@ -389,6 +385,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
 
   ceres::Solver::Options solver;
   solver.linear_solver_type = turntable ? ceres::DENSE_QR : ceres::DENSE_SCHUR;
+  if (!turntable) solver.linear_solver_ordering = ViewRotationsFirst(problem, b);
   solver.max_num_iterations = options.max_iterations;
   solver.num_threads = options.threads;
   solver.function_tolerance = 1e-12;

@@ -172,7 +172,7 @@ Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calib
   e.initial = ComparePoses(calibration, truth.views, true);
   const bool from_views = std::any_of(calibration.cameras.begin(), calibration.cameras.end(),
                                       [](const auto& c) { return c.intrinsics_source == "views"; });
-  e.initial_source = from_views ? "OpenCV calibrateCamera + per-view PnP" : "nominal intrinsics";
+  e.initial_source = from_views ? "Zhang per camera + per-view IPPE" : "nominal intrinsics";
   for (const StoredCalibration::View& view : calibration.views)
     if (view.solved) e.reprojection_rms_px.values.push_back(view.rms_px);
   e.overall_rms_px = calibration.rms_px;

@@ -60,8 +60,8 @@ struct CalibrationEvaluation {
   int views_compared = 0;  // solved and in the ground truth
   PoseErrors solved;       // the bundle adjustment's
   PoseErrors initial;      // before it
-  // What the initial intrinsics came from: "OpenCV calibrateCamera + per-view
-  // PnP" when any camera's came from the views, else "nominal intrinsics".
+  // What the initial intrinsics came from: "Zhang per camera + per-view IPPE"
+  // when any camera's came from the views, else "nominal intrinsics".
   std::string initial_source;
   ErrorSpread reprojection_rms_px;  // per solved view
   double overall_rms_px = 0;

@@ -85,7 +85,7 @@ TEST(CalibrationEvaluation, ErrorsOfASmallCalibrationAgainstItsTruth) {
   EXPECT_NEAR(e->initial.focal_percent.values.at(0), 0.0, 1e-12);
   ASSERT_TRUE(e->corner_noise_px.has_value());
   EXPECT_NEAR(*e->corner_noise_px, 0.5, 1e-9);
-  EXPECT_EQ(e->initial_source, "OpenCV calibrateCamera + per-view PnP");
+  EXPECT_EQ(e->initial_source, "Zhang per camera + per-view IPPE");
 
   const nlohmann::json j = e->ToJson();
   EXPECT_EQ(j["stage"], "calibration");

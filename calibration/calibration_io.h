@@ -38,7 +38,7 @@ struct StoredCalibration {
     bool solved = false;
     CameraIntrinsics intrinsics;
     CameraIntrinsics initial;       // before the bundle adjustment
-    std::string intrinsics_source;  // "views": initial is OpenCV's calibrateCamera
+    std::string intrinsics_source;  // "views": initial is from Zhang's method (intrinsics_from_views.h)
     std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
   };
   struct Tag {

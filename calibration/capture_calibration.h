@@ -86,7 +86,7 @@ struct FrameCalibration {
   int tags_detected = 0;
   std::vector<TagObservation> tags;   // matched to the box (the bundle adjustment's input)
   std::vector<RejectedTag> rejected;
-  Rigid3d cam_from_box_init;      // the per-view PnP (the OpenCV-only pose)
+  Rigid3d cam_from_box_init;      // the per-view IPPE + LM pose (the planar start)
   Rigid3d cam_from_box;           // solved
   double init_rms_px = 0;
   double rms_px = 0;              // corner reprojection RMS after the bundle adjustment
@@ -97,7 +97,7 @@ struct CameraCalibration {
   bool solved = false;
   std::string failure;
   std::string intrinsics_source;  // "nominal", "prior" or "views"
-  CameraIntrinsics initial;       // before the bundle adjustment (the OpenCV-only intrinsics when "views")
+  CameraIntrinsics initial;       // before the bundle adjustment (Zhang's method when "views")
   CameraIntrinsics intrinsics;    // solved
   std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
   Rigid3d cam_from_world;         // turntable mode

@@ -1,8 +1,15 @@
 // A camera's intrinsics from its own views of the calibration box, with no
-// starting guess: every box face seen with two or more tags
-// in a view is a planar target, and OpenCV's calibrateCamera (Zhang's method,
-// then Levenberg-Marquardt) solves pinhole + k1, k2, p1, p2 from them, k3
-// held at 0. This is also the OpenCV-only baseline's intrinsics.
+// starting guess: every box face seen with two or more tags in a view is a
+// planar target, solved as OpenCV's calibrateCamera does (Zhang, "A flexible
+// new technique for camera calibration", PAMI 2000): a homography per
+// plane, the focal lengths in closed form from them with the principal point
+// at the image centre (Sec. 3.1, zero skew), a pose per plane from its
+// homography (Sec. 3.1), then Levenberg-Marquardt (Ceres) over pinhole +
+// k1, k2, p1, p2 and every plane's pose, k3 held at 0 (Sec. 3.2-3.3).
+// Fixed-size Eigen arithmetic and a fixed Ceres ordering, so the same views
+// give the same bits in any process (calibrateCamera's results vary in the
+// last digits with the process's memory layout);
+// intrinsics_from_views_test.cpp compares the result with calibrateCamera's.
 #pragma once
 
 #include <vector>
@@ -24,7 +31,7 @@ CameraIntrinsics IntrinsicsFromOpenCv(const cv::Mat& camera_matrix, const cv::Ma
 struct IntrinsicsFromViews {
   CameraIntrinsics intrinsics;
   int planes = 0;       // (view, face) pairs used
-  double rms_px = 0;    // calibrateCamera's reprojection RMS
+  double rms_px = 0;    // corner reprojection RMS over the planes (px)
 };
 
 // `views` are one camera's matched observations. FailedPrecondition when fewer

@@ -3,8 +3,7 @@
 #include <cmath>
 #include <map>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
+#include "calibration/planar_pose.h"
 
 namespace hairrig {
 
@@ -26,14 +25,6 @@ double TagRmsPx(const TagObservation& tag, const Rigid3d& cam_from_box, const Ca
     sum += (uv - tag.corners_px[static_cast<size_t>(k)]).squaredNorm();
   }
   return std::sqrt(sum / 4);
-}
-
-Rigid3d FromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
-  cv::Mat r;
-  cv::Rodrigues(rvec, r);
-  Eigen::Matrix3d rotation;
-  cv::cv2eigen(r, rotation);
-  return Rigid3d(rotation, Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
 }
 
 std::string Summary(const std::vector<RejectedTag>& rejected) {
@@ -70,8 +61,9 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
   pose.rejected = observations.rejected;
   // Undistorted (normalised) corners, so that PnP sees a pinhole camera.
   std::vector<const TagObservation*> usable;
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
+  std::vector<Eigen::Vector3d> object;
+  std::vector<Eigen::Vector2d> image;
+  std::vector<std::array<Eigen::Vector2d, 4>> usable_normalised;
   for (const TagObservation& tag : observations.tags) {
     std::array<Eigen::Vector2d, 4> normalised;
     bool ok = true;
@@ -85,11 +77,9 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
       continue;
     }
     usable.push_back(&tag);
-    for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector3d& p = tag.corners_box_mm[static_cast<size_t>(k)];
-      object.emplace_back(p.x(), p.y(), p.z());
-      image.emplace_back(normalised[static_cast<size_t>(k)].x(), normalised[static_cast<size_t>(k)].y());
-    }
+    usable_normalised.push_back(normalised);
+    object.insert(object.end(), tag.corners_box_mm.begin(), tag.corners_box_mm.end());
+    image.insert(image.end(), normalised.begin(), normalised.end());
   }
   if (static_cast<int>(usable.size()) < options.min_tags) {
     return FailedPrecondition("view pose: " + std::to_string(usable.size()) + " usable tag(s), " +
@@ -98,17 +88,11 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
   // Hypotheses from single tags (IPPE: both poses of a planar square), each
   // scored by how many tags agree with it: a RANSAC over tags, exhaustive
   // because a view holds at most a few dozen.
-  const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
   Rigid3d rough;
   size_t best_inliers = 0;
   double best_error = INFINITY;
   for (size_t t = 0; t < usable.size(); ++t) {
-    const std::vector<cv::Point3d> tag_object(object.begin() + static_cast<long>(4 * t), object.begin() + static_cast<long>(4 * t + 4));
-    const std::vector<cv::Point2d> tag_image(image.begin() + static_cast<long>(4 * t), image.begin() + static_cast<long>(4 * t + 4));
-    std::vector<cv::Mat> rvecs, tvecs;
-    cv::solvePnPGeneric(tag_object, tag_image, identity, cv::noArray(), rvecs, tvecs, false, cv::SOLVEPNP_IPPE);
-    for (size_t h = 0; h < rvecs.size(); ++h) {
-      const Rigid3d candidate = FromRvecTvec(rvecs[h], tvecs[h]);
+    for (const Rigid3d& candidate : PlanarSquarePoses(usable[t]->corners_box_mm, usable_normalised[t])) {
       size_t inliers = 0;
       double error = 0;
       for (const TagObservation* tag : usable) {
@@ -125,9 +109,8 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
       }
     }
   }
-  cv::Mat rvec, tvec;
-  std::vector<cv::Point3d> kept_object;
-  std::vector<cv::Point2d> kept_image;
+  std::vector<Eigen::Vector3d> kept_object;
+  std::vector<Eigen::Vector2d> kept_image;
   std::vector<const TagObservation*> kept;
   // Refine on the hypothesis' inliers, then judge every tag under the refined pose.
   for (int pass = 0; pass < 2; ++pass) {
@@ -151,11 +134,7 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
       }
     }
     if (static_cast<int>(kept.size()) < options.min_tags) break;
-    Eigen::Vector3d aa = rough.AngleAxis();
-    rvec = (cv::Mat_<double>(3, 1) << aa.x(), aa.y(), aa.z());
-    tvec = (cv::Mat_<double>(3, 1) << rough.translation.x(), rough.translation.y(), rough.translation.z());
-    cv::solvePnPRefineLM(kept_object, kept_image, identity, cv::noArray(), rvec, tvec);
-    rough = FromRvecTvec(rvec, tvec);
+    rough = RefinePose(kept_object, kept_image, rough).cam_from_model;
   }
   if (static_cast<int>(kept.size()) < options.min_tags) {
     return FailedPrecondition("view pose: " + std::to_string(kept.size()) + " tag(s) agree with the box, " +

@@ -4,9 +4,9 @@
 //
 // Matching: a detection whose id is not on the box, or an id seen twice in one
 // view, is reported and left out. Pose: the corners are undistorted with the
-// camera's intrinsics; every tag alone gives two pose hypotheses (OpenCV's
-// IPPE for a planar square), the one most tags agree with wins (a RANSAC
-// over tags), Levenberg-Marquardt refines it on those tags, and a tag whose
+// camera's intrinsics; every tag alone gives two pose hypotheses (IPPE for a
+// planar square, calibration/planar_pose.h), the one most tags agree with
+// wins (a RANSAC over tags), Levenberg-Marquardt refines it on those tags, and a tag whose
 // reprojection RMS under the refined pose is too large is reported and left
 // out before a last refinement. Pixels in the OpenCV convention
 // (core/transform.h), box frame in mm (core/calib_box.h).
