@@ -23,10 +23,9 @@
 //
 // Relative file names resolve against the options file's folder. A stage's
 // options enter its input hash, except `threads` and file names (the files'
-// contents do: batch/stage.h). Calibration with more than one thread sums in
-// a varying order, so its solution repeats bit for bit only with 1; its
-// uncertainties' last bits vary between runs in any case (Ceres orders the
-// covariance's parameter blocks by their memory addresses).
+// contents do: batch/stage.h). With "threads": 1 every stage repeats bit
+// for bit on the same binary and CPU type (tests/batch_slurm checks it);
+// with more, bit-for-bit repetition is not checked.
 #pragma once
 
 #include <array>

@@ -171,7 +171,7 @@ int Uncertainty(int captures) {
               "rms/noise: reprojection RMS over the detections' corner noise (median over captures); "
               "start: the planar start's median error over ours\n");
   std::printf("%-22s %8s %8s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg", "sd_med", "sd_max",
-              "ctr_mm", "r_rot", "r_ctr", "m_rot", "m_ctr", "rms/noise", "cv_rot", "cv_ctr");
+              "ctr_mm", "r_rot", "r_ctr", "m_rot", "m_ctr", "rms/noise", "st_rot", "st_ctr");
   for (const Way* way : {&views, &free_views, &soft, &hard}) Report(*way);
   return 0;
 }

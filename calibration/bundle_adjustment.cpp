@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <memory>
 #include <set>
 #include <string>
 #include <utility>
@@ -73,9 +72,10 @@ struct PoseBlock {
 
 // Every parameter block of the problem, all in one arena laid out in a fixed
 // order (intrinsics per camera, view poses, turntable_from_box, cam_from_world
-// per camera, stop angles): Ceres orders parameter blocks by address (its
-// default linear-solver ordering and its covariance), so blocks in separate
-// allocations would give a solution whose last bits vary from run to run.
+// per camera, stop angles): Ceres orders parameter blocks by address in
+// places (the blocks of an elimination group, the covariance's), so blocks
+// in separate allocations could give results whose last bits vary from run
+// to run.
 struct Blocks {
   Blocks(const BundleAdjustmentInput& input, bool turntable_mode) : turntable(turntable_mode) {
     std::set<int> stops;
@@ -122,23 +122,6 @@ struct Blocks {
     return out;
   }
 };
-
-// The free mode's Schur ordering: the views' rotation blocks (no two share
-// a residual) eliminated first, then translations and intrinsics. Explicit,
-// because Ceres' own choice of an independent set depends on the blocks'
-// addresses and with it the last bits of the solution.
-std::shared_ptr<ceres::ParameterBlockOrdering> ViewRotationsFirst(const ceres::Problem& problem,
-                                                                  const Blocks& blocks) {
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  for (const PoseBlock& pose : blocks.view_poses) {
-    if (!problem.HasParameterBlock(pose.q)) continue;
-    ordering->AddElementToGroup(pose.q, 0);
-    ordering->AddElementToGroup(pose.t, 1);
-  }
-  for (double* intrinsics : blocks.intrinsics)
-    if (problem.HasParameterBlock(intrinsics)) ordering->AddElementToGroup(intrinsics, 1);
-  return ordering;
-}
 
 // Sum of the squared corner reprojection errors of one view (px^2).
 double ViewSquaredError(const Blocks& blocks, const CalibrationView& v, size_t view_index) {
@@ -385,7 +368,6 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
 
   ceres::Solver::Options solver;
   solver.linear_solver_type = turntable ? ceres::DENSE_QR : ceres::DENSE_SCHUR;
-  if (!turntable) solver.linear_solver_ordering = ViewRotationsFirst(problem, b);
   solver.max_num_iterations = options.max_iterations;
   solver.num_threads = options.threads;
   solver.function_tolerance = 1e-12;

@@ -96,7 +96,7 @@ bool FocalLengths(const std::vector<Eigen::Matrix3d>& homographies, const Eigen:
   Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
   for (const Eigen::Matrix3d& homography : homographies) {
     Eigen::Matrix3d h = shift * homography;
-    h /= h.norm();
+    h /= h.leftCols<2>().norm();  // every plane weighs alike, wherever it is in the image
     const Eigen::Vector3d h1 = h.col(0), h2 = h.col(1);
     Eigen::Matrix2d a;
     Eigen::Vector2d b;
@@ -112,16 +112,17 @@ bool FocalLengths(const std::vector<Eigen::Matrix3d>& homographies, const Eigen:
   return std::isfinite(*fx) && std::isfinite(*fy);
 }
 
-// Zhang 2000 Sec. 3.1: r1 = l K^-1 h1, r2 = l K^-1 h2, t = l K^-1 h3 with
-// l = 1 / |K^-1 h1|, the sign putting the plane in front of the camera, and
+// Zhang 2000 Sec. 3.1: r1 = K^-1 h1 / |K^-1 h1|, r2 likewise, t = l K^-1 h3
+// with l = 2 / (|K^-1 h1| + |K^-1 h2|) (the two norms differ where the
+// starting K is off), the sign putting the plane in front of the camera, and
 // the nearest rotation to [r1 r2 r1 x r2].
 Rigid3d PoseFromHomography(const Eigen::Matrix3d& homography, const Eigen::Matrix3d& camera_matrix) {
-  Eigen::Matrix3d m = camera_matrix.inverse() * homography;
-  double scale = 1 / m.col(0).norm();
-  if (m(2, 2) * scale < 0) scale = -scale;
-  m *= scale;
+  const Eigen::Matrix3d m = camera_matrix.inverse() * homography;
+  const double sign = m(2, 2) < 0 ? -1.0 : 1.0;
+  const Eigen::Vector3d r1 = sign * m.col(0).normalized(), r2 = sign * m.col(1).normalized();
+  const Eigen::Vector3d t = sign * 2 / (m.col(0).norm() + m.col(1).norm()) * m.col(2);
   Eigen::Matrix3d r;
-  r << m.col(0), m.col(1), m.col(0).cross(m.col(1));
+  r << r1, r2, r1.cross(r2);
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
   if (rotation.determinant() < 0) {
@@ -129,7 +130,7 @@ Rigid3d PoseFromHomography(const Eigen::Matrix3d& homography, const Eigen::Matri
     flip(2, 2) = -1;
     rotation = svd.matrixU() * flip * svd.matrixV().transpose();
   }
-  return Rigid3d(rotation, m.col(2));
+  return Rigid3d(rotation, t);
 }
 
 // A face corner under its plane's pose as one block: quaternion (x, y, z, w) then translation.
@@ -142,10 +143,12 @@ struct PlaneCorner {
 };
 
 // Zhang 2000 Sec. 3.2-3.3: Levenberg-Marquardt over the intrinsics (k3 held)
-// and every plane's pose; the poses are eliminated first (an explicit Schur
-// ordering, so Ceres does not order the blocks by their addresses).
-// Returns the corner reprojection RMS (px).
-double RefineOverPlanes(const std::vector<Plane>& planes, double* intrinsics, std::vector<Rigid3d>* poses) {
+// and every plane's pose, the poses eliminated first (Schur). Returns the
+// corner reprojection RMS (px); FailedPrecondition when Ceres finds no
+// usable solution.
+Result<double> RefineOverPlanes(const std::vector<Plane>& planes, double* intrinsics, std::vector<Rigid3d>* poses) {
+  // One allocation: Ceres orders an elimination group's blocks by address,
+  // which is then the planes' order in every process.
   std::vector<double> pose_blocks(7 * planes.size());
   ceres::Problem problem;
   ceres::ParameterBlockOrdering* ordering = new ceres::ParameterBlockOrdering;
@@ -176,6 +179,9 @@ double RefineOverPlanes(const std::vector<Plane>& planes, double* intrinsics, st
   options.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable())
+    return FailedPrecondition("intrinsics from views: the refinement over " + std::to_string(planes.size()) +
+                              " planes failed (" + summary.message + ")");
   for (size_t j = 0; j < planes.size(); ++j) {
     const double* q = &pose_blocks[7 * j];
     (*poses)[j] = Rigid3d(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(q[4], q[5], q[6]));
@@ -226,7 +232,7 @@ Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(const std::vector<const Vie
   for (const Eigen::Matrix3d& h : homographies) poses.push_back(PoseFromHomography(h, camera_matrix));
   double params[CameraIntrinsics::kNumParams] = {fx, fy, centre.x(), centre.y(), 0, 0, 0, 0, 0};
   IntrinsicsFromViews out;
-  out.rms_px = RefineOverPlanes(planes, params, &poses);
+  HR_ASSIGN_OR_RETURN(out.rms_px, RefineOverPlanes(planes, params, &poses));
   out.intrinsics = CameraIntrinsics::FromParams(params, width_px, height_px);
   out.planes = static_cast<int>(planes.size());
   const Status valid = out.intrinsics.Validate();

@@ -1,14 +1,16 @@
 // A camera's intrinsics from its own views of the calibration box, with no
 // starting guess: every box face seen with two or more tags in a view is a
-// planar target, solved as OpenCV's calibrateCamera does (Zhang, "A flexible
-// new technique for camera calibration", PAMI 2000): a homography per
+// planar target, solved with the model and to the minimum of OpenCV's
+// calibrateCamera (Zhang, "A flexible new technique for camera calibration",
+// PAMI 2000; the closed-form start differs in its details): a homography per
 // plane, the focal lengths in closed form from them with the principal point
 // at the image centre (Sec. 3.1, zero skew), a pose per plane from its
 // homography (Sec. 3.1), then Levenberg-Marquardt (Ceres) over pinhole +
 // k1, k2, p1, p2 and every plane's pose, k3 held at 0 (Sec. 3.2-3.3).
-// Fixed-size Eigen arithmetic and a fixed Ceres ordering, so the same views
-// give the same bits in any process (calibrateCamera's results vary in the
-// last digits with the process's memory layout);
+// Fixed-size Eigen arithmetic and a Ceres ordering that does not depend on
+// memory addresses, so the same views give the same bits in every run of the
+// same binary on the same kind of CPU (calibrateCamera's results varied in
+// the last digits with the process's memory layout);
 // intrinsics_from_views_test.cpp compares the result with calibrateCamera's.
 #pragma once
 

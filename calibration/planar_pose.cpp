@@ -30,6 +30,12 @@ bool MakePlaneFrame(const std::array<Eigen::Vector3d, 4>& corners, PlaneFrame* f
   if (!(frame->scale > 0)) return false;
   const Eigen::Vector3d normal = (corners[2] - corners[0]).cross(corners[3] - corners[1]);
   if (!(normal.norm() > 1e-9 * frame->scale * frame->scale)) return false;
+  for (size_t skip = 0; skip < 4; ++skip) {  // no three corners on one line
+    const Eigen::Vector3d& a = corners[(skip + 1) % 4];
+    const Eigen::Vector3d& b = corners[(skip + 2) % 4];
+    const Eigen::Vector3d& c = corners[(skip + 3) % 4];
+    if (!((b - a).cross(c - a).norm() > 1e-6 * frame->scale * frame->scale)) return false;
+  }
   const Eigen::Vector3d z = normal.normalized();
   for (const Eigen::Vector3d& c : corners) {
     if (std::abs(z.dot(c - frame->origin)) > 1e-6 * frame->scale) return false;
@@ -60,15 +66,8 @@ bool SolveHomography(const std::array<Eigen::Vector2d, 4>& plane, const std::arr
   if (lu.rank() < 8) return false;
   const Eigen::Matrix<double, 8, 1> p = lu.solve(b);
   *h << p(0), p(1), p(2), p(3), p(4), p(5), p(6), p(7), 1;
-  return h->allFinite();
-}
-
-// The rotation taking the unit vector `t` onto the optical axis (0, 0, 1).
-Eigen::Matrix3d RotationOntoOpticalAxis(const Eigen::Vector3d& t) {
-  const Eigen::Vector3d axis = t.cross(Eigen::Vector3d::UnitZ());
-  const double sine = axis.norm();
-  if (sine < 1e-15) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(std::atan2(sine, t.z()), axis / sine).toRotationMatrix();
+  // A singular homography: three image corners on one line (seen edge-on).
+  return h->allFinite() && std::abs(h->determinant()) > 1e-12 * std::pow(h->norm(), 3);
 }
 
 // Collins & Bartoli 2014, Sec. 4: with v the image of the plane's origin and
@@ -79,14 +78,16 @@ Eigen::Matrix3d RotationOntoOpticalAxis(const Eigen::Vector3d& t) {
 // block's two completions to a rotation, which differ in the sign of the
 // third row, are the two poses. Returns 0 or 2 rotations (plane to camera).
 std::vector<Eigen::Matrix3d> RotationsFromJacobian(const Eigen::Vector2d& v, const Eigen::Matrix2d& jacobian) {
-  const Eigen::Matrix3d rv = RotationOntoOpticalAxis(Eigen::Vector3d(v.x(), v.y(), 1).normalized());
+  const Eigen::Matrix3d rv =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d(v.x(), v.y(), 1), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   Eigen::Matrix<double, 2, 3> project;
   project << 1, 0, -v.x(), 0, 1, -v.y();
   const Eigen::Matrix2d b = (project * rv.transpose()).leftCols<2>();
   if (!(std::abs(b.determinant()) > 1e-12)) return {};
   const Eigen::Matrix2d a = b.inverse() * jacobian;
-  const double frobenius = a.squaredNorm(), det = a.determinant();
-  const double largest = std::sqrt(0.5 * (frobenius + std::sqrt(std::max(0.0, frobenius * frobenius - 4 * det * det))));
+  const Eigen::Matrix2d ata = a.transpose() * a;  // largest eigenvalue without cancellation near equal ones
+  const double half_gap = 0.5 * (ata(0, 0) - ata(1, 1));
+  const double largest = std::sqrt(0.5 * (ata(0, 0) + ata(1, 1)) + std::sqrt(half_gap * half_gap + ata(0, 1) * ata(0, 1)));
   if (!(largest > 0)) return {};
   const Eigen::Matrix2d block = a / largest;
   const Eigen::Vector2d b1 = block.col(0), b2 = block.col(1);
@@ -201,9 +202,9 @@ PoseRefinement RefinePose(const std::vector<Eigen::Vector3d>& points_model,
       const Vector6d step = damped.ldlt().solve(-gradient);
       const Eigen::Vector3d w = step.head<3>();
       const double angle = w.norm();
-      const Eigen::Matrix3d turn =
-          angle > 0 ? Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
-      const Rigid3d candidate(Eigen::Matrix3d(turn * rotation), out.cam_from_model.translation + step.tail<3>());
+      const Rigid3d turn = Rigid3d::FromAngleAxis(w, Eigen::Vector3d::Zero());
+      const Rigid3d candidate(turn.rotation * out.cam_from_model.rotation,
+                              out.cam_from_model.translation + step.tail<3>());
       const double candidate_cost = SquaredReprojectionError(candidate, points_model.data(), normalised.data(), count);
       if (candidate_cost < cost) {
         accepted = true;

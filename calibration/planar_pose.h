@@ -22,10 +22,12 @@ namespace hairrig {
 // plane to the image gives the perspective map's Jacobian at the corners'
 // centroid; a rotation is recovered from it up to the plane's two-fold
 // ambiguity, and each rotation's translation is the linear least-squares
-// solution over the 4 corners. The pose with the smaller reprojection error
-// comes first. Empty when the corners are not on one plane (relative
-// out-of-plane distance above 1e-6), are degenerate (three collinear) or the
-// view is edge-on.
+// solution over the 4 corners. Returns 0, 1 or 2 poses, the one with the
+// smaller reprojection error first: a pose that puts the tag behind the
+// camera (as both do for a tag seen nearly edge-on) is left out. Empty when
+// a corner is not finite, the corners are not on one plane (relative
+// out-of-plane distance above 1e-6) or are degenerate (three corners on one
+// line, in the model or in the image).
 std::vector<Rigid3d> PlanarSquarePoses(const std::array<Eigen::Vector3d, 4>& corners_model,
                                        const std::array<Eigen::Vector2d, 4>& normalised);
 
@@ -37,9 +39,13 @@ struct PoseRefinement {
 
 // Levenberg-Marquardt on the reprojection error of points in normalised
 // coordinates, from `start`: rotation updates on the left (angle-axis),
-// translation additive; stops when a step changes the pose by less than
-// 1e-14 (relative) or after 100 iterations. `points_model` and `normalised`
-// have the same size (at least 3 non-collinear points).
+// translation additive. Stops after an accepted step smaller than 1e-14
+// (rotation in rad plus translation over max(1 mm, |t|)), when no step
+// lowers the cost any more (damping beyond 1e12), or after 100 iterations.
+// `points_model` and `normalised` have the same size (at least 3
+// non-collinear points; extra entries of the longer one are ignored). A
+// start that puts a point behind the camera is returned unchanged with an
+// infinite rms.
 PoseRefinement RefinePose(const std::vector<Eigen::Vector3d>& points_model,
                           const std::vector<Eigen::Vector2d>& normalised, const Rigid3d& start);
 

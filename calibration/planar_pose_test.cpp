@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
@@ -47,11 +48,28 @@ std::array<Eigen::Vector2d, 4> Project(const Rigid3d& pose, const std::array<Eig
 double AngleBetween(const Rigid3d& a, const Rigid3d& b) { return a.rotation.angularDistance(b.rotation); }
 
 Rigid3d FromOpenCv(const cv::Mat& rvec, const cv::Mat& tvec) {
-  const Eigen::Vector3d aa(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2));
-  const double angle = aa.norm();
-  const Eigen::Quaterniond q = angle > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, aa / angle))
-                                         : Eigen::Quaterniond::Identity();
-  return Rigid3d(q, Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+  return Rigid3d::FromAngleAxis(Eigen::Vector3d(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2)),
+                                Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+}
+
+// Both of OpenCV's IPPE poses and ours agree for `truth` seen with `noise`.
+void ExpectOpenCvsIppe(const std::array<Eigen::Vector3d, 4>& square, const Rigid3d& truth, std::mt19937& rng,
+                       double noise, const std::string& label) {
+  std::vector<cv::Point3d> object;
+  for (const auto& p : square) object.emplace_back(p.x(), p.y(), p.z());
+  const auto image = Project(truth, square, &rng, noise);
+  std::vector<cv::Point2d> cv_image;
+  for (const auto& u : image) cv_image.emplace_back(u.x(), u.y());
+  std::vector<cv::Mat> rvecs, tvecs;
+  cv::solvePnPGeneric(object, cv_image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvecs, tvecs, false,
+                      cv::SOLVEPNP_IPPE);
+  const std::vector<Rigid3d> ours = PlanarSquarePoses(square, image);
+  ASSERT_EQ(ours.size(), rvecs.size()) << label;
+  for (size_t h = 0; h < ours.size(); ++h) {
+    const Rigid3d theirs = FromOpenCv(rvecs[h], tvecs[h]);
+    EXPECT_LT(AngleBetween(ours[h], theirs), 1e-7) << label << " hypothesis " << h;
+    EXPECT_LT((ours[h].translation - theirs.translation).norm(), 1e-4) << label << " hypothesis " << h;
+  }
 }
 
 TEST(PlanarSquarePoses, RecoversTheTruePoseFromExactCorners) {
@@ -69,9 +87,6 @@ TEST(PlanarSquarePoses, RecoversTheTruePoseFromExactCorners) {
 TEST(PlanarSquarePoses, GivesOpenCvsIppeSolutionsFromNoisyCorners) {
   std::mt19937 rng(11);
   const auto square = TiltedSquare();
-  std::vector<cv::Point3d> object;
-  for (const auto& p : square) object.emplace_back(p.x(), p.y(), p.z());
-  const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
   const Eigen::Vector3d normal = (square[1] - square[0]).cross(square[3] - square[0]).normalized();
   int compared = 0;
   for (int trial = 0; trial < 200; ++trial) {
@@ -81,20 +96,34 @@ TEST(PlanarSquarePoses, GivesOpenCvsIppeSolutionsFromNoisyCorners) {
     const double facing = (truth.rotation * normal).dot((truth * square[0]).normalized());
     if (std::abs(facing) < std::sin(15 * M_PI / 180)) continue;
     ++compared;
-    const auto image = Project(truth, square, &rng, 1e-3);  // about 1 px at a focal length of 1000 px
-    std::vector<cv::Point2d> cv_image;
-    for (const auto& u : image) cv_image.emplace_back(u.x(), u.y());
-    std::vector<cv::Mat> rvecs, tvecs;
-    cv::solvePnPGeneric(object, cv_image, identity, cv::noArray(), rvecs, tvecs, false, cv::SOLVEPNP_IPPE);
-    const std::vector<Rigid3d> ours = PlanarSquarePoses(square, image);
-    ASSERT_EQ(ours.size(), rvecs.size()) << trial;
-    for (size_t h = 0; h < ours.size(); ++h) {
-      const Rigid3d theirs = FromOpenCv(rvecs[h], tvecs[h]);
-      EXPECT_LT(AngleBetween(ours[h], theirs), 1e-7) << trial << " hypothesis " << h;
-      EXPECT_LT((ours[h].translation - theirs.translation).norm(), 1e-4) << trial << " hypothesis " << h;
-    }
+    // About 1 px at a focal length of 1000 px.
+    ExpectOpenCvsIppe(square, truth, rng, 1e-3, "trial " + std::to_string(trial));
   }
   EXPECT_GT(compared, 150);
+}
+
+// Seen square on and within a degree of it, where the two singular values of
+// the Jacobian's block are nearly equal. (With noise, one small tag seen
+// square on leaves its tilt uncertain by degrees: only OpenCV's answer is
+// compared then.)
+TEST(PlanarSquarePoses, GivesOpenCvsIppeSolutionsForATagSeenSquareOn) {
+  std::mt19937 rng(5);
+  const auto square = TiltedSquare();
+  const Eigen::Vector3d centre = (square[0] + square[1] + square[2] + square[3]) / 4;
+  const Eigen::Vector3d normal = (square[1] - square[0]).cross(square[3] - square[0]).normalized();
+  for (double tilt_deg : {0.0, 0.01, 0.1, 1.0}) {
+    const Eigen::Vector3d side = normal.unitOrthogonal();
+    const Eigen::Vector3d eye =
+        centre + 500 * (Eigen::AngleAxisd(tilt_deg * M_PI / 180, side) * normal);
+    const Rigid3d truth = LookAt(eye, centre, side);
+    for (double noise : {0.0, 1e-4}) {
+      ExpectOpenCvsIppe(square, truth, rng, noise,
+                        "tilt " + std::to_string(tilt_deg) + " deg, noise " + std::to_string(noise));
+    }
+    const std::vector<Rigid3d> exact = PlanarSquarePoses(square, Project(truth, square));
+    ASSERT_FALSE(exact.empty());
+    EXPECT_LT(AngleBetween(exact[0], truth), 1e-7) << tilt_deg;
+  }
 }
 
 TEST(PlanarSquarePoses, RefusesCornersOffOnePlaneAndDegenerateOnes) {
@@ -107,12 +136,15 @@ TEST(PlanarSquarePoses, RefusesCornersOffOnePlaneAndDegenerateOnes) {
   collapsed[1] = collapsed[0];
   collapsed[2] = collapsed[3];
   EXPECT_TRUE(PlanarSquarePoses(collapsed, image).empty());
+  auto collinear = square;
+  collinear[1] = 0.5 * (square[0] + square[2]);  // on the diagonal: three corners on one line
+  EXPECT_TRUE(PlanarSquarePoses(collinear, image).empty());
   auto nan_image = image;
   nan_image[3].x() = NAN;
   EXPECT_TRUE(PlanarSquarePoses(square, nan_image).empty());
 }
 
-TEST(RefinePose, ConvergesToOpenCvsMinimumAndRepeatsBitForBit) {
+TEST(RefinePose, ConvergesToOpenCvsMinimum) {
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0, 1e-3);
   std::uniform_real_distribution<double> spread(-60, 60);
@@ -144,13 +176,6 @@ TEST(RefinePose, ConvergesToOpenCvsMinimumAndRepeatsBitForBit) {
     EXPECT_LT(ours.rms, 3e-3) << trial;  // the noise's RMS per point is 1.4e-3
     EXPECT_GT(ours.iterations, 1) << trial;
 
-    // The same points in other allocations give the same bits.
-    const std::vector<double> spacer(static_cast<size_t>(trial) + 1, 0.0);
-    const std::vector<Eigen::Vector3d> points_copy(points);
-    const std::vector<Eigen::Vector2d> image_copy(image);
-    const PoseRefinement again = RefinePose(points_copy, image_copy, start);
-    EXPECT_EQ(again.cam_from_model.rotation.coeffs(), ours.cam_from_model.rotation.coeffs()) << trial;
-    EXPECT_EQ(again.cam_from_model.translation, ours.cam_from_model.translation) << trial;
   }
 }
 

@@ -109,6 +109,10 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
       }
     }
   }
+  if (best_error == INFINITY) {
+    return FailedPrecondition("view pose: no tag gives a pose (every tag seen edge-on or degenerate; " +
+                              std::to_string(usable.size()) + " usable)");
+  }
   std::vector<Eigen::Vector3d> kept_object;
   std::vector<Eigen::Vector2d> kept_image;
   std::vector<const TagObservation*> kept;

@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/string_format.h"
+#include "rig/capture_calibration_input.h"
+#include "rig/capture_plan.h"
 #include "rig/rig_config.h"
 
 namespace hairrig {
@@ -60,6 +62,10 @@ Result<DeviceCheckSummary> CheckDevices(const DeviceCheckOptions& options) {
   }
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadRigConfig(path));
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config));
+  // The sections a capture and its calibration read, checked as they will read them.
+  HR_RETURN_IF_ERROR(ReadCapturePlan(config.root, rig->devices).status());
+  HR_RETURN_IF_ERROR(ReadCapturePolicies(config.root).status());
+  if (config.root.Has("calibration")) HR_RETURN_IF_ERROR(ReadCalibrationSection(config).status());
   DeviceCheckSummary summary;
   summary.config_path = config.path;
   summary.rig_name = config.name;

@@ -32,8 +32,9 @@ struct DeviceCheckSummary {
   std::string BriefReport() const;  // a table, one device a line
 };
 
-// Errors: the config (named, with the field) or a device that cannot be
-// built from it; a device that fails to open or its health check is reported
+// Errors: the config (named, with the field: its devices and the plan,
+// retries, storage and calibration sections as a capture reads them) or a
+// device that cannot be built from it; a device that fails to open or its health check is reported
 // in the summary, not as an error.
 Result<DeviceCheckSummary> CheckDevices(const DeviceCheckOptions& options);
 

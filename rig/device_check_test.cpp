@@ -33,6 +33,22 @@ TEST(DeviceCheck, EveryDeviceOfTheSmallRigIsOpenedAndHealthy) {
   EXPECT_NE(brief.find("7 of 7 devices healthy"), std::string::npos) << brief;
 }
 
+// A config the capture would refuse is refused here too, naming the field.
+TEST(DeviceCheck, UnknownKeysInTheCapturesSectionsAreNamed) {
+  const std::map<std::string, std::pair<std::string, std::string>> cases = {
+      {"retries", {"retries: {camera: {attempts: 2}, frame_timout_s: 3}\n", "frame_timout_s"}},
+      {"storage", {"storage: {min_free_mbb: 10}\n", "min_free_mbb"}},
+      {"plan", {"plan: {stops: 2, expsure_s: 0.01}\n", "expsure_s"}},
+      {"calibration", {"calibration: {box: calib-box.yaml, box_height_mm: 600, box_yw_deg: 3}\n", "box_yw_deg"}}};
+  for (const auto& [section, text_and_key] : cases) {
+    const std::string dir = hairrig::testing::FreshDir("device_check_" + section);
+    const auto summary = CheckDevices({.config_path = hairrig::testing::WriteSmallRig(dir, {{section, text_and_key.first}})});
+    ASSERT_FALSE(summary.ok()) << section;
+    EXPECT_NE(summary.status().message().find(text_and_key.second), std::string::npos)
+        << section << ": " << summary.status().ToString();
+  }
+}
+
 TEST(DeviceCheck, AMissingConfigIsNamed) {
   const auto summary = CheckDevices({.config_path = "/nonexistent/rig.yaml"});
   ASSERT_FALSE(summary.ok());

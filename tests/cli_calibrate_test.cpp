@@ -6,6 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -256,6 +259,37 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
   EXPECT_EQ(summary["views_solved"], 37);
   EXPECT_NE(summary["reasons"].dump().find("005_SIM-CAM-LOWER.png"), std::string::npos) << summary.dump();
   EXPECT_NE(summary["reasons"].dump().find("bytes, its record gives"), std::string::npos) << summary.dump();
+}
+
+// The same frames calibrate to the same bytes in other processes: copies of
+// the capture in folders with names of other lengths, one solved on a single
+// CPU and one with a larger environment (each moves the process's memory
+// layout; OpenCV's calibrateCamera and solvePnP, which once started the
+// solve, gave other last digits under such changes).
+TEST_F(CliCalibrate, TheSameFramesCalibrateToTheSameBytesInOtherProcesses) {
+  const std::string padding(3000, 'x');
+  const std::vector<std::pair<std::string, std::string>> runs = {
+      {"a", ""},
+      {"a_copy_in_a_folder_with_a_longer_name", "taskset -c 0 "},
+      {"bb", "HAIRRIG_TEST_PADDING=" + padding + " "}};
+  std::string first;
+  for (const auto& [name, prefix] : runs) {
+    const std::string copy = ::testing::TempDir() + "/cli_calibrate_repeat/" + name;
+    fs::remove_all(copy);
+    fs::create_directories(fs::path(copy).parent_path());
+    fs::copy(capture_, copy, fs::copy_options::recursive);
+    fs::remove_all(copy + "/calibration");
+    const CommandRun r = Hairrig("--log-level warning calibrate " + copy + " --threads 1", prefix);
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+    std::ifstream in(copy + "/calibration/calibration.json", std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty()) << name;
+    if (first.empty()) {
+      first = bytes;
+    } else {
+      EXPECT_TRUE(bytes == first) << name << ": calibration.json differs from the first copy's";
+    }
+  }
 }
 
 }  // namespace
