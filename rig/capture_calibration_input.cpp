@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 #include <map>
+#include <set>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -68,9 +69,16 @@ Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::
 Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest, const std::string& manifest_path,
                  const std::map<std::string, int>& by_serial, CaptureCalibrationInput* input) {
   const JsonObject root(manifest, manifest_path);
+  std::set<int> views_seen;
   for (const JsonObject& f : root.Objects("frames")) {
     CalibrationFrame frame;
     frame.view = static_cast<int>(f.Integer("view", {.min = 0, .max = kMaxViewIndex}));
+    if (f.ok() && !views_seen.insert(frame.view).second) {
+      // Checked before any file is read: a list repeated thousands of times is refused at once.
+      f.Fail("view", "view " + std::to_string(frame.view) +
+                         " is listed twice; the manifest was altered: rewrite it with `hairrig capture --resume`");
+      break;
+    }
     frame.stop = static_cast<int>(f.Integer("stop", {.min = 0, .max = kMaxViewIndex}));
     frame.turntable_deg = f.Number("angle_measured_deg");
     frame.name = f.String("file");

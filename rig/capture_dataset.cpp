@@ -173,13 +173,26 @@ Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir
   const std::string journal = (fs::path(capture_dir) / kJournal).string();
   HR_ASSIGN_OR_RETURN(const auto planned, PlannedViews(journal, records));
   std::map<int, FrameRecord> claimed;  // the last record per view
+  std::map<int, size_t> claimed_line;
   for (size_t i = 0; i < records.size(); ++i) {
     if (JournalEvent(records[i]) != "frame_stored") continue;
     const std::string where = JournalLine(journal, i);
     Result<FrameRecord> frame = FrameRecord::FromJson(records[i], where);
     if (!frame.ok()) return CorruptData(frame.status().message() + "; " + kAlteredAdvice);
     HR_RETURN_IF_ERROR(CheckAgainstPlan(*frame, planned, where));
+    claimed_line[frame->view] = i;
     claimed[frame->view] = std::move(frame).value();
+  }
+  // Two exposures never give the same bytes: one frame vouched for by two
+  // views' records is a record (and its file) copied onto another view.
+  std::map<std::string, int> view_of_content;
+  for (const auto& [view, frame] : claimed) {
+    const auto [other, inserted] = view_of_content.emplace(frame.sha256, view);
+    if (!inserted) {
+      return CorruptData(JournalLine(journal, claimed_line[view]) + ": field 'sha256': view " + std::to_string(view) +
+                         " has the same frame content as view " + std::to_string(other->second) + " (" +
+                         JournalLine(journal, claimed_line[other->second]) + "); " + kAlteredAdvice);
+    }
   }
   std::map<int, FrameRecord> verified;
   for (auto& [view, frame] : claimed) {

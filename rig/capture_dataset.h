@@ -201,8 +201,9 @@ Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, 
 // replay: per view, the last frame_stored record of `records` (the capture's
 // journal), if its file verifies (VerifyFrameFile). CorruptData naming the
 // journal line and field for a damaged record (FrameRecord::FromJson), a frame
-// of a view no view_planned record plans, or of another camera than the one
-// planned for its view (a record copied onto another view).
+// of a view no view_planned record plans, of another camera than the one
+// planned for its view, or with the same SHA-256 as another view's frame (a
+// record copied onto another view, its file copied too).
 Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir,
                                                   const std::vector<nlohmann::json>& records);
 

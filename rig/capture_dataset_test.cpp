@@ -235,6 +235,34 @@ TEST(CaptureDatasetHostile, ARecordCopiedOntoAnotherViewIsRefused) {
   EXPECT_FALSE(fs::exists(dir + "/quarantine"));
 }
 
+// The same with the copied record made consistent (its file name) and the
+// frame file copied under that name: the record's own checks pass, the
+// duplicate content does not.
+TEST(CaptureDatasetHostile, AFrameCopiedWithItsRecordOntoAnotherViewIsRefused) {
+  const std::string dir = DamageableCapture("dataset_duplicate_content");
+  auto records = ReadJournal(dir);
+  const nlohmann::json original = records[FirstFrameRecord(records)];
+  nlohmann::json copy = original;
+  copy["view"] = 1;
+  copy["seq"] = 1000;
+  copy["file"] = "frames/001_CAM-1.png";
+  fs::copy_file(dir + "/" + original["file"].get<std::string>(), dir + "/frames/001_CAM-1.png",
+                fs::copy_options::overwrite_existing);
+  records.push_back(copy);
+  WriteJournal(dir, records);
+  ResumeReport report;
+  const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.status().code(), StatusCode::kCorruptData) << d.status().ToString();
+  EXPECT_NE(d.status().message().find("line " + std::to_string(records.size()) +
+                                      ": field 'sha256': view 1 has the same frame content as view 0"),
+            std::string::npos)
+      << d.status().ToString();
+  EXPECT_FALSE(fs::exists(dir + "/quarantine"));
+  const auto verified = VerifiedFrames(dir, records);
+  EXPECT_FALSE(verified.ok()) << "replay reads frames through the same check";
+}
+
 // Resume writes into journal.jsonl, frames/ and quarantine/: a symlink there
 // used to send truncation, re-shot frames or quarantined files outside the capture.
 TEST(CaptureDatasetHostile, SymlinksAreRefusedForWriting) {

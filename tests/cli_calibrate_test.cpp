@@ -241,6 +241,24 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
   EXPECT_NE(r.output.find("field 'frames[0].file': ../../etc/passwd is not the file of view 0"), std::string::npos)
       << r.output;
 
+  // The frame list repeated 2,000 times: refused at its first repeat, before
+  // any frame is read (it used to verify all 76,000 entries, over 20 s).
+  nlohmann::json manifest = nlohmann::json::parse(std::ifstream(capture_ + "/manifest.json"));
+  const nlohmann::json frames = manifest["frames"];
+  for (int copy = 1; copy < 2000; ++copy)
+    for (const nlohmann::json& frame : frames) manifest["frames"].push_back(frame);
+  const std::string repeated = ::testing::TempDir() + "/cli_calibrate_repeated";
+  fs::remove_all(repeated);
+  fs::copy(capture_, repeated, fs::copy_options::recursive);
+  fs::remove_all(repeated + "/calibration");
+  std::ofstream(repeated + "/manifest.json") << manifest.dump();
+  r = Hairrig("calibrate " + repeated);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("field 'frames[" + std::to_string(frames.size()) + "].view': view 0 is listed twice"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(repeated + "/calibration/calibration.json"));
+
   // A corrupt frame: named, the rest still solved.
   const std::string damaged = ::testing::TempDir() + "/cli_calibrate_damaged";
   fs::remove_all(damaged);
