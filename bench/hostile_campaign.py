@@ -1294,7 +1294,7 @@ def config_variants(c, rng, random_count, full):
             ("second document after end marker", base + "...\n---\nextra: 1\n")]:
         add(name, text, ERROR, ERROR, core=name in ("duplicate sim section", "second document",
                                                    "unknown top-level key"))
-    # Plan mistakes: `capture` must refuse them before shooting; `devices` does not read the plan.
+    # Plan mistakes: `capture` must refuse them before shooting; `devices` checks the plan as capture reads it.
     plans = [("light-name typo 'botom'", "plan: {lights: {top: 1, botom: 1}}"),
              ("camera typo in the plan", "plan: {cameras: [uper]}"),
              ("light typo in a view", "plan:\n  views:\n    - {angle_deg: 0, camera: upper, lights: {tpo: 1}}"),
@@ -1317,7 +1317,7 @@ def config_variants(c, rng, random_count, full):
                 else base.replace("min_free_mb: 10", "min_free_mb: -1")
         else:
             text = base + plan + "\n"
-        add(name, text, SUCCESS, ERROR, core=name in ("light-name typo 'botom'", "angle 1e12"))
+        add(name, text, ERROR, ERROR, core=name in ("light-name typo 'botom'", "angle 1e12"))
     if full:
         add("angles_deg with 5M entries", lambda ctx: base + "plan:\n  angles_deg: [" +
             ", ".join(["1"] * 5_000_000) + "]\n", SUCCESS, ERROR)
