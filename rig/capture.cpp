@@ -18,6 +18,7 @@
 #include "core/file_util.h"
 #include "core/log.h"
 #include "drivers/camera_support.h"
+#include "rig/capture_calibration_input.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
@@ -767,6 +768,7 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
+  HR_RETURN_IF_ERROR(CheckCalibrationSection(config));
   const std::shared_ptr<CaptureStorage> storage =
       options.storage ? options.storage : rig->capture_storage ? rig->capture_storage : DefaultCaptureStorage();
   DatasetOptions dataset_options;

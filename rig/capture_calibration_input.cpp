@@ -137,6 +137,11 @@ Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config) {
   return out;
 }
 
+Status CheckCalibrationSection(const RigConfig& config) {
+  if (!config.root.Has("calibration")) return Status::Ok();
+  return ReadCalibrationSection(config).status();
+}
+
 Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
   HR_ASSIGN_OR_RETURN(const CaptureMetadata metadata, ReadCaptureMetadata(capture_dir));
   return LoadRigConfig((fs::path(capture_dir) / "rig.yaml").string(), metadata.config_dir,

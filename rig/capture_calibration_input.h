@@ -39,6 +39,10 @@ struct CalibrationSection {
 };
 // Errors name the file, line and field.
 Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config);
+// The calibration section checked as ReadCalibrationSection reads it (its
+// keys, numbers and box file), when the config has one; Ok without one.
+// Capture and `devices` check it, so a mistake shows before any frame.
+Status CheckCalibrationSection(const RigConfig& config);
 
 // Errors name the file and field: a missing manifest or rig.yaml, a damaged
 // manifest frame entry, a frame file that does not verify against the size

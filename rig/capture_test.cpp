@@ -204,10 +204,11 @@ TEST(Capture, RefusesAnExistingFolderWithoutResume) {
   EXPECT_NE(s.status().message().find("--resume"), std::string::npos) << s.status().ToString();
 }
 
-// A capture with `plan` is refused naming `field`, and creates nothing.
-void ExpectPlanRefused(const std::string& dir, const std::string& plan, const std::string& field) {
+// A capture with `text` as its `section` is refused naming `field`, and creates nothing.
+void ExpectSectionRefused(const std::string& dir, const std::string& section, const std::string& text,
+                          const std::string& field) {
   CaptureOptions o;
-  o.config_path = WriteSmallRig(dir, {{"plan", plan}});
+  o.config_path = WriteSmallRig(dir, {{section, text}});
   o.out_dir = dir + "/c";
   auto s = RunCapture(o);
   ASSERT_FALSE(s.ok());
@@ -215,8 +216,19 @@ void ExpectPlanRefused(const std::string& dir, const std::string& plan, const st
   EXPECT_FALSE(fs::exists(o.out_dir));
 }
 
+void ExpectPlanRefused(const std::string& dir, const std::string& plan, const std::string& field) {
+  ExpectSectionRefused(dir, "plan", plan, field);
+}
+
 TEST(Capture, BrokenConfigCreatesNothing) {
   ExpectPlanRefused(FreshDir("capture_bad_config"), "plan: {stops: 0}\n", "plan.stops");
+}
+
+// The calibration section is checked before shooting (an unknown key used to
+// pass a capture and fail only its calibration).
+TEST(Capture, AnUnknownKeyInTheCalibrationSectionCreatesNothing) {
+  ExpectSectionRefused(FreshDir("capture_bad_calibration"), "calibration",
+                       "calibration: {box: calib-box.yaml, box_height_mm: 600, box_yw_deg: 3}\n", "box_yw_deg");
 }
 
 // Plan mistakes that used to pass silently (a typo switching a panel off, a

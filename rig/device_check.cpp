@@ -65,7 +65,7 @@ Result<DeviceCheckSummary> CheckDevices(const DeviceCheckOptions& options) {
   // The sections a capture and its calibration read, checked as they will read them.
   HR_RETURN_IF_ERROR(ReadCapturePlan(config.root, rig->devices).status());
   HR_RETURN_IF_ERROR(ReadCapturePolicies(config.root).status());
-  if (config.root.Has("calibration")) HR_RETURN_IF_ERROR(ReadCalibrationSection(config).status());
+  HR_RETURN_IF_ERROR(CheckCalibrationSection(config));
   DeviceCheckSummary summary;
   summary.config_path = config.path;
   summary.rig_name = config.name;
