@@ -156,6 +156,7 @@ class AravisCamera : public Camera {
       return Fault(IoError("starting acquisition: " + TakeError(error)));
     }
     sequence_ = 0;
+    underruns_seen_ = 0;
     triggers_.Clear();
     SetState(DeviceState::kBusy);
     return Status::Ok();
@@ -204,8 +205,11 @@ class AravisCamera : public Camera {
     }
     Result<Frame> frame = ToFrameLocked(buffer);
     arv_stream_push_buffer(stream, buffer);
+    HR_RETURN_IF_ERROR(CheckNoFrameLostLocked());
     return frame;
   }
+
+  void LineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
 
   AravisStreamStats stats() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -283,9 +287,25 @@ class AravisCamera : public Camera {
     return w;
   }
 
+  // A frame that arrived with no free buffer is dropped by the stream unseen:
+  // its trigger cannot be told from the next one's, so the pairing of frames
+  // and triggers is lost until the camera is armed again.
+  Status CheckNoFrameLostLocked() {
+    guint64 completed = 0, failures = 0, underruns = 0;
+    arv_stream_get_statistics(stream_.get(), &completed, &failures, &underruns);
+    if (underruns == underruns_seen_) return Status::Ok();
+    const guint64 lost = underruns - underruns_seen_;
+    underruns_seen_ = underruns;
+    return CorruptData(Describe() + ": " + std::to_string(lost) +
+                       " frame(s) lost for want of a free stream buffer, so later frames cannot be paired with "
+                       "their triggers; the camera must be armed again (raise `buffers` if this recurs)");
+  }
+
   Result<Frame> ToFrameLocked(ArvBuffer* buffer) {
     const ArvBufferStatus status = arv_buffer_get_status(buffer);
     if (status != ARV_BUFFER_STATUS_SUCCESS) {
+      // The camera answered a trigger, though the frame is lost.
+      (void)triggers_.ForFrame(SteadyNowNs(), 0);
       return CorruptData(Describe() + ": frame arrived incomplete (Aravis buffer status " +
                          std::to_string(static_cast<int>(status)) + "); see the stream statistics");
     }
@@ -354,6 +374,7 @@ class AravisCamera : public Camera {
   double max_exposure_s_ = 0;
   uint64_t sequence_ = 0;
   TriggerTimes triggers_;
+  guint64 underruns_seen_ = 0;  // stream underruns already reported, since Arm
   AravisStreamStats last_stats_;
 };
 

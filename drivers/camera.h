@@ -4,8 +4,12 @@
 // downloads overlap the next turntable move:
 //   Configure(settings) -> Arm() -> [SoftwareTrigger() | pulse on the trigger line]
 //   -> WaitFrame(timeout), any number of times; Disarm() when done.
-// WaitFrame returns frames in trigger order; Timeout if none arrives in time
-// (the device stays usable), Unavailable if the camera dropped off the bus.
+// WaitFrame returns frames in trigger order, each with the time of the trigger
+// it answers; Timeout if none arrives in time (the device stays usable; the
+// late frame comes out of a later WaitFrame with its own, earlier trigger
+// time), Unavailable if the camera dropped off the bus. A camera that ignores
+// a trigger without reporting it shifts the pairing of its later frames; the
+// backends cannot tell that from a late frame.
 #pragma once
 
 #include <chrono>
@@ -67,6 +71,13 @@ class Camera : public Device {
   virtual Status Arm() = 0;
   virtual Status Disarm() = 0;
   virtual Status SoftwareTrigger() = 0;
+  // The host is about to pulse this camera's trigger line (TriggerSource::kLine);
+  // `sent_ns` on the SteadyNowNs clock. Frames are dated by these, in order, as
+  // by software triggers, so that a frame arriving after its view timed out
+  // carries its own trigger time, not a guess from its arrival. Called for
+  // every armed camera on the line, whether or not the host waits for its
+  // frame. Backends that see the pulse themselves (simulated, replayed) ignore it.
+  virtual void LineTriggerSent(int64_t sent_ns) = 0;
   virtual Result<Frame> WaitFrame(std::chrono::milliseconds timeout) = 0;
 };
 

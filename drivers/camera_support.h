@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <mutex>
 #include <string>
 
 #include "core/clock.h"
@@ -37,16 +38,24 @@ CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& d
 // OutOfRange naming the camera when `exposure_s` is outside the capabilities' range.
 Status CheckExposure(const Camera& camera, const CameraCapabilities& caps, double exposure_s);
 
-// The trigger time of each frame, in trigger order. Software triggers are
-// recorded when sent; a frame with no recorded trigger (a line pulse the
-// camera saw but the host did not) is dated back from its arrival by the
-// nominal latency.
+// The trigger time of each frame, in trigger order: software triggers and
+// line pulses are recorded when sent, and each frame takes the oldest. A frame
+// with no recorded trigger (a pulse the camera saw but the host did not send)
+// is dated back from its arrival by the nominal latency. Thread-safe, with a
+// lock of its own, so that noting a pulse never waits for a download.
 class TriggerTimes {
  public:
-  void Clear() { sent_ns_.clear(); }
-  void Sent(int64_t t_ns) { sent_ns_.push_back(t_ns); }
+  void Clear() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    sent_ns_.clear();
+  }
+  void Sent(int64_t t_ns) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    sent_ns_.push_back(t_ns);
+  }
   // `latency_wall_s`: exposure + readout + download, in wall seconds.
   int64_t ForFrame(int64_t received_ns, double latency_wall_s) {
+    std::lock_guard<std::mutex> lock(mutex_);
     if (sent_ns_.empty()) return received_ns - static_cast<int64_t>(latency_wall_s * 1e9);
     const int64_t t = sent_ns_.front();
     sent_ns_.pop_front();
@@ -54,6 +63,7 @@ class TriggerTimes {
   }
 
  private:
+  std::mutex mutex_;
   std::deque<int64_t> sent_ns_;
 };
 

@@ -377,6 +377,7 @@ class Gphoto2Camera : public Camera {
     std::lock_guard<std::mutex> lock(mutex_);
     sequence_ = 0;
     triggers_.Clear();
+    HR_RETURN_IF_ERROR(DiscardQueuedFilesLocked());
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
@@ -396,6 +397,8 @@ class Gphoto2Camera : public Camera {
     triggers_.Sent(t);
     return Status::Ok();
   }
+
+  void LineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
 
   Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
@@ -497,6 +500,27 @@ class Gphoto2Camera : public Camera {
 
   Status WriteSettingRetrying(const std::string& name, const std::string& value) {
     return FaultIfGone(Retrying("setting " + name, [&] { return session_->WriteSetting(name, value); }));
+  }
+
+  // Files the body reported before this arming answer no trigger of it (a
+  // shot that finished after its view timed out, before a reopen): they would
+  // otherwise be paired with the first new trigger. They stay on the card.
+  Status DiscardQueuedFilesLocked() {
+    constexpr int kMaxQueuedEvents = 1000;
+    for (int i = 0; i < kMaxQueuedEvents; ++i) {
+      CameraEventType type = GP_EVENT_UNKNOWN;
+      void* data = nullptr;
+      const int r = gp_camera_wait_for_event(session_->camera(), 0, &type, &data, session_->context());
+      if (r < GP_OK) return FaultIfGone(session_->Check(r, Describe() + ": reading the body's queued events"));
+      if (type == GP_EVENT_FILE_ADDED) {
+        const auto* path = static_cast<CameraFilePath*>(data);
+        LogWarning(Describe() + ": " + path->folder + "/" + path->name +
+                   " was reported before the camera was armed; it answers no trigger of this run and stays on the card");
+      }
+      free(data);
+      if (type == GP_EVENT_TIMEOUT) return Status::Ok();
+    }
+    return DeviceFault(Describe() + ": the body reports events without end; power-cycle it");
   }
 
   // A camera that went away is faulted (Open() reconnects); other errors leave it usable.

@@ -130,6 +130,9 @@ class V4l2Camera : public Camera {
     return Status::Ok();
   }
 
+  // UVC cameras have no trigger input: Configure refuses TriggerSource::kLine.
+  void LineTriggerSent(int64_t) override {}
+
   Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
     const auto deadline = std::chrono::steady_clock::now() + timeout;

@@ -73,7 +73,7 @@ struct CameraSlot {
   Camera* camera = nullptr;
   std::deque<Shot> queue;
   bool busy = false;          // the collector is working on a shot
-  bool needs_reopen = false;  // the camera dropped off the bus
+  bool needs_reopen = false;  // dropped off the bus, or its frames can no longer be paired with triggers
   int gave_up_in_pass = 0;    // reopening failed every attempt in this pass: skip it until the next
   std::thread collector;
 };
@@ -99,6 +99,7 @@ class Sequencer {
   bool ShootStop(const PlannedStop& stop, const std::vector<int>& views);
   Status Move(double angle_deg, double* measured_deg);
   Status SetLights(const std::map<std::string, double>& levels);
+  void PulseTriggerLine(const std::string& line_name, int64_t sent_ns);
   void AllLightsOff();
   Status EnsureCameraReady(CameraSlot& slot);
   Status PrepareCamera(Camera& camera);
@@ -312,6 +313,30 @@ Status Sequencer::SetLights(const std::map<std::string, double>& levels) {
   return Status::Ok();
 }
 
+// Every armed camera on the line hears of the pulse before it is sent, so
+// that each frame is paired with its own trigger however late it arrives
+// (cameras not shooting at this stop expose too, and their frames are
+// discarded as stale later). A pulse that fails may or may not have reached
+// the cameras: they are reopened, which clears the pairing, and the views of
+// this stop are shot again.
+void Sequencer::PulseTriggerLine(const std::string& line_name, int64_t sent_ns) {
+  std::vector<CameraSlot*> on_line;
+  for (auto& [serial, slot] : slots_) {
+    const auto line = rig_.camera_trigger_lines.find(slot.camera->info().name);
+    if (line == rig_.camera_trigger_lines.end() || line->second != line_name) continue;
+    if (slot.camera->state() == DeviceState::kBusy) slot.camera->LineTriggerSent(sent_ns);
+    on_line.push_back(&slot);
+  }
+  for (const auto& l : rig_.devices.trigger_lines) {
+    if (l->info().name != line_name) continue;
+    const Status s = l->Pulse(plan_.trigger_pulse);
+    if (s.ok()) continue;
+    RecordFault(l.get(), s, "reopen the cameras on it, re-shoot later");
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (CameraSlot* slot : on_line) slot->needs_reopen = true;
+  }
+}
+
 Status Sequencer::Move(double angle_deg, double* measured_deg) {
   Turntable& table = *rig_.devices.turntable;
   HR_ASSIGN_OR_RETURN(TurntableStatus now, table.ReadStatus());
@@ -417,12 +442,7 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
   }
   const int64_t trigger_ns = SteadyNowNs();
   const Clock::time_point trigger_time = Clock::now();
-  for (const std::string& name : lines) {
-    for (const auto& l : rig_.devices.trigger_lines) {
-      if (l->info().name != name) continue;
-      if (const Status s = l->Pulse(plan_.trigger_pulse); !s.ok()) RecordFault(l.get(), s, "re-shoot later");
-    }
-  }
+  for (const std::string& name : lines) PulseTriggerLine(name, trigger_ns);
   double exposure_wall_s = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -345,6 +345,8 @@ class ReplayCamera : public ReplayDevice<Camera> {
     OnTrigger();
     return Status::Ok();
   }
+  // The replay's trigger bus hands this camera each pulse with its exact time.
+  void LineTriggerSent(int64_t) override {}
   Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
     Pending next;

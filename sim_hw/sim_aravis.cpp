@@ -75,9 +75,10 @@ class SimAravisFeed::Impl {
   }
 
   // A pulse on the wired line: a fake in Line0 trigger mode takes a frame of
-  // the world as it is now.
+  // the world as it is now, while it acquires (a camera ignores triggers
+  // between AcquisitionStop and AcquisitionStart).
   void OnPulse() {
-    if (!InTriggerMode(kLine0)) return;
+    if (!InTriggerMode(kLine0) || arv_fake_camera_get_acquisition_status(fake_) == 0) return;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       pulse_exposures_.push_back(ExposeWorldNow(*world_));
@@ -101,6 +102,8 @@ class SimAravisFeed::Impl {
       if (arv_fake_camera_get_acquisition_status(fake_) == 0) {
         if (acquiring_) {
           acquiring_ = false;  // stopped: the next stream waits for its start
+          std::lock_guard<std::mutex> lock(mutex_);
+          pulse_exposures_.clear();  // AcquisitionStop aborts the frames not yet sent
           return false;
         }
         // Not started yet; a stream dropped without a start must not hang its thread.

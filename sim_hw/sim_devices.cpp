@@ -610,6 +610,8 @@ class SimCamera : public SimDevice<Camera> {
     OnTrigger();
     return Status::Ok();
   }
+  // The world's trigger bus hands this camera each pulse with its exact time.
+  void LineTriggerSent(int64_t) override {}
   Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
     if (gone_) return Fault(Unavailable("dropped off the bus; reopen it"));
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));

@@ -302,6 +302,12 @@ class SimDslrServer::Impl {
       Reply(client, {"ERR", proto::kErrClaimed, "the camera is claimed by process " + holder});
       return false;
     }
+    if (owner_ != client) {
+      // A new session, as a PTP OpenSession: it hears of no file written
+      // before it (the files stay on the card).
+      ++session_;
+      events_.clear();
+    }
     owner_ = client;
     lock.unlock();
     return Reply(client, {"OK", proto::kModel, options_.serial, std::to_string(options_.reply_timeout_ms)});
@@ -315,12 +321,14 @@ class SimDslrServer::Impl {
     int jpeg_quality = 95;
     bool drop = false;
     double extra_delay_s = 0;
+    uint64_t session = 0;  // the session that fired the shutter hears of the file
   };
 
   // Latches the world and the settings at the shutter; applies world faults.
   // False when the camera has dropped off the bus.
   bool StartShotLocked(Shot* shot) {
     if (gone_) return false;
+    shot->session = session_;
     shot->exposure = ExposeWorldNow(*world_);
     shot->exposure_s = ShutterSeconds(ValueLocked("shutterspeed"));
     shot->gain_db = 20.0 * std::log10(std::stod(ValueLocked("iso")) / 100.0);
@@ -396,7 +404,7 @@ class SimDslrServer::Impl {
       }
       Result<std::string> name = Develop(shot);
       std::lock_guard<std::mutex> lock(mutex_);
-      if (name.ok() && !name->empty()) {
+      if (name.ok() && !name->empty() && shot.session == session_) {
         events_.push_back(*name);
         cv_.notify_all();
       }
@@ -497,6 +505,7 @@ class SimDslrServer::Impl {
   std::map<std::string, StoredFile> card_;
   std::deque<Shot> pending_shots_;
   std::deque<std::string> events_;
+  uint64_t session_ = 0;  // counts the sessions opened (HELLO from a new owner)
   std::map<Fault, int> injected_;
   bool gone_ = false;
   int gone_connects_left_ = 0;

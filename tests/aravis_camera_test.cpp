@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/config.h"
+#include "core/clock.h"
 #include "drivers/aravis_camera.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
@@ -139,6 +140,35 @@ TEST(AravisCamera, InLine0ModeOnlyAPulseOnTheWiredLineTakesAFrame) {
   auto frame = p.camera->WaitFrame(kFrameWait);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   EXPECT_EQ(p.feed->frames_rendered(), 1);
+}
+
+// Pulses the host notes date the frames in order; a pulse while the camera
+// is not acquiring takes no frame, so nothing from before an arming is
+// paired with a trigger after it.
+TEST(AravisCamera, LinePulsesDateTheFramesAndPulsesWhileDisarmedTakeNone) {
+  InProcess p = StartInProcess("trig0");
+  ASSERT_TRUE(p.camera->Open().ok());
+  CaptureSettings s;
+  s.format = PixelFormat::kMono8;
+  s.trigger = TriggerSource::kLine;
+  s.trigger_line = "trig0";
+  ASSERT_TRUE(p.camera->Configure(s).ok());
+  WorldTriggers(*p.w.world).Fire("trig0");  // not armed yet
+  ASSERT_TRUE(p.camera->Arm().ok());
+  const int64_t first_ns = SteadyNowNs();
+  p.camera->LineTriggerSent(first_ns);
+  WorldTriggers(*p.w.world).Fire("trig0");
+  const int64_t second_ns = SteadyNowNs();
+  p.camera->LineTriggerSent(second_ns);
+  WorldTriggers(*p.w.world).Fire("trig0");
+  auto first = p.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(first.ok()) << first.status().ToString();
+  EXPECT_EQ(first->trigger_time_ns, first_ns);
+  auto second = p.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(second.ok()) << second.status().ToString();
+  EXPECT_EQ(second->trigger_time_ns, second_ns);
+  EXPECT_EQ(p.camera->WaitFrame(milliseconds(300)).status().code(), StatusCode::kTimeout);
+  EXPECT_EQ(p.feed->frames_rendered(), 2);
 }
 
 TEST(AravisCamera, AnotherSerialIsRefusedNamingBoth) {

@@ -11,11 +11,13 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/clock.h"
 #include "drivers/gphoto2_camera.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
@@ -206,6 +208,54 @@ TEST(Gphoto2Camera, ALinePulseFiresTheShutterAndTheFileArrivesAsAnEvent) {
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   EXPECT_FALSE(frame->data.empty());
   EXPECT_LE(frame->trigger_time_ns, frame->received_time_ns);
+}
+
+// Line pulses the host notes are the frames' trigger times, in order: a shot
+// that comes out after its wait timed out carries its own pulse's time.
+TEST(Gphoto2Camera, ALateShotCarriesTheTimeOfItsOwnPulse) {
+  // The 1st shot takes 100 device s (1 s here) longer than usual.
+  Bench b = StartBench({SimFault{SimFaultKind::kDownloadTimeout, kSerial, 0, 1, 100.0}}, "trig0");
+  ASSERT_TRUE(b.camera->Open().ok());
+  CaptureSettings s;
+  s.trigger = TriggerSource::kLine;
+  s.trigger_line = "trig0";
+  ASSERT_TRUE(b.camera->Configure(s).ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
+  const int64_t first_ns = SteadyNowNs();
+  b.camera->LineTriggerSent(first_ns);
+  WorldTriggers(*b.world).Fire("trig0");
+  EXPECT_EQ(b.camera->WaitFrame(milliseconds(200)).status().code(), StatusCode::kTimeout);
+  const int64_t second_ns = SteadyNowNs();
+  b.camera->LineTriggerSent(second_ns);
+  WorldTriggers(*b.world).Fire("trig0");
+  auto late = b.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(late.ok()) << late.status().ToString();
+  EXPECT_EQ(late->trigger_time_ns, first_ns);
+  auto next = b.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(next.ok()) << next.status().ToString();
+  EXPECT_EQ(next->trigger_time_ns, second_ns);
+}
+
+// A shot still developing when the connection is closed belongs to the old
+// session (as with PTP): after reopening and arming, the first frame is the
+// new trigger's, not the old shot's.
+TEST(Gphoto2Camera, AShotOfAClosedSessionIsNotTakenForTheNextTrigger) {
+  Bench b = StartBench({SimFault{SimFaultKind::kDownloadTimeout, kSerial, 0, 1, 50.0}});
+  ASSERT_TRUE(b.camera->Open().ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
+  ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
+  EXPECT_EQ(b.camera->WaitFrame(milliseconds(100)).status().code(), StatusCode::kTimeout);
+  ASSERT_TRUE(b.camera->Close().ok());
+  ASSERT_TRUE(b.camera->Open().ok());
+  ASSERT_TRUE(b.camera->Arm().ok());
+  std::this_thread::sleep_for(milliseconds(700));  // the old shot is on the card by now
+  const int64_t trigger_ns = SteadyNowNs();
+  ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
+  auto frame = b.camera->WaitFrame(kFrameWait);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_GE(frame->trigger_time_ns, trigger_ns);
+  EXPECT_EQ(b.camera->WaitFrame(milliseconds(300)).status().code(), StatusCode::kTimeout)
+      << "the old session's shot came out";
 }
 
 TEST(Gphoto2Camera, ABusyCameraIsRetriedThenReportedBusy) {
