@@ -78,4 +78,11 @@ Result<HeadSpec> LoadHeadFile(const std::string& path) {
   return head;
 }
 
+Result<HeadSpec> ReadHeadOfFile(const std::string& path) {
+  HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
+  HeadSpec head;
+  if (root.Has("head")) HR_RETURN_IF_ERROR(ReadHeadConfig(root, "head", path, &head));
+  return head;
+}
+
 }  // namespace hairrig

@@ -43,4 +43,8 @@ Status ReadHeadConfig(const ConfigNode& parent, const std::string& key, const st
 // A head file: a YAML document with a top-level `head:` map.
 Result<HeadSpec> LoadHeadFile(const std::string& path);
 
+// The `head:` of any YAML file that may have one (a scene, a rig config),
+// its other top-level keys not read; HeadSpec's defaults when it has none.
+Result<HeadSpec> ReadHeadOfFile(const std::string& path);
+
 }  // namespace hairrig

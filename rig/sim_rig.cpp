@@ -9,8 +9,11 @@
 #include "drivers/v4l2_camera.h"
 #include "rig/capture.h"
 #include "rig/rig_extension.h"
+#include "rig/strand_preview.h"
 #include "sim_hw/capture_truth.h"
 #include "sim_hw/modbus_turntable_server.h"
+#include "sim_hw/renderer.h"
+#include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_dslr_protocol.h"
@@ -269,11 +272,37 @@ class SimRigExtension : public RigExtension {
   }
 };
 
+// The scene's first camera at turntable angle 0, without sensor noise.
+class SceneStrandPreviewer : public StrandPreviewer {
+ public:
+  explicit SceneStrandPreviewer(std::unique_ptr<Renderer> renderer) : renderer_(std::move(renderer)) {}
+  Result<cv::Mat> Draw(const StrandSet& strands) override {
+    renderer_->SetStrands(strands);
+    RenderOptions options;
+    options.noise = false;
+    HR_ASSIGN_OR_RETURN(RenderedView view, renderer_->Render(0, 0.0, options));
+    return view.image;
+  }
+
+ private:
+  std::unique_ptr<Renderer> renderer_;
+};
+
+Result<std::unique_ptr<StrandPreviewer>> MakeSceneStrandPreviewer(const std::string& scene_file,
+                                                                  const HeadSpec& head) {
+  HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(scene_file));
+  scene.head = head;
+  scene.wig.num_strands = 1;  // replaced by the strands drawn
+  HR_ASSIGN_OR_RETURN(std::unique_ptr<Renderer> renderer, Renderer::Create(scene));
+  return std::unique_ptr<StrandPreviewer>(std::make_unique<SceneStrandPreviewer>(std::move(renderer)));
+}
+
 }  // namespace
 
 void RegisterSimRig() {
   static const bool registered = [] {
     RegisterRigExtension(std::make_shared<SimRigExtension>());
+    RegisterStrandPreviewer(MakeSceneStrandPreviewer);
     return true;
   }();
   (void)registered;

@@ -30,6 +30,8 @@
 //     board (its `board` id, 8 channels; sim_hw/sim_usb_relay.h) powering the
 //     scene light `light` (default: the device's name).
 // Those values in a config without a `sim` section are refused, naming the field.
+// RegisterSimRig also registers the scene renderer as the strand previewer
+// (rig/strand_preview.h) of `hairrig simulate`.
 #pragma once
 
 #include <memory>

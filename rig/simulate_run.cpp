@@ -16,7 +16,7 @@
 #include "core/strand_io.h"
 #include "core/string_format.h"
 #include "rig/rig_config.h"
-#include "sim_hw/renderer.h"
+#include "rig/strand_preview.h"
 #include "simulation/guide_interpolation.h"
 
 namespace hairrig {
@@ -53,42 +53,36 @@ StrandSet ReadSourceStrands(const HelixModel& model, const std::string& model_pa
   return {};
 }
 
-// The scene, its head replaced by the head file's when one is given.
-Result<Scene> LoadSceneAndHead(const SimulateRunOptions& o) {
-  std::string scene_path = o.scene_file;
-  if (scene_path.empty()) {
-    HR_ASSIGN_OR_RETURN(scene_path, EtcPath("scenes/default.yaml"));
-  }
-  HR_ASSIGN_OR_RETURN(Scene scene, LoadScene(scene_path));
-  if (!o.head_file.empty()) {
-    HR_ASSIGN_OR_RETURN(scene.head, LoadHeadFile(o.head_file));
-  }
-  return scene;
+Result<std::string> ScenePath(const SimulateRunOptions& o) {
+  if (!o.scene_file.empty()) return o.scene_file;
+  return EtcPath("scenes/default.yaml");
 }
 
-Result<HairSimulationOptions> MakeSimulationOptions(const SimulateRunOptions& o,
-                                                    const Scene& scene) {
+// The head file's head when one is given, else the scene's.
+Result<HeadSpec> LoadHead(const SimulateRunOptions& o, const std::string& scene_path) {
+  if (!o.head_file.empty()) return LoadHeadFile(o.head_file);
+  return ReadHeadOfFile(scene_path);
+}
+
+Result<HairSimulationOptions> MakeSimulationOptions(const SimulateRunOptions& o, const HeadSpec& head) {
   HairSimulationOptions s;
   s.scenario = o.scenario;
   s.dynamics.time_step_s = o.time_step_s;
   s.dynamics.solver = o.solver;
   s.up = o.up.normalized();
   s.has_head = o.head_contact;
-  s.head_center_mm = scene.head.center_turntable_mm;
-  s.head_radii_mm = scene.head.radii_mm;
+  s.head_center_mm = head.center_turntable_mm;
+  s.head_radii_mm = head.radii_mm;
   if (s.has_head && !o.head_file.empty()) {
-    HR_ASSIGN_OR_RETURN(std::unique_ptr<HeadModel> head, HeadModel::Build(scene.head));
-    s.head_surface = std::move(head);
+    HR_ASSIGN_OR_RETURN(std::unique_ptr<HeadModel> surface, HeadModel::Build(head));
+    s.head_surface = std::move(surface);
   }
   return s;
 }
 
-Status WritePreview(Renderer& renderer, const StrandSet& strands, const std::string& path) {
-  renderer.SetStrands(strands);
-  RenderOptions options;
-  options.noise = false;
-  HR_ASSIGN_OR_RETURN(const RenderedView view, renderer.Render(0, 0.0, options));
-  return WriteImageAtomic(path, view.image);
+Status WritePreview(StrandPreviewer& previewer, const StrandSet& strands, const std::string& path) {
+  HR_ASSIGN_OR_RETURN(const cv::Mat image, previewer.Draw(strands));
+  return WriteImageAtomic(path, image);
 }
 
 Status CreateOutputFolders(const std::string& out_dir) {
@@ -107,14 +101,15 @@ struct SimulateSetup {
   std::vector<std::vector<Eigen::Vector3d>> guides_rest;
   size_t full_strands = 0;
   std::unique_ptr<GuideInterpolation> interpolation;  // null: the guides are written
-  std::unique_ptr<Renderer> renderer;                 // null: no previews
+  std::unique_ptr<StrandPreviewer> previewer;         // null: no previews
 };
 
 Result<SimulateSetup> Setup(const SimulateRunOptions& o) {
   HR_ASSIGN_OR_RETURN(const HelixModel model, ReadHelixModel(o.model_file));
-  HR_ASSIGN_OR_RETURN(Scene scene, LoadSceneAndHead(o));
+  HR_ASSIGN_OR_RETURN(const std::string scene_path, ScenePath(o));
+  HR_ASSIGN_OR_RETURN(const HeadSpec head, LoadHead(o, scene_path));
   SimulateSetup setup;
-  HR_ASSIGN_OR_RETURN(setup.options, MakeSimulationOptions(o, scene));
+  HR_ASSIGN_OR_RETURN(setup.options, MakeSimulationOptions(o, head));
   HR_ASSIGN_OR_RETURN(setup.sim, HairSimulation::Create(model, setup.options));
   setup.guides_rest = setup.sim->GuideCurves(kPointsPerElement);
   const StrandSet full = o.guides_only ? StrandSet{} : ReadSourceStrands(model, o.model_file);
@@ -125,8 +120,7 @@ Result<SimulateSetup> Setup(const SimulateRunOptions& o) {
     setup.interpolation = std::make_unique<GuideInterpolation>(std::move(built));
   }
   if (o.preview_every > 0) {
-    scene.wig.num_strands = 1;  // replaced by the simulated strands
-    HR_ASSIGN_OR_RETURN(setup.renderer, Renderer::Create(scene));
+    HR_ASSIGN_OR_RETURN(setup.previewer, MakeStrandPreviewer(scene_path, head));
   }
   return setup;
 }
@@ -142,9 +136,9 @@ Status WriteFrame(const SimulateRunOptions& o, SimulateSetup& setup,
   }
   const std::string name = StringPrintf("frame_%04d", f);
   HR_RETURN_IF_ERROR(WriteStrands(o.out_dir + "/frames/" + name + ".hair", strands));
-  if (setup.renderer && f % o.preview_every == 0) {
+  if (setup.previewer && f % o.preview_every == 0) {
     HR_RETURN_IF_ERROR(
-        WritePreview(*setup.renderer, strands, o.out_dir + "/previews/" + name + ".png"));
+        WritePreview(*setup.previewer, strands, o.out_dir + "/previews/" + name + ".png"));
   }
   return Status::Ok();
 }

@@ -4,9 +4,9 @@
 // as a strand file per frame and a preview image every few frames, with a
 // summary. Output folder:
 //   frames/frame_NNNN.hair     the strands of frame N, model frame, mm
-//   previews/frame_NNNN.png    the strands rendered by the scene's first camera
-//                              (sim_hw/renderer.h), the head as the scene (or
-//                              head_file) gives it
+//   previews/frame_NNNN.png    the strands drawn by the registered previewer
+//                              (rig/strand_preview.h: the scene's first camera),
+//                              the head as the scene (or head_file) gives it
 //   summary.json               SimulateRunSummary::ToJson()
 #pragma once
 
@@ -29,8 +29,8 @@ struct SimulateRunOptions {
   double fps = 30;     // frames written per simulated second; frame 0 is the rest state
   double time_step_s = 1.0 / 240;
   LinearSolver solver = LinearSolver::kCholesky;  // of Eq. 11
-  // The scene (sim_hw/scene.h) giving the head (contact, the shake's pivot)
-  // and the preview camera; empty: etc/scenes/default.yaml.
+  // The scene file giving the head (contact, the shake's pivot) and the
+  // preview camera; empty: etc/scenes/default.yaml.
   std::string scene_file;
   // A head file (core/head_config.h) replacing the scene's head, for contact
   // with its surface and in the previews; empty: the scene's ellipsoid.

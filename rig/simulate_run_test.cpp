@@ -11,6 +11,7 @@
 #include "core/strand_io.h"
 #include "core/strand_test_util.h"
 #include "rig/capture_test_util.h"
+#include "rig/sim_rig.h"
 #include "simulation/fit_strand_file.h"
 
 namespace hairrig {
@@ -18,6 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using hairrig::testing::FreshDir;
+
+// The previews are drawn by the simulated rig's renderer.
+[[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 // Four guides fitted to twelve curls, in `dir`; the model's path.
 std::string CurlsModel(const std::string& dir) {
