@@ -8,8 +8,9 @@
 //
 // Parsers: journal.jsonl (ReadJournalRecords, VerifiedFrames, OpenForResume,
 // OpenReplaySource), manifest.json (LoadCaptureCalibrationInput),
-// capture.json, calibration.json, intrinsics files, helix models, heads, and
-// the three strand formats (.hair, .data, .ply binary and ascii).
+// capture.json, calibration.json, intrinsics files, helix models, heads, the
+// three strand formats (.hair, .data, .ply binary and ascii) and COLMAP text
+// models (cameras.txt, images.txt).
 
 #include <cmath>
 #include <cstring>
@@ -29,6 +30,7 @@
 #include "core/json_file.h"
 #include "core/sha256.h"
 #include "core/strand_io.h"
+#include "reconstruction/colmap_model.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_dataset.h"
 #include "rig/journal_records.h"
@@ -325,6 +327,45 @@ void FuzzStrands(StrandFormat format, const std::string& name, uint32_t seed_num
         EXPECT_TRUE(set->Validate().ok()) << name << " input " << i;
       }
       return set.status();
+    });
+  }
+}
+
+// A COLMAP text model: each mutation hits cameras.txt, images.txt or both.
+TEST(ParserFuzz, ColmapTextModels) {
+  const std::string dir = TestDir("colmap");
+  fs::create_directories(dir + "/images");
+  for (const char* image : {"a.jpg", "b.jpg"}) WriteText(dir + "/images/" + image, "x");
+  const std::string cameras =
+      "# Camera list\n"
+      "1 OPENCV 1200 1600 1750 1751 600.5 800.5 -0.03 0.012 0.0002 -0.0001\n"
+      "2 SIMPLE_RADIAL 640 480 500 320 240 0.01\n";
+  const std::string images =
+      "# Image list\n"
+      "1 1 0 0 0 10 20 1000 1 a.jpg\n"
+      "100.0 200.0 -1\n"
+      "2 0.7071067811865476 0 0.7071067811865476 0 0 0 900 2 b.jpg\n"
+      "\n";
+  const auto read = [&] { return ReadColmapModel(dir, ColmapReadOptions{dir + "/images", ""}); };
+  WriteText(dir + "/cameras.txt", cameras);
+  WriteText(dir + "/images.txt", images);
+  ASSERT_TRUE(read().ok()) << read().status().ToString();
+  Mutator m(kSeed + 10);
+  for (int i = 0; i < 600; ++i) {
+    const size_t which = m.Below(3);
+    WriteText(dir + "/cameras.txt", which != 1 ? m.MutateBytes(cameras) : cameras);
+    WriteText(dir + "/images.txt", which != 0 ? m.MutateBytes(images) : images);
+    ExpectClean("colmap", static_cast<size_t>(i), ".txt", [&] {
+      const auto model = read();
+      if (model.ok()) {
+        for (const ReconstructionView& v : model->views) {
+          EXPECT_TRUE(v.camera.width_px > 0 && v.camera.height_px > 0) << "input " << i;
+          EXPECT_TRUE(std::isfinite(v.camera.fx_px) && v.camera.fx_px > 0) << "input " << i;
+          EXPECT_TRUE(v.cam_from_object.translation.allFinite()) << "input " << i;
+          EXPECT_TRUE(v.cam_from_object.rotation.coeffs().allFinite()) << "input " << i;
+        }
+      }
+      return model.status();
     });
   }
 }
