@@ -24,6 +24,7 @@
 #include "calibration/uncertainty_check.h"
 #include "tests/support/scene_calibration_input.h"
 #include "core/parallel.h"
+#include "core/statistics.h"
 #include "sim_hw/charuco_views.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
@@ -35,12 +36,6 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 double Seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 // One rendered capture of the default plan, detected in memory.
 CaptureCalibrationInput RenderedCapture(const Renderer& renderer, uint64_t seed, std::vector<ViewGroundTruth>* truths) {

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/statistics.h"
 #include "drivers/gphoto2_camera.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
@@ -23,11 +24,6 @@ namespace hairrig {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 double SecondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/statistics.h"
 #include "reconstruction/evaluation.h"
 #include "reconstruction/orientation_map.h"
 #include "sim_hw/renderer.h"
@@ -81,10 +82,9 @@ int Run(const std::vector<std::string>& scenes, int views) {
           if (std::isfinite(t(y, x)) && std::isfinite(t(y, x + 2))) differences.push_back(OrientationDifferenceDeg(t(y, x), t(y, x + 2)));
         }
       }
-      std::sort(differences.begin(), differences.end());
       if (!differences.empty()) {
         std::printf("  the truth between hair pixels 2 px apart: median %.2f deg, p90 %.2f deg\n",
-                    differences[differences.size() / 2], differences[differences.size() * 9 / 10]);
+                    Median(differences), Quantile(differences, 0.9));
       }
     }
     for (const Variant& variant : Variants()) {

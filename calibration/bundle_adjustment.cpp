@@ -11,13 +11,14 @@
 #include <ceres/rotation.h>
 #include <Eigen/Geometry>
 
+#include "core/transform.h"
 #include "calibration/corner_cost.h"
 
 namespace hairrig {
 
 namespace {
 
-constexpr double kDegToRad = 3.14159265358979323846 / 180;
+constexpr double kDegToRad = kPi / 180;
 
 // A box corner in the turntable mode: cam_from_world * Rz(theta) * turntable_from_box.
 struct TurntableCorner {

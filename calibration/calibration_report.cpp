@@ -9,7 +9,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/file_util.h"
+#include "core/image_file.h"
 #include "core/parallel.h"
+#include "core/statistics.h"
 
 namespace hairrig {
 
@@ -25,9 +27,7 @@ double MedianSolvedRms(const CaptureCalibration& result) {
   std::vector<double> rms;
   for (const FrameCalibration& f : result.frames)
     if (f.solved) rms.push_back(f.rms_px);
-  if (rms.empty()) return 0;
-  std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
-  return rms[rms.size() / 2];
+  return Median(std::move(rms));
 }
 
 double OutlierThreshold(const CaptureCalibration& result) {
@@ -141,10 +141,7 @@ Status DrawResiduals(const std::string& path, const cv::Mat& image, const Camera
   }
   cv::putText(shown, Format("RMS %.3f px; residuals x %.0f", frame.rms_px, kResidualScale), {10, 24},
               cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 2);
-  std::vector<uint8_t> bytes;
-  if (!cv::imencode(".jpg", shown, bytes, {cv::IMWRITE_JPEG_QUALITY, 85}))
-    return IoError(path + ": cannot encode the residual image");
-  return WriteFileAtomic(path, bytes.data(), bytes.size());
+  return WriteImageAtomic(path, shown, {cv::IMWRITE_JPEG_QUALITY, 85});
 }
 
 std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibration& result,
@@ -198,9 +195,7 @@ Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationIn
   fs::create_directories(root / "residuals", ec);
   if (ec) return IoError((root / "residuals").string() + ": cannot create the folder (" + ec.message() + ")");
   HR_RETURN_IF_ERROR(WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
-  std::vector<uint8_t> png;
-  cv::imencode(".png", RmsBarChart(input, result), png);
-  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "view_rms.png").string(), png.data(), png.size()));
+  HR_RETURN_IF_ERROR(WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
   // One residual image per solved view, on two threads (they dominate the report's time).
   std::vector<Status> written(result.frames.size());
   ParallelFor(result.frames.size(), 2, [&] {

@@ -24,9 +24,10 @@ Rigid3d LookAt(const Eigen::Vector3d& eye_mm, const Eigen::Vector3d& target_mm,
 }
 
 double RotationDifferenceDeg(const Rigid3d& a, const Rigid3d& b) {
-  const Eigen::Quaterniond d = a.rotation.conjugate() * b.rotation;
-  const double w = std::clamp(std::abs(d.normalized().w()), 0.0, 1.0);
-  return RadToDeg(2.0 * std::acos(w));
+  const Eigen::Quaterniond d = (a.rotation.conjugate() * b.rotation).normalized();
+  // atan2 of the sine and cosine of the half angle keeps full precision for
+  // small angles, where 2 acos(|w|) rounds anything under about 3e-8 rad to 0.
+  return RadToDeg(2.0 * std::atan2(d.vec().norm(), std::abs(d.w())));
 }
 
 }  // namespace hairrig

@@ -163,11 +163,10 @@ Result<TriangleMesh> ReadTriangleMesh(const std::string& path) {
 TriangleMesh MakeEllipsoidMesh(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& radii_mm, int rings,
                                int segments) {
   TriangleMesh mesh;
-  const double pi = std::acos(-1.0);
   for (int r = 0; r <= rings; ++r) {
-    const double polar = pi * r / rings;
+    const double polar = kPi * r / rings;
     for (int s = 0; s < segments; ++s) {
-      const double azimuth = 2 * pi * s / segments;
+      const double azimuth = 2 * kPi * s / segments;
       const Eigen::Vector3d unit(std::sin(polar) * std::cos(azimuth), std::sin(polar) * std::sin(azimuth),
                                  std::cos(polar));
       mesh.vertices_mm.push_back(center_mm + unit.cwiseProduct(radii_mm));

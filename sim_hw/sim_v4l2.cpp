@@ -277,7 +277,7 @@ class SimV4l2Device::Impl {
       used = width_ * height_ * 2;
     } else if (image.ok()) {
       std::vector<uint8_t> jpeg;
-      cv::imencode(".jpg", *image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
+      if (!cv::imencode(".jpg", *image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90})) jpeg.clear();  // delivered empty: corrupt
       // A corrupt frame is cut short, as when the USB transfer loses its tail.
       used = static_cast<uint32_t>(std::min(corrupt ? size_t{64} : jpeg.size(), capacity));
       std::memcpy(memory, jpeg.data(), used);

@@ -52,12 +52,7 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
       }
       g.tags = view->tags;
       const std::string path = out_dir + "/" + ViewFileName(v, g.camera_serial);
-      std::vector<uint8_t> png;
-      if (!cv::imencode(".png", view->image, png)) {
-        errors[static_cast<size_t>(v)] = IoError(path + ": PNG encoding failed");
-        continue;
-      }
-      errors[static_cast<size_t>(v)] = WriteFileAtomic(path, png.data(), png.size());
+      errors[static_cast<size_t>(v)] = WriteImageAtomic(path, view->image);
       if (errors[static_cast<size_t>(v)].ok()) {
         errors[static_cast<size_t>(v)] = WriteViewTruthMaps(out_dir + "/views", v, view->truth);
       }
@@ -80,10 +75,9 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
     labels.emplace_back(label);
   }
   const int columns = static_cast<int>(scene.cameras.size()) * 4;
-  std::vector<uint8_t> png;
-  cv::imencode(".png", MakeContactSheet(images, labels, columns, 240), png);
   summary.contact_sheet = "contact_sheet.png";
-  HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.contact_sheet, png.data(), png.size()));
+  HR_RETURN_IF_ERROR(
+      WriteImageAtomic(out_dir + "/" + summary.contact_sheet, MakeContactSheet(images, labels, columns, 240)));
   HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, out_dir));
   summary.ground_truth = "ground_truth.json";
   HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.ground_truth, GroundTruthJson(scene, truths, /*with_maps=*/true)));

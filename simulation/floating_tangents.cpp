@@ -6,12 +6,13 @@
 #include <cmath>
 #include <string>
 
+#include "core/transform.h"
 #include "simulation/strand_spline.h"
 
 namespace hairrig {
 
 namespace {
-constexpr double kRadToDeg = 57.29577951308232;
+constexpr double kRadToDeg = 180 / kPi;
 }  // namespace
 
 bool FloatingTangentsOptions::IsValid(std::string* why) const {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "core/transform.h"
 #include "simulation/inverse_statics.h"
 #include "simulation/super_helix.h"
 
@@ -14,7 +15,6 @@ namespace hairrig {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kGravity = 9.81;
 constexpr double kRampS = 0.5;      // scenarios start smoothly over this time
 constexpr double kGustHz = 0.7;

@@ -6,10 +6,12 @@
 #include <limits>
 #include <vector>
 
+#include "core/transform.h"
+
 namespace hairrig {
 
 namespace {
-constexpr double kTwoPi = 6.283185307179586476925;
+constexpr double kTwoPi = 2 * kPi;
 constexpr int kCoarseScan = 48;  // samples of the axis angle on [0, 2 pi]
 constexpr int kFineScan = 720;
 static_assert(kCoarseScan % 4 == 0 && kFineScan % 4 == 0, "ScanAngles folds |sin| by quarters");
@@ -264,7 +266,6 @@ class HelixSearch {
   // often has one in each, of which one has g against the chord). Newton
   // starts from `guess` if it is inside the quarter.
   void ZeroTurnRoot(double side, double guess, ZeroTurnRoots* roots) const {
-    constexpr double kPi = kTwoPi / 2;
     const double first = side < 0 ? kPi : 0;
     const double f[3] = {FromSinCos(0, side, kPi), FromSinCos(side, 0, ThetaFromSin(side, 0)),
                          FromSinCos(0, -side, kPi)};

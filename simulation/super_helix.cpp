@@ -5,12 +5,12 @@
 
 #include <Eigen/Geometry>
 
+#include "core/transform.h"
 #include "simulation/helix.h"
 
 namespace hairrig {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
