@@ -30,6 +30,8 @@ std::vector<std::string> SimulateArgv(const SimulateStageRequest& r) {
                                 NumberText(s.fps),
                                 "--preview-every",
                                 std::to_string(s.preview_every),
+                                "--threads",  // the one CPU the stage asks a scheduler for
+                                "1",
                                 "--json"};
   if (!s.head.empty()) argv.insert(argv.end(), {"--head", s.head});
   if (!s.scene.empty()) argv.insert(argv.end(), {"--scene", s.scene});

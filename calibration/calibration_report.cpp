@@ -189,16 +189,16 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
 }  // namespace
 
 Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
-                              const CaptureCalibration& result, const CalibrationVerdict& verdict) {
+                              const CaptureCalibration& result, const CalibrationVerdict& verdict, int threads) {
   const fs::path root(dir);
   std::error_code ec;
   fs::create_directories(root / "residuals", ec);
   if (ec) return IoError((root / "residuals").string() + ": cannot create the folder (" + ec.message() + ")");
   HR_RETURN_IF_ERROR(WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
   HR_RETURN_IF_ERROR(WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
-  // One residual image per solved view, on two threads (they dominate the report's time).
+  // One residual image per solved view, spread over the threads (they dominate the report's time).
   std::vector<Status> written(result.frames.size());
-  ParallelFor(result.frames.size(), 2, [&] {
+  ParallelFor(result.frames.size(), threads, [&] {
     return [&](size_t f) {
       const FrameCalibration& frame = result.frames[f];
       if (!frame.solved) return;

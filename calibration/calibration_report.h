@@ -32,8 +32,9 @@ struct CalibrationVerdict {
 // reason names the camera, the prior's file and the parameter that disagrees).
 CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const CaptureCalibration& result);
 
-// Writes the files above under `dir` (created). IoError names the file.
+// Writes the files above under `dir` (created), the residual images on
+// `threads` threads. IoError names the file.
 Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
-                              const CaptureCalibration& result, const CalibrationVerdict& verdict);
+                              const CaptureCalibration& result, const CalibrationVerdict& verdict, int threads);
 
 }  // namespace hairrig

@@ -10,6 +10,13 @@
 
 namespace hairrig {
 
+// The one thread-count policy of every `threads` option: a positive request
+// as it is, anything else one thread per core the machine reports (at least 1).
+inline int ResolveThreads(int requested) {
+  if (requested > 0) return requested;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
 // Calls make_worker() once per thread (at most `threads`, at least 1; the
 // caller's thread is one of them) and the worker it returns with every index
 // in [0, count) exactly once. Per-thread state (a detector, a buffer) lives in

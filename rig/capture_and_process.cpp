@@ -23,7 +23,7 @@ double SecondsSince(int64_t start_ns, int64_t end_ns) {
 
 Result<CalibrationAfterCapture> CalibrateAfterCapture(const std::string& dir,
                                                       const std::vector<std::string>& priors,
-                                                      TagDetectionSink& sink) {
+                                                      int threads, TagDetectionSink& sink) {
   CalibrationAfterCapture after;
   after.capture_closed_s = SecondsSince(sink.last_frame_ns(), SteadyNowNs());
   const std::map<std::string, ViewObservations> detected = sink.WaitForAll();
@@ -31,6 +31,7 @@ Result<CalibrationAfterCapture> CalibrateAfterCapture(const std::string& dir,
   after.frames_detected_during_capture = static_cast<int>(detected.size());
   CalibrateFolderOptions options;
   options.prior_files = priors;
+  options.calibration.threads = threads;
   options.detected = &detected;
   int64_t written_ns = 0;
   options.on_written = [&] { written_ns = SteadyNowNs(); };
@@ -66,11 +67,11 @@ Result<CaptureOptions> MakeCaptureOptions(const CaptureAndProcessOptions& o) {
 }
 
 // Detects the box's tags as frames land, with the box of the config the capture runs.
-Result<std::unique_ptr<TagDetectionSink>> MakeDetectionSink(const CaptureOptions& capture) {
+Result<std::unique_ptr<TagDetectionSink>> MakeDetectionSink(const CaptureOptions& capture, int threads) {
   HR_ASSIGN_OR_RETURN(const RigConfig config, capture.resume ? LoadCaptureRigConfig(capture.out_dir)
                                                              : LoadRigConfig(capture.config_path));
   HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
-  return std::make_unique<TagDetectionSink>(section.box, TagDetectorOptions{}, 2);
+  return std::make_unique<TagDetectionSink>(section.box, TagDetectorOptions{}, threads);
 }
 
 std::string CaptureBriefReport(const CaptureSummary& s) {
@@ -94,6 +95,7 @@ Status CaptureAndProcessOptions::Validate() const {
   if (!intrinsics_files.empty() && !calibrate)
     return InvalidArgument("--intrinsics needs --calibrate");
   if (reconstruct && !calibrate) return InvalidArgument("--reconstruct needs --calibrate");
+  if (threads < 1) return InvalidArgument("--threads must be at least 1");
   return Status::Ok();
 }
 
@@ -132,7 +134,7 @@ Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOption
   HR_ASSIGN_OR_RETURN(CaptureOptions capture, MakeCaptureOptions(options));
   std::unique_ptr<TagDetectionSink> sink;
   if (options.calibrate) {
-    HR_ASSIGN_OR_RETURN(sink, MakeDetectionSink(capture));
+    HR_ASSIGN_OR_RETURN(sink, MakeDetectionSink(capture, options.threads));
     capture.sink = sink.get();
   }
   CaptureAndProcessSummary summary;
@@ -140,11 +142,13 @@ Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOption
   if (options.on_captured) options.on_captured(summary.capture);
   if (!sink || summary.capture.status != "complete") return summary;
   HR_ASSIGN_OR_RETURN(summary.calibration,
-                      CalibrateAfterCapture(capture.out_dir, options.intrinsics_files, *sink));
+                      CalibrateAfterCapture(capture.out_dir, options.intrinsics_files, options.threads, *sink));
   if (options.reconstruct &&
       summary.calibration->calibration.verdict.level != CalibrationVerdict::Level::kFailed) {
     ReconstructCaptureOptions reconstruct;
     reconstruct.dir = capture.out_dir;
+    reconstruct.points.threads = options.threads;
+    reconstruct.strands.threads = options.threads;
     HR_ASSIGN_OR_RETURN(summary.reconstruction, ReconstructCapture(reconstruct));
   }
   return summary;

@@ -33,13 +33,14 @@ struct CaptureAndProcessOptions {
   bool reconstruct = false;  // needs calibrate
   std::vector<std::string>
       intrinsics_files;  // needs calibrate: intrinsics held (CalibrateFolderOptions::prior_files)
+  int threads = 2;       // tag detection as frames land, calibration and reconstruction
   std::function<void(const CaptureProgress&)>
       on_progress;  // optional, called from the sequencer thread
   std::function<void(const CaptureSummary&)>
       on_captured;  // optional, once the capture ends, before calibrating
 
   // InvalidArgument naming the option: no out_dir, intrinsics_files or
-  // reconstruct without calibrate.
+  // reconstruct without calibrate, threads below 1.
   Status Validate() const;
 };
 

@@ -273,7 +273,8 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, 
   done.write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
   if (options.on_written) options.on_written();
   done.verdict = JudgeCalibration(done.input, done.result);
-  HR_RETURN_IF_ERROR(WriteCalibrationReport(done.out_dir + "/report", done.input, done.result, done.verdict));
+  HR_RETURN_IF_ERROR(
+      WriteCalibrationReport(done.out_dir + "/report", done.input, done.result, done.verdict, calibration.threads));
   done.report_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count() - done.write_s;
   return done;
 }

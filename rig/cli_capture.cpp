@@ -56,6 +56,10 @@ void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
   cmd->add_option("--intrinsics", options->intrinsics_files,
                   "with --calibrate: intrinsics held, as `calibrate --intrinsics`")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--threads", options->threads,
+                  "with --calibrate: threads for tag detection, calibration and reconstruction")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([options, &dispatch] {
     const Status valid = options->Validate();

@@ -36,6 +36,9 @@ void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
                   "Algorithm 2 alone (paper)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--threads", fit.threads, "guides fitted in parallel (0: one thread per core)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_flag("--paper-root", args->paper_root, "relax the root too (Eq. 5 as printed) instead of anchoring it");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {

@@ -56,6 +56,9 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
   cmd->add_option("--preview-every", o.preview_every, "render a preview every N frames (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--threads", o.threads, "guides stepped in parallel (0: one thread per core)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_flag("--guides-only", o.guides_only,
                 "write the guides, not the interpolated full hairstyle");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");

@@ -69,6 +69,7 @@ Result<HairSimulationOptions> MakeSimulationOptions(const SimulateRunOptions& o,
   s.scenario = o.scenario;
   s.dynamics.time_step_s = o.time_step_s;
   s.dynamics.solver = o.solver;
+  s.threads = o.threads;
   s.up = o.up.normalized();
   s.has_head = o.head_contact;
   s.head_center_mm = head.center_turntable_mm;
@@ -157,6 +158,7 @@ Status SimulateRunOptions::Validate() const {
   if (!up.allFinite() || up.norm() < 1e-9)
     return InvalidArgument("--up must be a non-zero direction");
   if (preview_every < 0) return InvalidArgument("--preview-every must be 0 (no previews) or more");
+  if (threads < 0) return InvalidArgument("--threads must be 0 (one per core) or more");
   return Status::Ok();
 }
 

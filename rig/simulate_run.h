@@ -38,6 +38,7 @@ struct SimulateRunOptions {
   bool head_contact = true;
   Eigen::Vector3d up{0, 0, 1};  // world up; any non-zero length
   int preview_every = 1;        // a preview every this many frames; 0: none
+  int threads = 0;              // guides stepped in parallel; 0: one thread per core
   // Write the guides only, not the full hairstyle of the model's source
   // strands (read from where `fit` recorded them or beside the model; the
   // guides are written when they cannot be read, with a warning).

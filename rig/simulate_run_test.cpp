@@ -90,6 +90,25 @@ TEST(SimulateRun, GuidesOnlyWritesTheGuides) {
   EXPECT_TRUE(fs::is_empty(o.out_dir + "/previews"));
 }
 
+// Guides do not interact: the frames are the same bytes on one thread or several.
+TEST(SimulateRun, TheFramesDoNotDependOnTheThreadCount) {
+  const std::string dir = FreshDir("simulate_run_threads");
+  const std::string model = CurlsModel(dir);
+  std::vector<std::string> frames;
+  for (int threads : {1, 3}) {
+    SimulateRunOptions o = ShortWind(model, dir + "/out" + std::to_string(threads));
+    o.preview_every = 0;
+    o.head_contact = true;
+    o.threads = threads;
+    const auto summary = SimulateRun(o);
+    ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+    const auto bytes = ReadFileBytes(o.out_dir + "/frames/frame_0002.hair", 1 << 24);
+    ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+    frames.emplace_back(bytes->begin(), bytes->end());
+  }
+  EXPECT_EQ(frames[0], frames[1]);
+}
+
 TEST(SimulateRun, OptionsOutOfRangeAreNamed) {
   SimulateRunOptions o = ShortWind("model.json", "out");
   o.fps = 0;
@@ -101,6 +120,9 @@ TEST(SimulateRun, OptionsOutOfRangeAreNamed) {
   o.preview_every = -1;
   EXPECT_NE(o.Validate().message().find("--preview-every"), std::string::npos);
   o.preview_every = 0;
+  o.threads = -1;
+  EXPECT_NE(o.Validate().message().find("--threads"), std::string::npos);
+  o.threads = 0;
   o.time_step_s = 0;
   EXPECT_NE(o.Validate().message().find("time_step_s"), std::string::npos);
   o.time_step_s = 1.0 / 240;

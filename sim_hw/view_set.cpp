@@ -1,12 +1,9 @@
 #include "sim_hw/view_set.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +12,7 @@
 #include "core/contact_sheet.h"
 #include "core/file_util.h"
 #include "core/image_file.h"
+#include "core/parallel.h"
 #include "core/strand_io.h"
 #include "core/string_format.h"
 #include "sim_hw/ground_truth.h"
@@ -35,34 +33,28 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
   std::vector<cv::Mat> images(static_cast<size_t>(n));
   std::vector<ViewGroundTruth> truths(static_cast<size_t>(n));
   std::vector<Status> errors(static_cast<size_t>(n));
-  std::atomic<int> next{0};
-  const auto work = [&] {
-    for (int v = next++; v < n; v = next++) {
-      ViewGroundTruth g = MakeViewGroundTruth(scene, v);
+  ParallelFor(static_cast<size_t>(n), options.threads, [&] {
+    return [&](size_t v) {
+      ViewGroundTruth g = MakeViewGroundTruth(scene, static_cast<int>(v));
       RenderOptions o;
       o.noise = options.noise;
-      o.noise_seed = scene.seed * 1000003ull + static_cast<uint64_t>(v);
+      o.noise_seed = scene.seed * 1000003ull + v;
       o.light_levels = options.light_levels;
       o.threads = 1;  // the views are already spread over the threads
       o.ground_truth = true;
       auto view = renderer.Render(g.camera_index, g.turntable_deg, o);
       if (!view.ok()) {
-        errors[static_cast<size_t>(v)] = view.status();
-        continue;
+        errors[v] = view.status();
+        return;
       }
       g.tags = view->tags;
-      const std::string path = out_dir + "/" + ViewFileName(v, g.camera_serial);
-      errors[static_cast<size_t>(v)] = WriteImageAtomic(path, view->image);
-      if (errors[static_cast<size_t>(v)].ok()) {
-        errors[static_cast<size_t>(v)] = WriteViewTruthMaps(out_dir + "/views", v, view->truth);
-      }
-      images[static_cast<size_t>(v)] = view->image;
-      truths[static_cast<size_t>(v)] = std::move(g);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::max(1, options.threads); ++t) pool.emplace_back(work);
-  for (auto& t : pool) t.join();
+      const std::string path = out_dir + "/" + ViewFileName(static_cast<int>(v), g.camera_serial);
+      errors[v] = WriteImageAtomic(path, view->image);
+      if (errors[v].ok()) errors[v] = WriteViewTruthMaps(out_dir + "/views", static_cast<int>(v), view->truth);
+      images[v] = view->image;
+      truths[v] = std::move(g);
+    };
+  });
   for (const Status& s : errors) HR_RETURN_IF_ERROR(s);
 
   RenderViewsSummary summary;

@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
-#include <thread>
+#include <numeric>
 
 #include <Eigen/Geometry>
 
+#include "core/parallel.h"
 #include "core/transform.h"
 #include "simulation/inverse_statics.h"
 #include "simulation/super_helix.h"
@@ -125,51 +125,39 @@ Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(const HelixModel&
 HairSimulation::HairSimulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HairSimulation::~HairSimulation() = default;
 
-// Guides do not interact, so each thread steps its own share of them through
-// the whole interval.
+// Guides do not interact, so each guide is stepped through the whole
+// interval by one thread.
 Status HairSimulation::Advance(double seconds) {
   Impl& m = *impl_;
   const double dt = m.options.dynamics.time_step_s;
   const int steps = static_cast<int>(std::lround(seconds / dt));
   std::vector<Environment> environments;
   for (int k = 0; k < steps; ++k) environments.push_back(EnvironmentAt(m.time_s + k * dt));
-  const int guides = num_guides();
-  int threads = m.options.threads > 0 ? m.options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, std::max(1, guides));
-  std::mutex mutex;
-  Status first_error = Status::Ok();
-  long long contacts = 0, iterations = 0;
-  auto work = [&](int begin, int end) {
-    long long local_contacts = 0, local_iterations = 0;
-    for (int g = begin; g < end; ++g) {
+  const size_t guides = static_cast<size_t>(num_guides());
+  std::vector<Status> statuses(guides);
+  std::vector<long long> contacts(guides, 0), iterations(guides, 0);
+  ParallelFor(guides, ResolveThreads(m.options.threads), [&] {
+    return [&](size_t g) {
       for (int k = 0; k < steps; ++k) {
         StepReport report;
-        const Status status = m.dynamics[static_cast<size_t>(g)].Step(environments[static_cast<size_t>(k)],
-                                                                       &m.states[static_cast<size_t>(g)], &report);
-        if (!status.ok()) {
-          std::lock_guard<std::mutex> lock(mutex);
-          if (first_error.ok()) first_error = status.WithContext("guide " + std::to_string(g));
-          break;
-        }
-        local_contacts += report.contacts;
-        local_iterations += report.solver_iterations;
+        statuses[g] = m.dynamics[g].Step(environments[static_cast<size_t>(k)], &m.states[g], &report);
+        if (!statuses[g].ok()) break;
+        contacts[g] += report.contacts;
+        iterations[g] += report.solver_iterations;
       }
-    }
-    std::lock_guard<std::mutex> lock(mutex);
-    contacts += local_contacts;
-    iterations += local_iterations;
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work, guides * t / threads, guides * (t + 1) / threads);
-  work(0, guides / threads);
-  for (std::thread& thread : pool) thread.join();
+    };
+  });
   m.time_s += steps * dt;
   m.stats.steps += steps;
-  m.stats.contact_samples += contacts;
-  m.solver_iterations += iterations;
+  m.stats.contact_samples += std::accumulate(contacts.begin(), contacts.end(), 0LL);
+  m.solver_iterations += std::accumulate(iterations.begin(), iterations.end(), 0LL);
   m.stats.mean_solver_iterations =
-      static_cast<double>(m.solver_iterations) / static_cast<double>(std::max<long long>(1, m.stats.steps * guides));
-  return first_error;
+      static_cast<double>(m.solver_iterations) /
+      static_cast<double>(std::max<long long>(1, m.stats.steps * static_cast<long long>(guides)));
+  for (size_t g = 0; g < guides; ++g) {
+    if (!statuses[g].ok()) return statuses[g].WithContext("guide " + std::to_string(g));
+  }
+  return Status::Ok();
 }
 
 double HairSimulation::time_s() const { return impl_->time_s; }

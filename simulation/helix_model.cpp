@@ -4,13 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "core/json_file.h"
+#include "core/parallel.h"
 
 namespace hairrig {
 
@@ -49,21 +50,16 @@ Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& opti
   const size_t count = selection.guide_strands.size();
   std::vector<Result<PiecewiseHelix>> fitted(count, Result<PiecewiseHelix>(Internal("not fitted")));
   std::vector<StrandFitSummary> fits(count);
-  auto fit_range = [&](size_t begin, size_t end) {
-    std::vector<Eigen::Vector3d> points;
-    for (size_t k = begin; k < end; ++k) {
+  // At most one thread per 8 guides.
+  const int threads = std::min(ResolveThreads(options.threads), std::max(1, static_cast<int>(count / 8)));
+  ParallelFor(count, threads, [&] {
+    return [&, points = std::vector<Eigen::Vector3d>()](size_t k) mutable {
       const size_t g = static_cast<size_t>(selection.guide_strands[k]);
       points.clear();
       for (size_t i = offsets[g]; i < offsets[g + 1]; ++i) points.push_back(strands.points_mm[i].cast<double>());
       fitted[k] = FitFloatingTangents(points, options.fitting, &fits[k]);
-    }
-  };
-  size_t threads = options.threads > 0 ? static_cast<size_t>(options.threads) : std::thread::hardware_concurrency();
-  threads = std::clamp<size_t>(threads, 1, std::max<size_t>(1, count / 8));
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(fit_range, count * t / threads, count * (t + 1) / threads);
-  fit_range(0, count / threads);
-  for (std::thread& thread : pool) thread.join();
+    };
+  });
   double error_sum = 0, elements = 0;
   for (size_t k = 0; k < count; ++k) {
     if (!fitted[k].ok()) return fitted[k].status().WithContext("strand " + std::to_string(selection.guide_strands[k]));
