@@ -419,16 +419,9 @@ TEST(CaptureFaults, FrameArrivingAfterItsViewTimedOutIsNotStoredForTheNextView) 
   auto sections = WithRetries(SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 150}"),
                               "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n");
   sections["devices"] =
-      "devices:\n"
-      "  turntable: {name: turntable, backend: sim, serial: SIM-TT-0001}\n"
-      "  lights:\n"
-      "    - {name: top, backend: sim, serial: SIM-LED-TOP, light: top}\n"
-      "    - {name: bottom, backend: sim, serial: SIM-LED-BOTTOM, light: bottom}\n"
-      "  trigger_lines:\n"
-      "    - {name: trig0, backend: sim, serial: SIM-GPIO-0}\n"
-      "  cameras:\n"
-      "    - {name: upper, backend: gphoto2, serial: SIM-CAM-UPPER, port: sim, trigger_line: trig0}\n"
-      "    - {name: lower, backend: aravis, serial: SIM-CAM-LOWER, address: sim, trigger_line: trig0}\n";
+      SmallRigDevices("{name: turntable, backend: sim, serial: SIM-TT-0001}",
+                      "{name: upper, backend: gphoto2, serial: SIM-CAM-UPPER, port: sim, trigger_line: trig0}",
+                      "{name: lower, backend: aravis, serial: SIM-CAM-LOWER, address: sim, trigger_line: trig0}");
   const CaptureSummary s = Capture(WriteSmallRig(dir, sections), dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_completed, 38);

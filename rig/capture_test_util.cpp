@@ -50,6 +50,22 @@ std::string WriteSmallRig(const std::string& dir, const std::map<std::string, st
   return path;
 }
 
+std::string SmallRigDevices(const std::string& turntable, const std::string& upper_camera,
+                            const std::string& lower_camera) {
+  return "devices:\n"
+         "  turntable: " + turntable + "\n"
+         "  lights:\n"
+         "    - {name: top, backend: sim, serial: SIM-LED-TOP, light: top}\n"
+         "    - {name: bottom, backend: sim, serial: SIM-LED-BOTTOM, light: bottom}\n"
+         "  trigger_lines:\n"
+         "    - {name: trig0, backend: sim, serial: SIM-GPIO-0}\n"
+         "  cameras:\n"
+         "    - " + upper_camera + "\n"
+         "    - " + lower_camera + "\n"
+         "  input_lines:\n"
+         "    - {name: estop, backend: sim, serial: SIM-ESTOP}\n";
+}
+
 std::vector<nlohmann::json> ReadJournal(const std::string& capture_dir) {
   std::vector<nlohmann::json> records;
   std::ifstream in(capture_dir + "/journal.jsonl");

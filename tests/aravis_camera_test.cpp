@@ -25,6 +25,7 @@
 namespace hairrig {
 namespace {
 
+using hairrig_test::ArmOnLine;
 using hairrig_test::kFrameWait;
 using hairrig_test::Psnr;
 using hairrig_test::ShootOnce;
@@ -127,12 +128,7 @@ TEST(AravisCamera, FramesComeInTriggerOrderWithTheirTriggerTimes) {
 TEST(AravisCamera, InLine0ModeOnlyAPulseOnTheWiredLineTakesAFrame) {
   InProcess p = StartInProcess("trig0");
   ASSERT_TRUE(p.camera->Open().ok());
-  CaptureSettings s;
-  s.format = PixelFormat::kMono8;
-  s.trigger = TriggerSource::kLine;
-  s.trigger_line = "trig0";
-  ASSERT_TRUE(p.camera->Configure(s).ok());
-  ASSERT_TRUE(p.camera->Arm().ok());
+  ASSERT_TRUE(ArmOnLine(*p.camera, "trig0", PixelFormat::kMono8).ok());
   EXPECT_EQ(p.camera->WaitFrame(milliseconds(200)).status().code(), StatusCode::kTimeout);
   WorldTriggers(*p.w.world).Fire("trig1");  // another line
   EXPECT_EQ(p.camera->WaitFrame(milliseconds(200)).status().code(), StatusCode::kTimeout);

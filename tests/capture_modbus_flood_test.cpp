@@ -121,18 +121,9 @@ TEST(CaptureUnderModbusFlood, CompletesWithEveryViewVerified) {
   CaptureOptions options;
   options.config_path = WriteSmallRig(
       dir, {{"devices",
-             "devices:\n"
-             "  turntable: {name: turntable, backend: modbus, serial: SIM-TT-0001, transport: tcp, host: sim}\n"
-             "  lights:\n"
-             "    - {name: top, backend: sim, serial: SIM-LED-TOP, light: top}\n"
-             "    - {name: bottom, backend: sim, serial: SIM-LED-BOTTOM, light: bottom}\n"
-             "  trigger_lines:\n"
-             "    - {name: trig0, backend: sim, serial: SIM-GPIO-0}\n"
-             "  cameras:\n"
-             "    - {name: upper, backend: sim, serial: SIM-CAM-UPPER, trigger_line: trig0}\n"
-             "    - {name: lower, backend: sim, serial: SIM-CAM-LOWER, trigger_line: trig0}\n"
-             "  input_lines:\n"
-             "    - {name: estop, backend: sim, serial: SIM-ESTOP}\n"},
+             SmallRigDevices("{name: turntable, backend: modbus, serial: SIM-TT-0001, transport: tcp, host: sim}",
+                             "{name: upper, backend: sim, serial: SIM-CAM-UPPER, trigger_line: trig0}",
+                             "{name: lower, backend: sim, serial: SIM-CAM-LOWER, trigger_line: trig0}")},
             {"plan", "plan:\n  stops: " + std::to_string(kStops) + "\n"}});
   options.out_dir = dir + "/capture";
   sockaddr_in server{};

@@ -29,6 +29,7 @@
 namespace hairrig {
 namespace {
 
+using hairrig_test::ArmOnLine;
 using hairrig_test::kFrameWait;
 using hairrig_test::Psnr;
 using hairrig_test::ShootOnce;
@@ -197,11 +198,7 @@ TEST(Gphoto2Camera, AnotherSerialAtThePortIsRefusedNamingBoth) {
 TEST(Gphoto2Camera, ALinePulseFiresTheShutterAndTheFileArrivesAsAnEvent) {
   Bench b = StartBench({}, "trig0");
   ASSERT_TRUE(b.camera->Open().ok());
-  CaptureSettings s;
-  s.trigger = TriggerSource::kLine;
-  s.trigger_line = "trig0";
-  ASSERT_TRUE(b.camera->Configure(s).ok());
-  ASSERT_TRUE(b.camera->Arm().ok());
+  ASSERT_TRUE(ArmOnLine(*b.camera, "trig0").ok());
   EXPECT_EQ(b.camera->WaitFrame(milliseconds(100)).status().code(), StatusCode::kTimeout);
   WorldTriggers(*b.world).Fire("trig0");
   auto frame = b.camera->WaitFrame(kFrameWait);
@@ -216,11 +213,7 @@ TEST(Gphoto2Camera, ALateShotCarriesTheTimeOfItsOwnPulse) {
   // The 1st shot takes 100 device s (1 s here) longer than usual.
   Bench b = StartBench({SimFault{SimFaultKind::kDownloadTimeout, kSerial, 0, 1, 100.0}}, "trig0");
   ASSERT_TRUE(b.camera->Open().ok());
-  CaptureSettings s;
-  s.trigger = TriggerSource::kLine;
-  s.trigger_line = "trig0";
-  ASSERT_TRUE(b.camera->Configure(s).ok());
-  ASSERT_TRUE(b.camera->Arm().ok());
+  ASSERT_TRUE(ArmOnLine(*b.camera, "trig0").ok());
   const int64_t first_ns = SteadyNowNs();
   b.camera->LineTriggerSent(first_ns);
   WorldTriggers(*b.world).Fire("trig0");

@@ -1,10 +1,11 @@
-// Test helpers for camera backends: one software-triggered shot, and the
-// PSNR between a delivered frame and the world rendered directly. Header-only.
+// Test helpers for camera backends: one software-triggered shot, arming for
+// a line trigger, and the PSNR between a delivered frame and the world rendered directly. Header-only.
 #pragma once
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <string>
 
 #include <opencv2/core.hpp>
 
@@ -29,6 +30,17 @@ inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera, hairri
   auto frame = camera.WaitFrame(kFrameWait);
   (void)camera.Disarm();
   return frame;
+}
+
+// Configure for a trigger on `line` (TriggerSource::kLine) in `format`, then Arm.
+inline hairrig::Status ArmOnLine(hairrig::Camera& camera, const std::string& line,
+                                 hairrig::PixelFormat format = hairrig::PixelFormat::kRgb8) {
+  hairrig::CaptureSettings s;
+  s.format = format;
+  s.trigger = hairrig::TriggerSource::kLine;
+  s.trigger_line = line;
+  HR_RETURN_IF_ERROR(camera.Configure(s));
+  return camera.Arm();
 }
 
 // Peak signal-to-noise ratio of two 8-bit images of one size, in dB.
