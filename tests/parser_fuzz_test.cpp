@@ -350,7 +350,7 @@ TEST(ParserFuzz, ColmapTextModels) {
   WriteText(dir + "/cameras.txt", cameras);
   WriteText(dir + "/images.txt", images);
   ASSERT_TRUE(read().ok()) << read().status().ToString();
-  Mutator m(kSeed + 10);
+  Mutator m(kSeed + 12);
   for (int i = 0; i < 600; ++i) {
     const size_t which = m.Below(3);
     WriteText(dir + "/cameras.txt", which != 1 ? m.MutateBytes(cameras) : cameras);
