@@ -42,6 +42,11 @@ function(hairrig_add_test module name)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
+  if(HAIRRIG_SANITIZE)
+    # A liveness bound, not a speed check: sanitizer builds run the simulated
+    # rig's renders several times slower.
+    math(EXPR ARG_TIMEOUT "${ARG_TIMEOUT} * 3")
+  endif()
   set_tests_properties(${module}/${name} PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT ${ARG_TIMEOUT}
                        LABELS "${module};${ARG_LABELS}")
 endfunction()

@@ -61,8 +61,10 @@ struct JsonRange {
 
 class JsonObject {
  public:
-  // `where` names the file and the record: "c/journal.jsonl: line 12".
+  // `where` names the file and the record: "c/journal.jsonl: line 12". The
+  // object reads `j` in place: `j` must outlive it (a temporary is refused).
   JsonObject(const nlohmann::json& j, std::string where);
+  JsonObject(nlohmann::json&& j, std::string where) = delete;
 
   bool ok() const { return error_->ok(); }
   Status status() const { return *error_; }

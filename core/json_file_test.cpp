@@ -50,7 +50,8 @@ TEST(JsonObject, ErrorsNameTheRecordAndTheField) {
 }
 
 TEST(JsonObject, TheFirstErrorIsKeptAndNotAnObjectIsOne) {
-  const JsonObject r(json::array({1, 2}), "m.json");
+  const json list = json::array({1, 2});
+  const JsonObject r(list, "m.json");
   EXPECT_EQ(r.String("a"), "");
   EXPECT_EQ(r.Integer("b"), 0);
   EXPECT_EQ(r.status().message(), "m.json: expected an object, got a list");
