@@ -291,6 +291,7 @@ class AravisCamera : public Camera {
   // its trigger cannot be told from the next one's, so the pairing of frames
   // and triggers is lost until the camera is armed again.
   Status CheckNoFrameLostLocked() {
+    if (!stream_) return Status::Ok();  // disarmed meanwhile: the next Arm starts afresh
     guint64 completed = 0, failures = 0, underruns = 0;
     arv_stream_get_statistics(stream_.get(), &completed, &failures, &underruns);
     if (underruns == underruns_seen_) return Status::Ok();
