@@ -15,11 +15,10 @@
 // "This submission" is the latest one holding the capture and the stage.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "batch/batch_state.h"
 #include "batch/stages.h"

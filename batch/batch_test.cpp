@@ -6,10 +6,10 @@
 // tests/batch_slurm_test.cpp runs the real stages, locally and on Slurm.
 #include "batch/batch.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "batch/batch_test_util.h"
 #include "batch/stage_record.h"

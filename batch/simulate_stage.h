@@ -4,9 +4,8 @@
 // hairrig binary, which holds the dynamics' driver (rig/cli_simulate.cpp).
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "batch/stages.h"
 #include "core/status.h"

@@ -4,12 +4,11 @@
 // they were called. tests/batch_slurm_test.cpp runs it on a real cluster.
 #include "batch/slurm_engine.h"
 
+#include <gtest/gtest.h>
 #include <stdlib.h>
 
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "batch/batch_test_util.h"
 #include "batch/process.h"

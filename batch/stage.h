@@ -28,9 +28,8 @@
 #pragma once
 
 #include <map>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "batch/stages.h"
 #include "core/status.h"

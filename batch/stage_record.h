@@ -21,9 +21,8 @@
 // out of memory or out of time) leaves a record that says it never finished.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "batch/stages.h"
 #include "core/status.h"

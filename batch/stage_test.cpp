@@ -4,13 +4,12 @@
 // place, the fault hook, missing inputs; and the stage options file.
 #include "batch/stage.h"
 
+#include <gtest/gtest.h>
 #include <stdlib.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "batch/stage_record.h"
 #include "core/strand_io.h"

@@ -54,10 +54,13 @@ Run Measure(Camera& camera, PixelFormat format, int frames) {
 }
 
 void Print(const char* what, const Run& r) {
-  std::printf("%-44s %7.1f fps   completed %lu  failures %lu  underruns %lu  missing packets %lu  resent %lu\n",
-              what, r.fps, static_cast<unsigned long>(r.stats.completed), static_cast<unsigned long>(r.stats.failures),
-              static_cast<unsigned long>(r.stats.underruns), static_cast<unsigned long>(r.stats.missing_packets),
-              static_cast<unsigned long>(r.stats.resent_packets));
+  std::printf(
+      "%-44s %7.1f fps   completed %lu  failures %lu  underruns %lu  missing packets %lu  resent "
+      "%lu\n",
+      what, r.fps, static_cast<unsigned long>(r.stats.completed),
+      static_cast<unsigned long>(r.stats.failures), static_cast<unsigned long>(r.stats.underruns),
+      static_cast<unsigned long>(r.stats.missing_packets),
+      static_cast<unsigned long>(r.stats.resent_packets));
 }
 
 int Main(int frames) {
@@ -73,7 +76,8 @@ int Main(int frames) {
   AravisCameraOptions o;
   o.nominal.width_px = scene->cameras[1].intrinsics.width_px;
   o.nominal.height_px = scene->cameras[1].intrinsics.height_px;
-  std::printf("# aravis backend, %dx%d, %d software-triggered frames each\n", o.nominal.width_px, o.nominal.height_px, frames);
+  std::printf("# aravis backend, %dx%d, %d software-triggered frames each\n", o.nominal.width_px,
+              o.nominal.height_px, frames);
   const DeviceInfo info{DeviceKind::kCamera, "bench", "aravis", serial, "bench"};
   {
     auto gige = SimGigECamera::Start(world, {serial, 1, "", /*render=*/false});
@@ -103,4 +107,6 @@ int Main(int frames) {
 }  // namespace
 }  // namespace hairrig
 
-int main(int argc, char** argv) { return hairrig::Main(argc > 1 ? std::max(2, std::atoi(argv[1])) : 20); }
+int main(int argc, char** argv) {
+  return hairrig::Main(argc > 1 ? std::max(2, std::atoi(argv[1])) : 20);
+}

@@ -7,8 +7,8 @@
 //   images per camera, own noise), and the same prior held exactly. Per way:
 //   median rotation / centre error, the observed over predicted error ratios
 //   pooled over every view, the reprojection RMS over the corner noise of the
-//   same detections, and the planar start (Zhang + per-view IPPE, as OpenCV's calibrateCamera + PnP)
-//   error over ours.
+//   same detections, and the planar start (Zhang + per-view IPPE, as OpenCV's calibrateCamera +
+//   PnP) error over ours.
 // speed: AprilTag detection per view at the default 1200 x 1600 and at 24 MP
 //   (the same scene camera scaled), and the bundle adjustment of 38 views.
 #include <algorithm>
@@ -22,12 +22,12 @@
 #include "calibration/capture_calibration.h"
 #include "calibration/charuco_intrinsics.h"
 #include "calibration/uncertainty_check.h"
-#include "tests/support/scene_calibration_input.h"
 #include "core/parallel.h"
 #include "core/statistics.h"
 #include "sim_hw/charuco_views.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
+#include "tests/support/scene_calibration_input.h"
 
 namespace fs = std::filesystem;
 using namespace hairrig;
@@ -35,10 +35,13 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double Seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double Seconds(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // One rendered capture of the default plan, detected in memory.
-CaptureCalibrationInput RenderedCapture(const Renderer& renderer, uint64_t seed, std::vector<ViewGroundTruth>* truths) {
+CaptureCalibrationInput RenderedCapture(const Renderer& renderer, uint64_t seed,
+                                        std::vector<ViewGroundTruth>* truths) {
   const Scene& scene = renderer.scene();
   CaptureCalibrationInput input = hairrig_test::SceneCalibrationInput(scene);
   const int views = NumViews(scene);
@@ -69,7 +72,8 @@ CaptureCalibrationInput RenderedCapture(const Renderer& renderer, uint64_t seed,
 }
 
 // Each camera's ChArUco prior from 20 board images with this capture's noise.
-bool AddChArUcoPriors(const Scene& scene, const ChArUcoBoard& board, uint64_t seed, CaptureCalibrationInput* input) {
+bool AddChArUcoPriors(const Scene& scene, const ChArUcoBoard& board, uint64_t seed,
+                      CaptureCalibrationInput* input) {
   const fs::path dir = fs::temp_directory_path() / "hairrig_bench_charuco";
   for (size_t c = 0; c < scene.cameras.size(); ++c) {
     fs::remove_all(dir);
@@ -88,7 +92,8 @@ bool AddChArUcoPriors(const Scene& scene, const ChArUcoBoard& board, uint64_t se
 struct Way {
   const char* name;
   std::vector<UncertaintySample> samples;
-  std::vector<double> rotation_deg, centre_mm, baseline_rotation_deg, baseline_centre_mm, rms_over_noise;
+  std::vector<double> rotation_deg, centre_mm, baseline_rotation_deg, baseline_centre_mm,
+      rms_over_noise;
 };
 
 void Score(const CaptureCalibrationInput& input, const CaptureCalibration& result,
@@ -99,17 +104,23 @@ void Score(const CaptureCalibrationInput& input, const CaptureCalibration& resul
     const FrameCalibration& frame = result.frames[f];
     if (!frame.solved) continue;
     const ViewGroundTruth& t = truths[f];
-    way->samples.push_back(MakeUncertaintySample(frame.cam_from_box, t.cam_from_box, frame.uncertainty));
+    way->samples.push_back(
+        MakeUncertaintySample(frame.cam_from_box, t.cam_from_box, frame.uncertainty));
     way->rotation_deg.push_back(RotationDifferenceDeg(frame.cam_from_box, t.cam_from_box));
-    way->centre_mm.push_back((frame.cam_from_box.Inverse().translation - t.cam_from_box.Inverse().translation).norm());
+    way->centre_mm.push_back(
+        (frame.cam_from_box.Inverse().translation - t.cam_from_box.Inverse().translation).norm());
     if (has_baseline) {
-      way->baseline_rotation_deg.push_back(RotationDifferenceDeg(frame.cam_from_box_init, t.cam_from_box));
+      way->baseline_rotation_deg.push_back(
+          RotationDifferenceDeg(frame.cam_from_box_init, t.cam_from_box));
       way->baseline_centre_mm.push_back(
-          (frame.cam_from_box_init.Inverse().translation - t.cam_from_box.Inverse().translation).norm());
+          (frame.cam_from_box_init.Inverse().translation - t.cam_from_box.Inverse().translation)
+              .norm());
     }
     for (const TagObservation& tag : frame.tags)
       for (size_t k = 0; k < 4; ++k, ++corners)
-        noise_sq += (tag.corners_px[k] - Project(t.intrinsics, t.cam_from_box * tag.corners_box_mm[k])).squaredNorm();
+        noise_sq +=
+            (tag.corners_px[k] - Project(t.intrinsics, t.cam_from_box * tag.corners_box_mm[k]))
+                .squaredNorm();
   }
   way->rms_over_noise.push_back(result.rms_px / std::sqrt(noise_sq / corners));
 }
@@ -117,11 +128,13 @@ void Score(const CaptureCalibrationInput& input, const CaptureCalibration& resul
 void Report(const Way& way) {
   const UncertaintyRatios r = ObservedOverPredicted(way.samples);
   std::vector<double> predicted_rotation;
-  for (const UncertaintySample& sample : way.samples) predicted_rotation.push_back(sample.predicted.rotation_sd_deg);
+  for (const UncertaintySample& sample : way.samples)
+    predicted_rotation.push_back(sample.predicted.rotation_sd_deg);
   std::sort(predicted_rotation.begin(), predicted_rotation.end());
-  std::printf("%-22s %8.4f %8.4f %8.4f %8.3f %7.3f %7.3f %7.3f %7.3f %8.3f", way.name, Median(way.rotation_deg),
-              Median(predicted_rotation), predicted_rotation.empty() ? NAN : predicted_rotation.back(),
-              Median(way.centre_mm), r.rotation, r.centre, r.rotation_mahalanobis, r.centre_mahalanobis,
+  std::printf("%-22s %8.4f %8.4f %8.4f %8.3f %7.3f %7.3f %7.3f %7.3f %8.3f", way.name,
+              Median(way.rotation_deg), Median(predicted_rotation),
+              predicted_rotation.empty() ? NAN : predicted_rotation.back(), Median(way.centre_mm),
+              r.rotation, r.centre, r.rotation_mahalanobis, r.centre_mahalanobis,
               Median(way.rms_over_noise));
   if (!way.baseline_rotation_deg.empty())
     std::printf(" %7.1fx %7.1fx", Median(way.baseline_rotation_deg) / Median(way.rotation_deg),
@@ -133,17 +146,20 @@ int Uncertainty(int captures) {
   auto scene = LoadScene("etc/scenes/default.yaml");
   auto board = LoadChArUcoBoard("etc/charuco-board.yaml");
   if (!scene.ok() || !board.ok()) {
-    std::fprintf(stderr, "run from the repository root (etc/scenes/default.yaml, etc/charuco-board.yaml)\n");
+    std::fprintf(
+        stderr, "run from the repository root (etc/scenes/default.yaml, etc/charuco-board.yaml)\n");
     return 1;
   }
   auto renderer = Renderer::Create(*scene);
   if (!renderer.ok()) return 1;
   Way views{"views", {}, {}, {}, {}, {}, {}}, soft{"ChArUco, Gaussian", {}, {}, {}, {}, {}, {}},
-      hard{"ChArUco, held exactly", {}, {}, {}, {}, {}, {}}, free_views{"views, free mode", {}, {}, {}, {}, {}, {}};
+      hard{"ChArUco, held exactly", {}, {}, {}, {}, {}, {}},
+      free_views{"views, free mode", {}, {}, {}, {}, {}, {}};
   const auto t0 = Clock::now();
   for (int seed = 1; seed <= captures; ++seed) {
     std::vector<ViewGroundTruth> truths;
-    CaptureCalibrationInput input = RenderedCapture(**renderer, static_cast<uint64_t>(seed), &truths);
+    CaptureCalibrationInput input =
+        RenderedCapture(**renderer, static_cast<uint64_t>(seed), &truths);
     CaptureCalibrationOptions options;
     auto result = CalibrateCapture(input, options);
     if (result.ok()) Score(input, *result, truths, true, &views);
@@ -160,13 +176,19 @@ int Uncertainty(int captures) {
     if (result.ok()) Score(input, *result, truths, false, &hard);
     std::fprintf(stderr, "capture %d of %d (%.0f s)\n", seed, captures, Seconds(t0));
   }
-  std::printf("# %d rendered captures of the default rig (38 views each), errors against the truth\n", captures);
-  std::printf("# rot_deg: median rotation error; sd_med, sd_max: predicted rotation sd (deg) over the views\n");
-  std::printf("# ratios: observed / predicted error over all views (1 = stated uncertainty right); "
-              "rms/noise: reprojection RMS over the detections' corner noise (median over captures); "
-              "start: the planar start's median error over ours\n");
-  std::printf("%-22s %8s %8s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg", "sd_med", "sd_max",
-              "ctr_mm", "r_rot", "r_ctr", "m_rot", "m_ctr", "rms/noise", "st_rot", "st_ctr");
+  std::printf(
+      "# %d rendered captures of the default rig (38 views each), errors against the truth\n",
+      captures);
+  std::printf(
+      "# rot_deg: median rotation error; sd_med, sd_max: predicted rotation sd (deg) over the "
+      "views\n");
+  std::printf(
+      "# ratios: observed / predicted error over all views (1 = stated uncertainty right); "
+      "rms/noise: reprojection RMS over the detections' corner noise (median over captures); "
+      "start: the planar start's median error over ours\n");
+  std::printf("%-22s %8s %8s %8s %8s %7s %7s %7s %7s %8s %8s %8s\n", "intrinsics", "rot_deg",
+              "sd_med", "sd_max", "ctr_mm", "r_rot", "r_ctr", "m_rot", "m_ctr", "rms/noise",
+              "st_rot", "st_ctr");
   for (const Way* way : {&views, &free_views, &soft, &hard}) Report(*way);
   return 0;
 }
@@ -201,15 +223,16 @@ int Speed() {
   if (!renderer.ok()) return 1;
   std::vector<ViewGroundTruth> truths;
   const CaptureCalibrationInput input = RenderedCapture(**renderer, 1, &truths);
-  std::printf("# calibration of 38 detected views (2 threads): initialisation and bundle adjustment\n");
+  std::printf(
+      "# calibration of 38 detected views (2 threads): initialisation and bundle adjustment\n");
   for (CalibrationMode mode : {CalibrationMode::kTurntable, CalibrationMode::kFree}) {
     CaptureCalibrationOptions options;
     options.mode = mode;
     auto result = CalibrateCapture(input, options);
     if (!result.ok()) return 1;
     std::printf("%-10s init %.3f s, bundle adjustment %.3f s (%d iterations)\n",
-                mode == CalibrationMode::kTurntable ? "turntable" : "free", result->init_s, result->solve_s,
-                result->iterations);
+                mode == CalibrationMode::kTurntable ? "turntable" : "free", result->init_s,
+                result->solve_s, result->iterations);
   }
   return 0;
 }

@@ -11,11 +11,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <regex>
-#include <string>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <regex>
+#include <string>
 
 #include "core/sha256.h"
 #include "rig/capture.h"
@@ -30,7 +29,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double Seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double Seconds(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 std::string TempDir(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("hairrig_bench_" + name);
@@ -40,24 +41,30 @@ std::string TempDir(const std::string& name) {
 }
 
 int Efficiency() {
-  std::printf("# capture efficiency, default plan on the default simulated rig (etc/sim-rig.yaml)\n");
-  std::printf("%-11s %8s %10s %14s %11s\n", "time_scale", "views", "wall_s", "lower_bound_s", "efficiency");
+  std::printf(
+      "# capture efficiency, default plan on the default simulated rig (etc/sim-rig.yaml)\n");
+  std::printf("%-11s %8s %10s %14s %11s\n", "time_scale", "views", "wall_s", "lower_bound_s",
+              "efficiency");
   std::ifstream in("etc/sim-rig.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), {});
   for (double scale : {1.0, 0.5}) {
     const std::string dir = TempDir("efficiency");
-    std::string config = std::regex_replace(text, std::regex("time_scale: [0-9.]+"), "time_scale: " + std::to_string(scale));
-    config = std::regex_replace(config, std::regex("scene: scenes/"), "scene: " + fs::absolute("etc/scenes").string() + "/");
+    std::string config = std::regex_replace(text, std::regex("time_scale: [0-9.]+"),
+                                            "time_scale: " + std::to_string(scale));
+    config = std::regex_replace(config, std::regex("scene: scenes/"),
+                                "scene: " + fs::absolute("etc/scenes").string() + "/");
     std::ofstream(dir + "/rig.yaml") << config;
     CaptureOptions o;
     o.config_path = dir + "/rig.yaml";
     o.out_dir = dir + "/capture";
     auto s = RunCapture(o);
     if (!s.ok() || s->status != "complete") {
-      std::fprintf(stderr, "capture failed: %s\n", s.ok() ? s->message.c_str() : s.status().ToString().c_str());
+      std::fprintf(stderr, "capture failed: %s\n",
+                   s.ok() ? s->message.c_str() : s.status().ToString().c_str());
       return 1;
     }
-    std::printf("%-11.2f %8d %10.3f %14.3f %11.3f\n", scale, s->views_completed, s->wall_s, s->lower_bound_s, s->efficiency);
+    std::printf("%-11.2f %8d %10.3f %14.3f %11.3f\n", scale, s->views_completed, s->wall_s,
+                s->lower_bound_s, s->efficiency);
     fs::remove_all(dir);
   }
   return 0;
@@ -85,13 +92,16 @@ int Ingest() {
   encoded.encoding = "png";
   cv::imencode(".png", view->image, encoded.data, {cv::IMWRITE_PNG_COMPRESSION, 1});
 
-  std::printf("# ingest: CaptureDataset::StoreFrame, 1200x1600 RGB rendered view, %d frames per row\n", 38);
+  std::printf(
+      "# ingest: CaptureDataset::StoreFrame, 1200x1600 RGB rendered view, %d frames per row\n", 38);
   std::printf("%-34s %9s %12s %13s\n", "path", "frames/s", "raw MB/s", "stored MB/s");
   for (const auto& [name, frame, compression] :
-       {std::tuple{"raw RGB8 -> PNG level 1", &raw, 1}, std::tuple{"raw RGB8 -> PNG level 0", &raw, 0},
+       {std::tuple{"raw RGB8 -> PNG level 1", &raw, 1},
+        std::tuple{"raw RGB8 -> PNG level 0", &raw, 0},
         std::tuple{"encoded PNG pass-through (replay)", &encoded, 1}}) {
     const std::string dir = TempDir("ingest");
-    auto dataset = CaptureDataset::Create(dir + "/c", "bench: true\n", {}, {.png_compression = compression});
+    auto dataset =
+        CaptureDataset::Create(dir + "/c", "bench: true\n", {}, {.png_compression = compression});
     if (!dataset.ok()) return 1;
     std::vector<PlannedViewRecord> plan;
     for (int v = 0; v < 38; ++v) plan.push_back({v, v / 2, 0, "bench", frame->camera_serial, {}});
@@ -109,12 +119,14 @@ int Ingest() {
     }
     const double s = Seconds(t0);
     const double raw_mb = static_cast<double>(raw.data.size()) / 1e6;
-    std::printf("%-34s %9.1f %12.1f %13.1f\n", name, 38 / s, 38 * raw_mb / s, static_cast<double>(stored) / 1e6 / s);
+    std::printf("%-34s %9.1f %12.1f %13.1f\n", name, 38 / s, 38 * raw_mb / s,
+                static_cast<double>(stored) / 1e6 / s);
     fs::remove_all(dir);
   }
   const auto t0 = Clock::now();
   for (int i = 0; i < 10; ++i) (void)Sha256Hex(raw.data.data(), raw.data.size());
-  std::printf("%-34s %9s %12.1f\n", "SHA-256 alone", "", 10 * static_cast<double>(raw.data.size()) / 1e6 / Seconds(t0));
+  std::printf("%-34s %9s %12.1f\n", "SHA-256 alone", "",
+              10 * static_cast<double>(raw.data.size()) / 1e6 / Seconds(t0));
   return 0;
 }
 

@@ -33,7 +33,8 @@ Result<HelixModel> Hairstyle(const HeadSpec& head, int guides, int elements) {
   return FitHairModel(strands, fit, &summary);
 }
 
-void Row(const HeadSpec& head, int guides, int elements, LinearSolver solver, int threads, int steps) {
+void Row(const HeadSpec& head, int guides, int elements, LinearSolver solver, int threads,
+         int steps) {
   auto model = Hairstyle(head, guides, elements);
   if (!model.ok()) {
     std::fprintf(stderr, "%s\n", model.status().ToString().c_str());
@@ -50,10 +51,12 @@ void Row(const HeadSpec& head, int guides, int elements, LinearSolver solver, in
   if (!sim.ok() || !(*sim)->Advance(2 * o.dynamics.time_step_s).ok()) std::exit(1);
   const auto start = std::chrono::steady_clock::now();
   if (!(*sim)->Advance(steps * o.dynamics.time_step_s).ok()) std::exit(1);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%7d %9d %-9s %8d %12.1f %14.1f %11.1f\n", guides, elements,
-              solver == LinearSolver::kConjugateGradient ? "cg" : "cholesky", threads, steps / seconds,
-              steps * guides / seconds / 1000, (*sim)->stats().mean_solver_iterations);
+              solver == LinearSolver::kConjugateGradient ? "cg" : "cholesky", threads,
+              steps / seconds, steps * guides / seconds / 1000,
+              (*sim)->stats().mean_solver_iterations);
 }
 
 void Interpolation(const HeadSpec& head) {
@@ -78,12 +81,16 @@ void Interpolation(const HeadSpec& head) {
   auto start = std::chrono::steady_clock::now();
   auto interpolation = GuideInterpolation::Build(*full, rest, {});
   if (!interpolation.ok()) std::exit(1);
-  const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double build_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   start = std::chrono::steady_clock::now();
   if (!interpolation->Apply(rest).ok()) std::exit(1);
-  const double apply_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("interpolation: 1000 guides -> %zu strands (%zu points): weights %.2f s, %.3f s per frame, rest fit RMS %.2f mm\n",
-              full->num_strands(), full->num_points(), build_s, apply_s, interpolation->rest_fit_rms_mm());
+  const double apply_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "interpolation: 1000 guides -> %zu strands (%zu points): weights %.2f s, %.3f s per frame, "
+      "rest fit RMS %.2f mm\n",
+      full->num_strands(), full->num_points(), build_s, apply_s, interpolation->rest_fit_rms_mm());
 }
 
 }  // namespace
@@ -91,8 +98,8 @@ void Interpolation(const HeadSpec& head) {
 int main(int argc, char** argv) {
   const int steps = argc > 1 ? std::atoi(argv[1]) : 24;
   const HeadSpec head;
-  std::printf("%7s %9s %-9s %8s %12s %14s %11s\n", "guides", "elements", "solver", "threads", "steps/s",
-              "kguide-steps/s", "iterations");
+  std::printf("%7s %9s %-9s %8s %12s %14s %11s\n", "guides", "elements", "solver", "threads",
+              "steps/s", "kguide-steps/s", "iterations");
   for (LinearSolver solver : {LinearSolver::kConjugateGradient, LinearSolver::kCholesky}) {
     Row(head, 1000, 15, solver, 0, steps);
   }

@@ -6,12 +6,12 @@
 // paper's Algorithm 2 (with our relaxation, the element count being what it
 // shows), ours (Algorithm 2 grown to a
 // 0.05 mm mean error, the root anchored), ours with planar arcs where only a
-// coil would join a gentle stretch, and the fixed N = 15 baseline. One thread unless the row says otherwise; times for
-// all strands of a row (the fastest of kRepeats runs): fit_s for the models alone (the fit error
-// measured only where ours' growth needs it; the paper's timing is of its fitting), report_s for
-// the models with their fit report (mean and max distance to the input, G1 defect, co-helical
-// residual: what `hairrig fit` writes). An argument keeps only the strand sets whose name contains
-// it (e.g. "curly", "60 cm", ".hair").
+// coil would join a gentle stretch, and the fixed N = 15 baseline. One thread unless the row says
+// otherwise; times for all strands of a row (the fastest of kRepeats runs): fit_s for the models
+// alone (the fit error measured only where ours' growth needs it; the paper's timing is of its
+// fitting), report_s for the models with their fit report (mean and max distance to the input, G1
+// defect, co-helical residual: what `hairrig fit` writes). An argument keeps only the strand sets
+// whose name contains it (e.g. "curly", "60 cm", ".hair").
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -45,7 +45,8 @@ double TimeFits(const StrandSet& strands, const FloatingTangentsOptions& o, int 
     ParallelFor(strands.num_strands(), threads, [&] {
       return [&, p = std::vector<Eigen::Vector3d>()](size_t k) mutable {
         p.clear();
-        for (size_t i = offsets[k]; i < offsets[k + 1]; ++i) p.push_back(strands.points_mm[i].cast<double>());
+        for (size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+          p.push_back(strands.points_mm[i].cast<double>());
         StrandFitSummary* summary = fits ? &(*fits)[k] : nullptr;
         if (!FitFloatingTangents(p, o, summary).ok() && summary) *summary = StrandFitSummary{};
       };
@@ -91,7 +92,8 @@ void Compare(const std::string& name, const StrandSet& strands) {
     o.planar_arcs = v.planar_arcs;
     const Row r = FitAll(strands, o, v.threads);
     std::printf("%-26s %-22s %6zu %7.3f %9.3f %9.1f %12.3f %11.3f\n", name.c_str(), v.name,
-                strands.num_strands(), r.fit_seconds, r.report_seconds, r.elements, r.mean_error, r.max_error);
+                strands.num_strands(), r.fit_seconds, r.report_seconds, r.elements, r.mean_error,
+                r.max_error);
   }
 }
 

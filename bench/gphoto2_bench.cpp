@@ -25,7 +25,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double SecondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double SecondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 int Run(int shots) {
   auto scene = LoadScene("etc/scenes/default.yaml");
@@ -50,7 +52,8 @@ int Run(int shots) {
   o.port = server->port();
   o.model = sim_dslr::kModel;
   o.nominal.time_scale = 1e-4;
-  auto camera = MakeGphoto2Camera({DeviceKind::kCamera, "bench", "gphoto2", server_options.serial, "bench"}, o);
+  auto camera = MakeGphoto2Camera(
+      {DeviceKind::kCamera, "bench", "gphoto2", server_options.serial, "bench"}, o);
   const auto open_start = Clock::now();
   if (Status s = camera->Open(); !s.ok()) {
     std::fprintf(stderr, "%s\n", s.ToString().c_str());
@@ -79,8 +82,9 @@ int Run(int shots) {
     bytes = frame->data.size();
   }
   const double capture = Median(capture_s), transfer = Median(transfer_s);
-  std::printf("# gphoto2 backend against the simulated DSLR, %d shots, %dx%d JPEG of %.1f MB\n", shots,
-              scene->cameras[0].intrinsics.width_px, scene->cameras[0].intrinsics.height_px, static_cast<double>(bytes) / 1e6);
+  std::printf("# gphoto2 backend against the simulated DSLR, %d shots, %dx%d JPEG of %.1f MB\n",
+              shots, scene->cameras[0].intrinsics.width_px, scene->cameras[0].intrinsics.height_px,
+              static_cast<double>(bytes) / 1e6);
   std::printf("open (load camlibs, connect, read serial)   %8.1f ms\n", open_s * 1e3);
   std::printf("trigger -> file downloaded (median)         %8.1f ms\n", capture * 1e3);
   std::printf("  of which event + download + delete        %8.1f ms (%.0f MB/s)\n", transfer * 1e3,
@@ -92,4 +96,6 @@ int Run(int shots) {
 }  // namespace
 }  // namespace hairrig
 
-int main(int argc, char** argv) { return hairrig::Run(argc > 1 ? std::max(3, std::atoi(argv[1])) : 15); }
+int main(int argc, char** argv) {
+  return hairrig::Run(argc > 1 ? std::max(3, std::atoi(argv[1])) : 15);
+}

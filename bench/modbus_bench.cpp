@@ -23,7 +23,8 @@ Peer Connect(bool tcp, benchmark::State& state) {
   if (!scene.ok()) state.SkipWithError(scene.status().ToString().c_str());
   p.world = CreateSimWorld(*scene, {}).value();
   const ModbusServerOptions options{ModbusRegisterMap{}, "SIM-TT-0001", 1};
-  p.server = (tcp ? ModbusTurntableServer::StartTcp(p.world, options) : ModbusTurntableServer::StartRtu(p.world, options))
+  p.server = (tcp ? ModbusTurntableServer::StartTcp(p.world, options)
+                  : ModbusTurntableServer::StartRtu(p.world, options))
                  .value();
   ModbusEndpoint e;
   if (tcp) {

@@ -79,7 +79,8 @@ int Run(const std::vector<std::string>& scenes, int views) {
       const cv::Mat1f& t = view->truth.orientation_deg;
       for (int y = 0; y < t.rows; ++y) {
         for (int x = 0; x + 2 < t.cols; ++x) {
-          if (std::isfinite(t(y, x)) && std::isfinite(t(y, x + 2))) differences.push_back(OrientationDifferenceDeg(t(y, x), t(y, x + 2)));
+          if (std::isfinite(t(y, x)) && std::isfinite(t(y, x + 2)))
+            differences.push_back(OrientationDifferenceDeg(t(y, x), t(y, x + 2)));
         }
       }
       if (!differences.empty()) {
@@ -94,7 +95,8 @@ int Run(const std::vector<std::string>& scenes, int views) {
         ro.ground_truth = true;
         const int stops = scene->turntable_stops;
         const int stop = (i * stops) / views;
-        auto view = (*renderer)->Render(i % static_cast<int>(scene->cameras.size()), scene->StopAngleDeg(stop), ro);
+        auto view = (*renderer)->Render(i % static_cast<int>(scene->cameras.size()),
+                                        scene->StopAngleDeg(stop), ro);
         if (!view.ok()) return 1;
         const cv::Mat hair = view->truth.label == ViewTruthMaps::kHair;
         const auto t0 = std::chrono::steady_clock::now();
@@ -109,8 +111,10 @@ int Run(const std::vector<std::string>& scenes, int views) {
         kept += kept_02->kept_fraction / views;
         median_all += all->median_error_deg / views;
       }
-      std::printf("  %-44s median %5.2f deg  p90 %5.2f deg  kept %4.1f %%  (coverage >= 0.95: median %5.2f)  %.2f s/view\n",
-                  variant.name, median, p90, 100 * kept, median_all, seconds / views);
+      std::printf(
+          "  %-44s median %5.2f deg  p90 %5.2f deg  kept %4.1f %%  (coverage >= 0.95: median "
+          "%5.2f)  %.2f s/view\n",
+          variant.name, median, p90, 100 * kept, median_all, seconds / views);
     }
   }
   return 0;
@@ -122,8 +126,10 @@ int main(int argc, char** argv) {
   std::vector<std::string> scenes;
   int views = 4;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--views") == 0 && i + 1 < argc) views = std::max(1, std::atoi(argv[++i]));
-    else scenes.push_back(argv[i]);
+    if (std::strcmp(argv[i], "--views") == 0 && i + 1 < argc)
+      views = std::max(1, std::atoi(argv[++i]));
+    else
+      scenes.push_back(argv[i]);
   }
   if (scenes.empty()) scenes = {"etc/scenes/default.yaml"};
   return Run(scenes, views);

@@ -1,7 +1,8 @@
 // Reconstruction I on a calibrated capture of the simulated rig, per stereo
 // cost side by side: each step's time and the accuracy against the ground
 // truth. Run from the repository root:
-//   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric] [--stride N] [--iterations N]
+//   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric] [--stride N]
+//   [--iterations N]
 //       [--mls SIGMA_MM]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
 // reconstructions go to CAPTURE/bench-reconstruction-<cost>/ (the capture's
@@ -29,14 +30,19 @@ struct Row {
 };
 
 MvsCost ParseCost(const std::string& name) {
-  return name == "orientation" ? MvsCost::kOrientation : name == "photometric" ? MvsCost::kPhotometric : MvsCost::kBoth;
+  return name == "orientation"   ? MvsCost::kOrientation
+         : name == "photometric" ? MvsCost::kPhotometric
+                                 : MvsCost::kBoth;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] [--mls SIGMA_MM]\n", argv[0]);
+    std::fprintf(stderr,
+                 "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] "
+                 "[--mls SIGMA_MM]\n",
+                 argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
@@ -63,7 +69,8 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   for (const std::string& cost : costs) {
     options.mvs.cost = ParseCost(cost);
-    const std::string out = capture + "/bench-reconstruction-" + cost + (options.fusion.mls_sigma_mm > 0 ? "-mls" : "");
+    const std::string out =
+        capture + "/bench-reconstruction-" + cost + (options.fusion.mls_sigma_mm > 0 ? "-mls" : "");
     auto summary = ReconstructPoints(*input, out, options);
     if (!summary.ok()) {
       std::fprintf(stderr, "%s: %s\n", cost.c_str(), summary.status().ToString().c_str());
@@ -77,15 +84,17 @@ int main(int argc, char** argv) {
       return 1;
     }
     rows.push_back({cost, *summary, *evaluation});
-    std::printf("== %s\n%s%s", cost.c_str(), summary->BriefReport().c_str(), evaluation->BriefReport().c_str());
+    std::printf("== %s\n%s%s", cost.c_str(), summary->BriefReport().c_str(),
+                evaluation->BriefReport().c_str());
   }
-  std::printf("\n%-12s %8s %8s %8s %8s %10s %10s %8s %8s\n", "cost", "total_s", "stereo_s", "depth_md", "depth_mn",
-              "points", "P(2,20)", "R(2,20)", "F1(2,20)");
+  std::printf("\n%-12s %8s %8s %8s %8s %10s %10s %8s %8s\n", "cost", "total_s", "stereo_s",
+              "depth_md", "depth_mn", "points", "P(2,20)", "R(2,20)", "F1(2,20)");
   for (const Row& r : rows) {
     const MatchScore& s = r.evaluation.visible[1];
-    std::printf("%-12s %8.1f %8.1f %8.2f %8.2f %10lld %10.3f %8.3f %8.3f\n", r.cost.c_str(), r.summary.total_s,
-                r.summary.stereo_s, r.evaluation.depth_median_mm, r.evaluation.depth_mean_mm,
-                static_cast<long long>(r.evaluation.points), s.precision, s.recall, s.f1);
+    std::printf("%-12s %8.1f %8.1f %8.2f %8.2f %10lld %10.3f %8.3f %8.3f\n", r.cost.c_str(),
+                r.summary.total_s, r.summary.stereo_s, r.evaluation.depth_median_mm,
+                r.evaluation.depth_mean_mm, static_cast<long long>(r.evaluation.points),
+                s.precision, s.recall, s.f1);
   }
   if (rows.size() >= 2 && rows[0].evaluation.depth_median_mm > 0) {
     std::printf("depth median error, %s / %s: %.2f\n", rows[1].cost.c_str(), rows[0].cost.c_str(),

@@ -62,14 +62,21 @@ void Run(benchmark::State& state, bool draw_hair) {
     benchmark::DoNotOptimize(v);
     ++view;
   }
-  state.counters["strands"] = static_cast<double>(draw_hair ? renderer.strands_turntable_mm().num_strands() : 0);
+  state.counters["strands"] =
+      static_cast<double>(draw_hair ? renderer.strands_turntable_mm().num_strands() : 0);
 }
 
 void BM_RenderView(benchmark::State& state) { Run(state, true); }
 void BM_RenderNoHair(benchmark::State& state) { Run(state, false); }
 BENCHMARK(BM_RenderView)
-    ->Args({0, 2})->Args({0, 1})->Args({1, 2})->Args({3, 2})->Args({2, 2})->Args({2, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Args({0, 2})
+    ->Args({0, 1})
+    ->Args({1, 2})
+    ->Args({3, 2})
+    ->Args({2, 2})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_RenderNoHair)->Args({0, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

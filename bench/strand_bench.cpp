@@ -1,7 +1,8 @@
 // Reconstruction II on a capture of the simulated rig whose points exist
 // (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
 // timed, side by side. Run from the repository root:
-//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE]
+//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head
+//   FILE]
 //                                    [--volume-bound B] [--out-suffix S] [--score yes|no]
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
 // reconstruction is left alone); preview_truth.jpg beside them shows the
@@ -25,7 +26,10 @@ int main(int argc, char** argv) {
   using namespace hairrig;
   namespace fs = std::filesystem;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE] [--volume-bound B] [--out-suffix S] [--score yes|no]\n", argv[0]);
+    std::fprintf(stderr,
+                 "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE] "
+                 "[--volume-bound B] [--out-suffix S] [--score yes|no]\n",
+                 argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
@@ -65,7 +69,8 @@ int main(int argc, char** argv) {
     options.method = *method;
     const std::string dir = capture + "/bench-strands-" + name + out_suffix;
     fs::create_directories(dir);
-    fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply", fs::copy_options::overwrite_existing);
+    fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply",
+                  fs::copy_options::overwrite_existing);
     auto summary = ReconstructStrands(dir, head->spec, head->source, options);
     if (!summary.ok()) {
       std::fprintf(stderr, "%s: %s\n", name.c_str(), summary.status().ToString().c_str());
@@ -74,17 +79,20 @@ int main(int argc, char** argv) {
     std::printf("%s", summary->BriefReport().c_str());
     auto strands = ReadStrands(dir + "/strands/strands.ply");
     if (!strands.ok()) return 1;
-    const cv::Mat preview = RenderStrandPreview({&*strands, &*truth}, {name, "ground truth"}, StrandPreviewOptions{});
+    const cv::Mat preview =
+        RenderStrandPreview({&*strands, &*truth}, {name, "ground truth"}, StrandPreviewOptions{});
     if (!WriteImageAtomic(dir + "/strands/preview_truth.jpg", preview).ok()) return 1;
     if (!score) continue;
     ReconstructionEvalOptions eval;
     eval.strands_dir = dir;
     auto scored = EvaluateReconstruction(capture, eval);
     if (!scored.ok() || !scored->strands) {
-      std::fprintf(stderr, "%s: %s\n", name.c_str(), scored.ok() ? "no strands scored" : scored.status().ToString().c_str());
+      std::fprintf(stderr, "%s: %s\n", name.c_str(),
+                   scored.ok() ? "no strands scored" : scored.status().ToString().c_str());
       return 1;
     }
-    std::printf("%s scored as `hairrig eval reconstruction` does:\n%s", name.c_str(), scored->strands->BriefReport().c_str());
+    std::printf("%s scored as `hairrig eval reconstruction` does:\n%s", name.c_str(),
+                scored->strands->BriefReport().c_str());
   }
   return 0;
 }

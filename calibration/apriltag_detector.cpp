@@ -24,7 +24,8 @@ TagDetector::~TagDetector() = default;
 
 Result<std::unique_ptr<TagDetector>> TagDetector::Create(const TagDetectorOptions& options) {
   if (options.threads < 1) return InvalidArgument("tag detector: threads must be at least 1");
-  if (options.decimate < 0) return InvalidArgument("tag detector: decimate must be 0 (auto) or positive");
+  if (options.decimate < 0)
+    return InvalidArgument("tag detector: decimate must be 0 (auto) or positive");
   auto impl = std::make_unique<Impl>();
   impl->options = options;
   impl->family = tag36h11_create();
@@ -66,7 +67,8 @@ Result<std::vector<TagDetection>> TagDetector::Detect(const cv::Mat& image) {
     t.id = d->id;
     t.hamming = d->hamming;
     t.decision_margin = d->decision_margin;
-    for (int k = 0; k < 4; ++k) t.corners_px[k] = Eigen::Vector2d(d->p[k][0] + offset, d->p[k][1] + offset);
+    for (int k = 0; k < 4; ++k)
+      t.corners_px[k] = Eigen::Vector2d(d->p[k][0] + offset, d->p[k][1] + offset);
     detections.push_back(t);
   }
   apriltag_detections_destroy(found);

@@ -6,12 +6,11 @@
 // rendered-view test in tests/ proves the correction against ground truth.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <memory>
-#include <vector>
-
-#include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
+#include <vector>
 
 #include "core/status.h"
 
@@ -23,8 +22,8 @@ struct TagDetection {
   int id = -1;
   // libapriltag order (core/calib_box.h kTagCornerSigns), OpenCV pixel convention.
   std::array<Eigen::Vector2d, 4> corners_px;
-  int hamming = 0;            // bits corrected while decoding
-  double decision_margin = 0; // decoder confidence; higher is better
+  int hamming = 0;             // bits corrected while decoding
+  double decision_margin = 0;  // decoder confidence; higher is better
 };
 
 struct TagDetectorOptions {

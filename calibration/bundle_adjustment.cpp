@@ -1,5 +1,9 @@
 #include "calibration/bundle_adjustment.h"
 
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -7,12 +11,8 @@
 #include <string>
 #include <utility>
 
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
-#include <Eigen/Geometry>
-
-#include "core/transform.h"
 #include "calibration/corner_cost.h"
+#include "core/transform.h"
 
 namespace hairrig {
 
@@ -25,10 +25,12 @@ struct TurntableCorner {
   Eigen::Vector2d observed;
   Eigen::Vector3d p_box;
   template <typename T>
-  bool operator()(const T* intrinsics, const T* q_cam_from_world, const T* t_cam_from_world, const T* theta_rad,
-                  const T* q_turntable_from_box, const T* t_turntable_from_box, T* residual) const {
+  bool operator()(const T* intrinsics, const T* q_cam_from_world, const T* t_cam_from_world,
+                  const T* theta_rad, const T* q_turntable_from_box, const T* t_turntable_from_box,
+                  T* residual) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q_tb(q_turntable_from_box);
-    const CornerVec3<T> p_tt = q_tb * p_box.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_turntable_from_box);
+    const CornerVec3<T> p_tt =
+        q_tb * p_box.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_turntable_from_box);
     const T c = cos(theta_rad[0]), s = sin(theta_rad[0]);
     const CornerVec3<T> p_world(c * p_tt.x() - s * p_tt.y(), s * p_tt.x() + c * p_tt.y(), p_tt.z());
     const Eigen::Map<const Eigen::Quaternion<T>> q_cw(q_cam_from_world);
@@ -47,7 +49,8 @@ struct IntrinsicsPrior {
   template <typename T>
   bool operator()(const T* intrinsics, T* residual) const {
     for (int i = 0; i < CameraIntrinsics::kNumParams; ++i)
-      residual[i] = (intrinsics[i] - T(prior[static_cast<size_t>(i)])) * T(inverse_sd[static_cast<size_t>(i)] * *sigma_px);
+      residual[i] = (intrinsics[i] - T(prior[static_cast<size_t>(i)])) *
+                    T(inverse_sd[static_cast<size_t>(i)] * *sigma_px);
     return true;
   }
 };
@@ -68,7 +71,9 @@ struct PoseBlock {
     q[0] = r.x(), q[1] = r.y(), q[2] = r.z(), q[3] = r.w();
     t[0] = pose.translation.x(), t[1] = pose.translation.y(), t[2] = pose.translation.z();
   }
-  Rigid3d ToRigid() const { return Rigid3d(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(t[0], t[1], t[2])); }
+  Rigid3d ToRigid() const {
+    return Rigid3d(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(t[0], t[1], t[2]));
+  }
 };
 
 // Every parameter block of the problem, all in one arena laid out in a fixed
@@ -83,7 +88,8 @@ struct Blocks {
     for (const CalibrationView& v : input.views) stops.insert(v.stop);
     const size_t cameras = input.cameras.size(), views = turntable ? 0 : input.views.size();
     const size_t poses = views + (turntable ? 1 + cameras : 0);
-    arena.assign(cameras * CameraIntrinsics::kNumParams + poses * 7 + (turntable ? stops.size() : 0), 0.0);
+    arena.assign(
+        cameras * CameraIntrinsics::kNumParams + poses * 7 + (turntable ? stops.size() : 0), 0.0);
     double* next = arena.data();
     auto take = [&next](size_t n) { return std::exchange(next, next + n); };
     auto take_pose = [&take]() { return PoseBlock{take(4), take(3)}; };
@@ -107,19 +113,24 @@ struct Blocks {
 
   Rigid3d CamFromBox(const CalibrationView& v, size_t view_index) const {
     if (!turntable) return view_poses[view_index].ToRigid();
-    return cam_from_world[static_cast<size_t>(v.camera)].ToRigid() * WorldFromTurntable(*stop_rad.at(v.stop) / kDegToRad) *
-           turntable_from_box.ToRigid();
+    return cam_from_world[static_cast<size_t>(v.camera)].ToRigid() *
+           WorldFromTurntable(*stop_rad.at(v.stop) / kDegToRad) * turntable_from_box.ToRigid();
   }
 
   // The blocks (pointer, ambient size) a view's pose and projections depend on.
   std::vector<std::pair<double*, int>> Of(const CalibrationView& v, size_t view_index) {
-    std::vector<std::pair<double*, int>> out{{intrinsics[static_cast<size_t>(v.camera)], CameraIntrinsics::kNumParams}};
+    std::vector<std::pair<double*, int>> out{
+        {intrinsics[static_cast<size_t>(v.camera)], CameraIntrinsics::kNumParams}};
     if (!turntable) {
       out.insert(out.end(), {{view_poses[view_index].q, 4}, {view_poses[view_index].t, 3}});
       return out;
     }
     PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
-    out.insert(out.end(), {{cw.q, 4}, {cw.t, 3}, {stop_rad.at(v.stop), 1}, {turntable_from_box.q, 4}, {turntable_from_box.t, 3}});
+    out.insert(out.end(), {{cw.q, 4},
+                           {cw.t, 3},
+                           {stop_rad.at(v.stop), 1},
+                           {turntable_from_box.q, 4},
+                           {turntable_from_box.t, 3}});
     return out;
   }
 };
@@ -127,16 +138,19 @@ struct Blocks {
 // Sum of the squared corner reprojection errors of one view (px^2).
 double ViewSquaredError(const Blocks& blocks, const CalibrationView& v, size_t view_index) {
   const Rigid3d pose = blocks.CamFromBox(v, view_index);
-  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)], 1, 1);
+  const CameraIntrinsics k =
+      CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)], 1, 1);
   double sq = 0;
   for (const TagObservation& tag : v.tags)
-    for (size_t i = 0; i < 4; ++i) sq += (Project(k, pose * tag.corners_box_mm[i]) - tag.corners_px[i]).squaredNorm();
+    for (size_t i = 0; i < 4; ++i)
+      sq += (Project(k, pose * tag.corners_box_mm[i]) - tag.corners_px[i]).squaredNorm();
   return sq;
 }
 
 // The corner residuals' standard deviation per coordinate (px) for
 // `effective_parameters` estimated; NaN without redundancy.
-double CornerResidualSigma(const Blocks& blocks, const BundleAdjustmentInput& input, int effective_parameters) {
+double CornerResidualSigma(const Blocks& blocks, const BundleAdjustmentInput& input,
+                           int effective_parameters) {
   double sq = 0, corners = 0;
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
     sq += ViewSquaredError(blocks, input.views[vi], vi);
@@ -149,9 +163,11 @@ double CornerResidualSigma(const Blocks& blocks, const BundleAdjustmentInput& in
 // What a view's blocks predict: the rotation vector taking `reference` to the
 // current cam_from_box (rad), the camera centre in the box frame (mm) and the
 // projections of the view's observed corners (px).
-Eigen::VectorXd Predict(const Blocks& blocks, const CalibrationView& v, size_t view_index, const Rigid3d& reference) {
+Eigen::VectorXd Predict(const Blocks& blocks, const CalibrationView& v, size_t view_index,
+                        const Rigid3d& reference) {
   const Rigid3d pose = blocks.CamFromBox(v, view_index);
-  const CameraIntrinsics k = CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)], 1, 1);
+  const CameraIntrinsics k =
+      CameraIntrinsics::FromParams(blocks.intrinsics[static_cast<size_t>(v.camera)], 1, 1);
   Eigen::VectorXd out(6 + 8 * static_cast<Eigen::Index>(v.tags.size()));
   const Eigen::AngleAxisd delta(pose.rotation * reference.rotation.conjugate());
   out.head<3>() = delta.angle() * delta.axis();
@@ -185,14 +201,15 @@ void FillUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdju
         view_blocks[vi].push_back(block);
     }
     for (const auto& a : view_blocks[vi])
-      for (const auto& b : view_blocks[vi]) pairs.emplace(std::min(a.first, b.first), std::max(a.first, b.first));
+      for (const auto& b : view_blocks[vi])
+        pairs.emplace(std::min(a.first, b.first), std::max(a.first, b.first));
   }
   ceres::Covariance::Options options;
   options.algorithm_type = ceres::DENSE_SVD;
   options.null_space_rank = -1;
   ceres::Covariance covariance(options);
-  const bool ok =
-      covariance.Compute(std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem);
+  const bool ok = covariance.Compute(
+      std::vector<std::pair<const double*, const double*>>(pairs.begin(), pairs.end()), &problem);
   for (size_t c = 0; c < blocks.intrinsics.size(); ++c) {
     const double* intr = blocks.intrinsics[c];
     if (!problem.HasParameterBlock(intr) || problem.IsParameterBlockConstant(intr)) {
@@ -237,8 +254,9 @@ void FillUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdju
     u.rotation_sd_deg = std::sqrt(std::max(0.0, u.rotation_cov_rad2.trace())) / kDegToRad;
     u.centre_sd_mm = std::sqrt(std::max(0.0, u.centre_cov_mm2.trace()));
     const Eigen::Index corners = 4 * static_cast<Eigen::Index>(v.tags.size());
-    u.projection_sd_px = std::sqrt(std::max(0.0, predicted.bottomRightCorner(2 * corners, 2 * corners).trace() /
-                                                     static_cast<double>(corners)));
+    u.projection_sd_px =
+        std::sqrt(std::max(0.0, predicted.bottomRightCorner(2 * corners, 2 * corners).trace() /
+                                    static_cast<double>(corners)));
   }
 }
 
@@ -257,7 +275,8 @@ Status ValidateInput(const BundleAdjustmentInput& input) {
                              std::to_string(view.camera) + ", which does not exist");
     }
     if (view.stop < 0 || !std::isfinite(view.turntable_deg)) {
-      return InvalidArgument("bundle adjustment: view " + std::to_string(v) + " has a bad stop or turntable angle");
+      return InvalidArgument("bundle adjustment: view " + std::to_string(v) +
+                             " has a bad stop or turntable angle");
     }
     if (!view.tags.empty()) ++views_of[static_cast<size_t>(view.camera)];
     corners += 4 * view.tags.size();
@@ -284,7 +303,8 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     const auto params = input.cameras[c].ToParams();
     std::copy(params.begin(), params.end(), b.intrinsics[c]);
   }
-  for (size_t v = 0; v < b.view_poses.size(); ++v) b.view_poses[v].Set(input.views[v].cam_from_box_init);
+  for (size_t v = 0; v < b.view_poses.size(); ++v)
+    b.view_poses[v].Set(input.views[v].cam_from_box_init);
 
   // Turntable mode: cameras from their best-observed view, angles from the encoder.
   auto& intrinsics = b.intrinsics;
@@ -298,15 +318,18 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     std::set<int> stops_set;
     std::vector<size_t> best_tags(input.cameras.size(), 0);
     for (const CalibrationView& v : input.views) {
-      if (stops_set.insert(v.stop).second) *stop_rad.at(v.stop) = v.turntable_deg * kDegToRad;  // the first view's
+      if (stops_set.insert(v.stop).second)
+        *stop_rad.at(v.stop) = v.turntable_deg * kDegToRad;  // the first view's
       if (v.tags.size() <= best_tags[static_cast<size_t>(v.camera)]) continue;
       best_tags[static_cast<size_t>(v.camera)] = v.tags.size();
       cam_from_world[static_cast<size_t>(v.camera)].Set(
-          v.cam_from_box_init * input.turntable_from_box_init.Inverse() * WorldFromTurntable(v.turntable_deg).Inverse());
+          v.cam_from_box_init * input.turntable_from_box_init.Inverse() *
+          WorldFromTurntable(v.turntable_deg).Inverse());
     }
   }
 
-  ceres::LossFunction* loss = new ceres::HuberLoss(options.huber_px);  // shared; the problem deletes it once
+  ceres::LossFunction* loss =
+      new ceres::HuberLoss(options.huber_px);  // shared; the problem deletes it once
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
     const CalibrationView& v = input.views[vi];
     double* intr = intrinsics[static_cast<size_t>(v.camera)];
@@ -316,8 +339,8 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
           auto* cost = new ceres::AutoDiffCostFunction<TurntableCorner, 2, 9, 4, 3, 1, 4, 3>(
               new TurntableCorner{tag.corners_px[k], tag.corners_box_mm[k]});
           PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
-          problem.AddResidualBlock(cost, loss, intr, cw.q, cw.t, stop_rad.at(v.stop), turntable_from_box.q,
-                                   turntable_from_box.t);
+          problem.AddResidualBlock(cost, loss, intr, cw.q, cw.t, stop_rad.at(v.stop),
+                                   turntable_from_box.q, turntable_from_box.t);
         } else {
           auto* cost = new ceres::AutoDiffCostFunction<PosedCorner, 2, 9, 4, 3>(
               new PosedCorner{tag.corners_px[k], tag.corners_box_mm[k]});
@@ -327,14 +350,16 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     }
   }
   // Manifolds and the gauge.
-  double prior_sigma_px = 1.0;  // the corner noise the prior weighs against; updated after a first solve
+  double prior_sigma_px =
+      1.0;  // the corner noise the prior weighs against; updated after a first solve
   bool soft_prior = false;
   for (size_t c = 0; c < intrinsics.size(); ++c) {
     double* intr = intrinsics[c];
     if (!problem.HasParameterBlock(intr)) continue;
     const bool has_sd = c < input.prior_stddev.size() && HasStddev(input.prior_stddev[c]);
     if (!options.fix_intrinsics) {
-      problem.SetManifold(intr, new ceres::SubsetManifold(CameraIntrinsics::kNumParams, {8}));  // k3 held
+      problem.SetManifold(intr,
+                          new ceres::SubsetManifold(CameraIntrinsics::kNumParams, {8}));  // k3 held
     } else if (options.hard_prior || !has_sd) {
       problem.SetParameterBlockConstant(intr);
     } else {
@@ -347,23 +372,27 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
         if (!(sd > 0)) held.push_back(i);
       }
       problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<IntrinsicsPrior, CameraIntrinsics::kNumParams, CameraIntrinsics::kNumParams>(
-              new IntrinsicsPrior(prior)),
+          new ceres::AutoDiffCostFunction<IntrinsicsPrior, CameraIntrinsics::kNumParams,
+                                          CameraIntrinsics::kNumParams>(new IntrinsicsPrior(prior)),
           nullptr, intr);
-      if (!held.empty()) problem.SetManifold(intr, new ceres::SubsetManifold(CameraIntrinsics::kNumParams, held));
+      if (!held.empty())
+        problem.SetManifold(intr, new ceres::SubsetManifold(CameraIntrinsics::kNumParams, held));
       soft_prior = true;
     }
   }
   if (turntable) {
     for (PoseBlock& cw : cam_from_world) {
-      if (problem.HasParameterBlock(cw.q)) problem.SetManifold(cw.q, new ceres::EigenQuaternionManifold);
+      if (problem.HasParameterBlock(cw.q))
+        problem.SetManifold(cw.q, new ceres::EigenQuaternionManifold);
     }
     problem.SetManifold(turntable_from_box.q, new ceres::EigenQuaternionManifold);
-    problem.SetManifold(turntable_from_box.t, new ceres::SubsetManifold(3, {2}));  // height along the axis
-    problem.SetParameterBlockConstant(stop_rad.begin()->second);                 // the turn about the axis
+    problem.SetManifold(turntable_from_box.t,
+                        new ceres::SubsetManifold(3, {2}));       // height along the axis
+    problem.SetParameterBlockConstant(stop_rad.begin()->second);  // the turn about the axis
   } else {
     for (PoseBlock& p : view_poses) {
-      if (problem.HasParameterBlock(p.q)) problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
+      if (problem.HasParameterBlock(p.q))
+        problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
     }
   }
 
@@ -397,7 +426,8 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     for (const PoseBlock& cw : cam_from_world) result.cam_from_world.push_back(cw.ToRigid());
     int last_stop = stop_rad.empty() ? -1 : stop_rad.rbegin()->first;
     result.stop_deg.assign(static_cast<size_t>(last_stop + 1), NAN);
-    for (const auto& [stop, rad] : stop_rad) result.stop_deg[static_cast<size_t>(stop)] = *rad / kDegToRad;
+    for (const auto& [stop, rad] : stop_rad)
+      result.stop_deg[static_cast<size_t>(stop)] = *rad / kDegToRad;
   }
   double total_sq = 0;
   size_t total_corners = 0;

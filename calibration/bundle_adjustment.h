@@ -18,11 +18,10 @@
 // projection errors (ViewUncertainty). Millimetres, degrees, pixels.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cmath>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "calibration/view_pose.h"
 #include "core/camera_model.h"
@@ -34,11 +33,11 @@ namespace hairrig {
 enum class CalibrationMode { kTurntable, kFree };
 
 struct CalibrationView {
-  int camera = 0;              // index into the cameras
-  int stop = 0;                // turntable stop (turntable mode)
-  double turntable_deg = 0;    // the encoder's angle at that stop
+  int camera = 0;            // index into the cameras
+  int stop = 0;              // turntable stop (turntable mode)
+  double turntable_deg = 0;  // the encoder's angle at that stop
   std::vector<TagObservation> tags;
-  Rigid3d cam_from_box_init;   // from EstimateViewPose
+  Rigid3d cam_from_box_init;  // from EstimateViewPose
 };
 
 struct BundleAdjustmentOptions {
@@ -58,7 +57,7 @@ struct BundleAdjustmentOptions {
 struct BundleAdjustmentInput {
   std::vector<CameraIntrinsics> cameras;  // initial values
   std::vector<CalibrationView> views;
-  Rigid3d turntable_from_box_init;        // turntable mode: nominal, from the rig config
+  Rigid3d turntable_from_box_init;  // turntable mode: nominal, from the rig config
   // Per camera (empty, or one per camera): standard deviations of the prior
   // intrinsics (kParamNames order); all zero = no stated uncertainty.
   std::vector<std::array<double, CameraIntrinsics::kNumParams>> prior_stddev;
@@ -79,15 +78,16 @@ struct ViewUncertainty {
   Eigen::Matrix3d centre_cov_mm2 = Eigen::Matrix3d::Constant(NAN);
 };
 
-using IntrinsicsCovariance = Eigen::Matrix<double, CameraIntrinsics::kNumParams, CameraIntrinsics::kNumParams>;
+using IntrinsicsCovariance =
+    Eigen::Matrix<double, CameraIntrinsics::kNumParams, CameraIntrinsics::kNumParams>;
 
 struct BundleAdjustmentResult {
   std::vector<CameraIntrinsics> cameras;
   std::vector<Rigid3d> cam_from_box;    // per view
   std::vector<Rigid3d> cam_from_world;  // per camera (turntable mode)
   Rigid3d turntable_from_box;           // turntable mode
-  std::vector<double> stop_deg;         // refined angle per stop (turntable mode; NaN for unused stops)
-  std::vector<double> view_rms_px;      // corner reprojection RMS per view (2D error)
+  std::vector<double> stop_deg;     // refined angle per stop (turntable mode; NaN for unused stops)
+  std::vector<double> view_rms_px;  // corner reprojection RMS per view (2D error)
   double rms_px = 0;
   // Standard deviations of each camera's intrinsics (kParamNames order; 0 for
   // held parameters) from the covariance of the estimate, with the residuals'

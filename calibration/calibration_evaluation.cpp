@@ -4,9 +4,8 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <numeric>
-
 #include <nlohmann/json.hpp>
+#include <numeric>
 
 #include "core/geometry_json.h"
 #include "core/json_file.h"

@@ -21,11 +21,10 @@
 #pragma once
 
 #include <array>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "calibration/calibration_io.h"
 #include "calibration/uncertainty_check.h"

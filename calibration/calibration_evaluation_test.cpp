@@ -1,8 +1,8 @@
 #include "calibration/calibration_evaluation.h"
 
-#include <filesystem>
-
 #include <gtest/gtest.h>
+
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"

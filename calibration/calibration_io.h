@@ -37,8 +37,9 @@ struct StoredCalibration {
     std::string name, serial;
     bool solved = false;
     CameraIntrinsics intrinsics;
-    CameraIntrinsics initial;       // before the bundle adjustment
-    std::string intrinsics_source;  // "views": initial is from Zhang's method (intrinsics_from_views.h)
+    CameraIntrinsics initial;  // before the bundle adjustment
+    std::string
+        intrinsics_source;  // "views": initial is from Zhang's method (intrinsics_from_views.h)
     std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
   };
   struct Tag {
@@ -52,8 +53,8 @@ struct StoredCalibration {
     bool solved = false;
     Rigid3d cam_from_box;
     Rigid3d cam_from_box_initial;  // the per-view PnP before the bundle adjustment
-    Rigid3d cam_from_object;       // the object frame: turntable in turntable mode, box in free mode
-    std::string failure;           // why the view was not solved
+    Rigid3d cam_from_object;  // the object frame: turntable in turntable mode, box in free mode
+    std::string failure;      // why the view was not solved
     double rms_px = 0;
     ViewUncertainty uncertainty;  // NaN where calibration.json has none
     std::vector<Tag> tags;        // the detections the bundle adjustment used
@@ -73,8 +74,8 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json);
 // format "hairrig-intrinsics", the camera's serial, the board file, the
 // intrinsics with their standard deviations and the per-image results.
 // Written atomically; IoError names the file.
-Status WriteIntrinsicsFile(const std::string& path, const std::string& serial, const std::string& board,
-                           const ChArUcoCalibration& result);
+Status WriteIntrinsicsFile(const std::string& path, const std::string& serial,
+                           const std::string& board, const ChArUcoCalibration& result);
 
 // The used images' chessboard corners as mrcal's corners cache, the input of
 // `mrcal-calibrate-cameras --corners-cache`: a vnl table "# filename x y level",

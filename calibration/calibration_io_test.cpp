@@ -1,12 +1,11 @@
 #include "calibration/calibration_io.h"
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <functional>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/persistence.hpp>
 
@@ -28,12 +27,14 @@ std::string Write(const std::string& name, const json& j) {
 }
 
 TEST(CalibrationIo, ReadsWhatItWrites) {
-  const auto priors = ReadIntrinsicsPriors(Write("intrinsics.json", hairrig_test::IntrinsicsDocument()));
+  const auto priors =
+      ReadIntrinsicsPriors(Write("intrinsics.json", hairrig_test::IntrinsicsDocument()));
   ASSERT_TRUE(priors.ok()) << priors.status().ToString();
   ASSERT_EQ(priors->size(), 1u);
   EXPECT_EQ(priors->at(0).serial, "CAM-UPPER");
   EXPECT_EQ(priors->at(0).stddev[0], 0.5);
-  const auto calibration = ReadCalibration(Write("calibration.json", hairrig_test::CalibrationDocument()));
+  const auto calibration =
+      ReadCalibration(Write("calibration.json", hairrig_test::CalibrationDocument()));
   ASSERT_TRUE(calibration.ok()) << calibration.status().ToString();
   ASSERT_EQ(calibration->views.size(), 2u);  // a solved and a failed view
   EXPECT_EQ(calibration->views[0].tags.at(0).corners_px[3].y(), 8);
@@ -58,18 +59,25 @@ TEST(CalibrationIo, DamagedIntrinsicsFilesNameTheField) {
     const auto priors = ReadIntrinsicsPriors(path);
     ASSERT_FALSE(priors.ok()) << j.dump();
     EXPECT_EQ(priors.status().code(), StatusCode::kCorruptData);
-    EXPECT_NE(priors.status().message().find(path + ": " + expected), std::string::npos) << priors.status().ToString();
+    EXPECT_NE(priors.status().message().find(path + ": " + expected), std::string::npos)
+        << priors.status().ToString();
   }
 }
 
 TEST(CalibrationIo, DamagedCalibrationFilesNameTheField) {
   const std::vector<std::pair<std::function<void(json&)>, std::string>> cases = {
-      {[](json& j) { j["views"][0]["camera"] = 1; }, "field 'views[0].camera': expected an integer in [0, 0]"},
+      {[](json& j) { j["views"][0]["camera"] = 1; },
+       "field 'views[0].camera': expected an integer in [0, 0]"},
       {[](json& j) { j["views"][0]["view"] = 2.5; }, "field 'views[0].view'"},
-      {[](json& j) { j["views"][0]["tags"][0]["corners_px"][2] = {1}; }, "field 'views[0].tags[0].corners_px'"},
-      {[](json& j) { j["views"][0]["cam_from_box"] = "identity"; }, "field 'views[0].cam_from_box'"},
+      {[](json& j) { j["views"][0]["tags"][0]["corners_px"][2] = {1}; },
+       "field 'views[0].tags[0].corners_px'"},
+      {[](json& j) { j["views"][0]["cam_from_box"] = "identity"; },
+       "field 'views[0].cam_from_box'"},
       {[](json& j) { j["cameras"][0]["name"] = json::array(); }, "field 'cameras[0].name'"},
-      {[](json& j) { j["cameras"][0]["intrinsics_stddev"] = {{"k1", -1}}; }, "field 'cameras[0].intrinsics_stddev.k1'"},
+      {[](json& j) {
+         j["cameras"][0]["intrinsics_stddev"] = {{"k1", -1}};
+       },
+       "field 'cameras[0].intrinsics_stddev.k1'"},
       {[](json& j) { j["views"] = 3; }, "field 'views': expected a list"},
   };
   for (const auto& [damage, expected] : cases) {
@@ -87,12 +95,14 @@ TEST(CalibrationIo, DamagedCalibrationFilesNameTheField) {
 namespace fs = std::filesystem;
 
 // An intrinsics file as `hairrig calibrate-intrinsics` writes it, with `stddev`.
-std::string WriteIntrinsics(const std::string& name, const std::array<double, CameraIntrinsics::kNumParams>& stddev) {
+std::string WriteIntrinsics(const std::string& name,
+                            const std::array<double, CameraIntrinsics::kNumParams>& stddev) {
   ChArUcoCalibration result;
   result.intrinsics = {640, 480, 800, 800, 320, 240};
   result.stddev = stddev;
   result.rms_px = 0.2;
-  const std::string path = (fs::temp_directory_path() / (name + "_" + std::to_string(getpid()) + ".json")).string();
+  const std::string path =
+      (fs::temp_directory_path() / (name + "_" + std::to_string(getpid()) + ".json")).string();
   EXPECT_TRUE(WriteIntrinsicsFile(path, "CAM-1", "board.yaml", result).ok());
   return path;
 }

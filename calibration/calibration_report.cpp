@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <sstream>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "core/file_util.h"
 #include "core/image_file.h"
@@ -42,16 +41,19 @@ std::string Format(const char* format, double a, double b = 0) {
 
 // A prior the views reject fails the calibration: every view of that camera
 // was solved with intrinsics that are not its own.
-void JudgePriors(const CaptureCalibrationInput& input, const CaptureCalibration& result, CalibrationVerdict* verdict) {
+void JudgePriors(const CaptureCalibrationInput& input, const CaptureCalibration& result,
+                 CalibrationVerdict* verdict) {
   for (size_t c = result.cameras.size(); c-- > 0;) {
     const PriorCheck& check = result.cameras[c].prior_check;
     if (!check.rejected) continue;
     const CalibrationCamera& camera = input.cameras[c];
-    const std::string file = camera.prior_source.empty() ? "its intrinsics prior" : camera.prior_source;
+    const std::string file =
+        camera.prior_source.empty() ? "its intrinsics prior" : camera.prior_source;
     verdict->level = CalibrationVerdict::Level::kFailed;
     verdict->reasons.insert(verdict->reasons.begin(),
-                            "camera " + camera.name + " (" + camera.serial + "): its views reject the intrinsics of " +
-                                file + ": " + DescribePriorCheck(check) + "; check that " + file +
+                            "camera " + camera.name + " (" + camera.serial +
+                                "): its views reject the intrinsics of " + file + ": " +
+                                DescribePriorCheck(check) + "; check that " + file +
                                 " belongs to camera " + camera.serial +
                                 ", or recalibrate its intrinsics (`hairrig calibrate-intrinsics`)");
   }
@@ -59,7 +61,8 @@ void JudgePriors(const CaptureCalibrationInput& input, const CaptureCalibration&
 
 }  // namespace
 
-CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
+CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input,
+                                    const CaptureCalibration& result) {
   CalibrationVerdict verdict;
   const double threshold = OutlierThreshold(result);
   size_t solved = 0;
@@ -71,21 +74,26 @@ CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const 
       verdict.reasons.push_back("view " + input.frames[f].name + " not solved: " + frame.failure);
     } else if (frame.rms_px > threshold) {
       verdict.views_to_check.push_back(static_cast<int>(f));
-      verdict.reasons.push_back("view " + input.frames[f].name +
-                                Format(" has RMS %.2f px (outlier threshold %.2f px)", frame.rms_px, threshold));
+      verdict.reasons.push_back(
+          "view " + input.frames[f].name +
+          Format(" has RMS %.2f px (outlier threshold %.2f px)", frame.rms_px, threshold));
     }
   }
   for (size_t c = 0; c < result.cameras.size(); ++c)
-    if (!result.cameras[c].solved) verdict.reasons.push_back("camera " + input.cameras[c].name + " not solved: " + result.cameras[c].failure);
+    if (!result.cameras[c].solved)
+      verdict.reasons.push_back("camera " + input.cameras[c].name +
+                                " not solved: " + result.cameras[c].failure);
   if (!verdict.reasons.empty()) verdict.level = CalibrationVerdict::Level::kCheck;
   if (2 * solved < result.frames.size()) {
     verdict.level = CalibrationVerdict::Level::kFailed;
-    verdict.reasons.insert(verdict.reasons.begin(), std::to_string(solved) + " of " +
-                                                        std::to_string(result.frames.size()) + " views solved");
+    verdict.reasons.insert(
+        verdict.reasons.begin(),
+        std::to_string(solved) + " of " + std::to_string(result.frames.size()) + " views solved");
   }
   if (result.rms_px > kFailedRmsPx) {
     verdict.level = CalibrationVerdict::Level::kFailed;
-    verdict.reasons.insert(verdict.reasons.begin(), Format("overall RMS %.2f px is above %.1f px", result.rms_px, kFailedRmsPx));
+    verdict.reasons.insert(verdict.reasons.begin(), Format("overall RMS %.2f px is above %.1f px",
+                                                           result.rms_px, kFailedRmsPx));
   }
   JudgePriors(input, result, &verdict);
   return verdict;
@@ -104,23 +112,28 @@ cv::Mat RmsBarChart(const CaptureCalibrationInput& input, const CaptureCalibrati
   for (int tick = 0; tick <= 4; ++tick) {
     const double px = top_px * tick / 4;
     cv::line(chart, {left - 4, y_of(px)}, {width - 10, y_of(px)}, cv::Scalar(220, 220, 220));
-    cv::putText(chart, Format("%.2f", px), {4, y_of(px) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0));
+    cv::putText(chart, Format("%.2f", px), {4, y_of(px) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0));
   }
-  cv::line(chart, {left, y_of(threshold)}, {width - 10, y_of(threshold)}, cv::Scalar(0, 0, 200), 1, cv::LINE_AA);
+  cv::line(chart, {left, y_of(threshold)}, {width - 10, y_of(threshold)}, cv::Scalar(0, 0, 200), 1,
+           cv::LINE_AA);
   for (size_t f = 0; f < result.frames.size(); ++f) {
     const FrameCalibration& frame = result.frames[f];
     const int x = left + bar * static_cast<int>(f);
     const bool bad = !frame.solved || frame.rms_px > threshold;
     const cv::Scalar colour = bad ? cv::Scalar(40, 40, 220) : cv::Scalar(180, 120, 40);
     const int y = frame.solved ? y_of(frame.rms_px) : top;
-    cv::rectangle(chart, {x + 2, y}, {x + bar - 2, top + height}, colour, frame.solved ? cv::FILLED : 2);
+    cv::rectangle(chart, {x + 2, y}, {x + bar - 2, top + height}, colour,
+                  frame.solved ? cv::FILLED : 2);
     if (f % 2 == 0)
-      cv::putText(chart, std::to_string(input.frames[f].view), {x, top + height + 14}, cv::FONT_HERSHEY_SIMPLEX, 0.35,
-                  cv::Scalar(0, 0, 0));
+      cv::putText(chart, std::to_string(input.frames[f].view), {x, top + height + 14},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0));
   }
-  cv::putText(chart, "reprojection RMS per view (px); red line: outlier threshold; hollow: not solved", {left, 18},
-              cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
-  cv::putText(chart, "view", {width / 2, top + height + 32}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+  cv::putText(chart,
+              "reprojection RMS per view (px); red line: outlier threshold; hollow: not solved",
+              {left, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+  cv::putText(chart, "view", {width / 2, top + height + 32}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+              cv::Scalar(0, 0, 0));
   return chart;
 }
 
@@ -133,14 +146,15 @@ Status DrawResiduals(const std::string& path, const cv::Mat& image, const Camera
       const Eigen::Vector2d seen = tag.corners_px[k];
       const Eigen::Vector2d predicted = Project(camera, frame.cam_from_box * tag.corners_box_mm[k]);
       const Eigen::Vector2d tip = seen + kResidualScale * (predicted - seen);
-      cv::circle(shown, {static_cast<int>(seen.x() / 2), static_cast<int>(seen.y() / 2)}, 2, cv::Scalar(0, 255, 0), 1,
-                 cv::LINE_AA);
+      cv::circle(shown, {static_cast<int>(seen.x() / 2), static_cast<int>(seen.y() / 2)}, 2,
+                 cv::Scalar(0, 255, 0), 1, cv::LINE_AA);
       cv::line(shown, {static_cast<int>(seen.x() / 2), static_cast<int>(seen.y() / 2)},
-               {static_cast<int>(tip.x() / 2), static_cast<int>(tip.y() / 2)}, cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
+               {static_cast<int>(tip.x() / 2), static_cast<int>(tip.y() / 2)},
+               cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
     }
   }
-  cv::putText(shown, Format("RMS %.3f px; residuals x %.0f", frame.rms_px, kResidualScale), {10, 24},
-              cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 2);
+  cv::putText(shown, Format("RMS %.3f px; residuals x %.0f", frame.rms_px, kResidualScale),
+              {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 2);
   return WriteImageAtomic(path, shown, {cv::IMWRITE_JPEG_QUALITY, 85});
 }
 
@@ -150,10 +164,13 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
   out << "verdict: " << verdict.name() << "\n";
   for (const std::string& reason : verdict.reasons) out << "  - " << reason << "\n";
   out << "\nmode " << (result.mode == CalibrationMode::kTurntable ? "turntable" : "free")
-      << Format(", overall RMS %.3f px, residual sigma %.3f px", result.rms_px, result.residual_sigma_px)
-      << ", " << result.iterations << " iterations" << (result.converged ? "" : " (NOT converged)") << "\n";
+      << Format(", overall RMS %.3f px, residual sigma %.3f px", result.rms_px,
+                result.residual_sigma_px)
+      << ", " << result.iterations << " iterations" << (result.converged ? "" : " (NOT converged)")
+      << "\n";
   out << Format("time: detection %.2f s, initialisation %.2f s", result.detect_s, result.init_s)
-      << Format(", bundle adjustment %.2f s, prior check %.2f s\n\ncameras:\n", result.solve_s, result.prior_check_s);
+      << Format(", bundle adjustment %.2f s, prior check %.2f s\n\ncameras:\n", result.solve_s,
+                result.prior_check_s);
   for (size_t c = 0; c < result.cameras.size(); ++c) {
     const CameraCalibration& cam = result.cameras[c];
     out << "  " << input.cameras[c].name << " (" << input.cameras[c].serial << "): ";
@@ -166,21 +183,27 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
     const std::string& source = input.cameras[c].prior_source;
     if (cam.prior_check.tested || !cam.prior_check.not_tested.empty())
       out << "    prior" << (source.empty() ? "" : " " + source) << " against the views alone: "
-          << (cam.prior_check.rejected ? "REJECTED, " : cam.prior_check.tested ? "consistent, " : "")
+          << (cam.prior_check.rejected ? "REJECTED, "
+              : cam.prior_check.tested ? "consistent, "
+                                       : "")
           << DescribePriorCheck(cam.prior_check) << "\n";
     for (size_t k = 0; k < params.size(); ++k)
-      out << "    " << CameraIntrinsics::kParamNames[k] << Format(" = %.6g +- %.3g\n", params[k], cam.intrinsics_stddev[k]);
+      out << "    " << CameraIntrinsics::kParamNames[k]
+          << Format(" = %.6g +- %.3g\n", params[k], cam.intrinsics_stddev[k]);
   }
-  out << "\nviews (RMS px, tags used / detected; predicted error: rotation deg, camera centre mm):\n";
+  out << "\nviews (RMS px, tags used / detected; predicted error: rotation deg, camera centre "
+         "mm):\n";
   for (size_t f = 0; f < result.frames.size(); ++f) {
     const FrameCalibration& frame = result.frames[f];
     out << "  " << input.frames[f].name << ": ";
     if (frame.solved)
       out << Format("%.3f px, ", frame.rms_px) << frame.tags.size() << " / " << frame.tags_detected
-          << Format("; +- %.4f deg, %.3f mm", frame.uncertainty.rotation_sd_deg, frame.uncertainty.centre_sd_mm);
+          << Format("; +- %.4f deg, %.3f mm", frame.uncertainty.rotation_sd_deg,
+                    frame.uncertainty.centre_sd_mm);
     else
       out << "NOT SOLVED: " << frame.failure;
-    for (const RejectedTag& r : frame.rejected) out << "; tag " << r.id << " left out: " << r.reason;
+    for (const RejectedTag& r : frame.rejected)
+      out << "; tag " << r.id << " left out: " << r.reason;
     out << "\n";
   }
   return out.str();
@@ -189,13 +212,18 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
 }  // namespace
 
 Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
-                              const CaptureCalibration& result, const CalibrationVerdict& verdict, int threads) {
+                              const CaptureCalibration& result, const CalibrationVerdict& verdict,
+                              int threads) {
   const fs::path root(dir);
   std::error_code ec;
   fs::create_directories(root / "residuals", ec);
-  if (ec) return IoError((root / "residuals").string() + ": cannot create the folder (" + ec.message() + ")");
-  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
-  HR_RETURN_IF_ERROR(WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
+  if (ec)
+    return IoError((root / "residuals").string() + ": cannot create the folder (" + ec.message() +
+                   ")");
+  HR_RETURN_IF_ERROR(
+      WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
+  HR_RETURN_IF_ERROR(
+      WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
   // One residual image per solved view, spread over the threads (they dominate the report's time).
   std::vector<Status> written(result.frames.size());
   ParallelFor(result.frames.size(), threads, [&] {
@@ -208,8 +236,9 @@ Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationIn
         return;
       }
       const std::string name = fs::path(input.frames[f].name).stem().string() + ".jpg";
-      written[f] = DrawResiduals((root / "residuals" / name).string(), image,
-                                 result.cameras[static_cast<size_t>(input.frames[f].camera)].intrinsics, frame);
+      written[f] = DrawResiduals(
+          (root / "residuals" / name).string(), image,
+          result.cameras[static_cast<size_t>(input.frames[f].camera)].intrinsics, frame);
     };
   });
   for (const Status& s : written) HR_RETURN_IF_ERROR(s);

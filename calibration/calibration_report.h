@@ -23,18 +23,22 @@ struct CalibrationVerdict {
   enum class Level { kGood, kCheck, kFailed } level = Level::kGood;
   std::vector<std::string> reasons;  // one line each; empty when good
   std::vector<int> views_to_check;   // input frame indices: failed or outliers
-  const char* name() const { return level == Level::kGood ? "good" : level == Level::kCheck ? "check these views" : "failed"; }
+  const char* name() const {
+    return level == Level::kGood ? "good" : level == Level::kCheck ? "check these views" : "failed";
+  }
 };
 
 // Outlier: a view whose RMS exceeds max(3 x the median view RMS, 0.5 px).
 // Failed: less than half the views solved, an overall RMS above 2 px, or a
 // camera's intrinsics prior rejected by its views (PriorCheck::rejected; the
 // reason names the camera, the prior's file and the parameter that disagrees).
-CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input, const CaptureCalibration& result);
+CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input,
+                                    const CaptureCalibration& result);
 
 // Writes the files above under `dir` (created), the residual images on
 // `threads` threads. IoError names the file.
 Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
-                              const CaptureCalibration& result, const CalibrationVerdict& verdict, int threads);
+                              const CaptureCalibration& result, const CalibrationVerdict& verdict,
+                              int threads);
 
 }  // namespace hairrig

@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "calibration/intrinsics_from_views.h"
@@ -18,36 +17,41 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 }
 
 // A prior is only valid at the image size it was calibrated at.
-Status CheckPriorImageSize(const CalibrationCamera& camera, const CaptureCalibrationOptions& options) {
+Status CheckPriorImageSize(const CalibrationCamera& camera,
+                           const CaptureCalibrationOptions& options) {
   const CameraIntrinsics& prior = *camera.nominal;
   if (!options.fix_intrinsics || camera.width_px <= 0 || camera.height_px <= 0 ||
       (prior.width_px == camera.width_px && prior.height_px == camera.height_px))
     return Status::Ok();
   const std::string from = camera.prior_source.empty() ? "" : " (" + camera.prior_source + ")";
-  return InvalidArgument("calibration: camera " + camera.name + ": the intrinsics prior" + from + " is for " +
-                         std::to_string(prior.width_px) + " x " + std::to_string(prior.height_px) +
-                         " px images, the camera's frames are " + std::to_string(camera.width_px) + " x " +
-                         std::to_string(camera.height_px) + "; pass the file calibrated at the frames' size");
+  return InvalidArgument(
+      "calibration: camera " + camera.name + ": the intrinsics prior" + from + " is for " +
+      std::to_string(prior.width_px) + " x " + std::to_string(prior.height_px) +
+      " px images, the camera's frames are " + std::to_string(camera.width_px) + " x " +
+      std::to_string(camera.height_px) + "; pass the file calibrated at the frames' size");
 }
 
-Status ValidateInput(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options) {
+Status ValidateInput(const CaptureCalibrationInput& input,
+                     const CaptureCalibrationOptions& options) {
   if (input.cameras.empty()) return InvalidArgument("calibration: no camera");
   if (input.frames.empty()) return InvalidArgument("calibration: no frame to calibrate from");
   if (input.box.tags.empty()) return InvalidArgument("calibration: the box model has no tag");
   for (const CalibrationCamera& camera : input.cameras) {
     if (options.fix_intrinsics && !camera.nominal)
-      return InvalidArgument("calibration: intrinsics are to be held fixed but camera " + camera.name +
-                             " has no prior values");
+      return InvalidArgument("calibration: intrinsics are to be held fixed but camera " +
+                             camera.name + " has no prior values");
     if (camera.nominal) {
       const Status valid = camera.nominal->Validate();
-      if (!valid.ok()) return InvalidArgument("calibration: camera " + camera.name + ": " + valid.message());
+      if (!valid.ok())
+        return InvalidArgument("calibration: camera " + camera.name + ": " + valid.message());
       HR_RETURN_IF_ERROR(CheckPriorImageSize(camera, options));
     }
   }
   for (const CalibrationFrame& frame : input.frames) {
     if (frame.camera < 0 || frame.camera >= static_cast<int>(input.cameras.size()))
-      return InvalidArgument("calibration: frame " + frame.name + " names camera " + std::to_string(frame.camera) +
-                             " of " + std::to_string(input.cameras.size()));
+      return InvalidArgument("calibration: frame " + frame.name + " names camera " +
+                             std::to_string(frame.camera) + " of " +
+                             std::to_string(input.cameras.size()));
     if (!std::isfinite(frame.turntable_deg))
       return InvalidArgument("calibration: frame " + frame.name + " has no finite turntable angle");
   }
@@ -57,8 +61,10 @@ Status ValidateInput(const CaptureCalibrationInput& input, const CaptureCalibrat
 }
 
 // Step 2a: every camera's starting intrinsics.
-void InitialiseIntrinsics(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options,
-                          const std::vector<ViewObservations>& observations, CaptureCalibration* out) {
+void InitialiseIntrinsics(const CaptureCalibrationInput& input,
+                          const CaptureCalibrationOptions& options,
+                          const std::vector<ViewObservations>& observations,
+                          CaptureCalibration* out) {
   for (size_t c = 0; c < input.cameras.size(); ++c) {
     const CalibrationCamera& camera = input.cameras[c];
     CameraCalibration& result = out->cameras[c];
@@ -109,14 +115,14 @@ void InitialisePoses(const CaptureCalibrationInput& input, const CaptureCalibrat
 }
 
 struct SolveMap {
-  std::vector<int> camera_of;     // bundle-adjustment camera -> input camera
-  std::vector<int> ba_camera;     // input camera -> bundle-adjustment camera, -1 if left out
-  std::vector<size_t> frame_of;   // bundle-adjustment view -> input frame
+  std::vector<int> camera_of;    // bundle-adjustment camera -> input camera
+  std::vector<int> ba_camera;    // input camera -> bundle-adjustment camera, -1 if left out
+  std::vector<size_t> frame_of;  // bundle-adjustment view -> input frame
 };
 
 // The bundle adjustment's input from the solved frames; cameras without one are named and left out.
-BundleAdjustmentInput BuildAdjustmentInput(const CaptureCalibrationInput& input, CaptureCalibration* out,
-                                           SolveMap* map) {
+BundleAdjustmentInput BuildAdjustmentInput(const CaptureCalibrationInput& input,
+                                           CaptureCalibration* out, SolveMap* map) {
   BundleAdjustmentInput ba;
   map->ba_camera.assign(input.cameras.size(), -1);
   for (size_t c = 0; c < input.cameras.size(); ++c) {
@@ -149,11 +155,13 @@ BundleAdjustmentInput BuildAdjustmentInput(const CaptureCalibrationInput& input,
   return ba;
 }
 
-void CopySolution(const BundleAdjustmentResult& solution, const SolveMap& map, CaptureCalibration* out) {
+void CopySolution(const BundleAdjustmentResult& solution, const SolveMap& map,
+                  CaptureCalibration* out) {
   for (size_t k = 0; k < map.camera_of.size(); ++k) {
     CameraCalibration& camera = out->cameras[static_cast<size_t>(map.camera_of[k])];
     camera.intrinsics = solution.cameras[k];
-    if (k < solution.intrinsics_stddev.size()) camera.intrinsics_stddev = solution.intrinsics_stddev[k];
+    if (k < solution.intrinsics_stddev.size())
+      camera.intrinsics_stddev = solution.intrinsics_stddev[k];
     if (k < solution.cam_from_world.size()) camera.cam_from_world = solution.cam_from_world[k];
   }
   for (size_t v = 0; v < map.frame_of.size(); ++v) {
@@ -177,8 +185,10 @@ void CheckPriors(const BundleAdjustmentInput& ba, const BundleAdjustmentResult& 
                  const CaptureCalibrationOptions& options, CaptureCalibration* out) {
   BundleAdjustmentInput views_only = ba;
   views_only.prior_stddev.clear();
-  for (size_t v = 0; v < views_only.views.size(); ++v) views_only.views[v].cam_from_box_init = solution.cam_from_box[v];
-  if (ba_options.mode == CalibrationMode::kTurntable) views_only.turntable_from_box_init = solution.turntable_from_box;
+  for (size_t v = 0; v < views_only.views.size(); ++v)
+    views_only.views[v].cam_from_box_init = solution.cam_from_box[v];
+  if (ba_options.mode == CalibrationMode::kTurntable)
+    views_only.turntable_from_box_init = solution.turntable_from_box;
   BundleAdjustmentOptions free_options = ba_options;
   free_options.fix_intrinsics = false;
   const auto solved = RunBundleAdjustment(views_only, free_options);
@@ -196,9 +206,9 @@ void CheckPriors(const BundleAdjustmentInput& ba, const BundleAdjustmentResult& 
 
 }  // namespace
 
-std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames, const CalibBox& box,
-                                           const TagDetectorOptions& detector, int threads,
-                                           std::vector<std::string>* failures) {
+std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames,
+                                           const CalibBox& box, const TagDetectorOptions& detector,
+                                           int threads, std::vector<std::string>* failures) {
   std::vector<ViewObservations> observations(frames.size());
   failures->assign(frames.size(), "");
   ParallelFor(frames.size(), threads, [&] {
@@ -241,11 +251,12 @@ Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input
   out.frames.resize(input.frames.size());
   auto start = std::chrono::steady_clock::now();
   std::vector<std::string> unreadable;
-  const std::vector<ViewObservations> observations =
-      DetectFrames(input.frames, input.box, options.detector, std::max(1, options.threads), &unreadable);
+  const std::vector<ViewObservations> observations = DetectFrames(
+      input.frames, input.box, options.detector, std::max(1, options.threads), &unreadable);
   for (size_t f = 0; f < input.frames.size(); ++f) {
     out.frames[f].failure = unreadable[f];
-    out.frames[f].tags_detected = static_cast<int>(observations[f].tags.size() + observations[f].rejected.size());
+    out.frames[f].tags_detected =
+        static_cast<int>(observations[f].tags.size() + observations[f].rejected.size());
   }
   out.detect_s = SecondsSince(start);
 

@@ -37,10 +37,10 @@ struct CalibrationCamera {
 };
 
 struct CalibrationFrame {
-  std::string path;      // image file to read
-  std::string name;      // as the capture names it (frames/000_SERIAL.png)
+  std::string path;  // image file to read
+  std::string name;  // as the capture names it (frames/000_SERIAL.png)
   int view = 0;
-  int camera = 0;        // index into CaptureCalibrationInput::cameras
+  int camera = 0;  // index into CaptureCalibrationInput::cameras
   int stop = 0;
   double turntable_deg = 0;  // measured by the encoder
   // Tags already detected and matched (during the capture, through the frame
@@ -69,8 +69,9 @@ struct CaptureCalibrationInput {
 struct CaptureCalibrationOptions {
   CalibrationMode mode = CalibrationMode::kTurntable;
   bool fix_intrinsics = false;  // hold every camera at its `nominal` (a prior calibration)
-  bool hard_prior = false;      // ... exactly, ignoring nominal_stddev (BundleAdjustmentOptions::hard_prior)
-  int threads = 2;              // detection and Ceres
+  bool hard_prior =
+      false;        // ... exactly, ignoring nominal_stddev (BundleAdjustmentOptions::hard_prior)
+  int threads = 2;  // detection and Ceres
   TagDetectorOptions detector;
   ViewPoseOptions pose;
   double huber_px = 1.0;
@@ -82,15 +83,15 @@ struct CaptureCalibrationOptions {
 
 struct FrameCalibration {
   bool solved = false;
-  std::string failure;            // why not, when !solved
+  std::string failure;  // why not, when !solved
   int tags_detected = 0;
-  std::vector<TagObservation> tags;   // matched to the box (the bundle adjustment's input)
+  std::vector<TagObservation> tags;  // matched to the box (the bundle adjustment's input)
   std::vector<RejectedTag> rejected;
-  Rigid3d cam_from_box_init;      // the per-view IPPE + LM pose (the planar start)
-  Rigid3d cam_from_box;           // solved
+  Rigid3d cam_from_box_init;  // the per-view IPPE + LM pose (the planar start)
+  Rigid3d cam_from_box;       // solved
   double init_rms_px = 0;
-  double rms_px = 0;              // corner reprojection RMS after the bundle adjustment
-  ViewUncertainty uncertainty;    // predicted by the covariance of the estimate
+  double rms_px = 0;            // corner reprojection RMS after the bundle adjustment
+  ViewUncertainty uncertainty;  // predicted by the covariance of the estimate
 };
 
 struct CameraCalibration {
@@ -100,8 +101,8 @@ struct CameraCalibration {
   CameraIntrinsics initial;       // before the bundle adjustment (Zhang's method when "views")
   CameraIntrinsics intrinsics;    // solved
   std::array<double, CameraIntrinsics::kNumParams> intrinsics_stddev{};
-  Rigid3d cam_from_world;         // turntable mode
-  PriorCheck prior_check;         // with fix_intrinsics and check_priors
+  Rigid3d cam_from_world;  // turntable mode
+  PriorCheck prior_check;  // with fix_intrinsics and check_priors
 };
 
 struct CaptureCalibration {
@@ -120,9 +121,9 @@ struct CaptureCalibration {
 // with `observations` keeps them. A frame that cannot be read gives an empty
 // observation with the reason in `failures` (same order as frames; empty
 // string for success).
-std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames, const CalibBox& box,
-                                           const TagDetectorOptions& detector, int threads,
-                                           std::vector<std::string>* failures);
+std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames,
+                                           const CalibBox& box, const TagDetectorOptions& detector,
+                                           int threads, std::vector<std::string>* failures);
 
 // FailedPrecondition when nothing can be solved (no camera with usable views,
 // no turntable axis in turntable mode: the message says what to try);

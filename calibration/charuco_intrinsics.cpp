@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -16,9 +15,10 @@ namespace hairrig {
 namespace {
 
 cv::Ptr<cv::aruco::CharucoBoard> OpenCvBoard(const ChArUcoBoard& board) {
-  return cv::aruco::CharucoBoard::create(board.squares_x, board.squares_y, static_cast<float>(board.square_mm),
-                                         static_cast<float>(board.marker_mm),
-                                         cv::aruco::getPredefinedDictionary(board.opencv_dictionary));
+  return cv::aruco::CharucoBoard::create(
+      board.squares_x, board.squares_y, static_cast<float>(board.square_mm),
+      static_cast<float>(board.marker_mm),
+      cv::aruco::getPredefinedDictionary(board.opencv_dictionary));
 }
 
 struct Solve {
@@ -28,8 +28,8 @@ struct Solve {
 };
 
 // calibrateCamera over the images in `use` (indices into corners).
-Solve SolveOnce(const std::vector<ChArUcoCorners>& corners, const std::vector<size_t>& use, const ChArUcoBoard& board,
-                cv::Size size, bool fix_k3) {
+Solve SolveOnce(const std::vector<ChArUcoCorners>& corners, const std::vector<size_t>& use,
+                const ChArUcoBoard& board, cv::Size size, bool fix_k3) {
   std::vector<std::vector<cv::Point3f>> object;
   std::vector<std::vector<cv::Point2f>> image;
   for (size_t i : use) {
@@ -37,8 +37,10 @@ Solve SolveOnce(const std::vector<ChArUcoCorners>& corners, const std::vector<si
     std::vector<cv::Point2f> p;
     for (size_t k = 0; k < corners[i].ids.size(); ++k) {
       const Eigen::Vector3d& b = board.corners_board_mm[static_cast<size_t>(corners[i].ids[k])];
-      o.emplace_back(static_cast<float>(b.x()), static_cast<float>(b.y()), static_cast<float>(b.z()));
-      p.emplace_back(static_cast<float>(corners[i].corners_px[k].x()), static_cast<float>(corners[i].corners_px[k].y()));
+      o.emplace_back(static_cast<float>(b.x()), static_cast<float>(b.y()),
+                     static_cast<float>(b.z()));
+      p.emplace_back(static_cast<float>(corners[i].corners_px[k].x()),
+                     static_cast<float>(corners[i].corners_px[k].y()));
     }
     object.push_back(std::move(o));
     image.push_back(std::move(p));
@@ -46,9 +48,10 @@ Solve SolveOnce(const std::vector<ChArUcoCorners>& corners, const std::vector<si
   Solve s;
   std::vector<cv::Mat> rvecs, tvecs;
   cv::Mat stddev_extrinsics, per_view;
-  s.rms = cv::calibrateCamera(object, image, size, s.camera_matrix, s.distortion, rvecs, tvecs, s.stddev,
-                              stddev_extrinsics, per_view, fix_k3 ? cv::CALIB_FIX_K3 : 0,
-                              cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+  s.rms = cv::calibrateCamera(
+      object, image, size, s.camera_matrix, s.distortion, rvecs, tvecs, s.stddev, stddev_extrinsics,
+      per_view, fix_k3 ? cv::CALIB_FIX_K3 : 0,
+      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
   for (int i = 0; i < per_view.rows; ++i) s.image_rms.push_back(per_view.at<double>(i));
   return s;
 }
@@ -99,9 +102,9 @@ ChArUcoCorners DetectChArUcoCorners(const cv::Mat& image, const ChArUcoBoard& bo
   return out;
 }
 
-Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std::string>& image_paths,
-                                                          const ChArUcoBoard& board,
-                                                          const ChArUcoCalibrationOptions& options) {
+Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(
+    const std::vector<std::string>& image_paths, const ChArUcoBoard& board,
+    const ChArUcoCalibrationOptions& options) {
   if (image_paths.empty()) return InvalidArgument("calibrate-intrinsics: no images given");
   ChArUcoCalibration out;
   out.images.resize(image_paths.size());
@@ -121,9 +124,9 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std:
       out.images[i].markers = corners[i].markers;
       out.images[i].corners = static_cast<int>(corners[i].ids.size());
       if (out.images[i].corners < options.min_corners)
-        out.images[i].failure = std::to_string(out.images[i].corners) + " chessboard corners found (" +
-                                std::to_string(corners[i].markers) + " markers), " +
-                                std::to_string(options.min_corners) + " needed";
+        out.images[i].failure = std::to_string(out.images[i].corners) +
+                                " chessboard corners found (" + std::to_string(corners[i].markers) +
+                                " markers), " + std::to_string(options.min_corners) + " needed";
     };
   });
   std::vector<size_t> use;
@@ -132,18 +135,21 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std:
     if (!out.images[i].failure.empty()) continue;
     if (size.empty()) size = sizes[i];
     if (sizes[i] != size)
-      return FailedPrecondition("calibrate-intrinsics: " + image_paths[i] + " is " + std::to_string(sizes[i].width) +
-                                " x " + std::to_string(sizes[i].height) + " px, the images before it " +
+      return FailedPrecondition("calibrate-intrinsics: " + image_paths[i] + " is " +
+                                std::to_string(sizes[i].width) + " x " +
+                                std::to_string(sizes[i].height) + " px, the images before it " +
                                 std::to_string(size.width) + " x " + std::to_string(size.height) +
                                 "; record every image at the camera's capture resolution");
     use.push_back(i);
   }
   const auto too_few = [&] {
-    return FailedPrecondition("calibrate-intrinsics: " + std::to_string(use.size()) + " of " +
-                              std::to_string(image_paths.size()) + " images show the board (" +
-                              std::to_string(options.min_images) +
-                              " needed); record more images with the whole board in view, tilted, in every part of "
-                              "the image" + FailureSummary(out.images));
+    return FailedPrecondition(
+        "calibrate-intrinsics: " + std::to_string(use.size()) + " of " +
+        std::to_string(image_paths.size()) + " images show the board (" +
+        std::to_string(options.min_images) +
+        " needed); record more images with the whole board in view, tilted, in every part of "
+        "the image" +
+        FailureSummary(out.images));
   };
   if (static_cast<int>(use.size()) < options.min_images) return too_few();
   Solve solve = SolveOnce(corners, use, board, size, options.fix_k3);
@@ -154,8 +160,9 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std:
     if (solve.image_rms[k] <= limit) {
       kept.push_back(use[k]);
     } else {
-      out.images[use[k]].failure = "reprojection RMS " + std::to_string(solve.image_rms[k]) + " px is above " +
-                                   std::to_string(limit) + " px (a moving or bent board?)";
+      out.images[use[k]].failure = "reprojection RMS " + std::to_string(solve.image_rms[k]) +
+                                   " px is above " + std::to_string(limit) +
+                                   " px (a moving or bent board?)";
     }
   }
   if (kept.size() != use.size()) {
@@ -163,8 +170,10 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std:
     if (static_cast<int>(use.size()) < options.min_images) return too_few();
     solve = SolveOnce(corners, use, board, size, options.fix_k3);
   }
-  out.intrinsics = IntrinsicsFromOpenCv(solve.camera_matrix, solve.distortion, size.width, size.height);
-  HR_RETURN_IF_ERROR(out.intrinsics.Validate().WithContext("calibrate-intrinsics: the solution is not usable"));
+  out.intrinsics =
+      IntrinsicsFromOpenCv(solve.camera_matrix, solve.distortion, size.width, size.height);
+  HR_RETURN_IF_ERROR(
+      out.intrinsics.Validate().WithContext("calibrate-intrinsics: the solution is not usable"));
   for (int p = 0; p < CameraIntrinsics::kNumParams && p < solve.stddev.rows; ++p)
     out.stddev[static_cast<size_t>(p)] = solve.stddev.at<double>(p);
   if (options.fix_k3) out.stddev[8] = 0;

@@ -12,12 +12,11 @@
 // in mm (core/charuco_board.h).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
+#include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core/mat.hpp>
 
 #include "core/camera_model.h"
 #include "core/charuco_board.h"
@@ -36,10 +35,10 @@ struct ChArUcoCorners {
 ChArUcoCorners DetectChArUcoCorners(const cv::Mat& image, const ChArUcoBoard& board);
 
 struct ChArUcoCalibrationOptions {
-  bool fix_k3 = true;     // k3 is rarely observable on low-distortion lenses
-  int min_corners = 12;   // per image
+  bool fix_k3 = true;    // k3 is rarely observable on low-distortion lenses
+  int min_corners = 12;  // per image
   int min_images = 6;
-  int threads = 2;        // detection
+  int threads = 2;  // detection
 };
 
 struct ChArUcoImage {
@@ -47,13 +46,14 @@ struct ChArUcoImage {
   bool used = false;
   std::string failure;  // why not, when !used
   int markers = 0, corners = 0;
-  double rms_px = 0;    // reprojection RMS of its corners after the solve
+  double rms_px = 0;  // reprojection RMS of its corners after the solve
   ChArUcoCorners detected;
 };
 
 struct ChArUcoCalibration {
   CameraIntrinsics intrinsics;
-  std::array<double, CameraIntrinsics::kNumParams> stddev{};  // kParamNames order; 0 for held parameters
+  std::array<double, CameraIntrinsics::kNumParams>
+      stddev{};  // kParamNames order; 0 for held parameters
   double rms_px = 0;
   int images_used = 0;
   std::vector<ChArUcoImage> images;  // input order
@@ -63,8 +63,8 @@ struct ChArUcoCalibration {
 // `min_images` images show the board well enough (the message says how many
 // did and why the others failed, and what to record instead) or when the
 // images disagree on their size; the rest of the failures are per image.
-Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(const std::vector<std::string>& image_paths,
-                                                          const ChArUcoBoard& board,
-                                                          const ChArUcoCalibrationOptions& options = {});
+Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(
+    const std::vector<std::string>& image_paths, const ChArUcoBoard& board,
+    const ChArUcoCalibrationOptions& options = {});
 
 }  // namespace hairrig

@@ -16,7 +16,8 @@ using CornerVec3 = Eigen::Matrix<T, 3, 1>;
 
 // Projection of a camera-frame point minus the observed pixel (px).
 template <typename T>
-bool ProjectResidual(const T* intrinsics, const CornerVec3<T>& p_cam, const Eigen::Vector2d& observed, T* residual) {
+bool ProjectResidual(const T* intrinsics, const CornerVec3<T>& p_cam,
+                     const Eigen::Vector2d& observed, T* residual) {
   T uv[2];
   ProjectCamPoint(intrinsics, p_cam.data(), uv);
   residual[0] = uv[0] - T(observed.x());
@@ -30,9 +31,11 @@ struct PosedCorner {
   Eigen::Vector2d observed;
   Eigen::Vector3d p_model;
   template <typename T>
-  bool operator()(const T* intrinsics, const T* q_cam_from_model, const T* t_cam_from_model, T* residual) const {
+  bool operator()(const T* intrinsics, const T* q_cam_from_model, const T* t_cam_from_model,
+                  T* residual) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q(q_cam_from_model);
-    const CornerVec3<T> p_cam = q * p_model.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_cam_from_model);
+    const CornerVec3<T> p_cam =
+        q * p_model.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_cam_from_model);
     return ProjectResidual(intrinsics, p_cam, observed, residual);
   }
 };

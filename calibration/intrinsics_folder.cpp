@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-
 #include <nlohmann/json.hpp>
 
 #include "calibration/calibration_io.h"

@@ -4,9 +4,8 @@
 // WriteIntrinsicsFile), and optionally the corners as mrcal's corners cache.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "calibration/charuco_intrinsics.h"
 #include "core/status.h"

@@ -14,9 +14,8 @@
 // intrinsics_from_views_test.cpp compares the result with calibrateCamera's.
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core/mat.hpp>
+#include <vector>
 
 #include "calibration/view_pose.h"
 #include "core/calib_box.h"
@@ -27,20 +26,20 @@ namespace hairrig {
 
 // OpenCV's 3 x 3 camera matrix and distortion vector (k1 k2 p1 p2 [k3], CV_64F)
 // as intrinsics; a missing k3 is 0.
-CameraIntrinsics IntrinsicsFromOpenCv(const cv::Mat& camera_matrix, const cv::Mat& distortion, int width_px,
-                                      int height_px);
+CameraIntrinsics IntrinsicsFromOpenCv(const cv::Mat& camera_matrix, const cv::Mat& distortion,
+                                      int width_px, int height_px);
 
 struct IntrinsicsFromViews {
   CameraIntrinsics intrinsics;
-  int planes = 0;       // (view, face) pairs used
-  double rms_px = 0;    // corner reprojection RMS over the planes (px)
+  int planes = 0;     // (view, face) pairs used
+  double rms_px = 0;  // corner reprojection RMS over the planes (px)
 };
 
 // `views` are one camera's matched observations. FailedPrecondition when fewer
 // than `min_planes` (view, face) pairs have 2 or more tags (the message says
 // how many were found and what to do); InvalidArgument for a bad image size.
-Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(const std::vector<const ViewObservations*>& views,
-                                                     const CalibBox& box, int width_px, int height_px,
-                                                     int min_planes = 4);
+Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(
+    const std::vector<const ViewObservations*>& views, const CalibBox& box, int width_px,
+    int height_px, int min_planes = 4);
 
 }  // namespace hairrig

@@ -1,11 +1,10 @@
 #include "calibration/planar_pose.h"
 
-#include <algorithm>
-#include <cmath>
-
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
 
 namespace hairrig {
 
@@ -26,7 +25,8 @@ struct PlaneFrame {
 bool MakePlaneFrame(const std::array<Eigen::Vector3d, 4>& corners, PlaneFrame* frame) {
   frame->origin = (corners[0] + corners[1] + corners[2] + corners[3]) / 4;
   frame->scale = 0;
-  for (const Eigen::Vector3d& c : corners) frame->scale = std::max(frame->scale, (c - frame->origin).norm());
+  for (const Eigen::Vector3d& c : corners)
+    frame->scale = std::max(frame->scale, (c - frame->origin).norm());
   if (!(frame->scale > 0)) return false;
   const Eigen::Vector3d normal = (corners[2] - corners[0]).cross(corners[3] - corners[1]);
   if (!(normal.norm() > 1e-9 * frame->scale * frame->scale)) return false;
@@ -50,8 +50,8 @@ bool MakePlaneFrame(const std::array<Eigen::Vector3d, 4>& corners, PlaneFrame* f
 
 // The homography (h33 = 1) taking plane points to normalised image points;
 // false when the 4 correspondences are degenerate.
-bool SolveHomography(const std::array<Eigen::Vector2d, 4>& plane, const std::array<Eigen::Vector2d, 4>& image,
-                     Eigen::Matrix3d* h) {
+bool SolveHomography(const std::array<Eigen::Vector2d, 4>& plane,
+                     const std::array<Eigen::Vector2d, 4>& image, Eigen::Matrix3d* h) {
   Eigen::Matrix<double, 8, 8> a;
   Eigen::Matrix<double, 8, 1> b;
   for (int i = 0; i < 4; ++i) {
@@ -77,17 +77,21 @@ bool SolveHomography(const std::array<Eigen::Vector2d, 4>& plane, const std::arr
 // fixes Q's upper-left block up to s = its largest singular value; the
 // block's two completions to a rotation, which differ in the sign of the
 // third row, are the two poses. Returns 0 or 2 rotations (plane to camera).
-std::vector<Eigen::Matrix3d> RotationsFromJacobian(const Eigen::Vector2d& v, const Eigen::Matrix2d& jacobian) {
+std::vector<Eigen::Matrix3d> RotationsFromJacobian(const Eigen::Vector2d& v,
+                                                   const Eigen::Matrix2d& jacobian) {
   const Eigen::Matrix3d rv =
-      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d(v.x(), v.y(), 1), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d(v.x(), v.y(), 1), Eigen::Vector3d::UnitZ())
+          .toRotationMatrix();
   Eigen::Matrix<double, 2, 3> project;
   project << 1, 0, -v.x(), 0, 1, -v.y();
   const Eigen::Matrix2d b = (project * rv.transpose()).leftCols<2>();
   if (!(std::abs(b.determinant()) > 1e-12)) return {};
   const Eigen::Matrix2d a = b.inverse() * jacobian;
-  const Eigen::Matrix2d ata = a.transpose() * a;  // largest eigenvalue without cancellation near equal ones
+  const Eigen::Matrix2d ata =
+      a.transpose() * a;  // largest eigenvalue without cancellation near equal ones
   const double half_gap = 0.5 * (ata(0, 0) - ata(1, 1));
-  const double largest = std::sqrt(0.5 * (ata(0, 0) + ata(1, 1)) + std::sqrt(half_gap * half_gap + ata(0, 1) * ata(0, 1)));
+  const double largest = std::sqrt(0.5 * (ata(0, 0) + ata(1, 1)) +
+                                   std::sqrt(half_gap * half_gap + ata(0, 1) * ata(0, 1)));
   if (!(largest > 0)) return {};
   const Eigen::Matrix2d block = a / largest;
   const Eigen::Vector2d b1 = block.col(0), b2 = block.col(1);
@@ -107,7 +111,8 @@ std::vector<Eigen::Matrix3d> RotationsFromJacobian(const Eigen::Vector2d& v, con
 
 // The translation minimising the algebraic reprojection error of `plane`
 // points (plane frame, z = 0) under `rotation`: [I | -u] (R p + T) = 0.
-Eigen::Vector3d TranslationFor(const Eigen::Matrix3d& rotation, const std::array<Eigen::Vector3d, 4>& plane,
+Eigen::Vector3d TranslationFor(const Eigen::Matrix3d& rotation,
+                               const std::array<Eigen::Vector3d, 4>& plane,
                                const std::array<Eigen::Vector2d, 4>& image) {
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
@@ -121,8 +126,8 @@ Eigen::Vector3d TranslationFor(const Eigen::Matrix3d& rotation, const std::array
   return normal.ldlt().solve(rhs);
 }
 
-double SquaredReprojectionError(const Rigid3d& pose, const Eigen::Vector3d* points, const Eigen::Vector2d* image,
-                                size_t count) {
+double SquaredReprojectionError(const Rigid3d& pose, const Eigen::Vector3d* points,
+                                const Eigen::Vector2d* image, size_t count) {
   double sum = 0;
   for (size_t i = 0; i < count; ++i) {
     const Eigen::Vector3d y = pose * points[i];
@@ -139,7 +144,8 @@ std::vector<Rigid3d> PlanarSquarePoses(const std::array<Eigen::Vector3d, 4>& cor
   PlaneFrame frame;
   if (!MakePlaneFrame(corners_model, &frame)) return {};
   std::array<Eigen::Vector3d, 4> plane;
-  std::array<Eigen::Vector2d, 4> scaled;  // plane coordinates / scale, for the homography's conditioning
+  std::array<Eigen::Vector2d, 4>
+      scaled;  // plane coordinates / scale, for the homography's conditioning
   for (size_t i = 0; i < 4; ++i) {
     plane[i] = frame.axes.transpose() * (corners_model[i] - frame.origin);
     plane[i].z() = 0;
@@ -154,16 +160,19 @@ std::vector<Rigid3d> PlanarSquarePoses(const std::array<Eigen::Vector3d, 4>& cor
       h(1, 1) - h(2, 1) * h(1, 2);
   jacobian /= frame.scale;
 
-  const Rigid3d plane_from_model(Eigen::Matrix3d(frame.axes.transpose()), -(frame.axes.transpose() * frame.origin));
+  const Rigid3d plane_from_model(Eigen::Matrix3d(frame.axes.transpose()),
+                                 -(frame.axes.transpose() * frame.origin));
   std::vector<std::pair<double, Rigid3d>> scored;
   for (const Eigen::Matrix3d& rotation : RotationsFromJacobian(v, jacobian)) {
     const Eigen::Vector3d translation = TranslationFor(rotation, plane, normalised);
     if (!(translation.z() > 0) || !translation.allFinite()) continue;
     const Rigid3d cam_from_model = Rigid3d(rotation, translation) * plane_from_model;
-    scored.emplace_back(SquaredReprojectionError(cam_from_model, corners_model.data(), normalised.data(), 4),
-                        cam_from_model);
+    scored.emplace_back(
+        SquaredReprojectionError(cam_from_model, corners_model.data(), normalised.data(), 4),
+        cam_from_model);
   }
-  std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Rigid3d> poses;
   for (const auto& [error, pose] : scored) poses.push_back(pose);
   return poses;
@@ -176,7 +185,8 @@ PoseRefinement RefinePose(const std::vector<Eigen::Vector3d>& points_model,
   double cost = SquaredReprojectionError(start, points_model.data(), normalised.data(), count);
   double damping = 1e-6;
   bool converged = false;
-  for (int iteration = 0; iteration < 100 && !converged && std::isfinite(cost) && cost > 0; ++iteration) {
+  for (int iteration = 0; iteration < 100 && !converged && std::isfinite(cost) && cost > 0;
+       ++iteration) {
     out.iterations = iteration + 1;
     Matrix6d normal = Matrix6d::Zero();
     Vector6d gradient = Vector6d::Zero();
@@ -190,7 +200,8 @@ PoseRefinement RefinePose(const std::vector<Eigen::Vector3d>& points_model,
       d_projection /= y.z();
       Matrix26d jacobian;  // left rotation increment w: dY/dw = -[R p]x; dY/dT = I
       Eigen::Matrix3d minus_cross;
-      minus_cross << 0, rotated.z(), -rotated.y(), -rotated.z(), 0, rotated.x(), rotated.y(), -rotated.x(), 0;
+      minus_cross << 0, rotated.z(), -rotated.y(), -rotated.z(), 0, rotated.x(), rotated.y(),
+          -rotated.x(), 0;
       jacobian << d_projection * minus_cross, d_projection;
       normal += jacobian.transpose() * jacobian;
       gradient += jacobian.transpose() * (projected - normalised[i]);
@@ -205,10 +216,12 @@ PoseRefinement RefinePose(const std::vector<Eigen::Vector3d>& points_model,
       const Rigid3d turn = Rigid3d::FromAngleAxis(w, Eigen::Vector3d::Zero());
       const Rigid3d candidate(turn.rotation * out.cam_from_model.rotation,
                               out.cam_from_model.translation + step.tail<3>());
-      const double candidate_cost = SquaredReprojectionError(candidate, points_model.data(), normalised.data(), count);
+      const double candidate_cost =
+          SquaredReprojectionError(candidate, points_model.data(), normalised.data(), count);
       if (candidate_cost < cost) {
         accepted = true;
-        const double change = angle + step.tail<3>().norm() / std::max(1.0, out.cam_from_model.translation.norm());
+        const double change =
+            angle + step.tail<3>().norm() / std::max(1.0, out.cam_from_model.translation.norm());
         out.cam_from_model = candidate;
         cost = candidate_cost;
         damping = std::max(damping / 10, 1e-12);

@@ -7,10 +7,9 @@
 // folder).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/transform.h"
 

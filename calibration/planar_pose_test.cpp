@@ -2,24 +2,26 @@
 // against OpenCV's SOLVEPNP_IPPE and solvePnPRefineLM on the same corners.
 #include "calibration/planar_pose.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <opencv2/calib3d.hpp>
 #include <random>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <opencv2/calib3d.hpp>
 
 namespace hairrig {
 namespace {
 
 // A 30 mm square on a tilted plane of the model, 20 mm off its origin.
 std::array<Eigen::Vector3d, 4> TiltedSquare() {
-  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d tilt =
+      Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
   const Eigen::Vector3d offset(20, -10, 5);
   std::array<Eigen::Vector3d, 4> square;
   const double half = 15;
   const double signs[4][2] = {{-1, 1}, {1, 1}, {1, -1}, {-1, -1}};
-  for (size_t i = 0; i < 4; ++i) square[i] = tilt * Eigen::Vector3d(signs[i][0] * half, signs[i][1] * half, 0) + offset;
+  for (size_t i = 0; i < 4; ++i)
+    square[i] = tilt * Eigen::Vector3d(signs[i][0] * half, signs[i][1] * half, 0) + offset;
   return square;
 }
 
@@ -33,7 +35,8 @@ Rigid3d RandomView(std::mt19937& rng, double distance_mm) {
   return Rigid3d(r, Eigen::Vector3d(shift(rng), shift(rng), distance_mm));
 }
 
-std::array<Eigen::Vector2d, 4> Project(const Rigid3d& pose, const std::array<Eigen::Vector3d, 4>& points,
+std::array<Eigen::Vector2d, 4> Project(const Rigid3d& pose,
+                                       const std::array<Eigen::Vector3d, 4>& points,
                                        std::mt19937* rng = nullptr, double noise = 0) {
   std::normal_distribution<double> n(0, noise);
   std::array<Eigen::Vector2d, 4> out;
@@ -45,30 +48,34 @@ std::array<Eigen::Vector2d, 4> Project(const Rigid3d& pose, const std::array<Eig
   return out;
 }
 
-double AngleBetween(const Rigid3d& a, const Rigid3d& b) { return a.rotation.angularDistance(b.rotation); }
+double AngleBetween(const Rigid3d& a, const Rigid3d& b) {
+  return a.rotation.angularDistance(b.rotation);
+}
 
 Rigid3d FromOpenCv(const cv::Mat& rvec, const cv::Mat& tvec) {
-  return Rigid3d::FromAngleAxis(Eigen::Vector3d(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2)),
-                                Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+  return Rigid3d::FromAngleAxis(
+      Eigen::Vector3d(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2)),
+      Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
 }
 
 // Both of OpenCV's IPPE poses and ours agree for `truth` seen with `noise`.
-void ExpectOpenCvsIppe(const std::array<Eigen::Vector3d, 4>& square, const Rigid3d& truth, std::mt19937& rng,
-                       double noise, const std::string& label) {
+void ExpectOpenCvsIppe(const std::array<Eigen::Vector3d, 4>& square, const Rigid3d& truth,
+                       std::mt19937& rng, double noise, const std::string& label) {
   std::vector<cv::Point3d> object;
   for (const auto& p : square) object.emplace_back(p.x(), p.y(), p.z());
   const auto image = Project(truth, square, &rng, noise);
   std::vector<cv::Point2d> cv_image;
   for (const auto& u : image) cv_image.emplace_back(u.x(), u.y());
   std::vector<cv::Mat> rvecs, tvecs;
-  cv::solvePnPGeneric(object, cv_image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvecs, tvecs, false,
-                      cv::SOLVEPNP_IPPE);
+  cv::solvePnPGeneric(object, cv_image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvecs, tvecs,
+                      false, cv::SOLVEPNP_IPPE);
   const std::vector<Rigid3d> ours = PlanarSquarePoses(square, image);
   ASSERT_EQ(ours.size(), rvecs.size()) << label;
   for (size_t h = 0; h < ours.size(); ++h) {
     const Rigid3d theirs = FromOpenCv(rvecs[h], tvecs[h]);
     EXPECT_LT(AngleBetween(ours[h], theirs), 1e-7) << label << " hypothesis " << h;
-    EXPECT_LT((ours[h].translation - theirs.translation).norm(), 1e-4) << label << " hypothesis " << h;
+    EXPECT_LT((ours[h].translation - theirs.translation).norm(), 1e-4)
+        << label << " hypothesis " << h;
   }
 }
 
@@ -117,8 +124,9 @@ TEST(PlanarSquarePoses, GivesOpenCvsIppeSolutionsForATagSeenSquareOn) {
         centre + 500 * (Eigen::AngleAxisd(tilt_deg * M_PI / 180, side) * normal);
     const Rigid3d truth = LookAt(eye, centre, side);
     for (double noise : {0.0, 1e-4}) {
-      ExpectOpenCvsIppe(square, truth, rng, noise,
-                        "tilt " + std::to_string(tilt_deg) + " deg, noise " + std::to_string(noise));
+      ExpectOpenCvsIppe(
+          square, truth, rng, noise,
+          "tilt " + std::to_string(tilt_deg) + " deg, noise " + std::to_string(noise));
     }
     const std::vector<Rigid3d> exact = PlanarSquarePoses(square, Project(truth, square));
     ASSERT_FALSE(exact.empty());
@@ -128,7 +136,8 @@ TEST(PlanarSquarePoses, GivesOpenCvsIppeSolutionsForATagSeenSquareOn) {
 
 TEST(PlanarSquarePoses, RefusesCornersOffOnePlaneAndDegenerateOnes) {
   const auto square = TiltedSquare();
-  const auto image = Project(Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 500)), square);
+  const auto image =
+      Project(Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 500)), square);
   auto bent = square;
   bent[2].z() += 1.0;
   EXPECT_TRUE(PlanarSquarePoses(bent, image).empty());
@@ -161,21 +170,23 @@ TEST(RefinePose, ConvergesToOpenCvsMinimum) {
       cv_points.emplace_back(points.back().x(), points.back().y(), points.back().z());
       cv_image.emplace_back(image.back().x(), image.back().y());
     }
-    const Rigid3d start(Eigen::Quaterniond(Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.3, -1, 0.2).normalized())) *
-                            truth.rotation,
-                        truth.translation + Eigen::Vector3d(5, -4, 20));
+    const Rigid3d start(
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.3, -1, 0.2).normalized())) *
+            truth.rotation,
+        truth.translation + Eigen::Vector3d(5, -4, 20));
     const PoseRefinement ours = RefinePose(points, image, start);
     const Eigen::Vector3d aa = start.AngleAxis();
     cv::Mat rvec = (cv::Mat_<double>(3, 1) << aa.x(), aa.y(), aa.z());
-    cv::Mat tvec = (cv::Mat_<double>(3, 1) << start.translation.x(), start.translation.y(), start.translation.z());
-    cv::solvePnPRefineLM(cv_points, cv_image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec,
-                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-15));
+    cv::Mat tvec = (cv::Mat_<double>(3, 1) << start.translation.x(), start.translation.y(),
+                    start.translation.z());
+    cv::solvePnPRefineLM(
+        cv_points, cv_image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec,
+        cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-15));
     const Rigid3d theirs = FromOpenCv(rvec, tvec);
     EXPECT_LT(AngleBetween(ours.cam_from_model, theirs), 1e-9) << trial;
     EXPECT_LT((ours.cam_from_model.translation - theirs.translation).norm(), 1e-6) << trial;
     EXPECT_LT(ours.rms, 3e-3) << trial;  // the noise's RMS per point is 1.4e-3
     EXPECT_GT(ours.iterations, 1) << trial;
-
   }
 }
 

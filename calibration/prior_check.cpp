@@ -1,10 +1,9 @@
 #include "calibration/prior_check.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 namespace hairrig {
 
@@ -48,10 +47,11 @@ double ChiSquareSigma(double chi2, int dof) {
   return (std::cbrt(std::max(0.0, chi2) / k) - (1.0 - 2.0 / (9.0 * k))) / spread;
 }
 
-PriorCheck CheckIntrinsicsPrior(const CameraIntrinsics& prior,
-                                const std::array<double, CameraIntrinsics::kNumParams>& prior_stddev,
-                                const CameraIntrinsics& from_views, const IntrinsicsCovariance& from_views_covariance,
-                                const PriorCheckOptions& options) {
+PriorCheck CheckIntrinsicsPrior(
+    const CameraIntrinsics& prior,
+    const std::array<double, CameraIntrinsics::kNumParams>& prior_stddev,
+    const CameraIntrinsics& from_views, const IntrinsicsCovariance& from_views_covariance,
+    const PriorCheckOptions& options) {
   PriorCheck out;
   out.prior = prior;
   out.from_views = from_views;
@@ -62,7 +62,8 @@ PriorCheck CheckIntrinsicsPrior(const CameraIntrinsics& prior,
   const auto p = prior.ToParams(), v = from_views.ToParams();
   std::vector<int> compared;  // the parameters the views estimate
   for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
-    out.from_views_stddev[static_cast<size_t>(i)] = std::sqrt(std::max(0.0, from_views_covariance(i, i)));
+    out.from_views_stddev[static_cast<size_t>(i)] =
+        std::sqrt(std::max(0.0, from_views_covariance(i, i)));
     if (from_views_covariance(i, i) > 0) compared.push_back(i);
   }
   if (compared.empty()) {
@@ -72,7 +73,8 @@ PriorCheck CheckIntrinsicsPrior(const CameraIntrinsics& prior,
   // Normalised by each parameter's summed standard deviation, so that the
   // pixels and the distortion coefficients meet on one scale.
   const auto prior_variance = [&](int i, int j) {
-    return i == j ? prior_stddev[static_cast<size_t>(i)] * prior_stddev[static_cast<size_t>(i)] : 0.0;
+    return i == j ? prior_stddev[static_cast<size_t>(i)] * prior_stddev[static_cast<size_t>(i)]
+                  : 0.0;
   };
   const Eigen::Index n = static_cast<Eigen::Index>(compared.size());
   Eigen::VectorXd d(n), sd(n);
@@ -112,7 +114,8 @@ std::string DescribePriorCheck(const PriorCheck& check) {
                   check.prior.ToParams()[i], check.from_views.ToParams()[i]) +
            Format(", %.1f sigma; ", check.worst_param_sigma);
   }
-  return text + Format("chi-square %.1f over %.0f parameters, %.1f sigma", check.chi2, check.dof, check.sigma);
+  return text + Format("chi-square %.1f over %.0f parameters, %.1f sigma", check.chi2, check.dof,
+                       check.sigma);
 }
 
 }  // namespace hairrig

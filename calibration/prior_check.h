@@ -48,10 +48,11 @@ struct PriorCheck {
 // `from_views_covariance` as BundleAdjustmentResult::intrinsics_covariance
 // (NaN: not tested); `prior_stddev` as CalibrationCamera::nominal_stddev (all
 // 0: the prior's own uncertainty is not known and only the views' counts).
-PriorCheck CheckIntrinsicsPrior(const CameraIntrinsics& prior,
-                                const std::array<double, CameraIntrinsics::kNumParams>& prior_stddev,
-                                const CameraIntrinsics& from_views, const IntrinsicsCovariance& from_views_covariance,
-                                const PriorCheckOptions& options = {});
+PriorCheck CheckIntrinsicsPrior(
+    const CameraIntrinsics& prior,
+    const std::array<double, CameraIntrinsics::kNumParams>& prior_stddev,
+    const CameraIntrinsics& from_views, const IntrinsicsCovariance& from_views_covariance,
+    const PriorCheckOptions& options = {});
 
 // The one-sided standard normal deviate with the upper tail probability of
 // `chi2` under a chi-square distribution with `dof` degrees of freedom, by

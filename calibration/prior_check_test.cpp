@@ -1,8 +1,8 @@
 #include "calibration/prior_check.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace hairrig {
 namespace {
@@ -33,18 +33,22 @@ TEST(PriorCheck, ChiSquareSigmaIsTheWilsonHilfertyDeviate) {
 }
 
 TEST(PriorCheck, TheSamePriorPassesAndAnotherIsRejectedNamingFx) {
-  const std::array<double, CameraIntrinsics::kNumParams> prior_sd = {0.2, 0.2, 0.2, 0.2, 1e-4, 1e-4, 1e-5, 1e-5, 0};
-  const PriorCheck same = CheckIntrinsicsPrior(Camera(1750), prior_sd, Camera(1750.5), ViewsCovariance());
+  const std::array<double, CameraIntrinsics::kNumParams> prior_sd = {0.2,  0.2,  0.2,  0.2, 1e-4,
+                                                                     1e-4, 1e-5, 1e-5, 0};
+  const PriorCheck same =
+      CheckIntrinsicsPrior(Camera(1750), prior_sd, Camera(1750.5), ViewsCovariance());
   ASSERT_TRUE(same.tested) << same.not_tested;
   EXPECT_EQ(same.dof, 8);
   EXPECT_FALSE(same.rejected) << DescribePriorCheck(same);
 
-  const PriorCheck other = CheckIntrinsicsPrior(Camera(1750), prior_sd, Camera(1760), ViewsCovariance());
+  const PriorCheck other =
+      CheckIntrinsicsPrior(Camera(1750), prior_sd, Camera(1760), ViewsCovariance());
   ASSERT_TRUE(other.tested);
   EXPECT_TRUE(other.rejected) << DescribePriorCheck(other);
   EXPECT_EQ(other.worst_param, 0);
   EXPECT_NEAR(other.worst_param_sigma, 10 / std::sqrt(1 + 0.04), 1e-9);
-  EXPECT_NE(DescribePriorCheck(other).find("fx_px 1750.0 (prior) vs 1760.0 (views) px"), std::string::npos)
+  EXPECT_NE(DescribePriorCheck(other).find("fx_px 1750.0 (prior) vs 1760.0 (views) px"),
+            std::string::npos)
       << DescribePriorCheck(other);
 }
 

@@ -62,7 +62,8 @@ TagDetectionSink::TagDetectionSink(CalibBox box, TagDetectorOptions detector, in
     : impl_(std::make_unique<Impl>()) {
   impl_->box = std::move(box);
   impl_->detector = detector;
-  for (int t = 0; t < std::max(1, threads); ++t) impl_->workers.emplace_back([this] { impl_->Work(); });
+  for (int t = 0; t < std::max(1, threads); ++t)
+    impl_->workers.emplace_back([this] { impl_->Work(); });
 }
 
 TagDetectionSink::~TagDetectionSink() {

@@ -1,10 +1,9 @@
 #include "calibration/turntable_axis.h"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <map>
 #include <string>
-
-#include <Eigen/Dense>
 
 namespace hairrig {
 
@@ -21,7 +20,8 @@ Circle FitCircle(const std::vector<Eigen::Vector3d>& points) {
   for (const auto& p : points) mean += p;
   mean /= static_cast<double>(points.size());
   Eigen::MatrixXd centred(points.size(), 3);
-  for (size_t i = 0; i < points.size(); ++i) centred.row(static_cast<Eigen::Index>(i)) = (points[i] - mean).transpose();
+  for (size_t i = 0; i < points.size(); ++i)
+    centred.row(static_cast<Eigen::Index>(i)) = (points[i] - mean).transpose();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred, Eigen::ComputeThinV);
   Circle c;
   c.normal = svd.matrixV().col(2);
@@ -48,8 +48,8 @@ Circle FitCircle(const std::vector<Eigen::Vector3d>& points) {
 
 }  // namespace
 
-Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views, double height_mm,
-                                          double yaw_deg) {
+Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views,
+                                          double height_mm, double yaw_deg) {
   // Camera centres in the box frame, per camera, ordered by turntable angle.
   std::map<int, std::map<double, Eigen::Vector3d>> centres;
   for (const CalibrationView& v : views) {
@@ -66,7 +66,8 @@ Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& vi
     }
   }
   if (best < 0) {
-    return FailedPrecondition("turntable axis: no camera sees the box at 3 or more stops spanning over 10 deg");
+    return FailedPrecondition(
+        "turntable axis: no camera sees the box at 3 or more stops spanning over 10 deg");
   }
   std::vector<Eigen::Vector3d> points;
   for (const auto& [angle, p] : centres[best]) points.push_back(p);
@@ -79,7 +80,8 @@ Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& vi
   Eigen::Vector3d x = Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(z) * z;
   if (x.norm() < 1e-3) x = Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitY().dot(z) * z;
   x.normalize();
-  x = Eigen::AngleAxisd(-yaw_deg * M_PI / 180, z) * x;  // the box's x axis lies yaw_deg past the turntable's
+  x = Eigen::AngleAxisd(-yaw_deg * M_PI / 180, z) *
+      x;  // the box's x axis lies yaw_deg past the turntable's
   Eigen::Matrix3d box_from_turntable_rotation;
   box_from_turntable_rotation << x, z.cross(x), z;
   // Origin on the axis, placed so that the box origin sits at `height_mm`.

@@ -29,7 +29,7 @@ struct TurntableAxisFit {
 
 // FailedPrecondition if no camera has views at 3 or more distinct stops that
 // span more than a few degrees.
-Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views, double height_mm,
-                                          double yaw_deg = 0);
+Result<TurntableAxisFit> FitTurntableAxis(const std::vector<CalibrationView>& views,
+                                          double height_mm, double yaw_deg = 0);
 
 }  // namespace hairrig

@@ -5,9 +5,8 @@
 // optimistic, below 1 pessimistic. Radians, millimetres.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "calibration/bundle_adjustment.h"
 #include "core/transform.h"
@@ -15,13 +14,15 @@
 namespace hairrig {
 
 struct UncertaintySample {
-  Eigen::Vector3d rotation_error_rad = Eigen::Vector3d::Zero();  // rotation vector, truth to estimate
-  Eigen::Vector3d centre_error_mm = Eigen::Vector3d::Zero();     // camera centre in the box frame
+  Eigen::Vector3d rotation_error_rad =
+      Eigen::Vector3d::Zero();                                // rotation vector, truth to estimate
+  Eigen::Vector3d centre_error_mm = Eigen::Vector3d::Zero();  // camera centre in the box frame
   ViewUncertainty predicted;
 };
 
 // The errors of one view's cam_from_box; `predicted` as solved.
-UncertaintySample MakeUncertaintySample(const Rigid3d& estimated_cam_from_box, const Rigid3d& true_cam_from_box,
+UncertaintySample MakeUncertaintySample(const Rigid3d& estimated_cam_from_box,
+                                        const Rigid3d& true_cam_from_box,
                                         const ViewUncertainty& predicted);
 
 struct UncertaintyRatios {

@@ -17,11 +17,13 @@ bool CornersFinite(const TagDetection& d) {
 }
 
 // Corner reprojection RMS of one tag under a pose (pixels, full camera model).
-double TagRmsPx(const TagObservation& tag, const Rigid3d& cam_from_box, const CameraIntrinsics& intrinsics) {
+double TagRmsPx(const TagObservation& tag, const Rigid3d& cam_from_box,
+                const CameraIntrinsics& intrinsics) {
   double sum = 0;
   for (int k = 0; k < 4; ++k) {
     Eigen::Vector2d uv;
-    if (!ProjectChecked(intrinsics, cam_from_box * tag.corners_box_mm[static_cast<size_t>(k)], &uv)) return INFINITY;
+    if (!ProjectChecked(intrinsics, cam_from_box * tag.corners_box_mm[static_cast<size_t>(k)], &uv))
+      return INFINITY;
     sum += (uv - tag.corners_px[static_cast<size_t>(k)]).squaredNorm();
   }
   return std::sqrt(sum / 4);
@@ -29,7 +31,8 @@ double TagRmsPx(const TagObservation& tag, const Rigid3d& cam_from_box, const Ca
 
 std::string Summary(const std::vector<RejectedTag>& rejected) {
   std::string text;
-  for (const RejectedTag& r : rejected) text += (text.empty() ? "" : "; ") + ("tag " + std::to_string(r.id) + ": " + r.reason);
+  for (const RejectedTag& r : rejected)
+    text += (text.empty() ? "" : "; ") + ("tag " + std::to_string(r.id) + ": " + r.reason);
   return text.empty() ? "no tag of the box was detected" : text;
 }
 
@@ -44,7 +47,8 @@ ViewObservations MatchToBox(const std::vector<TagDetection>& detections, const C
     if (!tag) {
       out.rejected.push_back({d.id, "not on the calibration box (another tag in view?)"});
     } else if (seen[d.id] > 1) {
-      out.rejected.push_back({d.id, "seen " + std::to_string(seen[d.id]) + " times in one view (a reflection or a second copy?)"});
+      out.rejected.push_back({d.id, "seen " + std::to_string(seen[d.id]) +
+                                        " times in one view (a reflection or a second copy?)"});
     } else if (!CornersFinite(d)) {
       out.rejected.push_back({d.id, "corners are not finite"});
     } else {
@@ -54,7 +58,8 @@ ViewObservations MatchToBox(const std::vector<TagDetection>& detections, const C
   return out;
 }
 
-Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const CameraIntrinsics& intrinsics,
+Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
+                                  const CameraIntrinsics& intrinsics,
                                   const ViewPoseOptions& options) {
   HR_RETURN_IF_ERROR(intrinsics.Validate());
   ViewPose pose;
@@ -73,7 +78,8 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
       if (ok) normalised[static_cast<size_t>(k)] = *n;
     }
     if (!ok) {
-      pose.rejected.push_back({tag.id, "a corner cannot be undistorted (outside the lens model's range)"});
+      pose.rejected.push_back(
+          {tag.id, "a corner cannot be undistorted (outside the lens model's range)"});
       continue;
     }
     usable.push_back(&tag);
@@ -83,7 +89,8 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
   }
   if (static_cast<int>(usable.size()) < options.min_tags) {
     return FailedPrecondition("view pose: " + std::to_string(usable.size()) + " usable tag(s), " +
-                              std::to_string(options.min_tags) + " needed (" + Summary(pose.rejected) + ")");
+                              std::to_string(options.min_tags) + " needed (" +
+                              Summary(pose.rejected) + ")");
   }
   // Hypotheses from single tags (IPPE: both poses of a planar square), each
   // scored by how many tags agree with it: a RANSAC over tags, exhaustive
@@ -92,7 +99,8 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
   size_t best_inliers = 0;
   double best_error = INFINITY;
   for (size_t t = 0; t < usable.size(); ++t) {
-    for (const Rigid3d& candidate : PlanarSquarePoses(usable[t]->corners_box_mm, usable_normalised[t])) {
+    for (const Rigid3d& candidate :
+         PlanarSquarePoses(usable[t]->corners_box_mm, usable_normalised[t])) {
       size_t inliers = 0;
       double error = 0;
       for (const TagObservation* tag : usable) {
@@ -110,8 +118,9 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
     }
   }
   if (best_error == INFINITY) {
-    return FailedPrecondition("view pose: no tag gives a pose (every tag seen edge-on or degenerate; " +
-                              std::to_string(usable.size()) + " usable)");
+    return FailedPrecondition(
+        "view pose: no tag gives a pose (every tag seen edge-on or degenerate; " +
+        std::to_string(usable.size()) + " usable)");
   }
   std::vector<Eigen::Vector3d> kept_object;
   std::vector<Eigen::Vector2d> kept_image;
@@ -126,7 +135,8 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
       const double limit = pass == 0 ? options.ransac_threshold_px : options.max_tag_rms_px;
       if (rms > limit) {
         if (pass == 1) {
-          pose.rejected.push_back({usable[t]->id, "corners disagree with the box model (" + std::to_string(rms) +
+          pose.rejected.push_back({usable[t]->id, "corners disagree with the box model (" +
+                                                      std::to_string(rms) +
                                                       " px RMS under the view's pose)"});
         }
         continue;
@@ -141,8 +151,9 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const Ca
     rough = RefinePose(kept_object, kept_image, rough).cam_from_model;
   }
   if (static_cast<int>(kept.size()) < options.min_tags) {
-    return FailedPrecondition("view pose: " + std::to_string(kept.size()) + " tag(s) agree with the box, " +
-                              std::to_string(options.min_tags) + " needed (" + Summary(pose.rejected) + ")");
+    return FailedPrecondition("view pose: " + std::to_string(kept.size()) +
+                              " tag(s) agree with the box, " + std::to_string(options.min_tags) +
+                              " needed (" + Summary(pose.rejected) + ")");
   }
   pose.cam_from_box = rough;
   double sum = 0;

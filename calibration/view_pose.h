@@ -12,11 +12,10 @@
 // (core/transform.h), box frame in mm (core/calib_box.h).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "calibration/apriltag_detector.h"
 #include "core/calib_box.h"
@@ -61,7 +60,8 @@ struct ViewPose {
 // FailedPrecondition when fewer than `min_tags` usable tags remain (the
 // message says how many and why the others were left out); InvalidArgument
 // for invalid intrinsics.
-Result<ViewPose> EstimateViewPose(const ViewObservations& observations, const CameraIntrinsics& intrinsics,
+Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
+                                  const CameraIntrinsics& intrinsics,
                                   const ViewPoseOptions& options = {});
 
 }  // namespace hairrig

@@ -2,11 +2,11 @@
 // etc/calib-box.yaml projected through a distorted camera with corner noise.
 #include "calibration/view_pose.h"
 
-#include <cmath>
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <random>
 
 namespace hairrig {
 namespace {
@@ -43,12 +43,15 @@ std::vector<TagDetection> SyntheticDetections(const CalibBox& box, double noise_
   for (const BoxTag& tag : box.tags) {
     const BoxFace& face = box.faces[static_cast<size_t>(tag.face)];
     const Eigen::Vector3d normal_cam = cam_from_box.rotation * face.normal_box;
-    if (normal_cam.dot(cam_from_box * tag.center_box_mm) > -0.3 * (cam_from_box * tag.center_box_mm).norm()) continue;
+    if (normal_cam.dot(cam_from_box * tag.center_box_mm) >
+        -0.3 * (cam_from_box * tag.center_box_mm).norm())
+      continue;
     TagDetection d;
     d.id = tag.id;
     for (int k = 0; k < 4; ++k) {
       d.corners_px[static_cast<size_t>(k)] =
-          Project(camera, cam_from_box * tag.corners_box_mm[static_cast<size_t>(k)]) + Eigen::Vector2d(noise(rng), noise(rng));
+          Project(camera, cam_from_box * tag.corners_box_mm[static_cast<size_t>(k)]) +
+          Eigen::Vector2d(noise(rng), noise(rng));
     }
     out.push_back(d);
   }
@@ -79,7 +82,8 @@ TEST_F(ViewPoseTest, RecoversThePoseFromNoisyCorners) {
   EXPECT_EQ(pose->tags_used, static_cast<int>(detections.size()));
   EXPECT_LT(RotationErrorDeg(pose->cam_from_box, TrueCamFromBox()), 0.05);
   EXPECT_LT((pose->cam_from_box.translation - TrueCamFromBox().translation).norm(), 1.0);
-  EXPECT_NEAR(pose->rms_px, 0.2 * std::sqrt(2.0), 0.06);  // the 2D corner noise (sigma 0.2 px per axis)
+  EXPECT_NEAR(pose->rms_px, 0.2 * std::sqrt(2.0),
+              0.06);  // the 2D corner noise (sigma 0.2 px per axis)
 }
 
 TEST_F(ViewPoseTest, UnknownDuplicateAndInconsistentTagsAreReportedAndLeftOut) {
@@ -99,7 +103,8 @@ TEST_F(ViewPoseTest, UnknownDuplicateAndInconsistentTagsAreReportedAndLeftOut) {
   bool moved_reported = false, stranger_reported = false;
   for (const RejectedTag& r : pose->rejected) {
     moved_reported |= r.id == moved_id && r.reason.find("disagree") != std::string::npos;
-    stranger_reported |= r.id == 999 && r.reason.find("not on the calibration box") != std::string::npos;
+    stranger_reported |=
+        r.id == 999 && r.reason.find("not on the calibration box") != std::string::npos;
   }
   EXPECT_TRUE(moved_reported);
   EXPECT_TRUE(stranger_reported);
@@ -112,11 +117,13 @@ TEST_F(ViewPoseTest, TooFewTagsOrBadInputGiveClearErrors) {
   detections.resize(1);
   auto pose = EstimateViewPose(MatchToBox(detections, box_), Camera());
   ASSERT_FALSE(pose.ok());
-  EXPECT_NE(pose.status().message().find("1 usable tag(s), 2 needed"), std::string::npos) << pose.status().message();
+  EXPECT_NE(pose.status().message().find("1 usable tag(s), 2 needed"), std::string::npos)
+      << pose.status().message();
 
   pose = EstimateViewPose(MatchToBox({}, box_), Camera());
   ASSERT_FALSE(pose.ok());
-  EXPECT_NE(pose.status().message().find("no tag of the box"), std::string::npos) << pose.status().message();
+  EXPECT_NE(pose.status().message().find("no tag of the box"), std::string::npos)
+      << pose.status().message();
 
   detections = SyntheticDetections(box_, 0.2, 3);
   detections[0].corners_px[1].x() = std::nan("");

@@ -10,7 +10,8 @@ namespace hairrig {
 std::array<Eigen::Vector3d, 8> BoxCornerPoints(const Eigen::Vector3d& half) {
   std::array<Eigen::Vector3d, 8> corners;
   for (int c = 0; c < 8; ++c) {
-    corners[c] = Eigen::Vector3d((c & 1 ? 1 : -1) * half.x(), (c & 2 ? 1 : -1) * half.y(), (c & 4 ? 1 : -1) * half.z());
+    corners[c] = Eigen::Vector3d((c & 1 ? 1 : -1) * half.x(), (c & 2 ? 1 : -1) * half.y(),
+                                 (c & 4 ? 1 : -1) * half.z());
   }
   return corners;
 }
@@ -102,7 +103,8 @@ Result<CalibBox> LoadCalibBox(const std::string& path) {
       const double half_printed = 0.5 * tag.size_mm * 10.0 / 8.0;
       if (std::abs(c[0]) + half_printed > 0.5 * face.width_mm + 1e-9 ||
           std::abs(c[1]) + half_printed > 0.5 * face.height_mm + 1e-9) {
-        tag_node.Fail("center_mm", "the tag (with its white border) does not fit on face " + face_name);
+        tag_node.Fail("center_mm",
+                      "the tag (with its white border) does not fit on face " + face_name);
         break;
       }
       if (!ids.insert(tag.id).second) {

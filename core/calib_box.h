@@ -9,12 +9,11 @@
 // A tag's position is its centre in (u, v) on the face, in mm from the face centre.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "core/status.h"
 
@@ -23,10 +22,11 @@ namespace hairrig {
 // Corner k of a tag, as libapriltag reports detection corners p[k], sits at
 // (sign_u * s/2, sign_v * s/2) in the face frame (s = tag size): bottom-left,
 // bottom-right, top-right, top-left as seen from outside the box.
-constexpr std::array<std::array<int, 2>, 4> kTagCornerSigns = {{{-1, +1}, {+1, +1}, {+1, -1}, {-1, -1}}};
+constexpr std::array<std::array<int, 2>, 4> kTagCornerSigns = {
+    {{-1, +1}, {+1, +1}, {+1, -1}, {-1, -1}}};
 
 struct BoxFace {
-  std::string name;  // "+x", "-x", "+y", "-y", "+z", "-z"
+  std::string name;                                      // "+x", "-x", "+y", "-y", "+z", "-z"
   Eigen::Vector3d normal_box = Eigen::Vector3d::Zero();  // outward
   Eigen::Vector3d right_box = Eigen::Vector3d::Zero();   // u
   Eigen::Vector3d down_box = Eigen::Vector3d::Zero();    // v
@@ -37,8 +37,8 @@ struct BoxFace {
 
 struct BoxTag {
   int id = -1;
-  int face = -1;         // index into CalibBox::faces
-  double size_mm = 0;    // edge of the black border square
+  int face = -1;                                             // index into CalibBox::faces
+  double size_mm = 0;                                        // edge of the black border square
   Eigen::Vector2d center_face_mm = Eigen::Vector2d::Zero();  // (u, v)
   Eigen::Vector3d center_box_mm = Eigen::Vector3d::Zero();
   std::array<Eigen::Vector3d, 4> corners_box_mm;  // in kTagCornerSigns order

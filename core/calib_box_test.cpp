@@ -1,8 +1,8 @@
 #include "core/calib_box.h"
 
-#include <fstream>
-
 #include <gtest/gtest.h>
+
+#include <fstream>
 
 namespace hairrig {
 namespace {
@@ -19,7 +19,8 @@ TEST(CalibBox, DefaultBoxHasTagsFlatOnItsFaces) {
     EXPECT_NEAR((tag.corners_box_mm[1] - tag.corners_box_mm[0]).norm(), tag.size_mm, 1e-9);
     // Corner order winds so that (p1-p0) x (p3-p0) points out of the face... or in:
     // seen from outside, bottom-left -> bottom-right -> top-right is counter-clockwise.
-    const Eigen::Vector3d n = (tag.corners_box_mm[1] - tag.corners_box_mm[0]).cross(tag.corners_box_mm[2] - tag.corners_box_mm[1]);
+    const Eigen::Vector3d n = (tag.corners_box_mm[1] - tag.corners_box_mm[0])
+                                  .cross(tag.corners_box_mm[2] - tag.corners_box_mm[1]);
     EXPECT_GT(n.dot(face.normal_box), 0.0);
   }
   EXPECT_NE(box->FindTag(23), nullptr);
@@ -39,13 +40,19 @@ std::string WriteTemp(const std::string& text) {
 }
 
 TEST(CalibBox, BadBoxesAreRefusedWithTheField) {
-  const std::string head = "size_mm: [200, 200, 200]\ntag_size_mm: 72\nfaces:\n  - name: \"+x\"\n    tags:\n";
-  auto dup = LoadCalibBox(WriteTemp(head + "      - {id: 1, center_mm: [-48, 0]}\n      - {id: 1, center_mm: [48, 0]}\n"));
-  EXPECT_NE(dup.status().message().find("used twice"), std::string::npos) << dup.status().ToString();
+  const std::string head =
+      "size_mm: [200, 200, 200]\ntag_size_mm: 72\nfaces:\n  - name: \"+x\"\n    tags:\n";
+  auto dup = LoadCalibBox(WriteTemp(
+      head + "      - {id: 1, center_mm: [-48, 0]}\n      - {id: 1, center_mm: [48, 0]}\n"));
+  EXPECT_NE(dup.status().message().find("used twice"), std::string::npos)
+      << dup.status().ToString();
   auto off = LoadCalibBox(WriteTemp(head + "      - {id: 1, center_mm: [90, 0]}\n"));
-  EXPECT_NE(off.status().message().find("does not fit"), std::string::npos) << off.status().ToString();
-  auto face = LoadCalibBox(WriteTemp("size_mm: [200, 200, 200]\nfaces:\n  - name: top\n    tags: []\n"));
-  EXPECT_NE(face.status().message().find("faces[0].name"), std::string::npos) << face.status().ToString();
+  EXPECT_NE(off.status().message().find("does not fit"), std::string::npos)
+      << off.status().ToString();
+  auto face =
+      LoadCalibBox(WriteTemp("size_mm: [200, 200, 200]\nfaces:\n  - name: top\n    tags: []\n"));
+  EXPECT_NE(face.status().message().find("faces[0].name"), std::string::npos)
+      << face.status().ToString();
 }
 
 }  // namespace

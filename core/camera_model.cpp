@@ -1,10 +1,9 @@
 #include "core/camera_model.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <Eigen/LU>
 
 namespace hairrig {
 
@@ -28,25 +27,32 @@ Status CameraIntrinsics::Validate() const {
   const auto params = ToParams();
   for (int i = 0; i < kNumParams; ++i) {
     if (!std::isfinite(params[i])) {
-      return InvalidArgument(std::string("camera intrinsics: ") + kParamNames[i] + " is not a finite number");
+      return InvalidArgument(std::string("camera intrinsics: ") + kParamNames[i] +
+                             " is not a finite number");
     }
   }
-  if (width_px <= 0 || height_px <= 0) return InvalidArgument("camera intrinsics: image size must be positive");
-  if (fx_px <= 0 || fy_px <= 0) return InvalidArgument("camera intrinsics: fx_px and fy_px must be positive");
+  if (width_px <= 0 || height_px <= 0)
+    return InvalidArgument("camera intrinsics: image size must be positive");
+  if (fx_px <= 0 || fy_px <= 0)
+    return InvalidArgument("camera intrinsics: fx_px and fy_px must be positive");
   // 1000 x the long side is a field of view under 0.06 deg: beyond any lens.
   const double max_focal_px = 1000.0 * std::max(width_px, height_px);
   if (fx_px > max_focal_px || fy_px > max_focal_px) {
-    return InvalidArgument("camera intrinsics: fx_px and fy_px must be at most 1000 x the image's long side (" +
-                           std::to_string(static_cast<long long>(max_focal_px)) + " px; a field of view under 0.06 deg "
-                           "is no lens): check the file or the lens' focal length");
+    return InvalidArgument(
+        "camera intrinsics: fx_px and fy_px must be at most 1000 x the image's long side (" +
+        std::to_string(static_cast<long long>(max_focal_px)) +
+        " px; a field of view under 0.06 deg "
+        "is no lens): check the file or the lens' focal length");
   }
   if (cx_px < 0 || cx_px > width_px || cy_px < 0 || cy_px > height_px) {
-    return InvalidArgument("camera intrinsics: principal point (cx_px, cy_px) lies outside the image");
+    return InvalidArgument(
+        "camera intrinsics: principal point (cx_px, cy_px) lies outside the image");
   }
   return Status::Ok();
 }
 
-bool ProjectChecked(const CameraIntrinsics& camera, const Eigen::Vector3d& p_cam, Eigen::Vector2d* uv) {
+bool ProjectChecked(const CameraIntrinsics& camera, const Eigen::Vector3d& p_cam,
+                    Eigen::Vector2d* uv) {
   if (!(p_cam.z() > 1e-9)) return false;
   *uv = Project(camera, p_cam);
   return true;
@@ -61,7 +67,8 @@ Eigen::Vector2d Project(const CameraIntrinsics& camera, const Eigen::Vector3d& p
 
 Result<Eigen::Vector2d> UndistortPixel(const CameraIntrinsics& camera, const Eigen::Vector2d& uv) {
   const auto params = camera.ToParams();
-  const Eigen::Vector2d target((uv.x() - camera.cx_px) / camera.fx_px, (uv.y() - camera.cy_px) / camera.fy_px);
+  const Eigen::Vector2d target((uv.x() - camera.cx_px) / camera.fx_px,
+                               (uv.y() - camera.cy_px) / camera.fy_px);
   Eigen::Vector2d x = target;  // the undistorted point starts at the distorted one
   for (int iter = 0; iter < 30; ++iter) {
     // Numerical Jacobian is accurate enough here and keeps one copy of the model.

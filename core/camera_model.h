@@ -12,10 +12,9 @@
 // CameraIntrinsics::kParamNames so that Ceres can differentiate through them.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 
@@ -31,7 +30,9 @@ struct CameraIntrinsics {
   double fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
 
-  std::array<double, kNumParams> ToParams() const { return {fx_px, fy_px, cx_px, cy_px, k1, k2, p1, p2, k3}; }
+  std::array<double, kNumParams> ToParams() const {
+    return {fx_px, fy_px, cx_px, cy_px, k1, k2, p1, p2, k3};
+  }
   static CameraIntrinsics FromParams(const double* params, int width_px, int height_px);
 
   // Finite values, positive focal lengths and image size, principal point
@@ -66,7 +67,8 @@ inline void ProjectCamPoint(const T* params, const T* p_cam, T* uv) {
 }
 
 // Projects a camera-frame point; false if it is behind (or on) the image plane.
-bool ProjectChecked(const CameraIntrinsics& camera, const Eigen::Vector3d& p_cam, Eigen::Vector2d* uv);
+bool ProjectChecked(const CameraIntrinsics& camera, const Eigen::Vector3d& p_cam,
+                    Eigen::Vector2d* uv);
 Eigen::Vector2d Project(const CameraIntrinsics& camera, const Eigen::Vector3d& p_cam);
 
 // Inverts the distortion: pixel -> normalised coordinates (x, y) with the ray

@@ -1,10 +1,10 @@
 #include "core/camera_model.h"
 
-#include <algorithm>
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <opencv2/calib3d.hpp>
+#include <random>
 
 namespace hairrig {
 namespace {
@@ -41,7 +41,8 @@ TEST(CameraModel, AgreesWithOpenCvProjectPoints) {
     for (size_t i = 0; i < points.size(); ++i) {
       const Eigen::Vector2d uv = Project(c, Eigen::Vector3d(points[i].x, points[i].y, points[i].z));
       const double scale = std::max(std::hypot(expected[i].x, expected[i].y), 1.0);
-      worst_relative = std::max(worst_relative, std::hypot(uv.x() - expected[i].x, uv.y() - expected[i].y) / scale);
+      worst_relative = std::max(worst_relative,
+                                std::hypot(uv.x() - expected[i].x, uv.y() - expected[i].y) / scale);
     }
   }
   std::printf("worst relative difference to cv::projectPoints: %.3g\n", worst_relative);
@@ -52,7 +53,8 @@ TEST(CameraModel, UndistortInvertsProjection) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 100; ++trial) {
     CameraIntrinsics c = RandomCamera(rng);
-    c.fx_px = c.fy_px = 1500 + c.fx_px;  // lenses of the rig: the model is invertible over the image
+    c.fx_px = c.fy_px =
+        1500 + c.fx_px;  // lenses of the rig: the model is invertible over the image
     c.k1 *= 0.3;
     c.k2 *= 0.3;
     c.k3 *= 0.3;
@@ -95,7 +97,8 @@ TEST(CameraModel, ValidateNamesTheBadParameter) {
   c.fx_px = 1e308;  // finite, but no lens
   const Status huge = c.Validate();
   EXPECT_FALSE(huge.ok());
-  EXPECT_NE(huge.message().find("1000 x the image's long side"), std::string::npos) << huge.message();
+  EXPECT_NE(huge.message().find("1000 x the image's long side"), std::string::npos)
+      << huge.message();
   c.fx_px = 999.0 * std::max(c.width_px, c.height_px);
   EXPECT_TRUE(c.Validate().ok());
 }

@@ -9,11 +9,10 @@
 // Chessboard corner i is OpenCV's ChArUco corner id i.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 
@@ -35,7 +34,8 @@ struct ChArUcoBoard {
   double square_mm = 0, marker_mm = 0;
   std::vector<Eigen::Vector3d> corners_board_mm;  // inner chessboard corners, by ChArUco id
   std::vector<ChArUcoMarker> markers;
-  std::vector<int> marker_of_square;  // squares_y x squares_x, row-major: index into markers or -1 (black)
+  std::vector<int>
+      marker_of_square;  // squares_y x squares_x, row-major: index into markers or -1 (black)
   // Unit normal of the printed side, pointing towards a camera that sees the
   // board unmirrored.
   Eigen::Vector3d front_normal_board = Eigen::Vector3d::UnitZ();
@@ -49,8 +49,8 @@ struct ChArUcoBoard {
 // InvalidArgument naming the field for: fewer than 3 squares along a side, a
 // marker not smaller than its square, an unknown dictionary (the message
 // lists the known ones), or a dictionary with fewer markers than the board needs.
-Result<ChArUcoBoard> MakeChArUcoBoard(const std::string& dictionary, int squares_x, int squares_y, double square_mm,
-                                      double marker_mm);
+Result<ChArUcoBoard> MakeChArUcoBoard(const std::string& dictionary, int squares_x, int squares_y,
+                                      double square_mm, double marker_mm);
 
 // The board of a YAML file (keys dictionary, squares: [x, y], square_mm,
 // marker_mm); errors name the file, line and field.

@@ -1,10 +1,10 @@
 #include "core/charuco_board.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 namespace hairrig {
 namespace {
@@ -40,16 +40,20 @@ TEST(ChArUcoBoard, LayoutHasEveryCornerAndAMarkerInEveryWhiteSquare) {
 }
 
 TEST(ChArUcoBoard, BadValuesNameTheField) {
-  EXPECT_NE(MakeChArUcoBoard("DICT_5X5_100", 9, 12, 30, 30).status().message().find("marker_mm"), std::string::npos);
-  EXPECT_NE(MakeChArUcoBoard("DICT_5X5_100", 2, 12, 30, 20).status().message().find("3 x 3"), std::string::npos);
+  EXPECT_NE(MakeChArUcoBoard("DICT_5X5_100", 9, 12, 30, 30).status().message().find("marker_mm"),
+            std::string::npos);
+  EXPECT_NE(MakeChArUcoBoard("DICT_5X5_100", 2, 12, 30, 20).status().message().find("3 x 3"),
+            std::string::npos);
   const std::string unknown = MakeChArUcoBoard("DICT_9X9", 9, 12, 30, 20).status().message();
   EXPECT_NE(unknown.find("DICT_9X9"), std::string::npos) << unknown;
   EXPECT_NE(unknown.find("DICT_6X6_250"), std::string::npos) << unknown;
   const std::string small = MakeChArUcoBoard("DICT_4X4_50", 12, 12, 30, 20).status().message();
   EXPECT_NE(small.find("needs 72"), std::string::npos) << small;
 
-  const std::string path = (std::filesystem::temp_directory_path() / "hairrig_bad_board.yaml").string();
-  std::ofstream(path) << "dictionary: DICT_5X5_100\nsquares: [9, 12]\nsquare_mm: 30\nmarker_mm: .nan\n";
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "hairrig_bad_board.yaml").string();
+  std::ofstream(path)
+      << "dictionary: DICT_5X5_100\nsquares: [9, 12]\nsquare_mm: 30\nmarker_mm: .nan\n";
   const Status bad = LoadChArUcoBoard(path).status();
   EXPECT_FALSE(bad.ok());
   EXPECT_NE(bad.message().find("marker_mm"), std::string::npos) << bad.message();

@@ -1,12 +1,12 @@
 #include "core/config.h"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
-
-#include <yaml-cpp/eventhandler.h>
-#include <yaml-cpp/yaml.h>
 
 #include "core/file_util.h"
 
@@ -101,19 +101,23 @@ class DocumentChecker : public YAML::EventHandler {
   };
 
   void OnDocumentStart(const YAML::Mark& mark) override {
-    if (++documents_ > 1) throw DocumentProblem{mark, "a second YAML document (after '---'); a config file holds one"};
+    if (++documents_ > 1)
+      throw DocumentProblem{mark, "a second YAML document (after '---'); a config file holds one"};
   }
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { Value(mark, nullptr); }
   void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { Value(mark, nullptr); }
-  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string& text) override {
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                const std::string& text) override {
     Value(mark, &text);
   }
-  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
     Open(mark, /*map=*/false);
   }
   void OnSequenceEnd() override { open_.pop_back(); }
-  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
     Open(mark, /*map=*/true);
   }
   void OnMapEnd() override { open_.pop_back(); }
@@ -142,10 +146,12 @@ class DocumentChecker : public YAML::EventHandler {
   // A value inside the innermost open collection; `text` is null for anything but a scalar.
   void Value(const YAML::Mark& mark, const std::string* text) {
     if (++values_ > kMaxConfigValues) {
-      throw DocumentProblem{mark, "more than " + std::to_string(kMaxConfigValues) + " values; is this a config file?"};
+      throw DocumentProblem{mark, "more than " + std::to_string(kMaxConfigValues) +
+                                      " values; is this a config file?"};
     }
     const bool is_key = !open_.empty() && open_.back().map && open_.back().at_key;
-    if (!open_.empty() && !open_.back().map) open_.back().current = "[" + std::to_string(open_.back().items++) + "]";
+    if (!open_.empty() && !open_.back().map)
+      open_.back().current = "[" + std::to_string(open_.back().items++) + "]";
     if (text != nullptr && !IsValidUtf8(*text)) {
       throw DocumentProblem{mark, (is_key ? "a key in " : "field ") + FieldPath(is_key) +
                                       ": text that is not valid UTF-8; save the file as UTF-8"};
@@ -166,7 +172,8 @@ class DocumentChecker : public YAML::EventHandler {
   void Open(const YAML::Mark& mark, bool map) {
     Value(mark, nullptr);
     if (static_cast<int>(open_.size()) >= kMaxConfigDepth) {
-      throw DocumentProblem{mark, "nested deeper than " + std::to_string(kMaxConfigDepth) + " levels"};
+      throw DocumentProblem{mark,
+                            "nested deeper than " + std::to_string(kMaxConfigDepth) + " levels"};
     }
     open_.push_back({map, true, {}, {}, 0});
   }
@@ -189,7 +196,6 @@ Status CheckDocument(const std::string& text, const std::string& origin) {
   }
   return Status::Ok();
 }
-
 
 }  // namespace
 
@@ -216,8 +222,8 @@ ConfigNode& ConfigNode::operator=(const ConfigNode&) = default;
 
 Result<ConfigNode> ConfigNode::LoadString(const std::string& text, const std::string& origin) {
   if (text.size() > kMaxConfigBytes) {
-    return InvalidArgument(origin + ": " + std::to_string(text.size()) + " bytes, more than a config's " +
-                           std::to_string(kMaxConfigBytes));
+    return InvalidArgument(origin + ": " + std::to_string(text.size()) +
+                           " bytes, more than a config's " + std::to_string(kMaxConfigBytes));
   }
   ConfigNode root;
   root.impl_->doc->file = origin;
@@ -228,7 +234,8 @@ Result<ConfigNode> ConfigNode::LoadString(const std::string& text, const std::st
     return InvalidArgument(MarkText(origin, e.mark) + ": not valid YAML: " + e.msg);
   }
   if (!root.impl_->node.IsMap()) {
-    return InvalidArgument(origin + ": expected a YAML map at the top level, got " + Describe(root.impl_->node));
+    return InvalidArgument(origin + ": expected a YAML map at the top level, got " +
+                           Describe(root.impl_->node));
   }
   return root;
 }
@@ -263,7 +270,8 @@ void ConfigNode::Fail(std::string_view key, const std::string& what) const {
   if (!key.empty() && Has(key)) mark = impl_->node[std::string(key)].Mark();
   const std::string field = key.empty() ? impl_->path : JoinPath(impl_->path, key);
   const std::string quoted = field.empty() ? "'<top>'" : QuotedExcerpt(field);
-  impl_->doc->first_error = InvalidArgument(MarkText(file(), mark) + ": field " + quoted + ": " + what);
+  impl_->doc->first_error =
+      InvalidArgument(MarkText(file(), mark) + ": field " + quoted + ": " + what);
 }
 
 namespace {
@@ -372,7 +380,8 @@ bool ConfigNode::Bool(std::string_view key, bool fallback) const {
   return fallback;
 }
 
-std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_size, NumberRange range) const {
+std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_size,
+                                        NumberRange range) const {
   if (!Has(key)) {
     Fail(key, "required list of numbers is missing");
     return {};
@@ -390,13 +399,15 @@ std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_si
       return {};
     }
     if (v < range.min || v > range.max) {
-      Fail(key, "element " + std::to_string(i) + ": expected a number" + RangeText(range) + ", got " + Describe(n[i]));
+      Fail(key, "element " + std::to_string(i) + ": expected a number" + RangeText(range) +
+                    ", got " + Describe(n[i]));
       return {};
     }
     values.push_back(v);
   }
   if (expected_size != 0 && values.size() != expected_size) {
-    Fail(key, "expected " + std::to_string(expected_size) + " numbers, got " + std::to_string(values.size()));
+    Fail(key, "expected " + std::to_string(expected_size) + " numbers, got " +
+                  std::to_string(values.size()));
     return {};
   }
   return values;
@@ -405,7 +416,8 @@ std::vector<double> ConfigNode::Numbers(std::string_view key, size_t expected_si
 std::vector<std::string> ConfigNode::Strings(std::string_view key) const {
   const YAML::Node n = Has(key) ? impl_->node[std::string(key)] : YAML::Node();
   if (!n.IsSequence()) {
-    Fail(key, Has(key) ? "expected a list of names, got " + Describe(n) : "required list of names is missing");
+    Fail(key, Has(key) ? "expected a list of names, got " + Describe(n)
+                       : "required list of names is missing");
     return {};
   }
   std::vector<std::string> values;
@@ -495,9 +507,9 @@ void ConfigNode::AllowOnlyKeys(const std::vector<std::string>& allowed) const {
     }
     if (!known) {
       if (!ok()) return;
-      impl_->doc->first_error = InvalidArgument(MarkText(file(), kv.first.Mark()) + ": unknown field " +
-                                                QuotedExcerpt(JoinPath(impl_->path, key)) +
-                                                " (expected one of: " + listed + ")");
+      impl_->doc->first_error = InvalidArgument(
+          MarkText(file(), kv.first.Mark()) + ": unknown field " +
+          QuotedExcerpt(JoinPath(impl_->path, key)) + " (expected one of: " + listed + ")");
       return;
     }
   }

@@ -19,6 +19,7 @@
 // one (over 40 bytes, or with control characters) by its length only.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
@@ -28,8 +29,6 @@
 #include <string_view>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "core/status.h"
 
 namespace hairrig {
@@ -38,7 +37,7 @@ namespace hairrig {
 // (hand-written configs are a few kilobytes and a few hundred values).
 inline constexpr size_t kMaxConfigBytes = size_t{1} << 20;
 inline constexpr int kMaxConfigValues = 100000;  // scalars, lists and maps
-inline constexpr int kMaxConfigDepth = 64;        // nested lists and maps
+inline constexpr int kMaxConfigDepth = 64;       // nested lists and maps
 
 // `text` quoted for an error message and cut to at most 60 bytes (control
 // characters shown as '?'): 'root:x:0:0:root:/root:/bin/bash daemo...' (1843 bytes).
@@ -83,13 +82,14 @@ class ConfigNode {
                      const std::string& fallback = "") const;
   bool Bool(std::string_view key, bool fallback) const;
   // Every element finite and inside `range`; `expected_size` 0 takes any length.
-  std::vector<double> Numbers(std::string_view key, size_t expected_size = 0, NumberRange range = {}) const;
+  std::vector<double> Numbers(std::string_view key, size_t expected_size = 0,
+                              NumberRange range = {}) const;
   std::vector<std::string> Strings(std::string_view key) const;
   Eigen::Vector3d Vec3(std::string_view key) const;
   Eigen::Vector3d Vec3(std::string_view key, const Eigen::Vector3d& fallback) const;
 
-  ConfigNode Child(std::string_view key) const;          // required map
-  ConfigNode OptionalChild(std::string_view key) const;  // IsMap() false when absent
+  ConfigNode Child(std::string_view key) const;               // required map
+  ConfigNode OptionalChild(std::string_view key) const;       // IsMap() false when absent
   std::vector<ConfigNode> Items(std::string_view key) const;  // required sequence of maps
   std::vector<ConfigNode> OptionalItems(std::string_view key) const;
 

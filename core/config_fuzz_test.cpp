@@ -2,6 +2,7 @@
 // core loaders built on it: every mutant of the shipped configs is either
 // refused with a short message naming the file, or read; nothing throws,
 // hangs or prints the input back whole.
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -9,8 +10,6 @@
 #include <functional>
 #include <random>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "core/calib_box.h"
 #include "core/charuco_board.h"
@@ -46,10 +45,28 @@ std::string Join(const std::vector<std::string>& lines) {
 }
 
 // Values that stand where a number, a name or a section was.
-const std::vector<std::string> kHostileValues = {
-    "1e12", "-1e308", "1e999", "99999999999999999999999", ".nan", ".inf", "-.inf", "0x7fffffff", "-0",
-    "[1, 2, 3]", "[1e12, 3]", "[-5, 1e300, .nan]", "{a: 1}", "~", "''", "\"\\x00\"", "&a [*a]", "*nope", "!!binary AAAA", "yes",
-    "/etc/passwd", std::string(300, 'w')};
+const std::vector<std::string> kHostileValues = {"1e12",
+                                                 "-1e308",
+                                                 "1e999",
+                                                 "99999999999999999999999",
+                                                 ".nan",
+                                                 ".inf",
+                                                 "-.inf",
+                                                 "0x7fffffff",
+                                                 "-0",
+                                                 "[1, 2, 3]",
+                                                 "[1e12, 3]",
+                                                 "[-5, 1e300, .nan]",
+                                                 "{a: 1}",
+                                                 "~",
+                                                 "''",
+                                                 "\"\\x00\"",
+                                                 "&a [*a]",
+                                                 "*nope",
+                                                 "!!binary AAAA",
+                                                 "yes",
+                                                 "/etc/passwd",
+                                                 std::string(300, 'w')};
 
 class Mutator {
  public:
@@ -57,22 +74,32 @@ class Mutator {
 
   std::string Mutate(const std::string& text) {
     switch (Pick(7)) {
-      case 0: return text.substr(0, Pick(text.size() + 1));  // truncation
-      case 1: return FlipBits(text);
-      case 2: return DuplicateLine(text);
-      case 3: return ReplaceValue(text);
-      case 4: return text + "---\n" + text;  // a second document
-      case 5: return RepeatLine(text);
-      default: return FlipBits(ReplaceValue(text));
+      case 0:
+        return text.substr(0, Pick(text.size() + 1));  // truncation
+      case 1:
+        return FlipBits(text);
+      case 2:
+        return DuplicateLine(text);
+      case 3:
+        return ReplaceValue(text);
+      case 4:
+        return text + "---\n" + text;  // a second document
+      case 5:
+        return RepeatLine(text);
+      default:
+        return FlipBits(ReplaceValue(text));
     }
   }
 
  private:
-  size_t Pick(size_t n) { return n == 0 ? 0 : std::uniform_int_distribution<size_t>(0, n - 1)(rng_); }
+  size_t Pick(size_t n) {
+    return n == 0 ? 0 : std::uniform_int_distribution<size_t>(0, n - 1)(rng_);
+  }
 
   std::string FlipBits(std::string text) {
     if (text.empty()) return text;
-    for (size_t i = 0, n = 1 + Pick(4); i < n; ++i) text[Pick(text.size())] ^= static_cast<char>(1u << Pick(8));
+    for (size_t i = 0, n = 1 + Pick(4); i < n; ++i)
+      text[Pick(text.size())] ^= static_cast<char>(1u << Pick(8));
     return text;
   }
 
@@ -128,7 +155,9 @@ void ReadEverything(const ConfigNode& node, int depth) {
 void ExpectCleanMessage(const Status& status, const std::string& origin, const std::string& input) {
   const std::string& m = status.message();
   EXPECT_LE(m.size(), kMaxMessageBytes) << m;
-  EXPECT_NE(m.find(origin), std::string::npos) << "the message names the file: " << m << "\ninput:\n" << input;
+  EXPECT_NE(m.find(origin), std::string::npos)
+      << "the message names the file: " << m << "\ninput:\n"
+      << input;
 }
 
 struct Seed {
@@ -143,7 +172,8 @@ std::vector<Seed> Seeds() {
           {"etc/scenes/default.yaml", nullptr},
           {"tests/data/small_rig.yaml", nullptr},
           {"etc/calib-box.yaml", [](const std::string& p) { return LoadCalibBox(p).status(); }},
-          {"etc/charuco-board.yaml", [](const std::string& p) { return LoadChArUcoBoard(p).status(); }}};
+          {"etc/charuco-board.yaml",
+           [](const std::string& p) { return LoadChArUcoBoard(p).status(); }}};
 }
 
 TEST(ConfigFuzz, EveryMutantIsRefusedCleanlyOrRead) {

@@ -1,12 +1,11 @@
 #include "core/config.h"
 
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 namespace hairrig {
 namespace {
@@ -28,7 +27,8 @@ TEST(Config, ReadsFieldsAndNamesTheLineOfABadOne) {
 TEST(Config, BrokenYamlNamesTheFileAndLine) {
   auto root = ConfigNode::LoadString("a: [1, 2\nb: 3\n", "broken.yaml");
   ASSERT_FALSE(root.ok());
-  EXPECT_NE(root.status().message().find("broken.yaml:"), std::string::npos) << root.status().message();
+  EXPECT_NE(root.status().message().find("broken.yaml:"), std::string::npos)
+      << root.status().message();
 }
 
 TEST(Config, RefusesNanRangeAndUnknownKeys) {
@@ -43,7 +43,8 @@ TEST(Config, RefusesNanRangeAndUnknownKeys) {
 
   auto r3 = ConfigNode::LoadString("fx: 3\n", "f.yaml");
   r3->AllowOnlyKeys({"fx_px"});
-  EXPECT_NE(r3->status().message().find("unknown field 'fx'"), std::string::npos) << r3->status().message();
+  EXPECT_NE(r3->status().message().find("unknown field 'fx'"), std::string::npos)
+      << r3->status().message();
 }
 
 TEST(Config, ItemsCarryTheirIndexInThePath) {
@@ -51,13 +52,16 @@ TEST(Config, ItemsCarryTheirIndexInThePath) {
   const auto items = root->Items("cams");
   ASSERT_EQ(items.size(), 2u);
   items[1].Integer("w");
-  EXPECT_NE(root->status().message().find("cams[1].w"), std::string::npos) << root->status().message();
+  EXPECT_NE(root->status().message().find("cams[1].w"), std::string::npos)
+      << root->status().message();
 }
 
 TEST(Config, KeysComeInFileOrder) {
-  auto root = ConfigNode::LoadString("settings: {iso: 100, aperture: 8, imageformat: RAW}\nx: 1\n", "f.yaml");
+  auto root = ConfigNode::LoadString("settings: {iso: 100, aperture: 8, imageformat: RAW}\nx: 1\n",
+                                     "f.yaml");
   ASSERT_TRUE(root.ok());
-  EXPECT_EQ(root->Child("settings").Keys(), (std::vector<std::string>{"iso", "aperture", "imageformat"}));
+  EXPECT_EQ(root->Child("settings").Keys(),
+            (std::vector<std::string>{"iso", "aperture", "imageformat"}));
   EXPECT_TRUE(root->OptionalChild("absent").Keys().empty());
 }
 
@@ -87,7 +91,8 @@ TEST(Config, DuplicateKeysAreErrorsAtTheSecondOne) {
   m = Refusal("sim: {a: 1}\nplan: {}\nsim: {b: 2}\n");
   EXPECT_NE(m.find("rig.yaml:3:1: duplicate key 'sim'"), std::string::npos) << m;
   // The same key in two maps is two keys.
-  EXPECT_TRUE(ConfigNode::LoadString("a: {x: 1}\nb: {x: 2}\nc: [{x: 1}, {x: 2}]\n", "rig.yaml").ok());
+  EXPECT_TRUE(
+      ConfigNode::LoadString("a: {x: 1}\nb: {x: 2}\nc: [{x: 1}, {x: 2}]\n", "rig.yaml").ok());
 }
 
 TEST(Config, ASecondDocumentIsAnError) {
@@ -97,17 +102,20 @@ TEST(Config, ASecondDocumentIsAnError) {
 }
 
 TEST(Config, KeysMustBeText) {
-  EXPECT_NE(Refusal("? [a, b]\n: 1\n").find("rig.yaml:1:3: a map key must be text"), std::string::npos);
+  EXPECT_NE(Refusal("? [a, b]\n: 1\n").find("rig.yaml:1:3: a map key must be text"),
+            std::string::npos);
 }
 
 TEST(Config, SizeDepthAndValueCountAreBounded) {
   std::string deep = "a: ";
   for (int i = 0; i < 100; ++i) deep += "[";
-  EXPECT_NE(Refusal(deep + std::string(100, ']') + "\n").find("nested deeper than"), std::string::npos);
+  EXPECT_NE(Refusal(deep + std::string(100, ']') + "\n").find("nested deeper than"),
+            std::string::npos);
   std::string many = "angles_deg: [";
   for (int i = 0; i <= kMaxConfigValues; ++i) many += "0,";
   EXPECT_NE(Refusal(many + "0]\n").find("more than"), std::string::npos);
-  EXPECT_NE(Refusal("a: '" + std::string(kMaxConfigBytes, 'x') + "'\n").find("bytes"), std::string::npos);
+  EXPECT_NE(Refusal("a: '" + std::string(kMaxConfigBytes, 'x') + "'\n").find("bytes"),
+            std::string::npos);
 }
 
 TEST(Config, MessagesQuoteAnExcerptNeverAWholeFile) {
@@ -126,20 +134,25 @@ TEST(Config, MessagesQuoteAnExcerptNeverAWholeFile) {
   EXPECT_EQ(QuotedExcerpt("a\tb"), "'a?b'");
   EXPECT_EQ(QuotedExcerpt(std::string(61, 'z')), "'" + std::string(60, 'z') + "...' (61 bytes)");
   // A cut never splits a UTF-8 character: 'é' is 2 bytes, 59 + 2 crosses 60.
-  EXPECT_EQ(QuotedExcerpt(std::string(59, 'z') + "\xC3\xA9z"), "'" + std::string(59, 'z') + "...' (62 bytes)");
+  EXPECT_EQ(QuotedExcerpt(std::string(59, 'z') + "\xC3\xA9z"),
+            "'" + std::string(59, 'z') + "...' (62 bytes)");
 }
 
 // Config text ends up in JSON files (capture.json, reports), which hold UTF-8
 // only: text that is not is refused where it is read, naming its field.
 TEST(Config, TextMustBeValidUtf8) {
   std::string m = Refusal("name: ok\nrig:\n  name: caf\xE9\n");
-  EXPECT_EQ(m, "rig.yaml:3:9: field 'rig.name': text that is not valid UTF-8; save the file as UTF-8");
+  EXPECT_EQ(m,
+            "rig.yaml:3:9: field 'rig.name': text that is not valid UTF-8; save the file as UTF-8");
   m = Refusal("cameras:\n  - {serial: \"\xC0\xAF\"}\n");  // an overlong '/'
-  EXPECT_NE(m.find("rig.yaml:2:14: field 'cameras[0].serial': text that is not valid UTF-8"), std::string::npos) << m;
+  EXPECT_NE(m.find("rig.yaml:2:14: field 'cameras[0].serial': text that is not valid UTF-8"),
+            std::string::npos)
+      << m;
   m = Refusal("a:\n  - [1, \"x\xED\xA0\x80y\"]\n");  // a UTF-16 surrogate
   EXPECT_NE(m.find("field 'a[0][1]'"), std::string::npos) << m;
   EXPECT_NE(Refusal("caf\xE9: 1\n").find("rig.yaml:1:1: a key in '<top>'"), std::string::npos);
-  EXPECT_NE(Refusal("name: \"\xF4\x90\x80\x80\"\n").find("not valid UTF-8"), std::string::npos);  // > U+10FFFF
+  EXPECT_NE(Refusal("name: \"\xF4\x90\x80\x80\"\n").find("not valid UTF-8"),
+            std::string::npos);  // > U+10FFFF
   EXPECT_TRUE(ConfigNode::LoadString("name: caf\xC3\xA9 \xF0\x9F\x98\x80\n", "rig.yaml").ok());
 }
 
@@ -148,7 +161,8 @@ TEST(Config, ListElementsAreCheckedAgainstTheRange) {
   ASSERT_TRUE(root.ok());
   EXPECT_TRUE(root->Numbers("angles_deg", 0, {.min = -3600, .max = 3600}).empty());
   const std::string m = root->status().message();
-  EXPECT_NE(m.find("element 1: expected a number in [-3600, 3600], got '1e12'"), std::string::npos) << m;
+  EXPECT_NE(m.find("element 1: expected a number in [-3600, 3600], got '1e12'"), std::string::npos)
+      << m;
 }
 
 TEST(Config, UnknownKeysListTheKnownOnes) {
@@ -162,15 +176,18 @@ TEST(Config, OnlyRegularFilesAreRead) {
   for (const char* path : {"/dev/zero", "/dev/urandom", "/"}) {
     auto root = ConfigNode::LoadFile(path);
     ASSERT_FALSE(root.ok()) << path;
-    EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos) << root.status().message();
+    EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos)
+        << root.status().message();
   }
   const std::string fifo =
-      (std::filesystem::temp_directory_path() / ("config_test_fifo_" + std::to_string(getpid()))).string();
+      (std::filesystem::temp_directory_path() / ("config_test_fifo_" + std::to_string(getpid())))
+          .string();
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
   auto root = ConfigNode::LoadFile(fifo);  // a blocking open would wait here for a writer
   unlink(fifo.c_str());
   ASSERT_FALSE(root.ok());
-  EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos) << root.status().message();
+  EXPECT_NE(root.status().message().find("not a regular file"), std::string::npos)
+      << root.status().message();
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 #include "core/contact_sheet.h"
 
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 namespace hairrig {

@@ -1,10 +1,9 @@
 // A contact sheet: thumbnails of a set of images in a grid, each labelled.
 #pragma once
 
+#include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 namespace hairrig {
 

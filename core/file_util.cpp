@@ -1,12 +1,11 @@
 #include "core/file_util.h"
 
-#include <atomic>
-
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 
@@ -24,7 +23,8 @@ const char* FileKind(mode_t mode) {
 }
 
 Status TooLarge(const std::string& path, uint64_t max_bytes) {
-  return OutOfRange(path + ": larger than " + std::to_string(max_bytes) + " bytes, the most this reader accepts");
+  return OutOfRange(path + ": larger than " + std::to_string(max_bytes) +
+                    " bytes, the most this reader accepts");
 }
 
 // A file descriptor closed when it goes out of scope.
@@ -48,7 +48,8 @@ class Descriptor {
 
 // Opens `path` for reading if it is a regular file of at most `max_bytes`;
 // *size is its length. O_NONBLOCK: opening a FIFO with no writer returns at once.
-Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* fd, uint64_t* size) {
+Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* fd,
+                       uint64_t* size) {
   fd->reset(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY));
   if (fd->get() < 0) {
     const std::string why = std::strerror(errno);
@@ -56,8 +57,10 @@ Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* 
     return IoError(path + ": cannot open for reading (" + why + ")");
   }
   struct stat st {};
-  if (::fstat(fd->get(), &st) != 0) return IoError(path + ": cannot read its file status (" + std::strerror(errno) + ")");
-  if (!S_ISREG(st.st_mode)) return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
+  if (::fstat(fd->get(), &st) != 0)
+    return IoError(path + ": cannot read its file status (" + std::strerror(errno) + ")");
+  if (!S_ISREG(st.st_mode))
+    return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
   *size = static_cast<uint64_t>(st.st_size);
   if (*size > max_bytes) return TooLarge(path, max_bytes);
   return Status::Ok();
@@ -65,7 +68,8 @@ Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* 
 
 // Writes all `size` bytes through `write_call` (::write when empty), retrying
 // on EINTR and after short writes.
-Status WriteAll(int fd, const std::string& path, const uint8_t* p, size_t size, const WriteCall& write_call) {
+Status WriteAll(int fd, const std::string& path, const uint8_t* p, size_t size,
+                const WriteCall& write_call) {
   while (size > 0) {
     const ssize_t n = write_call ? write_call(fd, p, size) : ::write(fd, p, size);
     if (n < 0) {
@@ -79,8 +83,8 @@ Status WriteAll(int fd, const std::string& path, const uint8_t* p, size_t size, 
 }
 
 // WriteAll in two parts, with on_stage("half_written") between them.
-Status WriteInHalves(int fd, const std::string& path, const void* bytes, size_t size, const StageHook& on_stage,
-                     const WriteCall& write_call) {
+Status WriteInHalves(int fd, const std::string& path, const void* bytes, size_t size,
+                     const StageHook& on_stage, const WriteCall& write_call) {
   const auto* p = static_cast<const uint8_t*>(bytes);
   const size_t first = size - size / 2;
   HR_RETURN_IF_ERROR(WriteAll(fd, path, p, first, write_call));
@@ -96,10 +100,14 @@ Result<int> OpenRegularFileForAppend(const std::string& path) {
     return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
   // O_NONBLOCK: should a FIFO take the checked name meanwhile, opening it fails at once.
   Descriptor fd;
-  fd.reset(::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK | O_NOCTTY, 0644));
+  fd.reset(::open(path.c_str(),
+                  O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK | O_NOCTTY,
+                  0644));
   if (fd.get() < 0) return IoErrorFromErrno(path + ": cannot open for appending", errno);
-  if (::fstat(fd.get(), &st) != 0) return IoErrorFromErrno(path + ": cannot read its file status", errno);
-  if (!S_ISREG(st.st_mode)) return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
+  if (::fstat(fd.get(), &st) != 0)
+    return IoErrorFromErrno(path + ": cannot read its file status", errno);
+  if (!S_ISREG(st.st_mode))
+    return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
   const int flags = ::fcntl(fd.get(), F_GETFL);
   if (flags < 0 || ::fcntl(fd.get(), F_SETFL, flags & ~O_NONBLOCK) != 0)
     return IoErrorFromErrno(path + ": cannot set blocking writes", errno);
@@ -146,7 +154,8 @@ Result<std::string> ReadFileText(const std::string& path, uint64_t max_bytes) {
 
 Status SyncFolder(const std::string& folder) {
   const int fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return IoError(folder + ": cannot open the folder to sync it (" + std::strerror(errno) + ")");
+  if (fd < 0)
+    return IoError(folder + ": cannot open the folder to sync it (" + std::strerror(errno) + ")");
   const int rc = ::fsync(fd);
   ::close(fd);
   if (rc != 0) return IoError(folder + ": fsync failed (" + std::strerror(errno) + ")");
@@ -157,11 +166,12 @@ Status IoErrorFromErrno(const std::string& what, int error_number) {
   return IoError(what + " (" + std::strerror(error_number) + ")");
 }
 
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size, const StageHook& on_stage,
-                       const WriteCall& write_call) {
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
+                       const StageHook& on_stage, const WriteCall& write_call) {
   // Unique per process and per call, so that two threads writing one path never share a temporary.
   static std::atomic<uint64_t> next_temporary{0};
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(next_temporary++);
+  const std::string tmp =
+      path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(next_temporary++);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) return IoErrorFromErrno(tmp + ": cannot create", errno);
   Status s = WriteInHalves(fd, path, bytes, size, on_stage, write_call);
@@ -181,14 +191,16 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size, 
   return SyncFolder(slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash));
 }
 
-Status AppendDurably(int fd, const std::string& path, const void* bytes, size_t size, const StageHook& on_stage,
-                     const WriteCall& write_call) {
+Status AppendDurably(int fd, const std::string& path, const void* bytes, size_t size,
+                     const StageHook& on_stage, const WriteCall& write_call) {
   struct stat before {};
-  if (::fstat(fd, &before) != 0) return IoErrorFromErrno(path + ": cannot read its file status", errno);
+  if (::fstat(fd, &before) != 0)
+    return IoErrorFromErrno(path + ": cannot read its file status", errno);
   Status s = WriteInHalves(fd, path, bytes, size, on_stage, write_call);
   if (s.ok() && ::fdatasync(fd) != 0) s = IoErrorFromErrno(path + ": fsync failed", errno);
   if (!s.ok() && ::ftruncate(fd, before.st_size) != 0) {
-    return IoErrorFromErrno(s.message() + "; cutting the file back to its former length failed too", errno);
+    return IoErrorFromErrno(s.message() + "; cutting the file back to its former length failed too",
+                            errno);
   }
   return s;
 }
@@ -198,7 +210,8 @@ std::string FileExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
   std::string ext = path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 

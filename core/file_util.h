@@ -25,7 +25,8 @@ inline constexpr uint64_t kMaxFileBytes = uint64_t{2} << 30;
 Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
                       const std::function<void(const uint8_t* data, size_t size)>& chunk);
 // The whole file, with the checks of ReadFileChunks.
-Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, uint64_t max_bytes = kMaxFileBytes);
+Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path,
+                                           uint64_t max_bytes = kMaxFileBytes);
 Result<std::string> ReadFileText(const std::string& path, uint64_t max_bytes);
 // Opens `path` for appending (O_APPEND, created with mode 0644 when absent,
 // never through a symlink) and returns the descriptor, which the caller closes.
@@ -52,15 +53,15 @@ using StageHook = std::function<void(const char* stage)>;
 // On failure the temporary is removed and `path` is as it was; IoError names
 // `path` and the errno (IoErrorFromErrno).
 // `on_stage`, when given, is called with "half_written" and "before_rename".
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size, const StageHook& on_stage = {},
-                       const WriteCall& write_call = {});
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size,
+                       const StageHook& on_stage = {}, const WriteCall& write_call = {});
 // Appends `size` bytes to `fd`, a file opened with O_APPEND that `path` names
 // in messages, and fdatasyncs it. `on_stage`, when given, is called with
 // "half_written" once the first half is written. A failed append (IoError
 // naming `path` and the errno) cuts the file back to its length before the
 // call, so no part of the bytes stays in it; only a crash can leave a part.
-Status AppendDurably(int fd, const std::string& path, const void* bytes, size_t size, const StageHook& on_stage = {},
-                     const WriteCall& write_call = {});
+Status AppendDurably(int fd, const std::string& path, const void* bytes, size_t size,
+                     const StageHook& on_stage = {}, const WriteCall& write_call = {});
 // fsync of a folder, so that renames and new entries in it are durable.
 Status SyncFolder(const std::string& folder);
 inline Status WriteFileAtomic(const std::string& path, const std::string& text) {

@@ -1,6 +1,7 @@
 #include "core/file_util.h"
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -10,8 +11,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "core/config.h"
@@ -41,12 +40,15 @@ TEST(FileUtil, OnlyRegularFilesAreRead) {
   const std::string zero_link = dir + "/frame.hair";
   fs::create_symlink("/dev/zero", zero_link);
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {dir, "is a folder"}, {fifo, "is a FIFO"}, {"/dev/zero", "is a character device"},
+      {dir, "is a folder"},
+      {fifo, "is a FIFO"},
+      {"/dev/zero", "is a character device"},
       {zero_link, "is a character device"}};
   for (const auto& [path, kind] : cases) {
     const auto bytes = ReadFileBytes(path);
     EXPECT_EQ(bytes.status().code(), StatusCode::kInvalidArgument) << path;
-    EXPECT_NE(bytes.status().message().find(path + " " + kind), std::string::npos) << bytes.status().ToString();
+    EXPECT_NE(bytes.status().message().find(path + " " + kind), std::string::npos)
+        << bytes.status().ToString();
     EXPECT_FALSE(ReadJsonFile(path).ok()) << path;
     EXPECT_FALSE(ConfigNode::LoadFile(path).ok()) << path;
     EXPECT_FALSE(Sha256OfFile(path).ok()) << path;
@@ -65,7 +67,8 @@ TEST(FileUtil, AppendingOpensRegularFilesOnly) {
            {fifo, "is a FIFO"}, {dir, "is a folder"}, {"/dev/null", "is a character device"}}) {
     const Result<int> fd = OpenRegularFileForAppend(path);
     EXPECT_EQ(fd.status().code(), StatusCode::kInvalidArgument) << path;
-    EXPECT_NE(fd.status().message().find(path + " " + kind), std::string::npos) << fd.status().ToString();
+    EXPECT_NE(fd.status().message().find(path + " " + kind), std::string::npos)
+        << fd.status().ToString();
     if (fd.ok()) ::close(*fd);
   }
   const std::string file = dir + "/new.jsonl";
@@ -130,14 +133,17 @@ TEST(FileUtil, WritersLeaveNothingBehindWhenTheDiskIsFull) {
   EXPECT_EQ(atomic.code(), StatusCode::kIoError);
   EXPECT_EQ(atomic.message(), path + ": write failed (" + std::strerror(ENOSPC) + ")");
   EXPECT_EQ(ReadFileText(path, 100).value(), "old");
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1) << "a temporary was left";
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1)
+      << "a temporary was left";
 
   const std::string journal = dir + "/journal.jsonl";
   const int fd = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   ASSERT_GE(fd, 0);
   int stages = 0;
   const std::string record = "{\"event\": \"fault\"}\n";
-  EXPECT_TRUE(AppendDurably(fd, journal, record.data(), record.size(), [&](const char*) { ++stages; }).ok());
+  EXPECT_TRUE(AppendDurably(fd, journal, record.data(), record.size(), [&](const char*) {
+                ++stages;
+              }).ok());
   EXPECT_EQ(stages, 1);
   const Status append = AppendDurably(fd, journal, record.data(), record.size(), {}, FullAfter(5));
   EXPECT_EQ(append.message(), IoErrorFromErrno(journal + ": write failed", ENOSPC).message());

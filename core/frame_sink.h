@@ -5,22 +5,21 @@
 // simulated one or a replay.
 #pragma once
 
-#include <string>
-
 #include <opencv2/core/mat.hpp>
+#include <string>
 
 namespace hairrig {
 
 struct StoredFrame {
-  int view = 0;                 // index in the capture plan
-  int stop = 0;                 // turntable stop
-  std::string camera_name;      // role in the rig config ("upper")
+  int view = 0;             // index in the capture plan
+  int stop = 0;             // turntable stop
+  std::string camera_name;  // role in the rig config ("upper")
   std::string camera_serial;
-  std::string path;             // absolute path of the stored, verified file
+  std::string path;  // absolute path of the stored, verified file
   std::string sha256;
   double turntable_commanded_deg = 0;
   double turntable_measured_deg = 0;
-  cv::Mat image;                // decoded pixels: 8-bit BGR or single channel
+  cv::Mat image;  // decoded pixels: 8-bit BGR or single channel
 };
 
 class FrameSink {

@@ -1,7 +1,6 @@
 #include "core/geometry_json.h"
 
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "core/json_file.h"
@@ -23,11 +22,13 @@ namespace {
 
 // A fixed-length array of finite numbers at j[key].
 template <size_t N>
-Status ReadNumbers(const nlohmann::json& j, const char* key, const std::string& where, double (&out)[N]) {
+Status ReadNumbers(const nlohmann::json& j, const char* key, const std::string& where,
+                   double (&out)[N]) {
   const std::string field = where + ": " + key;
   if (!j.is_object() || !j.contains(key)) return InvalidArgument(field + " is missing");
   const nlohmann::json& a = j.at(key);
-  if (!a.is_array() || a.size() != N) return InvalidArgument(field + " must be " + std::to_string(N) + " numbers");
+  if (!a.is_array() || a.size() != N)
+    return InvalidArgument(field + " must be " + std::to_string(N) + " numbers");
   for (size_t i = 0; i < N; ++i) {
     if (!a[i].is_number() || !std::isfinite(a[i].get<double>()))
       return InvalidArgument(field + "[" + std::to_string(i) + "] is not a finite number");
@@ -54,7 +55,8 @@ nlohmann::json IntrinsicsToJson(const CameraIntrinsics& camera) {
   j["width_px"] = camera.width_px;
   j["height_px"] = camera.height_px;
   const auto params = camera.ToParams();
-  for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) j[CameraIntrinsics::kParamNames[static_cast<size_t>(i)]] = params[static_cast<size_t>(i)];
+  for (int i = 0; i < CameraIntrinsics::kNumParams; ++i)
+    j[CameraIntrinsics::kParamNames[static_cast<size_t>(i)]] = params[static_cast<size_t>(i)];
   return j;
 }
 
@@ -71,8 +73,8 @@ Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::
     if (!j.contains(name) || !j[name].is_number_integer())
       return InvalidArgument(where + ": " + name + " is missing or not an integer");
   }
-  const CameraIntrinsics camera =
-      CameraIntrinsics::FromParams(params.data(), j["width_px"].get<int>(), j["height_px"].get<int>());
+  const CameraIntrinsics camera = CameraIntrinsics::FromParams(
+      params.data(), j["width_px"].get<int>(), j["height_px"].get<int>());
   const Status valid = camera.Validate();
   if (!valid.ok()) return InvalidArgument(where + ": " + valid.message());
   return camera;
@@ -80,7 +82,8 @@ Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::
 
 nlohmann::json Vector3ToJson(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key, const std::string& where) {
+Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key,
+                                        const std::string& where) {
   double v[3];
   HR_RETURN_IF_ERROR(ReadNumbers(j, key.c_str(), where, v));
   return Eigen::Vector3d(v[0], v[1], v[2]);

@@ -2,15 +2,14 @@
 // intrinsics (ground truth, calibration.json). Frames as in core/transform.h;
 // millimetres and pixels.
 //
-//   pose:       {"quaternion_wxyz": [w,x,y,z], "translation_mm": [x,y,z], "matrix_3x4": [[..],[..],[..]]}
-//   intrinsics: {"width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "p1", "p2", "k3"}
-//   vector:     [x, y, z]
+//   pose:       {"quaternion_wxyz": [w,x,y,z], "translation_mm": [x,y,z], "matrix_3x4":
+//   [[..],[..],[..]]} intrinsics: {"width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px",
+//   "k1", "k2", "p1", "p2", "k3"} vector:     [x, y, z]
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <string_view>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "core/camera_model.h"
 #include "core/status.h"
@@ -33,7 +32,8 @@ Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::
 nlohmann::json Vector3ToJson(const Eigen::Vector3d& v);
 // j[key] as three finite numbers. InvalidArgument names `where` and the key
 // when it is missing, not three numbers, or not finite.
-Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key, const std::string& where);
+Result<Eigen::Vector3d> Vector3FromJson(const nlohmann::json& j, const std::string& key,
+                                        const std::string& where);
 
 // The readers above applied to field `key` of `j` (core/json_file.h): a
 // problem is recorded in `j` as CorruptData naming the file and the field, and

@@ -6,20 +6,26 @@ namespace hairrig {
 namespace {
 
 void ReadScalp(const ConfigNode& n, ScalpSpec* s) {
-  n.AllowOnlyKeys({"center_mm", "face_dir", "hairline_front_deg", "hairline_temple_deg", "hairline_ear_deg",
-                   "hairline_nape_deg", "parting", "parting_offset_deg", "parting_width_mm", "parting_back_deg"});
+  n.AllowOnlyKeys({"center_mm", "face_dir", "hairline_front_deg", "hairline_temple_deg",
+                   "hairline_ear_deg", "hairline_nape_deg", "parting", "parting_offset_deg",
+                   "parting_width_mm", "parting_back_deg"});
   s->defined = true;
   s->center_turntable_mm = n.Vec3("center_mm", s->center_turntable_mm);
   Eigen::Vector3d face = n.Vec3("face_dir", s->face_dir);
   face.z() = 0;
-  if (face.norm() < 1e-9) n.Fail("face_dir", "must have a horizontal part (x, y): the way the face looks");
+  if (face.norm() < 1e-9)
+    n.Fail("face_dir", "must have a horizontal part (x, y): the way the face looks");
   s->face_dir = face.norm() > 0 ? Eigen::Vector3d(face.normalized()) : s->face_dir;
-  s->hairline_front_deg = n.Number("hairline_front_deg", s->hairline_front_deg, {.min = -90, .max = 90});
-  s->hairline_temple_deg = n.Number("hairline_temple_deg", s->hairline_temple_deg, {.min = -90, .max = 90});
+  s->hairline_front_deg =
+      n.Number("hairline_front_deg", s->hairline_front_deg, {.min = -90, .max = 90});
+  s->hairline_temple_deg =
+      n.Number("hairline_temple_deg", s->hairline_temple_deg, {.min = -90, .max = 90});
   s->hairline_ear_deg = n.Number("hairline_ear_deg", s->hairline_ear_deg, {.min = -90, .max = 90});
-  s->hairline_nape_deg = n.Number("hairline_nape_deg", s->hairline_nape_deg, {.min = -90, .max = 90});
+  s->hairline_nape_deg =
+      n.Number("hairline_nape_deg", s->hairline_nape_deg, {.min = -90, .max = 90});
   s->parting = n.Bool("parting", s->parting);
-  s->parting_offset_deg = n.Number("parting_offset_deg", s->parting_offset_deg, {.min = -60, .max = 60});
+  s->parting_offset_deg =
+      n.Number("parting_offset_deg", s->parting_offset_deg, {.min = -60, .max = 60});
   s->parting_width_mm = n.Number("parting_width_mm", s->parting_width_mm, {.min = 0, .max = 50});
   s->parting_back_deg = n.Number("parting_back_deg", s->parting_back_deg, {.min = -90, .max = 90});
 }
@@ -55,12 +61,13 @@ Rigid3d ReadPoseConfig(const ConfigNode& n) {
   return Rigid3d(q, t);
 }
 
-Status ReadHeadConfig(const ConfigNode& parent, const std::string& key, const std::string& base_file,
-                      HeadSpec* head) {
+Status ReadHeadConfig(const ConfigNode& parent, const std::string& key,
+                      const std::string& base_file, HeadSpec* head) {
   if (parent.HasScalar(key)) {
     const std::string file = ResolveBesideFile(base_file, parent.String(key));
     Result<HeadSpec> from_file = LoadHeadFile(file);
-    if (!from_file.ok()) return from_file.status().WithContext(parent.Where() + ": field '" + key + "'");
+    if (!from_file.ok())
+      return from_file.status().WithContext(parent.Where() + ": field '" + key + "'");
     *head = *from_file;
     return Status::Ok();
   }
@@ -72,7 +79,8 @@ Result<HeadSpec> LoadHeadFile(const std::string& path) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
   root.AllowOnlyKeys({"head"});
   HeadSpec head;
-  if (root.HasScalar("head")) root.Fail("head", "a head file's head must be a map, not another file's name");
+  if (root.HasScalar("head"))
+    root.Fail("head", "a head file's head must be a map, not another file's name");
   if (root.ok()) ReadHeadMap(root.Child("head"), path, &head);
   HR_RETURN_IF_ERROR(root.status());
   return head;

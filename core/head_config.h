@@ -37,8 +37,8 @@ Rigid3d ReadPoseConfig(const ConfigNode& node);
 // paths resolve against the folder of `base_file` (the file `parent` came
 // from, or the folder its relative paths are relative to). Errors name the
 // file, line and field (of the parent's document, or of the head file).
-Status ReadHeadConfig(const ConfigNode& parent, const std::string& key, const std::string& base_file,
-                      HeadSpec* head);
+Status ReadHeadConfig(const ConfigNode& parent, const std::string& key,
+                      const std::string& base_file, HeadSpec* head);
 
 // A head file: a YAML document with a top-level `head:` map.
 Result<HeadSpec> LoadHeadFile(const std::string& path);

@@ -28,7 +28,8 @@ TEST(HeadConfig, AHeadSectionIsAMapOrTheNameOfAHeadFileWithPathsBesideIt) {
   WriteFile(dir / "heads/h.yaml",
             "head:\n  mesh: meshes/m.ply\n  center_mm: [1, 2, 300]\n  radii_mm: [70, 90, 100]\n"
             "  scalp: {hairline_front_deg: 30, parting: false}\n");
-  const std::string rig = WriteFile(dir / "rig.yaml", "by_file: heads/h.yaml\ninline: {radii_mm: [60, 70, 80]}\n");
+  const std::string rig =
+      WriteFile(dir / "rig.yaml", "by_file: heads/h.yaml\ninline: {radii_mm: [60, 70, 80]}\n");
   auto root = ConfigNode::LoadFile(rig);
   ASSERT_TRUE(root.ok());
   HeadSpec by_file, inline_head;
@@ -52,10 +53,12 @@ TEST(HeadConfig, ErrorsNameTheFileAndTheField) {
   EXPECT_NE(head.status().message().find("bad.yaml"), std::string::npos) << head.status().message();
   EXPECT_NE(head.status().message().find("radii_mm"), std::string::npos) << head.status().message();
 
-  const std::string typo = WriteFile(dir / "typo.yaml", "head:\n  scalp: {hairline_frnt_deg: 30}\n");
+  const std::string typo =
+      WriteFile(dir / "typo.yaml", "head:\n  scalp: {hairline_frnt_deg: 30}\n");
   head = LoadHeadFile(typo);
   ASSERT_FALSE(head.ok());
-  EXPECT_NE(head.status().message().find("hairline_frnt_deg"), std::string::npos) << head.status().message();
+  EXPECT_NE(head.status().message().find("hairline_frnt_deg"), std::string::npos)
+      << head.status().message();
 
   const std::string rig = WriteFile(dir / "rig.yaml", "head: missing.yaml\n");
   auto root = ConfigNode::LoadFile(rig);

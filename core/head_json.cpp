@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <filesystem>
-
 #include <nlohmann/json.hpp>
 
 #include "core/geometry_json.h"
@@ -59,13 +58,16 @@ nlohmann::json HeadSpecToJson(const HeadSpec& head, const std::string& mesh_file
   return j;
 }
 
-Result<HeadSpec> HeadSpecFromJson(const nlohmann::json& j, const std::string& base_dir, const std::string& where) {
+Result<HeadSpec> HeadSpecFromJson(const nlohmann::json& j, const std::string& base_dir,
+                                  const std::string& where) {
   const JsonObject o(j, where);
   HeadSpec head;
   if (o.Has("mesh_file")) {
     const std::filesystem::path path(o.String("mesh_file"));
     if (o.ok() && path.empty()) o.Fail("mesh_file", "is empty");
-    head.mesh_file = path.is_absolute() ? path.string() : (std::filesystem::path(base_dir) / path).lexically_normal().string();
+    head.mesh_file = path.is_absolute()
+                         ? path.string()
+                         : (std::filesystem::path(base_dir) / path).lexically_normal().string();
     head.turntable_from_mesh = PoseField(o, "turntable_from_mesh");
   }
   head.center_turntable_mm = Vector3Field(o, "center_turntable_mm");

@@ -2,17 +2,18 @@
 // truth records the true head (<capture>/ground_truth/ground_truth.json,
 // "head"). Turntable frame, mm and deg, like the spec:
 //
-//   {"mesh_file": "head_mesh.ply",           // absent for an ellipsoid head; relative to the JSON file's folder
+//   {"mesh_file": "head_mesh.ply",           // absent for an ellipsoid head; relative to the JSON
+//   file's folder
 //    "turntable_from_mesh": pose,            // with a mesh only (core/geometry_json.h)
 //    "center_turntable_mm": [x, y, z], "radii_mm": [rx, ry, rz], "albedo": [r, g, b],
-//    "scalp": {"defined", "center_turntable_mm", "face_dir", "hairline_front_deg", "hairline_temple_deg",
+//    "scalp": {"defined", "center_turntable_mm", "face_dir", "hairline_front_deg",
+//    "hairline_temple_deg",
 //              "hairline_ear_deg", "hairline_nape_deg", "parting", "parting_offset_deg",
 //              "parting_width_mm", "parting_back_deg"}}
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "core/head_spec.h"
 #include "core/status.h"
@@ -32,6 +33,7 @@ nlohmann::json HeadSpecToJson(const HeadSpec& head, const std::string& mesh_file
 // is missing or of the wrong type, a number that is not finite, radii that are
 // not positive, a face direction without a horizontal part or a negative
 // parting width.
-Result<HeadSpec> HeadSpecFromJson(const nlohmann::json& j, const std::string& base_dir, const std::string& where);
+Result<HeadSpec> HeadSpecFromJson(const nlohmann::json& j, const std::string& base_dir,
+                                  const std::string& where);
 
 }  // namespace hairrig

@@ -1,6 +1,7 @@
 #include "core/head_json.h"
 
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 
 namespace hairrig {
@@ -10,8 +11,9 @@ namespace {
 HeadSpec UnusualHead() {
   HeadSpec h;
   h.mesh_file = "/somewhere/heads/mannequin.ply";
-  h.turntable_from_mesh = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
-                                  Eigen::Vector3d(4, -5, 260));
+  h.turntable_from_mesh =
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
+              Eigen::Vector3d(4, -5, 260));
   h.center_turntable_mm = Eigen::Vector3d(1, -2, 240);
   h.radii_mm = Eigen::Vector3d(70, 90, 110);
   h.albedo = Eigen::Vector3d(0.5, 0.4, 0.3);
@@ -38,7 +40,8 @@ TEST(HeadJson, EveryFieldSurvivesARoundTripWithTheMeshBesideTheFile) {
   ASSERT_TRUE(back.ok()) << back.status().ToString();
   EXPECT_EQ(back->mesh_file, "/captures/c1/ground_truth/head_mesh.ply");
   EXPECT_LT(RotationDifferenceDeg(back->turntable_from_mesh, h.turntable_from_mesh), 1e-9);
-  EXPECT_LT((back->turntable_from_mesh.translation - h.turntable_from_mesh.translation).norm(), 1e-12);
+  EXPECT_LT((back->turntable_from_mesh.translation - h.turntable_from_mesh.translation).norm(),
+            1e-12);
   EXPECT_EQ(back->center_turntable_mm, h.center_turntable_mm);
   EXPECT_EQ(back->radii_mm, h.radii_mm);
   EXPECT_EQ(back->albedo, h.albedo);
@@ -77,7 +80,8 @@ TEST(HeadJson, ADamagedHeadIsCorruptDataNamingTheFileAndTheField) {
     auto head = HeadSpecFromJson(j, "/base", "gt.json: head");
     ASSERT_FALSE(head.ok()) << field;
     EXPECT_EQ(head.status().code(), StatusCode::kCorruptData) << head.status().ToString();
-    EXPECT_NE(head.status().message().find("gt.json: head"), std::string::npos) << head.status().message();
+    EXPECT_NE(head.status().message().find("gt.json: head"), std::string::npos)
+        << head.status().message();
     EXPECT_NE(head.status().message().find(field), std::string::npos) << head.status().message();
   };
   nlohmann::json j = good;

@@ -10,21 +10,20 @@
 // to the nape, minus a parting line, so the face, the ears and the neck stay bare.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <random>
 
-#include <Eigen/Core>
-
+#include "core/head_spec.h"
 #include "core/mesh_bvh.h"
 #include "core/status.h"
 #include "core/triangle_mesh.h"
-#include "core/head_spec.h"
 
 namespace hairrig {
 
 struct HeadHit {
-  double t = 0;                  // along the ray (units of its direction)
-  Eigen::Vector3d normal;        // outward shading normal, unit (turntable frame)
+  double t = 0;            // along the ray (units of its direction)
+  Eigen::Vector3d normal;  // outward shading normal, unit (turntable frame)
 };
 
 class HeadModel {
@@ -41,8 +40,8 @@ class HeadModel {
   const TriangleMesh& mesh() const { return mesh_; }
 
   // Nearest hit of origin + t dir with t in (t_min, t_max) (turntable frame).
-  bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min, double t_max,
-                 HeadHit* hit) const;
+  bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                 double t_max, HeadHit* hit) const;
   // Signed distance to the surface (mm, negative inside) and the outward
   // direction (unit). Exact for an ellipsoid's level sets near it (first order); a
   // mesh's is trilinear in its grid (within about 1 mm near the surface;
@@ -78,7 +77,7 @@ class HeadModel {
   Eigen::Vector3d mesh_centre_mm_ = Eigen::Vector3d::Zero();  // centre of the mesh's bounds
   MeshBvh bvh_;
   std::vector<Eigen::Vector3d> vertex_normals_;
-  std::vector<double> cumulative_scalp_area_;   // per triangle, for sampling
+  std::vector<double> cumulative_scalp_area_;  // per triangle, for sampling
   std::vector<uint32_t> scalp_triangles_;
   // Signed distance grid (mesh only).
   Eigen::Vector3d grid_origin_;

@@ -31,7 +31,8 @@ TEST(HeadModel, TheMeshHeadKeepsPointsOutsideAndKnowsInsideFromOutside) {
   const Eigen::Vector3d lo = (*head)->mesh().MinCorner(), hi = (*head)->mesh().MaxCorner();
   int inside = 0, checked = 0;
   for (int i = 0; i < 3000; ++i) {
-    const Eigen::Vector3d p = 0.5 * (lo + hi) + 0.5 * (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const Eigen::Vector3d p =
+        0.5 * (lo + hi) + 0.5 * (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
     const double d = (*head)->SignedDistance(p, nullptr);
     if (std::abs(d) < 3.0) continue;  // within the grid's resolution of the surface
     ++checked;
@@ -74,7 +75,8 @@ TEST(HeadModel, AMissingMeshNamesTheField) {
   h.mesh_file = "/nonexistent/head.ply";
   auto head = HeadModel::Build(h);
   ASSERT_FALSE(head.ok());
-  EXPECT_NE(head.status().message().find("head.mesh"), std::string::npos) << head.status().message();
+  EXPECT_NE(head.status().message().find("head.mesh"), std::string::npos)
+      << head.status().message();
 }
 
 }  // namespace

@@ -4,9 +4,8 @@
 // (a rig config's or a scene's `head:` section) is core/head_config.h.
 #pragma once
 
-#include <string>
-
 #include <Eigen/Core>
+#include <string>
 
 #include "core/transform.h"
 

@@ -6,7 +6,8 @@
 
 namespace hairrig {
 
-Status WriteImageAtomic(const std::string& path, const cv::Mat& image, const std::vector<int>& params) {
+Status WriteImageAtomic(const std::string& path, const cv::Mat& image,
+                        const std::vector<int>& params) {
   const std::string ext = FileExtension(path);
   if (ext.empty()) return Internal(path + ": no extension to choose the image format by");
   std::vector<uint8_t> bytes;

@@ -3,10 +3,9 @@
 // atomically (core/file_util.h), so no reader ever sees half an image.
 #pragma once
 
+#include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 #include "core/status.h"
 
@@ -15,6 +14,7 @@ namespace hairrig {
 // `params`: OpenCV's imwrite flags (e.g. {cv::IMWRITE_JPEG_QUALITY, 85}).
 // Internal when the image cannot be encoded in that format (a float image as
 // JPEG, an unknown extension); IoError naming the file when it cannot be written.
-Status WriteImageAtomic(const std::string& path, const cv::Mat& image, const std::vector<int>& params = {});
+Status WriteImageAtomic(const std::string& path, const cv::Mat& image,
+                        const std::vector<int>& params = {});
 
 }  // namespace hairrig

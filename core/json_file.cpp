@@ -1,7 +1,6 @@
 #include "core/json_file.h"
 
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"
@@ -38,7 +37,8 @@ std::string RangeText(double min, double max) {
     if (!t.empty() && t.back() == '.') t.pop_back();
     return t;
   };
-  if (std::isfinite(min) && std::isfinite(max)) return " in [" + number(min) + ", " + number(max) + "]";
+  if (std::isfinite(min) && std::isfinite(max))
+    return " in [" + number(min) + ", " + number(max) + "]";
   if (std::isfinite(min)) return " >= " + number(min);
   if (std::isfinite(max)) return " <= " + number(max);
   return "";
@@ -77,14 +77,17 @@ bool ToNumber(const nlohmann::json& v, const JsonRange& range, double* out) {
 
 Result<nlohmann::json> ParseJson(std::string_view text, const std::string& where) {
   int deepest = 0;
-  const nlohmann::json::parser_callback_t depth = [&deepest](int d, nlohmann::json::parse_event_t, nlohmann::json&) {
+  const nlohmann::json::parser_callback_t depth = [&deepest](int d, nlohmann::json::parse_event_t,
+                                                             nlohmann::json&) {
     deepest = std::max(deepest, d);
     return true;
   };
-  nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), depth, /*allow_exceptions=*/false);
+  nlohmann::json j =
+      nlohmann::json::parse(text.begin(), text.end(), depth, /*allow_exceptions=*/false);
   if (j.is_discarded()) return CorruptData(where + ": not valid JSON");
   if (deepest > kMaxJsonDepth)
-    return CorruptData(where + ": not valid JSON (nested deeper than " + std::to_string(kMaxJsonDepth) + " levels)");
+    return CorruptData(where + ": not valid JSON (nested deeper than " +
+                       std::to_string(kMaxJsonDepth) + " levels)");
   return j;
 }
 
@@ -99,7 +102,8 @@ Result<nlohmann::json> ReadJsonFile(const std::string& path, const std::string& 
 JsonObject::JsonObject(const nlohmann::json& j, std::string where)
     : JsonObject(&j, std::move(where), "", std::make_shared<Status>()) {}
 
-JsonObject::JsonObject(const nlohmann::json* j, std::string where, std::string path, std::shared_ptr<Status> error)
+JsonObject::JsonObject(const nlohmann::json* j, std::string where, std::string path,
+                       std::shared_ptr<Status> error)
     : j_(j), where_(std::move(where)), path_(std::move(path)), error_(std::move(error)) {
   if (!j_->is_object()) Fail("", "expected an object, got " + Shown(*j_));
 }
@@ -191,7 +195,9 @@ bool JsonObject::Bool(std::string_view key) const {
   return v->get<bool>();
 }
 
-bool JsonObject::BoolOr(std::string_view key, bool fallback) const { return Has(key) ? Bool(key) : fallback; }
+bool JsonObject::BoolOr(std::string_view key, bool fallback) const {
+  return Has(key) ? Bool(key) : fallback;
+}
 
 std::vector<double> JsonObject::Numbers(std::string_view key, size_t size) const {
   const nlohmann::json* v = Required(key);
@@ -220,7 +226,8 @@ std::vector<int64_t> JsonObject::IntegersOr(std::string_view key, JsonIntRange r
   std::vector<int64_t> out(v.size());
   for (size_t i = 0; i < v.size(); ++i) {
     if (!ToInteger(v[i], range, &out[i])) {
-      Fail(key, "item " + std::to_string(i) + ": expected an integer" + IntRangeText(range) + ", got " + Shown(v[i]));
+      Fail(key, "item " + std::to_string(i) + ": expected an integer" + IntRangeText(range) +
+                    ", got " + Shown(v[i]));
       return {};
     }
   }
@@ -242,7 +249,8 @@ std::vector<JsonObject> JsonObject::Objects(std::string_view key) const {
   std::vector<JsonObject> out;
   out.reserve(v->size());
   for (size_t i = 0; i < v->size(); ++i)
-    out.push_back(JsonObject(&(*v)[i], where_, JoinPath(path_, key) + "[" + std::to_string(i) + "]", error_));
+    out.push_back(
+        JsonObject(&(*v)[i], where_, JoinPath(path_, key) + "[" + std::to_string(i) + "]", error_));
   return out;
 }
 

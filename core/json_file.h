@@ -7,11 +7,10 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "core/status.h"
 
@@ -103,7 +102,8 @@ class JsonObject {
   void Record(const Status& status) const;
 
  private:
-  JsonObject(const nlohmann::json* j, std::string where, std::string path, std::shared_ptr<Status> error);
+  JsonObject(const nlohmann::json* j, std::string where, std::string path,
+             std::shared_ptr<Status> error);
   // The field's value, or nullptr (with an error recorded) when it is absent or null.
   const nlohmann::json* Required(std::string_view key) const;
 

@@ -1,6 +1,7 @@
 #include "core/json_file.h"
 
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 
 namespace hairrig {
@@ -9,8 +10,13 @@ namespace {
 using nlohmann::json;
 
 TEST(JsonObject, ReadsTypedFields) {
-  const json j = {{"serial", "CAM-1"}, {"view", 3}, {"angle_deg", 12.5}, {"ok", true},
-                  {"pose", {{"t", {1, 2, 3}}}}, {"ids", {4, 5}}, {"frames", {{{"file", "a"}}, {{"file", "b"}}}}};
+  const json j = {{"serial", "CAM-1"},
+                  {"view", 3},
+                  {"angle_deg", 12.5},
+                  {"ok", true},
+                  {"pose", {{"t", {1, 2, 3}}}},
+                  {"ids", {4, 5}},
+                  {"frames", {{{"file", "a"}}, {{"file", "b"}}}}};
   JsonObject r(j, "f.json");
   EXPECT_EQ(r.String("serial"), "CAM-1");
   EXPECT_EQ(r.Integer("view", {.min = 0, .max = 10}), 3);
@@ -30,21 +36,27 @@ TEST(JsonObject, ErrorsNameTheRecordAndTheField) {
   const json j = json::parse(R"({"view": -1, "bytes": 2.5, "sha256": 5, "big": 18446744073709551615,
                                  "pose": {"t": [1, "x", 3]}, "frames": [{"file": 1}], "list": "no"})");
   const std::vector<std::pair<std::function<void(const JsonObject&)>, std::string>> cases = {
-      {[](const JsonObject& r) { r.Integer("view", {.min = 0}); }, "field 'view': expected an integer >= 0, got -1"},
-      {[](const JsonObject& r) { r.Integer("bytes"); }, "field 'bytes': expected an integer, got 2.5"},
+      {[](const JsonObject& r) { r.Integer("view", {.min = 0}); },
+       "field 'view': expected an integer >= 0, got -1"},
+      {[](const JsonObject& r) { r.Integer("bytes"); },
+       "field 'bytes': expected an integer, got 2.5"},
       {[](const JsonObject& r) { r.String("sha256"); }, "field 'sha256': expected a string, got 5"},
       {[](const JsonObject& r) { r.String("serial"); }, "field 'serial': is missing"},
       {[](const JsonObject& r) { r.Integer("big"); }, "field 'big': expected an integer"},
       {[](const JsonObject& r) { r.Object("pose").Numbers("t", 3); }, "field 'pose.t': item 1"},
-      {[](const JsonObject& r) { r.Objects("frames")[0].String("file"); }, "field 'frames[0].file'"},
-      {[](const JsonObject& r) { r.IntegersOr("list"); }, "field 'list': expected a list of integers"},
-      {[](const JsonObject& r) { r.Object("view").String("x"); }, "field 'view': expected an object, got -1"},
+      {[](const JsonObject& r) { r.Objects("frames")[0].String("file"); },
+       "field 'frames[0].file'"},
+      {[](const JsonObject& r) { r.IntegersOr("list"); },
+       "field 'list': expected a list of integers"},
+      {[](const JsonObject& r) { r.Object("view").String("x"); },
+       "field 'view': expected an object, got -1"},
   };
   for (const auto& [read, expected] : cases) {
     const JsonObject r(j, "c/journal.jsonl: line 7");
     read(r);
     EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
-    EXPECT_EQ(r.status().message().rfind("c/journal.jsonl: line 7: ", 0), 0u) << r.status().message();
+    EXPECT_EQ(r.status().message().rfind("c/journal.jsonl: line 7: ", 0), 0u)
+        << r.status().message();
     EXPECT_NE(r.status().message().find(expected), std::string::npos) << r.status().message();
   }
 }

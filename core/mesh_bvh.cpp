@@ -50,7 +50,8 @@ MeshBvh::MeshBvh(const TriangleMesh& mesh) {
   }
   triangles_.resize(n);
   for (uint32_t t = 0; t < n; ++t) {
-    triangles_[t] = {mesh.Corner(t, 0), mesh.Corner(t, 1) - mesh.Corner(t, 0), mesh.Corner(t, 2) - mesh.Corner(t, 0)};
+    triangles_[t] = {mesh.Corner(t, 0), mesh.Corner(t, 1) - mesh.Corner(t, 0),
+                     mesh.Corner(t, 2) - mesh.Corner(t, 0)};
   }
   nodes_.reserve(2 * n);
   nodes_.emplace_back();
@@ -63,7 +64,8 @@ MeshBvh::MeshBvh(const TriangleMesh& mesh) {
 
 // Fills `node` and its subtree over order_[begin, end); children take two
 // consecutive slots appended to nodes_.
-void MeshBvh::Build(uint32_t node, uint32_t begin, uint32_t end, const std::vector<Eigen::Vector3d>& centroids) {
+void MeshBvh::Build(uint32_t node, uint32_t begin, uint32_t end,
+                    const std::vector<Eigen::Vector3d>& centroids) {
   Bounds box, centre_box;
   for (uint32_t i = begin; i < end; ++i) {
     const Triangle& t = triangles_[order_[i]];
@@ -74,7 +76,8 @@ void MeshBvh::Build(uint32_t node, uint32_t begin, uint32_t end, const std::vect
   nodes_[node].hi = box.hi.cast<float>();
   // Float bounds rounded outward so no triangle pokes out of its box.
   for (int k = 0; k < 3; ++k) {
-    nodes_[node].lo[k] = std::nextafter(nodes_[node].lo[k], -std::numeric_limits<float>::infinity());
+    nodes_[node].lo[k] =
+        std::nextafter(nodes_[node].lo[k], -std::numeric_limits<float>::infinity());
     nodes_[node].hi[k] = std::nextafter(nodes_[node].hi[k], std::numeric_limits<float>::infinity());
   }
   const uint32_t count = end - begin;
@@ -105,8 +108,10 @@ void MeshBvh::Build(uint32_t node, uint32_t begin, uint32_t end, const std::vect
   for (int split = 1; split < kBins; ++split) {
     Bounds left, right;
     uint32_t n_left = 0, n_right = 0;
-    for (int b = 0; b < split; ++b) left.Grow(bins[static_cast<size_t>(b)]), n_left += bin_count[static_cast<size_t>(b)];
-    for (int b = split; b < kBins; ++b) right.Grow(bins[static_cast<size_t>(b)]), n_right += bin_count[static_cast<size_t>(b)];
+    for (int b = 0; b < split; ++b)
+      left.Grow(bins[static_cast<size_t>(b)]), n_left += bin_count[static_cast<size_t>(b)];
+    for (int b = split; b < kBins; ++b)
+      right.Grow(bins[static_cast<size_t>(b)]), n_right += bin_count[static_cast<size_t>(b)];
     if (n_left == 0 || n_right == 0) continue;
     const double cost = left.Area() * n_left + right.Area() * n_right;
     if (cost < best_cost) best_cost = cost, best_split = split;
@@ -114,7 +119,8 @@ void MeshBvh::Build(uint32_t node, uint32_t begin, uint32_t end, const std::vect
   auto* middle = std::partition(order_.data() + begin, order_.data() + end,
                                 [&](uint32_t tri) { return bin_of(tri) < best_split; });
   auto mid = static_cast<uint32_t>(middle - order_.data());
-  if (mid == begin || mid == end) mid = begin + count / 2;  // every centroid in one bin: split by count
+  if (mid == begin || mid == end)
+    mid = begin + count / 2;  // every centroid in one bin: split by count
   const auto left = static_cast<uint32_t>(nodes_.size());
   nodes_[node].first = left;
   nodes_[node].count = 0;
@@ -125,8 +131,8 @@ void MeshBvh::Build(uint32_t node, uint32_t begin, uint32_t end, const std::vect
 }
 
 template <bool kAnyHit>
-bool MeshBvh::Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min, double t_max,
-                       MeshRayHit* hit) const {
+bool MeshBvh::Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                       double t_max, MeshRayHit* hit) const {
   if (nodes_.empty()) return false;
   const Eigen::Vector3d inv_dir(1.0 / dir.x(), 1.0 / dir.y(), 1.0 / dir.z());
   std::array<uint32_t, 64> stack;
@@ -140,9 +146,10 @@ bool MeshBvh::Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir
     if (n.count == 0) {
       // Visit the nearer child first: push it last.
       double t_left = 0, t_right = 0;
-      const bool hit_left = HitsBox(nodes_[n.first].lo, nodes_[n.first].hi, origin, inv_dir, t_min, t_max, &t_left);
-      const bool hit_right =
-          HitsBox(nodes_[n.first + 1].lo, nodes_[n.first + 1].hi, origin, inv_dir, t_min, t_max, &t_right);
+      const bool hit_left =
+          HitsBox(nodes_[n.first].lo, nodes_[n.first].hi, origin, inv_dir, t_min, t_max, &t_left);
+      const bool hit_right = HitsBox(nodes_[n.first + 1].lo, nodes_[n.first + 1].hi, origin,
+                                     inv_dir, t_min, t_max, &t_right);
       if (hit_left && hit_right && top + 2 <= stack.size()) {
         const bool left_first = t_left <= t_right;
         stack[top++] = left_first ? n.first + 1 : n.first;
@@ -181,8 +188,8 @@ bool MeshBvh::Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir
   return found;
 }
 
-bool MeshBvh::Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min, double t_max,
-                        MeshRayHit* hit) const {
+bool MeshBvh::Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                        double t_max, MeshRayHit* hit) const {
   return Traverse<false>(origin, dir, t_min, t_max, hit);
 }
 

@@ -4,19 +4,18 @@
 // mesh's; ray directions need not be unit length (t is in units of `dir`).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/triangle_mesh.h"
 
 namespace hairrig {
 
 struct MeshRayHit {
-  double t = 0;            // origin + t * dir is the hit point
-  uint32_t triangle = 0;   // index into the mesh's triangles
-  double u = 0, v = 0;     // barycentric weights of corners 1 and 2
+  double t = 0;           // origin + t * dir is the hit point
+  uint32_t triangle = 0;  // index into the mesh's triangles
+  double u = 0, v = 0;    // barycentric weights of corners 1 and 2
 };
 
 class MeshBvh {
@@ -26,10 +25,11 @@ class MeshBvh {
 
   // The nearest hit with t in (t_min, t_max), from either side of a triangle;
   // false if there is none.
-  bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min, double t_max,
-                 MeshRayHit* hit) const;
+  bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                 double t_max, MeshRayHit* hit) const;
   // Any hit with t in (t_min, t_max) (cheaper than Intersect: stops at the first).
-  bool Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min, double t_max) const;
+  bool Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                double t_max) const;
   // Whether `p` lies inside the closed mesh (odd number of crossings along a fixed ray).
   bool Contains(const Eigen::Vector3d& p) const;
 
@@ -39,16 +39,17 @@ class MeshBvh {
  private:
   struct Node {
     Eigen::Vector3f lo, hi;
-    uint32_t first = 0;   // leaf: first triangle in order_; inner: index of the left child
-    uint32_t count = 0;   // leaf: number of triangles; inner: 0 (right child is left + 1)
+    uint32_t first = 0;  // leaf: first triangle in order_; inner: index of the left child
+    uint32_t count = 0;  // leaf: number of triangles; inner: 0 (right child is left + 1)
   };
   struct Triangle {
     Eigen::Vector3d p0, e1, e2;
   };
   template <bool kAnyHit>
-  bool Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min, double t_max,
-                MeshRayHit* hit) const;
-  void Build(uint32_t node, uint32_t begin, uint32_t end, const std::vector<Eigen::Vector3d>& centroids);
+  bool Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                double t_max, MeshRayHit* hit) const;
+  void Build(uint32_t node, uint32_t begin, uint32_t end,
+             const std::vector<Eigen::Vector3d>& centroids);
 
   std::vector<Node> nodes_;
   std::vector<Triangle> triangles_;  // in leaf order

@@ -29,7 +29,8 @@ void ParallelFor(size_t count, int threads, MakeWorker make_worker) {
     for (size_t i = next++; i < count; i = next++) worker(i);
   };
   std::vector<std::thread> pool;
-  const size_t extra = std::min(count, static_cast<size_t>(std::max(1, threads))) - (count > 0 ? 1 : 0);
+  const size_t extra =
+      std::min(count, static_cast<size_t>(std::max(1, threads))) - (count > 0 ? 1 : 0);
   for (size_t t = 0; t < extra; ++t) pool.emplace_back(run);
   run();
   for (std::thread& thread : pool) thread.join();

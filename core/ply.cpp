@@ -22,16 +22,17 @@ T Load(const uint8_t* raw) {
 }  // namespace
 
 Status PlyCorrupt(const std::string& name, const std::string& what) {
-  return CorruptData(name + ": " + what + " (the file is truncated or not in the format its name says)");
+  return CorruptData(name + ": " + what +
+                     " (the file is truncated or not in the format its name says)");
 }
 
 bool ParsePlyType(const std::string& t, PlyType* out) {
   static const std::pair<const char*, PlyType> kNames[] = {
-      {"char", PlyType::kInt8},     {"int8", PlyType::kInt8},       {"uchar", PlyType::kUInt8},
-      {"uint8", PlyType::kUInt8},   {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
-      {"ushort", PlyType::kUInt16}, {"uint16", PlyType::kUInt16},   {"int", PlyType::kInt32},
-      {"int32", PlyType::kInt32},   {"uint", PlyType::kUInt32},     {"uint32", PlyType::kUInt32},
-      {"float", PlyType::kFloat32}, {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
+      {"char", PlyType::kInt8},      {"int8", PlyType::kInt8},       {"uchar", PlyType::kUInt8},
+      {"uint8", PlyType::kUInt8},    {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
+      {"ushort", PlyType::kUInt16},  {"uint16", PlyType::kUInt16},   {"int", PlyType::kInt32},
+      {"int32", PlyType::kInt32},    {"uint", PlyType::kUInt32},     {"uint32", PlyType::kUInt32},
+      {"float", PlyType::kFloat32},  {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
       {"float64", PlyType::kFloat64}};
   for (const auto& [n, type] : kNames) {
     if (t == n) {
@@ -45,13 +46,17 @@ bool ParsePlyType(const std::string& t, PlyType* out) {
 size_t PlyTypeSize(PlyType t) {
   switch (t) {
     case PlyType::kInt8:
-    case PlyType::kUInt8: return 1;
+    case PlyType::kUInt8:
+      return 1;
     case PlyType::kInt16:
-    case PlyType::kUInt16: return 2;
+    case PlyType::kUInt16:
+      return 2;
     case PlyType::kInt32:
     case PlyType::kUInt32:
-    case PlyType::kFloat32: return 4;
-    case PlyType::kFloat64: return 8;
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
   }
   return 0;
 }
@@ -67,11 +72,13 @@ Status CheckElementCounts(const PlyHeader& header, size_t body_bytes, const std:
   for (const PlyElement& e : header.elements) {
     if (e.count == 0) continue;
     if (e.properties.empty())
-      return PlyCorrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) + " records but has no properties");
+      return PlyCorrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) +
+                                  " records but has no properties");
     const uint64_t per_record = ascii ? 2 * e.properties.size() : e.MinRecordBytes();
     if (e.count > left / per_record) {
-      return PlyCorrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) + " records, more than the " +
-                                  std::to_string(body_bytes) + " bytes after the header hold");
+      return PlyCorrupt(name, "element '" + e.name + "' claims " + std::to_string(e.count) +
+                                  " records, more than the " + std::to_string(body_bytes) +
+                                  " bytes after the header hold");
     }
     left -= e.count * per_record;
   }
@@ -89,7 +96,8 @@ Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::s
   if (end == std::string::npos) return PlyCorrupt(name, "has no 'end_header' line");
   size_t data = end + end_marker.size();
   if (data < head.size() && head[data] == '\r') ++data;
-  if (data >= head.size() || head[data] != '\n') return PlyCorrupt(name, "'end_header' is not followed by a newline");
+  if (data >= head.size() || head[data] != '\n')
+    return PlyCorrupt(name, "'end_header' is not followed by a newline");
   PlyHeader header;
   header.data_offset = data + 1;
   std::istringstream lines(head.substr(0, end));
@@ -106,10 +114,14 @@ Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::s
     if (keyword == "format") {
       std::string enc;
       words >> enc;
-      if (enc == "ascii") header.encoding = PlyEncoding::kAscii;
-      else if (enc == "binary_little_endian") header.encoding = PlyEncoding::kBinaryLittle;
-      else if (enc == "binary_big_endian") header.encoding = PlyEncoding::kBinaryBig;
-      else return PlyCorrupt(name, where + ": unknown format '" + enc + "'");
+      if (enc == "ascii")
+        header.encoding = PlyEncoding::kAscii;
+      else if (enc == "binary_little_endian")
+        header.encoding = PlyEncoding::kBinaryLittle;
+      else if (enc == "binary_big_endian")
+        header.encoding = PlyEncoding::kBinaryBig;
+      else
+        return PlyCorrupt(name, where + ": unknown format '" + enc + "'");
       have_format = true;
     } else if (keyword == "element") {
       PlyElement e;
@@ -132,11 +144,13 @@ Result<PlyHeader> ParsePlyHeader(const std::vector<uint8_t>& bytes, const std::s
         }
       } else {
         words >> p.name;
-        if (!ParsePlyType(type, &p.type)) return PlyCorrupt(name, where + ": unknown property type '" + type + "'");
+        if (!ParsePlyType(type, &p.type))
+          return PlyCorrupt(name, where + ": unknown property type '" + type + "'");
       }
       if (p.name.empty()) return PlyCorrupt(name, where + ": property without a name");
       header.elements.back().properties.push_back(p);
-    } else if (keyword == "ply" || keyword == "comment" || keyword == "obj_info" || keyword.empty()) {
+    } else if (keyword == "ply" || keyword == "comment" || keyword == "obj_info" ||
+               keyword.empty()) {
       continue;
     } else {
       return PlyCorrupt(name, where + ": unknown keyword '" + keyword + "'");
@@ -167,19 +181,33 @@ bool PlyValueReader::Next(PlyType type, double* value, float* as_float) {
   pos_ += n;
   if (encoding_ == PlyEncoding::kBinaryBig) std::reverse(raw, raw + n);
   switch (type) {
-    case PlyType::kInt8: *value = static_cast<int8_t>(raw[0]); break;
-    case PlyType::kUInt8: *value = raw[0]; break;
-    case PlyType::kInt16: *value = Load<int16_t>(raw); break;
-    case PlyType::kUInt16: *value = Load<uint16_t>(raw); break;
-    case PlyType::kInt32: *value = Load<int32_t>(raw); break;
-    case PlyType::kUInt32: *value = Load<uint32_t>(raw); break;
+    case PlyType::kInt8:
+      *value = static_cast<int8_t>(raw[0]);
+      break;
+    case PlyType::kUInt8:
+      *value = raw[0];
+      break;
+    case PlyType::kInt16:
+      *value = Load<int16_t>(raw);
+      break;
+    case PlyType::kUInt16:
+      *value = Load<uint16_t>(raw);
+      break;
+    case PlyType::kInt32:
+      *value = Load<int32_t>(raw);
+      break;
+    case PlyType::kUInt32:
+      *value = Load<uint32_t>(raw);
+      break;
     case PlyType::kFloat32: {
       const float f = Load<float>(raw);
       if (as_float) *as_float = f;
       *value = f;
       break;
     }
-    case PlyType::kFloat64: *value = Load<double>(raw); break;
+    case PlyType::kFloat64:
+      *value = Load<double>(raw);
+      break;
   }
   if (as_float && type != PlyType::kFloat32) *as_float = ToFloat(*value);
   return true;

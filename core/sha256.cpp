@@ -35,8 +35,8 @@ Sha256::Sha256() : state_(kInitialState) {}
 void Sha256::Compress(const uint8_t* block) {
   uint32_t w[64];
   for (int t = 0; t < 16; ++t) {
-    w[t] = (uint32_t{block[4 * t]} << 24) | (uint32_t{block[4 * t + 1]} << 16) | (uint32_t{block[4 * t + 2]} << 8) |
-           uint32_t{block[4 * t + 3]};
+    w[t] = (uint32_t{block[4 * t]} << 24) | (uint32_t{block[4 * t + 1]} << 16) |
+           (uint32_t{block[4 * t + 2]} << 8) | uint32_t{block[4 * t + 3]};
   }
   for (int t = 16; t < 64; ++t) {
     const uint32_t s0 = RotateRight(w[t - 15], 7) ^ RotateRight(w[t - 15], 18) ^ (w[t - 15] >> 3);
@@ -117,7 +117,8 @@ std::string Sha256Hex(const void* data, size_t size) {
   return hash.HexDigest();
 }
 
-Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes, uint64_t* bytes_hashed) {
+Result<std::string> Sha256OfFile(const std::string& path, uint64_t max_bytes,
+                                 uint64_t* bytes_hashed) {
   Sha256 hash;
   uint64_t total = 0;
   const Status read = ReadFileChunks(path, max_bytes, [&](const uint8_t* data, size_t size) {

@@ -1,11 +1,11 @@
 #include "core/sha256.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "core/file_util.h"
 
@@ -15,7 +15,8 @@ namespace {
 // Test vectors from FIPS 180-4's examples (NIST CSRC "SHA256.pdf").
 TEST(Sha256, KnownVectors) {
   EXPECT_EQ(Sha256Hex("", 0), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
-  EXPECT_EQ(Sha256Hex("abc", 3), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(Sha256Hex("abc", 3),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
   const std::string two_blocks = "abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq";
   EXPECT_EQ(Sha256Hex(two_blocks.data(), two_blocks.size()),
             "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
@@ -31,7 +32,8 @@ TEST(Sha256, IncrementalEqualsOneShotForEveryChunking) {
   const std::string expected = Sha256Hex(data.data(), data.size());
   for (size_t chunk : {1, 3, 55, 56, 63, 64, 65, 127, 999}) {
     Sha256 hash;
-    for (size_t at = 0; at < data.size(); at += chunk) hash.Update(data.data() + at, std::min(chunk, data.size() - at));
+    for (size_t at = 0; at < data.size(); at += chunk)
+      hash.Update(data.data() + at, std::min(chunk, data.size() - at));
     EXPECT_EQ(hash.HexDigest(), expected) << "chunk " << chunk;
   }
 }

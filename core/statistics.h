@@ -15,7 +15,9 @@ template <typename T>
 double Quantile(std::vector<T> values, double q) {
   if (values.empty()) return 0;
   const double position = q > 0 ? q * static_cast<double>(values.size()) : 0.0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(std::min(position, static_cast<double>(values.size()))));
+  const size_t k =
+      std::min(values.size() - 1,
+               static_cast<size_t>(std::min(position, static_cast<double>(values.size()))));
   const auto kth = values.begin() + static_cast<std::ptrdiff_t>(k);
   std::nth_element(values.begin(), kth, values.end());
   return static_cast<double>(*kth);

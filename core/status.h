@@ -50,7 +50,9 @@ class [[nodiscard]] Status {
   std::string message_;
 };
 
-inline Status InvalidArgument(std::string m) { return {StatusCode::kInvalidArgument, std::move(m)}; }
+inline Status InvalidArgument(std::string m) {
+  return {StatusCode::kInvalidArgument, std::move(m)};
+}
 inline Status NotFound(std::string m) { return {StatusCode::kNotFound, std::move(m)}; }
 inline Status IoError(std::string m) { return {StatusCode::kIoError, std::move(m)}; }
 inline Status CorruptData(std::string m) { return {StatusCode::kCorruptData, std::move(m)}; }
@@ -67,7 +69,7 @@ inline Status Internal(std::string m) { return {StatusCode::kInternal, std::move
 template <typename T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : data_(std::move(value)) {}  // NOLINT: implicit by design
+  Result(T value) : data_(std::move(value)) {}        // NOLINT: implicit by design
   Result(Status status) : data_(std::move(status)) {  // NOLINT: implicit by design
     assert(!std::get<Status>(data_).ok() && "Result built from an ok Status has no value");
   }
@@ -93,10 +95,10 @@ class [[nodiscard]] Result {
 #define HR_CONCAT(a, b) HR_CONCAT_INNER(a, b)
 
 // Returns the Status from the enclosing function if `expr` is not ok.
-#define HR_RETURN_IF_ERROR(expr)                 \
-  do {                                           \
-    ::hairrig::Status hr_status_ = (expr);       \
-    if (!hr_status_.ok()) return hr_status_;     \
+#define HR_RETURN_IF_ERROR(expr)             \
+  do {                                       \
+    ::hairrig::Status hr_status_ = (expr);   \
+    if (!hr_status_.ok()) return hr_status_; \
   } while (false)
 
 // `HR_ASSIGN_OR_RETURN(auto x, MakeX());` declares x from a Result or returns its Status.

@@ -27,7 +27,9 @@ class ByteReader {
     return true;
   }
   template <typename T>
-  bool Get(T* out) { return Read(out, sizeof(T)); }
+  bool Get(T* out) {
+    return Read(out, sizeof(T));
+  }
 
  private:
   const std::vector<uint8_t>& bytes_;
@@ -46,13 +48,14 @@ class ByteWriter {
 };
 
 Status Corrupt(const std::string& name, const std::string& what) {
-  return CorruptData(name + ": " + what + " (the file is truncated or not in the format its name says)");
+  return CorruptData(name + ": " + what +
+                     " (the file is truncated or not in the format its name says)");
 }
 
 Status ReadPoints(ByteReader& in, size_t count, const std::string& name, StrandSet* set) {
   if (count > in.remaining() / 12) {
-    return Corrupt(name, "needs " + std::to_string(count) + " points but only " + std::to_string(in.remaining()) +
-                             " bytes are left");
+    return Corrupt(name, "needs " + std::to_string(count) + " points but only " +
+                             std::to_string(in.remaining()) + " bytes are left");
   }
   const size_t first = set->points_mm.size();
   set->points_mm.resize(first + count);
@@ -89,9 +92,11 @@ Result<StrandSet> DecodeHair(const std::vector<uint8_t>& bytes, const std::strin
   HairHeader h;
   if (!in.Get(&h)) return Corrupt(name, "shorter than the 128-byte .hair header");
   if (std::memcmp(h.magic, "HAIR", 4) != 0) return Corrupt(name, "does not start with 'HAIR'");
-  if (!(h.flags & kHairHasPoints)) return Corrupt(name, "header says the file holds no points array");
+  if (!(h.flags & kHairHasPoints))
+    return Corrupt(name, "header says the file holds no points array");
   // Counts are checked against the bytes that follow before anything is allocated.
-  const uint64_t needed = uint64_t{h.point_count} * 12 + ((h.flags & kHairHasSegments) ? uint64_t{h.strand_count} * 2 : 0);
+  const uint64_t needed = uint64_t{h.point_count} * 12 +
+                          ((h.flags & kHairHasSegments) ? uint64_t{h.strand_count} * 2 : 0);
   if (needed > in.remaining()) {
     return Corrupt(name, "header claims " + std::to_string(h.strand_count) + " strands of " +
                              std::to_string(h.point_count) + " points, more than the " +
@@ -115,17 +120,19 @@ Result<StrandSet> DecodeHair(const std::vector<uint8_t>& bytes, const std::strin
   uint64_t total = 0;
   for (uint32_t c : set.point_counts) total += c;
   if (total != h.point_count) {
-    return Corrupt(name, "segment counts add up to " + std::to_string(total) + " points but the header says " +
-                             std::to_string(h.point_count));
+    return Corrupt(name, "segment counts add up to " + std::to_string(total) +
+                             " points but the header says " + std::to_string(h.point_count));
   }
   HR_RETURN_IF_ERROR(ReadPoints(in, h.point_count, name, &set));
   const size_t per_point_floats = ((h.flags & kHairHasThickness) ? 1 : 0) +
-                                  ((h.flags & kHairHasTransparency) ? 1 : 0) + ((h.flags & kHairHasColor) ? 3 : 0);
+                                  ((h.flags & kHairHasTransparency) ? 1 : 0) +
+                                  ((h.flags & kHairHasColor) ? 3 : 0);
   if (per_point_floats * 4 > 0 && in.remaining() / (per_point_floats * 4) < h.point_count) {
     return Corrupt(name, "thickness/transparency/colour arrays are shorter than the point count");
   }
-  const size_t skip = size_t{h.point_count} * 4 *
-                      (((h.flags & kHairHasThickness) ? 1 : 0) + ((h.flags & kHairHasTransparency) ? 1 : 0));
+  const size_t skip =
+      size_t{h.point_count} * 4 *
+      (((h.flags & kHairHasThickness) ? 1 : 0) + ((h.flags & kHairHasTransparency) ? 1 : 0));
   ByteReader colors(bytes, in.pos() + skip);
   if (h.flags & kHairHasColor) {
     set.colors.resize(h.point_count);
@@ -168,18 +175,25 @@ Result<StrandSet> DecodeData(const std::vector<uint8_t>& bytes, const std::strin
   int32_t strand_count;
   if (!in.Get(&strand_count)) return Corrupt(name, "shorter than the 4-byte strand count");
   if (strand_count < 0 || static_cast<size_t>(strand_count) > in.remaining() / 4) {
-    return Corrupt(name, "strand count " + std::to_string(strand_count) + " is impossible for the file size");
+    return Corrupt(
+        name, "strand count " + std::to_string(strand_count) + " is impossible for the file size");
   }
   StrandSet set;
   set.point_counts.reserve(static_cast<size_t>(strand_count));
   for (int32_t s = 0; s < strand_count; ++s) {
     int32_t count;
-    if (!in.Get(&count)) return Corrupt(name, "ends before the point count of strand " + std::to_string(s));
-    if (count < 1) return Corrupt(name, "strand " + std::to_string(s) + " has point count " + std::to_string(count));
-    HR_RETURN_IF_ERROR(ReadPoints(in, static_cast<size_t>(count), name + " strand " + std::to_string(s), &set));
+    if (!in.Get(&count))
+      return Corrupt(name, "ends before the point count of strand " + std::to_string(s));
+    if (count < 1)
+      return Corrupt(name,
+                     "strand " + std::to_string(s) + " has point count " + std::to_string(count));
+    HR_RETURN_IF_ERROR(
+        ReadPoints(in, static_cast<size_t>(count), name + " strand " + std::to_string(s), &set));
     set.point_counts.push_back(static_cast<uint32_t>(count));
   }
-  if (in.remaining() != 0) return Corrupt(name, std::to_string(in.remaining()) + " unexpected bytes after the last strand");
+  if (in.remaining() != 0)
+    return Corrupt(name,
+                   std::to_string(in.remaining()) + " unexpected bytes after the last strand");
   return set;
 }
 
@@ -197,18 +211,22 @@ Result<std::vector<uint8_t>> EncodeData(const StrandSet& set) {
 // ----- PLY (core/ply.h reads the header and values) -------------------
 // Edges are redundant with the strand counts; where present each must join two
 // consecutive points of one strand (this catches a file cut inside its last edge).
-Status CheckPlyEdges(const StrandSet& set, const std::vector<std::array<double, 2>>& edges, const std::string& name) {
+Status CheckPlyEdges(const StrandSet& set, const std::vector<std::array<double, 2>>& edges,
+                     const std::string& name) {
   if (edges.empty()) return Status::Ok();
   std::vector<uint32_t> strand_of(set.num_points(), 0);
   size_t p = 0;
   for (size_t s = 0; s < set.point_counts.size() && p < strand_of.size(); ++s) {
-    for (uint32_t k = 0; k < set.point_counts[s] && p < strand_of.size(); ++k) strand_of[p++] = static_cast<uint32_t>(s);
+    for (uint32_t k = 0; k < set.point_counts[s] && p < strand_of.size(); ++k)
+      strand_of[p++] = static_cast<uint32_t>(s);
   }
   for (size_t i = 0; i < edges.size(); ++i) {
     const double a = edges[i][0], b = edges[i][1];
     const bool valid = a >= 0 && b == a + 1 && b < static_cast<double>(set.num_points()) &&
                        strand_of[static_cast<size_t>(a)] == strand_of[static_cast<size_t>(b)];
-    if (!valid) return Corrupt(name, "edge " + std::to_string(i) + " does not join two consecutive points of a strand");
+    if (!valid)
+      return Corrupt(
+          name, "edge " + std::to_string(i) + " does not join two consecutive points of a strand");
   }
   return Status::Ok();
 }
@@ -230,11 +248,13 @@ Result<StrandSet> DecodePly(const std::vector<uint8_t>& bytes, const std::string
       const std::string& n = e.properties[i].name;
       for (int k = 0; k < 3; ++k) {
         if (n == std::array<const char*, 3>{"x", "y", "z"}[k]) xyz_index[k] = static_cast<int>(i);
-        if (n == std::array<const char*, 3>{"red", "green", "blue"}[k]) rgb_index[k] = static_cast<int>(i);
+        if (n == std::array<const char*, 3>{"red", "green", "blue"}[k])
+          rgb_index[k] = static_cast<int>(i);
       }
     }
     if (is_vertex) {
-      if (xyz_index[0] < 0 || xyz_index[1] < 0 || xyz_index[2] < 0) return Corrupt(name, "vertex element lacks x, y or z");
+      if (xyz_index[0] < 0 || xyz_index[1] < 0 || xyz_index[2] < 0)
+        return Corrupt(name, "vertex element lacks x, y or z");
       have_vertices = true;
       set.points_mm.resize(e.count);
       if (rgb_index[0] >= 0 && rgb_index[1] >= 0 && rgb_index[2] >= 0) set.colors.resize(e.count);
@@ -253,16 +273,18 @@ Result<StrandSet> DecodePly(const std::vector<uint8_t>& bytes, const std::string
         float as_float = 0.f;
         if (p.is_list) {
           if (!reader.Next(p.count_type, &value) || value < 0 || value > 1e6) {
-            return Corrupt(name, "bad list length in element '" + e.name + "' record " + std::to_string(r));
+            return Corrupt(
+                name, "bad list length in element '" + e.name + "' record " + std::to_string(r));
           }
           for (size_t k = 0, n = static_cast<size_t>(value); k < n; ++k) {
-            if (!reader.Next(p.type, &value)) return Corrupt(name, "ends inside element '" + e.name + "'");
+            if (!reader.Next(p.type, &value))
+              return Corrupt(name, "ends inside element '" + e.name + "'");
           }
           continue;
         }
         if (!reader.Next(p.type, &value, &as_float)) {
-          return Corrupt(name, "ends or is unreadable at element '" + e.name + "' record " + std::to_string(r) +
-                                   " property '" + p.name + "'");
+          return Corrupt(name, "ends or is unreadable at element '" + e.name + "' record " +
+                                   std::to_string(r) + " property '" + p.name + "'");
         }
         const int idx = static_cast<int>(i);
         if (is_vertex) {
@@ -284,7 +306,8 @@ Result<StrandSet> DecodePly(const std::vector<uint8_t>& bytes, const std::string
     }
   }
   if (!have_vertices) return Corrupt(name, "has no 'vertex' element");
-  if (!have_strands) return Corrupt(name, "has no 'strand' element (per-strand 'nsegs'); not a strand PLY");
+  if (!have_strands)
+    return Corrupt(name, "has no 'strand' element (per-strand 'nsegs'); not a strand PLY");
   HR_RETURN_IF_ERROR(CheckPlyEdges(set, edges, name));
   return set;
 }
@@ -301,7 +324,8 @@ Result<std::vector<uint8_t>> EncodePly(const StrandSet& set, bool ascii) {
   std::ostringstream h;
   h << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\n"
     << "comment written by hairrig; units mm\n"
-    << "element vertex " << set.num_points() << "\nproperty float x\nproperty float y\nproperty float z\n";
+    << "element vertex " << set.num_points()
+    << "\nproperty float x\nproperty float y\nproperty float z\n";
   if (has_color) h << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   h << "element strand " << set.num_strands() << "\nproperty " << nsegs_type << " nsegs\n"
     << "element edge " << edges << "\nproperty int vertex1\nproperty int vertex2\nend_header\n";
@@ -314,8 +338,8 @@ Result<std::vector<uint8_t>> EncodePly(const StrandSet& set, bool ascii) {
       int n = std::snprintf(buf, sizeof(buf), "%.9g %.9g %.9g", static_cast<double>(p.x()),
                             static_cast<double>(p.y()), static_cast<double>(p.z()));
       if (has_color) {
-        n += std::snprintf(buf + n, sizeof(buf) - static_cast<size_t>(n), " %d %d %d", set.colors[i][0],
-                           set.colors[i][1], set.colors[i][2]);
+        n += std::snprintf(buf + n, sizeof(buf) - static_cast<size_t>(n), " %d %d %d",
+                           set.colors[i][0], set.colors[i][1], set.colors[i][2]);
       }
       out.PutText(std::string(buf, static_cast<size_t>(n)) + "\n");
     } else {
@@ -352,10 +376,14 @@ Result<std::vector<uint8_t>> EncodePly(const StrandSet& set, bool ascii) {
 
 const char* StrandFormatName(StrandFormat format) {
   switch (format) {
-    case StrandFormat::kHair: return "hair";
-    case StrandFormat::kData: return "data";
-    case StrandFormat::kPlyBinary: return "ply (binary)";
-    case StrandFormat::kPlyAscii: return "ply (ascii)";
+    case StrandFormat::kHair:
+      return "hair";
+    case StrandFormat::kData:
+      return "data";
+    case StrandFormat::kPlyBinary:
+      return "ply (binary)";
+    case StrandFormat::kPlyAscii:
+      return "ply (ascii)";
   }
   return "?";
 }
@@ -365,16 +393,21 @@ Result<StrandFormat> StrandFormatFromPath(const std::string& path) {
   if (ext == "hair") return StrandFormat::kHair;
   if (ext == "data") return StrandFormat::kData;
   if (ext == "ply") return StrandFormat::kPlyBinary;
-  return InvalidArgument(path + ": unknown strand file extension '" + ext + "' (use .hair, .data or .ply)");
+  return InvalidArgument(path + ": unknown strand file extension '" + ext +
+                         "' (use .hair, .data or .ply)");
 }
 
-Result<StrandSet> DecodeStrands(const std::vector<uint8_t>& bytes, StrandFormat format, const std::string& name) {
+Result<StrandSet> DecodeStrands(const std::vector<uint8_t>& bytes, StrandFormat format,
+                                const std::string& name) {
   Result<StrandSet> set = [&]() -> Result<StrandSet> {
     switch (format) {
-      case StrandFormat::kHair: return DecodeHair(bytes, name);
-      case StrandFormat::kData: return DecodeData(bytes, name);
+      case StrandFormat::kHair:
+        return DecodeHair(bytes, name);
+      case StrandFormat::kData:
+        return DecodeData(bytes, name);
       case StrandFormat::kPlyBinary:
-      case StrandFormat::kPlyAscii: return DecodePly(bytes, name);
+      case StrandFormat::kPlyAscii:
+        return DecodePly(bytes, name);
     }
     return Internal("unknown strand format");
   }();
@@ -386,10 +419,14 @@ Result<StrandSet> DecodeStrands(const std::vector<uint8_t>& bytes, StrandFormat 
 Result<std::vector<uint8_t>> EncodeStrands(const StrandSet& strands, StrandFormat format) {
   HR_RETURN_IF_ERROR(strands.Validate().WithContext("cannot write strands"));
   switch (format) {
-    case StrandFormat::kHair: return EncodeHair(strands);
-    case StrandFormat::kData: return EncodeData(strands);
-    case StrandFormat::kPlyBinary: return EncodePly(strands, false);
-    case StrandFormat::kPlyAscii: return EncodePly(strands, true);
+    case StrandFormat::kHair:
+      return EncodeHair(strands);
+    case StrandFormat::kData:
+      return EncodeData(strands);
+    case StrandFormat::kPlyBinary:
+      return EncodePly(strands, false);
+    case StrandFormat::kPlyAscii:
+      return EncodePly(strands, true);
   }
   return Internal("unknown strand format");
 }

@@ -34,7 +34,8 @@ const char* StrandFormatName(StrandFormat format);
 Result<StrandFormat> StrandFormatFromPath(const std::string& path);
 
 // `name` is used in messages only.
-Result<StrandSet> DecodeStrands(const std::vector<uint8_t>& bytes, StrandFormat format, const std::string& name);
+Result<StrandSet> DecodeStrands(const std::vector<uint8_t>& bytes, StrandFormat format,
+                                const std::string& name);
 Result<std::vector<uint8_t>> EncodeStrands(const StrandSet& strands, StrandFormat format);
 
 // Format from the extension (PLY: whichever the header says).

@@ -1,10 +1,9 @@
-#include "core/strand_io.h"
+#include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include <gtest/gtest.h>
-
 #include "core/file_util.h"
+#include "core/strand_io.h"
 #include "core/strand_test_util.h"
 
 namespace hairrig {
@@ -14,12 +13,11 @@ const std::string kStrandDir = "../shared/data/strands/";
 
 bool HaveShared() { return std::filesystem::exists(kStrandDir + "Bangs_100.hair"); }
 
-#define REQUIRE_SHARED()                                                                       \
-  if (!HaveShared()) {                                                                         \
+#define REQUIRE_SHARED()                                                                    \
+  if (!HaveShared()) {                                                                      \
     GTEST_SKIP() << "../shared/data/strands is absent beside the repository: golden files " \
-                    "cannot be checked here";                                                  \
+                    "cannot be checked here";                                               \
   }
-
 
 TEST(StrandIo, GoldenFilesAgreeWithEachOtherAndTheReadme) {
   REQUIRE_SHARED();
@@ -62,7 +60,8 @@ TEST(StrandIo, EveryFormatConvertsToEveryOtherWithoutLoss) {
   for (const std::string name : {"Bangs_100_binary.ply", "Curly_100.ply"}) {
     auto original = ReadStrands(kStrandDir + name);
     ASSERT_TRUE(original.ok()) << original.status().ToString();
-    for (StrandFormat f : {StrandFormat::kHair, StrandFormat::kData, StrandFormat::kPlyBinary, StrandFormat::kPlyAscii}) {
+    for (StrandFormat f : {StrandFormat::kHair, StrandFormat::kData, StrandFormat::kPlyBinary,
+                           StrandFormat::kPlyAscii}) {
       auto bytes = EncodeStrands(*original, f);
       ASSERT_TRUE(bytes.ok());
       auto back = DecodeStrands(*bytes, f, "converted");
@@ -77,7 +76,8 @@ TEST(StrandIo, EveryFormatConvertsToEveryOtherWithoutLoss) {
 
 TEST(StrandIo, TruncationAtEveryByteOffsetIsAnErrorNotACrash) {
   REQUIRE_SHARED();
-  for (const std::string name : {"Bangs_100.hair", "Bangs_100.data", "Bangs_100_binary.ply", "Bangs_100_ascii.ply"}) {
+  for (const std::string name :
+       {"Bangs_100.hair", "Bangs_100.data", "Bangs_100_binary.ply", "Bangs_100_ascii.ply"}) {
     auto bytes = ReadFileBytes(kStrandDir + name);
     ASSERT_TRUE(bytes.ok());
     auto format = StrandFormatFromPath(name);
@@ -85,7 +85,8 @@ TEST(StrandIo, TruncationAtEveryByteOffsetIsAnErrorNotACrash) {
     ASSERT_TRUE(full.ok());
     size_t accepted = 0;
     for (size_t cut = 0; cut < bytes->size(); ++cut) {
-      const std::vector<uint8_t> part(bytes->begin(), bytes->begin() + static_cast<std::ptrdiff_t>(cut));
+      const std::vector<uint8_t> part(bytes->begin(),
+                                      bytes->begin() + static_cast<std::ptrdiff_t>(cut));
       auto set = DecodeStrands(part, *format, name);
       if (set.ok()) {
         ++accepted;
@@ -95,7 +96,8 @@ TEST(StrandIo, TruncationAtEveryByteOffsetIsAnErrorNotACrash) {
         ASSERT_NE(set.status().message().find(name), std::string::npos);
       }
     }
-    std::printf("%s: %zu truncations, %zu accepted with identical geometry\n", name.c_str(), bytes->size(), accepted);
+    std::printf("%s: %zu truncations, %zu accepted with identical geometry\n", name.c_str(),
+                bytes->size(), accepted);
     if (name.find("ascii") == std::string::npos) {  // only text can lose just a final newline
       EXPECT_EQ(accepted, 0u) << name;
     }

@@ -1,10 +1,10 @@
 // Test helpers shared by the tests that read, write or fit strands.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "core/strands.h"
 
@@ -28,7 +28,8 @@ inline StrandSet TwelveCurls() {
     for (int k = 0; k < 40; ++k) {
       const float a = 0.3f * static_cast<float>(k);
       p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a),
-                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a), -0.8f * static_cast<float>(k));
+                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
+                     -0.8f * static_cast<float>(k));
     }
     set.AddStrand(p);
   }

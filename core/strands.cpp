@@ -19,19 +19,23 @@ void StrandSet::AddStrand(const std::vector<Eigen::Vector3f>& points) {
 
 namespace {
 
-// A point's coordinates are finite and small enough that differences between points do not overflow.
+// A point's coordinates are finite and small enough that differences between points do not
+// overflow.
 Status CheckCoordinates(const Eigen::Vector3f& p, size_t strand, uint32_t vertex, size_t point) {
   for (int axis = 0; axis < 3; ++axis) {
     const float value = p[axis];
     if (std::isfinite(value) && std::abs(value) <= kMaxStrandCoordinateMm) continue;
     char what[160];
     if (std::isfinite(value))
-      std::snprintf(what, sizeof what, "%c = %.3g mm is beyond +-%.0e mm, where distances between points overflow",
-                    "xyz"[axis], static_cast<double>(value), static_cast<double>(kMaxStrandCoordinateMm));
+      std::snprintf(what, sizeof what,
+                    "%c = %.3g mm is beyond +-%.0e mm, where distances between points overflow",
+                    "xyz"[axis], static_cast<double>(value),
+                    static_cast<double>(kMaxStrandCoordinateMm));
     else
       std::snprintf(what, sizeof what, "%c is not finite (NaN or inf)", "xyz"[axis]);
-    return CorruptData("strand " + std::to_string(strand) + " vertex " + std::to_string(vertex) + " (point " +
-                       std::to_string(point) + "): " + what + " (damaged data, or not millimetres)");
+    return CorruptData("strand " + std::to_string(strand) + " vertex " + std::to_string(vertex) +
+                       " (point " + std::to_string(point) + "): " + what +
+                       " (damaged data, or not millimetres)");
   }
   return Status::Ok();
 }
@@ -45,8 +49,8 @@ Status StrandSet::Validate() const {
     total += point_counts[i];
   }
   if (total != points_mm.size()) {
-    return CorruptData("strand point counts add up to " + std::to_string(total) + " but there are " +
-                       std::to_string(points_mm.size()) + " points");
+    return CorruptData("strand point counts add up to " + std::to_string(total) +
+                       " but there are " + std::to_string(points_mm.size()) + " points");
   }
   size_t point = 0;
   for (size_t strand = 0; strand < point_counts.size(); ++strand) {

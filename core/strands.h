@@ -2,12 +2,11 @@
 // or the producer states (the world frame of the rig for captures and scenes).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 

@@ -6,8 +6,9 @@
 namespace hairrig {
 
 Rigid3d WorldFromTurntable(double theta_deg) {
-  return Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(DegToRad(theta_deg), Eigen::Vector3d::UnitZ())),
-                 Eigen::Vector3d::Zero());
+  return Rigid3d(
+      Eigen::Quaterniond(Eigen::AngleAxisd(DegToRad(theta_deg), Eigen::Vector3d::UnitZ())),
+      Eigen::Vector3d::Zero());
 }
 
 Rigid3d LookAt(const Eigen::Vector3d& eye_mm, const Eigen::Vector3d& target_mm,

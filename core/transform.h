@@ -27,8 +27,10 @@ struct Rigid3d {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 
   Rigid3d() = default;
-  Rigid3d(const Eigen::Quaterniond& r, const Eigen::Vector3d& t) : rotation(r.normalized()), translation(t) {}
-  Rigid3d(const Eigen::Matrix3d& r, const Eigen::Vector3d& t) : rotation(Eigen::Quaterniond(r).normalized()), translation(t) {}
+  Rigid3d(const Eigen::Quaterniond& r, const Eigen::Vector3d& t)
+      : rotation(r.normalized()), translation(t) {}
+  Rigid3d(const Eigen::Matrix3d& r, const Eigen::Vector3d& t)
+      : rotation(Eigen::Quaterniond(r).normalized()), translation(t) {}
 
   Eigen::Vector3d operator*(const Eigen::Vector3d& p) const { return rotation * p + translation; }
   Rigid3d operator*(const Rigid3d& other) const {

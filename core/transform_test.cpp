@@ -22,8 +22,12 @@ TEST(Transform, RotationDifferenceIsExactFromTinyAnglesToAHalfTurn) {
   const Eigen::Vector3d axis = Eigen::Vector3d(1, 2, -1).normalized();
   for (double angle_rad : {1e-12, 1e-9, 1e-6, 1e-3, 0.5, 2.0, kPi}) {
     const Rigid3d b = a * Rigid3d::FromAngleAxis(angle_rad * axis, {0, 0, 0});
-    EXPECT_NEAR(RotationDifferenceDeg(a, b), RadToDeg(angle_rad), RadToDeg(1e-6 * angle_rad + 1e-14)) << angle_rad;
-    EXPECT_NEAR(RotationDifferenceDeg(b, a), RadToDeg(angle_rad), RadToDeg(1e-6 * angle_rad + 1e-14)) << angle_rad;
+    EXPECT_NEAR(RotationDifferenceDeg(a, b), RadToDeg(angle_rad),
+                RadToDeg(1e-6 * angle_rad + 1e-14))
+        << angle_rad;
+    EXPECT_NEAR(RotationDifferenceDeg(b, a), RadToDeg(angle_rad),
+                RadToDeg(1e-6 * angle_rad + 1e-14))
+        << angle_rad;
   }
   Rigid3d negated = a;
   negated.rotation.coeffs() = -a.rotation.coeffs();

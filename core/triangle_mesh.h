@@ -8,12 +8,11 @@
 // record.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 #include "core/transform.h"
@@ -26,7 +25,9 @@ struct TriangleMesh {
 
   size_t num_triangles() const { return triangles.size(); }
   // The corners of triangle `t`.
-  const Eigen::Vector3d& Corner(size_t t, int k) const { return vertices_mm[triangles[t][static_cast<size_t>(k)]]; }
+  const Eigen::Vector3d& Corner(size_t t, int k) const {
+    return vertices_mm[triangles[t][static_cast<size_t>(k)]];
+  }
   // Unit normal of triangle `t` by its winding (zero for a degenerate one).
   Eigen::Vector3d FaceNormal(size_t t) const;
   double FaceArea(size_t t) const;
@@ -47,7 +48,7 @@ Result<TriangleMesh> DecodeObjMesh(const std::string& text, const std::string& n
 
 // A closed ellipsoid (centre, semi-axes along x, y, z) tessellated by latitude
 // and longitude: `rings` bands from pole to pole, `segments` around. Outward winding.
-TriangleMesh MakeEllipsoidMesh(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& radii_mm, int rings,
-                               int segments);
+TriangleMesh MakeEllipsoidMesh(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& radii_mm,
+                               int rings, int segments);
 
 }  // namespace hairrig

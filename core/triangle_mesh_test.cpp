@@ -14,7 +14,8 @@ std::vector<uint8_t> Bytes(const std::string& s) { return {s.begin(), s.end()}; 
 
 TEST(TriangleMesh, AsciiPlyPolygonsAreFannedIntoTriangles) {
   const std::string ply =
-      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float "
+      "z\n"
       "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
   auto mesh = DecodePlyMesh(Bytes(ply), "quad.ply");
@@ -26,7 +27,8 @@ TEST(TriangleMesh, AsciiPlyPolygonsAreFannedIntoTriangles) {
 
 TEST(TriangleMesh, BadFilesNameTheFileAndTheRecord) {
   const std::string header =
-      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+      "z\n"
       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n";
   auto bad_index = DecodePlyMesh(Bytes(header + "3 0 1 7\n"), "head.ply");
   ASSERT_FALSE(bad_index.ok());
@@ -38,7 +40,8 @@ TEST(TriangleMesh, BadFilesNameTheFileAndTheRecord) {
   const std::string huge =
       "ply\nformat binary_little_endian 1.0\nelement vertex 9000000000000000000\nproperty float x\n"
       "property float y\nproperty float z\nend_header\n";
-  EXPECT_FALSE(DecodePlyMesh(Bytes(huge), "huge.ply").ok()) << "a count beyond the file's bytes is refused";
+  EXPECT_FALSE(DecodePlyMesh(Bytes(huge), "huge.ply").ok())
+      << "a count beyond the file's bytes is refused";
   auto nan = DecodeObjMesh("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n", "nan.obj");
   ASSERT_FALSE(nan.ok());
   EXPECT_NE(nan.status().message().find("nan.obj:3"), std::string::npos) << nan.status().message();
@@ -48,7 +51,8 @@ TEST(TriangleMesh, BadFilesNameTheFileAndTheRecord) {
 }
 
 TEST(TriangleMesh, ObjFacesWithTextureIndicesAndNegativeIndices) {
-  auto mesh = DecodeObjMesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf -3 -2 -1\n", "tri.obj");
+  auto mesh =
+      DecodeObjMesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf -3 -2 -1\n", "tri.obj");
   ASSERT_TRUE(mesh.ok()) << mesh.status().ToString();
   EXPECT_EQ(mesh->num_triangles(), 2u);
   EXPECT_EQ(mesh->triangles[1][0], 0u);
@@ -65,7 +69,8 @@ TEST(MeshBvh, RaysHitATessellatedEllipsoidWhereTheEllipsoidIs) {
   int hits = 0;
   for (int i = 0; i < 2000; ++i) {
     const Eigen::Vector3d origin = c + Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * 600;
-    const Eigen::Vector3d target = c + 0.9 * Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(r) / std::sqrt(3.0);
+    const Eigen::Vector3d target =
+        c + 0.9 * Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(r) / std::sqrt(3.0);
     const Eigen::Vector3d dir = target - origin;
     MeshRayHit hit;
     ASSERT_TRUE(bvh.Intersect(origin, dir, 0, 1e9, &hit)) << "the ray aims inside the ellipsoid";
@@ -78,13 +83,15 @@ TEST(MeshBvh, RaysHitATessellatedEllipsoidWhereTheEllipsoidIs) {
   EXPECT_TRUE(bvh.Contains(c));
   EXPECT_FALSE(bvh.Contains(c + Eigen::Vector3d(0, 0, 130)));
   MeshRayHit miss;
-  EXPECT_FALSE(bvh.Intersect(c + Eigen::Vector3d(0, 0, 500), Eigen::Vector3d(1, 0, 0), 0, 1e9, &miss));
+  EXPECT_FALSE(
+      bvh.Intersect(c + Eigen::Vector3d(0, 0, 500), Eigen::Vector3d(1, 0, 0), 0, 1e9, &miss));
 }
 
 // The real mannequin head that goes with the CT-scanned bangs: millimetres,
 // +x up (neck base at x = -42 mm, crown at x = 245 mm), face towards -y.
 TEST(TriangleMesh, TheRealHeadMeshReads) {
-  const std::string path = "etc/assets/mannequin_head.ply";  // Bangs_head.ply, vendored with its notice
+  const std::string path =
+      "etc/assets/mannequin_head.ply";  // Bangs_head.ply, vendored with its notice
   auto mesh = ReadTriangleMesh(path);
   ASSERT_TRUE(mesh.ok()) << mesh.status().ToString();
   EXPECT_EQ(mesh->vertices_mm.size(), 3943u);

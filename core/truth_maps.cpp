@@ -5,11 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <utility>
-#include <vector>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <utility>
+#include <vector>
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
@@ -35,7 +34,8 @@ Status WritePng(const std::string& path, const cv::Mat& image) {
 Result<cv::Mat> ReadPng(const std::string& path, int type) {
   cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (m.empty()) return NotFound(path + ": missing or not a PNG");
-  if (m.type() != type) return CorruptData(path + ": unexpected pixel type (written by another version?)");
+  if (m.type() != type)
+    return CorruptData(path + ": unexpected pixel type (written by another version?)");
   return m;
 }
 
@@ -49,18 +49,23 @@ Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps&
   cv::Mat alpha(size, CV_16U), orientation(size, CV_16U), depth(size, CV_16U), strand(size, CV_16U);
   for (int y = 0; y < size.height; ++y) {
     for (int x = 0; x < size.width; ++x) {
-      alpha.at<uint16_t>(y, x) = static_cast<uint16_t>(std::lround(std::clamp(maps.hair_alpha.at<float>(y, x), 0.f, 1.f) * 65535));
+      alpha.at<uint16_t>(y, x) = static_cast<uint16_t>(
+          std::lround(std::clamp(maps.hair_alpha.at<float>(y, x), 0.f, 1.f) * 65535));
       const float angle = maps.orientation_deg.at<float>(y, x);
-      orientation.at<uint16_t>(y, x) =
-          std::isfinite(angle) ? static_cast<uint16_t>(std::lround(angle * 100) % 18000) : uint16_t{65535};
+      orientation.at<uint16_t>(y, x) = std::isfinite(angle)
+                                           ? static_cast<uint16_t>(std::lround(angle * 100) % 18000)
+                                           : uint16_t{65535};
       const double d = std::round(maps.depth_mm.at<float>(y, x) * kTruthDepthScale);
       if (!(d >= 0 && d <= 65535)) {
-        return OutOfRange(MapPath(dir, view, "depth") + ": depth " + std::to_string(maps.depth_mm.at<float>(y, x)) +
-                          " mm at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") does not fit 16 bits");
+        return OutOfRange(MapPath(dir, view, "depth") + ": depth " +
+                          std::to_string(maps.depth_mm.at<float>(y, x)) + " mm at pixel (" +
+                          std::to_string(x) + ", " + std::to_string(y) + ") does not fit 16 bits");
       }
       depth.at<uint16_t>(y, x) = static_cast<uint16_t>(d);
       const int id = maps.strand_id.at<int>(y, x);
-      if (id >= 65535) return OutOfRange(MapPath(dir, view, "strand") + ": strand index " + std::to_string(id) + " does not fit 16 bits");
+      if (id >= 65535)
+        return OutOfRange(MapPath(dir, view, "strand") + ": strand index " + std::to_string(id) +
+                          " does not fit 16 bits");
       strand.at<uint16_t>(y, x) = static_cast<uint16_t>(id + 1);
     }
   }
@@ -85,7 +90,8 @@ Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view) {
   for (int y = 0; y < orientation.rows; ++y) {
     for (int x = 0; x < orientation.cols; ++x) {
       const uint16_t o = orientation.at<uint16_t>(y, x);
-      m.orientation_deg.at<float>(y, x) = o == 65535 ? std::numeric_limits<float>::quiet_NaN() : o / 100.0f;
+      m.orientation_deg.at<float>(y, x) =
+          o == 65535 ? std::numeric_limits<float>::quiet_NaN() : o / 100.0f;
     }
   }
   return m;
@@ -94,12 +100,15 @@ Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view) {
 Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir) {
   const std::filesystem::path truth_dir = std::filesystem::path(capture_dir) / "ground_truth";
   const std::string path = (truth_dir / "ground_truth.json").string();
-  HR_ASSIGN_OR_RETURN(nlohmann::json root, ReadJsonFile(path, "only captures from the simulated rig have a ground truth"));
+  HR_ASSIGN_OR_RETURN(
+      nlohmann::json root,
+      ReadJsonFile(path, "only captures from the simulated rig have a ground truth"));
   if (!root.is_object() || !root.contains("views") || !root["views"].is_array())
     return CorruptData(path + ": views is not an array");
   CaptureTruth truth;
   HR_ASSIGN_OR_RETURN(truth.turntable_from_box,
-                      PoseFromJson(root.value("turntable_from_box", nlohmann::json()), path + ": turntable_from_box"));
+                      PoseFromJson(root.value("turntable_from_box", nlohmann::json()),
+                                   path + ": turntable_from_box"));
   for (size_t i = 0; i < root["views"].size(); ++i) {
     const nlohmann::json& j = root["views"][i];
     const std::string where = path + ": views[" + std::to_string(i) + "]";
@@ -108,14 +117,17 @@ Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir) {
     CaptureTruth::View v;
     const nlohmann::json serial = j.value("camera_serial", nlohmann::json());
     v.camera_serial = serial.is_string() ? serial.get<std::string>() : "";
-    HR_ASSIGN_OR_RETURN(v.intrinsics, IntrinsicsFromJson(j.value("intrinsics", nlohmann::json()), where + ".intrinsics"));
-    HR_ASSIGN_OR_RETURN(v.cam_from_box, PoseFromJson(j.value("cam_from_box", nlohmann::json()), where + ".cam_from_box"));
+    HR_ASSIGN_OR_RETURN(v.intrinsics, IntrinsicsFromJson(j.value("intrinsics", nlohmann::json()),
+                                                         where + ".intrinsics"));
+    HR_ASSIGN_OR_RETURN(v.cam_from_box, PoseFromJson(j.value("cam_from_box", nlohmann::json()),
+                                                     where + ".cam_from_box"));
     truth.views[j["view"].get<int>()] = v;
   }
   truth.views_dir = (truth_dir / "views").string();
   truth.strands_file = (truth_dir / "ground_truth_strands.ply").string();
   if (root.contains("head")) {
-    HR_ASSIGN_OR_RETURN(HeadSpec head, HeadSpecFromJson(root["head"], truth_dir.string(), path + ": head"));
+    HR_ASSIGN_OR_RETURN(HeadSpec head,
+                        HeadSpecFromJson(root["head"], truth_dir.string(), path + ": head"));
     std::error_code ec;
     if (!head.mesh_file.empty() && !std::filesystem::is_regular_file(head.mesh_file, ec))
       return CorruptData(path + ": head.mesh_file " + head.mesh_file + " is missing");

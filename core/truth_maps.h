@@ -7,10 +7,9 @@
 
 #include <cstdint>
 #include <map>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core/mat.hpp>
 
 #include "core/camera_model.h"
 #include "core/head_spec.h"
@@ -35,9 +34,9 @@ struct ViewTruthMaps {
 // Per-pixel ground truth of one view, lossless, in `dir` (created if missing):
 //   NNN_label.png        8-bit: 0 backdrop, 1 box, 2 head, 3 hair
 //   NNN_alpha.png        16-bit: hair coverage x 65535
-//   NNN_orientation.png  16-bit: 2D strand direction in deg x 100 ([0, 18000)); 65535 where no strand
-//   NNN_depth.png        16-bit: depth of the front-most surface in mm x kTruthDepthScale; 0 on the backdrop
-//   NNN_strand.png       16-bit: front-most strand index + 1; 0 where no strand
+//   NNN_orientation.png  16-bit: 2D strand direction in deg x 100 ([0, 18000)); 65535 where no
+//   strand NNN_depth.png        16-bit: depth of the front-most surface in mm x kTruthDepthScale; 0
+//   on the backdrop NNN_strand.png       16-bit: front-most strand index + 1; 0 where no strand
 // NNN is the view number (three digits). A wig of 65,535 strands or more
 // cannot be written (OutOfRange), nor a depth past 3,276 mm.
 constexpr int kTruthMapsVersion = 1;
@@ -58,7 +57,8 @@ struct CaptureTruth {
   Rigid3d turntable_from_box;
   std::map<int, View> views;  // by view number
   std::string views_dir;      // the per-view maps' folder (<capture>/ground_truth/views)
-  std::string strands_file;   // the true strands, turntable frame (<capture>/ground_truth/ground_truth_strands.ply)
+  std::string strands_file;   // the true strands, turntable frame
+                              // (<capture>/ground_truth/ground_truth_strands.ply)
   // The true head, turntable frame (ground_truth.json's "head", core/head_json.h);
   // its mesh_file is absolute or relative to the working folder, e.g.
   // <capture>/ground_truth/head_mesh.ply. Absent in captures written before the

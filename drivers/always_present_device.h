@@ -19,7 +19,9 @@ class AlwaysPresentDevice : public Base {
     this->SetState(DeviceState::kClosed);
     return Status::Ok();
   }
-  Status HealthCheck() override { return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"); }
+  Status HealthCheck() override {
+    return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck");
+  }
 };
 
 }  // namespace hairrig

@@ -6,7 +6,6 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
-
 #include <opencv2/imgproc.hpp>
 
 #include "core/config.h"
@@ -38,11 +37,14 @@ struct WireFormat {
   bool debayer = false;
 };
 
-int WireBytesPerPixel(ArvPixelFormat f) { return static_cast<int>(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(f) / 8); }
+int WireBytesPerPixel(ArvPixelFormat f) {
+  return static_cast<int>(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(f) / 8);
+}
 
 class AravisCamera : public Camera {
  public:
-  AravisCamera(DeviceInfo info, AravisCameraOptions options) : Camera(std::move(info)), options_(std::move(options)) {}
+  AravisCamera(DeviceInfo info, AravisCameraOptions options)
+      : Camera(std::move(info)), options_(std::move(options)) {}
   ~AravisCamera() override { (void)Close(); }
 
   double time_scale() const override { return options_.nominal.time_scale; }
@@ -50,7 +52,8 @@ class AravisCamera : public Camera {
   CameraCapabilities capabilities() const override {
     return {.width_px = width_px_,
             .height_px = height_px_,
-            .formats = {PixelFormat::kMono8, PixelFormat::kRgb8, PixelFormat::kBgr8, PixelFormat::kBayerRG8},
+            .formats = {PixelFormat::kMono8, PixelFormat::kRgb8, PixelFormat::kBgr8,
+                        PixelFormat::kBayerRG8},
             .min_exposure_s = min_exposure_s_,
             .max_exposure_s = max_exposure_s_,
             .line_trigger = true,
@@ -73,8 +76,9 @@ class AravisCamera : public Camera {
     width_px_ = options_.nominal.width_px > 0 ? options_.nominal.width_px : sensor_w;
     height_px_ = options_.nominal.height_px > 0 ? options_.nominal.height_px : sensor_h;
     if (width_px_ > sensor_w || height_px_ > sensor_h) {
-      return FailOpen(OutOfRange("the region " + std::to_string(width_px_) + "x" + std::to_string(height_px_) +
-                                 " exceeds the sensor's " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h)));
+      return FailOpen(OutOfRange("the region " + std::to_string(width_px_) + "x" +
+                                 std::to_string(height_px_) + " exceeds the sensor's " +
+                                 std::to_string(sensor_w) + "x" + std::to_string(sensor_h)));
     }
     arv_camera_set_region(camera, 0, 0, width_px_, height_px_, &error);
     if (error) return FailOpen(IoError("setting the region: " + TakeError(error)));
@@ -108,14 +112,17 @@ class AravisCamera : public Camera {
     std::lock_guard<std::mutex> lock(mutex_);
     GError* error = nullptr;
     arv_camera_get_device_serial_number(camera_.get(), &error);
-    if (error || gone_) return Fault(Unavailable("does not answer (" + TakeError(error) + "); check its cable and power"));
+    if (error || gone_)
+      return Fault(
+          Unavailable("does not answer (" + TakeError(error) + "); check its cable and power"));
     return Status::Ok();
   }
 
   Status Configure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
     HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
-    if (s.format == PixelFormat::kEncoded) return OutOfRange(Describe() + ": delivers raw frames only");
+    if (s.format == PixelFormat::kEncoded)
+      return OutOfRange(Describe() + ": delivers raw frames only");
     std::lock_guard<std::mutex> lock(mutex_);
     ArvCamera* camera = camera_.get();
     HR_ASSIGN_OR_RETURN(wire_, ChooseWireFormat(s.format));
@@ -125,7 +132,8 @@ class AravisCamera : public Camera {
     if (!error) arv_camera_set_gain(camera, s.gain_db, &error);
     if (!error) arv_camera_set_acquisition_mode(camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
     if (!error) {
-      const std::string source = s.trigger == TriggerSource::kLine ? options_.trigger_source : "Software";
+      const std::string source =
+          s.trigger == TriggerSource::kLine ? options_.trigger_source : "Software";
       arv_camera_set_trigger(camera, source.c_str(), &error);
     }
     if (error) return Fault(IoError("configuring: " + TakeError(error)));
@@ -147,9 +155,11 @@ class AravisCamera : public Camera {
     // Some cameras (Aravis' fake among them) report no payload: compute it.
     size_t payload = arv_camera_get_payload(camera, &error);
     g_clear_error(&error);
-    const size_t computed = static_cast<size_t>(width_px_) * height_px_ * WireBytesPerPixel(wire_.arv);
+    const size_t computed =
+        static_cast<size_t>(width_px_) * height_px_ * WireBytesPerPixel(wire_.arv);
     payload = std::max(payload, computed);
-    for (int i = 0; i < options_.buffers; ++i) arv_stream_push_buffer(stream_.get(), arv_buffer_new(payload, nullptr));
+    for (int i = 0; i < options_.buffers; ++i)
+      arv_stream_push_buffer(stream_.get(), arv_buffer_new(payload, nullptr));
     arv_camera_start_acquisition(camera, &error);
     if (error) {
       stream_.reset();
@@ -194,7 +204,8 @@ class AravisCamera : public Camera {
       std::lock_guard<std::mutex> lock(mutex_);
       stream = stream_.get();
     }
-    ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream, static_cast<guint64>(timeout.count()) * 1000);
+    ArvBuffer* buffer =
+        arv_stream_timeout_pop_buffer(stream, static_cast<guint64>(timeout.count()) * 1000);
     std::lock_guard<std::mutex> lock(mutex_);
     if (gone_) {
       if (buffer) arv_stream_push_buffer(stream, buffer);
@@ -217,7 +228,9 @@ class AravisCamera : public Camera {
   }
 
  private:
-  static void OnControlLost(ArvDevice*, gpointer self) { static_cast<AravisCamera*>(self)->gone_ = true; }
+  static void OnControlLost(ArvDevice*, gpointer self) {
+    static_cast<AravisCamera*>(self)->gone_ = true;
+  }
 
   Status FailOpen(const Status& s) {
     camera_.reset();
@@ -243,19 +256,21 @@ class AravisCamera : public Camera {
         seen += (seen.empty() ? "" : ", ") + std::string(arv_get_device_id(i));
       }
       if (id.empty()) {
-        return Fault(Unavailable("not found on any Aravis interface (" +
-                                 (seen.empty() ? std::string("none found") : "found: " + seen) +
-                                 "); check its cable, power and network settings (arv-tool-0.8 lists cameras)"));
+        return Fault(Unavailable(
+            "not found on any Aravis interface (" +
+            (seen.empty() ? std::string("none found") : "found: " + seen) +
+            "); check its cable, power and network settings (arv-tool-0.8 lists cameras)"));
       }
     }
     if (camera == nullptr) camera = arv_camera_new(id.c_str(), &error);
-    if (camera == nullptr) return Fault(Unavailable("cannot open '" + id + "': " + TakeError(error)));
+    if (camera == nullptr)
+      return Fault(Unavailable("cannot open '" + id + "': " + TakeError(error)));
     const char* serial = arv_camera_get_device_serial_number(camera, &error);
     const std::string actual = serial ? serial : "";
     if (error || actual != info().serial) {
       g_object_unref(camera);
-      return Fault(Unavailable("'" + id + "' has serial '" + actual + "', not '" + info().serial + "'" +
-                               (error ? " (" + TakeError(error) + ")" : "")));
+      return Fault(Unavailable("'" + id + "' has serial '" + actual + "', not '" + info().serial +
+                               "'" + (error ? " (" + TakeError(error) + ")" : "")));
     }
     return camera;
   }
@@ -265,12 +280,20 @@ class AravisCamera : public Camera {
     guint n = 0;
     gint64* formats = arv_camera_dup_available_pixel_formats(camera_.get(), &n, &error);
     if (error) return Fault(IoError("listing pixel formats: " + TakeError(error)));
-    auto has = [&](ArvPixelFormat f) { return std::find(formats, formats + n, static_cast<gint64>(f)) != formats + n; };
+    auto has = [&](ArvPixelFormat f) {
+      return std::find(formats, formats + n, static_cast<gint64>(f)) != formats + n;
+    };
     WireFormat w;
     bool ok = true;
     switch (wanted) {
-      case PixelFormat::kMono8: w.arv = ARV_PIXEL_FORMAT_MONO_8; ok = has(w.arv); break;
-      case PixelFormat::kBayerRG8: w.arv = ARV_PIXEL_FORMAT_BAYER_RG_8; ok = has(w.arv); break;
+      case PixelFormat::kMono8:
+        w.arv = ARV_PIXEL_FORMAT_MONO_8;
+        ok = has(w.arv);
+        break;
+      case PixelFormat::kBayerRG8:
+        w.arv = ARV_PIXEL_FORMAT_BAYER_RG_8;
+        ok = has(w.arv);
+        break;
       case PixelFormat::kRgb8:
       case PixelFormat::kBgr8:
         if (has(ARV_PIXEL_FORMAT_RGB_8_PACKED)) {
@@ -280,7 +303,9 @@ class AravisCamera : public Camera {
           ok = has(w.arv);
         }
         break;
-      case PixelFormat::kEncoded: ok = false; break;
+      case PixelFormat::kEncoded:
+        ok = false;
+        break;
     }
     g_free(formats);
     if (!ok) return OutOfRange(Describe() + ": cannot deliver " + PixelFormatName(wanted));
@@ -297,9 +322,10 @@ class AravisCamera : public Camera {
     if (underruns == underruns_seen_) return Status::Ok();
     const guint64 lost = underruns - underruns_seen_;
     underruns_seen_ = underruns;
-    return CorruptData(Describe() + ": " + std::to_string(lost) +
-                       " frame(s) lost for want of a free stream buffer, so later frames cannot be paired with "
-                       "their triggers; the camera must be armed again (raise `buffers` if this recurs)");
+    return CorruptData(
+        Describe() + ": " + std::to_string(lost) +
+        " frame(s) lost for want of a free stream buffer, so later frames cannot be paired with "
+        "their triggers; the camera must be armed again (raise `buffers` if this recurs)");
   }
 
   Result<Frame> ToFrameLocked(ArvBuffer* buffer) {
@@ -318,8 +344,8 @@ class AravisCamera : public Camera {
     const auto* data = static_cast<const uint8_t*>(arv_buffer_get_data(buffer, nullptr));
     if (w != width_px_ || h != height_px_ || f != wire_.arv) {
       return CorruptData(Describe() + ": frame is " + std::to_string(w) + "x" + std::to_string(h) +
-                         ", format 0x" + std::to_string(f) + "; configured " + std::to_string(width_px_) + "x" +
-                         std::to_string(height_px_));
+                         ", format 0x" + std::to_string(f) + "; configured " +
+                         std::to_string(width_px_) + "x" + std::to_string(height_px_));
     }
     Frame frame;
     frame.camera_serial = info().serial;
@@ -330,12 +356,16 @@ class AravisCamera : public Camera {
     frame.exposure_s = settings_.exposure_s;
     frame.gain_db = settings_.gain_db;
     frame.received_time_ns = SteadyNowNs();
-    frame.trigger_time_ns = triggers_.ForFrame(frame.received_time_ns, options_.nominal.LatencyWallS(settings_.exposure_s));
-    const cv::Mat wire(h, w, WireBytesPerPixel(f) == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(data));
+    frame.trigger_time_ns = triggers_.ForFrame(frame.received_time_ns,
+                                               options_.nominal.LatencyWallS(settings_.exposure_s));
+    const cv::Mat wire(h, w, WireBytesPerPixel(f) == 3 ? CV_8UC3 : CV_8UC1,
+                       const_cast<uint8_t*>(data));
     cv::Mat out;
     if (wire_.debayer) {
       // OpenCV names a Bayer pattern by the 2x2 block at (1,1): an RGGB sensor is "BG".
-      cv::cvtColor(wire, out, settings_.format == PixelFormat::kRgb8 ? cv::COLOR_BayerBG2RGB : cv::COLOR_BayerBG2BGR);
+      cv::cvtColor(
+          wire, out,
+          settings_.format == PixelFormat::kRgb8 ? cv::COLOR_BayerBG2RGB : cv::COLOR_BayerBG2BGR);
     } else if (settings_.format == PixelFormat::kBgr8) {
       cv::cvtColor(wire, out, cv::COLOR_RGB2BGR);
     } else {
@@ -382,8 +412,9 @@ class AravisCamera : public Camera {
 }  // namespace
 
 Result<AravisCameraOptions> ParseAravisCameraOptions(const ConfigNode& device) {
-  device.AllowOnlyKeys({"name", "backend", "serial", "address", "width_px", "height_px", "buffers", "packet_size",
-                        "trigger_line", "trigger_source", "readout_s", "download_s"});
+  device.AllowOnlyKeys({"name", "backend", "serial", "address", "width_px", "height_px", "buffers",
+                        "packet_size", "trigger_line", "trigger_source", "readout_s",
+                        "download_s"});
   AravisCameraOptions o;
   o.address = device.String("address", "");
   o.nominal = ReadCameraNominal(device, o.nominal);
@@ -408,22 +439,22 @@ std::vector<AravisDetected> DetectAravisCameras() {
   std::vector<AravisDetected> found;
   auto text = [](const char* s) { return std::string(s ? s : ""); };
   for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
-    found.push_back({text(arv_get_device_id(i)), text(arv_get_device_vendor(i)), text(arv_get_device_model(i)),
-                     text(arv_get_device_serial_nbr(i)), text(arv_get_device_address(i)),
-                     text(arv_get_device_protocol(i))});
+    found.push_back({text(arv_get_device_id(i)), text(arv_get_device_vendor(i)),
+                     text(arv_get_device_model(i)), text(arv_get_device_serial_nbr(i)),
+                     text(arv_get_device_address(i)), text(arv_get_device_protocol(i))});
   }
   return found;
 }
 
 void RegisterAravisBackend(DeviceRegistry* registry, AravisOptionsHook hook) {
-  registry->AddBackend<Camera>(DeviceKind::kCamera, "aravis",
-                               [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
-                                 HR_ASSIGN_OR_RETURN(AravisCameraOptions options, ParseAravisCameraOptions(c.node));
-                                 if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
-                                 const std::string where =
-                                     options.address.empty() ? "found by serial" : options.address;
-                                 return MakeAravisCamera(c.Info("Aravis camera (" + where + ")"), std::move(options));
-                               });
+  registry->AddBackend<Camera>(
+      DeviceKind::kCamera, "aravis",
+      [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
+        HR_ASSIGN_OR_RETURN(AravisCameraOptions options, ParseAravisCameraOptions(c.node));
+        if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        const std::string where = options.address.empty() ? "found by serial" : options.address;
+        return MakeAravisCamera(c.Info("Aravis camera (" + where + ")"), std::move(options));
+      });
 }
 
 }  // namespace hairrig

@@ -62,8 +62,8 @@ std::unique_ptr<Camera> MakeAravisCamera(const DeviceInfo& info, AravisCameraOpt
 
 struct AravisStreamStats {
   uint64_t completed = 0;
-  uint64_t failures = 0;   // buffers that arrived incomplete or late
-  uint64_t underruns = 0;  // frames dropped for want of a free buffer
+  uint64_t failures = 0;         // buffers that arrived incomplete or late
+  uint64_t underruns = 0;        // frames dropped for want of a free buffer
   uint64_t resent_packets = 0;   // GigE only
   uint64_t missing_packets = 0;  // GigE only
 };
@@ -73,7 +73,7 @@ AravisStreamStats AravisCameraStreamStats(const Camera& camera);
 
 // A camera Aravis finds on its interfaces.
 struct AravisDetected {
-  std::string id;        // Aravis device id
+  std::string id;  // Aravis device id
   std::string vendor;
   std::string model;
   std::string serial;

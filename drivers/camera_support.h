@@ -28,7 +28,9 @@ struct CameraNominal {
   double download_s = 1.0;
   double time_scale = 1.0;  // wall s per device s
   // Wall seconds from trigger to frame on the host: exposure + readout + download.
-  double LatencyWallS(double exposure_s) const { return (exposure_s + readout_s + download_s) * time_scale; }
+  double LatencyWallS(double exposure_s) const {
+    return (exposure_s + readout_s + download_s) * time_scale;
+  }
 };
 // Reads the fields, keeping `defaults` for those absent; errors are recorded on `device`.
 CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& defaults);

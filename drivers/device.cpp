@@ -4,28 +4,37 @@ namespace hairrig {
 
 const char* DeviceKindName(DeviceKind kind) {
   switch (kind) {
-    case DeviceKind::kTurntable: return "turntable";
-    case DeviceKind::kLight: return "light";
-    case DeviceKind::kCamera: return "camera";
-    case DeviceKind::kTriggerLine: return "trigger line";
-    case DeviceKind::kInputLine: return "input line";
+    case DeviceKind::kTurntable:
+      return "turntable";
+    case DeviceKind::kLight:
+      return "light";
+    case DeviceKind::kCamera:
+      return "camera";
+    case DeviceKind::kTriggerLine:
+      return "trigger line";
+    case DeviceKind::kInputLine:
+      return "input line";
   }
   return "device";
 }
 
 const char* DeviceStateName(DeviceState state) {
   switch (state) {
-    case DeviceState::kClosed: return "closed";
-    case DeviceState::kReady: return "ready";
-    case DeviceState::kBusy: return "busy";
-    case DeviceState::kFaulted: return "faulted";
+    case DeviceState::kClosed:
+      return "closed";
+    case DeviceState::kReady:
+      return "ready";
+    case DeviceState::kBusy:
+      return "busy";
+    case DeviceState::kFaulted:
+      return "faulted";
   }
   return "?";
 }
 
 std::string Device::Describe() const {
-  return std::string(DeviceKindName(info_.kind)) + " '" + info_.name + "' (" + info_.backend + ", serial " +
-         info_.serial + ")";
+  return std::string(DeviceKindName(info_.kind)) + " '" + info_.name + "' (" + info_.backend +
+         ", serial " + info_.serial + ")";
 }
 
 Status Device::RequireState(std::initializer_list<DeviceState> allowed, const char* call) const {

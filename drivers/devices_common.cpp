@@ -2,10 +2,10 @@
 #include <cstdio>
 #include <thread>
 
+#include "core/config.h"
 #include "drivers/camera.h"
 #include "drivers/camera_support.h"
 #include "drivers/light.h"
-#include "core/config.h"
 #include "drivers/polled_turntable.h"
 #include "drivers/turntable.h"
 
@@ -14,7 +14,8 @@ namespace hairrig {
 Result<bool> OnOffFromLevel(const Light& light, double level, const std::string& what) {
   if (level == 0.0 || level == 1.0) return level == 1.0;
   if (level >= 0 && level <= 1) {
-    return FailedPrecondition(light.Describe() + ": " + what + " is on or off; level must be 0 or 1");
+    return FailedPrecondition(light.Describe() + ": " + what +
+                              " is on or off; level must be 0 or 1");
   }
   return OutOfRange(light.Describe() + ": level must be within 0..1");
 }
@@ -30,25 +31,28 @@ CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& d
 
 Status CheckExposure(const Camera& camera, const CameraCapabilities& caps, double exposure_s) {
   if (exposure_s >= caps.min_exposure_s && exposure_s <= caps.max_exposure_s) return Status::Ok();
-  return OutOfRange(camera.Describe() + ": exposure_s " + std::to_string(exposure_s) + " outside the camera's " +
-                    std::to_string(caps.min_exposure_s) + " - " + std::to_string(caps.max_exposure_s) + " s");
+  return OutOfRange(camera.Describe() + ": exposure_s " + std::to_string(exposure_s) +
+                    " outside the camera's " + std::to_string(caps.min_exposure_s) + " - " +
+                    std::to_string(caps.max_exposure_s) + " s");
 }
 
-Status Turntable::MoveTo(double target_deg, const MotionProfile& profile, std::chrono::milliseconds timeout) {
+Status Turntable::MoveTo(double target_deg, const MotionProfile& profile,
+                         std::chrono::milliseconds timeout) {
   HR_RETURN_IF_ERROR(StartMove(target_deg, profile));
   return WaitInPosition(timeout);
 }
 
 Status CheckMoveRequest(const std::string& device, double target_deg, const MotionProfile& p,
                         const TurntableCapabilities& caps) {
-  if (!std::isfinite(target_deg)) return InvalidArgument(device + ": target angle is not a finite number");
+  if (!std::isfinite(target_deg))
+    return InvalidArgument(device + ": target angle is not a finite number");
   if (!(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s)) {
     return OutOfRange(device + ": speed " + std::to_string(p.speed_deg_s) + " deg/s outside (0, " +
                       std::to_string(caps.max_speed_deg_s) + "]");
   }
   if (!(p.accel_deg_s2 > 0 && p.accel_deg_s2 <= caps.max_accel_deg_s2)) {
-    return OutOfRange(device + ": acceleration " + std::to_string(p.accel_deg_s2) + " deg/s^2 outside (0, " +
-                      std::to_string(caps.max_accel_deg_s2) + "]");
+    return OutOfRange(device + ": acceleration " + std::to_string(p.accel_deg_s2) +
+                      " deg/s^2 outside (0, " + std::to_string(caps.max_accel_deg_s2) + "]");
   }
   return Status::Ok();
 }
@@ -71,22 +75,27 @@ void PolledTurntable::StopDone() {
   if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
 }
 
-Status PolledTurntable::WaitUntilDone(std::chrono::milliseconds timeout, std::chrono::milliseconds period,
+Status PolledTurntable::WaitUntilDone(std::chrono::milliseconds timeout,
+                                      std::chrono::milliseconds period,
                                       const std::function<Result<MotionPoll>()>& poll) {
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + timeout;
   for (;;) {
-    if (stopped_) return Unavailable(Describe() + ": the move was stopped before reaching " + DegreesText(target_deg_));
+    if (stopped_)
+      return Unavailable(Describe() + ": the move was stopped before reaching " +
+                         DegreesText(target_deg_));
     HR_ASSIGN_OR_RETURN(const MotionPoll p, poll());
     if (p.fault) {
-      return Fault(DeviceFault("the controller reports " + *p.fault + " at " + DegreesText(p.position_deg) +
-                               " on the way to " + DegreesText(target_deg_) +
+      return Fault(DeviceFault("the controller reports " + *p.fault + " at " +
+                               DegreesText(p.position_deg) + " on the way to " +
+                               DegreesText(target_deg_) +
                                ": check that nothing blocks the platform, then home it again"));
     }
     if (p.done) break;
     if (Clock::now() >= deadline) {
       return Timeout(Describe() + ": not in position at " + DegreesText(target_deg_) + " within " +
-                     std::to_string(timeout.count()) + " ms (now at " + DegreesText(p.position_deg) + ")");
+                     std::to_string(timeout.count()) + " ms (now at " +
+                     DegreesText(p.position_deg) + ")");
     }
     std::this_thread::sleep_for(std::min<Clock::duration>(deadline - Clock::now(), period));
   }
@@ -103,11 +112,16 @@ double MoveDurationS(double distance_deg, const MotionProfile& profile) {
 
 const char* PixelFormatName(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kMono8: return "Mono8";
-    case PixelFormat::kRgb8: return "RGB8";
-    case PixelFormat::kBgr8: return "BGR8";
-    case PixelFormat::kBayerRG8: return "BayerRG8";
-    case PixelFormat::kEncoded: return "Encoded";
+    case PixelFormat::kMono8:
+      return "Mono8";
+    case PixelFormat::kRgb8:
+      return "RGB8";
+    case PixelFormat::kBgr8:
+      return "BGR8";
+    case PixelFormat::kBayerRG8:
+      return "BayerRG8";
+    case PixelFormat::kEncoded:
+      return "Encoded";
   }
   return "?";
 }
@@ -115,16 +129,20 @@ const char* PixelFormatName(PixelFormat format) {
 int BytesPerPixel(PixelFormat format) {
   switch (format) {
     case PixelFormat::kMono8:
-    case PixelFormat::kBayerRG8: return 1;
+    case PixelFormat::kBayerRG8:
+      return 1;
     case PixelFormat::kRgb8:
-    case PixelFormat::kBgr8: return 3;
-    case PixelFormat::kEncoded: return 0;
+    case PixelFormat::kBgr8:
+      return 3;
+    case PixelFormat::kEncoded:
+      return 0;
   }
   return 0;
 }
 
 size_t Frame::ExpectedBytes() const {
-  return static_cast<size_t>(width_px) * static_cast<size_t>(height_px) * static_cast<size_t>(BytesPerPixel(format));
+  return static_cast<size_t>(width_px) * static_cast<size_t>(height_px) *
+         static_cast<size_t>(BytesPerPixel(format));
 }
 
 }  // namespace hairrig

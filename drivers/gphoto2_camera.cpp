@@ -75,11 +75,13 @@ class Gphoto2Catalog {
     if (catalog && loaded_for == key) return catalog.get();
     auto fresh = std::unique_ptr<Gphoto2Catalog>(new Gphoto2Catalog());
     Gphoto2Context context;
-    if (gp_abilities_list_load(fresh->abilities, context.get()) < GP_OK || gp_port_info_list_load(fresh->ports) < GP_OK) {
+    if (gp_abilities_list_load(fresh->abilities, context.get()) < GP_OK ||
+        gp_port_info_list_load(fresh->ports) < GP_OK) {
       return IoError("libgphoto2: cannot load its camera drivers or port drivers (CAMLIBS=" + key +
                      "); is libgphoto2 installed (scripts/install-deps)?");
     }
-    catalog = std::move(fresh);  // frees the previous one: open cameras hold copies of what they use
+    catalog =
+        std::move(fresh);  // frees the previous one: open cameras hold copies of what they use
     loaded_for = key;
     return catalog.get();
   }
@@ -101,15 +103,19 @@ std::string ResultText(int result) { return gp_result_as_string(result); }
 
 // Turns a libgphoto2 result into a Status whose message says what to do.
 Status Gphoto2Status(int result, const std::string& what, const std::string& detail) {
-  const std::string reported = detail.empty() ? ResultText(result) : detail + " (" + ResultText(result) + ")";
+  const std::string reported =
+      detail.empty() ? ResultText(result) : detail + " (" + ResultText(result) + ")";
   const std::string text = what + ": " + reported;
   switch (result) {
     case GP_ERROR_IO_USB_CLAIM:
     case GP_ERROR_IO_LOCK:
-      return Unavailable(text + "; another process holds the camera: close gphoto2, Shotwell or digiKam, or stop "
-                                "gvfs (`pkill -f gvfs-gphoto2-volume-monitor`), then retry");
+      return Unavailable(
+          text +
+          "; another process holds the camera: close gphoto2, Shotwell or digiKam, or stop "
+          "gvfs (`pkill -f gvfs-gphoto2-volume-monitor`), then retry");
     case GP_ERROR_CAMERA_BUSY:
-      return DeviceFault(text + "; the camera is busy (focusing, writing to its card, or a menu is open)");
+      return DeviceFault(text +
+                         "; the camera is busy (focusing, writing to its card, or a menu is open)");
     case GP_ERROR_TIMEOUT:
       return Timeout(text + "; the camera did not answer in time");
     case GP_ERROR_IO:
@@ -118,8 +124,10 @@ Status Gphoto2Status(int result, const std::string& what, const std::string& det
     case GP_ERROR_IO_WRITE:
     case GP_ERROR_MODEL_NOT_FOUND:
     case GP_ERROR_CAMERA_ERROR:
-      return Unavailable(text + "; the camera dropped off the bus: check its cable, battery and auto power-off, "
-                                "then reopen it");
+      return Unavailable(
+          text +
+          "; the camera dropped off the bus: check its cable, battery and auto power-off, "
+          "then reopen it");
     case GP_ERROR_BAD_PARAMETERS:
       return InvalidArgument(text);
     case GP_ERROR_CORRUPTED_DATA:
@@ -142,7 +150,8 @@ class Gphoto2Session {
     }
   }
 
-  static Result<std::unique_ptr<Gphoto2Session>> Open(const std::string& model, const std::string& port) {
+  static Result<std::unique_ptr<Gphoto2Session>> Open(const std::string& model,
+                                                      const std::string& port) {
     HR_ASSIGN_OR_RETURN(Gphoto2Catalog * catalog, Gphoto2Catalog::Get());
     auto session = std::unique_ptr<Gphoto2Session>(new Gphoto2Session());
     const std::string where = "camera '" + model + "' at " + port;
@@ -154,8 +163,10 @@ class Gphoto2Session {
     }
     const int port_index = gp_port_info_list_lookup_path(catalog->ports, port.c_str());
     if (port_index < GP_OK) {
-      return NotFound(where + ": no such port; `gphoto2 --list-ports` lists the ports, `gphoto2 --auto-detect` "
-                              "the cameras on them");
+      return NotFound(
+          where +
+          ": no such port; `gphoto2 --list-ports` lists the ports, `gphoto2 --auto-detect` "
+          "the cameras on them");
     }
     CameraAbilities abilities;
     GPPortInfo port_info;
@@ -185,7 +196,8 @@ class Gphoto2Session {
     const int r = gp_camera_get_single_config(camera_, name.c_str(), &widget, context_.get());
     last_result_ = r;
     if (r == GP_ERROR_BAD_PARAMETERS || r == GP_ERROR_NOT_SUPPORTED) {
-      return NotFound("the camera has no setting named '" + name + "' (`gphoto2 --list-config` lists them)");
+      return NotFound("the camera has no setting named '" + name +
+                      "' (`gphoto2 --list-config` lists them)");
     }
     HR_RETURN_IF_ERROR(Check(r, "reading setting " + name));
     return WidgetPtr(widget);
@@ -228,7 +240,8 @@ class Gphoto2Session {
     if (!choices.empty() && std::find(choices.begin(), choices.end(), value) == choices.end()) {
       std::string list;
       for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
-      return OutOfRange("setting " + name + ": '" + value + "' is not one of the camera's choices (" + list + ")");
+      return OutOfRange("setting " + name + ": '" + value +
+                        "' is not one of the camera's choices (" + list + ")");
     }
     gp_widget_set_value(widget.get(), value.c_str());
     return Check(gp_camera_set_single_config(camera_, name.c_str(), widget.get(), context_.get()),
@@ -263,7 +276,8 @@ Result<std::vector<std::pair<std::string, std::string>>> AutoDetect() {
   HR_ASSIGN_OR_RETURN(Gphoto2Catalog * catalog, Gphoto2Catalog::Get());
   Gphoto2Context context;
   ListPtr list = NewList();
-  const int r = gp_abilities_list_detect(catalog->abilities, catalog->ports, list.get(), context.get());
+  const int r =
+      gp_abilities_list_detect(catalog->abilities, catalog->ports, list.get(), context.get());
   if (r < GP_OK) return Gphoto2Status(r, "libgphoto2 auto-detection", context.TakeError());
   std::vector<std::pair<std::string, std::string>> found;
   for (int i = 0; i < gp_list_count(list.get()); ++i) {
@@ -286,7 +300,8 @@ double ShutterSeconds(const std::string& text) {
 }
 
 // The choice whose value (parsed by `parse`) is nearest `target` in log scale.
-std::string NearestChoice(const std::vector<std::string>& choices, double target, double (*parse)(const std::string&)) {
+std::string NearestChoice(const std::vector<std::string>& choices, double target,
+                          double (*parse)(const std::string&)) {
   std::string best;
   double best_error = INFINITY;
   for (const std::string& c : choices) {
@@ -392,7 +407,8 @@ class Gphoto2Camera : public Camera {
     std::lock_guard<std::mutex> lock(mutex_);
     const int64_t t = SteadyNowNs();
     HR_RETURN_IF_ERROR(FaultIfGone(Retrying("trigger", [this] {
-      return session_->Check(gp_camera_trigger_capture(session_->camera(), session_->context()), "trigger_capture");
+      return session_->Check(gp_camera_trigger_capture(session_->camera(), session_->context()),
+                             "trigger_capture");
     })));
     triggers_.Sent(t);
     return Status::Ok();
@@ -404,16 +420,19 @@ class Gphoto2Camera : public Camera {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
     const auto deadline = Clock::now() + timeout;
     for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
       if (left.count() <= 0) {
-        return Timeout(Describe() + ": no new file from the camera within " + std::to_string(timeout.count()) + " ms");
+        return Timeout(Describe() + ": no new file from the camera within " +
+                       std::to_string(timeout.count()) + " ms");
       }
       // Short waits, so that a trigger from another thread gets the camera in between.
       const int slice_ms = static_cast<int>(std::min<int64_t>(left.count(), 50));
       std::lock_guard<std::mutex> lock(mutex_);
       CameraEventType type = GP_EVENT_UNKNOWN;
       void* data = nullptr;
-      const int r = gp_camera_wait_for_event(session_->camera(), slice_ms, &type, &data, session_->context());
+      const int r =
+          gp_camera_wait_for_event(session_->camera(), slice_ms, &type, &data, session_->context());
       if (r < GP_OK) return FaultIfGone(session_->Check(r, Describe() + ": waiting for the shot"));
       if (type != GP_EVENT_FILE_ADDED) {
         free(data);
@@ -456,11 +475,13 @@ class Gphoto2Camera : public Camera {
               (serial.ok() ? "'" + *serial + "'" : serial.status().message());
     }
     // A camera claimed by another process is the likely culprit; say so first.
-    if (!first_error.ok() && first_error.code() == StatusCode::kUnavailable && candidates.size() == 1) {
+    if (!first_error.ok() && first_error.code() == StatusCode::kUnavailable &&
+        candidates.size() == 1) {
       return Fault(first_error);
     }
-    return Fault(Unavailable("not found" + std::string(seen.empty() ? " (libgphoto2 detects no camera)" : ": " + seen) +
-                             "; check that it is connected, switched on and not in use by another program"));
+    return Fault(Unavailable(
+        "not found" + std::string(seen.empty() ? " (libgphoto2 detects no camera)" : ": " + seen) +
+        "; check that it is connected, switched on and not in use by another program"));
   }
 
   void ReadExposureRange() {
@@ -481,8 +502,9 @@ class Gphoto2Camera : public Camera {
     }
   }
 
-  // Retries a call the camera answered busy, as a user retries after the body finishes focusing. `call`
-  // returns the Status of one session request; busy is told by the session's last libgphoto2 result.
+  // Retries a call the camera answered busy, as a user retries after the body finishes focusing.
+  // `call` returns the Status of one session request; busy is told by the session's last libgphoto2
+  // result.
   template <typename Call>
   Status Retrying(const std::string& what, Call call) {
     Status s;
@@ -493,13 +515,15 @@ class Gphoto2Camera : public Camera {
         return DeviceFault(Describe() + ": " + what + ": " + s.message() + " (" +
                            std::to_string(options_.busy_attempts) + " attempts)");
       }
-      std::this_thread::sleep_for(std::chrono::duration<double>(options_.busy_backoff_s * options_.nominal.time_scale));
+      std::this_thread::sleep_for(
+          std::chrono::duration<double>(options_.busy_backoff_s * options_.nominal.time_scale));
     }
     return s.ok() ? s : Status(s.code(), Describe() + ": " + what + ": " + s.message());
   }
 
   Status WriteSettingRetrying(const std::string& name, const std::string& value) {
-    return FaultIfGone(Retrying("setting " + name, [&] { return session_->WriteSetting(name, value); }));
+    return FaultIfGone(
+        Retrying("setting " + name, [&] { return session_->WriteSetting(name, value); }));
   }
 
   // Files the body reported before this arming answer no trigger of it (a
@@ -510,12 +534,15 @@ class Gphoto2Camera : public Camera {
     for (int i = 0; i < kMaxQueuedEvents; ++i) {
       CameraEventType type = GP_EVENT_UNKNOWN;
       void* data = nullptr;
-      const int r = gp_camera_wait_for_event(session_->camera(), 0, &type, &data, session_->context());
-      if (r < GP_OK) return FaultIfGone(session_->Check(r, Describe() + ": reading the body's queued events"));
+      const int r =
+          gp_camera_wait_for_event(session_->camera(), 0, &type, &data, session_->context());
+      if (r < GP_OK)
+        return FaultIfGone(session_->Check(r, Describe() + ": reading the body's queued events"));
       if (type == GP_EVENT_FILE_ADDED) {
         const auto* path = static_cast<CameraFilePath*>(data);
         LogWarning(Describe() + ": " + path->folder + "/" + path->name +
-                   " was reported before the camera was armed; it answers no trigger of this run and stays on the card");
+                   " was reported before the camera was armed; it answers no trigger of this run "
+                   "and stays on the card");
       }
       free(data);
       if (type == GP_EVENT_TIMEOUT) return Status::Ok();
@@ -537,9 +564,10 @@ class Gphoto2Camera : public Camera {
     std::unique_ptr<CameraFile, FileDeleter> file(raw_file);
     const std::string where = std::string(path.folder) + "/" + path.name;
     HR_RETURN_IF_ERROR(FaultIfGone(Retrying("downloading " + where, [&] {
-      return session_->Check(gp_camera_file_get(session_->camera(), path.folder, path.name, GP_FILE_TYPE_NORMAL,
-                                                file.get(), session_->context()),
-                             "get_file");
+      return session_->Check(
+          gp_camera_file_get(session_->camera(), path.folder, path.name, GP_FILE_TYPE_NORMAL,
+                             file.get(), session_->context()),
+          "get_file");
     })));
     const char* bytes = nullptr;
     unsigned long size = 0;
@@ -555,12 +583,17 @@ class Gphoto2Camera : public Camera {
     f.received_time_ns = SteadyNowNs();
     f.width_px = options_.nominal.width_px;
     f.height_px = options_.nominal.height_px;
-    f.trigger_time_ns = triggers_.ForFrame(f.received_time_ns, options_.nominal.LatencyWallS(exposure_s_));
+    f.trigger_time_ns =
+        triggers_.ForFrame(f.received_time_ns, options_.nominal.LatencyWallS(exposure_s_));
     if (!options_.keep_on_camera) {
-      // The shot is safe on the host; a body that already dropped it (RAM target) answers not found.
-      const int r = gp_camera_file_delete(session_->camera(), path.folder, path.name, session_->context());
+      // The shot is safe on the host; a body that already dropped it (RAM target) answers not
+      // found.
+      const int r =
+          gp_camera_file_delete(session_->camera(), path.folder, path.name, session_->context());
       if (r < GP_OK && r != GP_ERROR_FILE_NOT_FOUND) {
-        LogWarning(session_->Check(r, Describe() + ": deleting " + where + " after download (the card fills up)")
+        LogWarning(session_
+                       ->Check(r, Describe() + ": deleting " + where +
+                                      " after download (the card fills up)")
                        .message());
       }
     }
@@ -570,7 +603,8 @@ class Gphoto2Camera : public Camera {
   static std::string Extension(const std::string& name) {
     const size_t dot = name.rfind('.');
     std::string ext = dot == std::string::npos ? "jpg" : name.substr(dot + 1);
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
     return ext == "jpeg" ? "jpg" : ext;
   }
 
@@ -590,8 +624,8 @@ class Gphoto2Camera : public Camera {
 }  // namespace
 
 Result<Gphoto2CameraOptions> ParseGphoto2CameraOptions(const ConfigNode& device) {
-  device.AllowOnlyKeys({"name", "backend", "serial", "port", "model", "settings", "keep_on_camera", "width_px",
-                        "height_px", "readout_s", "download_s", "trigger_line"});
+  device.AllowOnlyKeys({"name", "backend", "serial", "port", "model", "settings", "keep_on_camera",
+                        "width_px", "height_px", "readout_s", "download_s", "trigger_line"});
   Gphoto2CameraOptions o;
   o.port = device.String("port", "");
   o.model = device.String("model", "");
@@ -600,13 +634,15 @@ Result<Gphoto2CameraOptions> ParseGphoto2CameraOptions(const ConfigNode& device)
   o.keep_on_camera = device.Bool("keep_on_camera", false);
   o.nominal = ReadCameraNominal(device, o.nominal);
   if (o.port.rfind("disk:", 0) == 0 && o.model.empty()) {
-    device.Fail("model", "a camera on a disk: port needs its model (libgphoto2 cannot detect it there)");
+    device.Fail("model",
+                "a camera on a disk: port needs its model (libgphoto2 cannot detect it there)");
   }
   if (!device.ok()) return device.status();
   return o;
 }
 
-std::unique_ptr<hairrig::Camera> MakeGphoto2Camera(const DeviceInfo& info, Gphoto2CameraOptions options) {
+std::unique_ptr<hairrig::Camera> MakeGphoto2Camera(const DeviceInfo& info,
+                                                   Gphoto2CameraOptions options) {
   return std::make_unique<Gphoto2Camera>(info, std::move(options));
 }
 
@@ -620,8 +656,10 @@ Result<std::vector<Gphoto2Detected>> DetectGphoto2Cameras() {
       d.error = session.status().message();
     } else {
       auto serial = (*session)->Serial();
-      if (serial.ok()) d.serial = *serial;
-      else d.error = serial.status().message();
+      if (serial.ok())
+        d.serial = *serial;
+      else
+        d.error = serial.status().message();
     }
     out.push_back(std::move(d));
   }
@@ -630,13 +668,15 @@ Result<std::vector<Gphoto2Detected>> DetectGphoto2Cameras() {
 
 void RegisterGphoto2Backend(DeviceRegistry* registry, Gphoto2OptionsHook hook) {
   registry->AddBackend<hairrig::Camera>(
-      DeviceKind::kCamera, "gphoto2", [hook](const DeviceConfig& c) -> Result<std::unique_ptr<hairrig::Camera>> {
+      DeviceKind::kCamera, "gphoto2",
+      [hook](const DeviceConfig& c) -> Result<std::unique_ptr<hairrig::Camera>> {
         HR_ASSIGN_OR_RETURN(Gphoto2CameraOptions options, ParseGphoto2CameraOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
         const std::string where = options.port.empty() ? "found by serial" : options.port;
-        return MakeGphoto2Camera(c.Info("libgphoto2 camera" + (options.model.empty() ? "" : " " + options.model) +
-                                        " (" + where + ")"),
-                                 std::move(options));
+        return MakeGphoto2Camera(
+            c.Info("libgphoto2 camera" + (options.model.empty() ? "" : " " + options.model) + " (" +
+                   where + ")"),
+            std::move(options));
       });
 }
 

@@ -12,7 +12,8 @@ namespace {
 template <typename Base, typename Line>
 class GpioDevice : public Base {
  public:
-  GpioDevice(const DeviceInfo& info, std::shared_ptr<GpioProvider> provider, GpioLineRequest request)
+  GpioDevice(const DeviceInfo& info, std::shared_ptr<GpioProvider> provider,
+             GpioLineRequest request)
       : Base(info), provider_(std::move(provider)), request_(std::move(request)) {}
 
   Status Close() override {
@@ -21,7 +22,8 @@ class GpioDevice : public Base {
     return Status::Ok();
   }
   Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+    HR_RETURN_IF_ERROR(
+        this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
     return line_ ? Status::Ok() : Internal(this->Describe() + ": ready without a line");
   }
 
@@ -36,7 +38,9 @@ class GpioDevice : public Base {
     this->SetState(DeviceState::kReady);
     return Status::Ok();
   }
-  Status Checked(const Status& s) { return s.ok() ? s : this->Fault(s.WithContext(request_.Describe())); }
+  Status Checked(const Status& s) {
+    return s.ok() ? s : this->Fault(s.WithContext(request_.Describe()));
+  }
 
   std::shared_ptr<GpioProvider> provider_;
   GpioLineRequest request_;
@@ -100,7 +104,8 @@ class GpioInput : public GpioDevice<InputLine, GpioInputLine> {
   ~GpioInput() override { StopWatcher(); }
   Status Open() override {
     StopWatcher();
-    HR_RETURN_IF_ERROR(OpenWith([](GpioProvider& p, const GpioLineRequest& r) { return p.RequestInput(r); }));
+    HR_RETURN_IF_ERROR(
+        OpenWith([](GpioProvider& p, const GpioLineRequest& r) { return p.RequestInput(r); }));
     stop_ = false;
     watcher_ = std::thread([this] { Watch(); });
     return Status::Ok();
@@ -160,8 +165,8 @@ Result<GpioLineRequest> ParseLineRequest(const DeviceConfig& c, bool input) {
   r.consumer = "hairrig " + c.name;
   r.active_low = n.Bool("active_low", false);
   const std::string bias = n.Choice("bias", {"as_is", "disable", "pull_up", "pull_down"}, "as_is");
-  r.bias = bias == "disable" ? GpioBias::kDisable
-           : bias == "pull_up" ? GpioBias::kPullUp
+  r.bias = bias == "disable"     ? GpioBias::kDisable
+           : bias == "pull_up"   ? GpioBias::kPullUp
            : bias == "pull_down" ? GpioBias::kPullDown
                                  : GpioBias::kAsIs;
   if (!n.ok()) return n.status();
@@ -172,19 +177,25 @@ template <typename Interface, typename Impl>
 void AddGpioBackend(DeviceRegistry* registry, DeviceKind kind, const char* model, bool input,
                     std::shared_ptr<GpioProvider> provider) {
   registry->AddBackend<Interface>(
-      kind, "gpiod", [provider, model, input](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
+      kind, "gpiod",
+      [provider, model, input](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
         HR_ASSIGN_OR_RETURN(GpioLineRequest request, ParseLineRequest(c, input));
-        const DeviceInfo info = c.Info(std::string(model) + " (" + request.Describe() + ", " + provider->name() + ")");
-        return std::unique_ptr<Interface>(std::make_unique<Impl>(info, provider, std::move(request)));
+        const DeviceInfo info =
+            c.Info(std::string(model) + " (" + request.Describe() + ", " + provider->name() + ")");
+        return std::unique_ptr<Interface>(
+            std::make_unique<Impl>(info, provider, std::move(request)));
       });
 }
 
 }  // namespace
 
 void RegisterGpioBackends(DeviceRegistry* registry, std::shared_ptr<GpioProvider> provider) {
-  AddGpioBackend<Light, GpioLight>(registry, DeviceKind::kLight, "GPIO-switched panel", false, provider);
-  AddGpioBackend<TriggerLine, GpioTrigger>(registry, DeviceKind::kTriggerLine, "GPIO trigger output", false, provider);
-  AddGpioBackend<InputLine, GpioInput>(registry, DeviceKind::kInputLine, "GPIO safety input", true, provider);
+  AddGpioBackend<Light, GpioLight>(registry, DeviceKind::kLight, "GPIO-switched panel", false,
+                                   provider);
+  AddGpioBackend<TriggerLine, GpioTrigger>(registry, DeviceKind::kTriggerLine,
+                                           "GPIO trigger output", false, provider);
+  AddGpioBackend<InputLine, GpioInput>(registry, DeviceKind::kInputLine, "GPIO safety input", true,
+                                       provider);
 }
 
 }  // namespace hairrig

@@ -4,10 +4,10 @@
 // simulated provider in tests.
 //
 // Rig config fields, beside name, backend and serial:
-//   chip: pinctrl-bcm2711   # required: label (stable across boots), name (gpiochip0), number or path
-//   line: 17                # required: offset within the chip
-//   active_low: false       # true when the line is asserted by pulling it low
-//   bias: as_is             # inputs: as_is | disable | pull_up | pull_down
+//   chip: pinctrl-bcm2711   # required: label (stable across boots), name (gpiochip0), number or
+//   path line: 17                # required: offset within the chip active_low: false       # true
+//   when the line is asserted by pulling it low bias: as_is             # inputs: as_is | disable |
+//   pull_up | pull_down
 // A GPIO line has no serial number of its own: `serial` names the wired
 // function (the panel's or the button's asset tag), and a line is identified
 // by chip label and offset.

@@ -35,7 +35,8 @@ struct GpioLineRequest {
 };
 
 struct GpioEdge {
-  bool became_active = true;  // the logical value went to active (active-low lines: a falling level)
+  bool became_active =
+      true;                  // the logical value went to active (active-low lines: a falling level)
   int64_t timestamp_ns = 0;  // CLOCK_MONOTONIC (libgpiod) or steady_clock (simulated)
 };
 

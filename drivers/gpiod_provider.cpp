@@ -9,17 +9,26 @@
 
 namespace hairrig {
 
-std::string GpioLineRequest::Describe() const { return "line " + std::to_string(offset) + " of " + chip; }
+std::string GpioLineRequest::Describe() const {
+  return "line " + std::to_string(offset) + " of " + chip;
+}
 
 namespace {
 
 int RequestFlags(const GpioLineRequest& r) {
   int flags = r.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
   switch (r.bias) {
-    case GpioBias::kAsIs: break;
-    case GpioBias::kDisable: flags |= GPIOD_LINE_REQUEST_FLAG_BIAS_DISABLE; break;
-    case GpioBias::kPullUp: flags |= GPIOD_LINE_REQUEST_FLAG_BIAS_PULL_UP; break;
-    case GpioBias::kPullDown: flags |= GPIOD_LINE_REQUEST_FLAG_BIAS_PULL_DOWN; break;
+    case GpioBias::kAsIs:
+      break;
+    case GpioBias::kDisable:
+      flags |= GPIOD_LINE_REQUEST_FLAG_BIAS_DISABLE;
+      break;
+    case GpioBias::kPullUp:
+      flags |= GPIOD_LINE_REQUEST_FLAG_BIAS_PULL_UP;
+      break;
+    case GpioBias::kPullDown:
+      flags |= GPIOD_LINE_REQUEST_FLAG_BIAS_PULL_DOWN;
+      break;
   }
   return flags;
 }
@@ -40,7 +49,8 @@ class LibgpiodLine {
                       "; `gpiodetect` lists the chips (name, label, lines)");
     }
     if (r.offset < 0 || static_cast<unsigned>(r.offset) >= gpiod_chip_num_lines(chip_)) {
-      return OutOfRange(r.Describe() + ": the chip has " + std::to_string(gpiod_chip_num_lines(chip_)) + " lines");
+      return OutOfRange(r.Describe() + ": the chip has " +
+                        std::to_string(gpiod_chip_num_lines(chip_)) + " lines");
     }
     line_ = gpiod_chip_get_line(chip_, static_cast<unsigned>(r.offset));
     if (line_ == nullptr) return IoError(SystemError(r.Describe()));
@@ -48,9 +58,10 @@ class LibgpiodLine {
   }
   Status Busy(const GpioLineRequest& r) const {
     const char* holder = gpiod_line_consumer(line_);
-    return Unavailable(SystemError(r.Describe() + " cannot be requested") +
-                       (holder != nullptr ? std::string(" (held by '") + holder + "')" : std::string()) +
-                       "; check that no other program or kernel driver uses the line");
+    return Unavailable(
+        SystemError(r.Describe() + " cannot be requested") +
+        (holder != nullptr ? std::string(" (held by '") + holder + "')" : std::string()) +
+        "; check that no other program or kernel driver uses the line");
   }
   gpiod_line* line() const { return line_; }
 
@@ -64,13 +75,15 @@ class LibgpiodOutput : public GpioOutputLine {
   Status Request(const GpioLineRequest& r) {
     request_ = r;
     HR_RETURN_IF_ERROR(line_.Open(r));
-    if (gpiod_line_request_output_flags(line_.line(), r.consumer.c_str(), RequestFlags(r), r.initial_active ? 1 : 0) != 0) {
+    if (gpiod_line_request_output_flags(line_.line(), r.consumer.c_str(), RequestFlags(r),
+                                        r.initial_active ? 1 : 0) != 0) {
       return line_.Busy(r);
     }
     return Status::Ok();
   }
   Status Set(bool active) override {
-    if (gpiod_line_set_value(line_.line(), active ? 1 : 0) != 0) return IoError(SystemError(request_.Describe()));
+    if (gpiod_line_set_value(line_.line(), active ? 1 : 0) != 0)
+      return IoError(SystemError(request_.Describe()));
     return Status::Ok();
   }
 
@@ -84,7 +97,8 @@ class LibgpiodInput : public GpioInputLine {
   Status Request(const GpioLineRequest& r) {
     request_ = r;
     HR_RETURN_IF_ERROR(line_.Open(r));
-    if (gpiod_line_request_both_edges_events_flags(line_.line(), r.consumer.c_str(), RequestFlags(r)) != 0) {
+    if (gpiod_line_request_both_edges_events_flags(line_.line(), r.consumer.c_str(),
+                                                   RequestFlags(r)) != 0) {
       return line_.Busy(r);
     }
     return Status::Ok();
@@ -95,12 +109,14 @@ class LibgpiodInput : public GpioInputLine {
     return v == 1;
   }
   Result<std::optional<GpioEdge>> WaitEdge(std::chrono::milliseconds timeout) override {
-    timespec ts{static_cast<time_t>(timeout.count() / 1000), static_cast<long>(timeout.count() % 1000) * 1000000L};
+    timespec ts{static_cast<time_t>(timeout.count() / 1000),
+                static_cast<long>(timeout.count() % 1000) * 1000000L};
     const int ready = gpiod_line_event_wait(line_.line(), &ts);
     if (ready < 0) return IoError(SystemError(request_.Describe() + ": waiting for an edge"));
     if (ready == 0) return std::optional<GpioEdge>();
     gpiod_line_event event{};
-    if (gpiod_line_event_read(line_.line(), &event) != 0) return IoError(SystemError(request_.Describe()));
+    if (gpiod_line_event_read(line_.line(), &event) != 0)
+      return IoError(SystemError(request_.Describe()));
     GpioEdge edge;
     edge.became_active = event.event_type == GPIOD_LINE_EVENT_RISING_EDGE;
     edge.timestamp_ns = static_cast<int64_t>(event.ts.tv_sec) * 1000000000LL + event.ts.tv_nsec;
@@ -129,14 +145,18 @@ class LibgpiodProvider : public GpioProvider {
 
 }  // namespace
 
-std::shared_ptr<GpioProvider> MakeLibgpiodProvider() { return std::make_shared<LibgpiodProvider>(); }
+std::shared_ptr<GpioProvider> MakeLibgpiodProvider() {
+  return std::make_shared<LibgpiodProvider>();
+}
 
 std::vector<GpioChipInfo> ListGpioChips() {
   std::vector<GpioChipInfo> chips;
   gpiod_chip_iter* iter = gpiod_chip_iter_new();
   if (iter == nullptr) return chips;  // no /dev/gpiochip*
-  for (gpiod_chip* chip = gpiod_chip_iter_next(iter); chip != nullptr; chip = gpiod_chip_iter_next(iter)) {
-    chips.push_back({gpiod_chip_name(chip), gpiod_chip_label(chip), static_cast<int>(gpiod_chip_num_lines(chip))});
+  for (gpiod_chip* chip = gpiod_chip_iter_next(iter); chip != nullptr;
+       chip = gpiod_chip_iter_next(iter)) {
+    chips.push_back({gpiod_chip_name(chip), gpiod_chip_label(chip),
+                     static_cast<int>(gpiod_chip_num_lines(chip))});
   }
   gpiod_chip_iter_free(iter);
   return chips;

@@ -1,5 +1,6 @@
 #include "drivers/modbus_link.h"
 
+#include <modbus/modbus.h>
 #include <netdb.h>
 #include <sys/socket.h>
 
@@ -7,8 +8,6 @@
 #include <chrono>
 #include <cstring>
 #include <thread>
-
-#include <modbus/modbus.h>
 
 namespace hairrig {
 
@@ -26,13 +25,20 @@ Failure Classify(int error) {
 
 const char* ExceptionName(int code) {
   switch (code) {
-    case MODBUS_EXCEPTION_ILLEGAL_FUNCTION: return "illegal function";
-    case MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS: return "illegal data address";
-    case MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE: return "illegal data value";
-    case MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE: return "server device failure";
-    case MODBUS_EXCEPTION_ACKNOWLEDGE: return "acknowledge (still working)";
-    case MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY: return "server device busy";
-    default: return "exception";
+    case MODBUS_EXCEPTION_ILLEGAL_FUNCTION:
+      return "illegal function";
+    case MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS:
+      return "illegal data address";
+    case MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE:
+      return "illegal data value";
+    case MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE:
+      return "server device failure";
+    case MODBUS_EXCEPTION_ACKNOWLEDGE:
+      return "acknowledge (still working)";
+    case MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY:
+      return "server device busy";
+    default:
+      return "exception";
   }
 }
 
@@ -42,14 +48,17 @@ const char* Advice(Failure failure, ModbusEndpoint::Transport transport) {
   switch (failure) {
     case Failure::kTimeout:
       return tcp ? "check that the controller is powered, and its address, port and unit id"
-                 : "check power, the RS-485 wiring (A/B), the baud rate and parity, and the slave id";
+                 : "check power, the RS-485 wiring (A/B), the baud rate and parity, and the slave "
+                   "id";
     case Failure::kMalformed:
       return tcp ? "check that the address is the controller's and not another device's"
                  : "check the baud rate, parity, termination resistors and cable length";
     case Failure::kConnection:
-      return tcp ? "check the network cable and that no other program holds the controller's only connection"
+      return tcp ? "check the network cable and that no other program holds the controller's only "
+                   "connection"
                  : "check that the USB-serial adapter is plugged in";
-    default: return "see the controller's manual for this exception";
+    default:
+      return "see the controller's manual for this exception";
   }
 }
 
@@ -65,7 +74,8 @@ std::string ConnectFailure(int error, const ModbusEndpoint& e) {
            " ms; check that the controller is powered and on this network, and its address";
   }
   if (error == ECONNREFUSED) {
-    return "connection refused; check the port (Modbus TCP: 502) and that the controller's Modbus TCP server is on";
+    return "connection refused; check the port (Modbus TCP: 502) and that the controller's Modbus "
+           "TCP server is on";
   }
   return std::string(std::strerror(error)) + "; " + Advice(Failure::kConnection, e.transport);
 }
@@ -83,11 +93,12 @@ bool Resolves(const std::string& host) {
 
 // A TCP peer that never gave a Modbus reply on its connection.
 Status NotAModbusServer(const ModbusEndpoint& e, Failure failure, int error) {
-  return Unavailable("cannot connect to Modbus " + e.Describe() + ": the peer there " +
-                     (failure == Failure::kMalformed ? "answers, but not in Modbus TCP ("
-                                                     : "closes the connection before any Modbus reply (") +
-                     modbus_strerror(error) + "); check that " + e.host + ":" + std::to_string(e.port) +
-                     " is the controller's address and Modbus TCP port, not another device's");
+  return Unavailable(
+      "cannot connect to Modbus " + e.Describe() + ": the peer there " +
+      (failure == Failure::kMalformed ? "answers, but not in Modbus TCP ("
+                                      : "closes the connection before any Modbus reply (") +
+      modbus_strerror(error) + "); check that " + e.host + ":" + std::to_string(e.port) +
+      " is the controller's address and Modbus TCP port, not another device's");
 }
 
 }  // namespace
@@ -112,8 +123,9 @@ std::string ModbusEndpoint::Describe() const {
 
 Result<ModbusEndpoint> ParseModbusEndpoint(const ConfigNode& node) {
   ModbusEndpoint e;
-  e.transport = node.Choice("transport", {"tcp", "rtu"}, "tcp") == "rtu" ? ModbusEndpoint::Transport::kRtu
-                                                                      : ModbusEndpoint::Transport::kTcp;
+  e.transport = node.Choice("transport", {"tcp", "rtu"}, "tcp") == "rtu"
+                    ? ModbusEndpoint::Transport::kRtu
+                    : ModbusEndpoint::Transport::kTcp;
   if (e.transport == ModbusEndpoint::Transport::kTcp) {
     e.host = node.String("host");
     e.port = node.Integer("port", 502, {.min = 0, .max = 65535});
@@ -153,21 +165,25 @@ Status ModbusLink::ConnectLocked() {
   auto c = std::make_unique<Context>();
   const bool tcp = endpoint_.transport == ModbusEndpoint::Transport::kTcp;
   c->ctx = tcp ? modbus_new_tcp_pi(endpoint_.host.c_str(), std::to_string(endpoint_.port).c_str())
-               : modbus_new_rtu(endpoint_.device.c_str(), endpoint_.baud, endpoint_.parity, endpoint_.data_bits,
-                                endpoint_.stop_bits);
+               : modbus_new_rtu(endpoint_.device.c_str(), endpoint_.baud, endpoint_.parity,
+                                endpoint_.data_bits, endpoint_.stop_bits);
   if (c->ctx == nullptr) {
-    return InvalidArgument("cannot set up Modbus " + endpoint_.Describe() + ": " + modbus_strerror(errno));
+    return InvalidArgument("cannot set up Modbus " + endpoint_.Describe() + ": " +
+                           modbus_strerror(errno));
   }
   modbus_set_slave(c->ctx, endpoint_.slave_id);
   const int ms = endpoint_.timeout_ms;
-  modbus_set_response_timeout(c->ctx, static_cast<uint32_t>(ms / 1000), static_cast<uint32_t>(ms % 1000) * 1000);
+  modbus_set_response_timeout(c->ctx, static_cast<uint32_t>(ms / 1000),
+                              static_cast<uint32_t>(ms % 1000) * 1000);
   if (tcp && !Resolves(endpoint_.host)) {
-    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": the host name '" + endpoint_.host +
+    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": the host name '" +
+                       endpoint_.host +
                        "' does not resolve; check it, or give the controller's IP address");
   }
   errno = 0;
   if (modbus_connect(c->ctx) == -1) {
-    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": " + ConnectFailure(errno, endpoint_));
+    return Unavailable("cannot connect to Modbus " + endpoint_.Describe() + ": " +
+                       ConnectFailure(errno, endpoint_));
   }
   c->connected = true;
   context_ = std::move(c);
@@ -193,7 +209,8 @@ Status ModbusLink::Transact(const std::string& what, Request request) {
     const Failure failure = Classify(error);
     const std::string reason = what + " on Modbus " + endpoint_.Describe();
     const bool tcp = endpoint_.transport == ModbusEndpoint::Transport::kTcp;
-    if (tcp && !peer_spoke_modbus_ && (failure == Failure::kMalformed || failure == Failure::kConnection)) {
+    if (tcp && !peer_spoke_modbus_ &&
+        (failure == Failure::kMalformed || failure == Failure::kConnection)) {
       // The peer has never answered in Modbus: it is not a Modbus TCP server.
       last = NotAModbusServer(endpoint_, failure, error);
       DisconnectLocked();
@@ -204,15 +221,16 @@ Status ModbusLink::Transact(const std::string& what, Request request) {
       case Failure::kRetryableException: {
         peer_spoke_modbus_ = true;
         const int code = error - MODBUS_ENOBASE;
-        last = DeviceFault(reason + ": the controller answered Modbus exception " + std::to_string(code) + " (" +
-                           ExceptionName(code) + "); " + Advice(failure, endpoint_.transport));
+        last = DeviceFault(reason + ": the controller answered Modbus exception " +
+                           std::to_string(code) + " (" + ExceptionName(code) + "); " +
+                           Advice(failure, endpoint_.transport));
         if (failure == Failure::kException) return last;
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
         break;
       }
       case Failure::kTimeout:
-        last = Timeout(reason + ": no reply within " + std::to_string(endpoint_.timeout_ms) + " ms; " +
-                       Advice(failure, endpoint_.transport));
+        last = Timeout(reason + ": no reply within " + std::to_string(endpoint_.timeout_ms) +
+                       " ms; " + Advice(failure, endpoint_.transport));
         break;
       case Failure::kMalformed:
         last = CorruptData(reason + ": malformed reply (" + modbus_strerror(error) + "); " +
@@ -237,17 +255,19 @@ Status ModbusLink::Transact(const std::string& what, Request request) {
 Result<std::vector<uint16_t>> ModbusLink::Read(int address, int count) {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<uint16_t> values(static_cast<size_t>(count));
-  HR_RETURN_IF_ERROR(Transact("reading " + std::to_string(count) + " registers at " + std::to_string(address),
-                              [&](modbus_t* ctx) { return modbus_read_registers(ctx, address, count, values.data()); }));
+  HR_RETURN_IF_ERROR(Transact(
+      "reading " + std::to_string(count) + " registers at " + std::to_string(address),
+      [&](modbus_t* ctx) { return modbus_read_registers(ctx, address, count, values.data()); }));
   return values;
 }
 
 Status ModbusLink::Write(int address, const std::vector<uint16_t>& values) {
   std::lock_guard<std::mutex> lock(mutex_);
-  return Transact("writing " + std::to_string(values.size()) + " registers at " + std::to_string(address),
-                  [&](modbus_t* ctx) {
-                    return modbus_write_registers(ctx, address, static_cast<int>(values.size()), values.data());
-                  });
+  return Transact(
+      "writing " + std::to_string(values.size()) + " registers at " + std::to_string(address),
+      [&](modbus_t* ctx) {
+        return modbus_write_registers(ctx, address, static_cast<int>(values.size()), values.data());
+      });
 }
 
 ModbusLinkStats ModbusLink::stats() const {

@@ -34,14 +34,14 @@ struct ModbusEndpoint {
   Transport transport = Transport::kTcp;
   std::string host = "127.0.0.1";  // TCP: address or host name
   int port = 502;
-  std::string device;              // RTU: serial device (/dev/ttyUSB0, /dev/serial/by-id/...)
+  std::string device;  // RTU: serial device (/dev/ttyUSB0, /dev/serial/by-id/...)
   int baud = 19200;
-  char parity = 'N';               // 'N', 'E' or 'O'
+  char parity = 'N';  // 'N', 'E' or 'O'
   int data_bits = 8;
   int stop_bits = 1;
-  int slave_id = 1;                // unit id (1..247)
-  int timeout_ms = 500;            // per request
-  int retries = 2;                 // further attempts after a failed request
+  int slave_id = 1;      // unit id (1..247)
+  int timeout_ms = 500;  // per request
+  int retries = 2;       // further attempts after a failed request
 
   // "tcp 127.0.0.1:502 unit 1", "rtu /dev/ttyUSB0 19200 8N1 unit 3".
   std::string Describe() const;

@@ -17,16 +17,19 @@ struct RegisterField {
 };
 
 std::vector<RegisterField> Fields(ModbusRegisterMap& m) {
-  return {{"command", &m.command, 1},   {"status", &m.status, 1}, {"fault_code", &m.fault_code, 1},
-          {"position", &m.position, 2}, {"target", &m.target, 2}, {"speed", &m.speed, 2},
-          {"accel", &m.accel, 2},       {"serial", &m.serial, m.serial_registers}};
+  return {{"command", &m.command, 1},       {"status", &m.status, 1},
+          {"fault_code", &m.fault_code, 1}, {"position", &m.position, 2},
+          {"target", &m.target, 2},         {"speed", &m.speed, 2},
+          {"accel", &m.accel, 2},           {"serial", &m.serial, m.serial_registers}};
 }
 
 void ReadRegisters(const ConfigNode& node, ModbusRegisterMap* map) {
-  node.AllowOnlyKeys(
-      {"command", "status", "fault_code", "position", "target", "speed", "accel", "serial", "serial_registers"});
-  map->serial_registers = node.Integer("serial_registers", map->serial_registers, {.min = 1, .max = 32});
-  for (RegisterField& f : Fields(*map)) *f.address = node.Integer(f.name, *f.address, {.min = 0, .max = 65535 - 32});
+  node.AllowOnlyKeys({"command", "status", "fault_code", "position", "target", "speed", "accel",
+                      "serial", "serial_registers"});
+  map->serial_registers =
+      node.Integer("serial_registers", map->serial_registers, {.min = 1, .max = 32});
+  for (RegisterField& f : Fields(*map))
+    *f.address = node.Integer(f.name, *f.address, {.min = 0, .max = 65535 - 32});
   if (!node.ok()) return;
   const std::vector<RegisterField> fields = Fields(*map);
   for (size_t i = 0; i < fields.size(); ++i) {
@@ -34,7 +37,8 @@ void ReadRegisters(const ConfigNode& node, ModbusRegisterMap* map) {
       const RegisterField& a = fields[i];
       const RegisterField& b = fields[j];
       if (*a.address < *b.address + b.count && *b.address < *a.address + a.count) {
-        node.Fail(b.name, std::string("registers of '") + b.name + "' overlap those of '" + a.name + "'");
+        node.Fail(b.name,
+                  std::string("registers of '") + b.name + "' overlap those of '" + a.name + "'");
         return;
       }
     }
@@ -51,7 +55,8 @@ void ReadCommands(const ConfigNode& node, ModbusRegisterMap* m) {
   m->cmd_home = Code(node, "home", m->cmd_home);
   m->cmd_stop = Code(node, "stop", m->cmd_stop);
   m->cmd_clear_fault = Code(node, "clear_fault", m->cmd_clear_fault);
-  const std::vector<uint16_t> codes = {m->cmd_move_absolute, m->cmd_home, m->cmd_stop, m->cmd_clear_fault};
+  const std::vector<uint16_t> codes = {m->cmd_move_absolute, m->cmd_home, m->cmd_stop,
+                                       m->cmd_clear_fault};
   if (node.ok() && std::set<uint16_t>(codes.begin(), codes.end()).size() != codes.size()) {
     node.Fail("", "two commands share one code");
   }
@@ -78,7 +83,9 @@ void ReadLimits(const ConfigNode& node, ModbusRegisterMap* m) {
 
 }  // namespace
 
-int ModbusRegisterMap::StatusBlockStart() const { return std::min({status, fault_code, position, target}); }
+int ModbusRegisterMap::StatusBlockStart() const {
+  return std::min({status, fault_code, position, target});
+}
 
 int ModbusRegisterMap::StatusBlockCount() const {
   return std::max({status + 1, fault_code + 1, position + 2, target + 2}) - StatusBlockStart();
@@ -94,16 +101,19 @@ int ModbusRegisterMap::RegisterSpan() const {
 Result<ModbusRegisterMap> ParseModbusRegisterMap(const ConfigNode& device) {
   ModbusRegisterMap map;
   if (device.Has("registers")) ReadRegisters(device.Child("registers"), &map);
-  map.counts_per_degree = device.Number("counts_per_degree", map.counts_per_degree, {.min = 1e-3, .max = 1e7});
-  map.word_order = device.Choice("word_order", {"high_first", "low_first"}, "high_first") == "low_first"
-                       ? WordOrder::kLowFirst
-                       : WordOrder::kHighFirst;
+  map.counts_per_degree =
+      device.Number("counts_per_degree", map.counts_per_degree, {.min = 1e-3, .max = 1e7});
+  map.word_order =
+      device.Choice("word_order", {"high_first", "low_first"}, "high_first") == "low_first"
+          ? WordOrder::kLowFirst
+          : WordOrder::kHighFirst;
   if (device.Has("commands")) ReadCommands(device.Child("commands"), &map);
   if (device.Has("status_bits")) ReadStatusBits(device.Child("status_bits"), &map);
   if (device.Has("limits")) ReadLimits(device.Child("limits"), &map);
   if (!device.ok()) return device.status();
   if (map.StatusBlockCount() > 125) {
-    device.Fail("registers", "status, fault_code, position and target must lie within 125 registers (one read)");
+    device.Fail("registers",
+                "status, fault_code, position and target must lie within 125 registers (one read)");
     return device.status();
   }
   return map;
@@ -134,7 +144,9 @@ Result<int32_t> DegreesToCounts(double degrees, const ModbusRegisterMap& map) {
   return static_cast<int32_t>(counts);
 }
 
-double CountsToDegrees(int32_t counts, const ModbusRegisterMap& map) { return counts / map.counts_per_degree; }
+double CountsToDegrees(int32_t counts, const ModbusRegisterMap& map) {
+  return counts / map.counts_per_degree;
+}
 
 std::vector<uint16_t> EncodeAscii(const std::string& text, int registers) {
   std::vector<uint16_t> out(static_cast<size_t>(registers), 0);

@@ -64,17 +64,22 @@ TEST(ModbusRegisterMap, ParsesAProfileAndItsStatusBlock) {
 TEST(ModbusRegisterMap, ErrorsNameTheField) {
   auto overlap = Parse("registers: {position: 11}\n");
   EXPECT_FALSE(overlap.ok());
-  EXPECT_NE(overlap.status().message().find("overlap"), std::string::npos) << overlap.status().ToString();
+  EXPECT_NE(overlap.status().message().find("overlap"), std::string::npos)
+      << overlap.status().ToString();
   auto bits = Parse("status_bits: {homed: 0}\n");
-  EXPECT_NE(bits.status().message().find("share one bit"), std::string::npos) << bits.status().ToString();
+  EXPECT_NE(bits.status().message().find("share one bit"), std::string::npos)
+      << bits.status().ToString();
   auto codes = Parse("commands: {home: 1}\n");
-  EXPECT_NE(codes.status().message().find("share one code"), std::string::npos) << codes.status().ToString();
+  EXPECT_NE(codes.status().message().find("share one code"), std::string::npos)
+      << codes.status().ToString();
   auto order = Parse("word_order: middle\n");
-  EXPECT_NE(order.status().message().find("word_order"), std::string::npos) << order.status().ToString();
+  EXPECT_NE(order.status().message().find("word_order"), std::string::npos)
+      << order.status().ToString();
   auto typo = Parse("registers: {postion: 40}\n");
   EXPECT_NE(typo.status().message().find("postion"), std::string::npos) << typo.status().ToString();
   auto far = Parse("registers: {status: 1, position: 300}\n");
-  EXPECT_NE(far.status().message().find("125 registers"), std::string::npos) << far.status().ToString();
+  EXPECT_NE(far.status().message().find("125 registers"), std::string::npos)
+      << far.status().ToString();
 }
 
 }  // namespace

@@ -61,8 +61,10 @@ class ModbusTurntable : public PolledTurntable {
     if (!target.ok()) return target.status().WithContext(Describe());
     std::vector<uint16_t> words(8, 0);
     EncodeInt32(target.value(), m.word_order, &words[0]);
-    EncodeInt32(static_cast<int32_t>(std::lround(p.speed_deg_s * m.counts_per_degree)), m.word_order, &words[2]);
-    EncodeInt32(static_cast<int32_t>(std::lround(p.accel_deg_s2 * m.counts_per_degree)), m.word_order, &words[4]);
+    EncodeInt32(static_cast<int32_t>(std::lround(p.speed_deg_s * m.counts_per_degree)),
+                m.word_order, &words[2]);
+    EncodeInt32(static_cast<int32_t>(std::lround(p.accel_deg_s2 * m.counts_per_degree)),
+                m.word_order, &words[4]);
     HR_RETURN_IF_ERROR(Fail(WritePair(m.target, &words[0])));
     HR_RETURN_IF_ERROR(Fail(WritePair(m.speed, &words[2])));
     HR_RETURN_IF_ERROR(Fail(WritePair(m.accel, &words[4])));
@@ -72,7 +74,8 @@ class ModbusTurntable : public PolledTurntable {
   }
 
   Result<TurntableStatus> ReadStatus() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
+    HR_RETURN_IF_ERROR(RequireState(
+        {DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
     HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
     const ModbusRegisterMap& m = options_.map;
     TurntableStatus s{.position_deg = CountsToDegrees(r.position, m),
@@ -91,7 +94,8 @@ class ModbusTurntable : public PolledTurntable {
   }
 
   Status Stop() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
+    HR_RETURN_IF_ERROR(
+        RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
     StopRequested();
     HR_RETURN_IF_ERROR(Command(options_.map.cmd_stop).WithContext(Describe() + ": stop"));
     StopDone();
@@ -109,7 +113,9 @@ class ModbusTurntable : public PolledTurntable {
   Status Fail(const Status& s) { return s.ok() ? s : Fault(s); }
 
   Status Command(uint16_t code) { return link_.Write(options_.map.command, {code}); }
-  Status WritePair(int address, const uint16_t* pair) { return link_.Write(address, {pair[0], pair[1]}); }
+  Status WritePair(int address, const uint16_t* pair) {
+    return link_.Write(address, {pair[0], pair[1]});
+  }
 
   Result<Registers> ReadRegisters() {
     const ModbusRegisterMap& m = options_.map;
@@ -130,25 +136,28 @@ class ModbusTurntable : public PolledTurntable {
     const std::string found = DecodeAscii(words.value().data(), options_.map.serial_registers);
     if (found == info().serial) return Status::Ok();
     link_.Disconnect();
-    return Fault(Unavailable("the controller at " + options_.endpoint.Describe() + " reports serial '" + found +
-                             "', not '" + info().serial +
-                             "': check the address (or the cable) and the serial in the rig config"));
+    return Fault(
+        Unavailable("the controller at " + options_.endpoint.Describe() + " reports serial '" +
+                    found + "', not '" + info().serial +
+                    "': check the address (or the cable) and the serial in the rig config"));
   }
 
   // Polls the status registers until in position (and homed when asked).
   Status Wait(std::chrono::milliseconds timeout, bool need_homed) {
     const ModbusRegisterMap& m = options_.map;
-    return WaitUntilDone(timeout, std::chrono::milliseconds(options_.poll_ms), [&]() -> Result<MotionPoll> {
-      HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
-      MotionPoll p;
-      p.position_deg = CountsToDegrees(r.position, m);
-      if (Bit(r.status, m.bit_fault)) {
-        p.fault = "fault code " + std::to_string(r.fault_code) + " (reference profile: 1 stall, 2 limits)";
-      }
-      p.done = Bit(r.status, m.bit_in_position) && !Bit(r.status, m.bit_moving) &&
-               (!need_homed || Bit(r.status, m.bit_homed));
-      return p;
-    });
+    return WaitUntilDone(
+        timeout, std::chrono::milliseconds(options_.poll_ms), [&]() -> Result<MotionPoll> {
+          HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
+          MotionPoll p;
+          p.position_deg = CountsToDegrees(r.position, m);
+          if (Bit(r.status, m.bit_fault)) {
+            p.fault = "fault code " + std::to_string(r.fault_code) +
+                      " (reference profile: 1 stall, 2 limits)";
+          }
+          p.done = Bit(r.status, m.bit_in_position) && !Bit(r.status, m.bit_moving) &&
+                   (!need_homed || Bit(r.status, m.bit_homed));
+          return p;
+        });
   }
 
   ModbusTurntableOptions options_;
@@ -158,9 +167,27 @@ class ModbusTurntable : public PolledTurntable {
 }  // namespace
 
 Result<ModbusTurntableOptions> ParseModbusTurntableOptions(const ConfigNode& device) {
-  device.AllowOnlyKeys({"name", "backend", "serial", "transport", "host", "port", "device", "baud", "parity",
-                        "data_bits", "stop_bits", "slave_id", "timeout_ms", "retries", "poll_ms", "registers",
-                        "counts_per_degree", "word_order", "commands", "status_bits", "limits"});
+  device.AllowOnlyKeys({"name",
+                        "backend",
+                        "serial",
+                        "transport",
+                        "host",
+                        "port",
+                        "device",
+                        "baud",
+                        "parity",
+                        "data_bits",
+                        "stop_bits",
+                        "slave_id",
+                        "timeout_ms",
+                        "retries",
+                        "poll_ms",
+                        "registers",
+                        "counts_per_degree",
+                        "word_order",
+                        "commands",
+                        "status_bits",
+                        "limits"});
   ModbusTurntableOptions options;
   HR_ASSIGN_OR_RETURN(options.endpoint, ParseModbusEndpoint(device));
   HR_ASSIGN_OR_RETURN(options.map, ParseModbusRegisterMap(device));
@@ -169,7 +196,8 @@ Result<ModbusTurntableOptions> ParseModbusTurntableOptions(const ConfigNode& dev
   return options;
 }
 
-std::unique_ptr<Turntable> MakeModbusTurntable(const DeviceInfo& info, ModbusTurntableOptions options) {
+std::unique_ptr<Turntable> MakeModbusTurntable(const DeviceInfo& info,
+                                               ModbusTurntableOptions options) {
   return std::make_unique<ModbusTurntable>(info, std::move(options));
 }
 
@@ -180,10 +208,12 @@ ModbusLinkStats ModbusTurntableLinkStats(const Turntable& turntable) {
 
 void RegisterModbusTurntableBackend(DeviceRegistry* registry, ModbusOptionsHook hook) {
   registry->AddBackend<Turntable>(
-      DeviceKind::kTurntable, "modbus", [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
+      DeviceKind::kTurntable, "modbus",
+      [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
         HR_ASSIGN_OR_RETURN(ModbusTurntableOptions options, ParseModbusTurntableOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
-        const DeviceInfo info = c.Info("Modbus turntable controller (" + options.endpoint.Describe() + ")");
+        const DeviceInfo info =
+            c.Info("Modbus turntable controller (" + options.endpoint.Describe() + ")");
         return MakeModbusTurntable(info, std::move(options));
       });
 }

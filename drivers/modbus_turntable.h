@@ -32,14 +32,16 @@ namespace hairrig {
 struct ModbusTurntableOptions {
   ModbusEndpoint endpoint;
   ModbusRegisterMap map;
-  int poll_ms = 10;          // status polling period while waiting for a move
-  double time_scale = 1.0;   // wall s per device s: 1 for real hardware (a simulated controller sets its own)
+  int poll_ms = 10;  // status polling period while waiting for a move
+  double time_scale =
+      1.0;  // wall s per device s: 1 for real hardware (a simulated controller sets its own)
 };
 
 // Every field of the device's map, with errors naming the file, line and field.
 Result<ModbusTurntableOptions> ParseModbusTurntableOptions(const ConfigNode& device);
 
-std::unique_ptr<Turntable> MakeModbusTurntable(const DeviceInfo& info, ModbusTurntableOptions options);
+std::unique_ptr<Turntable> MakeModbusTurntable(const DeviceInfo& info,
+                                               ModbusTurntableOptions options);
 // The link statistics of a turntable made by MakeModbusTurntable (requests,
 // retries, reconnects); zeros for any other turntable.
 ModbusLinkStats ModbusTurntableLinkStats(const Turntable& turntable);

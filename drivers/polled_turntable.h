@@ -16,8 +16,8 @@ namespace hairrig {
 // One poll of a controller while a move runs.
 struct MotionPoll {
   double position_deg = 0;
-  bool done = false;                // in position (and homed, when waiting for a homing)
-  std::optional<std::string> fault; // the controller's fault, in words ("fault code 1 (...)")
+  bool done = false;                 // in position (and homed, when waiting for a homing)
+  std::optional<std::string> fault;  // the controller's fault, in words ("fault code 1 (...)")
 };
 
 class PolledTurntable : public Turntable {

@@ -17,8 +17,9 @@ Result<std::unique_ptr<Device>> DeviceRegistry::Create(const DeviceConfig& confi
   if (it == factories_.end()) {
     std::string known;
     for (const auto& n : BackendNames(config.kind)) known += (known.empty() ? "" : ", ") + n;
-    return NotFound(std::string("unknown ") + DeviceKindName(config.kind) + " backend '" + config.backend +
-                    "' (this build has: " + (known.empty() ? "none" : known) + ")");
+    return NotFound(std::string("unknown ") + DeviceKindName(config.kind) + " backend '" +
+                    config.backend + "' (this build has: " + (known.empty() ? "none" : known) +
+                    ")");
   }
   return it->second(config);
 }
@@ -104,18 +105,21 @@ Result<DeviceSet> BuildDevices(const ConfigNode& devices, const DeviceRegistry& 
   devices.AllowOnlyKeys({"turntable", "lights", "trigger_lines", "cameras", "input_lines"});
   DeviceBuilder builder(registry, backend_override);
   DeviceSet set;
-  if (devices.Has("turntable")) set.turntable = builder.Build<Turntable>(DeviceKind::kTurntable, devices.Child("turntable"));
+  if (devices.Has("turntable"))
+    set.turntable = builder.Build<Turntable>(DeviceKind::kTurntable, devices.Child("turntable"));
   for (const auto& n : devices.OptionalItems("lights")) {
     if (auto d = builder.Build<Light>(DeviceKind::kLight, n)) set.lights.push_back(std::move(d));
   }
   for (const auto& n : devices.OptionalItems("trigger_lines")) {
-    if (auto d = builder.Build<TriggerLine>(DeviceKind::kTriggerLine, n)) set.trigger_lines.push_back(std::move(d));
+    if (auto d = builder.Build<TriggerLine>(DeviceKind::kTriggerLine, n))
+      set.trigger_lines.push_back(std::move(d));
   }
   for (const auto& n : devices.Items("cameras")) {
     if (auto d = builder.Build<Camera>(DeviceKind::kCamera, n)) set.cameras.push_back(std::move(d));
   }
   for (const auto& n : devices.OptionalItems("input_lines")) {
-    if (auto d = builder.Build<InputLine>(DeviceKind::kInputLine, n)) set.input_lines.push_back(std::move(d));
+    if (auto d = builder.Build<InputLine>(DeviceKind::kInputLine, n))
+      set.input_lines.push_back(std::move(d));
   }
   if (!devices.ok()) return devices.status();
   return set;

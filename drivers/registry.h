@@ -44,7 +44,8 @@ class DeviceRegistry {
 
   template <typename T>
   void AddBackend(DeviceKind kind, const std::string& backend, Factory<T> factory) {
-    factories_[{kind, backend}] = [factory](const DeviceConfig& c) -> Result<std::unique_ptr<Device>> {
+    factories_[{kind, backend}] =
+        [factory](const DeviceConfig& c) -> Result<std::unique_ptr<Device>> {
       auto made = factory(c);
       if (!made.ok()) return made.status();
       return std::unique_ptr<Device>(std::move(made).value());
@@ -67,7 +68,7 @@ struct DeviceSet {
 
   std::vector<Device*> All() const;
   Camera* FindCameraBySerial(const std::string& serial) const;
-  Status OpenAll();   // first failure named; the rest still attempted
+  Status OpenAll();  // first failure named; the rest still attempted
   void CloseAll();
 };
 

@@ -33,15 +33,17 @@ class TestLight : public Light {
 
 DeviceRegistry MakeRegistry() {
   DeviceRegistry registry;
-  registry.AddBackend<Light>(DeviceKind::kLight, "test", [](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
-    return std::unique_ptr<Light>(std::make_unique<TestLight>(c.Info("test light")));
-  });
+  registry.AddBackend<Light>(
+      DeviceKind::kLight, "test", [](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
+        return std::unique_ptr<Light>(std::make_unique<TestLight>(c.Info("test light")));
+      });
   return registry;
 }
 
 TEST(Registry, BuildsDevicesByBackendName) {
   auto root = ConfigNode::LoadString(
-      "devices:\n  lights:\n    - {name: top, backend: test, serial: L1}\n    - {name: bottom, backend: test, serial: L2}\n"
+      "devices:\n  lights:\n    - {name: top, backend: test, serial: L1}\n    - {name: bottom, "
+      "backend: test, serial: L2}\n"
       "  cameras: []\n",
       "rig.yaml");
   ASSERT_TRUE(root.ok());
@@ -52,14 +54,16 @@ TEST(Registry, BuildsDevicesByBackendName) {
   EXPECT_EQ(set->lights[0]->state(), DeviceState::kClosed);
   const Status before_open = set->lights[0]->SetOn(true);
   EXPECT_EQ(before_open.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(before_open.message().find("call Open first"), std::string::npos) << before_open.message();
+  EXPECT_NE(before_open.message().find("call Open first"), std::string::npos)
+      << before_open.message();
   ASSERT_TRUE(set->OpenAll().ok());
   EXPECT_TRUE(set->lights[0]->SetOn(true).ok());
 }
 
 TEST(Registry, UnknownBackendNamesTheFieldAndTheKnownBackends) {
-  auto root = ConfigNode::LoadString("devices:\n  lights:\n    - {name: top, backend: gpoid, serial: L1}\n  cameras: []\n",
-                                     "rig.yaml");
+  auto root = ConfigNode::LoadString(
+      "devices:\n  lights:\n    - {name: top, backend: gpoid, serial: L1}\n  cameras: []\n",
+      "rig.yaml");
   auto set = BuildDevices(root->Child("devices"), MakeRegistry());
   ASSERT_FALSE(set.ok());
   const std::string m = set.status().message();
@@ -71,11 +75,13 @@ TEST(Registry, UnknownBackendNamesTheFieldAndTheKnownBackends) {
 
 TEST(Registry, DuplicateSerialIsRefused) {
   auto root = ConfigNode::LoadString(
-      "devices:\n  lights:\n    - {name: a, backend: test, serial: L1}\n    - {name: b, backend: test, serial: L1}\n"
+      "devices:\n  lights:\n    - {name: a, backend: test, serial: L1}\n    - {name: b, backend: "
+      "test, serial: L1}\n"
       "  cameras: []\n",
       "rig.yaml");
   auto set = BuildDevices(root->Child("devices"), MakeRegistry());
-  EXPECT_NE(set.status().message().find("used by two devices"), std::string::npos) << set.status().ToString();
+  EXPECT_NE(set.status().message().find("used by two devices"), std::string::npos)
+      << set.status().ToString();
 }
 
 }  // namespace

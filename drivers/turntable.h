@@ -15,7 +15,7 @@ struct TurntableCapabilities {
   double max_accel_deg_s2 = 0;
   double resolution_deg = 0;  // smallest commandable step
   bool can_home = true;
-  double settle_s = 0;        // time after the in-position flag before the platform is still
+  double settle_s = 0;  // time after the in-position flag before the platform is still
 };
 
 struct MotionProfile {

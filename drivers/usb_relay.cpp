@@ -38,7 +38,8 @@ class LibusbRelayBus : public UsbRelayBus {
     std::vector<Board> boards;
     ForEachRelay([&](libusb_device* device, libusb_device_handle* handle, uint8_t product_index) {
       unsigned char text[64] = {};
-      if (handle && libusb_get_string_descriptor_ascii(handle, product_index, text, sizeof(text)) > 0) {
+      if (handle &&
+          libusb_get_string_descriptor_ascii(handle, product_index, text, sizeof(text)) > 0) {
         const std::string product = reinterpret_cast<const char*>(text);
         // 16c0:05df is V-USB's shared id: only boards naming themselves USBRelayN are relays.
         if (UsbRelayChannels(product) > 0) boards.push_back({PortPath(device), product});
@@ -80,7 +81,9 @@ class LibusbRelayBus : public UsbRelayBus {
     const ssize_t n = libusb_get_device_list(context_, &list);
     for (ssize_t i = 0; i < n; ++i) {
       libusb_device_descriptor d{};
-      if (libusb_get_device_descriptor(list[i], &d) != 0 || d.idVendor != kVendorId || d.idProduct != kProductId) continue;
+      if (libusb_get_device_descriptor(list[i], &d) != 0 || d.idVendor != kVendorId ||
+          d.idProduct != kProductId)
+        continue;
       libusb_device_handle* handle = nullptr;
       if (libusb_open(list[i], &handle) != 0) handle = nullptr;
       const bool done = visit(list[i], handle, d.iProduct);
@@ -90,16 +93,17 @@ class LibusbRelayBus : public UsbRelayBus {
     if (list) libusb_free_device_list(list, 1);
   }
 
-  Status Transfer(const std::string& port_path, uint8_t type, uint8_t request, UsbRelayReport* report,
-                  const char* what) {
+  Status Transfer(const std::string& port_path, uint8_t type, uint8_t request,
+                  UsbRelayReport* report, const char* what) {
     std::lock_guard<std::mutex> lock(mutex_);
     HR_RETURN_IF_ERROR(Init());
     Status result = Unavailable("no relay board at USB port " + port_path + " (unplugged?)");
     ForEachRelay([&](libusb_device* device, libusb_device_handle* handle, uint8_t) {
       if (PortPath(device) != port_path) return false;
       if (!handle) {
-        result = Unavailable("relay board at USB port " + port_path +
-                             " cannot be opened: add a udev rule giving the rig's user access to 16c0:05df");
+        result = Unavailable(
+            "relay board at USB port " + port_path +
+            " cannot be opened: add a udev rule giving the rig's user access to 16c0:05df");
         return true;
       }
       libusb_set_auto_detach_kernel_driver(handle, 1);
@@ -110,8 +114,8 @@ class LibusbRelayBus : public UsbRelayBus {
         libusb_release_interface(handle, 0);
       }
       result = r >= 0 ? Status::Ok()
-                      : Unavailable(std::string(what) + " the relay board at USB port " + port_path + ": " +
-                                    libusb_error_name(r));
+                      : Unavailable(std::string(what) + " the relay board at USB port " +
+                                    port_path + ": " + libusb_error_name(r));
       return true;
     });
     return result;
@@ -123,7 +127,8 @@ class LibusbRelayBus : public UsbRelayBus {
 
 class UsbRelayLight : public Light {
  public:
-  UsbRelayLight(DeviceInfo info, UsbRelayLightOptions options) : Light(std::move(info)), options_(std::move(options)) {
+  UsbRelayLight(DeviceInfo info, UsbRelayLightOptions options)
+      : Light(std::move(info)), options_(std::move(options)) {
     if (!options_.bus) options_.bus = MakeLibusbRelayBus();
   }
   ~UsbRelayLight() override { (void)Close(); }
@@ -142,21 +147,23 @@ class UsbRelayLight : public Light {
         continue;
       }
       if (state->board_id != options_.board_id) {
-        seen += (seen.empty() ? "" : "; ") + b.product + " '" + state->board_id + "' at " + b.port_path;
+        seen +=
+            (seen.empty() ? "" : "; ") + b.product + " '" + state->board_id + "' at " + b.port_path;
         continue;
       }
       const int channels = UsbRelayChannels(b.product);
       if (options_.channel > channels) {
-        return Fault(OutOfRange("channel " + std::to_string(options_.channel) + ": the board (" + b.product + ") has " +
-                                std::to_string(channels)));
+        return Fault(OutOfRange("channel " + std::to_string(options_.channel) + ": the board (" +
+                                b.product + ") has " + std::to_string(channels)));
       }
       port_path_ = b.port_path;
       SetState(DeviceState::kReady);
       return Status::Ok();
     }
-    return Fault(Unavailable("no relay board with id '" + options_.board_id + "'" +
-                             (seen.empty() ? std::string(" (none found)") : " (found: " + seen + ")") +
-                             "; check its USB cable"));
+    return Fault(
+        Unavailable("no relay board with id '" + options_.board_id + "'" +
+                    (seen.empty() ? std::string(" (none found)") : " (found: " + seen + ")") +
+                    "; check its USB cable"));
   }
 
   Status Close() override {
@@ -202,7 +209,8 @@ class UsbRelayLight : public Light {
     if (!state.ok()) return Fault(state.status());
     if (state->IsOn(options_.channel) != on) {
       return Fault(DeviceFault("channel " + std::to_string(options_.channel) + " did not switch " +
-                               (on ? "on" : "off") + " (the board reports mask 0x" + std::to_string(state->on_mask) +
+                               (on ? "on" : "off") + " (the board reports mask 0x" +
+                               std::to_string(state->on_mask) +
                                "); check the board's supply and the relay"));
     }
     return Status::Ok();
@@ -218,7 +226,9 @@ std::shared_ptr<UsbRelayBus> MakeLibusbRelayBus() { return std::make_shared<Libu
 
 int UsbRelayChannels(const std::string& product) {
   const std::string prefix = "USBRelay";
-  if (product.rfind(prefix, 0) != 0 || product.size() == prefix.size() || product.size() > prefix.size() + 2) return 0;
+  if (product.rfind(prefix, 0) != 0 || product.size() == prefix.size() ||
+      product.size() > prefix.size() + 2)
+    return 0;
   for (size_t i = prefix.size(); i < product.size(); ++i) {
     if (!std::isdigit(static_cast<unsigned char>(product[i]))) return 0;
   }

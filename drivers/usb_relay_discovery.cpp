@@ -11,9 +11,12 @@ std::vector<UsbRelayDetected> DetectUsbRelays(UsbRelayBus& bus) {
   for (const UsbRelayBus::Board& b : *boards) {
     UsbRelayDetected d{b.port_path, b.product, UsbRelayChannels(b.product), "", ""};
     auto report = bus.GetReport(b.port_path);
-    auto state = report.ok() ? DecodeUsbRelayState(*report) : Result<UsbRelayState>(report.status());
-    if (state.ok()) d.board_id = state->board_id;
-    else d.error = state.status().message();
+    auto state =
+        report.ok() ? DecodeUsbRelayState(*report) : Result<UsbRelayState>(report.status());
+    if (state.ok())
+      d.board_id = state->board_id;
+    else
+      d.error = state.status().message();
     found.push_back(d);
   }
   return found;

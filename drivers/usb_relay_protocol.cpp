@@ -7,10 +7,13 @@ Result<UsbRelayReport> EncodeUsbRelaySwitch(int channel, bool on) {
     return InvalidArgument("relay channel " + std::to_string(channel) + " is outside 1.." +
                            std::to_string(kUsbRelayMaxChannels));
   }
-  return UsbRelayReport{static_cast<uint8_t>(on ? 0xFF : 0xFD), static_cast<uint8_t>(channel), 0, 0, 0, 0, 0, 0};
+  return UsbRelayReport{
+      static_cast<uint8_t>(on ? 0xFF : 0xFD), static_cast<uint8_t>(channel), 0, 0, 0, 0, 0, 0};
 }
 
-UsbRelayReport EncodeUsbRelayAll(bool on) { return {static_cast<uint8_t>(on ? 0xFE : 0xFC), 0, 0, 0, 0, 0, 0, 0}; }
+UsbRelayReport EncodeUsbRelayAll(bool on) {
+  return {static_cast<uint8_t>(on ? 0xFE : 0xFC), 0, 0, 0, 0, 0, 0, 0};
+}
 
 Result<UsbRelayState> DecodeUsbRelayState(const UsbRelayReport& report) {
   UsbRelayState state;
@@ -18,8 +21,8 @@ Result<UsbRelayState> DecodeUsbRelayState(const UsbRelayReport& report) {
     const uint8_t c = report[static_cast<size_t>(i)];
     if (c == 0) break;
     if (c < 0x20 || c > 0x7e) {
-      return CorruptData("relay board state report: byte " + std::to_string(i) + " of the board id is 0x" +
-                         std::to_string(c) + ", not printable ASCII");
+      return CorruptData("relay board state report: byte " + std::to_string(i) +
+                         " of the board id is 0x" + std::to_string(c) + ", not printable ASCII");
     }
     state.board_id += static_cast<char>(c);
   }

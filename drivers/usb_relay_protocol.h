@@ -29,7 +29,9 @@ UsbRelayReport EncodeUsbRelayAll(bool on);
 struct UsbRelayState {
   std::string board_id;  // trailing NULs and spaces dropped
   uint8_t on_mask = 0;
-  bool IsOn(int channel) const { return channel >= 1 && channel <= 8 && (on_mask >> (channel - 1)) & 1; }
+  bool IsOn(int channel) const {
+    return channel >= 1 && channel <= 8 && (on_mask >> (channel - 1)) & 1;
+  }
 };
 // CorruptData when the id holds bytes that are not printable ASCII.
 Result<UsbRelayState> DecodeUsbRelayState(const UsbRelayReport& report);

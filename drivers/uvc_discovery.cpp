@@ -17,7 +17,8 @@ std::vector<V4l2Detected> DetectV4l2Cameras(V4l2Io& io) {
     d.path = node;
     const int fd = io.Open(node, O_RDWR | O_NONBLOCK);
     if (fd < 0) {
-      d.error = std::string("cannot open: ") + std::strerror(errno) + " (is the user in the video group?)";
+      d.error = std::string("cannot open: ") + std::strerror(errno) +
+                " (is the user in the video group?)";
       found.push_back(d);
       continue;
     }
@@ -30,7 +31,8 @@ std::vector<V4l2Detected> DetectV4l2Cameras(V4l2Io& io) {
       found.push_back(d);
       continue;
     }
-    const uint32_t device_caps = (caps.capabilities & V4L2_CAP_DEVICE_CAPS) ? caps.device_caps : caps.capabilities;
+    const uint32_t device_caps =
+        (caps.capabilities & V4L2_CAP_DEVICE_CAPS) ? caps.device_caps : caps.capabilities;
     if (!(device_caps & V4L2_CAP_VIDEO_CAPTURE)) continue;  // metadata or output node
     d.card = reinterpret_cast<const char*>(caps.card);
     d.driver = reinterpret_cast<const char*>(caps.driver);

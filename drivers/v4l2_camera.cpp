@@ -7,7 +7,6 @@
 #include <cerrno>
 #include <cstring>
 #include <mutex>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -18,11 +17,13 @@ namespace hairrig {
 namespace {
 
 std::string FourCcText(uint32_t f) {
-  return {static_cast<char>(f & 0xff), static_cast<char>((f >> 8) & 0xff), static_cast<char>((f >> 16) & 0xff),
-          static_cast<char>((f >> 24) & 0xff)};
+  return {static_cast<char>(f & 0xff), static_cast<char>((f >> 8) & 0xff),
+          static_cast<char>((f >> 16) & 0xff), static_cast<char>((f >> 24) & 0xff)};
 }
 
-int64_t TimevalNs(const timeval& t) { return static_cast<int64_t>(t.tv_sec) * 1000000000 + t.tv_usec * 1000; }
+int64_t TimevalNs(const timeval& t) {
+  return static_cast<int64_t>(t.tv_sec) * 1000000000 + t.tv_usec * 1000;
+}
 
 bool GoneErrno(int e) { return e == ENODEV || e == EIO || e == ENXIO || e == EBADF; }
 
@@ -33,7 +34,8 @@ struct MappedBuffer {
 
 class V4l2Camera : public Camera {
  public:
-  V4l2Camera(DeviceInfo info, V4l2CameraOptions options) : Camera(std::move(info)), options_(std::move(options)) {
+  V4l2Camera(DeviceInfo info, V4l2CameraOptions options)
+      : Camera(std::move(info)), options_(std::move(options)) {
     if (!options_.io) options_.io = SystemV4l2Io();
   }
   ~V4l2Camera() override { (void)Close(); }
@@ -86,16 +88,20 @@ class V4l2Camera : public Camera {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
     HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     if (s.trigger == TriggerSource::kLine) {
-      return OutOfRange(Describe() + ": a UVC camera has no trigger input; leave its trigger_line out");
+      return OutOfRange(Describe() +
+                        ": a UVC camera has no trigger input; leave its trigger_line out");
     }
-    if (s.format != PixelFormat::kRgb8 && s.format != PixelFormat::kBgr8 && s.format != PixelFormat::kMono8) {
+    if (s.format != PixelFormat::kRgb8 && s.format != PixelFormat::kBgr8 &&
+        s.format != PixelFormat::kMono8) {
       return OutOfRange(Describe() + ": delivers rgb8, bgr8 or mono8");
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    HR_RETURN_IF_ERROR(SetControl(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "auto exposure off", true));
     HR_RETURN_IF_ERROR(
-        SetControl(V4L2_CID_EXPOSURE_ABSOLUTE, static_cast<int>(s.exposure_s * 1e4 + 0.5), "exposure", true));
-    HR_RETURN_IF_ERROR(SetControl(V4L2_CID_GAIN, static_cast<int>(s.gain_db + 0.5), "gain", s.gain_db != 0));
+        SetControl(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "auto exposure off", true));
+    HR_RETURN_IF_ERROR(SetControl(V4L2_CID_EXPOSURE_ABSOLUTE,
+                                  static_cast<int>(s.exposure_s * 1e4 + 0.5), "exposure", true));
+    HR_RETURN_IF_ERROR(
+        SetControl(V4L2_CID_GAIN, static_cast<int>(s.gain_db + 0.5), "gain", s.gain_db != 0));
     settings_ = s;
     return Status::Ok();
   }
@@ -142,10 +148,12 @@ class V4l2Camera : public Camera {
         std::lock_guard<std::mutex> lock(mutex_);
         if (!pending_triggers_ns_.empty()) trigger_ns = pending_triggers_ns_.front();
       }
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
       if (trigger_ns == 0 || left.count() <= 0) {
-        return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms" +
-                       (trigger_ns == 0 ? " (a UVC camera delivers frames after SoftwareTrigger)" : ""));
+        return Timeout(
+            Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms" +
+            (trigger_ns == 0 ? " (a UVC camera delivers frames after SoftwareTrigger)" : ""));
       }
       const int ready = io().PollReadable(fd_, static_cast<int>(left.count()));
       std::lock_guard<std::mutex> lock(mutex_);
@@ -158,7 +166,8 @@ class V4l2Camera : public Camera {
       }
       // A frame exposed before the trigger is the camera's stream running on: skip it.
       const bool before_trigger = TimevalNs(b.timestamp) < trigger_ns;
-      Result<Frame> frame = before_trigger ? Result<Frame>(Internal("skipped")) : DecodeLocked(b, trigger_ns);
+      Result<Frame> frame =
+          before_trigger ? Result<Frame>(Internal("skipped")) : DecodeLocked(b, trigger_ns);
       if (io().Ioctl(fd_, VIDIOC_QBUF, &b) != 0) return GoneLocked("VIDIOC_QBUF");
       if (before_trigger) continue;
       pending_triggers_ns_.pop_front();
@@ -177,11 +186,14 @@ class V4l2Camera : public Camera {
         seen += (seen.empty() ? "" : "; ") + d.path + ": " + d.error;
         continue;
       }
-      if ((options_.device.empty() || d.path == options_.device) && d.serial == info().serial) return d.path;
-      seen += (seen.empty() ? "" : "; ") + d.path + " (" + d.card + ") has serial '" + d.serial + "'";
+      if ((options_.device.empty() || d.path == options_.device) && d.serial == info().serial)
+        return d.path;
+      seen +=
+          (seen.empty() ? "" : "; ") + d.path + " (" + d.card + ") has serial '" + d.serial + "'";
     }
-    return Fault(Unavailable("not found" + (seen.empty() ? std::string(" (no /dev/video* capture node)") : ": " + seen) +
-                             "; check its cable, or `v4l2-ctl --list-devices`"));
+    return Fault(Unavailable(
+        "not found" + (seen.empty() ? std::string(" (no /dev/video* capture node)") : ": " + seen) +
+        "; check its cable, or `v4l2-ctl --list-devices`"));
   }
 
   Status NegotiateFormat() {
@@ -194,10 +206,11 @@ class V4l2Camera : public Camera {
       mjpeg = mjpeg || d.pixelformat == V4L2_PIX_FMT_MJPEG;
       yuyv = yuyv || d.pixelformat == V4L2_PIX_FMT_YUYV;
     }
-    const bool want_mjpeg = options_.wire == V4l2Wire::kMjpeg || (options_.wire == V4l2Wire::kAuto && mjpeg);
+    const bool want_mjpeg =
+        options_.wire == V4l2Wire::kMjpeg || (options_.wire == V4l2Wire::kAuto && mjpeg);
     if ((want_mjpeg && !mjpeg) || (!want_mjpeg && !yuyv)) {
-      return OutOfRange(path_ + ": does not offer " + (want_mjpeg ? "MJPEG" : "YUYV") + " (it offers" +
-                        (mjpeg ? " MJPEG" : "") + (yuyv ? " YUYV" : "") + ")");
+      return OutOfRange(path_ + ": does not offer " + (want_mjpeg ? "MJPEG" : "YUYV") +
+                        " (it offers" + (mjpeg ? " MJPEG" : "") + (yuyv ? " YUYV" : "") + ")");
     }
     v4l2_format f{};
     f.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -205,12 +218,14 @@ class V4l2Camera : public Camera {
     f.fmt.pix.height = static_cast<uint32_t>(options_.nominal.height_px);
     f.fmt.pix.pixelformat = want_mjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV;
     f.fmt.pix.field = V4L2_FIELD_NONE;
-    if (io().Ioctl(fd_, VIDIOC_S_FMT, &f) != 0) return IoError(path_ + ": VIDIOC_S_FMT: " + std::strerror(errno));
+    if (io().Ioctl(fd_, VIDIOC_S_FMT, &f) != 0)
+      return IoError(path_ + ": VIDIOC_S_FMT: " + std::strerror(errno));
     if (static_cast<int>(f.fmt.pix.width) != options_.nominal.width_px ||
         static_cast<int>(f.fmt.pix.height) != options_.nominal.height_px) {
-      return OutOfRange(path_ + ": offers " + std::to_string(f.fmt.pix.width) + "x" + std::to_string(f.fmt.pix.height) +
-                        " " + FourCcText(f.fmt.pix.pixelformat) + " instead of the configured " +
-                        std::to_string(options_.nominal.width_px) + "x" + std::to_string(options_.nominal.height_px) +
+      return OutOfRange(path_ + ": offers " + std::to_string(f.fmt.pix.width) + "x" +
+                        std::to_string(f.fmt.pix.height) + " " + FourCcText(f.fmt.pix.pixelformat) +
+                        " instead of the configured " + std::to_string(options_.nominal.width_px) +
+                        "x" + std::to_string(options_.nominal.height_px) +
                         " (`v4l2-ctl --list-formats-ext` lists its sizes)");
     }
     fourcc_ = f.fmt.pix.pixelformat;
@@ -232,11 +247,13 @@ class V4l2Camera : public Camera {
     request.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     request.memory = V4L2_MEMORY_MMAP;
     if (io().Ioctl(fd_, VIDIOC_REQBUFS, &request) != 0 || request.count == 0) {
-      return IoError(path_ + ": VIDIOC_REQBUFS (mmap streaming not supported?): " + std::strerror(errno));
+      return IoError(path_ +
+                     ": VIDIOC_REQBUFS (mmap streaming not supported?): " + std::strerror(errno));
     }
     for (uint32_t i = 0; i < request.count; ++i) {
       v4l2_buffer b = BufferRequest(i);
-      if (io().Ioctl(fd_, VIDIOC_QUERYBUF, &b) != 0) return IoError(path_ + ": VIDIOC_QUERYBUF: " + std::strerror(errno));
+      if (io().Ioctl(fd_, VIDIOC_QUERYBUF, &b) != 0)
+        return IoError(path_ + ": VIDIOC_QUERYBUF: " + std::strerror(errno));
       MappedBuffer m;
       m.length = b.length;
       m.start = io().Mmap(b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
@@ -255,12 +272,15 @@ class V4l2Camera : public Camera {
       return OutOfRange(Describe() + ": the camera has no " + what + " control");
     }
     if (value < query.minimum || value > query.maximum) {
-      return OutOfRange(Describe() + ": " + what + " " + std::to_string(value) + " outside the camera's " +
-                        std::to_string(query.minimum) + " - " + std::to_string(query.maximum));
+      return OutOfRange(Describe() + ": " + what + " " + std::to_string(value) +
+                        " outside the camera's " + std::to_string(query.minimum) + " - " +
+                        std::to_string(query.maximum));
     }
     v4l2_control control{id, value};
     if (io().Ioctl(fd_, VIDIOC_S_CTRL, &control) != 0) {
-      return GoneErrno(errno) ? GoneLocked("VIDIOC_S_CTRL") : IoError(Describe() + ": setting " + what + ": " + std::strerror(errno));
+      return GoneErrno(errno)
+                 ? GoneLocked("VIDIOC_S_CTRL")
+                 : IoError(Describe() + ": setting " + what + ": " + std::strerror(errno));
     }
     return Status::Ok();
   }
@@ -270,23 +290,34 @@ class V4l2Camera : public Camera {
     const int w = options_.nominal.width_px, h = options_.nominal.height_px;
     cv::Mat bgr;
     if (fourcc_ == V4L2_PIX_FMT_MJPEG) {
-      bgr = cv::imdecode(cv::Mat(1, static_cast<int>(b.bytesused), CV_8UC1, const_cast<uint8_t*>(data)), cv::IMREAD_COLOR);
+      bgr = cv::imdecode(
+          cv::Mat(1, static_cast<int>(b.bytesused), CV_8UC1, const_cast<uint8_t*>(data)),
+          cv::IMREAD_COLOR);
       if (bgr.empty() || bgr.cols != w || bgr.rows != h) {
-        return CorruptData(Describe() + ": an MJPEG frame of " + std::to_string(b.bytesused) + " bytes does not decode to " +
-                           std::to_string(w) + "x" + std::to_string(h));
+        return CorruptData(Describe() + ": an MJPEG frame of " + std::to_string(b.bytesused) +
+                           " bytes does not decode to " + std::to_string(w) + "x" +
+                           std::to_string(h));
       }
     } else {
       if (b.bytesused < static_cast<uint32_t>(bytes_per_line_ * h)) {
-        return CorruptData(Describe() + ": a YUYV frame of " + std::to_string(b.bytesused) + " bytes is short");
+        return CorruptData(Describe() + ": a YUYV frame of " + std::to_string(b.bytesused) +
+                           " bytes is short");
       }
-      cv::cvtColor(cv::Mat(h, w, CV_8UC2, const_cast<uint8_t*>(data), static_cast<size_t>(bytes_per_line_)), bgr,
-                   cv::COLOR_YUV2BGR_YUYV);
+      cv::cvtColor(
+          cv::Mat(h, w, CV_8UC2, const_cast<uint8_t*>(data), static_cast<size_t>(bytes_per_line_)),
+          bgr, cv::COLOR_YUV2BGR_YUYV);
     }
     cv::Mat out;
     switch (settings_.format) {
-      case PixelFormat::kRgb8: cv::cvtColor(bgr, out, cv::COLOR_BGR2RGB); break;
-      case PixelFormat::kMono8: cv::cvtColor(bgr, out, cv::COLOR_BGR2GRAY); break;
-      default: out = bgr; break;
+      case PixelFormat::kRgb8:
+        cv::cvtColor(bgr, out, cv::COLOR_BGR2RGB);
+        break;
+      case PixelFormat::kMono8:
+        cv::cvtColor(bgr, out, cv::COLOR_BGR2GRAY);
+        break;
+      default:
+        out = bgr;
+        break;
     }
     Frame f;
     f.camera_serial = info().serial;
@@ -304,7 +335,8 @@ class V4l2Camera : public Camera {
 
   Status GoneLocked(const char* call) {
     const int e = errno;
-    const std::string text = Describe() + ": " + call + " on " + path_ + " failed (" + std::strerror(e) + ")";
+    const std::string text =
+        Describe() + ": " + call + " on " + path_ + " failed (" + std::strerror(e) + ")";
     if (!GoneErrno(e)) return IoError(text);
     ReleaseLocked();
     SetState(DeviceState::kFaulted);
@@ -349,15 +381,16 @@ class V4l2Camera : public Camera {
 }  // namespace
 
 Result<V4l2CameraOptions> ParseV4l2CameraOptions(const ConfigNode& device) {
-  device.AllowOnlyKeys({"name", "backend", "serial", "device", "width_px", "height_px", "format", "buffers",
-                        "readout_s", "download_s"});
+  device.AllowOnlyKeys({"name", "backend", "serial", "device", "width_px", "height_px", "format",
+                        "buffers", "readout_s", "download_s"});
   V4l2CameraOptions o;
   o.device = device.String("device", "");
   o.nominal = ReadCameraNominal(device, o.nominal);
   const std::string wire = device.Choice("format", {"auto", "mjpeg", "yuyv"}, "auto");
   o.wire = wire == "mjpeg" ? V4l2Wire::kMjpeg : wire == "yuyv" ? V4l2Wire::kYuyv : V4l2Wire::kAuto;
   o.buffers = device.Integer("buffers", o.buffers, {.min = 2, .max = 32});
-  if (o.nominal.width_px <= 0 || o.nominal.height_px <= 0) device.Fail("width_px", "a UVC frame size must be given");
+  if (o.nominal.width_px <= 0 || o.nominal.height_px <= 0)
+    device.Fail("width_px", "a UVC frame size must be given");
   if (!device.ok()) return device.status();
   return o;
 }
@@ -367,12 +400,15 @@ std::unique_ptr<Camera> MakeV4l2Camera(const DeviceInfo& info, V4l2CameraOptions
 }
 
 void RegisterV4l2Backend(DeviceRegistry* registry, V4l2OptionsHook hook) {
-  registry->AddBackend<Camera>(DeviceKind::kCamera, "v4l2", [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
-    HR_ASSIGN_OR_RETURN(V4l2CameraOptions options, ParseV4l2CameraOptions(c.node));
-    if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
-    return MakeV4l2Camera(c.Info("UVC camera" + (options.device.empty() ? "" : " (" + options.device + ")")),
-                          std::move(options));
-  });
+  registry->AddBackend<Camera>(
+      DeviceKind::kCamera, "v4l2",
+      [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
+        HR_ASSIGN_OR_RETURN(V4l2CameraOptions options, ParseV4l2CameraOptions(c.node));
+        if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        return MakeV4l2Camera(
+            c.Info("UVC camera" + (options.device.empty() ? "" : " (" + options.device + ")")),
+            std::move(options));
+      });
 }
 
 }  // namespace hairrig

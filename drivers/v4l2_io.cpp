@@ -22,7 +22,8 @@ class SystemIo : public V4l2Io {
     std::vector<std::string> nodes;
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator("/dev", ec)) {
-      if (entry.path().filename().string().rfind("video", 0) == 0) nodes.push_back(entry.path().string());
+      if (entry.path().filename().string().rfind("video", 0) == 0)
+        nodes.push_back(entry.path().string());
     }
     std::sort(nodes.begin(), nodes.end());
     return nodes;
@@ -30,9 +31,10 @@ class SystemIo : public V4l2Io {
   // The `serial` attribute of the first ancestor of the node's sysfs device that has one.
   std::string UsbSerial(const std::string& node) override {
     std::error_code ec;
-    fs::path dir =
-        fs::canonical(fs::path("/sys/class/video4linux") / fs::path(node).filename() / "device", ec);
-    for (int depth = 0; !ec && depth < 4 && dir.has_parent_path(); ++depth, dir = dir.parent_path()) {
+    fs::path dir = fs::canonical(
+        fs::path("/sys/class/video4linux") / fs::path(node).filename() / "device", ec);
+    for (int depth = 0; !ec && depth < 4 && dir.has_parent_path();
+         ++depth, dir = dir.parent_path()) {
       if (!fs::exists(dir / "serial")) continue;
       std::ifstream in(dir / "serial");
       std::string serial;
@@ -41,7 +43,9 @@ class SystemIo : public V4l2Io {
     }
     return "";
   }
-  int Open(const std::string& path, int flags) override { return open(path.c_str(), flags | O_CLOEXEC); }
+  int Open(const std::string& path, int flags) override {
+    return open(path.c_str(), flags | O_CLOEXEC);
+  }
   int Close(int fd) override { return close(fd); }
   int Ioctl(int fd, unsigned long request, void* arg) override {
     int r = 0;

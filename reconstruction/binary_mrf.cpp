@@ -1,11 +1,11 @@
 #include "reconstruction/binary_mrf.h"
 
+#include <maxflow.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <utility>
-
-#include <maxflow.h>
 
 namespace hairrig {
 

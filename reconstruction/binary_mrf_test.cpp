@@ -1,9 +1,9 @@
 #include "reconstruction/binary_mrf.h"
 
+#include <gtest/gtest.h>
+
 #include <limits>
 #include <random>
-
-#include <gtest/gtest.h>
 
 namespace hairrig {
 namespace {
@@ -12,13 +12,15 @@ double EnergyOf(const BinaryMrf& mrf, uint32_t labels_bits) {
   const auto label = [&](uint32_t i) { return (labels_bits >> i) & 1u; };
   double e = 0;
   for (uint32_t i = 0; i < mrf.unary.size(); ++i) e += mrf.unary[i][label(i)];
-  for (const BinaryMrfPair& p : mrf.pairs) e += label(p.a) == label(p.b) ? p.cost_equal : p.cost_differ;
+  for (const BinaryMrfPair& p : mrf.pairs)
+    e += label(p.a) == label(p.b) ? p.cost_equal : p.cost_differ;
   return e;
 }
 
 double BruteForceMinimum(const BinaryMrf& mrf) {
   double best = std::numeric_limits<double>::max();
-  for (uint32_t bits = 0; bits < (1u << mrf.unary.size()); ++bits) best = std::min(best, EnergyOf(mrf, bits));
+  for (uint32_t bits = 0; bits < (1u << mrf.unary.size()); ++bits)
+    best = std::min(best, EnergyOf(mrf, bits));
   return best;
 }
 
@@ -33,7 +35,8 @@ TEST(BinaryMrf, ExactOnTreesWhatEverThePairsPrefer) {
     const uint32_t n = 9;
     for (uint32_t i = 0; i < n; ++i) mrf.unary.push_back({cost(rng), cost(rng)});
     for (uint32_t i = 1; i < n; ++i) {
-      mrf.pairs.push_back({static_cast<uint32_t>(rng() % i), i, std::abs(cost(rng)), std::abs(cost(rng))});
+      mrf.pairs.push_back(
+          {static_cast<uint32_t>(rng() % i), i, std::abs(cost(rng)), std::abs(cost(rng))});
     }
     const BinaryMrfSolution solution = SolveBinaryMrf(mrf);
     ASSERT_EQ(solution.labels.size(), n);

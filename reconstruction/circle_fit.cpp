@@ -1,11 +1,10 @@
 #include "reconstruction/circle_fit.h"
 
-#include <cmath>
-#include <limits>
-
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
 
 namespace hairrig {
 
@@ -18,8 +17,9 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 // normal equations J'J and J'r of the residuals (height over the plane,
 // in-plane distance to the rim; two per point) by (dc, da, db, dr), the
 // normal moving as n + da e1 + db e2.
-double SquaredDistances(const std::vector<Eigen::Vector3d>& points, const Circle3& circle, const Eigen::Vector3d& e1,
-                        const Eigen::Vector3d& e2, Matrix6d* jtj = nullptr, Vector6d* jtr = nullptr) {
+double SquaredDistances(const std::vector<Eigen::Vector3d>& points, const Circle3& circle,
+                        const Eigen::Vector3d& e1, const Eigen::Vector3d& e2,
+                        Matrix6d* jtj = nullptr, Vector6d* jtr = nullptr) {
   double sum = 0;
   if (jtj != nullptr) jtj->setZero(), jtr->setZero();
   for (const Eigen::Vector3d& p : points) {
@@ -44,7 +44,8 @@ double SquaredDistances(const std::vector<Eigen::Vector3d>& points, const Circle
 // one) and radius, minimising the squared geometric distances.
 void RefineCircle(const std::vector<Eigen::Vector3d>& points, Circle3* circle) {
   constexpr int kIterations = 15;
-  constexpr double kRelativeGain = 1e-6;  // stop when a step gains less than this share of the cost (RMS 5e-7)
+  constexpr double kRelativeGain =
+      1e-6;  // stop when a step gains less than this share of the cost (RMS 5e-7)
   double lambda = 1e-3;
   for (int iteration = 0; iteration < kIterations; ++iteration) {
     const Eigen::Vector3d e1 = circle->normal.unitOrthogonal(), e2 = circle->normal.cross(e1);
@@ -84,7 +85,8 @@ double Circle3::Distance(const Eigen::Vector3d& p) const {
   return std::sqrt(height * height + rim * rim);
 }
 
-bool FitCircleTaubin(const std::vector<Eigen::Vector2d>& points, Eigen::Vector2d* center, double* radius) {
+bool FitCircleTaubin(const std::vector<Eigen::Vector2d>& points, Eigen::Vector2d* center,
+                     double* radius) {
   if (points.size() < 3) return false;
   const double count = static_cast<double>(points.size());
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
@@ -108,13 +110,15 @@ bool FitCircleTaubin(const std::vector<Eigen::Vector2d>& points, Eigen::Vector2d
   }
   moments /= count;
   const Eigen::Vector3d inv_sqrt_constraint(0.5, 1.0, 1.0);  // T^(-1/2), mean |q|^2 = 1
-  const Eigen::Matrix3d reduced = inv_sqrt_constraint.asDiagonal() * moments * inv_sqrt_constraint.asDiagonal();
+  const Eigen::Matrix3d reduced =
+      inv_sqrt_constraint.asDiagonal() * moments * inv_sqrt_constraint.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(reduced);
   const Eigen::Vector3d v = inv_sqrt_constraint.cwiseProduct(eigen.eigenvectors().col(0));
   const double a = v(0);
   const Eigen::Vector2d b(v(1), v(2));
   // Centre -b / (2a), radius^2 = |b|^2 / (4 a^2) + 1 (scaled units).
-  const double offset = std::abs(a) > 0 ? b.norm() / (2 * std::abs(a)) : std::numeric_limits<double>::infinity();
+  const double offset =
+      std::abs(a) > 0 ? b.norm() / (2 * std::abs(a)) : std::numeric_limits<double>::infinity();
   if (offset * scale < kMaxCircleRadiusMm) {
     *center = centroid - scale * b / (2 * a);
     *radius = scale * std::sqrt(offset * offset + 1.0);
@@ -141,7 +145,8 @@ double FitCircle3(const std::vector<Eigen::Vector3d>& points, Circle3* circle) {
   const Eigen::Vector3d u = eigen.eigenvectors().col(2), w = normal.cross(u);
   std::vector<Eigen::Vector2d> planar;
   planar.reserve(points.size());
-  for (const Eigen::Vector3d& p : points) planar.emplace_back((p - centroid).dot(u), (p - centroid).dot(w));
+  for (const Eigen::Vector3d& p : points)
+    planar.emplace_back((p - centroid).dot(u), (p - centroid).dot(w));
   Eigen::Vector2d center2;
   double radius = 0;
   if (!FitCircleTaubin(planar, &center2, &radius)) return std::numeric_limits<double>::infinity();
@@ -151,7 +156,8 @@ double FitCircle3(const std::vector<Eigen::Vector3d>& points, Circle3* circle) {
   fit.radius = radius;
   RefineCircle(points, &fit);
   fit.radius = std::abs(fit.radius);
-  if (fit.radius > kMaxCircleRadiusMm) {  // refined past straight: keep the centre's direction at the bound
+  if (fit.radius >
+      kMaxCircleRadiusMm) {  // refined past straight: keep the centre's direction at the bound
     const Eigen::Vector3d away = (fit.center - centroid).normalized();
     fit.center = centroid + kMaxCircleRadiusMm * away;
     fit.radius = kMaxCircleRadiusMm;
@@ -176,7 +182,8 @@ void OrientByTraversal(const std::vector<Eigen::Vector3d>& points, Circle3* circ
 double SweepOverlap(const std::vector<Eigen::Vector3d>& points, const Circle3& circle) {
   double signed_sweep = 0, unsigned_sweep = 0;
   for (size_t k = 0; k + 1 < points.size(); ++k) {
-    const double sweep = (points[k + 1] - circle.center).cross(points[k] - circle.center).dot(circle.normal);
+    const double sweep =
+        (points[k + 1] - circle.center).cross(points[k] - circle.center).dot(circle.normal);
     signed_sweep += sweep;
     unsigned_sweep += std::abs(sweep);
   }

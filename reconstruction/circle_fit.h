@@ -6,9 +6,8 @@
 // works), any frame.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 namespace hairrig {
 
@@ -19,7 +18,8 @@ constexpr double kMaxCircleRadiusMm = 1e6;
 
 struct Circle3 {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit; its sign is arbitrary (OrientByTraversal)
+  Eigen::Vector3d normal =
+      Eigen::Vector3d::UnitZ();  // unit; its sign is arbitrary (OrientByTraversal)
   double radius = 0;
 
   double Curvature() const { return radius > 0 ? 1.0 / radius : 0.0; }
@@ -32,7 +32,8 @@ struct Circle3 {
 // distances under the constraint mean |gradient|^2 = 1, which is the exact
 // straight line when the points are collinear (the radius then
 // kMaxCircleRadiusMm). False for fewer than 3 points or all points in one place.
-bool FitCircleTaubin(const std::vector<Eigen::Vector2d>& points, Eigen::Vector2d* center, double* radius);
+bool FitCircleTaubin(const std::vector<Eigen::Vector2d>& points, Eigen::Vector2d* center,
+                     double* radius);
 
 // The 3D fit (plane, Taubin, Levenberg-Marquardt). Returns the RMS distance of
 // the points to the circle (mm); +infinity, with *circle untouched, for

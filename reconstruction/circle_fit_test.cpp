@@ -1,18 +1,19 @@
 #include "reconstruction/circle_fit.h"
 
-#include <cmath>
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <random>
 
 namespace hairrig {
 namespace {
 
 // Points on the circle (centre, normal, radius) from angle `from` to `to`
 // (rad), `count` of them, with Gaussian noise of `noise_mm` per coordinate.
-std::vector<Eigen::Vector3d> Arc(const Eigen::Vector3d& centre, const Eigen::Vector3d& normal, double radius,
-                                 double from, double to, int count, double noise_mm, uint32_t seed) {
+std::vector<Eigen::Vector3d> Arc(const Eigen::Vector3d& centre, const Eigen::Vector3d& normal,
+                                 double radius, double from, double to, int count, double noise_mm,
+                                 uint32_t seed) {
   const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, noise_mm);

@@ -4,10 +4,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 namespace hairrig {
 namespace {
@@ -22,7 +21,9 @@ struct Line {
 
 Result<std::vector<Line>> ReadLines(const fs::path& path, bool keep_empty) {
   std::ifstream in(path);
-  if (!in) return NotFound(path.string() + ": missing (a COLMAP text model has cameras.txt and images.txt)");
+  if (!in)
+    return NotFound(path.string() +
+                    ": missing (a COLMAP text model has cameras.txt and images.txt)");
   std::vector<Line> lines;
   std::string text;
   for (int number = 1; std::getline(in, text); ++number) {
@@ -54,26 +55,31 @@ Result<double> Number(const fs::path& path, const Line& line, size_t index, cons
 Result<int> Integer(const fs::path& path, const Line& line, size_t index, const char* name) {
   HR_ASSIGN_OR_RETURN(const double value, Number(path, line, index, name));
   if (value != std::floor(value) || value < 0 || value > 1e9) {
-    return LineError(path, line, std::string(name) + " '" + line.fields[index] + "' is not a whole number >= 0");
+    return LineError(
+        path, line, std::string(name) + " '" + line.fields[index] + "' is not a whole number >= 0");
   }
   return static_cast<int>(value);
 }
 
 // The parameter count and the intrinsics of each supported model.
 Result<CameraIntrinsics> CameraFromLine(const fs::path& path, const Line& line) {
-  if (line.fields.size() < 4) return LineError(path, line, "expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS...");
+  if (line.fields.size() < 4)
+    return LineError(path, line, "expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS...");
   const std::string& model = line.fields[1];
   static const std::map<std::string, size_t> kParams = {
       {"PINHOLE", 4}, {"SIMPLE_RADIAL", 4}, {"RADIAL", 5}, {"OPENCV", 8}, {"FULL_OPENCV", 12}};
   const auto known = kParams.find(model);
   if (known == kParams.end()) {
     return LineError(path, line,
-                     "camera model '" + model + "' is not supported (use PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV "
-                     "or FULL_OPENCV; undistort the images with COLMAP's image_undistorter for other models)");
+                     "camera model '" + model +
+                         "' is not supported (use PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV "
+                         "or FULL_OPENCV; undistort the images with COLMAP's image_undistorter for "
+                         "other models)");
   }
   if (line.fields.size() != 4 + known->second) {
-    return LineError(path, line, model + " takes " + std::to_string(known->second) + " parameters, the line has " +
-                                     std::to_string(line.fields.size() - 4));
+    return LineError(path, line,
+                     model + " takes " + std::to_string(known->second) +
+                         " parameters, the line has " + std::to_string(line.fields.size() - 4));
   }
   std::vector<double> p;
   for (size_t k = 4; k < line.fields.size(); ++k) {
@@ -103,7 +109,9 @@ Result<CameraIntrinsics> CameraFromLine(const fs::path& path, const Line& line) 
     if (p.size() == 12) {
       c.k3 = p[8];
       if (p[9] != 0 || p[10] != 0 || p[11] != 0) {
-        return LineError(path, line, "FULL_OPENCV with k4, k5 or k6 not 0 is not supported (rational lens model)");
+        return LineError(
+            path, line,
+            "FULL_OPENCV with k4, k5 or k6 not 0 is not supported (rational lens model)");
       }
     }
   }
@@ -123,7 +131,8 @@ Result<Rigid3d> PoseFromLine(const fs::path& path, const Line& line) {
   }
   const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
   if (std::abs(q.norm() - 1.0) > 1e-3) {
-    return LineError(path, line, "the quaternion QW QX QY QZ has norm " + std::to_string(q.norm()) + ", not 1");
+    return LineError(path, line,
+                     "the quaternion QW QX QY QZ has norm " + std::to_string(q.norm()) + ", not 1");
   }
   return Rigid3d(q, Eigen::Vector3d(v[4], v[5], v[6]));
 }
@@ -132,14 +141,16 @@ std::string MaskPathFor(const std::string& masks_dir, const std::string& name) {
   if (masks_dir.empty()) return {};
   const fs::path colmap_style = fs::path(masks_dir) / (name + ".png");
   if (fs::exists(colmap_style)) return colmap_style.string();
-  const fs::path stem_style = fs::path(masks_dir) / fs::path(name).filename().replace_extension(".png");
+  const fs::path stem_style =
+      fs::path(masks_dir) / fs::path(name).filename().replace_extension(".png");
   if (fs::exists(stem_style)) return stem_style.string();
   return {};
 }
 
 }  // namespace
 
-Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir, const ColmapReadOptions& options) {
+Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir,
+                                            const ColmapReadOptions& options) {
   const fs::path cameras_txt = fs::path(model_dir) / "cameras.txt";
   const fs::path images_txt = fs::path(model_dir) / "images.txt";
   HR_ASSIGN_OR_RETURN(const std::vector<Line> camera_lines, ReadLines(cameras_txt, false));
@@ -156,8 +167,9 @@ Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir, const 
     const Line& line = image_lines[i];
     if (line.fields.empty()) continue;  // a blank line where an image line may stand
     if (line.fields.size() != 10) {
-      return LineError(images_txt, line, "expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME (10 fields), got " +
-                                             std::to_string(line.fields.size()));
+      return LineError(images_txt, line,
+                       "expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME (10 fields), got " +
+                           std::to_string(line.fields.size()));
     }
     ReconstructionView view;
     HR_ASSIGN_OR_RETURN(view.id, Integer(images_txt, line, 0, "IMAGE_ID"));
@@ -165,7 +177,8 @@ Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir, const 
     HR_ASSIGN_OR_RETURN(const int camera_id, Integer(images_txt, line, 8, "CAMERA_ID"));
     const auto camera = cameras.find(camera_id);
     if (camera == cameras.end()) {
-      return LineError(images_txt, line, "camera " + std::to_string(camera_id) + " is not in cameras.txt");
+      return LineError(images_txt, line,
+                       "camera " + std::to_string(camera_id) + " is not in cameras.txt");
     }
     view.camera = camera->second;
     view.name = fs::path(line.fields[9]).stem().string();
@@ -179,7 +192,8 @@ Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir, const 
     input.views.push_back(std::move(view));
   }
   if (input.views.empty()) {
-    return NotFound(images_txt.string() + ": no image of the model is present in " + options.images_dir);
+    return NotFound(images_txt.string() + ": no image of the model is present in " +
+                    options.images_dir);
   }
   return input;
 }

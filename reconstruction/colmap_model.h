@@ -19,7 +19,8 @@ namespace hairrig {
 
 struct ColmapReadOptions {
   std::string images_dir;  // where NAME of images.txt is found
-  std::string masks_dir;   // optional: <masks_dir>/<NAME>.png (COLMAP's own convention) or <stem>.png
+  std::string
+      masks_dir;  // optional: <masks_dir>/<NAME>.png (COLMAP's own convention) or <stem>.png
 };
 
 // CorruptData naming the file and line for a malformed line, an unknown
@@ -27,6 +28,7 @@ struct ColmapReadOptions {
 // is not listed; NotFound for a missing file. An image whose file is missing is
 // left out with its reason (ReconstructionInput::left_out); no image left is
 // an error.
-Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir, const ColmapReadOptions& options);
+Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir,
+                                            const ColmapReadOptions& options);
 
 }  // namespace hairrig

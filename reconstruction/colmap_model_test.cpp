@@ -1,9 +1,9 @@
 #include "reconstruction/colmap_model.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 namespace hairrig {
 namespace {
@@ -55,32 +55,40 @@ TEST(ColmapModel, ReadsEachSupportedCameraModelWithPixelCentresMoved) {
 }
 
 TEST(ColmapModel, ErrorsNameTheFileAndLine) {
-  const std::string ok_cameras = "1 PINHOLE 640 480 500 500 320 240\n2 PINHOLE 640 480 500 500 320 240\n";
+  const std::string ok_cameras =
+      "1 PINHOLE 640 480 500 500 320 240\n2 PINHOLE 640 480 500 500 320 240\n";
   auto unknown = Model("unknown", "# c\n1 FISHEYE 640 480 500 320 240 0.1\n", kImages).Read();
   EXPECT_EQ(unknown.status().code(), StatusCode::kCorruptData);
-  EXPECT_NE(unknown.status().message().find("cameras.txt:2: camera model 'FISHEYE'"), std::string::npos)
+  EXPECT_NE(unknown.status().message().find("cameras.txt:2: camera model 'FISHEYE'"),
+            std::string::npos)
       << unknown.status().message();
   auto short_line = Model("short", ok_cameras, "1 1 0 0 0 10 20 1000 1\n\n").Read();
-  EXPECT_NE(short_line.status().message().find("images.txt:1: expected IMAGE_ID"), std::string::npos)
+  EXPECT_NE(short_line.status().message().find("images.txt:1: expected IMAGE_ID"),
+            std::string::npos)
       << short_line.status().message();
   auto nan = Model("nan", "1 PINHOLE 640 480 nan 500 320 240\n", kImages).Read();
-  EXPECT_NE(nan.status().message().find("cameras.txt:1: a camera parameter 'nan' is not a finite number"),
-            std::string::npos)
+  EXPECT_NE(
+      nan.status().message().find("cameras.txt:1: a camera parameter 'nan' is not a finite number"),
+      std::string::npos)
       << nan.status().message();
   auto params = Model("params", "1 OPENCV 640 480 500 500 320 240\n", kImages).Read();
-  EXPECT_NE(params.status().message().find("OPENCV takes 8 parameters, the line has 4"), std::string::npos)
+  EXPECT_NE(params.status().message().find("OPENCV takes 8 parameters, the line has 4"),
+            std::string::npos)
       << params.status().message();
   auto no_camera = Model("nocam", "1 PINHOLE 640 480 500 500 320 240\n", kImages).Read();
-  EXPECT_NE(no_camera.status().message().find("images.txt:4: camera 2 is not in cameras.txt"), std::string::npos)
+  EXPECT_NE(no_camera.status().message().find("images.txt:4: camera 2 is not in cameras.txt"),
+            std::string::npos)
       << no_camera.status().message();
   auto quaternion = Model("quat", ok_cameras, "1 2 0 0 0 0 0 1000 1 a.jpg\n\n").Read();
-  EXPECT_NE(quaternion.status().message().find("has norm 2"), std::string::npos) << quaternion.status().message();
+  EXPECT_NE(quaternion.status().message().find("has norm 2"), std::string::npos)
+      << quaternion.status().message();
   auto missing = ReadColmapModel("/nonexistent-model", {});
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
 }
 
 TEST(ColmapModel, AMissingImageIsLeftOutAndNamed) {
-  const Model m("missing", "1 PINHOLE 640 480 500 500 320 240\n2 PINHOLE 640 480 500 500 320 240\n", kImages);
+  const Model m("missing", "1 PINHOLE 640 480 500 500 320 240\n2 PINHOLE 640 480 500 500 320 240\n",
+                kImages);
   fs::remove(m.dir / "images" / "b.jpg");
   auto input = m.Read();
   ASSERT_TRUE(input.ok()) << input.status().ToString();

@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/statistics.h"
 
@@ -13,9 +12,10 @@ namespace hairrig {
 
 Result<OrientationAccuracy> MeasureOrientation(const OrientationMap& map, const cv::Mat& truth_deg,
                                                const cv::Mat& truth_hair, double min_confidence) {
-  if (truth_deg.type() != CV_32F || truth_hair.type() != CV_8U || truth_deg.size() != map.angle_deg.size() ||
-      truth_hair.size() != map.angle_deg.size()) {
-    return InvalidArgument("orientation truth must be CV_32F angles and a CV_8U mask of the map's size");
+  if (truth_deg.type() != CV_32F || truth_hair.type() != CV_8U ||
+      truth_deg.size() != map.angle_deg.size() || truth_hair.size() != map.angle_deg.size()) {
+    return InvalidArgument(
+        "orientation truth must be CV_32F angles and a CV_8U mask of the map's size");
   }
   OrientationAccuracy a;
   std::vector<double> errors;
@@ -33,7 +33,9 @@ Result<OrientationAccuracy> MeasureOrientation(const OrientationMap& map, const 
   a.kept_fraction = a.hair_pixels > 0 ? static_cast<double>(a.kept_pixels) / a.hair_pixels : 0;
   a.median_error_deg = Quantile(errors, 0.5);
   a.p90_error_deg = Quantile(errors, 0.9);
-  a.mean_error_deg = errors.empty() ? 0 : std::accumulate(errors.begin(), errors.end(), 0.0) / static_cast<double>(errors.size());
+  a.mean_error_deg = errors.empty() ? 0
+                                    : std::accumulate(errors.begin(), errors.end(), 0.0) /
+                                          static_cast<double>(errors.size());
   return a;
 }
 

@@ -10,10 +10,10 @@
 namespace hairrig {
 
 struct OrientationAccuracy {
-  int hair_pixels = 0;         // pixels the truth calls hair (with a strand direction)
-  int kept_pixels = 0;         // ... of which the map keeps (confidence >= the threshold)
-  double kept_fraction = 0;    // kept / hair
-  double median_error_deg = 0; // unsigned angle error over the kept pixels
+  int hair_pixels = 0;          // pixels the truth calls hair (with a strand direction)
+  int kept_pixels = 0;          // ... of which the map keeps (confidence >= the threshold)
+  double kept_fraction = 0;     // kept / hair
+  double median_error_deg = 0;  // unsigned angle error over the kept pixels
   double p90_error_deg = 0;
   double mean_error_deg = 0;
 };

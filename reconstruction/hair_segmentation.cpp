@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ml.hpp>
+#include <vector>
 
 #include "core/statistics.h"
 
@@ -100,7 +99,8 @@ cv::Mat1f ColourSamples(const cv::Mat3b& bgr, const cv::Mat1b& where, int limit)
     for (int x = 0; x < bgr.cols; ++x) {
       if (!where(y, x) || seen++ % step != 0) continue;
       const cv::Vec3b& p = bgr(y, x);
-      samples.push_back(cv::Mat1f(1, 3, std::array<float, 3>{float(p[0]), float(p[1]), float(p[2])}.data()));
+      samples.push_back(
+          cv::Mat1f(1, 3, std::array<float, 3>{float(p[0]), float(p[1]), float(p[2])}.data()));
     }
   }
   return samples;
@@ -112,15 +112,17 @@ cv::Mat1f ColourSamples(const cv::Mat3b& bgr, const cv::Mat1b& where, int limit)
 // Evaluated here (not by ml::EM::predict2) so that pixels are scored in parallel.
 class MaterialModel {
  public:
-  static Result<MaterialModel> Fit(const cv::Mat3b& bgr, const cv::Mat1b& where, const cv::Mat1f& energy,
-                                   const SegmentationOptions& options) {
+  static Result<MaterialModel> Fit(const cv::Mat3b& bgr, const cv::Mat1b& where,
+                                   const cv::Mat1f& energy, const SegmentationOptions& options) {
     const int components = options.colour_components;
     const cv::Mat1f samples = ColourSamples(bgr, where, 8000);
-    if (samples.rows < 20 * components) return FailedPrecondition("too few foreground pixels for a colour model");
+    if (samples.rows < 20 * components)
+      return FailedPrecondition("too few foreground pixels for a colour model");
     cv::Ptr<cv::ml::EM> em = cv::ml::EM::create();
     em->setClustersNumber(components);
     em->setCovarianceMatrixType(cv::ml::EM::COV_MAT_GENERIC);
-    em->setTermCriteria(cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 60, 1e-3));
+    em->setTermCriteria(
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 60, 1e-3));
     // EM starts from k-means, which draws from this thread's cv::theRNG():
     // seeded here so that a view segments the same on any thread, in any order.
     cv::theRNG() = cv::RNG(0x5eed5eedULL);
@@ -137,7 +139,8 @@ class MaterialModel {
       covariances[static_cast<size_t>(k)].convertTo(cv::Mat(cov, false), CV_64F);
       cov += cv::Matx33d::eye() * 1.0;  // a grey level of floor: sensor noise
       g.inverse = cov.inv();
-      g.log_norm = std::log(std::max(1e-12, weights.at<double>(0, k))) - 0.5 * std::log(cv::determinant(cov));
+      g.log_norm = std::log(std::max(1e-12, weights.at<double>(0, k))) -
+                   0.5 * std::log(cv::determinant(cov));
       model.gaussians_.push_back(g);
     }
     // Each component's median texture energy, over the pixels it wins.
@@ -152,7 +155,8 @@ class MaterialModel {
     }
     const float overall = static_cast<float>(Quantile(all, 0.5));
     for (size_t k = 0; k < energies.size(); ++k) {
-      model.gaussians_[k].hair = energies[k].empty() || Quantile(energies[k], 0.5) > options.skin_texture_ratio * overall;
+      model.gaussians_[k].hair =
+          energies[k].empty() || Quantile(energies[k], 0.5) > options.skin_texture_ratio * overall;
     }
     return model;
   }
@@ -187,7 +191,8 @@ class MaterialModel {
   int Best(const cv::Vec3d& colour) const {
     int best = 0;
     for (size_t k = 1; k < gaussians_.size(); ++k) {
-      if (Term(gaussians_[k], colour) > Term(gaussians_[static_cast<size_t>(best)], colour)) best = static_cast<int>(k);
+      if (Term(gaussians_[k], colour) > Term(gaussians_[static_cast<size_t>(best)], colour))
+        best = static_cast<int>(k);
     }
     return best;
   }
@@ -197,12 +202,14 @@ class MaterialModel {
 // Hair against skin on the foreground (non-zero in `candidates`): the
 // material model's likelihood ratio, smoothed over a few pixels. Returns a
 // mask of hair, same size as `bgr`.
-Result<cv::Mat1b> HairBySkinContrast(const cv::Mat3b& bgr, const cv::Mat1b& candidates, const cv::Mat1f& energy,
-                                     const SegmentationOptions& options) {
-  HR_ASSIGN_OR_RETURN(const MaterialModel model, MaterialModel::Fit(bgr, candidates, energy, options));
+Result<cv::Mat1b> HairBySkinContrast(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
+                                     const cv::Mat1f& energy, const SegmentationOptions& options) {
+  HR_ASSIGN_OR_RETURN(const MaterialModel model,
+                      MaterialModel::Fit(bgr, candidates, energy, options));
   cv::Mat1f ratio(bgr.size(), 0.f);
   ratio.forEach([&](float& r, const int* pos) {
-    if (candidates(pos[0], pos[1])) r = static_cast<float>(model.HairLogRatio(MaterialModel::Colour(bgr(pos[0], pos[1]))));
+    if (candidates(pos[0], pos[1]))
+      r = static_cast<float>(model.HairLogRatio(MaterialModel::Colour(bgr(pos[0], pos[1]))));
   });
   cv::GaussianBlur(ratio, ratio, cv::Size(), options.texture_sigma_px * options.work_scale);
   return Mask(candidates & (ratio > 0));
@@ -224,10 +231,12 @@ cv::Mat1b StrayComponents(const cv::Mat1b& hair, double share) {
   int largest = 0;
   for (int k = 1; k < n; ++k) largest = std::max(largest, stats.at<int>(k, cv::CC_STAT_AREA));
   std::vector<uint8_t> is_stray(static_cast<size_t>(n), 0);
-  for (int k = 1; k < n; ++k) is_stray[static_cast<size_t>(k)] = stats.at<int>(k, cv::CC_STAT_AREA) < share * largest;
+  for (int k = 1; k < n; ++k)
+    is_stray[static_cast<size_t>(k)] = stats.at<int>(k, cv::CC_STAT_AREA) < share * largest;
   cv::Mat1b stray(hair.size(), uint8_t{0});
   for (int y = 0; y < hair.rows; ++y)
-    for (int x = 0; x < hair.cols; ++x) stray(y, x) = is_stray[static_cast<size_t>(labels(y, x))] ? 255 : 0;
+    for (int x = 0; x < hair.cols; ++x)
+      stray(y, x) = is_stray[static_cast<size_t>(labels(y, x))] ? 255 : 0;
   return stray;
 }
 
@@ -235,8 +244,10 @@ cv::Mat1b StrayComponents(const cv::Mat1b& hair, double share) {
 
 Status SegmentationOptions::Check() const {
   if (border_px < 2) return InvalidArgument("segmentation border_px must be at least 2");
-  if (!(backdrop_distance > 0)) return InvalidArgument("segmentation backdrop_distance must be positive");
-  if (!(texture_sigma_px > 0)) return InvalidArgument("segmentation texture_sigma_px must be positive");
+  if (!(backdrop_distance > 0))
+    return InvalidArgument("segmentation backdrop_distance must be positive");
+  if (!(texture_sigma_px > 0))
+    return InvalidArgument("segmentation texture_sigma_px must be positive");
   if (!(skin_texture_ratio > 0 && skin_texture_ratio < 1)) {
     return InvalidArgument("segmentation skin_texture_ratio must be in (0, 1)");
   }
@@ -245,23 +256,27 @@ Status SegmentationOptions::Check() const {
   }
   if (!(min_hair_component_share >= 0 && min_hair_component_share < 1))
     return InvalidArgument("segmentation min_hair_component_share must be in [0, 1)");
-  if (!(work_scale > 0.1 && work_scale <= 1)) return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
+  if (!(work_scale > 0.1 && work_scale <= 1))
+    return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
   return Status::Ok();
 }
 
-std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera, const Rigid3d& cam_from_points,
+std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
+                                          const Rigid3d& cam_from_points,
                                           const std::vector<Eigen::Vector3d>& points) {
   std::vector<cv::Point2f> projected, hull;
   for (const Eigen::Vector3d& p : points) {
     Eigen::Vector2d uv;
-    if (ProjectChecked(camera, cam_from_points * p, &uv)) projected.emplace_back(float(uv.x()), float(uv.y()));
+    if (ProjectChecked(camera, cam_from_points * p, &uv))
+      projected.emplace_back(float(uv.x()), float(uv.y()));
   }
   if (projected.size() < 3) return {};
   cv::convexHull(projected, hull);
   return hull;
 }
 
-Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std::vector<cv::Point2f>>& not_hair_px,
+Result<HairSegmentation> SegmentHair(const cv::Mat& image,
+                                     const std::vector<std::vector<cv::Point2f>>& not_hair_px,
                                      const SegmentationOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
   if (image.empty() || image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
@@ -280,11 +295,13 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std
   for (const auto& polygon : not_hair_px) {
     std::vector<cv::Point> points;
     for (const cv::Point2f& p : polygon) points.emplace_back(cvRound(p.x), cvRound(p.y));
-    if (points.size() >= 3) cv::fillPoly(box_region, std::vector<std::vector<cv::Point>>{points}, cv::Scalar(255));
+    if (points.size() >= 3)
+      cv::fillPoly(box_region, std::vector<std::vector<cv::Point>>{points}, cv::Scalar(255));
   }
   const cv::Mat1b candidates = Mask(foreground & ~box_region);
   if (cv::countNonZero(candidates) < 100) {
-    return FailedPrecondition("nothing but backdrop and box in the image (no subject in view, or a black frame)");
+    return FailedPrecondition(
+        "nothing but backdrop and box in the image (no subject in view, or a black frame)");
   }
 
   // The colour model and graph cut at the working scale.
@@ -295,8 +312,10 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std
   cv::resize(bgr, small_bgr, cv::Size(), s, s, cv::INTER_AREA);
   cv::resize(candidates, small_candidates, small_bgr.size(), 0, 0, cv::INTER_AREA);
   small_candidates = Mask(small_candidates >= 128);
-  cv::resize(TextureEnergy(bgr, options.texture_sigma_px), small_energy, small_bgr.size(), 0, 0, cv::INTER_AREA);
-  HR_ASSIGN_OR_RETURN(const cv::Mat1b small_hair, HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
+  cv::resize(TextureEnergy(bgr, options.texture_sigma_px), small_energy, small_bgr.size(), 0, 0,
+             cv::INTER_AREA);
+  HR_ASSIGN_OR_RETURN(const cv::Mat1b small_hair,
+                      HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
   cv::Mat1b hair_side;
   cv::resize(small_hair, hair_side, bgr.size(), 0, 0, cv::INTER_LINEAR);
   hair_side = Mask(hair_side >= 128);
@@ -308,7 +327,8 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std
   cv::Mat1b near_hair;
   cv::dilate(hair_side, near_hair, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7)));
   const cv::Mat1b hair_region = Mask(candidates & (hair_side | (near_hair & ~skin_side)));
-  if (cv::countNonZero(hair_region) < 50) return FailedPrecondition("no pixel looks like hair in the image");
+  if (cv::countNonZero(hair_region) < 50)
+    return FailedPrecondition("no pixel looks like hair in the image");
 
   // Coverage against the backdrop: the distance relative to the hair's own.
   std::vector<float> hair_distances;
@@ -318,7 +338,7 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std
     }
   }
   const float full_coverage = std::max(static_cast<float>(2 * options.backdrop_distance),
-                                        static_cast<float>(Quantile(hair_distances, 0.5)));
+                                       static_cast<float>(Quantile(hair_distances, 0.5)));
 
   const cv::Mat1b stray = StrayComponents(hair_region, options.min_hair_component_share);
   HairSegmentation out;

@@ -17,10 +17,9 @@
 // they compare directly.
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
+#include <vector>
 
 #include "core/camera_model.h"
 #include "core/status.h"
@@ -31,12 +30,14 @@ namespace hairrig {
 enum SegmentLabel : uint8_t { kSegBackdrop = 0, kSegBox = 1, kSegHead = 2, kSegHair = 3 };
 
 struct SegmentationOptions {
-  int border_px = 16;               // the band along the image's edges that shows the backdrop
-  double backdrop_distance = 6.0;   // Mahalanobis distance to the backdrop colour under which a pixel is backdrop
-  double texture_sigma_px = 4.0;    // window over which the fine-scale energy is averaged
-  int colour_components = 6;        // Gaussians in the foreground's colour model
-  double skin_texture_ratio = 0.75; // a component is skin when its texture is below this share of the foreground's
-  double work_scale = 0.5;          // the colour model and graph cut run at this scale (1 = full size)
+  int border_px = 16;  // the band along the image's edges that shows the backdrop
+  double backdrop_distance =
+      6.0;  // Mahalanobis distance to the backdrop colour under which a pixel is backdrop
+  double texture_sigma_px = 4.0;  // window over which the fine-scale energy is averaged
+  int colour_components = 6;      // Gaussians in the foreground's colour model
+  double skin_texture_ratio =
+      0.75;  // a component is skin when its texture is below this share of the foreground's
+  double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.
   double min_hair_component_share = 0.01;
@@ -54,14 +55,16 @@ struct HairSegmentation {
 // The outline (convex hull, px) of 3D points seen by a camera: how the rig
 // turns the calibration box's corners into a not-hair polygon. Points behind
 // the camera are skipped; fewer than three in front give an empty outline.
-std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera, const Rigid3d& cam_from_points,
+std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
+                                          const Rigid3d& cam_from_points,
                                           const std::vector<Eigen::Vector3d>& points);
 
 // `image`: 8-bit BGR or grey. `not_hair_px`: polygons in pixels (may be
 // empty). InvalidArgument for an empty image or bad options; FailedPrecondition
 // when the border is not a backdrop (too varied: the subject or box touches
 // the edge, or the frame is black) or no pixel looks like hair.
-Result<HairSegmentation> SegmentHair(const cv::Mat& image, const std::vector<std::vector<cv::Point2f>>& not_hair_px,
+Result<HairSegmentation> SegmentHair(const cv::Mat& image,
+                                     const std::vector<std::vector<cv::Point2f>>& not_hair_px,
                                      const SegmentationOptions& options);
 
 }  // namespace hairrig

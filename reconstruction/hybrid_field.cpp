@@ -1,11 +1,10 @@
 #include "reconstruction/hybrid_field.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Eigenvalues>
 
 #include "reconstruction/central_gradient.h"
 
@@ -23,8 +22,8 @@ struct Grid {
   int64_t count() const { return static_cast<int64_t>(size.x()) * size.y() * size.z(); }
 };
 
-void SorSweeps(const Grid& g, int channels, const std::vector<uint8_t>& fixed, std::vector<float>* values,
-               int sweeps) {
+void SorSweeps(const Grid& g, int channels, const std::vector<uint8_t>& fixed,
+               std::vector<float>* values, int sweeps) {
   constexpr float kOmega = 1.7f;
   float* v = values->data();
   const int64_t sx = 1, sy = g.size.x(), sz = static_cast<int64_t>(g.size.x()) * g.size.y();
@@ -73,7 +72,9 @@ std::vector<float> ChamferDistance(const Grid& g, const std::vector<uint8_t>& so
               for (int dx = -1; dx <= 1; ++dx) {
                 if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;
                 const int nx = x + dx * direction, ny = y + dy * direction, nz = z + dz * direction;
-                if (nx < 0 || ny < 0 || nz < 0 || nx >= g.size.x() || ny >= g.size.y() || nz >= g.size.z()) continue;
+                if (nx < 0 || ny < 0 || nz < 0 || nx >= g.size.x() || ny >= g.size.y() ||
+                    nz >= g.size.z())
+                  continue;
                 const float step = std::sqrt(static_cast<float>(dx * dx + dy * dy + dz * dz));
                 best = std::min(best, d[g.Index(nx, ny, nz)] + step);
               }
@@ -103,10 +104,12 @@ void SolveLaplace(const Eigen::Vector3i& size, int channels, const std::vector<u
           const int64_t c = coarse.Index(x / 2, y / 2, z / 2);
           coarse_fixed[c] = 1;
           ++counts[c];
-          for (int k = 0; k < channels; ++k) coarse_values[c * channels + k] += (*values)[i * channels + k];
+          for (int k = 0; k < channels; ++k)
+            coarse_values[c * channels + k] += (*values)[i * channels + k];
         }
     for (int64_t c = 0; c < coarse.count(); ++c)
-      for (int k = 0; k < channels && counts[c] > 0; ++k) coarse_values[c * channels + k] /= static_cast<float>(counts[c]);
+      for (int k = 0; k < channels && counts[c] > 0; ++k)
+        coarse_values[c * channels + k] /= static_cast<float>(counts[c]);
     SolveLaplace(coarse.size, channels, coarse_fixed, &coarse_values, sweeps_per_level);
     for (int z = 0; z < size.z(); ++z)
       for (int y = 0; y < size.y(); ++y)
@@ -114,7 +117,8 @@ void SolveLaplace(const Eigen::Vector3i& size, int channels, const std::vector<u
           const int64_t i = g.Index(x, y, z);
           if (fixed[i]) continue;
           const int64_t c = coarse.Index(x / 2, y / 2, z / 2);
-          for (int k = 0; k < channels; ++k) (*values)[i * channels + k] = coarse_values[c * channels + k];
+          for (int k = 0; k < channels; ++k)
+            (*values)[i * channels + k] = coarse_values[c * channels + k];
         }
   }
   SorSweeps(g, channels, fixed, values, sweeps_per_level);
@@ -124,19 +128,22 @@ Status HybridFieldOptions::Check() const {
   if (!(voxel_mm > 0)) return InvalidArgument("field voxel_mm must be positive");
   if (!(margin_mm >= 0)) return InvalidArgument("field margin_mm must be non-negative");
   if (sweeps_per_level < 1) return InvalidArgument("field sweeps_per_level must be at least 1");
-  if (!(ribbon_min_length_mm >= 0)) return InvalidArgument("field ribbon_min_length_mm must be non-negative");
+  if (!(ribbon_min_length_mm >= 0))
+    return InvalidArgument("field ribbon_min_length_mm must be non-negative");
   return Status::Ok();
 }
 
-Result<HybridOrientationField> HybridOrientationField::Build(const std::vector<StrandSegment>& segments,
-                                                             const std::vector<DirectedRoot>& roots,
-                                                             const HeadModel* head, const HybridFieldOptions& o) {
+Result<HybridOrientationField> HybridOrientationField::Build(
+    const std::vector<StrandSegment>& segments, const std::vector<DirectedRoot>& roots,
+    const HeadModel* head, const HybridFieldOptions& o) {
   HR_RETURN_IF_ERROR(o.Check());
-  if (segments.empty()) return InvalidArgument("the hybrid field needs at least one strand segment");
+  if (segments.empty())
+    return InvalidArgument("the hybrid field needs at least one strand segment");
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
   for (const StrandSegment& s : segments)
     for (const Eigen::Vector3f& p : s.points_mm) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  for (const DirectedRoot& r : roots) lo = lo.cwiseMin(r.position_mm), hi = hi.cwiseMax(r.position_mm);
+  for (const DirectedRoot& r : roots)
+    lo = lo.cwiseMin(r.position_mm), hi = hi.cwiseMax(r.position_mm);
   HybridOrientationField f;
   f.voxel_mm_ = o.voxel_mm;
   f.directed_ = o.directed;
@@ -145,12 +152,14 @@ Result<HybridOrientationField> HybridOrientationField::Build(const std::vector<S
   f.size_ = (extent / static_cast<float>(o.voxel_mm)).array().ceil().cast<int>() + 1;
   const Grid g{f.size_};
   if (g.count() > kMaxVoxels) {
-    return InvalidArgument("the hybrid field's grid would have " + std::to_string(g.count()) +
-                           " voxels; the points span too much space (are they in mm?) or voxel_mm is too small");
+    return InvalidArgument(
+        "the hybrid field's grid would have " + std::to_string(g.count()) +
+        " voxels; the points span too much space (are they in mm?) or voxel_mm is too small");
   }
   const int channels = o.directed ? 3 : 6;
   const auto voxel_of = [&](const Eigen::Vector3f& p) {
-    const Eigen::Vector3i v = ((p - f.origin_) / static_cast<float>(o.voxel_mm)).array().round().cast<int>();
+    const Eigen::Vector3i v =
+        ((p - f.origin_) / static_cast<float>(o.voxel_mm)).array().round().cast<int>();
     return g.Index(std::clamp(v.x(), 0, g.size.x() - 1), std::clamp(v.y(), 0, g.size.y() - 1),
                    std::clamp(v.z(), 0, g.size.z() - 1));
   };
@@ -191,8 +200,11 @@ Result<HybridOrientationField> HybridOrientationField::Build(const std::vector<S
     for (int z = 0; z < g.size.z(); ++z)
       for (int y = 0; y < g.size.y(); ++y)
         for (int x = 0; x < g.size.x(); ++x) {
-          const Eigen::Vector3d p = (f.origin_ + Eigen::Vector3i(x, y, z).cast<float>() * static_cast<float>(o.voxel_mm)).cast<double>();
-          if (head->SignedDistance(p, nullptr) < 0.5 * o.voxel_mm) hair_boundary[g.Index(x, y, z)] = 1;
+          const Eigen::Vector3d p =
+              (f.origin_ + Eigen::Vector3i(x, y, z).cast<float>() * static_cast<float>(o.voxel_mm))
+                  .cast<double>();
+          if (head->SignedDistance(p, nullptr) < 0.5 * o.voxel_mm)
+            hair_boundary[g.Index(x, y, z)] = 1;
         }
   }
   const std::vector<float> boundary_distance = ChamferDistance(g, hair_boundary);
@@ -201,7 +213,8 @@ Result<HybridOrientationField> HybridOrientationField::Build(const std::vector<S
   for (int z = 0; z < g.size.z(); ++z)
     for (int y = 0; y < g.size.y(); ++y)
       for (int x = 0; x < g.size.x(); ++x) {
-        const bool face = x == 0 || y == 0 || z == 0 || x + 1 == g.size.x() || y + 1 == g.size.y() || z + 1 == g.size.z();
+        const bool face = x == 0 || y == 0 || z == 0 || x + 1 == g.size.x() ||
+                          y + 1 == g.size.y() || z + 1 == g.size.z();
         const int64_t i = g.Index(x, y, z);
         if (!face || hair_boundary[i]) continue;
         distance_fixed[i] = 1;
@@ -213,8 +226,8 @@ Result<HybridOrientationField> HybridOrientationField::Build(const std::vector<S
   return f;
 }
 
-void HybridOrientationField::Sample(const std::vector<float>& field, int channels, const Eigen::Vector3f& p,
-                                    float* out) const {
+void HybridOrientationField::Sample(const std::vector<float>& field, int channels,
+                                    const Eigen::Vector3f& p, float* out) const {
   const Grid g{size_};
   const Eigen::Vector3f u = (p - origin_) / static_cast<float>(voxel_mm_);
   int i0[3];
@@ -229,13 +242,15 @@ void HybridOrientationField::Sample(const std::vector<float>& field, int channel
     const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;
     const float weight = (dx ? w[0] : 1 - w[0]) * (dy ? w[1] : 1 - w[1]) * (dz ? w[2] : 1 - w[2]);
     if (weight == 0) continue;
-    const int64_t i = g.Index(std::min(i0[0] + dx, size_.x() - 1), std::min(i0[1] + dy, size_.y() - 1),
-                              std::min(i0[2] + dz, size_.z() - 1));
+    const int64_t i =
+        g.Index(std::min(i0[0] + dx, size_.x() - 1), std::min(i0[1] + dy, size_.y() - 1),
+                std::min(i0[2] + dz, size_.z() - 1));
     for (int c = 0; c < channels; ++c) out[c] += weight * field[i * channels + c];
   }
 }
 
-Eigen::Vector3f HybridOrientationField::Direction(const std::vector<float>& field, const Eigen::Vector3f& p,
+Eigen::Vector3f HybridOrientationField::Direction(const std::vector<float>& field,
+                                                  const Eigen::Vector3f& p,
                                                   const Eigen::Vector3f& previous) const {
   float v[6];
   if (directed_) {
@@ -251,11 +266,13 @@ Eigen::Vector3f HybridOrientationField::Direction(const std::vector<float>& fiel
   return d;
 }
 
-Eigen::Vector3f HybridOrientationField::Interior(const Eigen::Vector3f& p, const Eigen::Vector3f& previous) const {
+Eigen::Vector3f HybridOrientationField::Interior(const Eigen::Vector3f& p,
+                                                 const Eigen::Vector3f& previous) const {
   return Direction(interior_, p, previous);
 }
 
-Eigen::Vector3f HybridOrientationField::Surface(const Eigen::Vector3f& p, const Eigen::Vector3f& previous) const {
+Eigen::Vector3f HybridOrientationField::Surface(const Eigen::Vector3f& p,
+                                                const Eigen::Vector3f& previous) const {
   return Direction(surface_, p, previous);
 }
 
@@ -266,7 +283,8 @@ double HybridOrientationField::Distance(const Eigen::Vector3f& p) const {
 }
 
 Eigen::Vector3f HybridOrientationField::DistanceGradient(const Eigen::Vector3f& p) const {
-  return CentralGradient([this](const Eigen::Vector3f& q) { return Distance(q); }, p, static_cast<float>(voxel_mm_));
+  return CentralGradient([this](const Eigen::Vector3f& q) { return Distance(q); }, p,
+                         static_cast<float>(voxel_mm_));
 }
 
 double HybridOrientationField::RibbonDistance(const Eigen::Vector3f& p) const {

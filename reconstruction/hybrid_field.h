@@ -18,10 +18,9 @@
 // strand bench measures them side by side.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "core/status.h"
@@ -31,10 +30,11 @@ namespace hairrig {
 
 struct HybridFieldOptions {
   double voxel_mm = 2.0;
-  double margin_mm = 20;     // around the segments' and the scalp's bounds
-  bool directed = true;      // diffuse vectors (else the paper's tensors v v^T)
-  int sweeps_per_level = 40; // Gauss-Seidel (SOR) sweeps at each level of the coarse-to-fine solve
-  double ribbon_min_length_mm = 20;  // segments at least this long stand for the directed ribbons of S_s
+  double margin_mm = 20;      // around the segments' and the scalp's bounds
+  bool directed = true;       // diffuse vectors (else the paper's tensors v v^T)
+  int sweeps_per_level = 40;  // Gauss-Seidel (SOR) sweeps at each level of the coarse-to-fine solve
+  double ribbon_min_length_mm =
+      20;  // segments at least this long stand for the directed ribbons of S_s
   Status Check() const;
 };
 
@@ -49,16 +49,18 @@ class HybridOrientationField {
   // (then only segments bound I_d). InvalidArgument for an empty input or a
   // grid of more than 64 million voxels.
   static Result<HybridOrientationField> Build(const std::vector<StrandSegment>& segments,
-                                              const std::vector<DirectedRoot>& roots, const HeadModel* head,
+                                              const std::vector<DirectedRoot>& roots,
+                                              const HeadModel* head,
                                               const HybridFieldOptions& options);
 
   // Trilinear samples at p (outside the grid: the nearest face's). With
   // tensors, the principal direction signed to agree with `previous`.
   Eigen::Vector3f Interior(const Eigen::Vector3f& p, const Eigen::Vector3f& previous) const;
   Eigen::Vector3f Surface(const Eigen::Vector3f& p, const Eigen::Vector3f& previous) const;
-  double Distance(const Eigen::Vector3f& p) const;              // I_d (mm-like units)
-  Eigen::Vector3f DistanceGradient(const Eigen::Vector3f& p) const;  // grad I_d (central differences)
-  double RibbonDistance(const Eigen::Vector3f& p) const;        // d_s (mm)
+  double Distance(const Eigen::Vector3f& p) const;  // I_d (mm-like units)
+  Eigen::Vector3f DistanceGradient(
+      const Eigen::Vector3f& p) const;                    // grad I_d (central differences)
+  double RibbonDistance(const Eigen::Vector3f& p) const;  // d_s (mm)
   bool Contains(const Eigen::Vector3f& p) const;
 
   Eigen::Vector3i size() const { return size_; }
@@ -69,7 +71,8 @@ class HybridOrientationField {
   // channels: 3 (vectors) or 6 (tensor xx yy zz xy xz yz), voxel-major.
   Eigen::Vector3f Direction(const std::vector<float>& field, const Eigen::Vector3f& p,
                             const Eigen::Vector3f& previous) const;
-  void Sample(const std::vector<float>& field, int channels, const Eigen::Vector3f& p, float* out) const;
+  void Sample(const std::vector<float>& field, int channels, const Eigen::Vector3f& p,
+              float* out) const;
 
   Eigen::Vector3f origin_ = Eigen::Vector3f::Zero();
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();

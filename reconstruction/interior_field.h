@@ -8,10 +8,9 @@
 // Units mm, the points' frame.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "core/status.h"
@@ -31,8 +30,8 @@ class InteriorField {
  public:
   // InvalidArgument for no points, bad options or a grid of more than 64
   // million voxels.
-  static Result<InteriorField> Build(const std::vector<OrientedPoint>& points, const HeadModel& head,
-                                     const InteriorFieldOptions& options);
+  static Result<InteriorField> Build(const std::vector<OrientedPoint>& points,
+                                     const HeadModel& head, const InteriorFieldOptions& options);
 
   // Trilinear, in [0, 1]; outside the grid the nearest face's value.
   double At(const Eigen::Vector3f& p) const;

@@ -5,10 +5,9 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <random>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "core/parallel.h"
 #include "reconstruction/orientation_map.h"
@@ -25,7 +24,8 @@ bool Sample(const cv::Mat1f& map, double u, double v, float* value) {
   const float fx = static_cast<float>(u - x), fy = static_cast<float>(v - y);
   const float* r0 = map[y];
   const float* r1 = map[y + 1];
-  *value = (r0[x] * (1 - fx) + r0[x + 1] * fx) * (1 - fy) + (r1[x] * (1 - fx) + r1[x + 1] * fx) * fy;
+  *value =
+      (r0[x] * (1 - fx) + r0[x + 1] * fx) * (1 - fy) + (r1[x] * (1 - fx) + r1[x + 1] * fx) * fy;
   return true;
 }
 
@@ -51,14 +51,18 @@ struct Hypothesis {
 
 class ReferenceSolver {
  public:
-  ReferenceSolver(const std::vector<MvsView>& views, int reference, const std::vector<int>& neighbours,
-                  double centre_depth, const LineMvsOptions& options)
-      : ref_(views[static_cast<size_t>(reference)]), options_(options), centre_depth_(centre_depth) {
+  ReferenceSolver(const std::vector<MvsView>& views, int reference,
+                  const std::vector<int>& neighbours, double centre_depth,
+                  const LineMvsOptions& options)
+      : ref_(views[static_cast<size_t>(reference)]),
+        options_(options),
+        centre_depth_(centre_depth) {
     ref_params_ = ref_.camera.ToParams();
     const Rigid3d object_from_ref = ref_.cam_from_object.Inverse();
     for (int n : neighbours) {
       const Rigid3d n_from_ref = views[static_cast<size_t>(n)].cam_from_object * object_from_ref;
-      neighbours_.push_back({&views[static_cast<size_t>(n)], n_from_ref.RotationMatrix(), n_from_ref.translation,
+      neighbours_.push_back({&views[static_cast<size_t>(n)], n_from_ref.RotationMatrix(),
+                             n_from_ref.translation,
                              views[static_cast<size_t>(n)].camera.ToParams()});
     }
     object_from_ref_rotation_ = object_from_ref.RotationMatrix();
@@ -89,7 +93,8 @@ class ReferenceSolver {
       map.depth_mm(c.gy, c.gx) = h.depth;
       map.cost(c.gy, c.gx) = h.cost;
       const Eigen::Vector3d t = object_from_ref_rotation_ * Direction(c, h.tilt);
-      map.direction(c.gy, c.gx) = cv::Vec3f(static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z()));
+      map.direction(c.gy, c.gx) = cv::Vec3f(static_cast<float>(t.x()), static_cast<float>(t.y()),
+                                            static_cast<float>(t.z()));
     }
     return map;
   }
@@ -121,7 +126,8 @@ class ReferenceSolver {
         // One pixel along the image direction, at the same depth (distortion
         // varies little over a pixel).
         const double a = DegToRad(angle);
-        const Eigen::Vector3d along(std::cos(a) / ref_.camera.fx_px, std::sin(a) / ref_.camera.fy_px, 0.0);
+        const Eigen::Vector3d along(std::cos(a) / ref_.camera.fx_px,
+                                    std::sin(a) / ref_.camera.fy_px, 0.0);
         const Eigen::Vector3d r = c.ray.normalized();
         c.across = (along - along.dot(r) * r).normalized();
         c.prior_mm = ref_.prior_depth_mm.empty() ? 0.f : std::max(0.f, ref_.prior_depth_mm(v, u));
@@ -148,10 +154,12 @@ class ReferenceSolver {
 
   void InitialiseRandomly(std::mt19937_64* rng) {
     std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::uniform_real_distribution<double> tilt(-DegToRad(options_.max_tilt_deg), DegToRad(options_.max_tilt_deg));
+    std::uniform_real_distribution<double> tilt(-DegToRad(options_.max_tilt_deg),
+                                                DegToRad(options_.max_tilt_deg));
     for (size_t i = 0; i < cells_.size(); ++i) {
       const DepthRange& r = cells_[i].range;
-      Hypothesis h{static_cast<float>(r.lo + unit(*rng) * (r.hi - r.lo)), static_cast<float>(tilt(*rng)), kNoCost};
+      Hypothesis h{static_cast<float>(r.lo + unit(*rng) * (r.hi - r.lo)),
+                   static_cast<float>(tilt(*rng)), kNoCost};
       h.cost = Cost(cells_[i], h.depth, h.tilt);
       best_[i] = h;
     }
@@ -186,7 +194,8 @@ class ReferenceSolver {
           const Hypothesis& hj = best_[static_cast<size_t>(j)];
           TryHypothesis(i, hj.depth, hj.tilt);
           const float prior_j = cells_[static_cast<size_t>(j)].prior_mm;
-          if (c.prior_mm > 0 && prior_j > 0) TryHypothesis(i, c.prior_mm + (hj.depth - prior_j), hj.tilt);
+          if (c.prior_mm > 0 && prior_j > 0)
+            TryHypothesis(i, c.prior_mm + (hj.depth - prior_j), hj.tilt);
         }
       }
       const Hypothesis h = best_[i];
@@ -210,8 +219,8 @@ class ReferenceSolver {
     bool strip_ok = true;
   };
 
-  void MakeSamples(const Cell& c, const Eigen::Vector3d& centre, const Eigen::Vector3d& t, double step_mm,
-                   Samples* s) const {
+  void MakeSamples(const Cell& c, const Eigen::Vector3d& centre, const Eigen::Vector3d& t,
+                   double step_mm, Samples* s) const {
     const int half = options_.samples / 2;
     s->along = 2 * half + 1;
     for (int k = -half; k <= half; ++k) {
@@ -225,7 +234,8 @@ class ReferenceSolver {
     const Eigen::Vector3d side = t.cross(c.ray.normalized()).normalized() * step_mm;
     for (int k = 0; k < s->along && s->strip_ok; ++k) {
       for (int j = -1; j <= 1; ++j) {
-        const Eigen::Vector3d p = s->on_line[static_cast<size_t>(k)] + static_cast<double>(j) * side;
+        const Eigen::Vector3d p =
+            s->on_line[static_cast<size_t>(k)] + static_cast<double>(j) * side;
         Eigen::Vector2d in_ref;
         ProjectCamPoint(ref_params_.data(), p.data(), in_ref.data());
         float a;
@@ -254,8 +264,9 @@ class ReferenceSolver {
       if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, samples);
       if (options_.cost != MvsCost::kOrientation) photometric_cost = PhotometricCost(nb, samples);
       view_costs[v] = options_.cost == MvsCost::kOrientation ? orientation_cost
-                      : options_.cost == MvsCost::kPhotometric ? photometric_cost
-                                                               : 0.5f * (orientation_cost + photometric_cost);
+                      : options_.cost == MvsCost::kPhotometric
+                          ? photometric_cost
+                          : 0.5f * (orientation_cost + photometric_cost);
     }
     const size_t used = std::min(neighbours_.size(), static_cast<size_t>(options_.views_in_cost));
     std::partial_sort(view_costs.begin(), view_costs.begin() + static_cast<std::ptrdiff_t>(used),
@@ -277,12 +288,14 @@ class ReferenceSolver {
     const double truncation = options_.orientation_truncation_deg;
     for (int k = 0; k < s.along; ++k) {
       Eigen::Vector2d a, b;
-      if (!ProjectInto(nb, s.on_line[static_cast<size_t>(k)], &a) || !ProjectInto(nb, s.ahead[static_cast<size_t>(k)], &b)) {
+      if (!ProjectInto(nb, s.on_line[static_cast<size_t>(k)], &a) ||
+          !ProjectInto(nb, s.ahead[static_cast<size_t>(k)], &b)) {
         sum += 1;
         continue;
       }
       const int x = static_cast<int>(std::lround(a.x())), y = static_cast<int>(std::lround(a.y()));
-      if (x < 0 || y < 0 || x >= nb.view->hair.cols || y >= nb.view->hair.rows || !nb.view->hair(y, x)) {
+      if (x < 0 || y < 0 || x >= nb.view->hair.cols || y >= nb.view->hair.rows ||
+          !nb.view->hair(y, x)) {
         sum += 1;
         continue;
       }
@@ -348,14 +361,17 @@ Result<Eigen::Vector3d> SubjectCentre(const std::vector<MvsView>& views) {
   for (const MvsView& v : views) {
     const cv::Moments m = cv::moments(v.hair, true);
     if (m.m00 < 1) continue;
-    const Result<Eigen::Vector2d> n = UndistortPixel(v.camera, Eigen::Vector2d(m.m10 / m.m00, m.m01 / m.m00));
+    const Result<Eigen::Vector2d> n =
+        UndistortPixel(v.camera, Eigen::Vector2d(m.m10 / m.m00, m.m01 / m.m00));
     if (!n.ok()) continue;
-    const Eigen::Vector3d d = (v.cam_from_object.rotation.conjugate() * Eigen::Vector3d(n->x(), n->y(), 1)).normalized();
+    const Eigen::Vector3d d =
+        (v.cam_from_object.rotation.conjugate() * Eigen::Vector3d(n->x(), n->y(), 1)).normalized();
     const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
     a += p;
     b += p * CameraCentre(v);
   }
-  if (std::abs(a.determinant()) < 1e-9) return FailedPrecondition("the views' hair does not meet in one place");
+  if (std::abs(a.determinant()) < 1e-9)
+    return FailedPrecondition("the views' hair does not meet in one place");
   return Eigen::Vector3d(a.ldlt().solve(b));
 }
 
@@ -364,58 +380,70 @@ Result<Eigen::Vector3d> SubjectCentre(const std::vector<MvsView>& views) {
 Status LineMvsOptions::Check() const {
   if (stride_px < 1 || stride_px > 8) return InvalidArgument("mvs stride_px must be in 1..8");
   if (neighbours < 1 || neighbours > 16) return InvalidArgument("mvs neighbours must be in 1..16");
-  if (views_in_cost < 1 || views_in_cost > neighbours) return InvalidArgument("mvs views_in_cost must be in 1..neighbours");
+  if (views_in_cost < 1 || views_in_cost > neighbours)
+    return InvalidArgument("mvs views_in_cost must be in 1..neighbours");
   if (!(min_baseline_deg >= 0 && min_baseline_deg < max_baseline_deg && max_baseline_deg <= 180)) {
-    return InvalidArgument("mvs baselines must satisfy 0 <= min_baseline_deg < max_baseline_deg <= 180");
+    return InvalidArgument(
+        "mvs baselines must satisfy 0 <= min_baseline_deg < max_baseline_deg <= 180");
   }
   if (iterations < 1) return InvalidArgument("mvs iterations must be at least 1");
-  if (samples < 1 || samples % 2 == 0 || samples > 31) return InvalidArgument("mvs samples must be odd, 1..31");
+  if (samples < 1 || samples % 2 == 0 || samples > 31)
+    return InvalidArgument("mvs samples must be odd, 1..31");
   if (!(sample_step_px > 0)) return InvalidArgument("mvs sample_step_px must be positive");
   if (!(orientation_truncation_deg > 0 && orientation_truncation_deg <= 90)) {
     return InvalidArgument("mvs orientation_truncation_deg must be in (0, 90]");
   }
-  if (!(max_tilt_deg > 0 && max_tilt_deg < 90)) return InvalidArgument("mvs max_tilt_deg must be in (0, 90)");
+  if (!(max_tilt_deg > 0 && max_tilt_deg < 90))
+    return InvalidArgument("mvs max_tilt_deg must be in (0, 90)");
   if (!(depth_margin_mm > 0)) return InvalidArgument("mvs depth_margin_mm must be positive");
   if (!(prior_front_mm >= 0 && prior_behind_mm > 0 && prior_front_mm + prior_behind_mm < 1000))
-    return InvalidArgument("mvs prior_front_mm must be >= 0 and prior_behind_mm > 0 (their sum under 1000)");
+    return InvalidArgument(
+        "mvs prior_front_mm must be >= 0 and prior_behind_mm > 0 (their sum under 1000)");
   if (threads < 1) return InvalidArgument("mvs threads must be at least 1");
   return Status::Ok();
 }
 
-std::vector<int> NeighbourViews(const std::vector<MvsView>& views, int reference, const LineMvsOptions& options) {
+std::vector<int> NeighbourViews(const std::vector<MvsView>& views, int reference,
+                                const LineMvsOptions& options) {
   const Eigen::Vector3d d_ref = ViewingDirection(views[static_cast<size_t>(reference)]);
   std::vector<std::pair<double, int>> candidates;
   for (size_t n = 0; n < views.size(); ++n) {
     if (static_cast<int>(n) == reference) continue;
-    const double angle = RadToDeg(std::acos(std::clamp(d_ref.dot(ViewingDirection(views[n])), -1.0, 1.0)));
+    const double angle =
+        RadToDeg(std::acos(std::clamp(d_ref.dot(ViewingDirection(views[n])), -1.0, 1.0)));
     if (angle >= options.min_baseline_deg && angle <= options.max_baseline_deg) {
       candidates.push_back({angle, static_cast<int>(n)});
     }
   }
   std::sort(candidates.begin(), candidates.end());
   std::vector<int> out;
-  for (size_t k = 0; k < candidates.size() && static_cast<int>(k) < options.neighbours; ++k) out.push_back(candidates[k].second);
+  for (size_t k = 0; k < candidates.size() && static_cast<int>(k) < options.neighbours; ++k)
+    out.push_back(candidates[k].second);
   return out;
 }
 
 Result<std::vector<LineDepthMap>> ComputeLineDepthMaps(const std::vector<MvsView>& views,
-                                                       const LineMvsOptions& options, const MvsProgress& progress) {
+                                                       const LineMvsOptions& options,
+                                                       const MvsProgress& progress) {
   HR_RETURN_IF_ERROR(options.Check());
   if (views.size() < 2) return InvalidArgument("multi-view stereo needs at least two views");
   for (size_t v = 0; v < views.size(); ++v) {
     const MvsView& view = views[v];
     const cv::Size size(view.camera.width_px, view.camera.height_px);
-    if (view.grey.size() != size || view.orientation_deg.size() != size || view.hair.size() != size ||
+    if (view.grey.size() != size || view.orientation_deg.size() != size ||
+        view.hair.size() != size ||
         (!view.prior_depth_mm.empty() && view.prior_depth_mm.size() != size)) {
-      return InvalidArgument("mvs view " + std::to_string(v) + ": its maps are not the camera's size");
+      return InvalidArgument("mvs view " + std::to_string(v) +
+                             ": its maps are not the camera's size");
     }
   }
   std::vector<std::vector<int>> neighbours(views.size());
   for (size_t v = 0; v < views.size(); ++v) {
     neighbours[v] = NeighbourViews(views, static_cast<int>(v), options);
     if (static_cast<int>(neighbours[v].size()) < options.views_in_cost) {
-      return FailedPrecondition("view " + std::to_string(v) + " has " + std::to_string(neighbours[v].size()) +
-                                " neighbours within " + std::to_string(options.min_baseline_deg) + "-" +
+      return FailedPrecondition("view " + std::to_string(v) + " has " +
+                                std::to_string(neighbours[v].size()) + " neighbours within " +
+                                std::to_string(options.min_baseline_deg) + "-" +
                                 std::to_string(options.max_baseline_deg) + " deg; it needs " +
                                 std::to_string(options.views_in_cost));
     }

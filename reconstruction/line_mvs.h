@@ -29,9 +29,8 @@
 #pragma once
 
 #include <functional>
-#include <vector>
-
 #include <opencv2/core/mat.hpp>
+#include <vector>
 
 #include "core/camera_model.h"
 #include "core/status.h"
@@ -43,21 +42,22 @@ enum class MvsCost { kOrientation, kPhotometric, kBoth };
 
 struct LineMvsOptions {
   MvsCost cost = MvsCost::kBoth;
-  int stride_px = 3;              // reference pixels on a grid of this step (1 = every pixel)
-  int neighbours = 4;             // views compared with each reference view
-  int views_in_cost = 2;          // ... of which the best this many score a hypothesis
-  double min_baseline_deg = 8;    // neighbour views are at least this far in viewing direction ...
-  double max_baseline_deg = 50;   // ... and at most this far
-  int iterations = 4;             // with the hull's prior 4 find the depth 6 do (README)
-  int samples = 7;                // along the segment (odd)
-  double sample_step_px = 2.0;    // their spacing, as seen in the reference view
+  int stride_px = 3;             // reference pixels on a grid of this step (1 = every pixel)
+  int neighbours = 4;            // views compared with each reference view
+  int views_in_cost = 2;         // ... of which the best this many score a hypothesis
+  double min_baseline_deg = 8;   // neighbour views are at least this far in viewing direction ...
+  double max_baseline_deg = 50;  // ... and at most this far
+  int iterations = 4;            // with the hull's prior 4 find the depth 6 do (README)
+  int samples = 7;               // along the segment (odd)
+  double sample_step_px = 2.0;   // their spacing, as seen in the reference view
   double orientation_truncation_deg = 25;
   double max_tilt_deg = 75;
-  double depth_margin_mm = 200;   // without a prior: hypotheses within this of the subject's centre depth
+  double depth_margin_mm =
+      200;  // without a prior: hypotheses within this of the subject's centre depth
   // With a prior depth (MvsView::prior_depth_mm, the visual hull's surface):
   // hypotheses lie from this far in front of it ...
   double prior_front_mm = 3;
-  double prior_behind_mm = 25;    // ... to this far behind it
+  double prior_behind_mm = 25;  // ... to this far behind it
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
@@ -68,9 +68,9 @@ struct LineMvsOptions {
 struct MvsView {
   CameraIntrinsics camera;
   Rigid3d cam_from_object;
-  cv::Mat1f grey;               // 0..255
-  cv::Mat1f orientation_deg;    // [0, 180), NaN where unknown
-  cv::Mat1b hair;               // non-zero on hair
+  cv::Mat1f grey;             // 0..255
+  cv::Mat1f orientation_deg;  // [0, 180), NaN where unknown
+  cv::Mat1b hair;             // non-zero on hair
   // Optional (empty, or 0 at a pixel = none): a depth (mm) the surface is
   // near, such as the visual hull's (reconstruction/visual_hull.h), read at
   // the grid's pixels.
@@ -105,6 +105,7 @@ Result<std::vector<LineDepthMap>> ComputeLineDepthMaps(const std::vector<MvsView
 
 // Views sorted as neighbours of `reference`: within the baselines, the
 // closest viewing directions first, at most options.neighbours.
-std::vector<int> NeighbourViews(const std::vector<MvsView>& views, int reference, const LineMvsOptions& options);
+std::vector<int> NeighbourViews(const std::vector<MvsView>& views, int reference,
+                                const LineMvsOptions& options);
 
 }  // namespace hairrig

@@ -3,11 +3,11 @@
 // exact projections, so the depth found must be the plane's.
 #include "reconstruction/line_mvs.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace hairrig {
 namespace {
@@ -58,7 +58,8 @@ MvsView RenderPlane(double azimuth_deg, cv::Mat1f* true_depth) {
       v.hair(y, x) = 255;
       // Stripes across the strands, fixed on the plane: texture for the NCC.
       const double across = -std::sin(psi) * p.x() + std::cos(psi) * p.y();
-      v.grey(y, x) = static_cast<float>(128 + 60 * std::sin(1.7 * across) + 20 * std::sin(0.31 * p.x()));
+      v.grey(y, x) =
+          static_cast<float>(128 + 60 * std::sin(1.7 * across) + 20 * std::sin(0.31 * p.x()));
       (*true_depth)(y, x) = static_cast<float>((v.cam_from_object * p).z());
     }
   }
@@ -85,11 +86,13 @@ std::pair<double, double> DepthError(const PlaneScene& scene, const LineDepthMap
       if (!scene.views[static_cast<size_t>(v)].hair(y, x)) continue;
       ++hair;
       if (map.depth_mm(gy, gx) <= 0) continue;
-      errors.push_back(std::abs(map.depth_mm(gy, gx) - scene.true_depth[static_cast<size_t>(v)](y, x)));
+      errors.push_back(
+          std::abs(map.depth_mm(gy, gx) - scene.true_depth[static_cast<size_t>(v)](y, x)));
     }
   }
   if (errors.empty()) return {1e9, 0};
-  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2),
+                   errors.end());
   return {errors[errors.size() / 2], static_cast<double>(errors.size()) / std::max(1, hair)};
 }
 
@@ -155,11 +158,14 @@ TEST(LineMvs, BadInputIsRefused) {
   PlaneScene scene = MakeScene();
   LineMvsOptions options;
   options.samples = 4;
-  EXPECT_EQ(ComputeLineDepthMaps(scene.views, options).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ComputeLineDepthMaps(scene.views, options).status().code(),
+            StatusCode::kInvalidArgument);
   options = LineMvsOptions();
-  EXPECT_EQ(ComputeLineDepthMaps({scene.views[0]}, options).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ComputeLineDepthMaps({scene.views[0]}, options).status().code(),
+            StatusCode::kInvalidArgument);
   scene.views[2].hair = cv::Mat1b(10, 10, uint8_t{0});
-  EXPECT_EQ(ComputeLineDepthMaps(scene.views, options).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ComputeLineDepthMaps(scene.views, options).status().code(),
+            StatusCode::kInvalidArgument);
 }
 
 }  // namespace

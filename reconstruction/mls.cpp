@@ -1,21 +1,23 @@
 #include "reconstruction/mls.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Eigenvalues>
 
 #include "core/parallel.h"
 
 namespace hairrig {
 
 PointSetSurface::PointSetSurface(const std::vector<Eigen::Vector3f>& positions, double sigma_mm)
-    : sigma_mm_(sigma_mm), owned_grid_(std::make_unique<PointGrid>(positions, 2 * sigma_mm)), grid_(*owned_grid_) {}
+    : sigma_mm_(sigma_mm),
+      owned_grid_(std::make_unique<PointGrid>(positions, 2 * sigma_mm)),
+      grid_(*owned_grid_) {}
 
-PointSetSurface::PointSetSurface(const PointGrid& grid, double sigma_mm) : sigma_mm_(sigma_mm), grid_(grid) {}
+PointSetSurface::PointSetSurface(const PointGrid& grid, double sigma_mm)
+    : sigma_mm_(sigma_mm), grid_(grid) {}
 
-bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* projected, Eigen::Vector3f* normal,
-                              int min_neighbours) const {
+bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* projected,
+                              Eigen::Vector3f* normal, int min_neighbours) const {
   const double inv_sigma2 = 1.0 / (sigma_mm_ * sigma_mm_);
   double weight = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -41,7 +43,8 @@ bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* project
   return true;
 }
 
-std::vector<OrientedPoint> SmoothByMls(const std::vector<OrientedPoint>& points, double sigma_mm, int threads) {
+std::vector<OrientedPoint> SmoothByMls(const std::vector<OrientedPoint>& points, double sigma_mm,
+                                       int threads) {
   std::vector<Eigen::Vector3f> positions(points.size());
   for (size_t i = 0; i < points.size(); ++i) positions[i] = points[i].position_mm;
   const PointSetSurface surface(positions, sigma_mm);
@@ -51,7 +54,8 @@ std::vector<OrientedPoint> SmoothByMls(const std::vector<OrientedPoint>& points,
       Eigen::Vector3f projected, normal;
       if (!surface.Project(points[i].position_mm, &projected, &normal)) return;
       out[i].position_mm = projected;
-      const Eigen::Vector3f in_plane = points[i].direction - points[i].direction.dot(normal) * normal;
+      const Eigen::Vector3f in_plane =
+          points[i].direction - points[i].direction.dot(normal) * normal;
       if (in_plane.norm() > 1e-3f) out[i].direction = in_plane.normalized();
     };
   });

@@ -8,10 +8,9 @@
 // 2 sigma. Units mm; any frame.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "reconstruction/point_cloud.h"
 #include "reconstruction/point_grid.h"
@@ -41,6 +40,7 @@ class PointSetSurface {
 // Every point moved onto its MLS plane and its direction projected into the
 // plane (renormalised; kept where the projection degenerates). Points with
 // too few neighbours are kept as they are.
-std::vector<OrientedPoint> SmoothByMls(const std::vector<OrientedPoint>& points, double sigma_mm, int threads);
+std::vector<OrientedPoint> SmoothByMls(const std::vector<OrientedPoint>& points, double sigma_mm,
+                                       int threads);
 
 }  // namespace hairrig

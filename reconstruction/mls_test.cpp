@@ -1,9 +1,9 @@
 #include "reconstruction/mls.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 namespace hairrig {
 namespace {
@@ -19,7 +19,8 @@ std::vector<OrientedPoint> NoisyPlane(int n, double noise_mm, uint32_t seed) {
   for (OrientedPoint& p : points) {
     const float x = along(rng), y = along(rng);
     p.position_mm = Eigen::Vector3f(x, y, 0.1f * x) + across(rng) * normal;
-    p.direction = (Eigen::Vector3f(1.f, 0.f, 0.1f).normalized() + 0.2f * across(rng) * normal).normalized();
+    p.direction =
+        (Eigen::Vector3f(1.f, 0.f, 0.1f).normalized() + 0.2f * across(rng) * normal).normalized();
   }
   return points;
 }

@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <vector>
-
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "core/parallel.h"
 #include "core/transform.h"
@@ -22,7 +21,8 @@ struct GaborPair {
 };
 
 GaborPair MakeGaborPair(double direction_rad, const OrientationOptions& o) {
-  const int radius = static_cast<int>(std::ceil(3.0 * std::max(o.sigma_across_px, o.sigma_along_px)));
+  const int radius =
+      static_cast<int>(std::ceil(3.0 * std::max(o.sigma_across_px, o.sigma_along_px)));
   const int size = 2 * radius + 1;
   GaborPair k{cv::Mat1f(size, size), cv::Mat1f(size, size)};
   const double ux = std::cos(direction_rad), uy = std::sin(direction_rad);  // along the strand
@@ -30,8 +30,9 @@ GaborPair MakeGaborPair(double direction_rad, const OrientationOptions& o) {
   for (int y = -radius; y <= radius; ++y) {
     for (int x = -radius; x <= radius; ++x) {
       const double along = x * ux + y * uy, across = -x * uy + y * ux;
-      const double envelope = std::exp(-0.5 * (across * across / (o.sigma_across_px * o.sigma_across_px) +
-                                               along * along / (o.sigma_along_px * o.sigma_along_px)));
+      const double envelope =
+          std::exp(-0.5 * (across * across / (o.sigma_across_px * o.sigma_across_px) +
+                           along * along / (o.sigma_along_px * o.sigma_along_px)));
       const double phase = 2 * kPi * across / o.wavelength_px;
       k.even(y + radius, x + radius) = static_cast<float>(envelope * std::cos(phase));
       k.odd(y + radius, x + radius) = static_cast<float>(envelope * std::sin(phase));
@@ -59,7 +60,8 @@ cv::Rect WorkingArea(const cv::Mat& region, cv::Size image_size, int reach) {
 
 // One pass of the bank over `input` (already cropped): per pixel the peak
 // direction, its confidence and the peak response.
-OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& bank, bool quadrature, int threads) {
+OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& bank,
+                          bool quadrature, int threads) {
   const int n = static_cast<int>(bank.size());
   std::vector<cv::Mat1f> energy(bank.size());
   ParallelFor(bank.size(), threads, [&] {
@@ -91,13 +93,15 @@ OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& 
         int best = 0;
         float peak = energy[0](y, x);
         for (int k = 1; k < n; ++k) {
-          if (energy[static_cast<size_t>(k)](y, x) > peak) peak = energy[static_cast<size_t>(k)](y, x), best = k;
+          if (energy[static_cast<size_t>(k)](y, x) > peak)
+            peak = energy[static_cast<size_t>(k)](y, x), best = k;
         }
         // A parabola through the peak and its two neighbours (the bank is circular).
         const float before = energy[static_cast<size_t>((best + n - 1) % n)](y, x);
         const float after = energy[static_cast<size_t>((best + 1) % n)](y, x);
         const double curvature = before - 2.0 * peak + after;
-        const double shift = curvature < 0 ? std::clamp(0.5 * (before - after) / curvature, -0.5, 0.5) : 0.0;
+        const double shift =
+            curvature < 0 ? std::clamp(0.5 * (before - after) / curvature, -0.5, 0.5) : 0.0;
         double angle = (best + shift) * step_deg;
         angle = std::fmod(angle + 180.0, 180.0);
         double spread = 0;
@@ -107,7 +111,8 @@ OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& 
         }
         out.angle_deg(y, x) = static_cast<float>(angle);
         out.response(y, x) = peak;
-        out.confidence(y, x) = peak > 1e-6f ? static_cast<float>(std::sqrt(spread / distance2_sum) / peak) : 0.0f;
+        out.confidence(y, x) =
+            peak > 1e-6f ? static_cast<float>(std::sqrt(spread / distance2_sum) / peak) : 0.0f;
       }
     };
   });
@@ -117,13 +122,16 @@ OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& 
 }  // namespace
 
 Status OrientationOptions::Check() const {
-  if (directions < 4 || directions > 720) return InvalidArgument("orientation directions must be 4..720");
-  if (!(sigma_across_px > 0) || !(sigma_along_px > 0)) return InvalidArgument("orientation sigmas must be positive");
+  if (directions < 4 || directions > 720)
+    return InvalidArgument("orientation directions must be 4..720");
+  if (!(sigma_across_px > 0) || !(sigma_along_px > 0))
+    return InvalidArgument("orientation sigmas must be positive");
   if (!(wavelength_px > 1)) return InvalidArgument("orientation wavelength_px must exceed 1 pixel");
   if (!(dog_fine_px >= 0) || !(dog_coarse_px > dog_fine_px)) {
     return InvalidArgument("orientation dog_coarse_px must exceed dog_fine_px (>= 0)");
   }
-  if (refinement_passes < 0 || refinement_passes > 10) return InvalidArgument("orientation refinement_passes must be 0..10");
+  if (refinement_passes < 0 || refinement_passes > 10)
+    return InvalidArgument("orientation refinement_passes must be 0..10");
   if (threads < 1) return InvalidArgument("orientation threads must be at least 1");
   return Status::Ok();
 }
@@ -144,14 +152,18 @@ Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat
     return InvalidArgument("orientation region must be an 8-bit mask of the image's size");
   }
   std::vector<GaborPair> bank;
-  for (int k = 0; k < options.directions; ++k) bank.push_back(MakeGaborPair(kPi * k / options.directions, options));
+  for (int k = 0; k < options.directions; ++k)
+    bank.push_back(MakeGaborPair(kPi * k / options.directions, options));
   const int kernel_reach = bank[0].even.rows / 2;
-  const int reach = kernel_reach * (options.refinement_passes + 1) + static_cast<int>(std::ceil(3 * options.dog_coarse_px));
+  const int reach = kernel_reach * (options.refinement_passes + 1) +
+                    static_cast<int>(std::ceil(3 * options.dog_coarse_px));
   const cv::Rect area = WorkingArea(region, image.size(), reach);
 
   cv::Mat grey;
-  if (image.channels() == 3) cv::cvtColor(image(area), grey, cv::COLOR_BGR2GRAY);
-  else grey = image(area);
+  if (image.channels() == 3)
+    cv::cvtColor(image(area), grey, cv::COLOR_BGR2GRAY);
+  else
+    grey = image(area);
   cv::Mat1f input, coarse;
   grey.convertTo(input, CV_32F, 1.0 / 255);
   cv::GaussianBlur(input, coarse, cv::Size(), options.dog_coarse_px);
@@ -185,8 +197,9 @@ cv::Mat OrientationPicture(const OrientationMap& map) {
       const float angle = map.angle_deg(y, x);
       const bool known = std::isfinite(angle);
       const float c = std::clamp(map.confidence(y, x), 0.0f, 1.0f);
-      hsv.at<cv::Vec3b>(y, x) = known ? cv::Vec3b(static_cast<uint8_t>(angle), 255, static_cast<uint8_t>(255 * c))
-                                      : cv::Vec3b(0, 0, 0);
+      hsv.at<cv::Vec3b>(y, x) =
+          known ? cv::Vec3b(static_cast<uint8_t>(angle), 255, static_cast<uint8_t>(255 * c))
+                : cv::Vec3b(0, 0, 0);
     }
   }
   cv::Mat bgr;

@@ -23,11 +23,11 @@
 namespace hairrig {
 
 struct OrientationOptions {
-  int directions = 32;            // filters over [0, 180); >= 4
-  double sigma_across_px = 1.8;   // Gabor envelope across the strand (the oscillation's axis)
-  double sigma_along_px = 2.4;    // ... and along it
-  double wavelength_px = 4.3;     // the oscillation's period (0.23 cycles per pixel)
-  double dog_fine_px = 0.6;       // difference-of-Gaussians prefilter: fine and coarse sigma
+  int directions = 32;           // filters over [0, 180); >= 4
+  double sigma_across_px = 1.8;  // Gabor envelope across the strand (the oscillation's axis)
+  double sigma_along_px = 2.4;   // ... and along it
+  double wavelength_px = 4.3;    // the oscillation's period (0.23 cycles per pixel)
+  double dog_fine_px = 0.6;      // difference-of-Gaussians prefilter: fine and coarse sigma
   double dog_coarse_px = 3.0;
   // Passes over the previous pass's confidence (times its response) after the
   // first (0 = none). Chai et al. 2012 use 2-3 with the even kernel; on the
@@ -45,9 +45,10 @@ struct OrientationOptions {
 };
 
 struct OrientationMap {
-  cv::Mat1f angle_deg;   // [0, 180); NaN outside the region
-  cv::Mat1f confidence;  // 0 (no preferred direction) .. 1 (one direction only); 0 outside the region
-  cv::Mat1f response;    // the strongest filter response (same units as the filtered image)
+  cv::Mat1f angle_deg;  // [0, 180); NaN outside the region
+  cv::Mat1f
+      confidence;      // 0 (no preferred direction) .. 1 (one direction only); 0 outside the region
+  cv::Mat1f response;  // the strongest filter response (same units as the filtered image)
 };
 
 // `image`: 8-bit grey or BGR. `region`: CV_8U, non-zero where the map is

@@ -1,12 +1,12 @@
 #include "reconstruction/orientation_map.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <opencv2/imgproc.hpp>
 
 #include "core/transform.h"
 
@@ -24,9 +24,11 @@ cv::Mat Lines(double angle_deg, uint32_t seed, int size = 96) {
   const cv::Point2d centre(size / 2.0, size / 2.0);
   constexpr int kShift = 4;  // sub-pixel line ends
   for (double offset = -size; offset < size; offset += gap(rng)) {
-    const cv::Point2d p0 = centre + across * offset - along * (2.0 * size), p1 = centre + across * offset + along * (2.0 * size);
-    cv::line(image, cv::Point(cvRound(p0.x * 16), cvRound(p0.y * 16)), cv::Point(cvRound(p1.x * 16), cvRound(p1.y * 16)),
-             cv::Scalar(200), 1, cv::LINE_AA, kShift);
+    const cv::Point2d p0 = centre + across * offset - along * (2.0 * size),
+                      p1 = centre + across * offset + along * (2.0 * size);
+    cv::line(image, cv::Point(cvRound(p0.x * 16), cvRound(p0.y * 16)),
+             cv::Point(cvRound(p1.x * 16), cvRound(p1.y * 16)), cv::Scalar(200), 1, cv::LINE_AA,
+             kShift);
   }
   cv::Mat noise(image.size(), CV_8S);
   cv::randn(noise, 0, 6);
@@ -39,10 +41,12 @@ TEST(OrientationMap, FindsTheDirectionOfThinLinesWithinADegree) {
   std::vector<double> errors;
   for (int i = 0; i < 12; ++i) {
     const double truth = 7.5 + 15.0 * i;  // off the bank's directions on purpose
-    auto map = ComputeOrientationMap(Lines(truth, static_cast<uint32_t>(i)), cv::Mat(), OrientationOptions{});
+    auto map = ComputeOrientationMap(Lines(truth, static_cast<uint32_t>(i)), cv::Mat(),
+                                     OrientationOptions{});
     ASSERT_TRUE(map.ok()) << map.status().ToString();
     for (int y = 24; y < 72; y += 3) {
-      for (int x = 24; x < 72; x += 3) errors.push_back(OrientationDifferenceDeg(map->angle_deg(y, x), truth));
+      for (int x = 24; x < 72; x += 3)
+        errors.push_back(OrientationDifferenceDeg(map->angle_deg(y, x), truth));
     }
   }
   std::sort(errors.begin(), errors.end());

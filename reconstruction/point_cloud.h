@@ -13,21 +13,22 @@
 // The writer writes binary little endian; the reader takes any PLY encoding.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 
 namespace hairrig {
 
 struct OrientedPoint {
-  Eigen::Vector3f position_mm = Eigen::Vector3f::Zero();  // object frame (turntable frame for a capture)
-  Eigen::Vector3f direction = Eigen::Vector3f::Zero();    // unit strand direction, unsigned (d and -d are the same)
-  float confidence = 0;                                   // 0..1
-  std::vector<uint16_t> views;                            // indices into ReconstructionInput::views that see the point
+  Eigen::Vector3f position_mm =
+      Eigen::Vector3f::Zero();  // object frame (turntable frame for a capture)
+  Eigen::Vector3f direction =
+      Eigen::Vector3f::Zero();  // unit strand direction, unsigned (d and -d are the same)
+  float confidence = 0;         // 0..1
+  std::vector<uint16_t> views;  // indices into ReconstructionInput::views that see the point
 };
 
 // Writes `points` to `path` atomically (core/file_util.h: a reader never sees

@@ -4,17 +4,17 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <utility>
-
-#include <nlohmann/json.hpp>
 
 #include "core/parallel.h"
 
 namespace hairrig {
 namespace {
 
-// Cells further than this many cell sizes from the origin are not kept (their keys must fit 63 bits).
+// Cells further than this many cell sizes from the origin are not kept (their keys must fit 63
+// bits).
 constexpr double kMaxCellIndex = 1 << 20;
 // Query samples per ParallelFor item.
 constexpr size_t kChunk = 1024;
@@ -36,7 +36,8 @@ Criteria MakeCriteria(const std::vector<MatchThreshold>& thresholds) {
     c.usable.push_back(usable ? 1 : 0);
     c.max_d2.push_back(usable ? static_cast<float>(t.distance_mm * t.distance_mm) : -1.f);
     // A small slack so that equal directions meet a 0 degree threshold despite rounding.
-    const double cosine = t.angle_deg >= 180 ? -2.0 : std::cos(t.angle_deg * std::numbers::pi / 180) - 1e-6;
+    const double cosine =
+        t.angle_deg >= 180 ? -2.0 : std::cos(t.angle_deg * std::numbers::pi / 180) - 1e-6;
     c.min_cos.push_back(static_cast<float>(cosine));
     if (usable) {
       ++c.num_usable;
@@ -47,8 +48,9 @@ Criteria MakeCriteria(const std::vector<MatchThreshold>& thresholds) {
   return c;
 }
 
-// Integer cells of size cell_mm, keyed x fastest inside the bounding box of all kept samples grown by one cell
-// on every side, so that a neighbour's key is the cell's key plus a fixed offset and never aliases another cell.
+// Integer cells of size cell_mm, keyed x fastest inside the bounding box of all kept samples grown
+// by one cell on every side, so that a neighbour's key is the cell's key plus a fixed offset and
+// never aliases another cell.
 struct CellFrame {
   double cell_mm = 1;
   std::array<int64_t, 3> low{};           // smallest cell index minus one, per axis
@@ -64,7 +66,8 @@ struct CellFrame {
     return true;
   }
   uint64_t Key(const std::array<int64_t, 3>& c) const {
-    return (static_cast<uint64_t>(c[2] - low[2]) * size[1] + static_cast<uint64_t>(c[1] - low[1])) * size[0] +
+    return (static_cast<uint64_t>(c[2] - low[2]) * size[1] + static_cast<uint64_t>(c[1] - low[1])) *
+               size[0] +
            static_cast<uint64_t>(c[0] - low[0]);
   }
   // Key difference of the neighbour (dx, dy, dz), two's complement.
@@ -74,14 +77,16 @@ struct CellFrame {
   }
 };
 
-bool Usable(const OrientedSample& s, const CellFrame& frame, std::array<int64_t, 3>* cell, Eigen::Vector3f* dir) {
+bool Usable(const OrientedSample& s, const CellFrame& frame, std::array<int64_t, 3>* cell,
+            Eigen::Vector3f* dir) {
   const float length = s.direction.norm();
   if (!(length > 0) || !std::isfinite(length) || !frame.CellOf(s.position_mm, cell)) return false;
   *dir = s.direction / length;
   return true;
 }
 
-CellFrame MakeFrame(const std::vector<OrientedSample>& a, const std::vector<OrientedSample>& b, double cell_mm) {
+CellFrame MakeFrame(const std::vector<OrientedSample>& a, const std::vector<OrientedSample>& b,
+                    double cell_mm) {
   CellFrame frame;
   frame.cell_mm = cell_mm;
   std::array<int64_t, 3> lo{}, hi{}, cell{};
@@ -130,11 +135,14 @@ struct Grid {
   std::vector<Eigen::Vector3f> position;   // kept samples in cell order
   std::vector<Eigen::Vector3f> direction;  // unit
   std::vector<uint64_t> cell_key;          // occupied cells, increasing
-  std::vector<size_t> cell_begin;          // cell i holds [cell_begin[i], cell_begin[i + 1]); size cells + 1
-  std::vector<size_t> source;              // with keep_source: each kept sample's index in the input, else empty
+  std::vector<size_t>
+      cell_begin;  // cell i holds [cell_begin[i], cell_begin[i + 1]); size cells + 1
+  std::vector<size_t>
+      source;  // with keep_source: each kept sample's index in the input, else empty
 };
 
-Grid BuildGrid(const std::vector<OrientedSample>& samples, const CellFrame& frame, bool keep_source) {
+Grid BuildGrid(const std::vector<OrientedSample>& samples, const CellFrame& frame,
+               bool keep_source) {
   Grid grid;
   std::vector<KeyIndex> items;
   items.reserve(samples.size());
@@ -164,15 +172,17 @@ Grid BuildGrid(const std::vector<OrientedSample>& samples, const CellFrame& fram
   return grid;
 }
 
-// First index >= from whose key is >= key (keys increasing): galloping, as the queries of a chunk come in order.
+// First index >= from whose key is >= key (keys increasing): galloping, as the queries of a chunk
+// come in order.
 size_t SearchFrom(const std::vector<uint64_t>& keys, size_t from, uint64_t key) {
   size_t lo = from, step = 1;
   while (lo < keys.size() && keys[lo] < key) {
     const size_t probe = lo + step;
     if (probe >= keys.size() || keys[probe] >= key) {
       const auto end = keys.begin() + static_cast<std::ptrdiff_t>(std::min(probe, keys.size()));
-      return static_cast<size_t>(std::lower_bound(keys.begin() + static_cast<std::ptrdiff_t>(lo) + 1, end, key) -
-                                 keys.begin());
+      return static_cast<size_t>(
+          std::lower_bound(keys.begin() + static_cast<std::ptrdiff_t>(lo) + 1, end, key) -
+          keys.begin());
     }
     lo = probe + 1;
     step *= 2;
@@ -180,8 +190,9 @@ size_t SearchFrom(const std::vector<uint64_t>& keys, size_t from, uint64_t key) 
   return lo;
 }
 
-// The occupied target cells around each query sample's cell, nearest first (the own cell, faces, edges,
-// corners), for the query samples of a chunk (kChunk of them, in cell order) one after the other.
+// The occupied target cells around each query sample's cell, nearest first (the own cell, faces,
+// edges, corners), for the query samples of a chunk (kChunk of them, in cell order) one after the
+// other.
 class TargetCells {
  public:
   struct Neighbour {
@@ -192,12 +203,14 @@ class TargetCells {
   TargetCells(const Grid& queries, const Grid& targets, const CellFrame& frame)
       : queries_(queries), targets_(targets), frame_(frame) {}
 
-  // Calls visit(q) for every query sample q of `chunk`, in order, with the neighbours of q's cell current.
+  // Calls visit(q) for every query sample q of `chunk`, in order, with the neighbours of q's cell
+  // current.
   template <typename Visit>
   void ForEachQuery(size_t chunk, Visit&& visit) {
     const size_t begin = chunk * kChunk, end = std::min(queries_.position.size(), begin + kChunk);
     const std::vector<size_t>& starts = queries_.cell_begin;
-    size_t cell = static_cast<size_t>(std::upper_bound(starts.begin(), starts.end(), begin) - starts.begin() - 1);
+    size_t cell = static_cast<size_t>(std::upper_bound(starts.begin(), starts.end(), begin) -
+                                      starts.begin() - 1);
     cursors_.fill(0);
     EnterCell(cell);
     for (size_t q = begin; q < end; ++q) {
@@ -242,8 +255,8 @@ class TargetCells {
   int num_neighbours_ = 0;
 };
 
-// Squared distances from a point to the faces of its cell, below and above per axis: BoxDistance2 is a lower
-// bound of the squared distance from the point to anything in a neighbour cell.
+// Squared distances from a point to the faces of its cell, below and above per axis: BoxDistance2
+// is a lower bound of the squared distance from the point to anything in a neighbour cell.
 class CellFaces {
  public:
   CellFaces(const Eigen::Vector3f& p, double cell_mm) {
@@ -256,10 +269,12 @@ class CellFaces {
   }
   double BoxDistance2(const std::array<int, 3>& offset) const {
     double box2 = 0;
-    for (size_t k = 0; k < 3; ++k) box2 += offset[k] < 0 ? below_[k] : offset[k] > 0 ? above_[k] : 0.0;
+    for (size_t k = 0; k < 3; ++k)
+      box2 += offset[k] < 0 ? below_[k] : offset[k] > 0 ? above_[k] : 0.0;
     return box2;
   }
-  // False when the cell at `offset` lies beyond `reach2` (a squared distance), with a margin for rounding.
+  // False when the cell at `offset` lies beyond `reach2` (a squared distance), with a margin for
+  // rounding.
   bool CanReach(const std::array<int, 3>& offset, float reach2) const {
     return BoxDistance2(offset) <= static_cast<double>(reach2) * (1 + 1e-6) + 1e-9;
   }
@@ -271,8 +286,8 @@ class CellFaces {
 // Counts, per threshold, the query samples that have a target sample within it; one per thread.
 class Matcher {
  public:
-  Matcher(const Grid& queries, const Grid& targets, const CellFrame& frame, const Criteria& criteria, bool directed,
-          std::vector<int64_t>* counts)
+  Matcher(const Grid& queries, const Grid& targets, const CellFrame& frame,
+          const Criteria& criteria, bool directed, std::vector<int64_t>* counts)
       : queries_(queries),
         targets_(targets),
         frame_(frame),
@@ -336,12 +351,12 @@ class Matcher {
   std::vector<char> met_;
 };
 
-// For each query sample, the input index of the nearest target sample within one threshold (ties: the lower
-// index), -1 when none; one per thread. The grids keep their sources.
+// For each query sample, the input index of the nearest target sample within one threshold (ties:
+// the lower index), -1 when none; one per thread. The grids keep their sources.
 class NearestFinder {
  public:
-  NearestFinder(const Grid& queries, const Grid& targets, const CellFrame& frame, float max_d2, float min_cos,
-                bool directed, std::vector<int64_t>* nearest)
+  NearestFinder(const Grid& queries, const Grid& targets, const CellFrame& frame, float max_d2,
+                float min_cos, bool directed, std::vector<int64_t>* nearest)
       : queries_(queries),
         targets_(targets),
         frame_(frame),
@@ -392,11 +407,13 @@ class NearestFinder {
 std::vector<int64_t> CountMatched(const Grid& queries, const Grid& targets, const CellFrame& frame,
                                   const Criteria& criteria, bool directed, int threads) {
   const size_t num_threads = static_cast<size_t>(std::max(1, threads));
-  std::vector<std::vector<int64_t>> counts(num_threads, std::vector<int64_t>(criteria.usable.size(), 0));
+  std::vector<std::vector<int64_t>> counts(num_threads,
+                                           std::vector<int64_t>(criteria.usable.size(), 0));
   if (criteria.num_usable > 0 && !targets.position.empty()) {
     std::atomic<size_t> next_slot{0};
-    ParallelFor((queries.position.size() + kChunk - 1) / kChunk, threads,
-                [&] { return Matcher(queries, targets, frame, criteria, directed, &counts[next_slot++]); });
+    ParallelFor((queries.position.size() + kChunk - 1) / kChunk, threads, [&] {
+      return Matcher(queries, targets, frame, criteria, directed, &counts[next_slot++]);
+    });
   }
   std::vector<int64_t> total(criteria.usable.size(), 0);
   for (const auto& c : counts) {
@@ -405,7 +422,8 @@ std::vector<int64_t> CountMatched(const Grid& queries, const Grid& targets, cons
   return total;
 }
 
-void SampleStrand(const Eigen::Vector3f* points, size_t count, double step_mm, std::vector<OrientedSample>* out) {
+void SampleStrand(const Eigen::Vector3f* points, size_t count, double step_mm,
+                  std::vector<OrientedSample>* out) {
   const bool densify = step_mm > 0 && std::isfinite(step_mm);
   Eigen::Vector3f last_dir = Eigen::Vector3f::Zero();
   for (size_t i = 0; i + 1 < count; ++i) {
@@ -414,7 +432,9 @@ void SampleStrand(const Eigen::Vector3f* points, size_t count, double step_mm, s
     if (!(length > 0) || !std::isfinite(length)) continue;
     last_dir = segment / length;
     const size_t pieces =
-        densify ? std::max<size_t>(1, static_cast<size_t>(std::ceil(static_cast<double>(length) / step_mm))) : 1;
+        densify ? std::max<size_t>(
+                      1, static_cast<size_t>(std::ceil(static_cast<double>(length) / step_mm)))
+                : 1;
     for (size_t k = 0; k < pieces; ++k) {
       const float f = static_cast<float>(k) / static_cast<float>(pieces);
       out->push_back({points[i] + f * segment, last_dir});
@@ -431,17 +451,21 @@ double F1(double precision, double recall) {
 
 }  // namespace
 
-std::vector<MatchThreshold> DefaultMatchThresholds() { return {{1, 10}, {2, 20}, {3, 30}, {4, 40}, {4, 90}}; }
+std::vector<MatchThreshold> DefaultMatchThresholds() {
+  return {{1, 10}, {2, 20}, {3, 30}, {4, 40}, {4, 90}};
+}
 
 std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate,
                                      const std::vector<OrientedSample>& truth,
-                                     const std::vector<MatchThreshold>& thresholds, const SampleMatchOptions& options) {
+                                     const std::vector<MatchThreshold>& thresholds,
+                                     const SampleMatchOptions& options) {
   const Criteria criteria = MakeCriteria(thresholds);
   const CellFrame frame = MakeFrame(estimate, truth, criteria.cell_mm);
   Grid estimate_grid, truth_grid;
   ParallelFor(2, options.threads, [&] {
     return [&](size_t i) {
-      (i == 0 ? estimate_grid : truth_grid) = BuildGrid(i == 0 ? estimate : truth, frame, /*keep_source=*/false);
+      (i == 0 ? estimate_grid : truth_grid) =
+          BuildGrid(i == 0 ? estimate : truth, frame, /*keep_source=*/false);
     };
   });
   const std::vector<int64_t> matched_estimate =
@@ -454,8 +478,12 @@ std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate
     s.threshold = thresholds[t];
     s.matched_estimate = matched_estimate[t];
     s.matched_truth = matched_truth[t];
-    s.precision = estimate.empty() ? 0 : static_cast<double>(s.matched_estimate) / static_cast<double>(estimate.size());
-    s.recall = truth.empty() ? 0 : static_cast<double>(s.matched_truth) / static_cast<double>(truth.size());
+    s.precision = estimate.empty() ? 0
+                                   : static_cast<double>(s.matched_estimate) /
+                                         static_cast<double>(estimate.size());
+    s.recall = truth.empty()
+                   ? 0
+                   : static_cast<double>(s.matched_truth) / static_cast<double>(truth.size());
     s.f1 = F1(s.precision, s.recall);
   }
   return scores;
@@ -485,7 +513,8 @@ SubsetMatchScores MatchSamplesAndSubset(const std::vector<OrientedSample>& estim
 }
 
 std::vector<int64_t> NearestMatches(const std::vector<OrientedSample>& estimate,
-                                    const std::vector<OrientedSample>& truth, const MatchThreshold& threshold,
+                                    const std::vector<OrientedSample>& truth,
+                                    const MatchThreshold& threshold,
                                     const SampleMatchOptions& options) {
   std::vector<int64_t> nearest(truth.size(), -1);
   const Criteria criteria = MakeCriteria({threshold});
@@ -494,13 +523,14 @@ std::vector<int64_t> NearestMatches(const std::vector<OrientedSample>& estimate,
   Grid estimate_grid, truth_grid;
   ParallelFor(2, options.threads, [&] {
     return [&](size_t i) {
-      (i == 0 ? estimate_grid : truth_grid) = BuildGrid(i == 0 ? estimate : truth, frame, /*keep_source=*/true);
+      (i == 0 ? estimate_grid : truth_grid) =
+          BuildGrid(i == 0 ? estimate : truth, frame, /*keep_source=*/true);
     };
   });
   if (estimate_grid.position.empty()) return nearest;
   ParallelFor((truth_grid.position.size() + kChunk - 1) / kChunk, options.threads, [&] {
-    return NearestFinder(truth_grid, estimate_grid, frame, criteria.max_d2[0], criteria.min_cos[0], options.directed,
-                         &nearest);
+    return NearestFinder(truth_grid, estimate_grid, frame, criteria.max_d2[0], criteria.min_cos[0],
+                         options.directed, &nearest);
   });
   return nearest;
 }
@@ -517,7 +547,8 @@ nlohmann::json ScoresToJson(const std::vector<MatchScore>& scores) {
   return out;
 }
 
-std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::Vector3f>>& strands, double step_mm) {
+std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::Vector3f>>& strands,
+                                          double step_mm) {
   std::vector<OrientedSample> samples;
   for (const auto& strand : strands) SampleStrand(strand.data(), strand.size(), step_mm, &samples);
   return samples;
@@ -534,7 +565,8 @@ std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_
   size_t first = 0;
   for (size_t k = 0; k < strands.point_counts.size(); ++k) {
     const uint32_t count = strands.point_counts[k];
-    if (count > strands.points_mm.size() - first) break;  // counts inconsistent with the points (see Validate)
+    if (count > strands.points_mm.size() - first)
+      break;  // counts inconsistent with the points (see Validate)
     SampleStrand(strands.points_mm.data() + first, count, step_mm, &samples);
     if (sample_strand != nullptr) sample_strand->resize(samples.size(), static_cast<uint32_t>(k));
     first += count;

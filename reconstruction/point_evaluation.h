@@ -7,11 +7,10 @@
 // reconstruction, with the truth moved into it).
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
+#include <cstdint>
 #include <nlohmann/json_fwd.hpp>
+#include <vector>
 
 #include "core/strands.h"
 
@@ -19,15 +18,17 @@ namespace hairrig {
 
 struct OrientedSample {
   Eigen::Vector3f position_mm = Eigen::Vector3f::Zero();
-  Eigen::Vector3f direction = Eigen::Vector3f::Zero();  // unit (it is normalised again); may be signed
+  Eigen::Vector3f direction =
+      Eigen::Vector3f::Zero();  // unit (it is normalised again); may be signed
 };
 
 struct MatchThreshold {
   double distance_mm = 0;  // finite and >= 0, else the threshold matches nothing
-  double angle_deg = 0;    // in [0, 180] (above 180: any direction), negative or NaN matches nothing
+  double angle_deg = 0;  // in [0, 180] (above 180: any direction), negative or NaN matches nothing
 };
 
-// The thresholds of the project's protocol: (1 mm, 10 deg), (2 mm, 20), (3 mm, 30), (4 mm, 40), (4 mm, 90).
+// The thresholds of the project's protocol: (1 mm, 10 deg), (2 mm, 20), (3 mm, 30), (4 mm, 40), (4
+// mm, 90).
 std::vector<MatchThreshold> DefaultMatchThresholds();
 
 struct MatchScore {
@@ -38,8 +39,9 @@ struct MatchScore {
 };
 
 struct SampleMatchOptions {
-  bool directed = false;  // the sign of the direction counts (strands root to tip); else d and -d are the same
-  int threads = 2;        // at least 1 is used
+  bool directed =
+      false;  // the sign of the direction counts (strands root to tip); else d and -d are the same
+  int threads = 2;  // at least 1 is used
 };
 
 // One score per threshold, in the order given. precision = share of
@@ -58,12 +60,13 @@ struct SampleMatchOptions {
 // (about 70 bytes a sample while the sets are sorted into cells, 40 after).
 std::vector<MatchScore> MatchSamples(const std::vector<OrientedSample>& estimate,
                                      const std::vector<OrientedSample>& truth,
-                                     const std::vector<MatchThreshold>& thresholds, const SampleMatchOptions& options);
+                                     const std::vector<MatchThreshold>& thresholds,
+                                     const SampleMatchOptions& options);
 
 // Recall against all true samples and against a subset of them (the visible
 // surface: true samples seen by enough cameras), with one precision.
 struct SubsetMatchScores {
-  std::vector<MatchScore> all;     // MatchSamples(estimate, truth, ...)
+  std::vector<MatchScore> all;  // MatchSamples(estimate, truth, ...)
   // Recall (and matched_truth) against the true samples whose flag is set;
   // precision, matched_estimate and so F1 from `all`: an estimate sample is
   // right when it lies on any true strand, seen or not. Empty when the flags
@@ -86,7 +89,8 @@ SubsetMatchScores MatchSamplesAndSubset(const std::vector<OrientedSample>& estim
 // within reach is looked at); samples that match nothing there (non-finite,
 // far out, no direction) are -1 or never chosen.
 std::vector<int64_t> NearestMatches(const std::vector<OrientedSample>& estimate,
-                                    const std::vector<OrientedSample>& truth, const MatchThreshold& threshold,
+                                    const std::vector<OrientedSample>& truth,
+                                    const MatchThreshold& threshold,
                                     const SampleMatchOptions& options);
 
 // [{"distance_mm", "angle_deg", "precision", "recall", "f1"}, ...] in the scores' order.
@@ -98,7 +102,8 @@ nlohmann::json ScoresToJson(const std::vector<MatchScore>& scores);
 // A sample's direction is its segment's unit direction root to tip; the tip
 // takes its last segment's. Zero-length and non-finite segments give no
 // samples; a strand of one point gives none.
-std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::Vector3f>>& strands, double step_mm);
+std::vector<OrientedSample> SampleStrands(const std::vector<std::vector<Eigen::Vector3f>>& strands,
+                                          double step_mm);
 std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_mm);
 // The same samples, and in `sample_strand` (replaced; may be null) the index
 // of each sample's strand in `strands`. Samples come strand after strand, so

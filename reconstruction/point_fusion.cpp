@@ -18,8 +18,8 @@ struct ViewGeometry {
 };
 
 // Does view w's map hold the same segment at p (object frame)?
-bool Agrees(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3d& p, const Eigen::Vector3f& direction,
-            const FusionOptions& options, double cos_tolerance) {
+bool Agrees(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3d& p,
+            const Eigen::Vector3f& direction, const FusionOptions& options, double cos_tolerance) {
   const Eigen::Vector3d q = g.cam_from_object_rotation * p + g.cam_from_object_translation;
   if (q.z() <= 1.0) return false;
   double uv[2];
@@ -35,7 +35,8 @@ bool Agrees(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3
 }
 
 // The consistent points of reference view r, before merging.
-std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views, const std::vector<LineDepthMap>& maps,
+std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
+                                            const std::vector<LineDepthMap>& maps,
                                             const std::vector<ViewGeometry>& geometry, size_t r,
                                             const FusionOptions& options, int64_t* candidates) {
   std::vector<OrientedPoint> out;
@@ -47,10 +48,12 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views, c
       const float cost = map.cost(gy, gx);
       if (!(depth > 0) || cost > options.max_cost) continue;
       const cv::Point2d px = GridPixel(map, gx, gy);
-      const Result<Eigen::Vector2d> n = UndistortPixel(views[r].camera, Eigen::Vector2d(px.x, px.y));
+      const Result<Eigen::Vector2d> n =
+          UndistortPixel(views[r].camera, Eigen::Vector2d(px.x, px.y));
       if (!n.ok()) continue;
       ++*candidates;
-      const Eigen::Vector3d p = geometry[r].object_from_cam * (Eigen::Vector3d(n->x(), n->y(), 1.0) * depth);
+      const Eigen::Vector3d p =
+          geometry[r].object_from_cam * (Eigen::Vector3d(n->x(), n->y(), 1.0) * depth);
       const cv::Vec3f& d = map.direction(gy, gx);
       OrientedPoint point;
       point.position_mm = p.cast<float>();
@@ -109,22 +112,27 @@ std::vector<OrientedPoint> MergeByCell(std::vector<OrientedPoint> points, double
 
 Status FusionOptions::Check() const {
   if (!(max_cost > 0 && max_cost <= 1)) return InvalidArgument("fusion max_cost must be in (0, 1]");
-  if (!(depth_tolerance_mm > 0)) return InvalidArgument("fusion depth_tolerance_mm must be positive");
+  if (!(depth_tolerance_mm > 0))
+    return InvalidArgument("fusion depth_tolerance_mm must be positive");
   if (!(angle_tolerance_deg > 0 && angle_tolerance_deg <= 90))
     return InvalidArgument("fusion angle_tolerance_deg must be in (0, 90]");
-  if (min_agreeing_views < 0) return InvalidArgument("fusion min_agreeing_views must not be negative");
+  if (min_agreeing_views < 0)
+    return InvalidArgument("fusion min_agreeing_views must not be negative");
   if (!(merge_mm >= 0.01)) return InvalidArgument("fusion merge_mm must be at least 0.01");
-  if (!(mls_sigma_mm >= 0 && mls_sigma_mm <= 50)) return InvalidArgument("fusion mls_sigma_mm must be in [0, 50]");
+  if (!(mls_sigma_mm >= 0 && mls_sigma_mm <= 50))
+    return InvalidArgument("fusion mls_sigma_mm must be in [0, 50]");
   if (threads < 1) return InvalidArgument("fusion threads must be at least 1");
   return Status::Ok();
 }
 
-Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views, const std::vector<LineDepthMap>& maps,
-                                              const FusionOptions& options, FusionSummary* summary) {
+Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
+                                              const std::vector<LineDepthMap>& maps,
+                                              const FusionOptions& options,
+                                              FusionSummary* summary) {
   HR_RETURN_IF_ERROR(options.Check());
   if (views.size() != maps.size())
-    return InvalidArgument("fusion: " + std::to_string(views.size()) + " views but " + std::to_string(maps.size()) +
-                           " depth maps");
+    return InvalidArgument("fusion: " + std::to_string(views.size()) + " views but " +
+                           std::to_string(maps.size()) + " depth maps");
   if (views.size() > 65535) return InvalidArgument("fusion: at most 65,535 views");
   std::vector<ViewGeometry> geometry(views.size());
   for (size_t v = 0; v < views.size(); ++v) {
@@ -136,13 +144,16 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
   std::vector<std::vector<OrientedPoint>> per_view(views.size());
   std::vector<int64_t> candidates(views.size(), 0);
   ParallelFor(views.size(), options.threads, [&] {
-    return [&](size_t r) { per_view[r] = ConsistentPoints(views, maps, geometry, r, options, &candidates[r]); };
+    return [&](size_t r) {
+      per_view[r] = ConsistentPoints(views, maps, geometry, r, options, &candidates[r]);
+    };
   });
   std::vector<OrientedPoint> all;
   FusionSummary s;
   for (size_t r = 0; r < views.size(); ++r) {
     s.candidates += candidates[r];
-    all.insert(all.end(), std::make_move_iterator(per_view[r].begin()), std::make_move_iterator(per_view[r].end()));
+    all.insert(all.end(), std::make_move_iterator(per_view[r].begin()),
+               std::make_move_iterator(per_view[r].end()));
     per_view[r].clear();
     per_view[r].shrink_to_fit();
   }

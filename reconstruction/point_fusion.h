@@ -18,11 +18,12 @@
 namespace hairrig {
 
 struct FusionOptions {
-  double max_cost = 0.4;               // cells whose best hypothesis costs more are not points
-  double depth_tolerance_mm = 2.0;     // another view agrees where its depth at the projection is within this ...
-  double angle_tolerance_deg = 20;     // ... and its direction within this
-  int min_agreeing_views = 1;          // views besides the reference that must agree
-  double merge_mm = 0.5;               // points within one cell of this size are merged
+  double max_cost = 0.4;  // cells whose best hypothesis costs more are not points
+  double depth_tolerance_mm =
+      2.0;  // another view agrees where its depth at the projection is within this ...
+  double angle_tolerance_deg = 20;  // ... and its direction within this
+  int min_agreeing_views = 1;       // views besides the reference that must agree
+  double merge_mm = 0.5;            // points within one cell of this size are merged
   // Luo 2013 Sec. 4's MLS filtering of the merged points (reconstruction/mls.h):
   // the Gaussian's sigma in mm, 0 = off.
   double mls_sigma_mm = 0;
@@ -33,16 +34,18 @@ struct FusionOptions {
 };
 
 struct FusionSummary {
-  int64_t candidates = 0;   // cells with an estimate under max_cost
-  int64_t consistent = 0;   // ... that enough other views agree with
-  int64_t points = 0;       // after merging
-  bool mls = false;         // the points were MLS-filtered
+  int64_t candidates = 0;  // cells with an estimate under max_cost
+  int64_t consistent = 0;  // ... that enough other views agree with
+  int64_t points = 0;      // after merging
+  bool mls = false;        // the points were MLS-filtered
 };
 
 // `views` and `maps` as given to and returned by ComputeLineDepthMaps (the
 // same order). Each point's `views` holds indices into `views`, sorted.
 // InvalidArgument when the sizes differ or the options are bad.
-Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views, const std::vector<LineDepthMap>& maps,
-                                              const FusionOptions& options, FusionSummary* summary = nullptr);
+Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
+                                              const std::vector<LineDepthMap>& maps,
+                                              const FusionOptions& options,
+                                              FusionSummary* summary = nullptr);
 
 }  // namespace hairrig

@@ -3,13 +3,12 @@
 // read by any number of threads.
 #pragma once
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
 #include <unordered_map>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace hairrig {
 
@@ -64,7 +63,8 @@ class PointGrid {
     for (int64_t dz = -reach; dz <= reach; ++dz)
       for (int64_t dy = -reach; dy <= reach; ++dy)
         for (int64_t dx = -reach; dx <= reach; ++dx) {
-          if ((dx != 0 || dy != 0 || dz != 0) && any_in_cell(cx + dx, cy + dy, cz + dz)) return true;
+          if ((dx != 0 || dy != 0 || dz != 0) && any_in_cell(cx + dx, cy + dy, cz + dz))
+            return true;
         }
     return false;
   }
@@ -78,8 +78,9 @@ class PointGrid {
 
   const std::vector<Eigen::Vector3f>& positions_;
   double cell_mm_;
-  std::vector<uint32_t> order_;                                        // point indices sorted by cell
-  std::unordered_map<int64_t, std::pair<uint32_t, uint32_t>> cells_;  // cell -> [begin, end) in order_
+  std::vector<uint32_t> order_;  // point indices sorted by cell
+  std::unordered_map<int64_t, std::pair<uint32_t, uint32_t>>
+      cells_;  // cell -> [begin, end) in order_
 };
 
 }  // namespace hairrig

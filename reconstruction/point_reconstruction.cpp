@@ -4,11 +4,10 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "core/clock.h"
 #include "core/file_util.h"
@@ -22,16 +21,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double SecondsSince(int64_t start_ns) { return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9; }
+double SecondsSince(int64_t start_ns) {
+  return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9;
+}
 
 // A view after segmentation and orientation: what the stereo and the report need.
 struct PreparedView {
-  std::string why_not;  // non-empty: left out
-  Status written;       // writing the view's masks and orientation maps
+  std::string why_not;       // non-empty: left out
+  Status written;            // writing the view's masks and orientation maps
   uint16_t input_index = 0;  // in ReconstructionInput::views
   MvsView mvs;
   cv::Mat1b silhouette;
-  cv::Mat image;        // BGR, for the report
+  cv::Mat image;  // BGR, for the report
   ViewPointsSummary summary;
 };
 
@@ -46,21 +47,24 @@ cv::Mat1w ToUInt16(const cv::Mat1f& values, float scale, float missing_value, ui
   return out;
 }
 
-Status WriteSegmentation(const std::string& dir, const std::string& name, const HairSegmentation& s) {
+Status WriteSegmentation(const std::string& dir, const std::string& name,
+                         const HairSegmentation& s) {
   HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_label.png", s.label));
   cv::Mat1w alpha;
   s.hair_alpha.convertTo(alpha, CV_16U, 65535.0);
   return WriteImageAtomic(dir + "/" + name + "_alpha.png", alpha);
 }
 
-Status WriteOrientation(const std::string& dir, const std::string& name, const OrientationMap& map, bool picture) {
-  HR_RETURN_IF_ERROR(
-      WriteImageAtomic(dir + "/" + name + "_angle.png", ToUInt16(map.angle_deg, 100.f, -1.f, uint16_t{65535})));
+Status WriteOrientation(const std::string& dir, const std::string& name, const OrientationMap& map,
+                        bool picture) {
+  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_angle.png",
+                                      ToUInt16(map.angle_deg, 100.f, -1.f, uint16_t{65535})));
   cv::Mat1w confidence;
   map.confidence.convertTo(confidence, CV_16U, 65535.0);
   HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_confidence.png", confidence));
   if (!picture) return Status::Ok();
-  return WriteImageAtomic(dir + "/" + name + ".jpg", OrientationPicture(map), {cv::IMWRITE_JPEG_QUALITY, 90});
+  return WriteImageAtomic(dir + "/" + name + ".jpg", OrientationPicture(map),
+                          {cv::IMWRITE_JPEG_QUALITY, 90});
 }
 
 // Reads, segments and filters one view; a view that cannot be used says why.
@@ -74,9 +78,9 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
     return p;
   }
   if (p.image.cols != view.camera.width_px || p.image.rows != view.camera.height_px) {
-    p.why_not = view.image_path + ": " + std::to_string(p.image.cols) + "x" + std::to_string(p.image.rows) +
-                " px, its camera is " + std::to_string(view.camera.width_px) + "x" +
-                std::to_string(view.camera.height_px);
+    p.why_not = view.image_path + ": " + std::to_string(p.image.cols) + "x" +
+                std::to_string(p.image.rows) + " px, its camera is " +
+                std::to_string(view.camera.width_px) + "x" + std::to_string(view.camera.height_px);
     return p;
   }
   Result<HairSegmentation> seg = SegmentHair(p.image, view.not_hair_px, options.segmentation);
@@ -115,23 +119,28 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
   cv::cvtColor(p.image, grey, cv::COLOR_BGR2GRAY);
   grey.convertTo(p.mvs.grey, CV_32F);
   p.mvs.orientation_deg = map->angle_deg.clone();
-  p.mvs.orientation_deg.setTo(std::numeric_limits<float>::quiet_NaN(),
-                              map->confidence < static_cast<float>(options.min_orientation_confidence));
+  p.mvs.orientation_deg.setTo(
+      std::numeric_limits<float>::quiet_NaN(),
+      map->confidence < static_cast<float>(options.min_orientation_confidence));
   p.mvs.hair = hair & (map->confidence >= static_cast<float>(options.min_orientation_confidence));
   p.summary.stereo_pixels = cv::countNonZero(p.mvs.hair);
   p.written = WriteSegmentation(out_dir + "/masks", view.name, *seg);
-  if (p.written.ok()) p.written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
+  if (p.written.ok())
+    p.written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
   return p;
 }
 
-Status WriteDepth(const std::string& dir, const std::string& name, const LineDepthMap& map, bool picture) {
-  HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/" + name + "_depth.png", ToUInt16(map.depth_mm, 20.f, 0.f, 0)));
+Status WriteDepth(const std::string& dir, const std::string& name, const LineDepthMap& map,
+                  bool picture) {
+  HR_RETURN_IF_ERROR(
+      WriteImageAtomic(dir + "/" + name + "_depth.png", ToUInt16(map.depth_mm, 20.f, 0.f, 0)));
   if (!picture) return Status::Ok();
   const cv::Mat1b valid(map.depth_mm > 0);
   double lo = 0, hi = 0;
   cv::minMaxLoc(map.depth_mm, &lo, &hi, nullptr, nullptr, valid);
   cv::Mat1b scaled;
-  map.depth_mm.convertTo(scaled, CV_8U, hi > lo ? 255.0 / (hi - lo) : 1.0, hi > lo ? -lo * 255.0 / (hi - lo) : 0.0);
+  map.depth_mm.convertTo(scaled, CV_8U, hi > lo ? 255.0 / (hi - lo) : 1.0,
+                         hi > lo ? -lo * 255.0 / (hi - lo) : 0.0);
   cv::Mat coloured;
   cv::applyColorMap(scaled, coloured, cv::COLORMAP_TURBO);
   coloured.setTo(cv::Scalar::all(0), ~valid);
@@ -215,23 +224,26 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
                           {"points_seen", v.points_seen}});
   }
   nlohmann::json out = {{"format", "hairrig-reconstruction-points"},
-          {"version", 1},
-          {"object_frame", object_frame},
-          {"stride_px", stride_px},
-          {"min_orientation_confidence", min_orientation_confidence},
-          {"points_file", points_file},
-          {"views_used", views.size()},
-          {"left_out", left_out},
-          {"hull", {{"voxels", hull_voxels}, {"voxel_mm", hull_voxel_mm}}},
-          {"fusion", {{"candidates", fusion.candidates}, {"consistent", fusion.consistent}, {"points", fusion.points}}},
-          {"seconds",
-           {{"segmentation", segmentation_s},
-            {"hull", hull_s},
-            {"stereo", stereo_s},
-            {"fusion", fusion_s},
-            {"writing", writing_s},
-            {"total", total_s}}},
-          {"views", views_json}};
+                        {"version", 1},
+                        {"object_frame", object_frame},
+                        {"stride_px", stride_px},
+                        {"min_orientation_confidence", min_orientation_confidence},
+                        {"points_file", points_file},
+                        {"views_used", views.size()},
+                        {"left_out", left_out},
+                        {"hull", {{"voxels", hull_voxels}, {"voxel_mm", hull_voxel_mm}}},
+                        {"fusion",
+                         {{"candidates", fusion.candidates},
+                          {"consistent", fusion.consistent},
+                          {"points", fusion.points}}},
+                        {"seconds",
+                         {{"segmentation", segmentation_s},
+                          {"hull", hull_s},
+                          {"stereo", stereo_s},
+                          {"fusion", fusion_s},
+                          {"writing", writing_s},
+                          {"total", total_s}}},
+                        {"views", views_json}};
   if (object_from_box) out["object_from_box"] = PoseToJson(*object_from_box);
   return out;
 }
@@ -239,16 +251,19 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
 std::string PointReconstructionSummary::BriefReport() const {
   std::ostringstream s;
   s.precision(3);
-  s << "points: " << fusion.points << " oriented points from " << views.size() << " views (" << fusion.consistent
-    << " of " << fusion.candidates << " depth cells confirmed by another view), " << object_frame << " frame\n";
-  s << "time: " << total_s << " s (segmentation and orientation " << segmentation_s << " s, hull " << hull_s
-    << " s, stereo " << stereo_s << " s, fusion " << fusion_s << " s, writing " << writing_s << " s)\n";
+  s << "points: " << fusion.points << " oriented points from " << views.size() << " views ("
+    << fusion.consistent << " of " << fusion.candidates
+    << " depth cells confirmed by another view), " << object_frame << " frame\n";
+  s << "time: " << total_s << " s (segmentation and orientation " << segmentation_s << " s, hull "
+    << hull_s << " s, stereo " << stereo_s << " s, fusion " << fusion_s << " s, writing "
+    << writing_s << " s)\n";
   for (const std::string& l : left_out) s << "left out: " << l << "\n";
   s << "wrote: " << points_file << "\n";
   return s.str();
 }
 
-Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& input, const std::string& out_dir,
+Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& input,
+                                                     const std::string& out_dir,
                                                      const PointReconstructionOptions& raw_options,
                                                      const ReconstructionProgress& progress) {
   HR_RETURN_IF_ERROR(raw_options.Check());
@@ -284,13 +299,15 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   }
   prepared.clear();
   if (used.size() < 2)
-    return FailedPrecondition("only " + std::to_string(used.size()) + " view(s) can be used; the stereo needs two");
+    return FailedPrecondition("only " + std::to_string(used.size()) +
+                              " view(s) can be used; the stereo needs two");
   summary.segmentation_s = SecondsSince(start);
 
   // The hull, then each view's depth prior on its stereo pixels.
   auto step = SteadyNowNs();
   std::vector<SilhouetteView> silhouettes;
-  for (const PreparedView& p : used) silhouettes.push_back({p.mvs.camera, p.mvs.cam_from_object, p.silhouette});
+  for (const PreparedView& p : used)
+    silhouettes.push_back({p.mvs.camera, p.mvs.cam_from_object, p.silhouette});
   HR_ASSIGN_OR_RETURN(const VisualHull hull, CarveVisualHull(silhouettes, options.hull));
   silhouettes.clear();
   summary.hull_voxels = hull.OccupiedCount();
@@ -299,7 +316,8 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   ParallelFor(used.size(), options.threads, [&] {
     return [&](size_t v) {
       PreparedView& p = used[v];
-      p.mvs.prior_depth_mm = HullDepthMap(hull, p.mvs.camera, p.mvs.cam_from_object, p.mvs.hair, options.mvs.stride_px);
+      p.mvs.prior_depth_mm = HullDepthMap(hull, p.mvs.camera, p.mvs.cam_from_object, p.mvs.hair,
+                                          options.mvs.stride_px);
       if (progress) progress("hull", ++done, static_cast<int>(used.size()));
     };
   });
@@ -315,7 +333,8 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   summary.stereo_s = SecondsSince(step);
 
   step = SteadyNowNs();
-  HR_ASSIGN_OR_RETURN(std::vector<OrientedPoint> points, FusePoints(mvs_views, maps, options.fusion, &summary.fusion));
+  HR_ASSIGN_OR_RETURN(std::vector<OrientedPoint> points,
+                      FusePoints(mvs_views, maps, options.fusion, &summary.fusion));
   for (OrientedPoint& p : points) {
     for (uint16_t& v : p.views) {
       ++used[v].summary.points_seen;
@@ -332,11 +351,12 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   done = 0;
   ParallelFor(used.size(), options.threads, [&] {
     return [&](size_t v) {
-      written[v] = WriteDepth(out_dir + "/depth", used[v].summary.name, maps[v], options.write_pictures);
+      written[v] =
+          WriteDepth(out_dir + "/depth", used[v].summary.name, maps[v], options.write_pictures);
       if (written[v].ok() && options.write_pictures) {
-        written[v] = WriteImageAtomic(out_dir + "/report/" + used[v].summary.name + ".jpg",
-                                      ReportPicture(used[v], points),
-                                      {cv::IMWRITE_JPEG_QUALITY, 85});
+        written[v] =
+            WriteImageAtomic(out_dir + "/report/" + used[v].summary.name + ".jpg",
+                             ReportPicture(used[v], points), {cv::IMWRITE_JPEG_QUALITY, 85});
       }
       if (progress) progress("writing", ++done, static_cast<int>(used.size()));
     };

@@ -20,18 +20,16 @@
 //   orientation/<view>_angle.png   16-bit: deg x 100 in [0, 18000); 65535 where unknown
 //   orientation/<view>_confidence.png  16-bit: confidence x 65535
 //   orientation/<view>.jpg         hue = angle, brightness = confidence
-//   depth/<view>_depth.png         16-bit: mm x 20 on the MVS grid (every stride-th pixel); 0 = none
-//   depth/<view>.jpg               the depth as a colour map
-//   points.ply                     point_cloud.h
+//   depth/<view>_depth.png         16-bit: mm x 20 on the MVS grid (every stride-th pixel); 0 =
+//   none depth/<view>.jpg               the depth as a colour map points.ply point_cloud.h
 //   report/<view>.jpg              half size: hair outline and projected points
 //   summary.json                   PointReconstructionSummary::ToJson()
 #pragma once
 
 #include <functional>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "reconstruction/hair_segmentation.h"
 #include "reconstruction/line_mvs.h"
@@ -61,17 +59,17 @@ struct PointReconstructionOptions {
 
 struct ViewPointsSummary {
   std::string name;
-  int hair_pixels = 0;      // segmented as hair
-  int stereo_pixels = 0;    // ... with a confident orientation: the stereo's input
-  int depth_cells = 0;      // grid cells with a depth under the fusion's max_cost
-  double median_cost = 0;   // of those cells
-  int points_seen = 0;      // fused points this view sees
+  int hair_pixels = 0;     // segmented as hair
+  int stereo_pixels = 0;   // ... with a confident orientation: the stereo's input
+  int depth_cells = 0;     // grid cells with a depth under the fusion's max_cost
+  double median_cost = 0;  // of those cells
+  int points_seen = 0;     // fused points this view sees
 };
 
 struct PointReconstructionSummary {
   std::string object_frame;
   std::optional<Rigid3d> object_from_box;  // ReconstructionInput's
-  int stride_px = 0;                  // the depth maps' grid step
+  int stride_px = 0;                       // the depth maps' grid step
   double min_orientation_confidence = 0;
   std::vector<std::string> left_out;  // "view: why"
   std::vector<ViewPointsSummary> views;
@@ -93,7 +91,8 @@ using ReconstructionProgress = std::function<void(const std::string&, int, int)>
 // the summary; InvalidArgument for bad options; FailedPrecondition when fewer
 // than two views remain or the silhouettes do not meet; IoError naming the
 // file for an output that cannot be written.
-Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& input, const std::string& out_dir,
+Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& input,
+                                                     const std::string& out_dir,
                                                      const PointReconstructionOptions& options,
                                                      const ReconstructionProgress& progress = {});
 

@@ -22,8 +22,12 @@ struct OverlapTally {
 // which tally last saw that owner) make every lookup O(1); one per thread.
 class OverlapTallier {
  public:
-  OverlapTallier(const PolylineVertexTable& table, const PointGrid& grid, double overlap_mm, int stride)
-      : table_(table), grid_(grid), overlap_mm_(overlap_mm), stride_(static_cast<uint32_t>(stride)) {
+  OverlapTallier(const PolylineVertexTable& table, const PointGrid& grid, double overlap_mm,
+                 int stride)
+      : table_(table),
+        grid_(grid),
+        overlap_mm_(overlap_mm),
+        stride_(static_cast<uint32_t>(stride)) {
     const size_t n = table.owners();
     query_mark_.assign(n, kNone);
     query_slot_.assign(n, 0);
@@ -102,7 +106,8 @@ void PolylineVertexTable::Append(const std::vector<Eigen::Vector3f>& polyline) {
   }
 }
 
-PolylineVertexTable TabulatePolylines(const std::vector<const std::vector<Eigen::Vector3f>*>& polylines) {
+PolylineVertexTable TabulatePolylines(
+    const std::vector<const std::vector<Eigen::Vector3f>*>& polylines) {
   PolylineVertexTable table;
   for (const std::vector<Eigen::Vector3f>* polyline : polylines) {
     table.StartOwner();
@@ -112,8 +117,8 @@ PolylineVertexTable TabulatePolylines(const std::vector<const std::vector<Eigen:
   return table;
 }
 
-std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, double overlap_mm, int stride,
-                                            int threads) {
+std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, double overlap_mm,
+                                            int stride, int threads) {
   const size_t n = table.owners();
   const PointGrid grid(table.positions, overlap_mm);
   std::vector<std::vector<OverlapTally>> seen(n);
@@ -128,14 +133,16 @@ std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, do
   std::vector<OwnerOverlap> overlaps;
   for (uint32_t s = 0; s < n; ++s) {
     for (const OverlapTally& tally : seen[s]) {
-      if (tally.other < s) continue;  // each pair once, from its lower index; the other side's count joins it
+      if (tally.other < s)
+        continue;  // each pair once, from its lower index; the other side's count joins it
       OwnerOverlap overlap{s, tally.other, tally.overlapped, tally.votes, 0.0};
       const auto& back_list = seen[tally.other];
       const auto back = std::lower_bound(back_list.begin(), back_list.end(), s, by_other);
       if (back != back_list.end() && back->other == s) {
         overlap.overlapped += back->overlapped, overlap.votes += back->votes;
       }
-      overlap.share = static_cast<double>(overlap.overlapped) / static_cast<double>(queried(s) + queried(tally.other));
+      overlap.share = static_cast<double>(overlap.overlapped) /
+                      static_cast<double>(queried(s) + queried(tally.other));
       overlaps.push_back(overlap);
     }
   }

@@ -5,10 +5,9 @@
 // direction MRFs. Units mm, any frame.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace hairrig {
 
@@ -32,7 +31,8 @@ struct PolylineVertexTable {
 };
 
 // One table of every polyline, one owner each.
-PolylineVertexTable TabulatePolylines(const std::vector<const std::vector<Eigen::Vector3f>*>& polylines);
+PolylineVertexTable TabulatePolylines(
+    const std::vector<const std::vector<Eigen::Vector3f>*>& polylines);
 
 struct OwnerOverlap {
   uint32_t a = 0, b = 0;  // the owners, a < b
@@ -47,7 +47,7 @@ struct OwnerOverlap {
 // (<=) of each other's, sorted by (a, b). Every `stride`-th vertex of each
 // owner is queried (1: every vertex). Work is spread over `threads`; the
 // result does not depend on it.
-std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, double overlap_mm, int stride,
-                                            int threads);
+std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, double overlap_mm,
+                                            int stride, int threads);
 
 }  // namespace hairrig

@@ -5,11 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <sstream>
-#include <utility>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <utility>
 
 #include "core/geometry_json.h"
 #include "core/head_model.h"
@@ -34,17 +33,21 @@ struct ReconstructedViews {
 
 Result<ReconstructedViews> ReadSummary(const std::string& dir) {
   const std::string path = dir + "/summary.json";
-  HR_ASSIGN_OR_RETURN(nlohmann::json root, ReadJsonFile(path, "run `hairrig reconstruct` on the capture first"));
-  if (!root.is_object() || !root.contains("views") || !root["views"].is_array() || !root.contains("stride_px") ||
-      !root["stride_px"].is_number_integer())
+  HR_ASSIGN_OR_RETURN(nlohmann::json root,
+                      ReadJsonFile(path, "run `hairrig reconstruct` on the capture first"));
+  if (!root.is_object() || !root.contains("views") || !root["views"].is_array() ||
+      !root.contains("stride_px") || !root["stride_px"].is_number_integer())
     return CorruptData(path + ": needs views (an array) and stride_px (an integer)");
   ReconstructedViews out;
   out.stride_px = std::max(1, root["stride_px"].get<int>());
   const nlohmann::json confidence = root.value("min_orientation_confidence", nlohmann::json(0.0));
   out.min_confidence = confidence.is_number() ? confidence.get<double>() : 0.0;
   if (!root.contains("object_from_box"))
-    return CorruptData(path + ": no object_from_box: only a capture's reconstruction can be compared with its truth");
-  HR_ASSIGN_OR_RETURN(out.object_from_box, PoseFromJson(root["object_from_box"], path + ": object_from_box"));
+    return CorruptData(
+        path +
+        ": no object_from_box: only a capture's reconstruction can be compared with its truth");
+  HR_ASSIGN_OR_RETURN(out.object_from_box,
+                      PoseFromJson(root["object_from_box"], path + ": object_from_box"));
   for (const nlohmann::json& v : root["views"]) {
     if (!v.is_object() || !v.contains("name") || !v["name"].is_string())
       return CorruptData(path + ": every view needs a name");
@@ -76,40 +79,50 @@ struct ViewResult {
   cv::Mat1f true_depth;
 };
 
-ViewResult EvaluateView(const std::string& dir, const std::string& name, const ReconstructedViews& recon,
-                        const CaptureTruth& truth) {
+ViewResult EvaluateView(const std::string& dir, const std::string& name,
+                        const ReconstructedViews& recon, const CaptureTruth& truth) {
   ViewResult r;
   r.accuracy.name = name;
   auto run = [&]() -> Status {
     HR_ASSIGN_OR_RETURN(r.accuracy.view, ViewNumber(name));
-    if (!truth.views.count(r.accuracy.view)) return NotFound("view " + name + " has no ground truth");
-    HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps, ReadViewTruthMaps(truth.views_dir, r.accuracy.view));
+    if (!truth.views.count(r.accuracy.view))
+      return NotFound("view " + name + " has no ground truth");
+    HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps,
+                        ReadViewTruthMaps(truth.views_dir, r.accuracy.view));
     const cv::Mat true_hair = maps.label == ViewTruthMaps::kHair;
-    HR_ASSIGN_OR_RETURN(const cv::Mat label, ReadPng(dir + "/masks/" + name + "_label.png", cv::IMREAD_UNCHANGED));
+    HR_ASSIGN_OR_RETURN(const cv::Mat label,
+                        ReadPng(dir + "/masks/" + name + "_label.png", cv::IMREAD_UNCHANGED));
     HR_ASSIGN_OR_RETURN(r.accuracy.mask_iou, MaskIoU(label == 3, true_hair));
-    HR_ASSIGN_OR_RETURN(const cv::Mat angle, ReadPng(dir + "/orientation/" + name + "_angle.png", cv::IMREAD_UNCHANGED));
-    HR_ASSIGN_OR_RETURN(const cv::Mat confidence,
-                        ReadPng(dir + "/orientation/" + name + "_confidence.png", cv::IMREAD_UNCHANGED));
+    HR_ASSIGN_OR_RETURN(const cv::Mat angle,
+                        ReadPng(dir + "/orientation/" + name + "_angle.png", cv::IMREAD_UNCHANGED));
+    HR_ASSIGN_OR_RETURN(
+        const cv::Mat confidence,
+        ReadPng(dir + "/orientation/" + name + "_confidence.png", cv::IMREAD_UNCHANGED));
     OrientationMap map;
     angle.convertTo(map.angle_deg, CV_32F, 0.01);
     map.angle_deg.setTo(std::numeric_limits<float>::quiet_NaN(), angle == 65535);
     confidence.convertTo(map.confidence, CV_32F, 1.0 / 65535);
-    HR_ASSIGN_OR_RETURN(r.accuracy.orientation,
-                        MeasureOrientation(map, maps.orientation_deg, true_hair, recon.min_confidence));
-    HR_ASSIGN_OR_RETURN(const cv::Mat depth, ReadPng(dir + "/depth/" + name + "_depth.png", cv::IMREAD_UNCHANGED));
-    if (depth.type() != CV_16U) return CorruptData(dir + "/depth/" + name + "_depth.png: not a 16-bit PNG");
+    HR_ASSIGN_OR_RETURN(
+        r.accuracy.orientation,
+        MeasureOrientation(map, maps.orientation_deg, true_hair, recon.min_confidence));
+    HR_ASSIGN_OR_RETURN(const cv::Mat depth,
+                        ReadPng(dir + "/depth/" + name + "_depth.png", cv::IMREAD_UNCHANGED));
+    if (depth.type() != CV_16U)
+      return CorruptData(dir + "/depth/" + name + "_depth.png: not a 16-bit PNG");
     for (int gy = 0; gy < depth.rows; ++gy) {
       for (int gx = 0; gx < depth.cols; ++gx) {
         const int u = gx * recon.stride_px, v = gy * recon.stride_px;
         const uint16_t d = depth.at<uint16_t>(gy, gx);
-        if (d == 0 || u >= maps.label.cols || v >= maps.label.rows || !true_hair.at<uint8_t>(v, u)) continue;
+        if (d == 0 || u >= maps.label.cols || v >= maps.label.rows || !true_hair.at<uint8_t>(v, u))
+          continue;
         r.depth_errors.push_back(std::abs(d / 20.0 - maps.depth_mm.at<float>(v, u)));
       }
     }
     r.accuracy.depth_cells = static_cast<int>(r.depth_errors.size());
     double sum = 0;
     for (double e : r.depth_errors) sum += e;
-    r.accuracy.depth_mean_mm = r.depth_errors.empty() ? 0 : sum / static_cast<double>(r.depth_errors.size());
+    r.accuracy.depth_mean_mm =
+        r.depth_errors.empty() ? 0 : sum / static_cast<double>(r.depth_errors.size());
     r.accuracy.depth_median_mm = Median(r.depth_errors);
     r.true_depth = maps.depth_mm;
     return Status::Ok();
@@ -119,8 +132,10 @@ ViewResult EvaluateView(const std::string& dir, const std::string& name, const R
 }
 
 // How many true cameras see each sample: within tolerance of their true depth maps.
-std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples, const CaptureTruth& truth,
-                               const std::map<int, cv::Mat1f>& depth_maps, double tolerance_mm, int threads) {
+std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples,
+                               const CaptureTruth& truth,
+                               const std::map<int, cv::Mat1f>& depth_maps, double tolerance_mm,
+                               int threads) {
   struct Camera {
     std::array<double, CameraIntrinsics::kNumParams> params;
     Rigid3d cam_from_turntable;
@@ -141,7 +156,8 @@ std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples, const
         if (q.z() <= 1) continue;
         double uv[2];
         ProjectCamPoint(c.params.data(), q.data(), uv);
-        const int x = static_cast<int>(std::lround(uv[0])), y = static_cast<int>(std::lround(uv[1]));
+        const int x = static_cast<int>(std::lround(uv[0])),
+                  y = static_cast<int>(std::lround(uv[1]));
         if (x < 0 || y < 0 || x >= c.depth->cols || y >= c.depth->rows) continue;
         if (std::abs((*c.depth)(y, x) - q.z()) <= tolerance_mm) ++counts[i];
       }
@@ -151,13 +167,16 @@ std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples, const
 }
 
 // The reconstruction's points as samples in the true turntable frame.
-Result<std::vector<OrientedSample>> EstimateSamples(const std::string& dir, const Rigid3d& truth_from_estimate) {
+Result<std::vector<OrientedSample>> EstimateSamples(const std::string& dir,
+                                                    const Rigid3d& truth_from_estimate) {
   const Eigen::Matrix3f rotation = truth_from_estimate.RotationMatrix().cast<float>();
-  HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points, ReadPointCloudPly(dir + "/points.ply"));
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
+                      ReadPointCloudPly(dir + "/points.ply"));
   std::vector<OrientedSample> samples;
   samples.reserve(points.size());
   for (const OrientedPoint& p : points) {
-    samples.push_back({(truth_from_estimate * p.position_mm.cast<double>()).cast<float>(), rotation * p.direction});
+    samples.push_back({(truth_from_estimate * p.position_mm.cast<double>()).cast<float>(),
+                       rotation * p.direction});
   }
   return samples;
 }
@@ -170,14 +189,12 @@ StrandSet TransformedStrands(const StrandSet& strands, const Rigid3d& to_from_st
 }
 
 // The reconstruction's strands against the true ones, if it has any.
-Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(const std::string& dir, const std::string& capture_dir,
-                                                            const CaptureTruth& truth,
-                                                            const Rigid3d& truth_from_estimate,
-                                                            const StrandSet& true_strands,
-                                                            const std::vector<OrientedSample>& truth_samples,
-                                                            const std::vector<uint32_t>& truth_sample_strand,
-                                                            const std::vector<uint8_t>& visible,
-                                                            const ReconstructionEvalOptions& options) {
+Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
+    const std::string& dir, const std::string& capture_dir, const CaptureTruth& truth,
+    const Rigid3d& truth_from_estimate, const StrandSet& true_strands,
+    const std::vector<OrientedSample>& truth_samples,
+    const std::vector<uint32_t>& truth_sample_strand, const std::vector<uint8_t>& visible,
+    const ReconstructionEvalOptions& options) {
   const std::string path = (fs::path(dir) / "strands" / "strands.ply").string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::optional<StrandEvaluation>();
@@ -191,8 +208,9 @@ Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(const std::string& d
   StrandEvalOptions strand_options;
   strand_options.sample_step_mm = options.truth_step_mm;
   strand_options.threads = options.threads;
-  auto evaluation = EvaluateStrands(TransformedStrands(strands, truth_from_estimate), true_strands, truth_samples,
-                                    truth_sample_strand, visible, head.get(), strand_options);
+  auto evaluation =
+      EvaluateStrands(TransformedStrands(strands, truth_from_estimate), true_strands, truth_samples,
+                      truth_sample_strand, visible, head.get(), strand_options);
   if (!evaluation.ok()) return evaluation.status().WithContext(path);
   return std::optional<StrandEvaluation>(std::move(evaluation).value());
 }
@@ -201,7 +219,8 @@ Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(const std::string& d
 
 Status ReconstructionEvalOptions::Check() const {
   if (!(truth_step_mm >= 0.1)) return InvalidArgument("eval truth_step_mm must be at least 0.1");
-  if (!(visibility_tolerance_mm > 0)) return InvalidArgument("eval visibility_tolerance_mm must be positive");
+  if (!(visibility_tolerance_mm > 0))
+    return InvalidArgument("eval visibility_tolerance_mm must be positive");
   if (min_visible_views < 1) return InvalidArgument("eval min_visible_views must be at least 1");
   if (threads < 1) return InvalidArgument("eval threads must be at least 1");
   return Status::Ok();
@@ -210,8 +229,9 @@ Status ReconstructionEvalOptions::Check() const {
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
-  const std::string dir = options.reconstruction_dir.empty() ? (fs::path(capture_dir) / "reconstruction").string()
-                                                              : options.reconstruction_dir;
+  const std::string dir = options.reconstruction_dir.empty()
+                              ? (fs::path(capture_dir) / "reconstruction").string()
+                              : options.reconstruction_dir;
   HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(capture_dir));
   HR_ASSIGN_OR_RETURN(const ReconstructedViews recon, ReadSummary(dir));
 
@@ -239,7 +259,8 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
     out.mask_iou_worst = *std::min_element(ious.begin(), ious.end());
     out.orientation_median_deg = Median(orientation_medians);
     out.orientation_p90_deg = Median(orientation_p90s);
-    out.orientation_kept_fraction = hair > 0 ? static_cast<double>(kept) / static_cast<double>(hair) : 0;
+    out.orientation_kept_fraction =
+        hair > 0 ? static_cast<double>(kept) / static_cast<double>(hair) : 0;
   }
   double sum = 0;
   for (double e : depth_errors) sum += e;
@@ -247,27 +268,32 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   out.depth_median_mm = Median(std::move(depth_errors));
 
   const Rigid3d truth_from_estimate = truth.turntable_from_box * recon.object_from_box.Inverse();
-  HR_ASSIGN_OR_RETURN(const std::vector<OrientedSample> estimate, EstimateSamples(dir, truth_from_estimate));
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedSample> estimate,
+                      EstimateSamples(dir, truth_from_estimate));
   HR_ASSIGN_OR_RETURN(const StrandSet true_strands, ReadStrands(truth.strands_file));
-  // The true strands sampled, and their samples tested for visibility, once for the points and the strands.
+  // The true strands sampled, and their samples tested for visibility, once for the points and the
+  // strands.
   std::vector<uint32_t> truth_sample_strand;
   const std::vector<OrientedSample> all_truth =
       SampleStrands(true_strands, options.truth_step_mm, &truth_sample_strand);
   const std::vector<int> counts =
       VisibleCounts(all_truth, truth, depth_maps, options.visibility_tolerance_mm, options.threads);
   std::vector<uint8_t> visible(all_truth.size(), 0);
-  for (size_t i = 0; i < all_truth.size(); ++i) visible[i] = static_cast<uint8_t>(counts[i] >= options.min_visible_views);
+  for (size_t i = 0; i < all_truth.size(); ++i)
+    visible[i] = static_cast<uint8_t>(counts[i] >= options.min_visible_views);
   out.points = static_cast<int64_t>(estimate.size());
   out.truth_samples = static_cast<int64_t>(all_truth.size());
   SampleMatchOptions match;
   match.threads = options.threads;
-  SubsetMatchScores scores = MatchSamplesAndSubset(estimate, all_truth, visible, DefaultMatchThresholds(), match);
+  SubsetMatchScores scores =
+      MatchSamplesAndSubset(estimate, all_truth, visible, DefaultMatchThresholds(), match);
   out.visible_truth_samples = scores.subset_size;
   out.all = std::move(scores.all);
   out.visible = std::move(scores.subset);
-  HR_ASSIGN_OR_RETURN(out.strands, EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir,
-                                                       capture_dir, truth, truth_from_estimate, true_strands,
-                                                       all_truth, truth_sample_strand, visible, options));
+  HR_ASSIGN_OR_RETURN(out.strands,
+                      EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir,
+                                          capture_dir, truth, truth_from_estimate, true_strands,
+                                          all_truth, truth_sample_strand, visible, options));
   return out;
 }
 
@@ -285,19 +311,19 @@ nlohmann::json ReconstructionEvaluation::ToJson() const {
                           {"depth_median_mm", v.depth_median_mm}});
   }
   nlohmann::json j = {{"stage", "reconstruction"},
-          {"masks", {{"iou_median", mask_iou_median}, {"iou_worst", mask_iou_worst}}},
-          {"orientation",
-           {{"median_deg", orientation_median_deg},
-            {"p90_deg", orientation_p90_deg},
-            {"kept_fraction", orientation_kept_fraction}}},
-          {"depth", {{"median_mm", depth_median_mm}, {"mean_mm", depth_mean_mm}}},
-          {"points",
-           {{"count", points},
-            {"truth_samples", truth_samples},
-            {"visible_truth_samples", visible_truth_samples},
-            {"visible_surface", ScoresToJson(visible)},
-            {"all_strands", ScoresToJson(all)}}},
-          {"views", views_json}};
+                      {"masks", {{"iou_median", mask_iou_median}, {"iou_worst", mask_iou_worst}}},
+                      {"orientation",
+                       {{"median_deg", orientation_median_deg},
+                        {"p90_deg", orientation_p90_deg},
+                        {"kept_fraction", orientation_kept_fraction}}},
+                      {"depth", {{"median_mm", depth_median_mm}, {"mean_mm", depth_mean_mm}}},
+                      {"points",
+                       {{"count", points},
+                        {"truth_samples", truth_samples},
+                        {"visible_truth_samples", visible_truth_samples},
+                        {"visible_surface", ScoresToJson(visible)},
+                        {"all_strands", ScoresToJson(all)}}},
+                      {"views", views_json}};
   if (strands) j["strands"] = strands->ToJson();
   return j;
 }
@@ -306,19 +332,22 @@ std::string ReconstructionEvaluation::BriefReport() const {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(3);
-  s << "masks: hair IoU median " << mask_iou_median << ", worst " << mask_iou_worst << " (" << views.size()
-    << " views)\n";
+  s << "masks: hair IoU median " << mask_iou_median << ", worst " << mask_iou_worst << " ("
+    << views.size() << " views)\n";
   s.precision(2);
-  s << "orientation: median error " << orientation_median_deg << " deg, 90th percentile " << orientation_p90_deg
-    << " deg (medians over views), " << 100 * orientation_kept_fraction << " % of hair pixels kept\n";
-  s << "depth: median error " << depth_median_mm << " mm, mean " << depth_mean_mm << " mm (stereo grid, true hair)\n";
-  s << "points: " << points << " against " << truth_samples << " true samples (" << visible_truth_samples
-    << " seen by >= 2 cameras)\n";
+  s << "orientation: median error " << orientation_median_deg << " deg, 90th percentile "
+    << orientation_p90_deg << " deg (medians over views), " << 100 * orientation_kept_fraction
+    << " % of hair pixels kept\n";
+  s << "depth: median error " << depth_median_mm << " mm, mean " << depth_mean_mm
+    << " mm (stereo grid, true hair)\n";
+  s << "points: " << points << " against " << truth_samples << " true samples ("
+    << visible_truth_samples << " seen by >= 2 cameras)\n";
   s.precision(3);
   for (size_t k = 0; k < visible.size(); ++k) {
     s << "  (" << visible[k].threshold.distance_mm << " mm, " << visible[k].threshold.angle_deg
-      << " deg): precision " << visible[k].precision << ", visible-surface recall " << visible[k].recall << " (F1 "
-      << visible[k].f1 << "), all-strands recall " << all[k].recall << "\n";
+      << " deg): precision " << visible[k].precision << ", visible-surface recall "
+      << visible[k].recall << " (F1 " << visible[k].f1 << "), all-strands recall " << all[k].recall
+      << "\n";
   }
   if (strands) s << strands->BriefReport();
   return s.str();

@@ -16,11 +16,10 @@
 //   truth_from_estimate = true turntable_from_box * (summary.json's object_from_box)^-1.
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "reconstruction/evaluation.h"
 #include "reconstruction/point_evaluation.h"
@@ -29,13 +28,14 @@
 namespace hairrig {
 
 struct ReconstructionEvalOptions {
-  std::string reconstruction_dir;       // what to score; empty: <capture>/reconstruction
+  std::string reconstruction_dir;  // what to score; empty: <capture>/reconstruction
   // Where strands/strands.ply is read from (e.g. a strand bench's output
   // folder for one method); empty: the reconstruction folder.
   std::string strands_dir;
-  double truth_step_mm = 1.0;           // true strands sampled every this far
-  double visibility_tolerance_mm = 2.0; // a camera sees a true sample within this of its true depth map
-  int min_visible_views = 2;            // the visible surface: samples seen by at least this many cameras
+  double truth_step_mm = 1.0;  // true strands sampled every this far
+  double visibility_tolerance_mm =
+      2.0;                    // a camera sees a true sample within this of its true depth map
+  int min_visible_views = 2;  // the visible surface: samples seen by at least this many cameras
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
@@ -47,7 +47,7 @@ struct ViewReconstructionAccuracy {
   int view = 0;
   double mask_iou = 0;
   OrientationAccuracy orientation;
-  int depth_cells = 0;          // grid cells with a depth on true hair
+  int depth_cells = 0;  // grid cells with a depth on true hair
   double depth_mean_mm = 0;
   double depth_median_mm = 0;
 };
@@ -55,7 +55,8 @@ struct ViewReconstructionAccuracy {
 struct ReconstructionEvaluation {
   std::vector<ViewReconstructionAccuracy> views;
   double mask_iou_median = 0, mask_iou_worst = 0;
-  double orientation_median_deg = 0, orientation_p90_deg = 0, orientation_kept_fraction = 0;  // over all views' pixels
+  double orientation_median_deg = 0, orientation_p90_deg = 0,
+         orientation_kept_fraction = 0;           // over all views' pixels
   double depth_median_mm = 0, depth_mean_mm = 0;  // over all views' cells
   int64_t points = 0, truth_samples = 0, visible_truth_samples = 0;
   std::vector<MatchScore> visible;  // recall against the visible surface

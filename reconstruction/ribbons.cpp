@@ -39,8 +39,8 @@ struct SurfacePoint {
 
 // Barycentric weights of the point of triangle (a, b, c) nearest p; the
 // triangle may be degenerate (a segment, a point).
-Eigen::Vector3f ClosestBarycentric(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
-                                   const Eigen::Vector3f& c) {
+Eigen::Vector3f ClosestBarycentric(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                                   const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
   const Eigen::Vector3f ab = b - a, ac = c - a, ap = p - a;
   const Eigen::Vector3f n = ab.cross(ac);
   const float n2 = n.squaredNorm();
@@ -78,7 +78,8 @@ void ProjectOnTriangle(const Curves& curves, const GridIndex (&corner)[3], const
   const auto at = [&](const GridIndex& g) -> const Eigen::Vector3f& {
     return curves[static_cast<size_t>(g.j)][static_cast<size_t>(g.i)];
   };
-  const Eigen::Vector3f weights = ClosestBarycentric(p, at(corner[0]), at(corner[1]), at(corner[2]));
+  const Eigen::Vector3f weights =
+      ClosestBarycentric(p, at(corner[0]), at(corner[1]), at(corner[2]));
   Eigen::Vector3f closest = Eigen::Vector3f::Zero();
   for (int k = 0; k < 3; ++k) closest += weights(k) * at(corner[k]);
   const double d2 = (closest - p).squaredNorm();
@@ -90,9 +91,11 @@ void ProjectOnTriangle(const Curves& curves, const GridIndex (&corner)[3], const
   for (int k = 0; k < 3; ++k) {
     best->w += weights(k) * static_cast<float>(corner[k].j);
     best->l += weights(k) * static_cast<float>(corner[k].i);
-    orientation += weights(k) * PolylineTangent(curves[static_cast<size_t>(corner[k].j)], static_cast<size_t>(corner[k].i));
+    orientation += weights(k) * PolylineTangent(curves[static_cast<size_t>(corner[k].j)],
+                                                static_cast<size_t>(corner[k].i));
   }
-  best->orientation = orientation.norm() > 0 ? Eigen::Vector3f(orientation.normalized()) : orientation;
+  best->orientation =
+      orientation.norm() > 0 ? Eigen::Vector3f(orientation.normalized()) : orientation;
 }
 
 // Which part of the grid a projection looks at: isocurves lo..hi (inclusive,
@@ -108,8 +111,8 @@ struct CellRange {
 // With `skip_far_cells`, a cell whose bounding ball about its corners'
 // centroid lies no nearer than the best point so far is skipped: its
 // triangles cannot do better, so the result is the same.
-void ProjectOnCells(const Curves& curves, const CellRange& range, const Eigen::Vector3f& p, SurfacePoint* best,
-                    bool skip_far_cells = false) {
+void ProjectOnCells(const Curves& curves, const CellRange& range, const Eigen::Vector3f& p,
+                    SurfacePoint* best, bool skip_far_cells = false) {
   const int last_i = static_cast<int>(curves[static_cast<size_t>(range.lo)].size()) - 1;
   const auto at = [&](int j, int i) -> const Eigen::Vector3f& {
     return curves[static_cast<size_t>(j)][static_cast<size_t>(i)];
@@ -120,8 +123,9 @@ void ProjectOnCells(const Curves& curves, const CellRange& range, const Eigen::V
       const int i2 = std::min(i + 1, last_i);
       if (skip_far_cells) {
         const Eigen::Vector3f centre = 0.25f * (at(j, i) + at(j, i2) + at(j2, i2) + at(j2, i));
-        const float radius = std::sqrt(std::max({(at(j, i) - centre).squaredNorm(), (at(j, i2) - centre).squaredNorm(),
-                                                 (at(j2, i2) - centre).squaredNorm(), (at(j2, i) - centre).squaredNorm()}));
+        const float radius = std::sqrt(
+            std::max({(at(j, i) - centre).squaredNorm(), (at(j, i2) - centre).squaredNorm(),
+                      (at(j2, i2) - centre).squaredNorm(), (at(j2, i) - centre).squaredNorm()}));
         const float gap = (p - centre).norm() - radius;
         if (gap > 0 && static_cast<double>(gap) * gap >= best->distance2) continue;
       }
@@ -140,7 +144,11 @@ CellRange AllCells(const Curves& curves, int lo, int hi) {
 // The (up to four) cells that share vertex (j, i), within isocurves lo..hi.
 CellRange CellsAround(const Curves& curves, int lo, int hi, int j, int i) {
   const int length = static_cast<int>(curves[static_cast<size_t>(lo)].size()) - 1;
-  return {lo, hi, std::max(lo, j - 1), hi > lo ? std::min(j + 1, hi) : lo + 1, std::max(0, i - 1),
+  return {lo,
+          hi,
+          std::max(lo, j - 1),
+          hi > lo ? std::min(j + 1, hi) : lo + 1,
+          std::max(0, i - 1),
           length > 0 ? std::min(i + 1, length) : 1};
 }
 
@@ -163,11 +171,13 @@ class RibbonVertexIndex {
   explicit RibbonVertexIndex(double cell_mm) : cell_mm_(cell_mm) {}
 
   void AddIsocurve(const Curve& curve, int j) {
-    for (size_t i = 0; i < curve.size(); ++i) cells_[Key(Cell(curve[i]))].push_back({curve[i], j, static_cast<int>(i)});
+    for (size_t i = 0; i < curve.size(); ++i)
+      cells_[Key(Cell(curve[i]))].push_back({curve[i], j, static_cast<int>(i)});
   }
 
   // The vertex nearest q within `radius_mm` on isocurves j_lo..j_hi; false when none.
-  bool Nearest(const Eigen::Vector3f& q, double radius_mm, int j_lo, int j_hi, GridIndex* nearest) const {
+  bool Nearest(const Eigen::Vector3f& q, double radius_mm, int j_lo, int j_hi,
+               GridIndex* nearest) const {
     const Eigen::Vector3i centre = Cell(q);
     const int reach = static_cast<int>(std::ceil(radius_mm / cell_mm_));
     float best2 = static_cast<float>(radius_mm * radius_mm);
@@ -222,8 +232,9 @@ struct IndexedRibbon {
     if (!walked && !index.Nearest(p, radius_mm, j_lo, j_hi, &nearest)) return false;
     if (hint != nullptr) *hint = nearest;
     *out = SurfacePoint{};
-    ProjectOnCells(curves, CellsAround(curves, j_lo - first_j, j_hi - first_j, nearest.j - first_j, nearest.i), p,
-                   out);
+    ProjectOnCells(
+        curves, CellsAround(curves, j_lo - first_j, j_hi - first_j, nearest.j - first_j, nearest.i),
+        p, out);
     return true;
   }
 
@@ -234,7 +245,8 @@ struct IndexedRibbon {
 
   // From `start` to the neighbouring vertex nearest p while one is nearer;
   // the squared distance of where it stops.
-  float WalkDownhill(const Eigen::Vector3f& p, int j_lo, int j_hi, GridIndex start, GridIndex* end) const {
+  float WalkDownhill(const Eigen::Vector3f& p, int j_lo, int j_hi, GridIndex start,
+                     GridIndex* end) const {
     const int last_i = static_cast<int>(curves[0].size()) - 1;
     start.j = std::clamp(start.j, j_lo, j_hi);
     start.i = std::clamp(start.i, 0, last_i);
@@ -263,7 +275,8 @@ struct IndexedRibbon {
 // kept (at least two vertices when there are two).
 Curve Resample(const Curve& points, double step_mm) {
   std::vector<double> arc(points.size(), 0.0);
-  for (size_t k = 1; k < points.size(); ++k) arc[k] = arc[k - 1] + (points[k] - points[k - 1]).norm();
+  for (size_t k = 1; k < points.size(); ++k)
+    arc[k] = arc[k - 1] + (points[k] - points[k - 1]).norm();
   if (points.size() < 2) return points;
   const int steps = std::max(1, static_cast<int>(std::lround(arc.back() / step_mm)));
   Curve out;
@@ -272,7 +285,8 @@ Curve Resample(const Curve& points, double step_mm) {
     const double at = arc.back() * s / steps;
     while (k + 2 < points.size() && arc[k + 1] < at) ++k;
     const double span = arc[k + 1] - arc[k];
-    const float t = span > 0 ? static_cast<float>(std::clamp((at - arc[k]) / span, 0.0, 1.0)) : 0.0f;
+    const float t =
+        span > 0 ? static_cast<float>(std::clamp((at - arc[k]) / span, 0.0, 1.0)) : 0.0f;
     out.push_back(points[k] + t * (points[k + 1] - points[k]));
   }
   return out;
@@ -286,8 +300,10 @@ bool FillFromNeighbours(std::vector<Eigen::Vector3f>* values, const std::vector<
   if (first == valid.end()) return false;
   size_t last_valid = static_cast<size_t>(first - valid.begin());
   for (size_t k = 0; k < n; ++k) {
-    if (valid[k]) last_valid = k;
-    else (*values)[k] = (*values)[last_valid];
+    if (valid[k])
+      last_valid = k;
+    else
+      (*values)[k] = (*values)[last_valid];
   }
   return true;
 }
@@ -309,19 +325,25 @@ struct CoverContext {
 class RibbonGrower {
  public:
   RibbonGrower(CoverContext* context, int ribbon_id, int seed)
-      : c_(*context), o_(context->options), id_(ribbon_id), seed_(seed),
-        search_mm_(o_.spacing_mm + std::max(o_.spacing_mm, o_.step_mm)), index_(search_mm_) {}
+      : c_(*context),
+        o_(context->options),
+        id_(ribbon_id),
+        seed_(seed),
+        search_mm_(o_.spacing_mm + std::max(o_.spacing_mm, o_.step_mm)),
+        index_(search_mm_) {}
 
   Ribbon Grow() {
     const uint32_t begin = c_.vertices.first[static_cast<size_t>(seed_)];
     const uint32_t end = c_.vertices.first[static_cast<size_t>(seed_) + 1];
-    const Curve seed_points(c_.vertices.positions.begin() + begin, c_.vertices.positions.begin() + end);
+    const Curve seed_points(c_.vertices.positions.begin() + begin,
+                            c_.vertices.positions.begin() + end);
     AddIsocurve(Resample(seed_points, o_.step_mm), +1);
     c_.ribbon_of[static_cast<size_t>(seed_)] = id_;
     CoverNear(curves_.front());
     for (int side : {+1, -1}) {
       int failures = 0;
-      while (failures < o_.max_failed_expansions && static_cast<int>(curves_.size()) < o_.max_width) {
+      while (failures < o_.max_failed_expansions &&
+             static_cast<int>(curves_.size()) < o_.max_width) {
         Curve next;
         if (!NextIsocurve(side, &next)) break;
         AddIsocurve(std::move(next), side);
@@ -373,7 +395,8 @@ class RibbonGrower {
       if (!FillFromNeighbours(&normals, has_normal)) return false;
       for (size_t i = 0; i < n; ++i) {
         const Eigen::Vector3f b = PolylineTangent(outer, i).cross(normals[i]);
-        if (b.norm() > 1e-3f) (*offsets)[i] = static_cast<float>(side) * b.normalized(), valid[i] = 1;
+        if (b.norm() > 1e-3f)
+          (*offsets)[i] = static_cast<float>(side) * b.normalized(), valid[i] = 1;
       }
     } else {
       // b = o_R x n_R with n_R = o_R x (outer - inner), signed outward: the
@@ -398,7 +421,8 @@ class RibbonGrower {
     for (size_t i = 0; i < outer.size(); ++i) {
       const Eigen::Vector3f moved = outer[i] + offsets[i] * static_cast<float>(o_.spacing_mm);
       Eigen::Vector3f projected, normal;
-      (*next)[i] = c_.surface.Project(moved, &projected, &normal, o_.min_neighbours) ? projected : moved;
+      (*next)[i] =
+          c_.surface.Project(moved, &projected, &normal, o_.min_neighbours) ? projected : moved;
     }
     *next = SmoothPolyline(*next, o_.smooth_position, o_.smooth_orientation, o_.smooth_curvature);
     return true;
@@ -407,8 +431,10 @@ class RibbonGrower {
   // Rules 1-2 and T_bad: whether isocurves j_lo..j_hi cover the segment.
   bool Covers(int segment, int j_lo, int j_hi) const {
     const PolylineVertexTable& v = c_.vertices;
-    const uint32_t begin = v.first[static_cast<size_t>(segment)], end = v.first[static_cast<size_t>(segment) + 1];
-    const double allowed = std::min(static_cast<double>(o_.max_bad_points), o_.max_bad_fraction * (end - begin));
+    const uint32_t begin = v.first[static_cast<size_t>(segment)],
+                   end = v.first[static_cast<size_t>(segment) + 1];
+    const double allowed =
+        std::min(static_cast<double>(o_.max_bad_points), o_.max_bad_fraction * (end - begin));
     const double near2 = o_.spacing_mm * o_.spacing_mm;
     const IndexedRibbon ribbon{curves_, first_j_, index_};
     // From both ends inwards, alternately, each end walking the grid from
@@ -421,7 +447,8 @@ class RibbonGrower {
       const uint32_t k = side == 0 ? front++ : --back;
       SurfacePoint q;
       const bool good = ribbon.Project(v.positions[k], j_lo, j_hi, search_mm_, &q, &hints[side]) &&
-                        q.distance2 <= near2 && std::abs(v.tangents[k].dot(q.orientation)) >= o_.min_turn_cos;
+                        q.distance2 <= near2 &&
+                        std::abs(v.tangents[k].dot(q.orientation)) >= o_.min_turn_cos;
       if (!good && ++bad >= allowed) return false;
     }
     return bad < allowed;
@@ -470,7 +497,8 @@ class RibbonGrower {
   }
 
   bool CoversAll(int j_lo, int j_hi) const {
-    return std::all_of(covered_.begin(), covered_.end(), [&](int s) { return Covers(s, j_lo, j_hi); });
+    return std::all_of(covered_.begin(), covered_.end(),
+                       [&](int s) { return Covers(s, j_lo, j_hi); });
   }
 
   CoverContext& c_;
@@ -481,7 +509,7 @@ class RibbonGrower {
   double search_mm_;
   Curves curves_;
   int first_j_ = 0;
-  RibbonVertexIndex index_;  // keeps trimmed isocurves' vertices: every search names its isocurves
+  RibbonVertexIndex index_;   // keeps trimmed isocurves' vertices: every search names its isocurves
   std::vector<int> covered_;  // besides the seed
 };
 
@@ -495,7 +523,8 @@ RibbonSummary Summarise(const std::vector<Ribbon>& ribbons) {
   RibbonSummary s;
   s.ribbons = static_cast<int64_t>(ribbons.size());
   for (const Ribbon& r : ribbons) {
-    (r.segments.size() > 1 ? s.covered_segments : s.uncovered_segments) += static_cast<int64_t>(r.segments.size());
+    (r.segments.size() > 1 ? s.covered_segments : s.uncovered_segments) +=
+        static_cast<int64_t>(r.segments.size());
     s.mean_width += r.width();
     s.mean_length_mm += CurveLength(r.center());
   }
@@ -512,7 +541,8 @@ RibbonSummary Summarise(const std::vector<Ribbon>& ribbons) {
 // Projections onto finished ribbons, each indexed when first asked for.
 class RibbonProjector {
  public:
-  explicit RibbonProjector(const std::vector<Ribbon>& ribbons) : ribbons_(ribbons), indices_(ribbons.size()) {}
+  explicit RibbonProjector(const std::vector<Ribbon>& ribbons)
+      : ribbons_(ribbons), indices_(ribbons.size()) {}
 
   RibbonCoordinates Project(int r, const Eigen::Vector3f& p) {
     SurfacePoint q;
@@ -546,7 +576,8 @@ class RibbonProjector {
     auto& index = indices_[static_cast<size_t>(r)];
     if (index == nullptr) {
       index = std::make_unique<RibbonVertexIndex>(kSearchMm);
-      for (int j = 0; j <= ribbon.width(); ++j) index->AddIsocurve(ribbon.isocurves[static_cast<size_t>(j)], j);
+      for (int j = 0; j <= ribbon.width(); ++j)
+        index->AddIsocurve(ribbon.isocurves[static_cast<size_t>(j)], j);
     }
     return IndexedRibbon{ribbon.isocurves, 0, *index}.Project(p, 0, ribbon.width(), kSearchMm, q);
   }
@@ -561,8 +592,8 @@ struct SegmentEnd {
   bool at_first = false;
   Eigen::Vector3f position = Eigen::Vector3f::Zero();
   Eigen::Vector3f outward = Eigen::Vector3f::Zero();  // leaving the segment at this end (unit)
-  std::vector<Eigen::Vector3d> piece;                 // the K vertices nearest the end, the end last
-  Circle3 circle;                                     // normal: counter-clockwise along `piece`
+  std::vector<Eigen::Vector3d> piece;  // the K vertices nearest the end, the end last
+  Circle3 circle;                      // normal: counter-clockwise along `piece`
   bool fitted = false;
 };
 
@@ -578,7 +609,8 @@ SegmentEnd MakeEnd(const Curve& points, int segment, int ribbon, bool at_first, 
     end.piece.push_back(points[at_first ? from_end : n - 1 - from_end].cast<double>());
   }
   end.position = points[at_first ? 0 : n - 1];
-  const Eigen::Vector3f inner = points[at_first ? std::min<size_t>(2, n - 1) : n - 1 - std::min<size_t>(2, n - 1)];
+  const Eigen::Vector3f inner =
+      points[at_first ? std::min<size_t>(2, n - 1) : n - 1 - std::min<size_t>(2, n - 1)];
   const Eigen::Vector3f out = end.position - inner;
   end.outward = out.norm() > 0 ? Eigen::Vector3f(out.normalized()) : out;
   end.fitted = std::isfinite(FitCircle3(end.piece, &end.circle));
@@ -592,7 +624,8 @@ constexpr int kVerdicts = 6;
 class ArcJudge {
  public:
   explicit ArcJudge(const ConnectionOptions& o)
-      : o_(o), min_curvature_(1.0 / o.straight_radius_mm),
+      : o_(o),
+        min_curvature_(1.0 / o.straight_radius_mm),
         min_normal_cos_(std::cos(o.max_normal_angle_deg * M_PI / 180.0)) {}
 
   // The tests of Sec. 6.1 on the arc from end a's segment to end b's, in the
@@ -600,7 +633,8 @@ class ArcJudge {
   Verdict Judge(const SegmentEnd& a, const SegmentEnd& b, Circle3* joint, double* rms) const {
     if (!GapContinuesBoth(a, b)) return Verdict::kDirection;
     const double kappa_a = Curvature(a.circle), kappa_b = Curvature(b.circle);
-    if (std::abs(kappa_a - kappa_b) / (kappa_a + kappa_b) > o_.max_curvature_ratio) return Verdict::kCurvature;
+    if (std::abs(kappa_a - kappa_b) / (kappa_a + kappa_b) > o_.max_curvature_ratio)
+      return Verdict::kCurvature;
     // The arc runs along a's piece to its end, then along b's piece from its end: b's normal flips.
     const Circle3 piece_a = a.circle;
     Circle3 piece_b = b.circle;
@@ -612,7 +646,8 @@ class ArcJudge {
     if (!(*rms <= o_.max_rms_mm)) return Verdict::kRms;
     OrientByTraversal(arc, joint);
     if (SweepOverlap(arc, *joint) > o_.max_overlap) return Verdict::kOverlap;
-    if (std::abs(2 * Curvature(*joint) - kappa_a - kappa_b) / (kappa_a + kappa_b) > o_.max_curvature_ratio) {
+    if (std::abs(2 * Curvature(*joint) - kappa_a - kappa_b) / (kappa_a + kappa_b) >
+        o_.max_curvature_ratio) {
       return Verdict::kCurvature;
     }
     if (!NormalsAgree(*joint, piece_a) || !NormalsAgree(*joint, piece_b)) return Verdict::kTorsion;
@@ -660,8 +695,8 @@ void AddCounts(const EndVerdicts& v, ConnectionSummary* s) {
 
 // Every segment end in a ribbon, with its piece's circle (ends of segments
 // with fewer than 3 vertices left out).
-std::vector<SegmentEnd> FitEnds(const std::vector<StrandSegment>& segments, const std::vector<int>& ribbon_of,
-                                const ConnectionOptions& o) {
+std::vector<SegmentEnd> FitEnds(const std::vector<StrandSegment>& segments,
+                                const std::vector<int>& ribbon_of, const ConnectionOptions& o) {
   std::vector<std::pair<int, bool>> which;
   for (size_t seg = 0; seg < segments.size(); ++seg) {
     if (ribbon_of[seg] < 0 || segments[seg].points_mm.size() < 3) continue;
@@ -672,16 +707,19 @@ std::vector<SegmentEnd> FitEnds(const std::vector<StrandSegment>& segments, cons
   ParallelFor(which.size(), o.threads, [&] {
     return [&](size_t k) {
       const auto [seg, at_first] = which[k];
-      ends[k] = MakeEnd(segments[static_cast<size_t>(seg)].points_mm, seg, ribbon_of[static_cast<size_t>(seg)],
-                        at_first, o.fit_vertices);
+      ends[k] = MakeEnd(segments[static_cast<size_t>(seg)].points_mm, seg,
+                        ribbon_of[static_cast<size_t>(seg)], at_first, o.fit_vertices);
     };
   });
-  ends.erase(std::remove_if(ends.begin(), ends.end(), [](const SegmentEnd& e) { return !e.fitted; }), ends.end());
+  ends.erase(
+      std::remove_if(ends.begin(), ends.end(), [](const SegmentEnd& e) { return !e.fitted; }),
+      ends.end());
   return ends;
 }
 
 // The verdicts on every pair of ends in different ribbons within reach.
-std::vector<EndVerdicts> JudgePairs(const std::vector<SegmentEnd>& ends, const ConnectionOptions& o) {
+std::vector<EndVerdicts> JudgePairs(const std::vector<SegmentEnd>& ends,
+                                    const ConnectionOptions& o) {
   std::vector<Eigen::Vector3f> positions;
   for (const SegmentEnd& e : ends) positions.push_back(e.position);
   const PointGrid grid(positions, o.max_end_gap_mm);
@@ -711,11 +749,15 @@ std::vector<EndVerdicts> JudgePairs(const std::vector<SegmentEnd>& ends, const C
 
 // Whether the link's piece on side k (from the fitted end inwards) runs
 // towards increasing l.
-bool PieceRunsWithL(const RibbonLink& link, int k) { return link.at_first_vertex[k] == link.segment_along_ribbon[k]; }
+bool PieceRunsWithL(const RibbonLink& link, int k) {
+  return link.at_first_vertex[k] == link.segment_along_ribbon[k];
+}
 
 // A link is compatible with equal directions (both kept or both reversed)
 // when exactly one piece runs with its ribbon's l; otherwise with different ones.
-bool NeedsEqualDirections(const RibbonLink& link) { return PieceRunsWithL(link, 0) != PieceRunsWithL(link, 1); }
+bool NeedsEqualDirections(const RibbonLink& link) {
+  return PieceRunsWithL(link, 0) != PieceRunsWithL(link, 1);
+}
 
 // Eq. 5 for D(R) = 0 -> L (the cost of 0 -> L; L -> 0 costs its negative).
 double RibbonEnergy(const Ribbon& r, const ScalpDistance& zeta, const RibbonDirectionOptions& o) {
@@ -753,8 +795,9 @@ void AddLinkTerms(const std::vector<RibbonLink>& links, size_t ribbons, double a
   for (const RibbonLink& link : links) {
     if (!ValidLink(link, ribbons)) continue;
     const bool swap = link.ribbon[0] > link.ribbon[1];
-    entries.push_back({static_cast<uint32_t>(link.ribbon[swap ? 1 : 0]), static_cast<uint32_t>(link.ribbon[swap ? 0 : 1]),
-                       NeedsEqualDirections(link), link.segment[swap ? 1 : 0], link.segment[swap ? 0 : 1]});
+    entries.push_back({static_cast<uint32_t>(link.ribbon[swap ? 1 : 0]),
+                       static_cast<uint32_t>(link.ribbon[swap ? 0 : 1]), NeedsEqualDirections(link),
+                       link.segment[swap ? 1 : 0], link.segment[swap ? 0 : 1]});
   }
   std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
     return std::tie(x.a, x.b, x.needs_equal) < std::tie(y.a, y.b, y.needs_equal);
@@ -777,7 +820,8 @@ void AddLinkTerms(const std::vector<RibbonLink>& links, size_t ribbons, double a
     strengths.push_back(pair);
   }
   double largest = 0;
-  for (const BinaryMrfPair& p : strengths) largest = std::max({largest, p.cost_equal, p.cost_differ});
+  for (const BinaryMrfPair& p : strengths)
+    largest = std::max({largest, p.cost_equal, p.cost_differ});
   if (largest <= 0) return;
   for (BinaryMrfPair p : strengths) {
     p.cost_equal *= alpha / largest;
@@ -801,19 +845,22 @@ void AddCloseTerms(const std::vector<Ribbon>& ribbons, const RibbonDirectionOpti
                    std::vector<BinaryMrfPair>* pairs, int64_t* count) {
   std::vector<const Ribbon*> all;
   for (const Ribbon& r : ribbons) all.push_back(&r);
-  for (const OwnerOverlap& overlap : FindOwnerOverlaps(TabulateRibbons(all), o.overlap_mm, 1, o.threads)) {
+  for (const OwnerOverlap& overlap :
+       FindOwnerOverlaps(TabulateRibbons(all), o.overlap_mm, 1, o.threads)) {
     if (overlap.votes == 0) continue;
     const double cost = o.alpha_close * overlap.share;
     // Orientations that agree where they overlap are compatible with equal directions.
-    pairs->push_back({overlap.a, overlap.b, overlap.votes > 0 ? 0.0 : cost, overlap.votes > 0 ? cost : 0.0});
+    pairs->push_back(
+        {overlap.a, overlap.b, overlap.votes > 0 ? 0.0 : cost, overlap.votes > 0 ? cost : 0.0});
     ++*count;
   }
 }
 
 // One term per ribbon pair: the terms of each pair summed.
 void MergeTerms(std::vector<BinaryMrfPair>* pairs) {
-  std::sort(pairs->begin(), pairs->end(),
-            [](const BinaryMrfPair& x, const BinaryMrfPair& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
+  std::sort(pairs->begin(), pairs->end(), [](const BinaryMrfPair& x, const BinaryMrfPair& y) {
+    return std::tie(x.a, x.b) < std::tie(y.a, y.b);
+  });
   size_t out = 0;
   for (size_t k = 0; k < pairs->size(); ++k) {
     BinaryMrfPair& last = (*pairs)[out == 0 ? 0 : out - 1];
@@ -829,7 +876,8 @@ void MergeTerms(std::vector<BinaryMrfPair>* pairs) {
 
 // Reverses the l direction of the ribbons labelled 1 and the parameters of
 // the links at them.
-void ReverseRibbons(const std::vector<uint8_t>& reverse, std::vector<Ribbon>* ribbons, std::vector<RibbonLink>* links) {
+void ReverseRibbons(const std::vector<uint8_t>& reverse, std::vector<Ribbon>* ribbons,
+                    std::vector<RibbonLink>* links) {
   for (size_t r = 0; r < ribbons->size(); ++r) {
     if (!reverse[r]) continue;
     for (Curve& curve : (*ribbons)[r].isocurves) std::reverse(curve.begin(), curve.end());
@@ -858,11 +906,13 @@ RibbonCoordinates ProjectOntoRibbon(const Ribbon& ribbon, const Eigen::Vector3f&
   float nearest2 = std::numeric_limits<float>::max();
   for (int j = 0; j <= ribbon.width(); ++j) {
     for (int i = 0; i <= ribbon.length(); ++i) {
-      const float d2 = (ribbon.isocurves[static_cast<size_t>(j)][static_cast<size_t>(i)] - p).squaredNorm();
+      const float d2 =
+          (ribbon.isocurves[static_cast<size_t>(j)][static_cast<size_t>(i)] - p).squaredNorm();
       if (d2 < nearest2) nearest2 = d2, nearest = {j, i};
     }
   }
-  ProjectOnCells(ribbon.isocurves, CellsAround(ribbon.isocurves, 0, ribbon.width(), nearest.j, nearest.i), p, &best);
+  ProjectOnCells(ribbon.isocurves,
+                 CellsAround(ribbon.isocurves, 0, ribbon.width(), nearest.j, nearest.i), p, &best);
   ProjectOnCells(ribbon.isocurves, AllCells(ribbon.isocurves, 0, ribbon.width()), p, &best, true);
   return ToCoordinates(best, p, 0);
 }
@@ -871,31 +921,41 @@ Status RibbonOptions::Check() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
   if (!positive(spacing_mm)) return InvalidArgument("ribbon spacing_mm must be positive");
   if (!positive(step_mm)) return InvalidArgument("ribbon step_mm must be positive");
-  if (!(min_turn_cos >= 0 && min_turn_cos <= 1)) return InvalidArgument("ribbon min_turn_cos must lie in 0..1");
+  if (!(min_turn_cos >= 0 && min_turn_cos <= 1))
+    return InvalidArgument("ribbon min_turn_cos must lie in 0..1");
   if (max_bad_points < 1) return InvalidArgument("ribbon max_bad_points must be at least 1");
-  if (!(max_bad_fraction > 0 && max_bad_fraction <= 1)) return InvalidArgument("ribbon max_bad_fraction must lie in (0, 1]");
-  if (max_failed_expansions < 1) return InvalidArgument("ribbon max_failed_expansions must be at least 1");
+  if (!(max_bad_fraction > 0 && max_bad_fraction <= 1))
+    return InvalidArgument("ribbon max_bad_fraction must lie in (0, 1]");
+  if (max_failed_expansions < 1)
+    return InvalidArgument("ribbon max_failed_expansions must be at least 1");
   if (!positive(sigma_mm)) return InvalidArgument("ribbon sigma_mm must be positive");
   if (min_neighbours < 1) return InvalidArgument("ribbon min_neighbours must be at least 1");
   if (!(smooth_position > 0) || !(smooth_orientation >= 0) || !(smooth_curvature >= 0)) {
-    return InvalidArgument("ribbon smoothing weights: position must be positive, the others non-negative");
+    return InvalidArgument(
+        "ribbon smoothing weights: position must be positive, the others non-negative");
   }
   if (max_width < 1) return InvalidArgument("ribbon max_width must be at least 1");
   return Status::Ok();
 }
 
 std::vector<Ribbon> CoverWithRibbons(const std::vector<OrientedPoint>& points,
-                                     const std::vector<StrandSegment>& segments, const RibbonOptions& options,
-                                     RibbonSummary* summary) {
+                                     const std::vector<StrandSegment>& segments,
+                                     const RibbonOptions& options, RibbonSummary* summary) {
   std::vector<Eigen::Vector3f> positions(points.size());
   for (size_t k = 0; k < points.size(); ++k) positions[k] = points[k].position_mm;
   const PointSetSurface surface(positions, options.sigma_mm);
   std::vector<const Curve*> polylines;
   for (const StrandSegment& s : segments) polylines.push_back(&s.points_mm);
   const PolylineVertexTable vertices = TabulatePolylines(polylines);
-  const PointGrid vertex_grid(vertices.positions, options.spacing_mm + std::max(options.spacing_mm, options.step_mm));
-  CoverContext context{options, surface, vertices, vertex_grid, std::vector<int>(segments.size(), -1),
-                       std::vector<uint32_t>(segments.size(), 0), 0};
+  const PointGrid vertex_grid(vertices.positions,
+                              options.spacing_mm + std::max(options.spacing_mm, options.step_mm));
+  CoverContext context{options,
+                       surface,
+                       vertices,
+                       vertex_grid,
+                       std::vector<int>(segments.size(), -1),
+                       std::vector<uint32_t>(segments.size(), 0),
+                       0};
 
   // Sec. 5.2: the longest uncovered segment first.
   std::vector<double> length(segments.size());
@@ -905,7 +965,9 @@ std::vector<Ribbon> CoverWithRibbons(const std::vector<OrientedPoint>& points,
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return length[a] > length[b]; });
   std::vector<Ribbon> ribbons;
   for (int seed : order) {
-    if (context.ribbon_of[static_cast<size_t>(seed)] >= 0 || segments[static_cast<size_t>(seed)].points_mm.empty()) continue;
+    if (context.ribbon_of[static_cast<size_t>(seed)] >= 0 ||
+        segments[static_cast<size_t>(seed)].points_mm.empty())
+      continue;
     RibbonGrower grower(&context, static_cast<int>(ribbons.size()), seed);
     ribbons.push_back(grower.Grow());
   }
@@ -915,27 +977,35 @@ std::vector<Ribbon> CoverWithRibbons(const std::vector<OrientedPoint>& points,
 
 Status ConnectionOptions::Check() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
-  if (!positive(max_end_gap_mm)) return InvalidArgument("connection max_end_gap_mm must be positive");
+  if (!positive(max_end_gap_mm))
+    return InvalidArgument("connection max_end_gap_mm must be positive");
   if (fit_vertices < 3) return InvalidArgument("connection fit_vertices must be at least 3");
   if (!positive(max_rms_mm)) return InvalidArgument("connection max_rms_mm must be positive");
-  if (!positive(max_curvature_ratio)) return InvalidArgument("connection max_curvature_ratio must be positive");
+  if (!positive(max_curvature_ratio))
+    return InvalidArgument("connection max_curvature_ratio must be positive");
   if (!(max_normal_angle_deg >= 0 && max_normal_angle_deg <= 180)) {
     return InvalidArgument("connection max_normal_angle_deg must lie in 0..180");
   }
-  if (!(max_overlap >= 0 && max_overlap <= 1)) return InvalidArgument("connection max_overlap must lie in 0..1");
-  if (!positive(straight_radius_mm)) return InvalidArgument("connection straight_radius_mm must be positive");
-  if (!(min_gap_cos >= -1 && min_gap_cos < 1)) return InvalidArgument("connection min_gap_cos must lie in [-1, 1)");
+  if (!(max_overlap >= 0 && max_overlap <= 1))
+    return InvalidArgument("connection max_overlap must lie in 0..1");
+  if (!positive(straight_radius_mm))
+    return InvalidArgument("connection straight_radius_mm must be positive");
+  if (!(min_gap_cos >= -1 && min_gap_cos < 1))
+    return InvalidArgument("connection min_gap_cos must lie in [-1, 1)");
   if (threads < 1) return InvalidArgument("connection threads must be at least 1");
   return Status::Ok();
 }
 
-std::vector<RibbonLink> ConnectRibbons(const std::vector<Ribbon>& ribbons, const std::vector<StrandSegment>& segments,
-                                       const ConnectionOptions& options, ConnectionSummary* summary) {
+std::vector<RibbonLink> ConnectRibbons(const std::vector<Ribbon>& ribbons,
+                                       const std::vector<StrandSegment>& segments,
+                                       const ConnectionOptions& options,
+                                       ConnectionSummary* summary) {
   ConnectionSummary s;
   std::vector<int> ribbon_of(segments.size(), -1);
   for (size_t r = 0; r < ribbons.size(); ++r) {
     for (int seg : ribbons[r].segments) {
-      if (seg >= 0 && static_cast<size_t>(seg) < segments.size() && ribbon_of[static_cast<size_t>(seg)] < 0) {
+      if (seg >= 0 && static_cast<size_t>(seg) < segments.size() &&
+          ribbon_of[static_cast<size_t>(seg)] < 0) {
         ribbon_of[static_cast<size_t>(seg)] = static_cast<int>(r);
       }
     }
@@ -946,7 +1016,10 @@ std::vector<RibbonLink> ConnectRibbons(const std::vector<Ribbon>& ribbons, const
   std::vector<int> along(segments.size(), -1);  // per segment, AlongRibbon once asked (0/1)
   const auto along_ribbon = [&](const SegmentEnd& e) {
     int& known = along[static_cast<size_t>(e.segment)];
-    if (known < 0) known = projector.AlongRibbon(e.ribbon, segments[static_cast<size_t>(e.segment)].points_mm) ? 1 : 0;
+    if (known < 0)
+      known = projector.AlongRibbon(e.ribbon, segments[static_cast<size_t>(e.segment)].points_mm)
+                  ? 1
+                  : 0;
     return known == 1;
   };
   std::vector<RibbonLink> links;
@@ -974,18 +1047,22 @@ std::vector<RibbonLink> ConnectRibbons(const std::vector<Ribbon>& ribbons, const
 double RibbonOverlap(const Ribbon& a, const Ribbon& b, double overlap_mm, bool* compatible) {
   if (compatible != nullptr) *compatible = true;
   if (!(overlap_mm > 0)) return 0;
-  const std::vector<OwnerOverlap> overlaps = FindOwnerOverlaps(TabulateRibbons({&a, &b}), overlap_mm, 1, 1);
+  const std::vector<OwnerOverlap> overlaps =
+      FindOwnerOverlaps(TabulateRibbons({&a, &b}), overlap_mm, 1, 1);
   if (overlaps.empty()) return 0;
   if (compatible != nullptr) *compatible = overlaps[0].votes >= 0;
   return overlaps[0].share;
 }
 
 Status RibbonDirectionOptions::Check() const {
-  if (!(height_scale_mm > 0)) return InvalidArgument("ribbon direction height_scale_mm must be positive");
-  if (!(alpha_link >= 0) || !(alpha_close >= 0)) return InvalidArgument("ribbon direction weights must be non-negative");
+  if (!(height_scale_mm > 0))
+    return InvalidArgument("ribbon direction height_scale_mm must be positive");
+  if (!(alpha_link >= 0) || !(alpha_close >= 0))
+    return InvalidArgument("ribbon direction weights must be non-negative");
   if (!(overlap_mm > 0)) return InvalidArgument("ribbon direction overlap_mm must be positive");
   if (threads < 1) return InvalidArgument("ribbon direction threads must be at least 1");
-  if (!(std::abs(down.norm() - 1) < 1e-3)) return InvalidArgument("ribbon direction down must be a unit vector");
+  if (!(std::abs(down.norm() - 1) < 1e-3))
+    return InvalidArgument("ribbon direction down must be a unit vector");
   return Status::Ok();
 }
 
@@ -1014,7 +1091,9 @@ RibbonDirectionSummary DirectRibbons(std::vector<Ribbon>* ribbons, std::vector<R
   ReverseRibbons(solution.labels, ribbons, links);
   summary.reversed = std::count(solution.labels.begin(), solution.labels.end(), 1);
   // Every ribbon now runs 0 -> L: a link is compatible when it needs equal directions.
-  const auto incompatible = [n](const RibbonLink& link) { return !ValidLink(link, n) || !NeedsEqualDirections(link); };
+  const auto incompatible = [n](const RibbonLink& link) {
+    return !ValidLink(link, n) || !NeedsEqualDirections(link);
+  };
   summary.incompatible_links = std::count_if(links->begin(), links->end(), incompatible);
   summary.compatible_links = summary.links - summary.incompatible_links;
   links->erase(std::remove_if(links->begin(), links->end(), incompatible), links->end());

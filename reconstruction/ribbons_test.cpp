@@ -1,9 +1,9 @@
 #include "reconstruction/ribbons.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <set>
-
-#include <gtest/gtest.h>
 
 #include "core/head_spec.h"
 #include "tests/support/ellipsoid_head.h"
@@ -17,7 +17,8 @@ using Curve = std::vector<Eigen::Vector3f>;
 Curve Line(const Eigen::Vector3f& from, const Eigen::Vector3f& to, float step = 2.0f) {
   const int steps = std::max(1, static_cast<int>(std::lround((to - from).norm() / step)));
   Curve points;
-  for (int k = 0; k <= steps; ++k) points.push_back(from + (to - from) * (static_cast<float>(k) / static_cast<float>(steps)));
+  for (int k = 0; k <= steps; ++k)
+    points.push_back(from + (to - from) * (static_cast<float>(k) / static_cast<float>(steps)));
   return points;
 }
 
@@ -29,8 +30,8 @@ struct Sheet {
   std::vector<StrandSegment> segments;
 };
 
-Sheet MakeSheet(const Eigen::Vector3f& origin, const Eigen::Vector3f& across, const Eigen::Vector3f& along,
-                float width, float length) {
+Sheet MakeSheet(const Eigen::Vector3f& origin, const Eigen::Vector3f& across,
+                const Eigen::Vector3f& along, float width, float length) {
   Sheet sheet;
   for (float a = 0; a <= width + 1e-3f; a += 0.5f) {
     for (float l = 0; l <= length + 1e-3f; l += 0.5f) {
@@ -64,7 +65,8 @@ float Span(const Ribbon& r) {
 TEST(Ribbons, AFlatSheetOfParallelStrandsIsOneRibbonAcrossIt) {
   const Sheet sheet = MakeSheet({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 40, 100);
   RibbonSummary summary;
-  const std::vector<Ribbon> ribbons = CoverWithRibbons(sheet.points, sheet.segments, RibbonOptions{}, &summary);
+  const std::vector<Ribbon> ribbons =
+      CoverWithRibbons(sheet.points, sheet.segments, RibbonOptions{}, &summary);
   ASSERT_EQ(ribbons.size(), 1u);
   const Ribbon& r = ribbons[0];
   EXPECT_EQ(r.segments.size(), sheet.segments.size());
@@ -103,7 +105,8 @@ TEST(Ribbons, SegmentsGrownOnASheetShareOneRibbon) {
   const std::vector<StrandSegment> grown = GrowStrandSegments(sheet.points, SegmentGrowthOptions{});
   ASSERT_GT(grown.size(), 5u);
   RibbonSummary summary;
-  const std::vector<Ribbon> ribbons = CoverWithRibbons(sheet.points, grown, RibbonOptions{}, &summary);
+  const std::vector<Ribbon> ribbons =
+      CoverWithRibbons(sheet.points, grown, RibbonOptions{}, &summary);
   ASSERT_FALSE(ribbons.empty());
   EXPECT_GE(ribbons[0].segments.size(), grown.size() * 9 / 10);
   EXPECT_GT(Span(ribbons[0]), 25.0f);
@@ -111,7 +114,9 @@ TEST(Ribbons, SegmentsGrownOnASheetShareOneRibbon) {
 
 TEST(Ribbons, ProjectionGivesTheGridParameters) {
   Ribbon flat;  // W = 4 isocurves 1.5 mm apart across x, L = 10 steps of 2 mm along y
-  for (int j = 0; j <= 4; ++j) flat.isocurves.push_back(Line({1.5f * static_cast<float>(j), 0, 0}, {1.5f * static_cast<float>(j), 20, 0}));
+  for (int j = 0; j <= 4; ++j)
+    flat.isocurves.push_back(
+        Line({1.5f * static_cast<float>(j), 0, 0}, {1.5f * static_cast<float>(j), 20, 0}));
   ASSERT_EQ(flat.width(), 4);
   ASSERT_EQ(flat.length(), 10);
 
@@ -164,12 +169,15 @@ Eigen::Vector3f OnCircle(const Eigen::Vector3f& centre, float radius, float deg,
 }
 
 // The arc from `from_deg` to `to_deg`, vertices about 2 mm apart.
-Curve ArcPoints(const Eigen::Vector3f& centre, float radius, float from_deg, float to_deg, float y = 0) {
+Curve ArcPoints(const Eigen::Vector3f& centre, float radius, float from_deg, float to_deg,
+                float y = 0) {
   const float arc_mm = std::abs(to_deg - from_deg) * static_cast<float>(M_PI) / 180.0f * radius;
   const int steps = std::max(2, static_cast<int>(std::lround(arc_mm / 2.0f)));
   Curve points;
   for (int k = 0; k <= steps; ++k) {
-    points.push_back(OnCircle(centre, radius, from_deg + (to_deg - from_deg) * static_cast<float>(k) / static_cast<float>(steps), y));
+    points.push_back(OnCircle(
+        centre, radius,
+        from_deg + (to_deg - from_deg) * static_cast<float>(k) / static_cast<float>(steps), y));
   }
   return points;
 }
@@ -191,10 +199,12 @@ TEST(Ribbons, AnArcAcrossAGapLinksTwoPiecesOfOneCircle) {
   // Two 30 deg pieces of a 40 mm circle with 15 mm of arc (21.5 deg) between them;
   // the second listed from its far end.
   const float gap_deg = 15.0f / 40.0f * 180.0f / static_cast<float>(M_PI);
-  std::vector<StrandSegment> segments = {{ArcPoints(centre, 40, 0, 30)}, {ArcPoints(centre, 40, 30 + gap_deg, 60 + gap_deg)}};
+  std::vector<StrandSegment> segments = {{ArcPoints(centre, 40, 0, 30)},
+                                         {ArcPoints(centre, 40, 30 + gap_deg, 60 + gap_deg)}};
   std::reverse(segments[1].points_mm.begin(), segments[1].points_mm.end());
   ConnectionSummary summary;
-  const std::vector<RibbonLink> links = ConnectRibbons(OneRibbonEach(segments), segments, ConnectionOptions{}, &summary);
+  const std::vector<RibbonLink> links =
+      ConnectRibbons(OneRibbonEach(segments), segments, ConnectionOptions{}, &summary);
   EXPECT_EQ(summary.pairs_tried, 1);
   ASSERT_EQ(links.size(), 1u);
   const RibbonLink& link = links[0];
@@ -212,9 +222,11 @@ TEST(Ribbons, AnArcAcrossAGapLinksTwoPiecesOfOneCircle) {
 }
 
 TEST(Ribbons, SegmentsMeetingAtRightAnglesAreNotLinked) {
-  const std::vector<StrandSegment> segments = {{Line({0, -22, 0}, {0, -2, 0})}, {Line({2, 0, 0}, {22, 0, 0})}};
+  const std::vector<StrandSegment> segments = {{Line({0, -22, 0}, {0, -2, 0})},
+                                               {Line({2, 0, 0}, {22, 0, 0})}};
   ConnectionSummary summary;
-  const auto links = ConnectRibbons(OneRibbonEach(segments), segments, ConnectionOptions{}, &summary);
+  const auto links =
+      ConnectRibbons(OneRibbonEach(segments), segments, ConnectionOptions{}, &summary);
   // The corner's two ends, and the far end of each with the corner end of the
   // other (22 mm apart), which the gap's direction rejects.
   EXPECT_EQ(summary.pairs_tried, 3);
@@ -224,9 +236,11 @@ TEST(Ribbons, SegmentsMeetingAtRightAnglesAreNotLinked) {
 }
 
 TEST(Ribbons, SideBySideSegmentsAreNotLinked) {
-  const std::vector<StrandSegment> segments = {{Line({0, 0, 0}, {0, 20, 0})}, {Line({2, 0, 0}, {2, 20, 0})}};
+  const std::vector<StrandSegment> segments = {{Line({0, 0, 0}, {0, 20, 0})},
+                                               {Line({2, 0, 0}, {2, 20, 0})}};
   ConnectionSummary summary;
-  EXPECT_TRUE(ConnectRibbons(OneRibbonEach(segments), segments, ConnectionOptions{}, &summary).empty());
+  EXPECT_TRUE(
+      ConnectRibbons(OneRibbonEach(segments), segments, ConnectionOptions{}, &summary).empty());
   EXPECT_EQ(summary.pairs_tried, 4);  // top-top, bottom-bottom and the two diagonals
   EXPECT_EQ(summary.rejected_direction, 4);
   // Without the gap's direction check, criterion (d) rejects them: the arc would double back.
@@ -267,9 +281,12 @@ Curl MakeCurl() {
   }
   // Arbitrary starting orders: ribbons A and C and two segments reversed.
   for (int r : {0, 2}) {
-    for (auto& curve : curl.ribbons[static_cast<size_t>(r)].isocurves) std::reverse(curve.begin(), curve.end());
+    for (auto& curve : curl.ribbons[static_cast<size_t>(r)].isocurves)
+      std::reverse(curve.begin(), curve.end());
   }
-  for (int s : {1, 4}) std::reverse(curl.segments[static_cast<size_t>(s)].points_mm.begin(), curl.segments[static_cast<size_t>(s)].points_mm.end());
+  for (int s : {1, 4})
+    std::reverse(curl.segments[static_cast<size_t>(s)].points_mm.begin(),
+                 curl.segments[static_cast<size_t>(s)].points_mm.end());
   return curl;
 }
 
@@ -277,9 +294,11 @@ TEST(Ribbons, LinksDirectACurlRootToTipThroughItsRisingPart) {
   Curl curl = MakeCurl();
   ASSERT_NE(curl.head, nullptr);
   ConnectionSummary connection;
-  std::vector<RibbonLink> links = ConnectRibbons(curl.ribbons, curl.segments, ConnectionOptions{}, &connection);
+  std::vector<RibbonLink> links =
+      ConnectRibbons(curl.ribbons, curl.segments, ConnectionOptions{}, &connection);
   EXPECT_EQ(connection.links, 18) << "every strand of A with every strand of B, and of B with C";
-  const RibbonDirectionSummary summary = DirectRibbons(&curl.ribbons, &links, curl.head.get(), RibbonDirectionOptions{});
+  const RibbonDirectionSummary summary =
+      DirectRibbons(&curl.ribbons, &links, curl.head.get(), RibbonDirectionOptions{});
   EXPECT_EQ(summary.reversed, 2);
   EXPECT_EQ(summary.incompatible_links, 0);
   EXPECT_EQ(links.size(), 18u);
@@ -289,7 +308,9 @@ TEST(Ribbons, LinksDirectACurlRootToTipThroughItsRisingPart) {
   for (const RibbonLink& link : links) {
     // Strands run from the lower-numbered ribbon's tip (l = L) into the next one's root (l = 0).
     const int up = link.ribbon[0] < link.ribbon[1] ? 0 : 1;
-    EXPECT_NEAR(link.link_point[up].l, static_cast<float>(curl.ribbons[static_cast<size_t>(link.ribbon[up])].length()), 0.01f);
+    EXPECT_NEAR(link.link_point[up].l,
+                static_cast<float>(curl.ribbons[static_cast<size_t>(link.ribbon[up])].length()),
+                0.01f);
     EXPECT_NEAR(link.link_point[1 - up].l, 0.0f, 0.01f);
   }
 

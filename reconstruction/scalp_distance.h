@@ -5,9 +5,8 @@
 // exact distance near the scalp, relatively less further out).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/head_model.h"
 

@@ -1,10 +1,9 @@
 #include "reconstruction/scalp_guide.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Geometry>
 
 #include "core/transform.h"
 
@@ -21,7 +20,8 @@ Eigen::Vector3f SafeNormalized(const Eigen::Vector3f& v, const Eigen::Vector3f& 
 }
 
 // The unit vector a fraction s of the way from a to b along their great circle.
-Eigen::Vector3f Slerp(const Eigen::Vector3f& a, const Eigen::Vector3f& b, double angle_rad, double s) {
+Eigen::Vector3f Slerp(const Eigen::Vector3f& a, const Eigen::Vector3f& b, double angle_rad,
+                      double s) {
   if (angle_rad < 1e-6) return b;
   const double sin_angle = std::sin(angle_rad);
   const Eigen::Vector3f v = static_cast<float>(std::sin((1 - s) * angle_rad) / sin_angle) * a +
@@ -46,7 +46,8 @@ ScalpGuide::ScalpGuide(const HeadModel& head, const Eigen::Vector3f& down) : hea
   face_ = SafeNormalized(face - face.dot(up_) * up_, up_.unitOrthogonal());
   has_parting_ = scalp.defined && scalp.parting;
   const Eigen::Vector3f side = up_.cross(face_);
-  parting_normal_ = Eigen::AngleAxisf(static_cast<float>(DegToRad(scalp.parting_offset_deg)), face_) * side;
+  parting_normal_ =
+      Eigen::AngleAxisf(static_cast<float>(DegToRad(scalp.parting_offset_deg)), face_) * side;
   parting_up_ = face_.cross(parting_normal_);
   parting_begin_rad_ = DegToRad(scalp.hairline_front_deg);
   parting_end_rad_ = DegToRad(90 + scalp.parting_back_deg);
@@ -72,7 +73,8 @@ bool ScalpGuide::AnySampleWithin(const Eigen::Vector3f& q, double distance_mm) c
   return grid_->Nearest(q, distance_mm) >= 0;
 }
 
-Eigen::Vector3f ScalpGuide::SurfaceAlong(const Eigen::Vector3f& direction, double fallback_radius_mm) const {
+Eigen::Vector3f ScalpGuide::SurfaceAlong(const Eigen::Vector3f& direction,
+                                         double fallback_radius_mm) const {
   HeadHit hit;
   if (head_.Intersect(centre_.cast<double>(), direction.cast<double>(), 1e-6, 1e5, &hit)) {
     return centre_ + static_cast<float>(hit.t) * direction;
@@ -100,10 +102,12 @@ Eigen::Vector3f ScalpGuide::PartingDirection(const Eigen::Vector3f& from_centre)
   if (!has_parting_) return up_;
   double angle = std::atan2(from_centre.dot(parting_up_), from_centre.dot(face_));
   if (angle < parting_begin_rad_ || angle > parting_end_rad_) {
-    angle = AngleBetween(angle, parting_begin_rad_) < AngleBetween(angle, parting_end_rad_) ? parting_begin_rad_
-                                                                                            : parting_end_rad_;
+    angle = AngleBetween(angle, parting_begin_rad_) < AngleBetween(angle, parting_end_rad_)
+                ? parting_begin_rad_
+                : parting_end_rad_;
   }
-  return static_cast<float>(std::cos(angle)) * face_ + static_cast<float>(std::sin(angle)) * parting_up_;
+  return static_cast<float>(std::cos(angle)) * face_ +
+         static_cast<float>(std::sin(angle)) * parting_up_;
 }
 
 Eigen::Vector3f ScalpGuide::ReferenceDirection(const Eigen::Vector3f& p) const {
@@ -112,14 +116,16 @@ Eigen::Vector3f ScalpGuide::ReferenceDirection(const Eigen::Vector3f& p) const {
   // On the parting (or at the crown) the arc has no direction: away from the
   // parting's plane, or to the back of the head.
   const Eigen::Vector3f degenerate =
-      has_parting_ ? Eigen::Vector3f(u.dot(parting_normal_) >= 0 ? parting_normal_ : -parting_normal_)
-                   : Eigen::Vector3f(-face_);
+      has_parting_
+          ? Eigen::Vector3f(u.dot(parting_normal_) >= 0 ? parting_normal_ : -parting_normal_)
+          : Eigen::Vector3f(-face_);
   const Eigen::Vector3f along_arc = SafeNormalized(a.dot(u) * u - a, degenerate);
   const Eigen::Vector3f n = Outward(p);
   return SafeNormalized(along_arc - along_arc.dot(n) * n, along_arc);
 }
 
-std::vector<Eigen::Vector3f> ScalpGuide::PathFromParting(const Eigen::Vector3f& p, double step_mm) const {
+std::vector<Eigen::Vector3f> ScalpGuide::PathFromParting(const Eigen::Vector3f& p,
+                                                         double step_mm) const {
   const float radius = (p - centre_).norm();
   const Eigen::Vector3f u = SafeNormalized(p - centre_, up_);
   const Eigen::Vector3f a = PartingDirection(u);
@@ -134,7 +140,8 @@ std::vector<Eigen::Vector3f> ScalpGuide::PathFromParting(const Eigen::Vector3f& 
   return path;
 }
 
-Eigen::Vector3f ScalpGuide::GrowingDirection(const Eigen::Vector3f& r, const Eigen::Vector3f& q) const {
+Eigen::Vector3f ScalpGuide::GrowingDirection(const Eigen::Vector3f& r,
+                                             const Eigen::Vector3f& q) const {
   const Eigen::Vector3f n = Outward(r);
   const Eigen::Vector3f reference = ReferenceDirection(r);
   const Eigen::Vector3f towards_q = SafeNormalized(q - r, reference);
@@ -164,8 +171,10 @@ ScalpRoot ScalpGuide::AssignRoot(const Eigen::Vector3f& q, double step_mm, doubl
   for (int attempt = 0; attempt < kRootTries && !found; ++attempt) {
     Eigen::Vector3f g(gaussian(rng), gaussian(rng), gaussian(rng));
     g = SafeNormalized(g - g.dot(n_k) * n_k, n_k.unitOrthogonal());
-    const Eigen::Vector3f moved = path[k] + static_cast<float>(jitter_mm) * std::sqrt(uniform(rng)) * g;
-    const Eigen::Vector3f candidate = SurfaceAlong(SafeNormalized(moved - centre_, up_), (moved - centre_).norm());
+    const Eigen::Vector3f moved =
+        path[k] + static_cast<float>(jitter_mm) * std::sqrt(uniform(rng)) * g;
+    const Eigen::Vector3f candidate =
+        SurfaceAlong(SafeNormalized(moved - centre_, up_), (moved - centre_).norm());
     if (on_scalp(candidate)) root.position = candidate, found = true;
   }
   for (size_t i = k; i < path.size() && !found; ++i) {

@@ -17,11 +17,10 @@
 // parting's place: d_s points down the head away from the crown.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "reconstruction/point_grid.h"
@@ -29,8 +28,8 @@
 namespace hairrig {
 
 struct ScalpRoot {
-  Eigen::Vector3f position = Eigen::Vector3f::Zero();  // r, on the head's surface
-  Eigen::Vector3f normal = Eigen::Vector3f::Zero();    // n(r), unit, out of the head
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();           // r, on the head's surface
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();             // n(r), unit, out of the head
   Eigen::Vector3f growing_direction = Eigen::Vector3f::Zero();  // d_g (Eq. 12), unit
 };
 
@@ -72,7 +71,8 @@ class ScalpGuide {
   // Gamma(p)'s p_1..p_M, r drawn on the scalp within `jitter_mm` of p_k
   // (falling back to the next path points on the scalp, then to p), d_g by
   // Eq. 12. Requires !empty().
-  ScalpRoot AssignRoot(const Eigen::Vector3f& q, double step_mm, double jitter_mm, std::mt19937_64& rng) const;
+  ScalpRoot AssignRoot(const Eigen::Vector3f& q, double step_mm, double jitter_mm,
+                       std::mt19937_64& rng) const;
 
  private:
   // The nearest point of the parting (or the crown) seen from the centre, unit.

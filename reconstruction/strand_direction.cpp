@@ -21,7 +21,8 @@ using PairKey = std::pair<uint32_t, uint32_t>;
 using PairWeights = std::vector<std::pair<PairKey, double>>;
 
 void MergePairs(PairWeights* pairs) {
-  std::sort(pairs->begin(), pairs->end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::sort(pairs->begin(), pairs->end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   size_t out = 0;
   for (size_t i = 0; i < pairs->size(); ++i) {
     if (out > 0 && (*pairs)[out - 1].first == (*pairs)[i].first) {
@@ -57,9 +58,11 @@ void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOpti
   std::vector<const std::vector<Eigen::Vector3f>*> polylines;
   for (const StrandSegment& s : segments) polylines.push_back(&s.points_mm);
   const PolylineVertexTable table = TabulatePolylines(polylines);
-  for (const OwnerOverlap& overlap : FindOwnerOverlaps(table, o.overlap_mm, o.overlap_stride, o.threads)) {
+  for (const OwnerOverlap& overlap :
+       FindOwnerOverlaps(table, o.overlap_mm, o.overlap_stride, o.threads)) {
     if (overlap.votes == 0) continue;
-    pairs->push_back({{overlap.a, overlap.b}, (overlap.votes > 0 ? 1 : -1) * o.alpha_close * overlap.share});
+    pairs->push_back(
+        {{overlap.a, overlap.b}, (overlap.votes > 0 ? 1 : -1) * o.alpha_close * overlap.share});
     ++*count;
   }
 }
@@ -97,11 +100,15 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
 
 Status DirectionOptions::Check() const {
   if (!(height_scale_mm > 0)) return InvalidArgument("direction height_scale_mm must be positive");
-  if (!(alpha_link >= 0) || !(alpha_close >= 0)) return InvalidArgument("direction weights must be non-negative");
+  if (!(alpha_link >= 0) || !(alpha_close >= 0))
+    return InvalidArgument("direction weights must be non-negative");
   if (overlap_stride < 1) return InvalidArgument("direction overlap_stride must be at least 1");
-  if (!(link_gap_mm > 0) || !(overlap_mm > 0)) return InvalidArgument("direction link_gap_mm and overlap_mm must be positive");
-  if (!(link_cos >= 0 && link_cos <= 1)) return InvalidArgument("direction link_cos must lie in 0..1");
-  if (!(std::abs(down.norm() - 1) < 1e-3)) return InvalidArgument("direction down must be a unit vector");
+  if (!(link_gap_mm > 0) || !(overlap_mm > 0))
+    return InvalidArgument("direction link_gap_mm and overlap_mm must be positive");
+  if (!(link_cos >= 0 && link_cos <= 1))
+    return InvalidArgument("direction link_cos must lie in 0..1");
+  if (!(std::abs(down.norm() - 1) < 1e-3))
+    return InvalidArgument("direction down must be a unit vector");
   return Status::Ok();
 }
 
@@ -123,7 +130,8 @@ DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const Head
   for (size_t i = 0; i < n; ++i) mrf.unary[i] = {keep[i], -keep[i]};
   for (const auto& [key, weight] : pairs) {
     // + weight: the same label is compatible (differing costs it), - weight: the opposite.
-    mrf.pairs.push_back({key.first, key.second, weight >= 0 ? 0.0 : -weight, weight >= 0 ? weight : 0.0});
+    mrf.pairs.push_back(
+        {key.first, key.second, weight >= 0 ? 0.0 : -weight, weight >= 0 ? weight : 0.0});
   }
   const BinaryMrfSolution solution = SolveBinaryMrf(mrf);
   summary.truncated_pairs = solution.truncated_pairs;

@@ -22,10 +22,9 @@
 // ribbons (ribbons.h), whose MRF is the same over ribbons.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "core/status.h"
@@ -34,16 +33,16 @@
 namespace hairrig {
 
 struct DirectionOptions {
-  double height_scale_mm = 100;     // h of Eq. 5
-  double alpha_link = 1.0;          // Eq. 4's weights
+  double height_scale_mm = 100;  // h of Eq. 5
+  double alpha_link = 1.0;       // Eq. 4's weights
   double alpha_close = 1.0;
-  double link_gap_mm = 10;          // ends this close may link
-  double link_cos = 0.8;            // |tangent . tangent'| and the gap's alignment for a link
-  double overlap_mm = 3.0;          // vertices this close overlap
+  double link_gap_mm = 10;  // ends this close may link
+  double link_cos = 0.8;    // |tangent . tangent'| and the gap's alignment for a link
+  double overlap_mm = 3.0;  // vertices this close overlap
   // Overlaps are looked for from every overlap_stride-th vertex of each
   // segment (1: every vertex, as Eq. 7 counts them).
   int overlap_stride = 1;
-  Eigen::Vector3f down{0, 0, -1};   // H's direction (unit)
+  Eigen::Vector3f down{0, 0, -1};  // H's direction (unit)
   int threads = 2;
 
   Status Check() const;
@@ -51,9 +50,9 @@ struct DirectionOptions {
 
 struct DirectionSummary {
   int64_t segments = 0, links = 0, overlaps = 0;
-  int64_t reversed = 0;                 // segments whose vertex order was flipped
-  int64_t truncated_pairs = 0;          // non-submodular pairs truncated
-  int64_t unary_disagreements = 0;      // segments whose label goes against their own E_ribb
+  int64_t reversed = 0;             // segments whose vertex order was flipped
+  int64_t truncated_pairs = 0;      // non-submodular pairs truncated
+  int64_t unary_disagreements = 0;  // segments whose label goes against their own E_ribb
   // Eq. 4's truncated energy at the solution less its floor (the minimum cut;
   // BinaryMrfSolution::cut).
   double energy = 0;

@@ -1,8 +1,8 @@
 #include "reconstruction/strand_direction.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "core/head_spec.h"
 #include "tests/support/ellipsoid_head.h"
@@ -14,7 +14,8 @@ namespace {
 std::vector<Eigen::Vector3f> Line(const Eigen::Vector3f& from, const Eigen::Vector3f& to) {
   const int steps = std::max(2, static_cast<int>(std::ceil((to - from).norm() / 2.0f)));
   std::vector<Eigen::Vector3f> points;
-  for (int k = 0; k <= steps; ++k) points.push_back(from + (to - from) * (static_cast<float>(k) / static_cast<float>(steps)));
+  for (int k = 0; k <= steps; ++k)
+    points.push_back(from + (to - from) * (static_cast<float>(k) / static_cast<float>(steps)));
   return points;
 }
 
@@ -43,7 +44,8 @@ TEST(StrandDirection, HangingStrandsRunRootToTipWhateverOrderTheyArriveIn) {
   EXPECT_GT(summary.links, 0);
   EXPECT_GT(summary.overlaps, 0);
   for (size_t i = 0; i < segments.size(); ++i) {
-    EXPECT_GT(segments[i].points_mm.front().z(), segments[i].points_mm.back().z()) << "segment " << i;
+    EXPECT_GT(segments[i].points_mm.front().z(), segments[i].points_mm.back().z())
+        << "segment " << i;
   }
 }
 
@@ -57,8 +59,10 @@ TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
   segments.push_back({Line({0, 0, 100}, {0, 0, 0})});
   StrandSegment turn;
   for (int k = 0; k <= 16; ++k) {
-    const float a = static_cast<float>(M_PI) * static_cast<float>(k) / 16.0f;  // from straight down to straight up
-    turn.points_mm.emplace_back(10.0f - 10.0f * std::cos(a), 0.0f, -3.0f - 10.0f * std::sin(a) - 0.05f * static_cast<float>(k));
+    const float a = static_cast<float>(M_PI) * static_cast<float>(k) /
+                    16.0f;  // from straight down to straight up
+    turn.points_mm.emplace_back(10.0f - 10.0f * std::cos(a), 0.0f,
+                                -3.0f - 10.0f * std::sin(a) - 0.05f * static_cast<float>(k));
   }
   segments.push_back(turn);
   segments.push_back({Line({20, 0, -1}, {20, 0, 40})});
@@ -68,9 +72,11 @@ TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
     ShuffleOrders(&shuffled, seed);
     const DirectionSummary summary = DirectSegments(&shuffled, nullptr, DirectionOptions{});
     EXPECT_EQ(summary.links, 2) << "seed " << seed;
-    EXPECT_EQ(summary.unary_disagreements, 1) << "the rising piece goes against its own E_ribb, seed " << seed;
+    EXPECT_EQ(summary.unary_disagreements, 1)
+        << "the rising piece goes against its own E_ribb, seed " << seed;
     for (size_t i = 0; i < expected.size(); ++i) {
-      EXPECT_EQ(shuffled[i].points_mm.front(), expected[i].points_mm.front()) << "segment " << i << " seed " << seed;
+      EXPECT_EQ(shuffled[i].points_mm.front(), expected[i].points_mm.front())
+          << "segment " << i << " seed " << seed;
     }
   }
   // Without links, the rising piece follows its own E_ribb: the test above can fail.

@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <sstream>
 #include <string>
 #include <utility>
-
-#include <nlohmann/json.hpp>
 
 #include "core/statistics.h"
 
@@ -19,20 +18,26 @@ StrandLengthStats LengthStats(const StrandSet& strands) {
   const std::vector<double> lengths = strands.StrandLengths();
   s.count = static_cast<int64_t>(lengths.size());
   if (lengths.empty()) return s;
-  s.mean_mm = std::accumulate(lengths.begin(), lengths.end(), 0.0) / static_cast<double>(lengths.size());
+  s.mean_mm =
+      std::accumulate(lengths.begin(), lengths.end(), 0.0) / static_cast<double>(lengths.size());
   s.p10_mm = Quantile(lengths, 0.1);
   s.median_mm = Median(lengths);
   s.p90_mm = Quantile(lengths, 0.9);
   return s;
 }
 
-// Per true strand with matched samples, the largest share of them whose nearest estimate sample comes from one
-// estimate strand; the mean of the shares.
-void MeasureConsistency(const std::vector<int64_t>& nearest, const std::vector<uint32_t>& truth_sample_strand,
-                        const std::vector<uint32_t>& estimate_sample_strand, StrandEvaluation* out) {
-  std::vector<std::pair<uint32_t, uint32_t>> pairs;  // (true strand, estimate strand) per matched true sample
+// Per true strand with matched samples, the largest share of them whose nearest estimate sample
+// comes from one estimate strand; the mean of the shares.
+void MeasureConsistency(const std::vector<int64_t>& nearest,
+                        const std::vector<uint32_t>& truth_sample_strand,
+                        const std::vector<uint32_t>& estimate_sample_strand,
+                        StrandEvaluation* out) {
+  std::vector<std::pair<uint32_t, uint32_t>>
+      pairs;  // (true strand, estimate strand) per matched true sample
   for (size_t i = 0; i < nearest.size(); ++i) {
-    if (nearest[i] >= 0) pairs.emplace_back(truth_sample_strand[i], estimate_sample_strand[static_cast<size_t>(nearest[i])]);
+    if (nearest[i] >= 0)
+      pairs.emplace_back(truth_sample_strand[i],
+                         estimate_sample_strand[static_cast<size_t>(nearest[i])]);
   }
   std::sort(pairs.begin(), pairs.end());
   double sum = 0;
@@ -54,21 +59,29 @@ void MeasureConsistency(const std::vector<int64_t>& nearest, const std::vector<u
 }
 
 // Roots (first points) on the head's scalp: near its surface and OnScalp.
-void MeasureRoots(const StrandSet& estimate, const HeadModel& head, double tolerance_mm, StrandEvaluation* out) {
+void MeasureRoots(const StrandSet& estimate, const HeadModel& head, double tolerance_mm,
+                  StrandEvaluation* out) {
   int64_t on_scalp = 0;
   size_t first = 0;
   for (uint32_t count : estimate.point_counts) {
     const Eigen::Vector3d root = estimate.points_mm[first].cast<double>();
     first += count;
-    if (std::abs(head.SignedDistance(root, nullptr)) <= tolerance_mm && head.OnScalp(root)) ++on_scalp;
+    if (std::abs(head.SignedDistance(root, nullptr)) <= tolerance_mm && head.OnScalp(root))
+      ++on_scalp;
   }
   out->rooted_on_scalp = on_scalp;
   out->rooted_on_scalp_fraction =
-      estimate.num_strands() > 0 ? static_cast<double>(on_scalp) / static_cast<double>(estimate.num_strands()) : 0.0;
+      estimate.num_strands() > 0
+          ? static_cast<double>(on_scalp) / static_cast<double>(estimate.num_strands())
+          : 0.0;
 }
 
 nlohmann::json LengthsJson(const StrandLengthStats& s) {
-  return {{"count", s.count}, {"mean", s.mean_mm}, {"p10", s.p10_mm}, {"median", s.median_mm}, {"p90", s.p90_mm}};
+  return {{"count", s.count},
+          {"mean", s.mean_mm},
+          {"p10", s.p10_mm},
+          {"median", s.median_mm},
+          {"p90", s.p90_mm}};
 }
 
 nlohmann::json MatchJson(const StrandMatchScores& s) {
@@ -83,49 +96,61 @@ Status StrandEvalOptions::Check() const {
   if (!(sample_step_mm > 0) || !std::isfinite(sample_step_mm))
     return InvalidArgument("strand evaluation: sample_step_mm must be a positive number of mm");
   if (!(root_tolerance_mm >= 0) || !std::isfinite(root_tolerance_mm))
-    return InvalidArgument("strand evaluation: root_tolerance_mm must be a number of mm, 0 or more");
+    return InvalidArgument(
+        "strand evaluation: root_tolerance_mm must be a number of mm, 0 or more");
   if (threads < 1) return InvalidArgument("strand evaluation: threads must be at least 1");
   return Status::Ok();
 }
 
-Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame, const StrandSet& truth,
-                                         const std::vector<uint8_t>& truth_sample_visible, const HeadModel* true_head,
+Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame,
+                                         const StrandSet& truth,
+                                         const std::vector<uint8_t>& truth_sample_visible,
+                                         const HeadModel* true_head,
                                          const StrandEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
   std::vector<uint32_t> truth_sample_strand;
-  const std::vector<OrientedSample> truth_samples = SampleStrands(truth, options.sample_step_mm, &truth_sample_strand);
-  return EvaluateStrands(estimate_in_truth_frame, truth, truth_samples, truth_sample_strand, truth_sample_visible,
-                         true_head, options);
+  const std::vector<OrientedSample> truth_samples =
+      SampleStrands(truth, options.sample_step_mm, &truth_sample_strand);
+  return EvaluateStrands(estimate_in_truth_frame, truth, truth_samples, truth_sample_strand,
+                         truth_sample_visible, true_head, options);
 }
 
-Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame, const StrandSet& truth,
+Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame,
+                                         const StrandSet& truth,
                                          const std::vector<OrientedSample>& truth_samples,
                                          const std::vector<uint32_t>& truth_sample_strand,
-                                         const std::vector<uint8_t>& truth_sample_visible, const HeadModel* true_head,
+                                         const std::vector<uint8_t>& truth_sample_visible,
+                                         const HeadModel* true_head,
                                          const StrandEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
   const StrandSet& estimate = estimate_in_truth_frame;
-  if (const Status s = estimate.Validate(); !s.ok()) return InvalidArgument("reconstructed strands: " + s.message());
-  if (const Status s = truth.Validate(); !s.ok()) return InvalidArgument("true strands: " + s.message());
+  if (const Status s = estimate.Validate(); !s.ok())
+    return InvalidArgument("reconstructed strands: " + s.message());
+  if (const Status s = truth.Validate(); !s.ok())
+    return InvalidArgument("true strands: " + s.message());
   if (truth_sample_strand.size() != truth_samples.size())
-    return InvalidArgument("strand evaluation: " + std::to_string(truth_sample_strand.size()) + " strand indices for " +
-                           std::to_string(truth_samples.size()) + " true samples");
+    return InvalidArgument("strand evaluation: " + std::to_string(truth_sample_strand.size()) +
+                           " strand indices for " + std::to_string(truth_samples.size()) +
+                           " true samples");
   for (uint32_t k : truth_sample_strand) {
     if (k >= truth.num_strands())
-      return InvalidArgument("strand evaluation: a true sample's strand " + std::to_string(k) + " is not among the " +
-                             std::to_string(truth.num_strands()) + " true strands");
+      return InvalidArgument("strand evaluation: a true sample's strand " + std::to_string(k) +
+                             " is not among the " + std::to_string(truth.num_strands()) +
+                             " true strands");
   }
   const bool with_visible = !truth_sample_visible.empty();
   if (with_visible && truth_sample_visible.size() != truth_samples.size())
     return InvalidArgument("strand evaluation: the visible-surface mask has " +
                            std::to_string(truth_sample_visible.size()) + " flags for " +
-                           std::to_string(truth_samples.size()) + " true samples (one per sample of the truth every " +
+                           std::to_string(truth_samples.size()) +
+                           " true samples (one per sample of the truth every " +
                            std::to_string(options.sample_step_mm) + " mm)");
 
   StrandEvaluation out;
   out.sample_step_mm = options.sample_step_mm;
   std::vector<uint32_t> estimate_sample_strand;
-  const std::vector<OrientedSample> samples = SampleStrands(estimate, options.sample_step_mm, &estimate_sample_strand);
+  const std::vector<OrientedSample> samples =
+      SampleStrands(estimate, options.sample_step_mm, &estimate_sample_strand);
   out.strands = static_cast<int64_t>(estimate.num_strands());
   out.samples = static_cast<int64_t>(samples.size());
   out.truth_strands = static_cast<int64_t>(truth.num_strands());
@@ -134,7 +159,8 @@ Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_fram
   const std::vector<MatchThreshold> thresholds = StrandMatchThresholds();
   for (bool directed : {false, true}) {
     const SampleMatchOptions match{.directed = directed, .threads = options.threads};
-    SubsetMatchScores scores = MatchSamplesAndSubset(samples, truth_samples, truth_sample_visible, thresholds, match);
+    SubsetMatchScores scores =
+        MatchSamplesAndSubset(samples, truth_samples, truth_sample_visible, thresholds, match);
     (directed ? out.all.directed : out.all.undirected) = std::move(scores.all);
     if (with_visible) {
       (directed ? out.visible.directed : out.visible.undirected) = std::move(scores.subset);
@@ -142,8 +168,9 @@ Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_fram
     }
   }
 
-  const std::vector<int64_t> nearest = NearestMatches(samples, truth_samples, kStrandConsistencyThreshold,
-                                                      {.directed = false, .threads = options.threads});
+  const std::vector<int64_t> nearest =
+      NearestMatches(samples, truth_samples, kStrandConsistencyThreshold,
+                     {.directed = false, .threads = options.threads});
   MeasureConsistency(nearest, truth_sample_strand, estimate_sample_strand, &out);
 
   out.root_tolerance_mm = options.root_tolerance_mm;
@@ -160,7 +187,8 @@ nlohmann::json StrandEvaluation::ToJson() const {
   j["samples"] = samples;
   j["truth_strands"] = truth_strands;
   j["truth_samples"] = truth_samples;
-  j["visible_truth_samples"] = visible_truth_samples ? nlohmann::json(*visible_truth_samples) : nlohmann::json(nullptr);
+  j["visible_truth_samples"] =
+      visible_truth_samples ? nlohmann::json(*visible_truth_samples) : nlohmann::json(nullptr);
   j["all_strands"] = MatchJson(all);
   j["visible_surface"] = visible_truth_samples ? MatchJson(visible) : nlohmann::json(nullptr);
   j["consistency"] = {{"mean", consistency},
@@ -168,12 +196,14 @@ nlohmann::json StrandEvaluation::ToJson() const {
                       {"distance_mm", kStrandConsistencyThreshold.distance_mm},
                       {"angle_deg", kStrandConsistencyThreshold.angle_deg}};
   if (rooted_on_scalp_fraction) {
-    j["rooted_on_scalp"] = {
-        {"fraction", *rooted_on_scalp_fraction}, {"strands", rooted_on_scalp}, {"tolerance_mm", root_tolerance_mm}};
+    j["rooted_on_scalp"] = {{"fraction", *rooted_on_scalp_fraction},
+                            {"strands", rooted_on_scalp},
+                            {"tolerance_mm", root_tolerance_mm}};
   } else {
     j["rooted_on_scalp"] = nullptr;
   }
-  j["lengths_mm"] = {{"reconstructed", LengthsJson(lengths)}, {"truth", LengthsJson(truth_lengths)}};
+  j["lengths_mm"] = {{"reconstructed", LengthsJson(lengths)},
+                     {"truth", LengthsJson(truth_lengths)}};
   return j;
 }
 
@@ -181,8 +211,9 @@ std::string StrandEvaluation::BriefReport() const {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(1);
-  s << "strands: " << strands << " reconstructed (" << samples << " samples, every " << sample_step_mm
-    << " mm) against " << truth_strands << " true (" << truth_samples << " samples";
+  s << "strands: " << strands << " reconstructed (" << samples << " samples, every "
+    << sample_step_mm << " mm) against " << truth_strands << " true (" << truth_samples
+    << " samples";
   if (visible_truth_samples) s << ", " << *visible_truth_samples << " on the visible surface";
   s << "); precision / recall undirected, directed in brackets\n";
   s.precision(3);
@@ -193,23 +224,26 @@ std::string StrandEvaluation::BriefReport() const {
     s.precision(3);
     s << "precision " << u.precision << " (" << d.precision << ")";
     if (k < visible.undirected.size() && k < visible.directed.size())
-      s << ", visible-surface recall " << visible.undirected[k].recall << " (" << visible.directed[k].recall << ")";
+      s << ", visible-surface recall " << visible.undirected[k].recall << " ("
+        << visible.directed[k].recall << ")";
     s << ", all-strands recall " << u.recall << " (" << d.recall << ")\n";
   }
-  s << "  consistency " << consistency << " (mean over " << consistency_strands << " true strands with a sample matched";
+  s << "  consistency " << consistency << " (mean over " << consistency_strands
+    << " true strands with a sample matched";
   s.precision(0);
-  s << " at " << kStrandConsistencyThreshold.distance_mm << " mm, " << kStrandConsistencyThreshold.angle_deg
-    << " deg)\n";
+  s << " at " << kStrandConsistencyThreshold.distance_mm << " mm, "
+    << kStrandConsistencyThreshold.angle_deg << " deg)\n";
   s.precision(1);
   if (rooted_on_scalp_fraction) {
-    s << "  roots on the scalp: " << 100 * *rooted_on_scalp_fraction << " % of reconstructed strands (" << rooted_on_scalp
-      << ", within " << root_tolerance_mm << " mm of the head)\n";
+    s << "  roots on the scalp: " << 100 * *rooted_on_scalp_fraction
+      << " % of reconstructed strands (" << rooted_on_scalp << ", within " << root_tolerance_mm
+      << " mm of the head)\n";
   } else {
     s << "  roots on the scalp: not scored (no true head)\n";
   }
   const auto line = [&](const char* name, const StrandLengthStats& l) {
-    s << "  " << name << " lengths: mean " << l.mean_mm << " mm, p10 " << l.p10_mm << ", median " << l.median_mm
-      << ", p90 " << l.p90_mm << " (" << l.count << " strands)\n";
+    s << "  " << name << " lengths: mean " << l.mean_mm << " mm, p10 " << l.p10_mm << ", median "
+      << l.median_mm << ", p90 " << l.p90_mm << " (" << l.count << " strands)\n";
   };
   line("reconstructed", lengths);
   line("true", truth_lengths);

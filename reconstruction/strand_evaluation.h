@@ -24,11 +24,10 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "core/head_model.h"
 #include "core/status.h"
@@ -43,9 +42,10 @@ std::vector<MatchThreshold> StrandMatchThresholds();
 inline constexpr MatchThreshold kStrandConsistencyThreshold{3, 30};
 
 struct StrandEvalOptions {
-  double sample_step_mm = 1.0;     // both sets sampled at most this far apart along a strand (> 0)
-  double root_tolerance_mm = 3.0;  // a root within this of the head's surface (|signed distance| <=) is on it (>= 0)
-  int threads = 2;                 // at least 1
+  double sample_step_mm = 1.0;  // both sets sampled at most this far apart along a strand (> 0)
+  double root_tolerance_mm =
+      3.0;  // a root within this of the head's surface (|signed distance| <=) is on it (>= 0)
+  int threads = 2;  // at least 1
 
   // InvalidArgument naming the field for a value out of range (or NaN).
   Status Check() const;
@@ -71,8 +71,8 @@ struct StrandEvaluation {
   // True samples on the visible surface; nullopt when no mask was given (and
   // `visible` is then empty).
   std::optional<int64_t> visible_truth_samples;
-  StrandMatchScores all;      // recall against every true sample
-  StrandMatchScores visible;  // recall against the visible surface; precision as `all`'s
+  StrandMatchScores all;            // recall against every true sample
+  StrandMatchScores visible;        // recall against the visible surface; precision as `all`'s
   double consistency = 0;           // mean over consistency_strands (0 when there are none)
   int64_t consistency_strands = 0;  // true strands with at least one matched sample
   // Share of reconstructed strands rooted on the scalp and their number;
@@ -84,7 +84,8 @@ struct StrandEvaluation {
 
   // {"strands", "samples", "truth_strands", "truth_samples", "visible_truth_samples",
   //  "all_strands": {"undirected": [...], "directed": [...]}, "visible_surface": {...} or null,
-  //  "consistency": {...}, "rooted_on_scalp": {...} or null, "lengths_mm": {"reconstructed", "truth"}};
+  //  "consistency": {...}, "rooted_on_scalp": {...} or null, "lengths_mm": {"reconstructed",
+  //  "truth"}};
   // scores as point_evaluation.h's ScoresToJson.
   nlohmann::json ToJson() const;
   // A few lines: the counts, one line per threshold, consistency, roots, lengths.
@@ -98,18 +99,22 @@ struct StrandEvaluation {
 // scores are then 0). InvalidArgument for options that fail Check(), a strand
 // set that fails StrandSet::Validate() (naming which), or a mask of another size.
 // Time: a few MatchSamples runs over the samples (seconds for millions of samples).
-Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame, const StrandSet& truth,
-                                         const std::vector<uint8_t>& truth_sample_visible, const HeadModel* true_head,
+Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame,
+                                         const StrandSet& truth,
+                                         const std::vector<uint8_t>& truth_sample_visible,
+                                         const HeadModel* true_head,
                                          const StrandEvalOptions& options);
 
 // The same with the truth already sampled, for a caller that samples it once
 // for other scores as well: `truth_samples` and `truth_sample_strand` must be
 // SampleStrands(truth, options.sample_step_mm, &truth_sample_strand) (checked:
 // sizes, and strand indices within `truth`).
-Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame, const StrandSet& truth,
+Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame,
+                                         const StrandSet& truth,
                                          const std::vector<OrientedSample>& truth_samples,
                                          const std::vector<uint32_t>& truth_sample_strand,
-                                         const std::vector<uint8_t>& truth_sample_visible, const HeadModel* true_head,
+                                         const std::vector<uint8_t>& truth_sample_visible,
+                                         const HeadModel* true_head,
                                          const StrandEvalOptions& options);
 
 }  // namespace hairrig

@@ -3,13 +3,13 @@
 // 1 mm apart and sampled every 1 mm, so samples of copies coincide.
 #include "reconstruction/strand_evaluation.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 namespace hairrig {
 namespace {
@@ -19,7 +19,8 @@ StrandSet Comb(int count, int points) {
   StrandSet set;
   for (int i = 0; i < count; ++i) {
     std::vector<Eigen::Vector3f> strand;
-    for (int k = 0; k < points; ++k) strand.emplace_back(static_cast<float>(10 * i), 0.f, static_cast<float>(k));
+    for (int k = 0; k < points; ++k)
+      strand.emplace_back(static_cast<float>(10 * i), 0.f, static_cast<float>(k));
     set.AddStrand(strand);
   }
   return set;
@@ -35,7 +36,8 @@ std::vector<std::vector<Eigen::Vector3f>> Strands(const StrandSet& set) {
   return out;
 }
 
-void ExpectAll(const std::vector<MatchScore>& scores, double precision, double recall, const char* what) {
+void ExpectAll(const std::vector<MatchScore>& scores, double precision, double recall,
+               const char* what) {
   ASSERT_EQ(scores.size(), 4u) << what;
   for (const MatchScore& s : scores) {
     EXPECT_DOUBLE_EQ(s.precision, precision) << what << " at " << s.threshold.distance_mm << " mm";
@@ -43,7 +45,8 @@ void ExpectAll(const std::vector<MatchScore>& scores, double precision, double r
   }
 }
 
-StrandEvaluation Evaluate(const StrandSet& estimate, const StrandSet& truth, const std::vector<uint8_t>& visible = {},
+StrandEvaluation Evaluate(const StrandSet& estimate, const StrandSet& truth,
+                          const std::vector<uint8_t>& visible = {},
                           const HeadModel* head = nullptr) {
   auto e = EvaluateStrands(estimate, truth, visible, head, {});
   EXPECT_TRUE(e.ok()) << e.status().ToString();
@@ -112,8 +115,10 @@ TEST(StrandEvaluation, AStrandCutInTwoHalvesIsHalfConsistent) {
   const StrandSet truth = Comb(6, 20);
   StrandSet halves;
   for (const std::vector<Eigen::Vector3f>& s : Strands(truth)) {
-    halves.AddStrand(std::vector<Eigen::Vector3f>(s.begin(), s.begin() + 10));  // z = 0..9: 10 samples
-    halves.AddStrand(std::vector<Eigen::Vector3f>(s.begin() + 10, s.end()));  // z = 10..19: 10 samples
+    halves.AddStrand(
+        std::vector<Eigen::Vector3f>(s.begin(), s.begin() + 10));  // z = 0..9: 10 samples
+    halves.AddStrand(
+        std::vector<Eigen::Vector3f>(s.begin() + 10, s.end()));  // z = 10..19: 10 samples
   }
   const StrandEvaluation e = Evaluate(halves, truth);
   // Every true sample has an estimate sample at distance 0 (the nearest),
@@ -162,10 +167,11 @@ TEST(StrandEvaluation, TheShareOfRootsOnTheScalpOfAnEllipsoidHead) {
   };
   const Eigen::Vector3f up = Eigen::Vector3f::UnitZ(), forward(0, -1, 0);
   StrandSet estimate;
-  estimate.AddStrand(strand({0, 0, 365}, up));         // the crown: on the scalp
-  estimate.AddStrand(strand({0, 0, 367}, up));         // 2 mm above it: within 3 mm
-  estimate.AddStrand(strand({0, -95, 250}, forward));  // the face: on the head, below the hairline (38 deg)
-  estimate.AddStrand(strand({0, 0, 375}, up));         // 10 mm above the crown: off the head
+  estimate.AddStrand(strand({0, 0, 365}, up));  // the crown: on the scalp
+  estimate.AddStrand(strand({0, 0, 367}, up));  // 2 mm above it: within 3 mm
+  estimate.AddStrand(
+      strand({0, -95, 250}, forward));  // the face: on the head, below the hairline (38 deg)
+  estimate.AddStrand(strand({0, 0, 375}, up));  // 10 mm above the crown: off the head
   const StrandEvaluation e = Evaluate(estimate, Comb(2, 5), {}, head->get());
   ASSERT_TRUE(e.rooted_on_scalp_fraction.has_value());
   EXPECT_DOUBLE_EQ(*e.rooted_on_scalp_fraction, 0.5);
@@ -210,7 +216,8 @@ TEST(StrandEvaluation, BadOptionsMasksAndStrandSetsAreRefused) {
   broken.point_counts.push_back(4);  // points that are not there
   e = EvaluateStrands(broken, truth, {}, nullptr, {});
   ASSERT_FALSE(e.ok());
-  EXPECT_NE(e.status().message().find("reconstructed strands"), std::string::npos) << e.status().message();
+  EXPECT_NE(e.status().message().find("reconstructed strands"), std::string::npos)
+      << e.status().message();
 
   std::vector<uint32_t> strand_of;
   const std::vector<OrientedSample> samples = SampleStrands(truth, 1.0, &strand_of);
@@ -233,8 +240,8 @@ TEST(StrandEvaluation, TheReportAndTheJsonCarryEveryScore) {
   EXPECT_TRUE(j["rooted_on_scalp"].is_null());
   EXPECT_TRUE(Evaluate(truth, truth).ToJson()["visible_surface"].is_null());
   const std::string report = e.BriefReport();
-  for (const char* part : {"(2 mm, 20 deg)", "(4 mm, 90 deg)", "visible-surface recall", "consistency",
-                           "not scored", "lengths"})
+  for (const char* part : {"(2 mm, 20 deg)", "(4 mm, 90 deg)", "visible-surface recall",
+                           "consistency", "not scored", "lengths"})
     EXPECT_NE(report.find(part), std::string::npos) << part << " in\n" << report;
 }
 

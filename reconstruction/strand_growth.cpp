@@ -15,8 +15,8 @@ enum class End { kVolume, kLength };
 // Grows every root's strand with `step(previous vertex, previous direction,
 // &next direction) -> false to stop (volume)`, in parallel, in root order.
 template <typename MakeStep>
-StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head, const StrandGrowthOptions& o,
-                  MakeStep make_step, StrandGrowthSummary* summary) {
+StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
+                  const StrandGrowthOptions& o, MakeStep make_step, StrandGrowthSummary* summary) {
   std::vector<std::vector<Eigen::Vector3f>> strands(roots.size());
   std::vector<End> ends(roots.size(), End::kLength);
   const int max_steps = static_cast<int>(o.max_length_mm / o.step_mm);
@@ -33,7 +33,8 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
           break;
         }
         p += next * static_cast<float>(o.step_mm);
-        if (head != nullptr) p = head->KeepOutside(p.cast<double>(), o.head_clearance_mm).cast<float>();
+        if (head != nullptr)
+          p = head->KeepOutside(p.cast<double>(), o.head_clearance_mm).cast<float>();
         strand.push_back(p);
         direction = next;
       }
@@ -73,15 +74,19 @@ std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uin
 
 Status StrandGrowthOptions::Check() const {
   if (!(step_mm > 0)) return InvalidArgument("strand step_mm must be positive");
-  if (!(max_length_mm > step_mm)) return InvalidArgument("strand max_length_mm must exceed step_mm");
-  if (!(surface_threshold_mm >= 0)) return InvalidArgument("strand surface_threshold_mm must be non-negative");
+  if (!(max_length_mm > step_mm))
+    return InvalidArgument("strand max_length_mm must exceed step_mm");
+  if (!(surface_threshold_mm >= 0))
+    return InvalidArgument("strand surface_threshold_mm must be non-negative");
   if (!(volume_bound > 0)) return InvalidArgument("strand volume_bound must be positive");
-  if (!(head_clearance_mm >= 0)) return InvalidArgument("strand head_clearance_mm must be non-negative");
+  if (!(head_clearance_mm >= 0))
+    return InvalidArgument("strand head_clearance_mm must be non-negative");
   return Status::Ok();
 }
 
-StrandSet GrowStrandsInField(const HybridOrientationField& field, const std::vector<DirectedRoot>& roots,
-                             const HeadModel* head, const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
+StrandSet GrowStrandsInField(const HybridOrientationField& field,
+                             const std::vector<DirectedRoot>& roots, const HeadModel* head,
+                             const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
   const auto make_step = [&] {
     return [&](const Eigen::Vector3f& p, const Eigen::Vector3f& previous, Eigen::Vector3f* next) {
       if (!field.Contains(p) || field.Distance(p) > o.volume_bound) return false;
@@ -91,7 +96,8 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field, const std::vec
       if (d_s < o.surface_threshold_mm) a_s = 100 - d_s, a_i = 0.1;
       const double a_d = 0.1 * a_i, a_g = 10;
       Eigen::Vector3f h = static_cast<float>(a_i) * field.Interior(p, previous) -
-                          static_cast<float>(a_d) * field.DistanceGradient(p) + static_cast<float>(a_g) * previous;
+                          static_cast<float>(a_d) * field.DistanceGradient(p) +
+                          static_cast<float>(a_g) * previous;
       if (a_s > 0) h += static_cast<float>(a_s) * field.Surface(p, previous);
       if (h.norm() < 1e-6f) return true;  // keeps the previous direction
       *next = h.normalized();
@@ -101,8 +107,9 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field, const std::vec
   return GrowAll(roots, head, o, make_step, summary);
 }
 
-StrandSet GrowStrandsAlongPoints(const PointOrientationField& points, const std::vector<DirectedRoot>& roots,
-                                 const HeadModel* head, const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
+StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,
+                                 const std::vector<DirectedRoot>& roots, const HeadModel* head,
+                                 const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
   const auto make_step = [&] {
     return [&, reached = false](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
                                 Eigen::Vector3f* next) mutable {

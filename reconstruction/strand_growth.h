@@ -16,10 +16,9 @@
 //     stopped where it leaves them.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "core/status.h"
@@ -34,11 +33,11 @@ namespace hairrig {
 std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed);
 
 struct StrandGrowthOptions {
-  double step_mm = 1.0;            // delta of Eq. 2
+  double step_mm = 1.0;  // delta of Eq. 2
   double max_length_mm = 400;
   double surface_threshold_mm = 0.1;  // T_s
-  double volume_bound = 3.0;       // I_bound (I_d's units: mm at the grid's faces)
-  double head_clearance_mm = 0.5;  // vertices are kept this far outside the head
+  double volume_bound = 3.0;          // I_bound (I_d's units: mm at the grid's faces)
+  double head_clearance_mm = 0.5;     // vertices are kept this far outside the head
   int threads = 2;
 
   Status Check() const;
@@ -51,13 +50,15 @@ struct StrandGrowthSummary {
 };
 
 // Bao & Qi Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
-StrandSet GrowStrandsInField(const HybridOrientationField& field, const std::vector<DirectedRoot>& roots,
-                             const HeadModel* head, const StrandGrowthOptions& options,
+StrandSet GrowStrandsInField(const HybridOrientationField& field,
+                             const std::vector<DirectedRoot>& roots, const HeadModel* head,
+                             const StrandGrowthOptions& options,
                              StrandGrowthSummary* summary = nullptr);
 
 // The naive baseline from each root along the points' orientation.
-StrandSet GrowStrandsAlongPoints(const PointOrientationField& points, const std::vector<DirectedRoot>& roots,
-                                 const HeadModel* head, const StrandGrowthOptions& options,
+StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,
+                                 const std::vector<DirectedRoot>& roots, const HeadModel* head,
+                                 const StrandGrowthOptions& options,
                                  StrandGrowthSummary* summary = nullptr);
 
 }  // namespace hairrig

@@ -5,10 +5,9 @@
 // are drawn far to near and darkened with distance from the viewer.
 #pragma once
 
+#include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 #include "core/status.h"
 #include "core/strands.h"
@@ -18,13 +17,14 @@ namespace hairrig {
 
 struct StrandPreviewOptions {
   std::vector<double> azimuths_deg = {0, 90, 180, 270};
-  int view_px = 360;     // each view is view_px x view_px
-  int max_strands = 6000; // drawn per model (evenly chosen)
+  int view_px = 360;       // each view is view_px x view_px
+  int max_strands = 6000;  // drawn per model (evenly chosen)
 };
 
 // Rows share one scale and centre (the union of the models' bounds). An
 // empty model gives an empty row with its label.
-cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models, const std::vector<std::string>& labels,
+cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models,
+                            const std::vector<std::string>& labels,
                             const StrandPreviewOptions& options);
 
 struct StrandOverlayOptions {
@@ -38,7 +38,8 @@ struct StrandOverlayOptions {
 // a check that the model sits on the captured hair. Each view is cropped to
 // a square about the strands it shows (grown by a fifth on every side). Strand vertices behind a
 // camera are not drawn. Errors name an image that cannot be read.
-Result<cv::Mat> RenderStrandsOverViews(const std::vector<ReconstructionView>& views, const StrandSet& strands,
+Result<cv::Mat> RenderStrandsOverViews(const std::vector<ReconstructionView>& views,
+                                       const StrandSet& strands,
                                        const StrandOverlayOptions& options);
 
 }  // namespace hairrig

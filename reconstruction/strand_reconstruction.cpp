@@ -1,9 +1,8 @@
 #include "reconstruction/strand_reconstruction.h"
 
 #include <filesystem>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "core/clock.h"
 #include "core/file_util.h"
@@ -17,7 +16,9 @@ namespace hairrig {
 
 namespace {
 
-double SecondsSince(int64_t start_ns) { return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9; }
+double SecondsSince(int64_t start_ns) {
+  return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9;
+}
 
 StrandSet SegmentsAsStrands(const std::vector<StrandSegment>& segments) {
   StrandSet set;
@@ -46,7 +47,8 @@ struct StrandModel {
   bool structure = false;  // ribbons and wisps are written
 };
 
-Status WriteOutputs(const std::string& dir, const StrandModel& model, const StrandReconstructionSummary& summary) {
+Status WriteOutputs(const std::string& dir, const StrandModel& model,
+                    const StrandReconstructionSummary& summary) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
   if (error) return IoError(dir + ": cannot create the strands folder: " + error.message());
@@ -77,20 +79,23 @@ void SummariseStrands(const StrandSet& strands, StrandGrowthSummary* summary) {
 }
 
 Result<std::vector<StrandSegment>> GrowSegments(const std::vector<OrientedPoint>& points,
-                                                const std::string& points_file, const StrandReconstructionOptions& o,
+                                                const std::string& points_file,
+                                                const StrandReconstructionOptions& o,
                                                 StrandReconstructionSummary* summary) {
   const int64_t t = SteadyNowNs();
   std::vector<StrandSegment> segments = GrowStrandSegments(points, o.segments, &summary->segments);
   summary->seconds_segments = SecondsSince(t);
   if (segments.empty()) {
-    return InvalidArgument(points_file + ": the points give no strand segment (too few or too sparse)");
+    return InvalidArgument(points_file +
+                           ": the points give no strand segment (too few or too sparse)");
   }
   return segments;
 }
 
 // Luo 2013 Sec. 5.2-7.3 on the undirected segments.
-Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points, const std::vector<StrandSegment>& segments,
-                           const HeadModel& head, const StrandReconstructionOptions& o,
+Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points,
+                           const std::vector<StrandSegment>& segments, const HeadModel& head,
+                           const StrandReconstructionOptions& o,
                            StrandReconstructionSummary* summary) {
   int64_t t = SteadyNowNs();
   std::vector<Ribbon> ribbons = CoverWithRibbons(points, segments, o.ribbons, &summary->ribbons);
@@ -98,7 +103,8 @@ Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points, const std::
   t = SteadyNowNs();
   ConnectionOptions connections = o.connections;
   connections.threads = o.threads;
-  std::vector<RibbonLink> links = ConnectRibbons(ribbons, segments, connections, &summary->connections);
+  std::vector<RibbonLink> links =
+      ConnectRibbons(ribbons, segments, connections, &summary->connections);
   summary->seconds_connections = SecondsSince(t);
   t = SteadyNowNs();
   RibbonDirectionOptions ribbon_direction = o.ribbon_direction;
@@ -124,7 +130,8 @@ Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points, const std::
 
 // Bao & Qi 2017 on the segments directed by the MRF.
 Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadModel& head,
-                             const std::vector<DirectedRoot>& roots, const StrandReconstructionOptions& o,
+                             const std::vector<DirectedRoot>& roots,
+                             const StrandReconstructionOptions& o,
                              StrandReconstructionSummary* summary) {
   int64_t t = SteadyNowNs();
   DirectionOptions direction = o.direction;
@@ -169,8 +176,12 @@ nlohmann::json LuoJson(const StrandReconstructionSummary& s) {
           {"connections",
            {{"pairs_tried", s.connections.pairs_tried},
             {"links", s.connections.links},
-            {"rejected", {{"rms", s.connections.rejected_rms}, {"curvature", s.connections.rejected_curvature},
-                          {"torsion", s.connections.rejected_torsion}, {"overlap", s.connections.rejected_overlap}, {"direction", s.connections.rejected_direction}}}}},
+            {"rejected",
+             {{"rms", s.connections.rejected_rms},
+              {"curvature", s.connections.rejected_curvature},
+              {"torsion", s.connections.rejected_torsion},
+              {"overlap", s.connections.rejected_overlap},
+              {"direction", s.connections.rejected_direction}}}}},
           {"ribbon_direction",
            {{"links", s.ribbon_direction.links},
             {"compatible_links", s.ribbon_direction.compatible_links},
@@ -205,7 +216,8 @@ const char* StrandMethodName(StrandMethod method) {
 }
 
 Result<StrandMethod> ParseStrandMethod(const std::string& name) {
-  for (const StrandMethod method : {StrandMethod::kBaoQi, StrandMethod::kNaive, StrandMethod::kLuo}) {
+  for (const StrandMethod method :
+       {StrandMethod::kBaoQi, StrandMethod::kNaive, StrandMethod::kLuo}) {
     if (name == StrandMethodName(method)) return method;
   }
   return InvalidArgument("strand method '" + name + "': expected bao-qi, naive or luo");
@@ -226,44 +238,46 @@ Status StrandReconstructionOptions::Check() const {
 }
 
 nlohmann::json StrandReconstructionSummary::ToJson() const {
-  nlohmann::json j = {
-      {"format", "hairrig-reconstruction-strands"},
-      {"version", 1},
-      {"method", method},
-      {"head", head_source},
-      {"points", points},
-      {"segments",
-       {{"count", segments.segments},
-        {"seeds_grown", segments.seeds_grown},
-        {"vertices", segments.vertices},
-        {"mean_length_mm", segments.mean_length_mm},
-        {"splits", segments.splits},
-        {"stops", {{"turn", segments.stops_turn}, {"hole", segments.stops_hole}, {"mls", segments.stops_mls},
-                   {"length", segments.stops_length}}}}},
-      {"direction",
-       {{"links", direction.links},
-        {"overlaps", direction.overlaps},
-        {"reversed", direction.reversed},
-        {"truncated_pairs", direction.truncated_pairs},
-        {"against_own_height_and_scalp", direction.unary_disagreements},
-        {"energy", direction.energy}}},
-      {"strands",
-       {{"count", growth.strands},
-        {"vertices", growth.vertices},
-        {"mean_length_mm", growth.mean_length_mm},
-        {"stopped_at_volume", growth.stopped_volume},
-        {"stopped_at_max_length", growth.stopped_length},
-        {"dropped_short", growth.dropped_short}}},
-      {"seconds",
-       {{"segments", seconds_segments},
-        {"direction", seconds_direction},
-        {"field", seconds_field},
-        {"growth", seconds_growth},
-        {"ribbons", seconds_ribbons},
-        {"connections", seconds_connections},
-        {"wisps", seconds_wisps},
-        {"total", seconds_total}}},
-      {"output_dir", output_dir}};
+  nlohmann::json j = {{"format", "hairrig-reconstruction-strands"},
+                      {"version", 1},
+                      {"method", method},
+                      {"head", head_source},
+                      {"points", points},
+                      {"segments",
+                       {{"count", segments.segments},
+                        {"seeds_grown", segments.seeds_grown},
+                        {"vertices", segments.vertices},
+                        {"mean_length_mm", segments.mean_length_mm},
+                        {"splits", segments.splits},
+                        {"stops",
+                         {{"turn", segments.stops_turn},
+                          {"hole", segments.stops_hole},
+                          {"mls", segments.stops_mls},
+                          {"length", segments.stops_length}}}}},
+                      {"direction",
+                       {{"links", direction.links},
+                        {"overlaps", direction.overlaps},
+                        {"reversed", direction.reversed},
+                        {"truncated_pairs", direction.truncated_pairs},
+                        {"against_own_height_and_scalp", direction.unary_disagreements},
+                        {"energy", direction.energy}}},
+                      {"strands",
+                       {{"count", growth.strands},
+                        {"vertices", growth.vertices},
+                        {"mean_length_mm", growth.mean_length_mm},
+                        {"stopped_at_volume", growth.stopped_volume},
+                        {"stopped_at_max_length", growth.stopped_length},
+                        {"dropped_short", growth.dropped_short}}},
+                      {"seconds",
+                       {{"segments", seconds_segments},
+                        {"direction", seconds_direction},
+                        {"field", seconds_field},
+                        {"growth", seconds_growth},
+                        {"ribbons", seconds_ribbons},
+                        {"connections", seconds_connections},
+                        {"wisps", seconds_wisps},
+                        {"total", seconds_total}}},
+                      {"output_dir", output_dir}};
   if (method == StrandMethodName(StrandMethod::kLuo)) j.update(LuoJson(*this));
   return j;
 }
@@ -272,30 +286,35 @@ std::string StrandReconstructionSummary::BriefReport() const {
   const bool luo = method == StrandMethodName(StrandMethod::kLuo);
   std::ostringstream s;
   s.precision(3);
-  s << "strands (" << method << ", head: " << head_source << "): " << growth.strands << " strands, mean "
-    << growth.mean_length_mm << " mm, from " << segments.segments << " segments (mean " << segments.mean_length_mm
-    << " mm; ";
+  s << "strands (" << method << ", head: " << head_source << "): " << growth.strands
+    << " strands, mean " << growth.mean_length_mm << " mm, from " << segments.segments
+    << " segments (mean " << segments.mean_length_mm << " mm; ";
   if (luo) {
-    s << ribbons.ribbons << " ribbons, " << connections.links << " links, " << ribbon_direction.reversed
-      << " ribbons reversed by the direction MRF) of " << points << " points\n";
-    s << "  wisps: " << wisps.wisps << " (" << wisps.attached << " attached, " << wisps.interior << " interior; "
-      << wisps.connections << " connections; removed " << wisps.removed_covered << " covered, "
-      << wisps.removed_outliers << " outliers), mean " << wisps.mean_length_mm << " mm\n";
-    s << "  time: segments " << seconds_segments << " s, ribbons " << seconds_ribbons << " s, connections "
-      << seconds_connections << " s, direction " << seconds_direction << " s, wisps " << seconds_wisps
-      << " s, synthesis " << seconds_growth << " s, total " << seconds_total << " s\n";
+    s << ribbons.ribbons << " ribbons, " << connections.links << " links, "
+      << ribbon_direction.reversed << " ribbons reversed by the direction MRF) of " << points
+      << " points\n";
+    s << "  wisps: " << wisps.wisps << " (" << wisps.attached << " attached, " << wisps.interior
+      << " interior; " << wisps.connections << " connections; removed " << wisps.removed_covered
+      << " covered, " << wisps.removed_outliers << " outliers), mean " << wisps.mean_length_mm
+      << " mm\n";
+    s << "  time: segments " << seconds_segments << " s, ribbons " << seconds_ribbons
+      << " s, connections " << seconds_connections << " s, direction " << seconds_direction
+      << " s, wisps " << seconds_wisps << " s, synthesis " << seconds_growth << " s, total "
+      << seconds_total << " s\n";
     s << "  written: " << output_dir
       << "/strands.{ply,hair,data}, segments.ply, ribbons.ply, wisps.ply, summary.json\n";
     return s.str();
   }
   s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
-  s << "  time: segments " << seconds_segments << " s, direction " << seconds_direction << " s, field "
-    << seconds_field << " s, growth " << seconds_growth << " s, total " << seconds_total << " s\n";
+  s << "  time: segments " << seconds_segments << " s, direction " << seconds_direction
+    << " s, field " << seconds_field << " s, growth " << seconds_growth << " s, total "
+    << seconds_total << " s\n";
   s << "  written: " << output_dir << "/strands.{ply,hair,data}, segments.ply, summary.json\n";
   return s.str();
 }
 
-Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir, const HeadSpec& head_spec,
+Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir,
+                                                       const HeadSpec& head_spec,
                                                        const std::string& head_source,
                                                        const StrandReconstructionOptions& o) {
   HR_RETURN_IF_ERROR(o.Check());
@@ -306,7 +325,8 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
   summary.output_dir = reconstruction_dir + "/strands";
   const std::string points_file = reconstruction_dir + "/points.ply";
   if (!std::filesystem::exists(points_file)) {
-    return NotFound(points_file + ": no oriented points; run `hairrig reconstruct DIR --stage points` first");
+    return NotFound(points_file +
+                    ": no oriented points; run `hairrig reconstruct DIR --stage points` first");
   }
   HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points, ReadPointCloudPly(points_file));
   summary.points = static_cast<int64_t>(points.size());
@@ -316,12 +336,13 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
   if (o.method == StrandMethod::kNaive) {
     model = RunNaive(points, *head, SampleScalpRoots(*head, o.strands, o.seed), o, &summary);
   } else {
-    HR_ASSIGN_OR_RETURN(std::vector<StrandSegment> segments, GrowSegments(points, points_file, o, &summary));
+    HR_ASSIGN_OR_RETURN(std::vector<StrandSegment> segments,
+                        GrowSegments(points, points_file, o, &summary));
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
-      HR_ASSIGN_OR_RETURN(model, RunBaoQi(std::move(segments), *head, SampleScalpRoots(*head, o.strands, o.seed), o,
-                                          &summary));
+      HR_ASSIGN_OR_RETURN(model, RunBaoQi(std::move(segments), *head,
+                                          SampleScalpRoots(*head, o.strands, o.seed), o, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);

@@ -28,9 +28,8 @@
 #pragma once
 
 #include <cstdint>
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "core/head_spec.h"
 #include "core/status.h"
@@ -53,14 +52,14 @@ struct StrandReconstructionOptions {
   int strands = 20000;  // roots on the scalp (luo: strands synthesised)
   uint64_t seed = 1;    // root sampling (luo: synthesis)
   SegmentGrowthOptions segments;
-  DirectionOptions direction;           // bao-qi
-  HybridFieldOptions field;             // bao-qi
-  StrandGrowthOptions growth;           // bao-qi, naive
-  RibbonOptions ribbons;                // luo
-  ConnectionOptions connections;        // luo
+  DirectionOptions direction;               // bao-qi
+  HybridFieldOptions field;                 // bao-qi
+  StrandGrowthOptions growth;               // bao-qi, naive
+  RibbonOptions ribbons;                    // luo
+  ConnectionOptions connections;            // luo
   RibbonDirectionOptions ribbon_direction;  // luo
-  WispOptions wisps;                    // luo
-  SynthesisOptions synthesis;           // luo
+  WispOptions wisps;                        // luo
+  SynthesisOptions synthesis;               // luo
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
@@ -69,19 +68,20 @@ struct StrandReconstructionOptions {
 
 struct StrandReconstructionSummary {
   std::string method;
-  std::string head_source;   // where the head came from (for the report)
+  std::string head_source;  // where the head came from (for the report)
   std::string output_dir;
   int64_t points = 0;
   SegmentGrowthSummary segments;
   DirectionSummary direction;
-  StrandGrowthSummary growth;           // luo: the synthesised strands' count, vertices and mean length
+  StrandGrowthSummary growth;  // luo: the synthesised strands' count, vertices and mean length
   RibbonSummary ribbons;
   ConnectionSummary connections;
   RibbonDirectionSummary ribbon_direction;
   WispSummary wisps;
   // seconds_direction: the segments' MRF (bao-qi) or the ribbons' (luo);
   // seconds_growth: growing (bao-qi, naive) or synthesising (luo) the strands.
-  double seconds_segments = 0, seconds_direction = 0, seconds_field = 0, seconds_growth = 0, seconds_total = 0;
+  double seconds_segments = 0, seconds_direction = 0, seconds_field = 0, seconds_growth = 0,
+         seconds_total = 0;
   double seconds_ribbons = 0, seconds_connections = 0, seconds_wisps = 0;
 
   nlohmann::json ToJson() const;
@@ -92,7 +92,8 @@ struct StrandReconstructionSummary {
 // NotFound when there are no points (run the points stage first);
 // InvalidArgument for bad options, a head whose mesh cannot be loaded (naming
 // it), points that give no strand segment, or (luo) no wisp.
-Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir, const HeadSpec& head,
+Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir,
+                                                       const HeadSpec& head,
                                                        const std::string& head_source,
                                                        const StrandReconstructionOptions& options);
 

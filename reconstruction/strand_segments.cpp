@@ -1,11 +1,10 @@
 #include "reconstruction/strand_segments.h"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include <Eigen/Eigenvalues>
-#include <Eigen/SparseCore>
 
 namespace hairrig {
 
@@ -17,7 +16,8 @@ std::vector<Eigen::Vector3f> Positions(const std::vector<OrientedPoint>& points)
   return positions;
 }
 
-double PointSegmentDistance2(const Eigen::Vector3f& q, const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+double PointSegmentDistance2(const Eigen::Vector3f& q, const Eigen::Vector3f& a,
+                             const Eigen::Vector3f& b) {
   const Eigen::Vector3f ab = b - a;
   const float len2 = ab.squaredNorm();
   const float t = len2 > 0 ? std::clamp((q - a).dot(ab) / len2, 0.0f, 1.0f) : 0.0f;
@@ -28,7 +28,8 @@ enum class Stop { kTurn, kHole, kMls, kLength };
 
 // Grows from `start` along `direction` (one side of Sec. 5.1's growing); the
 // vertices after `start`.
-std::vector<Eigen::Vector3f> GrowOneWay(const PointOrientationField& field, const PointSetSurface& surface,
+std::vector<Eigen::Vector3f> GrowOneWay(const PointOrientationField& field,
+                                        const PointSetSurface& surface,
                                         const Eigen::Vector3f& start, Eigen::Vector3f direction,
                                         const SegmentGrowthOptions& o, Stop* why) {
   std::vector<Eigen::Vector3f> grown;
@@ -42,7 +43,8 @@ std::vector<Eigen::Vector3f> GrowOneWay(const PointOrientationField& field, cons
       break;
     }
     const Eigen::Vector3f shift = projected - moved;
-    if (shift.norm() > o.mls_min_shift_mm && std::abs(shift.normalized().dot(direction)) > o.max_mls_along) {
+    if (shift.norm() > o.mls_min_shift_mm &&
+        std::abs(shift.normalized().dot(direction)) > o.max_mls_along) {
       *why = Stop::kMls;  // rule 3
       break;
     }
@@ -72,7 +74,8 @@ void Cover(const PointGrid& grid, const std::vector<Eigen::Vector3f>& line, doub
     const Eigen::Vector3f mid = 0.5f * (a + b);
     const double reach = cover_mm + 0.5 * (b - a).norm();
     grid.ForEachWithin(mid, reach, [&](uint32_t k, double) {
-      if (!(*covered)[k] && PointSegmentDistance2(grid.positions()[k], a, b) <= cover2) (*covered)[k] = 1;
+      if (!(*covered)[k] && PointSegmentDistance2(grid.positions()[k], a, b) <= cover2)
+        (*covered)[k] = 1;
     });
   }
   if (line.size() == 1) {
@@ -82,11 +85,16 @@ void Cover(const PointGrid& grid, const std::vector<Eigen::Vector3f>& line, doub
 
 }  // namespace
 
-PointOrientationField::PointOrientationField(const std::vector<OrientedPoint>& points, double sigma_mm)
-    : points_(points), positions_(Positions(points)), sigma_mm_(sigma_mm), grid_(positions_, 2 * sigma_mm) {}
+PointOrientationField::PointOrientationField(const std::vector<OrientedPoint>& points,
+                                             double sigma_mm)
+    : points_(points),
+      positions_(Positions(points)),
+      sigma_mm_(sigma_mm),
+      grid_(positions_, 2 * sigma_mm) {}
 
-bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference, double min_abs_cos,
-                               int min_neighbours, Eigen::Vector3f* orientation, int* neighbours) const {
+bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference,
+                               double min_abs_cos, int min_neighbours, Eigen::Vector3f* orientation,
+                               int* neighbours) const {
   const bool filter = reference.squaredNorm() > 0;
   const double inv_two_sigma2 = 1.0 / (2 * sigma_mm_ * sigma_mm_);
   Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
@@ -95,7 +103,8 @@ bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& 
     const Eigen::Vector3f& o = points_[i].direction;
     if (filter && std::abs(o.dot(reference)) <= min_abs_cos) return;
     const Eigen::Vector3d od = o.cast<double>();
-    tensor += std::exp(-d2 * inv_two_sigma2) * std::max(points_[i].confidence, 1e-3f) * od * od.transpose();
+    tensor += std::exp(-d2 * inv_two_sigma2) * std::max(points_[i].confidence, 1e-3f) * od *
+              od.transpose();
     ++count;
   });
   if (neighbours != nullptr) *neighbours = count;
@@ -111,17 +120,24 @@ Status SegmentGrowthOptions::Check() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
   if (!positive(step_mm)) return InvalidArgument("segment step_mm must be positive");
   if (!positive(sigma_mm)) return InvalidArgument("segment sigma_mm must be positive");
-  if (!(min_turn_cos >= 0 && min_turn_cos <= 1)) return InvalidArgument("segment min_turn_cos must lie in 0..1");
-  if (!(neighbour_cos >= 0 && neighbour_cos < 1)) return InvalidArgument("segment neighbour_cos must lie in [0, 1)");
-  if (!(max_mls_along > 0 && max_mls_along <= 1)) return InvalidArgument("segment max_mls_along must lie in (0, 1]");
+  if (!(min_turn_cos >= 0 && min_turn_cos <= 1))
+    return InvalidArgument("segment min_turn_cos must lie in 0..1");
+  if (!(neighbour_cos >= 0 && neighbour_cos < 1))
+    return InvalidArgument("segment neighbour_cos must lie in [0, 1)");
+  if (!(max_mls_along > 0 && max_mls_along <= 1))
+    return InvalidArgument("segment max_mls_along must lie in (0, 1]");
   if (min_neighbours < 1) return InvalidArgument("segment min_neighbours must be at least 1");
   if (!positive(cover_mm)) return InvalidArgument("segment cover_mm must be positive");
   if (!(smooth_position > 0) || !(smooth_orientation >= 0) || !(smooth_curvature >= 0)) {
-    return InvalidArgument("segment smoothing weights: position must be positive, the others non-negative");
+    return InvalidArgument(
+        "segment smoothing weights: position must be positive, the others non-negative");
   }
-  if (!positive(split_height_mm)) return InvalidArgument("segment split_height_mm must be positive");
-  if (!(std::abs(down.norm() - 1) < 1e-3)) return InvalidArgument("segment down must be a unit vector");
-  if (!(mls_min_shift_mm >= 0)) return InvalidArgument("segment mls_min_shift_mm must be non-negative");
+  if (!positive(split_height_mm))
+    return InvalidArgument("segment split_height_mm must be positive");
+  if (!(std::abs(down.norm() - 1) < 1e-3))
+    return InvalidArgument("segment down must be a unit vector");
+  if (!(mls_min_shift_mm >= 0))
+    return InvalidArgument("segment mls_min_shift_mm must be non-negative");
   if (max_steps < 1) return InvalidArgument("segment max_steps must be at least 1");
   if (min_vertices < 2) return InvalidArgument("segment min_vertices must be at least 2");
   return Status::Ok();
@@ -133,8 +149,9 @@ double StrandSegment::Length() const {
   return length;
 }
 
-std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points, double alpha_position,
-                                            double alpha_orientation, double alpha_curvature) {
+std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points,
+                                            double alpha_position, double alpha_orientation,
+                                            double alpha_curvature) {
   PolylineSmoothing smoothing;
   smoothing.alpha_position = alpha_position;
   smoothing.alpha_orientation = alpha_orientation;
@@ -150,7 +167,8 @@ struct NormalEquations {
   Eigen::MatrixXd b;  // n x 3
 };
 
-NormalEquations Eq3NormalEquations(const std::vector<Eigen::Vector3f>& points, const PolylineSmoothing& o) {
+NormalEquations Eq3NormalEquations(const std::vector<Eigen::Vector3f>& points,
+                                   const PolylineSmoothing& o) {
   const int n = static_cast<int>(points.size());
   const bool own_edges = o.edges.size() == points.size() - 1;
   NormalEquations eq;
@@ -161,7 +179,8 @@ NormalEquations Eq3NormalEquations(const std::vector<Eigen::Vector3f>& points, c
     eq.b.row(i) += o.alpha_position * points[i].cast<double>().transpose();
   }
   for (int i = 0; i + 1 < n; ++i) {  // alpha1 |p_{i+1} - p_i - e_i|^2
-    const Eigen::Vector3f edge = own_edges ? o.edges[i] : Eigen::Vector3f(points[i + 1] - points[i]);
+    const Eigen::Vector3f edge =
+        own_edges ? o.edges[i] : Eigen::Vector3f(points[i + 1] - points[i]);
     const Eigen::RowVector3d e = edge.cast<double>().transpose();
     add(i, i, o.alpha_orientation);
     add(i + 1, i + 1, o.alpha_orientation);
@@ -183,7 +202,8 @@ NormalEquations Eq3NormalEquations(const std::vector<Eigen::Vector3f>& points, c
 // (duplicates summed) for every column of `rhs` in place: LDL^T on band
 // storage, O(size bandwidth^2), the bandwidth the entries' largest distance
 // from the diagonal. False when a pivot is not positive.
-bool SolveBanded(int size, const std::vector<Eigen::Triplet<double>>& entries, Eigen::MatrixXd* rhs) {
+bool SolveBanded(int size, const std::vector<Eigen::Triplet<double>>& entries,
+                 Eigen::MatrixXd* rhs) {
   int b = 0;
   for (const Eigen::Triplet<double>& t : entries) b = std::max(b, std::abs(t.row() - t.col()));
   Eigen::MatrixXd band = Eigen::MatrixXd::Zero(size, b + 1);  // band(i, k) = A(i, i - k)
@@ -195,7 +215,8 @@ bool SolveBanded(int size, const std::vector<Eigen::Triplet<double>>& entries, E
     for (int k = std::min(b, i); k >= 1; --k) {
       const int j = i - k;
       double value = band(i, k);
-      for (int m = std::max(0, i - b); m < j; ++m) value -= band(i, i - m) * band(m, 0) * band(j, j - m);
+      for (int m = std::max(0, i - b); m < j; ++m)
+        value -= band(i, i - m) * band(m, 0) * band(j, j - m);
       band(i, k) = value / band(j, 0);
     }
     double pivot = band(i, 0);
@@ -230,7 +251,8 @@ std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& 
   const int axes = field_terms.empty() ? 1 : 3;
   const int size = n * axes;
   std::vector<Eigen::Triplet<double>> entries;
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(size, 4 - axes);  // 3 columns, or 1 column of interleaved coordinates
+  Eigen::MatrixXd rhs =
+      Eigen::MatrixXd::Zero(size, 4 - axes);  // 3 columns, or 1 column of interleaved coordinates
   const auto rhs_at = [&](int vertex, int axis) -> double& {
     return axes == 1 ? rhs(vertex, axis) : rhs(3 * vertex + axis, 0);
   };
@@ -268,8 +290,9 @@ std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& 
   return out;
 }
 
-std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(const std::vector<Eigen::Vector3f>& points,
-                                                           const Eigen::Vector3f& down, double split_height_mm) {
+std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(
+    const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& down,
+    double split_height_mm) {
   constexpr double kHysteresisMm = 1.0;
   const size_t n = points.size();
   if (n < 3) return {points};
@@ -285,7 +308,8 @@ std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(const std::vector<Eig
       if (std::abs(change) > kHysteresisMm) trend = change > 0 ? 1 : -1, extreme = i;
       continue;
     }
-    if ((trend > 0 && height[i] >= height[extreme]) || (trend < 0 && height[i] <= height[extreme])) {
+    if ((trend > 0 && height[i] >= height[extreme]) ||
+        (trend < 0 && height[i] <= height[extreme])) {
       extreme = i;
     } else if (std::abs(change) > kHysteresisMm) {
       turns.push_back(extreme);
@@ -312,15 +336,18 @@ std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(const std::vector<Eig
 }
 
 std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& points,
-                                              const SegmentGrowthOptions& o, SegmentGrowthSummary* summary) {
+                                              const SegmentGrowthOptions& o,
+                                              SegmentGrowthSummary* summary) {
   SegmentGrowthSummary s;
   s.seeds = static_cast<int64_t>(points.size());
   const PointOrientationField field(points, o.sigma_mm);
-  const PointSetSurface surface(field.grid(), o.sigma_mm);  // the field's grid: same points, same 2 sigma cells
+  const PointSetSurface surface(field.grid(),
+                                o.sigma_mm);  // the field's grid: same points, same 2 sigma cells
   std::vector<uint32_t> seeds(points.size());
   std::iota(seeds.begin(), seeds.end(), 0u);
-  std::stable_sort(seeds.begin(), seeds.end(),
-                   [&](uint32_t a, uint32_t b) { return points[a].confidence > points[b].confidence; });
+  std::stable_sort(seeds.begin(), seeds.end(), [&](uint32_t a, uint32_t b) {
+    return points[a].confidence > points[b].confidence;
+  });
   std::vector<uint8_t> covered(points.size(), 0);
   std::vector<StrandSegment> segments;
   double total_length = 0;
@@ -335,10 +362,13 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
     if (!field.At(start, Eigen::Vector3f::Zero(), 0, o.min_neighbours, &t)) continue;
     Stop why_back, why_forward;
     std::vector<Eigen::Vector3f> back = GrowOneWay(field, surface, start, -t, o, &why_back);
-    const std::vector<Eigen::Vector3f> forward = GrowOneWay(field, surface, start, t, o, &why_forward);
+    const std::vector<Eigen::Vector3f> forward =
+        GrowOneWay(field, surface, start, t, o, &why_forward);
     for (Stop why : {why_back, why_forward}) {
-      ++(why == Stop::kTurn ? s.stops_turn : why == Stop::kHole ? s.stops_hole : why == Stop::kMls ? s.stops_mls
-                                                                                                  : s.stops_length);
+      ++(why == Stop::kTurn   ? s.stops_turn
+         : why == Stop::kHole ? s.stops_hole
+         : why == Stop::kMls  ? s.stops_mls
+                              : s.stops_length);
     }
     std::reverse(back.begin(), back.end());
     back.push_back(start);

@@ -7,11 +7,10 @@
 // (strand_direction.h).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 #include "reconstruction/mls.h"
@@ -34,8 +33,8 @@ class PointOrientationField {
   // wisps apart this way), signed to agree with `reference`. A zero
   // reference uses every neighbour. False when fewer than `min_neighbours`
   // points qualify; *neighbours (optional) is their number either way.
-  bool At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference, double min_abs_cos, int min_neighbours,
-          Eigen::Vector3f* orientation, int* neighbours = nullptr) const;
+  bool At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference, double min_abs_cos,
+          int min_neighbours, Eigen::Vector3f* orientation, int* neighbours = nullptr) const;
 
   const PointGrid& grid() const { return grid_; }
   const std::vector<OrientedPoint>& points() const { return points_; }
@@ -49,22 +48,24 @@ class PointOrientationField {
 };
 
 struct SegmentGrowthOptions {
-  double step_mm = 2.0;            // delta: the forward Euler step
-  double sigma_mm = 2.0;           // sigma_d of Eq. 2 and the MLS projection's sigma
-  double min_turn_cos = 0.9;       // T_t: stop where the next direction turns further (rule 1)
-  int min_neighbours = 5;          // T_N: stop in holes and past the boundary (rule 2)
-  double max_mls_along = 0.5;      // T_MLS: stop where the MLS projection moves along the strand (rule 3)
+  double step_mm = 2.0;       // delta: the forward Euler step
+  double sigma_mm = 2.0;      // sigma_d of Eq. 2 and the MLS projection's sigma
+  double min_turn_cos = 0.9;  // T_t: stop where the next direction turns further (rule 1)
+  int min_neighbours = 5;     // T_N: stop in holes and past the boundary (rule 2)
+  double max_mls_along =
+      0.5;  // T_MLS: stop where the MLS projection moves along the strand (rule 3)
   // Rule 3 looks only at projections that move the vertex further than this
   // (0: the paper's rule, which a noisy cloud trips on sub-0.1 mm shifts).
   double mls_min_shift_mm = 0.3;
-  double neighbour_cos = 0.5;      // T_o: neighbours whose direction is this compatible with the growth
-  double cover_mm = 1.5;           // Delta: seeds this close to a grown segment are covered
+  double neighbour_cos = 0.5;  // T_o: neighbours whose direction is this compatible with the growth
+  double cover_mm = 1.5;       // Delta: seeds this close to a grown segment are covered
   // Eq. 3's weights: position, orientation, curvature (the paper's values, for mm).
   double smooth_position = 0.1, smooth_orientation = 1.0, smooth_curvature = 5.0;
-  double split_height_mm = 50;     // T_H: the plausibility check's height between turning points
-  Eigen::Vector3f down{0, 0, -1};  // d_down (unit): the reference down direction (the turntable's -z)
-  int max_steps = 400;             // per growing direction
-  int min_vertices = 3;            // shorter segments are dropped (their seeds stay covered)
+  double split_height_mm = 50;  // T_H: the plausibility check's height between turning points
+  Eigen::Vector3f down{0, 0,
+                       -1};  // d_down (unit): the reference down direction (the turntable's -z)
+  int max_steps = 400;       // per growing direction
+  int min_vertices = 3;      // shorter segments are dropped (their seeds stay covered)
 
   // InvalidArgument naming the field for a value out of range.
   Status Check() const;
@@ -78,7 +79,7 @@ struct StrandSegment {
 struct SegmentGrowthSummary {
   int64_t seeds = 0, seeds_grown = 0;  // all points; those a segment was grown from
   int64_t segments = 0, vertices = 0;
-  int64_t splits = 0;                  // plausibility splits
+  int64_t splits = 0;                                                       // plausibility splits
   int64_t stops_turn = 0, stops_hole = 0, stops_mls = 0, stops_length = 0;  // why growing ended
   double mean_length_mm = 0;
 };
@@ -98,8 +99,9 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
 // direction and l_i the length of the initial edge i (the paper's t delta,
 // with the edge's own length so the polyline keeps its length). Polylines of
 // fewer than 3 points are returned unchanged.
-std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points, double alpha_position,
-                                            double alpha_orientation, double alpha_curvature);
+std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& points,
+                                            double alpha_position, double alpha_orientation,
+                                            double alpha_curvature);
 
 // The general form of Eq. 3 behind SmoothPolyline, for the variants Luo uses
 // later: transitions between ribbons whose orientation term follows the
@@ -135,7 +137,8 @@ std::vector<Eigen::Vector3f> SmoothPolyline(const std::vector<Eigen::Vector3f>& 
 // The plausibility check: heights H = p . down; the turning points are the
 // local extrema of H (with 1 mm hysteresis) and the ends; the polyline is cut
 // at every turning point next to a rise or fall larger than split_height_mm.
-std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(const std::vector<Eigen::Vector3f>& points,
-                                                           const Eigen::Vector3f& down, double split_height_mm);
+std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(
+    const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& down,
+    double split_height_mm);
 
 }  // namespace hairrig

@@ -1,9 +1,9 @@
 #include "reconstruction/strand_segments.h"
 
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <gtest/gtest.h>
+#include <random>
 
 namespace hairrig {
 namespace {
@@ -24,9 +24,11 @@ double Energy(const std::vector<Eigen::Vector3f>& p, const std::vector<Eigen::Ve
               const PolylineSmoothing& o, const std::vector<VertexFieldTerm>& terms) {
   const auto d = [](const Eigen::Vector3f& v) { return v.cast<double>(); };
   double energy = 0;
-  for (size_t i = 0; i < p.size(); ++i) energy += o.alpha_position * (d(p[i]) - d(initial[i])).squaredNorm();
+  for (size_t i = 0; i < p.size(); ++i)
+    energy += o.alpha_position * (d(p[i]) - d(initial[i])).squaredNorm();
   for (size_t i = 0; i + 1 < p.size(); ++i) {
-    energy += o.alpha_orientation * (d(p[i + 1]) - d(p[i]) - (d(initial[i + 1]) - d(initial[i]))).squaredNorm();
+    energy += o.alpha_orientation *
+              (d(p[i + 1]) - d(p[i]) - (d(initial[i + 1]) - d(initial[i]))).squaredNorm();
   }
   for (size_t i = 1; i + 1 < p.size(); ++i) {
     energy += o.alpha_curvature * (d(p[i - 1]) - 2 * d(p[i]) + d(p[i + 1])).squaredNorm();
@@ -57,12 +59,14 @@ TEST(PolylineSmoothing, Eq3MatchesADenseSolveOfItsNormalEquations) {
     const int index[3] = {i - 1, i, i + 1};
     const double coefficient[3] = {1, -2, 1};
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) q(index[r], index[c]) += o.alpha_curvature * coefficient[r] * coefficient[c];
+      for (int c = 0; c < 3; ++c)
+        q(index[r], index[c]) += o.alpha_curvature * coefficient[r] * coefficient[c];
   }
   const Eigen::MatrixXd dense = q.ldlt().solve(b);
   const std::vector<Eigen::Vector3f> smooth =
       SmoothPolyline(points, o.alpha_position, o.alpha_orientation, o.alpha_curvature);
-  for (int i = 0; i < n; ++i) EXPECT_LT((smooth[i].cast<double>() - dense.row(i).transpose()).norm(), 1e-4) << i;
+  for (int i = 0; i < n; ++i)
+    EXPECT_LT((smooth[i].cast<double>() - dense.row(i).transpose()).norm(), 1e-4) << i;
 }
 
 TEST(PolylineSmoothing, FixedVerticesStayAndFieldTermsAreMinimisedWithEq3) {
@@ -85,7 +89,8 @@ TEST(PolylineSmoothing, FixedVerticesStayAndFieldTermsAreMinimisedWithEq3) {
       for (float step : {-0.01f, 0.01f}) {
         std::vector<Eigen::Vector3f> moved = smooth;
         moved[i][k] += step;
-        EXPECT_GE(Energy(moved, points, o, terms), minimum - 1e-6) << "vertex " << i << " axis " << k;
+        EXPECT_GE(Energy(moved, points, o, terms), minimum - 1e-6)
+            << "vertex " << i << " axis " << k;
       }
   // The terms pull their vertices towards the level 3 of the field: closer than the input.
   double before = 0, after = 0;

@@ -8,11 +8,10 @@
 // Conrady, core/camera_model.h) maps every 3D point to its distorted pixel.
 #pragma once
 
+#include <opencv2/core/types.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core/types.hpp>
 
 #include "core/camera_model.h"
 #include "core/transform.h"
@@ -20,10 +19,11 @@
 namespace hairrig {
 
 struct ReconstructionView {
-  int id = 0;                // the capture's view number, or COLMAP's IMAGE_ID
-  std::string name;          // e.g. "012_SIM-CAM-UPPER": names outputs and messages
-  std::string image_path;    // 8-bit grey or colour, camera.width_px x camera.height_px
-  std::string mask_path;     // optional: a given hair mask (non-zero = hair), used instead of segmenting
+  int id = 0;              // the capture's view number, or COLMAP's IMAGE_ID
+  std::string name;        // e.g. "012_SIM-CAM-UPPER": names outputs and messages
+  std::string image_path;  // 8-bit grey or colour, camera.width_px x camera.height_px
+  std::string
+      mask_path;  // optional: a given hair mask (non-zero = hair), used instead of segmenting
   CameraIntrinsics camera;
   Rigid3d cam_from_object;
   // Image regions known not to be hair (the calibration box's projected

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-
 #include <opencv2/imgproc.hpp>
 
 #include "core/parallel.h"
@@ -41,11 +40,13 @@ bool SeesEmpty(const CarvingView& v, const Eigen::Vector3d& p_object, double rad
   double uv[2];
   ProjectCamPoint(v.params.data(), p.data(), uv);
   const int x = static_cast<int>(std::lround(uv[0])), y = static_cast<int>(std::lround(uv[1]));
-  if (x < 0 || y < 0 || x >= v.distance_to_subject_px.cols || y >= v.distance_to_subject_px.rows) return false;
+  if (x < 0 || y < 0 || x >= v.distance_to_subject_px.cols || y >= v.distance_to_subject_px.rows)
+    return false;
   return v.distance_to_subject_px(y, x) > v.focal_px * radius_mm / p.z() + 0.5;
 }
 
-bool Survives(const std::vector<CarvingView>& views, const Eigen::Vector3d& p, double radius_mm, int max_empty) {
+bool Survives(const std::vector<CarvingView>& views, const Eigen::Vector3d& p, double radius_mm,
+              int max_empty) {
   int empty = 0;
   for (const CarvingView& v : views) {
     if (SeesEmpty(v, p, radius_mm) && ++empty > max_empty) return false;
@@ -64,21 +65,25 @@ Result<Eigen::Vector3d> CommonTarget(const std::vector<SilhouetteView>& views) {
     a += p;
     b += p * object_from_cam.translation;
   }
-  if (std::abs(a.determinant()) < 1e-6) return FailedPrecondition("the cameras' optical axes do not meet (all parallel)");
+  if (std::abs(a.determinant()) < 1e-6)
+    return FailedPrecondition("the cameras' optical axes do not meet (all parallel)");
   return Eigen::Vector3d(a.ldlt().solve(b));
 }
 
 // Carves a grid of `grid` (occupied pre-filled with where to test) in place.
-void Carve(const std::vector<CarvingView>& views, double radius_mm, int max_empty, int threads, VisualHull* grid) {
+void Carve(const std::vector<CarvingView>& views, double radius_mm, int max_empty, int threads,
+           VisualHull* grid) {
   const size_t slice = static_cast<size_t>(grid->nx) * static_cast<size_t>(grid->ny);
   ParallelFor(static_cast<size_t>(grid->nz), threads, [&] {
     return [&](size_t z) {
       for (int y = 0; y < grid->ny; ++y) {
         for (int x = 0; x < grid->nx; ++x) {
-          uint8_t& cell = grid->occupied[z * slice + static_cast<size_t>(y) * static_cast<size_t>(grid->nx) +
-                                         static_cast<size_t>(x)];
+          uint8_t& cell =
+              grid->occupied[z * slice + static_cast<size_t>(y) * static_cast<size_t>(grid->nx) +
+                             static_cast<size_t>(x)];
           if (cell == 0) continue;
-          const Eigen::Vector3d p = grid->origin_mm + grid->voxel_mm * Eigen::Vector3d(x, y, static_cast<double>(z));
+          const Eigen::Vector3d p =
+              grid->origin_mm + grid->voxel_mm * Eigen::Vector3d(x, y, static_cast<double>(z));
           cell = Survives(views, p, radius_mm, max_empty) ? 1 : 0;
         }
       }
@@ -103,7 +108,8 @@ bool OccupiedBounds(const VisualHull& g, Eigen::Vector3i* lo, Eigen::Vector3i* h
 }  // namespace
 
 Status VisualHullOptions::Check() const {
-  if (!(voxel_mm > 0.1 && voxel_mm <= 50)) return InvalidArgument("hull voxel_mm must be in (0.1, 50]");
+  if (!(voxel_mm > 0.1 && voxel_mm <= 50))
+    return InvalidArgument("hull voxel_mm must be in (0.1, 50]");
   if (!(search_voxel_mm >= voxel_mm && search_voxel_mm <= 100))
     return InvalidArgument("hull search_voxel_mm must be in [voxel_mm, 100]");
   if (!(search_radius_mm > search_voxel_mm && search_radius_mm <= 5000))
@@ -119,36 +125,47 @@ bool VisualHull::OccupiedAt(const Eigen::Vector3d& p_object) const {
                   static_cast<int>(std::lround(g.z())));
 }
 
-int64_t VisualHull::OccupiedCount() const { return std::count(occupied.begin(), occupied.end(), uint8_t{1}); }
+int64_t VisualHull::OccupiedCount() const {
+  return std::count(occupied.begin(), occupied.end(), uint8_t{1});
+}
 
-Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views, const VisualHullOptions& options) {
+Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views,
+                                   const VisualHullOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
   if (views.size() < 2) return InvalidArgument("the visual hull needs at least two views");
   for (size_t v = 0; v < views.size(); ++v) {
-    if (views[v].silhouette.rows != views[v].camera.height_px || views[v].silhouette.cols != views[v].camera.width_px)
-      return InvalidArgument("hull view " + std::to_string(v) + ": its silhouette is not the camera's size");
+    if (views[v].silhouette.rows != views[v].camera.height_px ||
+        views[v].silhouette.cols != views[v].camera.width_px)
+      return InvalidArgument("hull view " + std::to_string(v) +
+                             ": its silhouette is not the camera's size");
   }
   HR_ASSIGN_OR_RETURN(const Eigen::Vector3d target, CommonTarget(views));
   std::vector<CarvingView> carving(views.size());
-  ParallelFor(views.size(), options.threads, [&] { return [&](size_t v) { carving[v] = PrepareView(views[v]); }; });
+  ParallelFor(views.size(), options.threads,
+              [&] { return [&](size_t v) { carving[v] = PrepareView(views[v]); }; });
 
   // Coarse: each voxel tested with its whole footprint, so nothing of the
   // subject is carved at this scale.
   VisualHull coarse;
   coarse.voxel_mm = options.search_voxel_mm;
-  coarse.nx = coarse.ny = coarse.nz = 2 * static_cast<int>(std::ceil(options.search_radius_mm / coarse.voxel_mm)) + 1;
+  coarse.nx = coarse.ny = coarse.nz =
+      2 * static_cast<int>(std::ceil(options.search_radius_mm / coarse.voxel_mm)) + 1;
   coarse.origin_mm = target - Eigen::Vector3d::Constant(coarse.voxel_mm * (coarse.nx / 2));
   coarse.occupied.assign(static_cast<size_t>(coarse.nx) * coarse.ny * coarse.nz, 1);
-  Carve(carving, coarse.voxel_mm * std::sqrt(3.0) / 2, options.max_empty_views, options.threads, &coarse);
+  Carve(carving, coarse.voxel_mm * std::sqrt(3.0) / 2, options.max_empty_views, options.threads,
+        &coarse);
   Eigen::Vector3i lo, hi;
   if (!OccupiedBounds(coarse, &lo, &hi))
-    return FailedPrecondition("the silhouettes share no point: the calibration or the segmentation is wrong");
+    return FailedPrecondition(
+        "the silhouettes share no point: the calibration or the segmentation is wrong");
 
   // Fine: the coarse survivors' bounds plus a coarse voxel, centres tested.
   VisualHull fine;
   fine.voxel_mm = options.voxel_mm;
-  const Eigen::Vector3d lo_mm = coarse.origin_mm + coarse.voxel_mm * (lo.cast<double>() - Eigen::Vector3d::Ones());
-  const Eigen::Vector3d hi_mm = coarse.origin_mm + coarse.voxel_mm * (hi.cast<double>() + Eigen::Vector3d::Ones());
+  const Eigen::Vector3d lo_mm =
+      coarse.origin_mm + coarse.voxel_mm * (lo.cast<double>() - Eigen::Vector3d::Ones());
+  const Eigen::Vector3d hi_mm =
+      coarse.origin_mm + coarse.voxel_mm * (hi.cast<double>() + Eigen::Vector3d::Ones());
   fine.origin_mm = lo_mm;
   const Eigen::Vector3d extent = (hi_mm - lo_mm) / fine.voxel_mm;
   fine.nx = static_cast<int>(std::ceil(extent.x())) + 1;
@@ -159,16 +176,18 @@ Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views, con
     for (int y = 0; y < fine.ny; ++y)
       for (int x = 0; x < fine.nx; ++x) {
         const Eigen::Vector3d p = fine.origin_mm + fine.voxel_mm * Eigen::Vector3d(x, y, z);
-        if (coarse.OccupiedAt(p)) fine.occupied[(static_cast<size_t>(z) * fine.ny + y) * fine.nx + x] = 1;
+        if (coarse.OccupiedAt(p))
+          fine.occupied[(static_cast<size_t>(z) * fine.ny + y) * fine.nx + x] = 1;
       }
   Carve(carving, 0.0, options.max_empty_views, options.threads, &fine);
   if (fine.OccupiedCount() == 0)
-    return FailedPrecondition("no voxel survives carving: the calibration or the segmentation is wrong");
+    return FailedPrecondition(
+        "no voxel survives carving: the calibration or the segmentation is wrong");
   return fine;
 }
 
-cv::Mat1f HullDepthMap(const VisualHull& hull, const CameraIntrinsics& camera, const Rigid3d& cam_from_object,
-                       const cv::Mat& region, int stride_px) {
+cv::Mat1f HullDepthMap(const VisualHull& hull, const CameraIntrinsics& camera,
+                       const Rigid3d& cam_from_object, const cv::Mat& region, int stride_px) {
   cv::Mat1f depth(camera.height_px, camera.width_px, 0.f);
   const Rigid3d object_from_cam = cam_from_object.Inverse();
   const Eigen::Matrix3d rotation = object_from_cam.RotationMatrix();

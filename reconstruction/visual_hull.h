@@ -9,11 +9,10 @@
 // frame, mm; depth maps are along each camera's optical axis.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
+#include <cstdint>
 #include <opencv2/core/mat.hpp>
+#include <vector>
 
 #include "core/camera_model.h"
 #include "core/status.h"
@@ -35,9 +34,10 @@ struct SilhouetteView {
 };
 
 struct VisualHullOptions {
-  double voxel_mm = 2.0;          // the hull's resolution
-  double search_voxel_mm = 8.0;   // the coarse grid that finds the subject's bounds first
-  double search_radius_mm = 700;  // the coarse grid spans this far around the cameras' common target
+  double voxel_mm = 2.0;         // the hull's resolution
+  double search_voxel_mm = 8.0;  // the coarse grid that finds the subject's bounds first
+  double search_radius_mm =
+      700;  // the coarse grid spans this far around the cameras' common target
   // A voxel is carved when more than this many views see it on the backdrop
   // (1 tolerates one view's segmentation error).
   int max_empty_views = 0;
@@ -48,14 +48,16 @@ struct VisualHullOptions {
 };
 
 struct VisualHull {
-  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();  // the centre of voxel (0, 0, 0), object frame
+  Eigen::Vector3d origin_mm =
+      Eigen::Vector3d::Zero();  // the centre of voxel (0, 0, 0), object frame
   double voxel_mm = 0;
   int nx = 0, ny = 0, nz = 0;
   std::vector<uint8_t> occupied;  // x fastest, then y, then z
 
   bool Occupied(int x, int y, int z) const {
     return x >= 0 && y >= 0 && z >= 0 && x < nx && y < ny && z < nz &&
-           occupied[(static_cast<size_t>(z) * static_cast<size_t>(ny) + static_cast<size_t>(y)) * static_cast<size_t>(nx) +
+           occupied[(static_cast<size_t>(z) * static_cast<size_t>(ny) + static_cast<size_t>(y)) *
+                        static_cast<size_t>(nx) +
                     static_cast<size_t>(x)] != 0;
   }
   // Occupancy at a point (the voxel containing it).
@@ -66,14 +68,15 @@ struct VisualHull {
 // Carves the hull. InvalidArgument for fewer than two views, a silhouette of
 // another size than its camera, or bad options; FailedPrecondition when
 // nothing survives (the silhouettes do not agree: a wrong calibration).
-Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views, const VisualHullOptions& options);
+Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views,
+                                   const VisualHullOptions& options);
 
 // Depth (mm along the optical axis) of the hull's first voxel on the ray of
 // every `stride_px`-th pixel where `region` is non-zero (all such pixels when
 // `region` is empty); 0 where the ray misses the hull and on pixels not
 // sampled. Full size, CV_32F. Rays march at a quarter voxel, so the depth is
 // within about a voxel of the hull's surface.
-cv::Mat1f HullDepthMap(const VisualHull& hull, const CameraIntrinsics& camera, const Rigid3d& cam_from_object,
-                       const cv::Mat& region, int stride_px);
+cv::Mat1f HullDepthMap(const VisualHull& hull, const CameraIntrinsics& camera,
+                       const Rigid3d& cam_from_object, const cv::Mat& region, int stride_px);
 
 }  // namespace hairrig

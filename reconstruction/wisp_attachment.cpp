@@ -1,9 +1,8 @@
 #include "reconstruction/wisp_attachment.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Geometry>
 
 #include "reconstruction/strand_segments.h"
 #include "reconstruction/wisp_grid.h"
@@ -26,7 +25,8 @@ Eigen::Vector3f Tangent(const std::vector<Eigen::Vector3f>& curve, size_t i) {
 
 // v made perpendicular to the unit t, unit; `fallback` (made perpendicular
 // too) when v is (nearly) along t.
-Eigen::Vector3f PerpendicularUnit(const Eigen::Vector3f& v, const Eigen::Vector3f& t, const Eigen::Vector3f& fallback) {
+Eigen::Vector3f PerpendicularUnit(const Eigen::Vector3f& v, const Eigen::Vector3f& t,
+                                  const Eigen::Vector3f& fallback) {
   const Eigen::Vector3f p = v - v.dot(t) * t;
   if (p.norm() > 1e-3f * std::max(v.norm(), 1e-6f)) return p.normalized();
   return UnitOr(fallback - fallback.dot(t) * t, t.unitOrthogonal());
@@ -34,8 +34,9 @@ Eigen::Vector3f PerpendicularUnit(const Eigen::Vector3f& v, const Eigen::Vector3
 
 }  // namespace
 
-WispAttacher::WispAttacher(const HeadModel& head, const ScalpGuide& guide, const InteriorField& field,
-                           const WispOptions& options, double bounding_diagonal_mm)
+WispAttacher::WispAttacher(const HeadModel& head, const ScalpGuide& guide,
+                           const InteriorField& field, const WispOptions& options,
+                           double bounding_diagonal_mm)
     : head_(head),
       guide_(guide),
       field_(field),
@@ -46,18 +47,20 @@ Eigen::Vector3f WispAttacher::KeepOutside(const Eigen::Vector3f& v, double margi
   return head_.KeepOutside(v.cast<double>(), margin_mm).cast<float>();
 }
 
-std::vector<Eigen::Vector3f> WispAttacher::InteriorStrand(const ScalpRoot& root, const Eigen::Vector3f& q,
-                                                          const Eigen::Vector3f* continuation) const {
+std::vector<Eigen::Vector3f> WispAttacher::InteriorStrand(
+    const ScalpRoot& root, const Eigen::Vector3f& q, const Eigen::Vector3f* continuation) const {
   const float step = static_cast<float>(options_.step_mm);
   const Eigen::Vector3f& r = root.position;
   if ((q - r).norm() <= 3 * step) return {r, q};
-  std::vector<Eigen::Vector3f> initial = {r, r + step * root.growing_direction, r + 2 * step * root.growing_direction};
+  std::vector<Eigen::Vector3f> initial = {r, r + step * root.growing_direction,
+                                          r + 2 * step * root.growing_direction};
   const Eigen::Vector3f from = initial.back();
   const int steps = std::max(1, static_cast<int>(std::ceil((q - from).norm() / step)));
   for (int k = 1; k <= steps; ++k)
     initial.push_back(from + (q - from) * (static_cast<float>(k) / static_cast<float>(steps)));
   const int n = static_cast<int>(initial.size());  // q is vertex n - 1
-  for (int i = kFixedRootVertices; i + 1 < n; ++i) initial[i] = KeepOutside(initial[i], options_.head_clearance_mm);
+  for (int i = kFixedRootVertices; i + 1 < n; ++i)
+    initial[i] = KeepOutside(initial[i], options_.head_clearance_mm);
   if (continuation != nullptr) initial.push_back(*continuation);
 
   PolylineSmoothing smoothing;
@@ -72,13 +75,15 @@ std::vector<Eigen::Vector3f> WispAttacher::InteriorStrand(const ScalpRoot& root,
     std::vector<VertexFieldTerm> terms;
     for (int i = kFixedRootVertices; i + 1 < n; ++i) {
       const Eigen::Vector3f gradient = field_.Gradient(current[i]);
-      const double target = static_cast<double>(i) / (n - 1) - field_.At(current[i]) + gradient.dot(current[i]);
+      const double target =
+          static_cast<double>(i) / (n - 1) - field_.At(current[i]) + gradient.dot(current[i]);
       terms.push_back({i, gradient, target, field_weight_});
     }
     current = SmoothPolyline(initial, smoothing, terms);
   }
   current.resize(static_cast<size_t>(n));
-  for (int i = kFixedRootVertices; i + 1 < n; ++i) current[i] = KeepOutside(current[i], options_.head_clearance_mm);
+  for (int i = kFixedRootVertices; i + 1 < n; ++i)
+    current[i] = KeepOutside(current[i], options_.head_clearance_mm);
   return current;
 }
 
@@ -93,8 +98,8 @@ bool WispAttacher::Attach(Wisp* wisp, std::mt19937_64& rng) const {
   const Eigen::Vector3f q = centre[0];
   if (!q.allFinite()) return false;
   const Eigen::Vector3f* continuation = centre.size() > 1 ? &centre[1] : nullptr;
-  const std::vector<Eigen::Vector3f> strand =
-      InteriorStrand(guide_.AssignRoot(q, options_.step_mm, options_.root_jitter_mm, rng), q, continuation);
+  const std::vector<Eigen::Vector3f> strand = InteriorStrand(
+      guide_.AssignRoot(q, options_.step_mm, options_.root_jitter_mm, rng), q, continuation);
   const int n = static_cast<int>(strand.size());  // strand.back() is q
   const size_t centre_index = wisp->isocurves.size() / 2;
   for (size_t j = 0; j < wisp->isocurves.size(); ++j) {
@@ -103,7 +108,8 @@ bool WispAttacher::Attach(Wisp* wisp, std::mt19937_64& rng) const {
     std::vector<Eigen::Vector3f> prefix(strand.begin(), strand.end() - 1);
     if (j != centre_index) {
       for (int k = 0; k + 1 < n; ++k) {
-        const double share = options_.root_width_share + (1 - options_.root_width_share) * k / (n - 1);
+        const double share =
+            options_.root_width_share + (1 - options_.root_width_share) * k / (n - 1);
         prefix[k] = PlaceOffsetVertex(k, strand[k] + static_cast<float>(share) * offset);
       }
     }
@@ -114,9 +120,10 @@ bool WispAttacher::Attach(Wisp* wisp, std::mt19937_64& rng) const {
   return true;
 }
 
-bool WispAttacher::MakeInteriorWisp(const Eigen::Vector3f& target, std::mt19937_64& rng, Wisp* wisp) const {
-  std::vector<Eigen::Vector3f> strand =
-      InteriorStrand(guide_.AssignRoot(target, options_.step_mm, options_.root_jitter_mm, rng), target);
+bool WispAttacher::MakeInteriorWisp(const Eigen::Vector3f& target, std::mt19937_64& rng,
+                                    Wisp* wisp) const {
+  std::vector<Eigen::Vector3f> strand = InteriorStrand(
+      guide_.AssignRoot(target, options_.step_mm, options_.root_jitter_mm, rng), target);
   size_t keep = strand.size();
   for (size_t i = kFixedRootVertices; i < strand.size(); ++i) {
     if (field_.At(strand[i]) > options_.interior_truncate_level) {
@@ -134,12 +141,14 @@ bool WispAttacher::MakeInteriorWisp(const Eigen::Vector3f& target, std::mt19937_
     const Eigen::Vector3f t = Tangent(strand, i);
     Eigen::Vector3d outward;
     head_.SignedDistance(strand[i].cast<double>(), &outward);
-    const Eigen::Vector3f normal = PerpendicularUnit(field_.Gradient(strand[i]), t, outward.cast<float>());
+    const Eigen::Vector3f normal =
+        PerpendicularUnit(field_.Gradient(strand[i]), t, outward.cast<float>());
     const Eigen::Vector3f across = t.cross(normal).normalized();
     for (int j = 0; j <= width; ++j) {
       const float offset = (static_cast<float>(j) - 0.5f * static_cast<float>(width)) * spacing;
       const Eigen::Vector3f v = strand[i] + offset * across;
-      wisp->isocurves[static_cast<size_t>(j)][i] = offset == 0 ? v : PlaceOffsetVertex(static_cast<int>(i), v);
+      wisp->isocurves[static_cast<size_t>(j)][i] =
+          offset == 0 ? v : PlaceOffsetVertex(static_cast<int>(i), v);
     }
   }
   wisp->range_low.assign(keep, 0.0f);
@@ -161,11 +170,14 @@ void SetWispNormals(const HeadModel& head, std::vector<Wisp>* wisps) {
                                      IsocurvePoint(wisp.isocurves, std::max(c - 1, 0), i);
       const Eigen::Vector3f t = UnitOr(along, Eigen::Vector3f::UnitZ());
       Eigen::Vector3d outward_d;
-      head.SignedDistance(wisp.isocurves[static_cast<size_t>(c)][static_cast<size_t>(i)].cast<double>(), &outward_d);
+      head.SignedDistance(
+          wisp.isocurves[static_cast<size_t>(c)][static_cast<size_t>(i)].cast<double>(),
+          &outward_d);
       const Eigen::Vector3f outward = outward_d.cast<float>();
       Eigen::Vector3f n = across.cross(along);
-      n = n.norm() > 1e-6f * std::max(across.norm() * along.norm(), 1e-12f) ? Eigen::Vector3f(n.normalized())
-                                                                            : PerpendicularUnit(outward, t, outward);
+      n = n.norm() > 1e-6f * std::max(across.norm() * along.norm(), 1e-12f)
+              ? Eigen::Vector3f(n.normalized())
+              : PerpendicularUnit(outward, t, outward);
       wisp.normals[static_cast<size_t>(i)] = n.dot(outward) < 0 ? Eigen::Vector3f(-n) : n;
     }
   }

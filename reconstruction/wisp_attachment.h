@@ -5,10 +5,9 @@
 // rules are written there. Units mm, the points' frame.
 #pragma once
 
+#include <Eigen/Core>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "reconstruction/interior_field.h"
@@ -20,8 +19,8 @@ namespace hairrig {
 class WispAttacher {
  public:
   // All must outlive the attacher. `bounding_diagonal_mm` is B of Eq. 13.
-  WispAttacher(const HeadModel& head, const ScalpGuide& guide, const InteriorField& field, const WispOptions& options,
-               double bounding_diagonal_mm);
+  WispAttacher(const HeadModel& head, const ScalpGuide& guide, const InteriorField& field,
+               const WispOptions& options, double bounding_diagonal_mm);
 
   // Sec. 7.1's interior strand from the root to q (first vertex r, last q):
   // the root and the two vertices after it along d_g and q are kept; the

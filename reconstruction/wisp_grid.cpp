@@ -1,10 +1,9 @@
 #include "reconstruction/wisp_grid.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Geometry>
 
 namespace hairrig {
 
@@ -16,15 +15,16 @@ struct Corner {
 };
 
 // The point of segment ab closest to p, as the weight of b.
-float SegmentParameter(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+float SegmentParameter(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                       const Eigen::Vector3f& b) {
   const Eigen::Vector3f ab = b - a;
   const float length2 = ab.squaredNorm();
   return length2 > 0 ? std::clamp((p - a).dot(ab) / length2, 0.0f, 1.0f) : 0.0f;
 }
 
 // Barycentric weights of the point of triangle abc closest to p.
-Eigen::Vector3f ClosestBarycentric(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
-                                   const Eigen::Vector3f& c) {
+Eigen::Vector3f ClosestBarycentric(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                                   const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
   const Eigen::Vector3f normal = (b - a).cross(c - a);
   const float area2 = normal.squaredNorm();
   if (area2 > 1e-12f) {
@@ -55,7 +55,8 @@ Eigen::Vector3f ClosestBarycentric(const Eigen::Vector3f& p, const Eigen::Vector
 void KeepCloser(const Eigen::Vector3f& p, const Corner& a, const Corner& b, const Corner& c,
                 const Eigen::Vector3f& along, GridProjection* best) {
   const Eigen::Vector3f weights = ClosestBarycentric(p, a.position, b.position, c.position);
-  const Eigen::Vector3f closest = weights[0] * a.position + weights[1] * b.position + weights[2] * c.position;
+  const Eigen::Vector3f closest =
+      weights[0] * a.position + weights[1] * b.position + weights[2] * c.position;
   const float distance = (closest - p).norm();
   if (distance >= best->distance_mm) return;
   best->distance_mm = distance;
@@ -86,7 +87,8 @@ GridVertexIndex::GridVertexIndex(const std::vector<const Isocurves*>& grids, dou
     for (size_t j = 0; j < grid.size(); ++j)
       for (size_t i = 0; i < grid[j].size(); ++i) {
         positions_.push_back(grid[j][i]);
-        owners_.push_back({static_cast<uint32_t>(g), static_cast<uint32_t>(j), static_cast<uint32_t>(i)});
+        owners_.push_back(
+            {static_cast<uint32_t>(g), static_cast<uint32_t>(j), static_cast<uint32_t>(i)});
       }
   }
   grid_ = std::make_unique<PointGrid>(positions_, cell_mm);
@@ -117,8 +119,8 @@ GridProjection ProjectNearVertex(const Isocurves& grid, int j, int i, const Eige
     for (int j0 = std::max(j - 1, 0); j0 <= std::min(j, width - 1); ++j0) {
       const Corner c00 = corner(j0, i0), c10 = corner(j0 + 1, i0), c11 = corner(j0 + 1, i0 + 1),
                    c01 = corner(j0, i0 + 1);
-      const Eigen::Vector3f along =
-          UnitOr((c01.position - c00.position) + (c11.position - c10.position), Eigen::Vector3f::UnitZ());
+      const Eigen::Vector3f along = UnitOr(
+          (c01.position - c00.position) + (c11.position - c10.position), Eigen::Vector3f::UnitZ());
       KeepCloser(p, c00, c10, c11, along, &best);
       KeepCloser(p, c00, c11, c01, along, &best);
     }

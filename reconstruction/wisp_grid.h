@@ -5,11 +5,10 @@
 // (wisps.cpp, wisp_attachment.cpp, wisp_synthesis.cpp) use them.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "reconstruction/point_grid.h"
 
@@ -45,7 +44,7 @@ class GridVertexIndex {
 // sharing it, each split along its (j, i)-(j+1, i+1) diagonal; the edges
 // next to it for a grid of one isocurve).
 struct GridProjection {
-  float w = 0, l = 0;                   // parameters of the closest point
+  float w = 0, l = 0;  // parameters of the closest point
   float distance_mm = 0;
   Eigen::Vector3f along = Eigen::Vector3f::Zero();  // unit direction of increasing l there
 };

@@ -27,9 +27,11 @@ struct NearestVertex {
 
 // Eq. 14 over every point: the covered points' w bounds per rounded l.
 int64_t AccumulateRanges(const std::vector<OrientedPoint>& points, const WispOptions& o,
-                         const std::vector<const Isocurves*>& grids, std::vector<RawRanges>* ranges) {
+                         const std::vector<const Isocurves*>& grids,
+                         std::vector<RawRanges>* ranges) {
   const double reach =
-      o.spacing_mm + o.step_mm;  // a point within spacing of a quad is this close to one of its corners
+      o.spacing_mm +
+      o.step_mm;  // a point within spacing of a quad is this close to one of its corners
   const GridVertexIndex index(grids, reach);
   int64_t covered_points = 0;
   std::vector<NearestVertex> nearest;
@@ -37,8 +39,8 @@ int64_t AccumulateRanges(const std::vector<OrientedPoint>& points, const WispOpt
     nearest.clear();
     index.points().ForEachWithin(point.position_mm, reach, [&](uint32_t vertex, double d2) {
       const uint32_t grid = index.owner(vertex).grid;
-      const auto known =
-          std::find_if(nearest.begin(), nearest.end(), [&](const NearestVertex& n) { return n.grid == grid; });
+      const auto known = std::find_if(nearest.begin(), nearest.end(),
+                                      [&](const NearestVertex& n) { return n.grid == grid; });
       if (known == nearest.end()) {
         nearest.push_back({grid, vertex, d2});
       } else if (d2 < known->distance2) {
@@ -48,9 +50,10 @@ int64_t AccumulateRanges(const std::vector<OrientedPoint>& points, const WispOpt
     bool covers = false;
     for (const NearestVertex& n : nearest) {
       const GridVertexIndex::Owner& owner = index.owner(n.vertex);
-      const GridProjection projection =
-          ProjectNearVertex(*grids[n.grid], static_cast<int>(owner.j), static_cast<int>(owner.i), point.position_mm);
-      if (projection.distance_mm > o.spacing_mm || std::abs(projection.along.dot(point.direction)) < o.cover_cos)
+      const GridProjection projection = ProjectNearVertex(
+          *grids[n.grid], static_cast<int>(owner.j), static_cast<int>(owner.i), point.position_mm);
+      if (projection.distance_mm > o.spacing_mm ||
+          std::abs(projection.along.dot(point.direction)) < o.cover_cos)
         continue;
       RawRanges& r = (*ranges)[n.grid];
       const size_t l = static_cast<size_t>(std::lround(projection.l));
@@ -95,7 +98,8 @@ void Taper(const WispOptions& o, std::vector<float>* low, std::vector<float>* hi
   const size_t n = low->size();
   if (n < 2 || o.taper_start >= 1) return;
   for (size_t i = 0; i < n; ++i) {
-    const double x = (static_cast<double>(i) / static_cast<double>(n - 1) - o.taper_start) / (1 - o.taper_start);
+    const double x =
+        (static_cast<double>(i) / static_cast<double>(n - 1) - o.taper_start) / (1 - o.taper_start);
     if (x <= 0) continue;
     const double factor = 1 - (1 - o.tip_range_share) * x * x;
     const double middle = 0.5 * ((*low)[i] + (*high)[i]), half = 0.5 * ((*high)[i] - (*low)[i]);
@@ -107,8 +111,8 @@ void Taper(const WispOptions& o, std::vector<float>* low, std::vector<float>* hi
 void FinishRanges(const WispOptions& o, const RawRanges* raw, Wisp* wisp) {
   const size_t n = static_cast<size_t>(wisp->length() + 1);
   const float width = static_cast<float>(wisp->width());
-  const bool from_points =
-      raw != nullptr && std::any_of(raw->low.begin(), raw->low.end(), [](float v) { return std::isfinite(v); });
+  const bool from_points = raw != nullptr && std::any_of(raw->low.begin(), raw->low.end(),
+                                                         [](float v) { return std::isfinite(v); });
   if (!from_points) {
     wisp->range_low.assign(n, 0.0f);
     wisp->range_high.assign(n, width);
@@ -131,7 +135,8 @@ void FinishRanges(const WispOptions& o, const RawRanges* raw, Wisp* wisp) {
 
 // g-(i), g+(i), or [0, W] where the ranges are missing.
 void RangeAt(const Wisp& wisp, size_t i, float* low, float* high) {
-  const bool has = wisp.range_low.size() == wisp.isocurves[0].size() && wisp.range_high.size() == wisp.range_low.size();
+  const bool has = wisp.range_low.size() == wisp.isocurves[0].size() &&
+                   wisp.range_high.size() == wisp.range_low.size();
   *low = has ? wisp.range_low[i] : 0.0f;
   *high = has ? wisp.range_high[i] : static_cast<float>(wisp.width());
 }
@@ -165,11 +170,13 @@ std::vector<int> Apportion(const std::vector<double>& weights, int total) {
   }
   std::stable_sort(remainders.begin(), remainders.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
-  for (size_t r = 0; given < total && r < remainders.size(); ++r, ++given) ++counts[remainders[r].second];
+  for (size_t r = 0; given < total && r < remainders.size(); ++r, ++given)
+    ++counts[remainders[r].second];
   return counts;
 }
 
-std::vector<Eigen::Vector3f> StrandInWisp(const Wisp& wisp, double t, double thickness_mm, const SynthesisOptions& o) {
+std::vector<Eigen::Vector3f> StrandInWisp(const Wisp& wisp, double t, double thickness_mm,
+                                          const SynthesisOptions& o) {
   const size_t n = wisp.isocurves[0].size();
   const bool has_normals = wisp.normals.size() == n;
   std::vector<Eigen::Vector3f> strand(n);
@@ -178,12 +185,15 @@ std::vector<Eigen::Vector3f> StrandInWisp(const Wisp& wisp, double t, double thi
   for (size_t i = 0; i < n; ++i) {
     float low, high;
     RangeAt(wisp, i, &low, &high);
-    const Eigen::Vector3f on_wisp = IsocurvePoint(wisp.isocurves, low * (1 - t) + high * t, static_cast<int>(i));
+    const Eigen::Vector3f on_wisp =
+        IsocurvePoint(wisp.isocurves, low * (1 - t) + high * t, static_cast<int>(i));
     if (i > 0) arc_mm += (on_wisp - previous).norm();
     previous = on_wisp;
     const double ramp = o.thickness_ramp_mm > 0 ? std::min(1.0, arc_mm / o.thickness_ramp_mm) : 1.0;
     strand[i] =
-        has_normals ? Eigen::Vector3f(on_wisp - static_cast<float>(thickness_mm * ramp) * wisp.normals[i]) : on_wisp;
+        has_normals
+            ? Eigen::Vector3f(on_wisp - static_cast<float>(thickness_mm * ramp) * wisp.normals[i])
+            : on_wisp;
   }
   PolylineSmoothing smoothing;
   smoothing.alpha_position = o.smooth_position;
@@ -196,7 +206,8 @@ std::vector<Eigen::Vector3f> StrandInWisp(const Wisp& wisp, double t, double thi
 
 }  // namespace
 
-int64_t SetWispRanges(const std::vector<OrientedPoint>& points, const WispOptions& options, std::vector<Wisp>* wisps) {
+int64_t SetWispRanges(const std::vector<OrientedPoint>& points, const WispOptions& options,
+                      std::vector<Wisp>* wisps) {
   std::vector<const Isocurves*> grids;
   std::vector<size_t> wisp_of_grid;
   std::vector<RawRanges> raw;
@@ -219,14 +230,17 @@ int64_t SetWispRanges(const std::vector<OrientedPoint>& points, const WispOption
 
 Status SynthesisOptions::Check() const {
   if (!(thickness_mm >= 0)) return InvalidArgument("synthesis thickness_mm must be non-negative");
-  if (!(thickness_ramp_mm >= 0)) return InvalidArgument("synthesis thickness_ramp_mm must be non-negative");
+  if (!(thickness_ramp_mm >= 0))
+    return InvalidArgument("synthesis thickness_ramp_mm must be non-negative");
   if (!(smooth_position > 0) || !(smooth_orientation >= 0) || !(smooth_curvature >= 0)) {
-    return InvalidArgument("synthesis smoothing weights: position must be positive, the others non-negative");
+    return InvalidArgument(
+        "synthesis smoothing weights: position must be positive, the others non-negative");
   }
   return Status::Ok();
 }
 
-StrandSet SynthesizeStrands(const std::vector<Wisp>& wisps, int strands, uint64_t seed, const SynthesisOptions& o) {
+StrandSet SynthesizeStrands(const std::vector<Wisp>& wisps, int strands, uint64_t seed,
+                            const SynthesisOptions& o) {
   std::vector<double> areas(wisps.size());
   for (size_t k = 0; k < wisps.size(); ++k) areas[k] = RangeArea(wisps[k]);
   const std::vector<int> counts = Apportion(areas, strands);

@@ -6,10 +6,9 @@
 // mm, the points' frame (the turntable frame for a capture of this rig).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/head_model.h"
 #include "core/status.h"
@@ -39,41 +38,48 @@ struct Wisp {
   // the one it started from (the tip's) up to the root's; empty for interior wisps.
   std::vector<int> ribbons;
 
-  int width() const { return static_cast<int>(isocurves.size()) - 1; }                              // W
-  int length() const { return isocurves.empty() ? -1 : static_cast<int>(isocurves[0].size()) - 1; }  // L
+  int width() const { return static_cast<int>(isocurves.size()) - 1; }  // W
+  int length() const {
+    return isocurves.empty() ? -1 : static_cast<int>(isocurves[0].size()) - 1;
+  }  // L
   const std::vector<Eigen::Vector3f>& center() const { return isocurves[isocurves.size() / 2]; }
 };
 
 struct WispOptions {
-  double link_distance_mm = 10;     // sigma_l: a feasible link's distance to R_0^{W/2} (Sec. 6.3)
-  double max_connect_overlap = 0.1; // connections to ribbons overlapping more than this are refused
-  double overlap_mm = 1.5;          // Delta (as RibbonDirectionOptions')
-  double step_mm = 2.0;             // delta: the transition's and interior strands' discretisation
-  double bridge_sigma_mm = 6.0;     // the larger sigma_d of the transitions' orientation
-  double interior_weight = 0.005;   // alpha_int of Eq. 13
-  double voxel_mm = 4.0;            // the interior field's grid
+  double link_distance_mm = 10;  // sigma_l: a feasible link's distance to R_0^{W/2} (Sec. 6.3)
+  double max_connect_overlap =
+      0.1;                         // connections to ribbons overlapping more than this are refused
+  double overlap_mm = 1.5;         // Delta (as RibbonDirectionOptions')
+  double step_mm = 2.0;            // delta: the transition's and interior strands' discretisation
+  double bridge_sigma_mm = 6.0;    // the larger sigma_d of the transitions' orientation
+  double interior_weight = 0.005;  // alpha_int of Eq. 13
+  double voxel_mm = 4.0;           // the interior field's grid
   double interior_min_scalp_distance_mm = 20;  // Sec. 7.2's sampling threshold
-  int interior_wisps = 200;         // how many interior wisps to generate
-  int interior_width = 4;           // their width W (W + 1 isocurves)
-  double taper_start = 0.7;         // share of the length where the ranges start to taper (Sec. 7.3)
-  Eigen::Vector3f down{0, 0, -1};   // unit; without a parting, d_s leads away from the crown above the scalp centre
-  uint64_t seed = 1;                // root and interior point draws
+  int interior_wisps = 200;                    // how many interior wisps to generate
+  int interior_width = 4;                      // their width W (W + 1 isocurves)
+  double taper_start = 0.7;  // share of the length where the ranges start to taper (Sec. 7.3)
+  Eigen::Vector3f down{
+      0, 0, -1};  // unit; without a parting, d_s leads away from the crown above the scalp centre
+  uint64_t seed = 1;  // root and interior point draws
 
   // Delta: the interior wisps' isocurve spacing, and how close a point must
   // lie to a wisp to cover it (Eq. 14's ranges).
   double spacing_mm = 1.5;
-  double cover_cos = 0.9;           // and how well its direction must agree (|o_p . o_R|, as T_t)
+  double cover_cos = 0.9;  // and how well its direction must agree (|o_p . o_R|, as T_t)
   // Eq. 3's weights for the transitions and interior strands (the paper's, for mm).
   double smooth_position = 0.1, smooth_orientation = 1.0, smooth_curvature = 5.0;
-  double head_clearance_mm = 1.0;   // interior strands' vertices (but the root) stay this far outside the head
-  double root_jitter_mm = 3.0;      // the neighbourhood of p_k the root r is drawn from (Sec. 7.1)
+  double head_clearance_mm =
+      1.0;  // interior strands' vertices (but the root) stay this far outside the head
+  double root_jitter_mm = 3.0;  // the neighbourhood of p_k the root r is drawn from (Sec. 7.1)
   // The wisp's width at its root, as a share of its width at the attaching
   // point: the other isocurves' offsets from the centre grow linearly along
   // the interior strand from this share to 1.
   double root_width_share = 0.3;
-  double interior_truncate_level = 0.8;  // interior wisps end where the interior field first exceeds this
-  double range_smoothness = 10;     // lambda of the ranges' smoothing (per squared vertex step)
-  double tip_range_share = 0.2;     // the ranges' width at the tip, as a share of their untapered width
+  double interior_truncate_level =
+      0.8;                       // interior wisps end where the interior field first exceeds this
+  double range_smoothness = 10;  // lambda of the ranges' smoothing (per squared vertex step)
+  double tip_range_share =
+      0.2;  // the ranges' width at the tip, as a share of their untapered width
   // A lone ribbon (no connection) covering at least this many segments is
   // kept as a wisp; 0: every lone ribbon is removed as an outlier (the paper).
   int keep_lone_ribbon_segments = 0;
@@ -90,9 +96,9 @@ struct WispOptions {
 struct WispSummary {
   int64_t wisps = 0, connections = 0, removed_covered = 0, removed_outliers = 0;
   int64_t attached = 0, interior = 0;
-  int64_t unattached = 0;           // wisps dropped unattached (no vertex, or a non-finite R_0)
-  int64_t covered_points = 0;       // points that set some wisp's ranges
-  double mean_length_mm = 0;        // of the centre isocurves, interior strands included
+  int64_t unattached = 0;      // wisps dropped unattached (no vertex, or a non-finite R_0)
+  int64_t covered_points = 0;  // points that set some wisp's ranges
+  double mean_length_mm = 0;   // of the centre isocurves, interior strands included
 };
 
 // Sec. 6.3, 7.1, 7.2 and 7.3's ranges. `ribbons` run root to tip and `links`
@@ -139,7 +145,8 @@ struct WispSummary {
 // Deterministic for options.seed. InvalidArgument for bad options, no
 // points, a ribbon whose isocurves differ in length, a link naming a ribbon
 // that does not exist, a head without scalp, or when no wisp is left.
-Result<std::vector<Wisp>> BuildWisps(const std::vector<OrientedPoint>& points, const std::vector<Ribbon>& ribbons,
+Result<std::vector<Wisp>> BuildWisps(const std::vector<OrientedPoint>& points,
+                                     const std::vector<Ribbon>& ribbons,
                                      const std::vector<RibbonLink>& links, const HeadModel& head,
                                      const WispOptions& options, WispSummary* summary = nullptr);
 
@@ -147,11 +154,13 @@ Result<std::vector<Wisp>> BuildWisps(const std::vector<OrientedPoint>& points, c
 // every wisp that is not interior, [0, W] for interior ones, all tapered.
 // Overwrites range_low and range_high; returns how many points cover some
 // wisp.
-int64_t SetWispRanges(const std::vector<OrientedPoint>& points, const WispOptions& options, std::vector<Wisp>* wisps);
+int64_t SetWispRanges(const std::vector<OrientedPoint>& points, const WispOptions& options,
+                      std::vector<Wisp>* wisps);
 
 struct SynthesisOptions {
-  double thickness_mm = 3.0;        // T_thick: strands are offset against the wisp's normal by up to this
-  double thickness_ramp_mm = 10;    // the offset grows from 0 at the root over this much of the strand
+  double thickness_mm = 3.0;  // T_thick: strands are offset against the wisp's normal by up to this
+  double thickness_ramp_mm =
+      10;  // the offset grows from 0 at the root over this much of the strand
   // Eq. 3's weights for the final smoothing (the paper's, for mm).
   double smooth_position = 0.1, smooth_orientation = 1.0, smooth_curvature = 5.0;
 

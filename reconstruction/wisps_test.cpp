@@ -1,11 +1,11 @@
 #include "reconstruction/wisps.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
 
 #include "core/head_spec.h"
 
@@ -34,8 +34,10 @@ Ribbon HangingRibbon(const Eigen::Vector3f& top, int width, int length, std::vec
   for (int j = 0; j <= width; ++j) {
     std::vector<Eigen::Vector3f> isocurve;
     for (int i = 0; i <= length; ++i) {
-      isocurve.push_back(top + Eigen::Vector3f(0, (static_cast<float>(j) - 0.5f * static_cast<float>(width)) * kSpacing,
-                                               -kStep * static_cast<float>(i)));
+      isocurve.push_back(
+          top +
+          Eigen::Vector3f(0, (static_cast<float>(j) - 0.5f * static_cast<float>(width)) * kSpacing,
+                          -kStep * static_cast<float>(i)));
     }
     r.isocurves.push_back(isocurve);
   }
@@ -53,8 +55,8 @@ void AddPointsOn(const Ribbon& r, std::vector<OrientedPoint>* points) {
       p.confidence = 1;
       points->push_back(p);
       if (j < r.width() && i < r.length()) {
-        p.position_mm =
-            0.25f * (r.isocurves[j][i] + r.isocurves[j + 1][i] + r.isocurves[j][i + 1] + r.isocurves[j + 1][i + 1]);
+        p.position_mm = 0.25f * (r.isocurves[j][i] + r.isocurves[j + 1][i] + r.isocurves[j][i + 1] +
+                                 r.isocurves[j + 1][i + 1]);
         points->push_back(p);
       }
     }
@@ -129,10 +131,14 @@ TEST(Wisps, TwoLinkedRibbonsBecomeOneWispRunningFromTheScalpToTheTip) {
   for (size_t i = 1; i < centre.size(); ++i) {
     EXPECT_LE((centre[i] - centre[i - 1]).norm(), 2 * kStep) << "gap at vertex " << i;
   }
-  EXPECT_LT(std::abs(head->SignedDistance(centre.front().cast<double>(), nullptr)), 1.0) << "rooted on the head";
-  EXPECT_LT((centre.back() - t.ribbons[kLower].center().back()).norm(), 1e-3) << "ends at the lower ribbon's tip";
-  EXPECT_LT(MinimumDistanceTo(centre, t.ribbons[kUpper].center().front()), 1e-3) << "passes the upper ribbon's top";
-  // The transition across the 10 mm gap has inner vertices on the straight line (the points run straight down).
+  EXPECT_LT(std::abs(head->SignedDistance(centre.front().cast<double>(), nullptr)), 1.0)
+      << "rooted on the head";
+  EXPECT_LT((centre.back() - t.ribbons[kLower].center().back()).norm(), 1e-3)
+      << "ends at the lower ribbon's tip";
+  EXPECT_LT(MinimumDistanceTo(centre, t.ribbons[kUpper].center().front()), 1e-3)
+      << "passes the upper ribbon's top";
+  // The transition across the 10 mm gap has inner vertices on the straight line (the points run
+  // straight down).
   int in_gap = 0;
   for (const Eigen::Vector3f& v : centre) {
     if (v.z() < 269 && v.z() > 261) {
@@ -184,12 +190,14 @@ TEST(Wisps, LoneRibbonsAreOutliersAndRibbonsInsideAnotherWispAreCovered) {
   AddPointsOn(t.ribbons[2], &t.points);
 
   WispOptions keep_big_lone_ribbons = NoInteriorWisps();
-  keep_big_lone_ribbons.keep_lone_ribbon_segments = 3;  // the inside ribbon survives as an outlier ...
+  keep_big_lone_ribbons.keep_lone_ribbon_segments =
+      3;  // the inside ribbon survives as an outlier ...
   WispSummary summary;
   auto wisps = BuildWisps(t.points, t.ribbons, t.links, *head, keep_big_lone_ribbons, &summary);
   ASSERT_TRUE(wisps.ok()) << wisps.status().ToString();
   EXPECT_EQ(summary.removed_outliers, 1);
-  EXPECT_EQ(summary.removed_covered, 2) << "... and goes as covered, with the upper ribbon's own wisp";
+  EXPECT_EQ(summary.removed_covered, 2)
+      << "... and goes as covered, with the upper ribbon's own wisp";
   ASSERT_EQ(wisps->size(), 1u);
   EXPECT_EQ((*wisps)[0].ribbons, (std::vector<int>{kLower, kUpper}));
 
@@ -260,7 +268,8 @@ TEST(Wisps, AWispBesideTheHeadIsAttachedToTheScalpByAnInteriorStrandOutsideTheHe
     const Eigen::Vector3f r = centre[0], q = ribbons[0].center()[0];
     EXPECT_LT(std::abs(head->SignedDistance(r.cast<double>(), nullptr)), 1.0) << "seed " << seed;
     EXPECT_TRUE(head->OnScalp(r.cast<double>())) << r.transpose() << ", seed " << seed;
-    EXPECT_LT((centre[static_cast<size_t>(wisp.interior_vertices) - 1] - q).norm(), 1e-4) << "reaches R_0";
+    EXPECT_LT((centre[static_cast<size_t>(wisp.interior_vertices) - 1] - q).norm(), 1e-4)
+        << "reaches R_0";
     for (int j = 0; j <= wisp.width(); ++j) {
       for (int i = 1; i < wisp.interior_vertices; ++i) {
         EXPECT_GT(head->SignedDistance(wisp.isocurves[j][i].cast<double>(), nullptr), -0.05)
@@ -281,19 +290,22 @@ TEST(Wisps, AWispBesideTheHeadIsAttachedToTheScalpByAnInteriorStrandOutsideTheHe
 }
 
 // Distance from p to the triangles of a grid (brute force).
-double DistanceToGrid(const std::vector<std::vector<Eigen::Vector3f>>& grid, const Eigen::Vector3f& p) {
+double DistanceToGrid(const std::vector<std::vector<Eigen::Vector3f>>& grid,
+                      const Eigen::Vector3f& p) {
   const auto to_segment = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
     const Eigen::Vector3f ab = b - a;
-    const float t = ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0f, 1.0f) : 0.0f;
+    const float t =
+        ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0f, 1.0f) : 0.0f;
     return static_cast<double>((a + t * ab - p).norm());
   };
-  const auto to_triangle = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
+  const auto to_triangle = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+                               const Eigen::Vector3f& c) {
     const Eigen::Vector3f n = (b - a).cross(c - a);
     if (n.squaredNorm() > 1e-12f) {
       const Eigen::Vector3f unit = n.normalized();
       const Eigen::Vector3f x = p - unit * unit.dot(p - a);
-      const bool inside =
-          (b - a).cross(x - a).dot(n) >= 0 && (c - b).cross(x - b).dot(n) >= 0 && (a - c).cross(x - c).dot(n) >= 0;
+      const bool inside = (b - a).cross(x - a).dot(n) >= 0 && (c - b).cross(x - b).dot(n) >= 0 &&
+                          (a - c).cross(x - c).dot(n) >= 0;
       if (inside) return static_cast<double>(std::abs(unit.dot(p - a)));
     }
     return std::min({to_segment(a, b), to_segment(b, c), to_segment(c, a)});
@@ -301,7 +313,8 @@ double DistanceToGrid(const std::vector<std::vector<Eigen::Vector3f>>& grid, con
   double best = std::numeric_limits<double>::max();
   for (size_t j = 0; j < grid.size(); ++j)
     for (size_t i = 0; i + 1 < grid[j].size(); ++i) {
-      if ((grid[j][i] - p).norm() > best + 5) continue;  // no point of a quad a few mm across is nearer
+      if ((grid[j][i] - p).norm() > best + 5)
+        continue;  // no point of a quad a few mm across is nearer
       if (j + 1 == grid.size()) {
         best = std::min(best, to_segment(grid[j][i], grid[j][i + 1]));
         continue;
@@ -323,7 +336,8 @@ TEST(Wisps, SynthesisedStrandsLieInTheirWispsAndStartOnTheScalp) {
   ASSERT_TRUE(wisps.ok()) << wisps.status().ToString();
   EXPECT_EQ(summary.interior, 3);
   ASSERT_EQ(wisps->size(), 4u);
-  SynthesisOptions thin;  // T_thick offsets strands off the surface by design: thin enough to stay within spacing
+  SynthesisOptions thin;  // T_thick offsets strands off the surface by design: thin enough to stay
+                          // within spacing
   thin.thickness_mm = 0.5;
   const StrandSet strands = SynthesizeStrands(*wisps, 300, 7, thin);
   ASSERT_EQ(strands.num_strands(), 300u);
@@ -334,10 +348,12 @@ TEST(Wisps, SynthesisedStrandsLieInTheirWispsAndStartOnTheScalp) {
     const Eigen::Vector3f& root = strands.points_mm[offsets[s]];
     EXPECT_LT(std::abs(head->SignedDistance(root.cast<double>(), nullptr)), 1.0) << "strand " << s;
     roots_on_scalp += head->OnScalp(root.cast<double>()) ? 1 : 0;
-    if (s % 3 != 0) continue;  // every third strand, every fifth vertex: the brute-force distance is slow
+    if (s % 3 != 0)
+      continue;  // every third strand, every fifth vertex: the brute-force distance is slow
     for (size_t k = offsets[s]; k < offsets[s + 1]; k += 5) {
       double nearest = std::numeric_limits<double>::max();
-      for (const Wisp& wisp : *wisps) nearest = std::min(nearest, DistanceToGrid(wisp.isocurves, strands.points_mm[k]));
+      for (const Wisp& wisp : *wisps)
+        nearest = std::min(nearest, DistanceToGrid(wisp.isocurves, strands.points_mm[k]));
       EXPECT_LT(nearest, kSpacing) << "strand " << s << " vertex " << k - offsets[s];
     }
   }
@@ -359,7 +375,8 @@ TEST(Wisps, RangesFromPointsOnHalfTheWispKeepItsStrandsInThatHalf) {
   for (int j = 0; j <= 10; ++j)
     for (int i = 0; i <= 80; ++i) {
       OrientedPoint p;
-      p.position_mm = Eigen::Vector3f(0.3f, 0.75f * static_cast<float>(j), -1.0f * static_cast<float>(i));
+      p.position_mm =
+          Eigen::Vector3f(0.3f, 0.75f * static_cast<float>(j), -1.0f * static_cast<float>(i));
       p.direction = Eigen::Vector3f(0, 0, -1);
       points.push_back(p);
     }
@@ -374,14 +391,16 @@ TEST(Wisps, RangesFromPointsOnHalfTheWispKeepItsStrandsInThatHalf) {
   ASSERT_EQ(ranged.range_low.size(), 41u);
   EXPECT_NEAR(ranged.range_low[10], 0, 0.1);
   EXPECT_NEAR(ranged.range_high[10], 5, 0.1);
-  EXPECT_LT(ranged.range_high[40] - ranged.range_low[40], 5 * options.tip_range_share + 0.1) << "tapered at the tip";
+  EXPECT_LT(ranged.range_high[40] - ranged.range_low[40], 5 * options.tip_range_share + 0.1)
+      << "tapered at the tip";
 
   SynthesisOptions flat;
   flat.thickness_mm = 0;
   const StrandSet strands = SynthesizeStrands(wisps, 200, 3, flat);
   ASSERT_EQ(strands.num_strands(), 200u);
   float low = std::numeric_limits<float>::max(), high = -low;
-  for (const Eigen::Vector3f& p : strands.points_mm) low = std::min(low, p.y()), high = std::max(high, p.y());
+  for (const Eigen::Vector3f& p : strands.points_mm)
+    low = std::min(low, p.y()), high = std::max(high, p.y());
   EXPECT_GT(low, -0.2f);
   EXPECT_LT(high, 5 * kSpacing + 0.2f);
   EXPECT_GT(high, 4 * kSpacing) << "the strands fill the covered half";

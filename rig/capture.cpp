@@ -9,10 +9,9 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <thread>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/contact_sheet.h"
 #include "core/file_util.h"
@@ -51,7 +50,8 @@ void SleepS(double seconds) {
   if (seconds > 0) std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
 }
 std::chrono::milliseconds Ms(double seconds) {
-  return std::chrono::milliseconds(std::max<int64_t>(1, static_cast<int64_t>(std::ceil(seconds * 1000))));
+  return std::chrono::milliseconds(
+      std::max<int64_t>(1, static_cast<int64_t>(std::ceil(seconds * 1000))));
 }
 std::string DegText(double deg) {
   char text[32];
@@ -72,16 +72,17 @@ struct Shot {
 struct CameraSlot {
   Camera* camera = nullptr;
   std::deque<Shot> queue;
-  bool busy = false;          // the collector is working on a shot
-  bool needs_reopen = false;  // dropped off the bus, or its frames can no longer be paired with triggers
-  int gave_up_in_pass = 0;    // reopening failed every attempt in this pass: skip it until the next
+  bool busy = false;  // the collector is working on a shot
+  bool needs_reopen =
+      false;  // dropped off the bus, or its frames can no longer be paired with triggers
+  int gave_up_in_pass = 0;  // reopening failed every attempt in this pass: skip it until the next
   std::thread collector;
 };
 
 class Sequencer {
  public:
-  Sequencer(Rig& rig, const CapturePlan& plan, const CapturePolicies& policies, CaptureDataset& dataset,
-            const CaptureOptions& options)
+  Sequencer(Rig& rig, const CapturePlan& plan, const CapturePolicies& policies,
+            CaptureDataset& dataset, const CaptureOptions& options)
       : rig_(rig), plan_(plan), policies_(policies), dataset_(dataset), options_(options) {}
 
   ~Sequencer() { StopCollectors(); }
@@ -110,7 +111,8 @@ class Sequencer {
   bool Collect(CameraSlot& slot, const Shot& shot);
 
   // --- bookkeeping -------------------------------------------------------------
-  void RecordFault(const Device* device, const Status& status, const std::string& action, int view = -1);
+  void RecordFault(const Device* device, const Status& status, const std::string& action,
+                   int view = -1);
   void StopRun(const std::string& why);
   void StopForStorage(const Status& status, const Device* device, int view = -1);
   bool Stopping() const { return stop_run_.load() || estop_.load(); }
@@ -137,7 +139,7 @@ class Sequencer {
   std::atomic<bool> stop_run_{false};
   std::atomic<bool> estop_{false};
   std::atomic<bool> storage_failed_{false};  // nothing more is written
-  std::string stop_reason_;  // guarded by mutex_
+  std::string stop_reason_;                  // guarded by mutex_
   std::atomic<int> faults_{0};
   std::atomic<int> frames_{0};
   std::atomic<uint64_t> bytes_{0};
@@ -153,7 +155,8 @@ class Sequencer {
   double bound_done_s_ = 0;
 };
 
-void Sequencer::RecordFault(const Device* device, const Status& status, const std::string& action, int view) {
+void Sequencer::RecordFault(const Device* device, const Status& status, const std::string& action,
+                            int view) {
   ++faults_;
   nlohmann::json r = {{"event", "fault"}, {"what", status.ToString()}, {"action", action}};
   if (device) {
@@ -176,14 +179,16 @@ void Sequencer::StopRun(const std::string& why) {
 // record follows it (ShootStop journals those under mutex_ unless stopping).
 void Sequencer::StopForStorage(const Status& status, const Device* device, int view) {
   storage_failed_ = true;
-  StopRun("storage: " + status.ToString() + ". The frames stored so far are kept; free space on the disk of " +
-          dataset_.dir() + ", then continue with --resume");
+  StopRun("storage: " + status.ToString() +
+          ". The frames stored so far are kept; free space on the disk of " + dataset_.dir() +
+          ", then continue with --resume");
   RecordFault(device, status, "stop the run", view);
 }
 
 double Sequencer::ExpectedFrameWallS(const Camera& camera) const {
   const CameraCapabilities caps = camera.capabilities();
-  return (plan_.camera_settings.exposure_s + caps.readout_s + caps.download_s) * camera.time_scale();
+  return (plan_.camera_settings.exposure_s + caps.readout_s + caps.download_s) *
+         camera.time_scale();
 }
 
 // Section "How it is judged" of the capture issue: moves, settles and
@@ -193,11 +198,13 @@ double Sequencer::LowerBoundOfStop(double from_deg, const PlannedStop& stop) con
   const double distance = std::abs(stop.angle_deg - from_deg);
   double s = 0;
   if (distance >= table.capabilities().resolution_deg) {
-    s += (MoveDurationS(distance, plan_.motion) + table.capabilities().settle_s) * table.time_scale();
+    s += (MoveDurationS(distance, plan_.motion) + table.capabilities().settle_s) *
+         table.time_scale();
   }
   double exposure = 0;
   for (int v : stop.views) {
-    const Camera* c = rig_.devices.FindCameraBySerial(plan_.views[static_cast<size_t>(v)].camera_serial);
+    const Camera* c =
+        rig_.devices.FindCameraBySerial(plan_.views[static_cast<size_t>(v)].camera_serial);
     exposure = std::max(exposure, plan_.camera_settings.exposure_s * c->time_scale());
   }
   return s + exposure;
@@ -220,7 +227,8 @@ Status Sequencer::Setup() {
     auto active = l->IsActive();
     if (!active.ok()) return active.status();
     if (*active) {
-      return FailedPrecondition(l->Describe() + " is active (e-stop pressed or door open): release it, then start again");
+      return FailedPrecondition(
+          l->Describe() + " is active (e-stop pressed or door open): release it, then start again");
     }
   }
   AllLightsOff();
@@ -275,7 +283,8 @@ void Sequencer::OnSafetyInput(const Device& line, bool active) {
   estop_ = true;
   (void)rig_.devices.turntable->Stop();
   AllLightsOff();
-  StopRun(line.Describe() + " went active (e-stop or interlock): motion stopped and lights off. "
+  StopRun(line.Describe() +
+          " went active (e-stop or interlock): motion stopped and lights off. "
           "Release it, check the rig, then continue with --resume");
   RecordFault(&line, Unavailable("safety input active"), "stop motion, lights off, end the run");
   // What the devices report right after, for the record (and the tests).
@@ -285,7 +294,9 @@ void Sequencer::OnSafetyInput(const Device& line, bool active) {
     if (!on.ok() || *on) lights_on.push_back(l->info().name);
   }
   auto table = rig_.devices.turntable->ReadStatus();
-  (void)dataset_.Append({{"event", "safety_stop"}, {"input", line.info().name}, {"lights_on", lights_on},
+  (void)dataset_.Append({{"event", "safety_stop"},
+                         {"input", line.info().name},
+                         {"lights_on", lights_on},
                          {"turntable_moving", table.ok() && table->moving && !table->in_position},
                          {"turntable_deg", table.ok() ? table->position_deg : std::nan("")}});
 }
@@ -340,12 +351,14 @@ void Sequencer::PulseTriggerLine(const std::string& line_name, int64_t sent_ns) 
 Status Sequencer::Move(double angle_deg, double* measured_deg) {
   Turntable& table = *rig_.devices.turntable;
   HR_ASSIGN_OR_RETURN(TurntableStatus now, table.ReadStatus());
-  if (std::abs(now.position_deg - angle_deg) < table.capabilities().resolution_deg && now.in_position) {
+  if (std::abs(now.position_deg - angle_deg) < table.capabilities().resolution_deg &&
+      now.in_position) {
     *measured_deg = now.position_deg;
     return Status::Ok();
   }
-  const double expected_s = (MoveDurationS(angle_deg - now.position_deg, plan_.motion) + table.capabilities().settle_s) *
-                            table.time_scale();
+  const double expected_s =
+      (MoveDurationS(angle_deg - now.position_deg, plan_.motion) + table.capabilities().settle_s) *
+      table.time_scale();
   Status s;
   for (int attempt = 1; attempt <= policies_.turntable.attempts && !Stopping(); ++attempt) {
     SleepS(policies_.turntable.BackoffBefore(attempt));
@@ -366,7 +379,8 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
     if (!slot.needs_reopen) return Status::Ok();
-    if (slot.gave_up_in_pass == pass_) return Unavailable(slot.camera->Describe() + ": skipped for the rest of this pass");
+    if (slot.gave_up_in_pass == pass_)
+      return Unavailable(slot.camera->Describe() + ": skipped for the rest of this pass");
     // The collector must be idle before the camera is touched from this thread.
     cv_.wait(lock, [&] { return (slot.queue.empty() && !slot.busy) || shutdown_; });
   }
@@ -376,11 +390,13 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
     s = PrepareCamera(*slot.camera);
     if (s.ok()) break;
     RecordFault(slot.camera, s,
-                attempt < policies_.camera.attempts ? "reopen again after back-off" : "skip its views until the next pass");
+                attempt < policies_.camera.attempts ? "reopen again after back-off"
+                                                    : "skip its views until the next pass");
   }
   if (!s.ok()) slot.gave_up_in_pass = pass_;
   if (s.ok()) {
-    (void)dataset_.Append({{"event", "device_reopened"}, {"device", slot.camera->info().name},
+    (void)dataset_.Append({{"event", "device_reopened"},
+                           {"device", slot.camera->info().name},
                            {"serial", slot.camera->info().serial}});
     std::lock_guard<std::mutex> lock(mutex_);
     slot.needs_reopen = false;
@@ -417,7 +433,9 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
   if (!moved.ok()) {
     if (!Stopping()) {
       RecordFault(rig_.devices.turntable.get(), moved, "stop the run");
-      StopRun(moved.ToString() + ". The frames stored so far are kept; check the turntable, then continue with --resume");
+      StopRun(
+          moved.ToString() +
+          ". The frames stored so far are kept; check the turntable, then continue with --resume");
     }
     return false;
   }
@@ -425,8 +443,10 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (Stopping()) return false;
-    (void)dataset_.Append({{"event", "position_reached"}, {"stop", stop.index},
-                           {"commanded_deg", stop.angle_deg}, {"measured_deg", measured}});
+    (void)dataset_.Append({{"event", "position_reached"},
+                           {"stop", stop.index},
+                           {"commanded_deg", stop.angle_deg},
+                           {"measured_deg", measured}});
   }
   if (const Status s = SetLights(stop.light_levels); !s.ok()) {
     StopRun(s.ToString() + ": cannot light the views; check the panel's power and connection");
@@ -453,18 +473,21 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
         if (const Status s = camera.SoftwareTrigger(); !s.ok()) shooting[i]->needs_reopen = true;
       }
       Shot shot{shot_views[i], stop.index, trigger_ns, {}, stop.angle_deg, measured};
-      shot.deadline = trigger_time + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                                         ExpectedFrameWallS(camera) + policies_.frame_timeout_s));
+      shot.deadline =
+          trigger_time + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                             ExpectedFrameWallS(camera) + policies_.frame_timeout_s));
       shooting[i]->queue.push_back(shot);
-      exposure_wall_s = std::max(exposure_wall_s, plan_.camera_settings.exposure_s * camera.time_scale());
+      exposure_wall_s =
+          std::max(exposure_wall_s, plan_.camera_settings.exposure_s * camera.time_scale());
       const CameraCapabilities caps = camera.capabilities();
-      last_download_s_ = std::max(last_download_s_, (caps.readout_s + caps.download_s) * camera.time_scale());
+      last_download_s_ =
+          std::max(last_download_s_, (caps.readout_s + caps.download_s) * camera.time_scale());
     }
     cv_.notify_all();
   }
   // The turntable may move once every exposure has ended.
-  std::this_thread::sleep_until(trigger_time +
-                                std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(exposure_wall_s)));
+  std::this_thread::sleep_until(trigger_time + std::chrono::duration_cast<Clock::duration>(
+                                                   std::chrono::duration<double>(exposure_wall_s)));
   return !Stopping();
 }
 
@@ -492,39 +515,51 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (slot.needs_reopen) {
-      RecordFault(&camera, Unavailable("the camera is being reopened"), "re-shoot later", shot.view);
+      RecordFault(&camera, Unavailable("the camera is being reopened"), "re-shoot later",
+                  shot.view);
       return false;
     }
   }
   // A camera delivers its frames one after another: when earlier frames are
   // still coming out, this one's transfer starts only now.
-  const Clock::time_point deadline =
-      std::max(shot.deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                                                 ExpectedFrameWallS(camera) + policies_.frame_timeout_s)));
+  const Clock::time_point deadline = std::max(
+      shot.deadline,
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                         ExpectedFrameWallS(camera) + policies_.frame_timeout_s)));
   for (;;) {
     const double left_s = std::chrono::duration<double>(deadline - Clock::now()).count();
-    Result<Frame> frame = left_s > 0 ? camera.WaitFrame(Ms(left_s))
-                                     : Result<Frame>(Timeout(camera.Describe() + ": no frame for view " +
-                                                             std::to_string(shot.view) + " in time"));
+    Result<Frame> frame = left_s > 0
+                              ? camera.WaitFrame(Ms(left_s))
+                              : Result<Frame>(Timeout(camera.Describe() + ": no frame for view " +
+                                                      std::to_string(shot.view) + " in time"));
     if (!frame.ok()) {
       if (frame.status().code() != StatusCode::kTimeout) {
         std::lock_guard<std::mutex> lock(mutex_);
         slot.needs_reopen = true;
       }
       RecordFault(&camera, frame.status(),
-                  frame.status().code() == StatusCode::kTimeout ? "re-shoot later" : "reopen the camera, re-shoot later",
+                  frame.status().code() == StatusCode::kTimeout
+                      ? "re-shoot later"
+                      : "reopen the camera, re-shoot later",
                   shot.view);
       return false;
     }
     if (frame->trigger_time_ns < shot.trigger_ns) {
-      (void)dataset_.Append({{"event", "stale_frame_discarded"}, {"serial", camera.info().serial},
-                             {"trigger_time_ns", frame->trigger_time_ns}, {"waiting_for_view", shot.view}});
+      (void)dataset_.Append({{"event", "stale_frame_discarded"},
+                             {"serial", camera.info().serial},
+                             {"trigger_time_ns", frame->trigger_time_ns},
+                             {"waiting_for_view", shot.view}});
       continue;
     }
     const PlannedView& view = plan_.views[static_cast<size_t>(shot.view)];
     const CameraCapabilities caps = camera.capabilities();
-    FrameContext context{shot.view, shot.stop, view.camera_name, shot.angle_commanded_deg, shot.angle_measured_deg,
-                         caps.width_px, caps.height_px};
+    FrameContext context{shot.view,
+                         shot.stop,
+                         view.camera_name,
+                         shot.angle_commanded_deg,
+                         shot.angle_measured_deg,
+                         caps.width_px,
+                         caps.height_px};
     auto stored = dataset_.StoreFrame(*frame, context);
     if (!stored.ok()) {
       if (stored.status().code() == StatusCode::kIoError) {
@@ -611,7 +646,9 @@ double Sequencer::PlannedBoundLeftLocked() const {
 
 void Sequencer::PlanEta(const std::map<int, std::vector<int>>& views_by_stop) {
   const auto status = rig_.devices.turntable->ReadStatus();
-  double from = status.ok() ? status->position_deg : plan_.stops[static_cast<size_t>(views_by_stop.begin()->first)].angle_deg;
+  double from = status.ok()
+                    ? status->position_deg
+                    : plan_.stops[static_cast<size_t>(views_by_stop.begin()->first)].angle_deg;
   std::lock_guard<std::mutex> lock(progress_mutex_);
   bound_left_s_.clear();
   for (const auto& [stop, views] : views_by_stop) {
@@ -689,14 +726,18 @@ CaptureSummary Sequencer::Run() {
     summary.status = "stopped";
   } else if (!summary.missing_views.empty()) {
     summary.status = "incomplete";
-    summary.message = std::to_string(summary.missing_views.size()) + " views still missing after " +
-                      std::to_string(policies_.camera.attempts) +
-                      " passes (see the faults in journal.jsonl); fix the cause, then run again with --resume";
+    summary.message =
+        std::to_string(summary.missing_views.size()) + " views still missing after " +
+        std::to_string(policies_.camera.attempts) +
+        " passes (see the faults in journal.jsonl); fix the cause, then run again with --resume";
   } else {
     summary.status = "complete";
   }
-  (void)dataset_.Append({{"event", "session_end"}, {"status", summary.status}, {"message", summary.message},
-                         {"views_completed", summary.views_completed}, {"frames", summary.frames},
+  (void)dataset_.Append({{"event", "session_end"},
+                         {"status", summary.status},
+                         {"message", summary.message},
+                         {"views_completed", summary.views_completed},
+                         {"frames", summary.frames},
                          {"faults", summary.faults}});
   (void)dataset_.WriteManifest(summary.status);
   if (options_.sink) options_.sink->OnCaptureFinished();
@@ -715,12 +756,14 @@ Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan)
     labels.push_back(std::filesystem::path(r.file).filename().string());
   }
   if (thumbs.empty()) return Status::Ok();
-  const int columns = std::max<int>(1, static_cast<int>(plan.views.size() / std::max<size_t>(1, plan.stops.size())) * 4);
+  const int columns = std::max<int>(
+      1, static_cast<int>(plan.views.size() / std::max<size_t>(1, plan.stops.size())) * 4);
   const cv::Mat sheet = MakeContactSheet(thumbs, labels, columns, 240);
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", sheet, png)) return Internal("contact sheet: PNG encoding failed");
   HR_RETURN_IF_ERROR(dataset.CheckFreeSpace(png.size()).WithContext("contact sheet not written"));
-  return dataset.storage().WriteFileAtomic(dataset.dir() + "/contact_sheet.png", png.data(), png.size(), {});
+  return dataset.storage().WriteFileAtomic(dataset.dir() + "/contact_sheet.png", png.data(),
+                                           png.size(), {});
 }
 
 std::string ReadText(const std::string& path) {
@@ -733,7 +776,8 @@ std::vector<PlannedViewRecord> PlannedViewRecords(const CapturePlan& plan) {
   std::vector<PlannedViewRecord> records;
   for (const PlannedView& v : plan.views) {
     const PlannedStop& stop = plan.stops[static_cast<size_t>(v.stop)];
-    records.push_back({v.index, v.stop, stop.angle_deg, v.camera_name, v.camera_serial, stop.light_levels});
+    records.push_back(
+        {v.index, v.stop, stop.angle_deg, v.camera_name, v.camera_serial, stop.light_levels});
   }
   return records;
 }
@@ -750,8 +794,9 @@ Result<RigConfig> LoadSessionConfig(const CaptureOptions& options, std::string* 
     return LoadRigConfig(snapshot.string(), metadata.config_dir, unclaimed);
   }
   if (fs::exists(options.out_dir)) {
-    return FailedPrecondition(options.out_dir +
-                              " already exists: choose a new --out folder, or add --resume to continue it");
+    return FailedPrecondition(
+        options.out_dir +
+        " already exists: choose a new --out folder, or add --resume to continue it");
   }
   HR_ASSIGN_OR_RETURN(RigConfig config,
                       LoadRigConfig(options.config_path, options.config_relative_to, unclaimed));
@@ -761,36 +806,41 @@ Result<RigConfig> LoadSessionConfig(const CaptureOptions& options, std::string* 
 
 // Room on the capture's disk for the views left to shoot: all of them, or
 // those of a resumed capture (`resumed`) without a verified frame.
-Status CheckSpaceToFinish(const CaptureStorage& storage, const std::string& out_dir, const CapturePlan& plan,
-                          const DeviceSet& devices, const CapturePolicies& policies, const CaptureDataset* resumed) {
+Status CheckSpaceToFinish(const CaptureStorage& storage, const std::string& out_dir,
+                          const CapturePlan& plan, const DeviceSet& devices,
+                          const CapturePolicies& policies, const CaptureDataset* resumed) {
   std::vector<int> left;
   for (const PlannedView& v : plan.views) {
     if (!resumed || !resumed->HasVerifiedFrame(v.index)) left.push_back(v.index);
   }
   // The file system the capture lands on: the nearest folder that exists.
   fs::path probe = fs::absolute(out_dir);
-  while (!fs::exists(probe) && probe.has_parent_path() && probe != probe.parent_path()) probe = probe.parent_path();
+  while (!fs::exists(probe) && probe.has_parent_path() && probe != probe.parent_path())
+    probe = probe.parent_path();
   HR_ASSIGN_OR_RETURN(const uint64_t free, storage.FreeBytes(probe.string()));
   const uint64_t needed = BytesNeededToFinish(plan, devices, left, policies);
   if (free >= needed) return Status::Ok();
-  return IoError(probe.string() + ": " + std::to_string(free / 1000000) + " MB free, the " +
-                 std::to_string(left.size()) + " views left to shoot need up to " + std::to_string(needed / 1000000) +
-                 " MB (their frames plus storage.min_free_mb): " +
-                 (resumed ? "free space, then run --resume again" : "free space or choose another --out"));
+  return IoError(
+      probe.string() + ": " + std::to_string(free / 1000000) + " MB free, the " +
+      std::to_string(left.size()) + " views left to shoot need up to " +
+      std::to_string(needed / 1000000) + " MB (their frames plus storage.min_free_mb): " +
+      (resumed ? "free space, then run --resume again" : "free space or choose another --out"));
 }
 
 }  // namespace
 
 Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
-  if (options.out_dir.empty()) return InvalidArgument("--out is required: the folder the capture is written to");
+  if (options.out_dir.empty())
+    return InvalidArgument("--out is required: the folder the capture is written to");
   std::string config_text;
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadSessionConfig(options, &config_text));
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
   HR_RETURN_IF_ERROR(CheckCalibrationSection(config));
-  const std::shared_ptr<CaptureStorage> storage =
-      options.storage ? options.storage : rig->capture_storage ? rig->capture_storage : DefaultCaptureStorage();
+  const std::shared_ptr<CaptureStorage> storage = options.storage        ? options.storage
+                                                  : rig->capture_storage ? rig->capture_storage
+                                                                         : DefaultCaptureStorage();
   DatasetOptions dataset_options;
   dataset_options.png_compression = policies.png_compression;
   dataset_options.min_free_bytes = policies.MinFreeBytes();
@@ -798,18 +848,20 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   std::unique_ptr<CaptureDataset> dataset;
   ResumeReport report;
   if (options.resume) {
-    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::OpenForResume(options.out_dir, dataset_options, &report, storage));
+    HR_ASSIGN_OR_RETURN(
+        dataset, CaptureDataset::OpenForResume(options.out_dir, dataset_options, &report, storage));
     // A resumed capture's plan is checked before anything else is written.
     HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
   }
-  HR_RETURN_IF_ERROR(CheckSpaceToFinish(*storage, options.out_dir, plan, rig->devices, policies, dataset.get()));
+  HR_RETURN_IF_ERROR(
+      CheckSpaceToFinish(*storage, options.out_dir, plan, rig->devices, policies, dataset.get()));
   if (!options.resume) {
     CaptureMetadata metadata;
     metadata.config_source = fs::absolute(config.path).lexically_normal().string();
     metadata.config_dir = config.relative_to;
     metadata.subject = options.subject;
-    HR_ASSIGN_OR_RETURN(dataset,
-                        CaptureDataset::Create(options.out_dir, config_text, metadata, dataset_options, storage));
+    HR_ASSIGN_OR_RETURN(dataset, CaptureDataset::Create(options.out_dir, config_text, metadata,
+                                                        dataset_options, storage));
   }
   const std::string subject = options.resume ? dataset->metadata().subject : options.subject;
   dataset->SetPlanSummary(static_cast<int>(plan.views.size()), subject, config.name);

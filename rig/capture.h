@@ -24,10 +24,9 @@
 
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/capture_storage.h"
 #include "core/frame_sink.h"
@@ -38,14 +37,14 @@
 namespace hairrig {
 
 struct CaptureProgress {
-  int views_done = 0;   // verified views, earlier sessions included
+  int views_done = 0;  // verified views, earlier sessions included
   int views_total = 0;
-  int stop = 0;         // current stop (0-based)
+  int stop = 0;  // current stop (0-based)
   int stops_total = 0;
-  std::string step;     // "moving to 37.9 deg", "exposing", "re-shooting 2 views", ...
-  double eta_s = 0;     // wall seconds left: the longer of the sweep's (the plan's lower bound of the
-                        // stops left times its pace so far) and the storage's (views left times the
-                        // wall time per view stored so far)
+  std::string step;  // "moving to 37.9 deg", "exposing", "re-shooting 2 views", ...
+  double eta_s = 0;  // wall seconds left: the longer of the sweep's (the plan's lower bound of the
+                     // stops left times its pace so far) and the storage's (views left times the
+                     // wall time per view stored so far)
   int faults = 0;
 };
 
@@ -54,11 +53,12 @@ struct CaptureOptions {
   // The folder the config's relative paths (sim.scene, head, calibration.box)
   // resolve against; empty: the config's own folder.
   std::string config_relative_to;
-  std::string out_dir;      // the capture folder: must not exist, unless resume
-  std::string subject;      // recorded in the journal and manifest
+  std::string out_dir;  // the capture folder: must not exist, unless resume
+  std::string subject;  // recorded in the journal and manifest
   bool resume = false;
-  FrameSink* sink = nullptr;                                // optional
-  std::function<void(const CaptureProgress&)> on_progress;  // optional, called from the sequencer thread
+  FrameSink* sink = nullptr;  // optional
+  std::function<void(const CaptureProgress&)>
+      on_progress;            // optional, called from the sequencer thread
   RigBuildOptions rig_build;  // how devices are made (the replay command swaps in its backend)
   // Where the capture's files are written (core/capture_storage.h). Null: the
   // rig's own (Rig::capture_storage: the simulated rig's disk), else the file system.
@@ -67,7 +67,8 @@ struct CaptureOptions {
 
 struct CaptureSummary {
   std::string dir;
-  std::string status;   // "complete", "incomplete" (views missing after retries) or "stopped" (a fault ended the run)
+  std::string status;   // "complete", "incomplete" (views missing after retries) or "stopped" (a
+                        // fault ended the run)
   std::string message;  // what happened and what to do, for stopped/incomplete runs
   int views_planned = 0;
   int views_completed = 0;  // verified, earlier sessions included
@@ -76,10 +77,11 @@ struct CaptureSummary {
   uint64_t bytes = 0;       // bytes stored in this session
   int faults = 0;           // faults in this session
   std::vector<int> missing_views;
-  double setup_s = 0;       // opening devices, homing, arming
-  double wall_s = 0;        // from the first stop's move to the last frame stored
-  double lower_bound_s = 0; // moves + settles + exposures of this session's stops + the last download
-  double efficiency = 0;    // lower_bound_s / wall_s
+  double setup_s = 0;  // opening devices, homing, arming
+  double wall_s = 0;   // from the first stop's move to the last frame stored
+  double lower_bound_s =
+      0;                  // moves + settles + exposures of this session's stops + the last download
+  double efficiency = 0;  // lower_bound_s / wall_s
   nlohmann::json ToJson() const;
 };
 

@@ -3,7 +3,6 @@
 #include <filesystem>
 #include <map>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "calibration/tag_detection_sink.h"
@@ -67,7 +66,8 @@ Result<CaptureOptions> MakeCaptureOptions(const CaptureAndProcessOptions& o) {
 }
 
 // Detects the box's tags as frames land, with the box of the config the capture runs.
-Result<std::unique_ptr<TagDetectionSink>> MakeDetectionSink(const CaptureOptions& capture, int threads) {
+Result<std::unique_ptr<TagDetectionSink>> MakeDetectionSink(const CaptureOptions& capture,
+                                                            int threads) {
   HR_ASSIGN_OR_RETURN(const RigConfig config, capture.resume ? LoadCaptureRigConfig(capture.out_dir)
                                                              : LoadRigConfig(capture.config_path));
   HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
@@ -141,8 +141,9 @@ Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOption
   HR_ASSIGN_OR_RETURN(summary.capture, RunCapture(capture));
   if (options.on_captured) options.on_captured(summary.capture);
   if (!sink || summary.capture.status != "complete") return summary;
-  HR_ASSIGN_OR_RETURN(summary.calibration,
-                      CalibrateAfterCapture(capture.out_dir, options.intrinsics_files, options.threads, *sink));
+  HR_ASSIGN_OR_RETURN(
+      summary.calibration,
+      CalibrateAfterCapture(capture.out_dir, options.intrinsics_files, options.threads, *sink));
   if (options.reconstruct &&
       summary.calibration->calibration.verdict.level != CalibrationVerdict::Level::kFailed) {
     ReconstructCaptureOptions reconstruct;

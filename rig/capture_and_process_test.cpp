@@ -1,8 +1,8 @@
 #include "rig/capture_and_process.h"
 
-#include <filesystem>
-
 #include <gtest/gtest.h>
+
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "rig/capture_test_util.h"

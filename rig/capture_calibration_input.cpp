@@ -3,10 +3,9 @@
 #include <chrono>
 #include <filesystem>
 #include <map>
-#include <set>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "calibration/calibration_io.h"
 #include "calibration/prior_check.h"
@@ -43,7 +42,8 @@ CameraIntrinsics ReadNominalIntrinsics(const ConfigNode& k) {
 }
 
 // Cameras from the config snapshot, each with its image size from its first frame.
-Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::map<std::string, int>* by_serial) {
+Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input,
+                  std::map<std::string, int>* by_serial) {
   const ConfigNode nominal = config.root.OptionalChild("calibration").OptionalChild("cameras");
   std::string names;
   for (const ConfigNode& cam : config.root.Child("devices").Items("cameras")) {
@@ -51,7 +51,8 @@ Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::
     camera.name = cam.String("name");
     camera.serial = cam.String("serial");
     names += (names.empty() ? "" : ", ") + camera.name;
-    if (nominal.IsMap() && nominal.Has(camera.name)) camera.nominal = ReadNominalIntrinsics(nominal.Child(camera.name));
+    if (nominal.IsMap() && nominal.Has(camera.name))
+      camera.nominal = ReadNominalIntrinsics(nominal.Child(camera.name));
     (*by_serial)[camera.serial] = static_cast<int>(input->cameras.size());
     input->cameras.push_back(camera);
   }
@@ -59,15 +60,17 @@ Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input, std::
     bool known = false;
     for (const CalibrationCamera& camera : input->cameras) known = known || camera.name == name;
     if (known) continue;
-    nominal.Fail(name, "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + names + ")");
+    nominal.Fail(name, "no camera named " + QuotedExcerpt(name) +
+                           " in the devices section (cameras: " + names + ")");
   }
   return config.root.status();
 }
 
 // The manifest's frames; one whose file does not verify against the manifest
 // (VerifyFrameFile) is marked unusable and named in the calibration's report.
-Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest, const std::string& manifest_path,
-                 const std::map<std::string, int>& by_serial, CaptureCalibrationInput* input) {
+Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest,
+                 const std::string& manifest_path, const std::map<std::string, int>& by_serial,
+                 CaptureCalibrationInput* input) {
   const JsonObject root(manifest, manifest_path);
   std::set<int> views_seen;
   for (const JsonObject& f : root.Objects("frames")) {
@@ -76,7 +79,8 @@ Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest,
     if (f.ok() && !views_seen.insert(frame.view).second) {
       // Checked before any file is read: a list repeated thousands of times is refused at once.
       f.Fail("view", "view " + std::to_string(frame.view) +
-                         " is listed twice; the manifest was altered: rewrite it with `hairrig capture --resume`");
+                         " is listed twice; the manifest was altered: rewrite it with `hairrig "
+                         "capture --resume`");
       break;
     }
     frame.stop = static_cast<int>(f.Integer("stop", {.min = 0, .max = kMaxViewIndex}));
@@ -87,7 +91,8 @@ Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest,
     const std::string sha256 = f.String("sha256");
     if (!f.ok()) break;
     if (!IsFrameFileName(frame.name, frame.view, serial)) {
-      f.Fail("file", frame.name + " is not the file of view " + std::to_string(frame.view) + " from camera " + serial);
+      f.Fail("file", frame.name + " is not the file of view " + std::to_string(frame.view) +
+                         " from camera " + serial);
       break;
     }
     const auto camera = by_serial.find(serial);
@@ -95,7 +100,8 @@ Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest,
       f.Fail("serial", "camera " + serial + " is not in rig.yaml");
       break;
     }
-    if (const Status verified = VerifyFrameFile(capture_dir, frame.name, bytes, sha256); !verified.ok())
+    if (const Status verified = VerifyFrameFile(capture_dir, frame.name, bytes, sha256);
+        !verified.ok())
       frame.unusable = verified.message() + " (`hairrig capture --resume` re-shoots it)";
     frame.path = (fs::path(capture_dir) / frame.name).lexically_normal().string();
     frame.camera = camera->second;
@@ -133,7 +139,8 @@ Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config) {
   out.box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
   out.box_yaw_deg = section.Number("box_yaw_deg", 0.0, {.min = -360, .max = 360});
   HR_RETURN_IF_ERROR(config.root.status());
-  HR_ASSIGN_OR_RETURN(out.box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
+  HR_ASSIGN_OR_RETURN(
+      out.box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
   return out;
 }
 
@@ -150,7 +157,8 @@ Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
 
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {
   const std::string manifest_path = (fs::path(capture_dir) / "manifest.json").string();
-  HR_ASSIGN_OR_RETURN(nlohmann::json manifest, ReadJsonFile(manifest_path, "is this a capture folder?"));
+  HR_ASSIGN_OR_RETURN(nlohmann::json manifest,
+                      ReadJsonFile(manifest_path, "is this a capture folder?"));
   HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(capture_dir));
   CaptureCalibrationInput input;
   HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
@@ -164,7 +172,8 @@ Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& c
   return input;
 }
 
-Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_paths, CaptureCalibrationInput* input) {
+Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_paths,
+                             CaptureCalibrationInput* input) {
   std::map<std::string, IntrinsicsPrior> by_serial;
   for (const std::string& path : prior_paths) {
     HR_ASSIGN_OR_RETURN(std::vector<IntrinsicsPrior> priors, ReadIntrinsicsPriors(path));
@@ -173,14 +182,17 @@ Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_paths, Captur
   for (CalibrationCamera& camera : input->cameras) {
     const auto match = by_serial.find(camera.serial);
     if (match == by_serial.end())
-      return InvalidArgument("--intrinsics: no file gives camera " + camera.serial +
-                             "; calibrate it with `hairrig calibrate-intrinsics` and pass that file too");
+      return InvalidArgument(
+          "--intrinsics: no file gives camera " + camera.serial +
+          "; calibrate it with `hairrig calibrate-intrinsics` and pass that file too");
     const IntrinsicsPrior& prior = match->second;
-    if (prior.intrinsics.width_px != camera.width_px || prior.intrinsics.height_px != camera.height_px)
-      return InvalidArgument("--intrinsics " + prior.source + ": camera " + camera.serial + " was calibrated at " +
-                             std::to_string(prior.intrinsics.width_px) + " x " +
-                             std::to_string(prior.intrinsics.height_px) + " px, the capture's frames are " +
-                             std::to_string(camera.width_px) + " x " + std::to_string(camera.height_px));
+    if (prior.intrinsics.width_px != camera.width_px ||
+        prior.intrinsics.height_px != camera.height_px)
+      return InvalidArgument("--intrinsics " + prior.source + ": camera " + camera.serial +
+                             " was calibrated at " + std::to_string(prior.intrinsics.width_px) +
+                             " x " + std::to_string(prior.intrinsics.height_px) +
+                             " px, the capture's frames are " + std::to_string(camera.width_px) +
+                             " x " + std::to_string(camera.height_px));
     camera.nominal = prior.intrinsics;
     camera.nominal_stddev = prior.stddev;
     camera.prior_source = prior.source;
@@ -252,7 +264,8 @@ std::string CalibratedFolder::BriefReport() const {
   return text;
 }
 
-Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, const CalibrateFolderOptions& options) {
+Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
+                                                const CalibrateFolderOptions& options) {
   CalibratedFolder done;
   HR_ASSIGN_OR_RETURN(done.input, LoadCaptureCalibrationInput(capture_dir));
   CaptureCalibrationOptions calibration = options.calibration;
@@ -270,12 +283,15 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, 
   done.out_dir = (std::filesystem::path(capture_dir) / "calibration").string();
   const auto write_start = std::chrono::steady_clock::now();
   HR_RETURN_IF_ERROR(WriteCalibration(done.out_dir, done.input, done.result));
-  done.write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
+  done.write_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
   if (options.on_written) options.on_written();
   done.verdict = JudgeCalibration(done.input, done.result);
-  HR_RETURN_IF_ERROR(
-      WriteCalibrationReport(done.out_dir + "/report", done.input, done.result, done.verdict, calibration.threads));
-  done.report_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count() - done.write_s;
+  HR_RETURN_IF_ERROR(WriteCalibrationReport(done.out_dir + "/report", done.input, done.result,
+                                            done.verdict, calibration.threads));
+  done.report_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count() -
+      done.write_s;
   return done;
 }
 

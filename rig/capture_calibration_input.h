@@ -7,17 +7,16 @@
 //   calibration:
 //     box: calib-box.yaml        # the box model (required)
 //     box_height_mm: 600         # box origin above the turntable plate, along the axis
-//     box_yaw_deg: 10            # the box's turn about the axis from the turntable's x axis (default 0)
-//     cameras:                   # optional nominal intrinsics by camera name;
+//     box_yaw_deg: 10            # the box's turn about the axis from the turntable's x axis
+//     (default 0) cameras:                   # optional nominal intrinsics by camera name;
 //       upper: {fx_px: .., fy_px: .., cx_px: .., cy_px: .., k1: 0, ...}  # else from the views
 #pragma once
 
 #include <functional>
 #include <map>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "calibration/calibration_evaluation.h"
 #include "calibration/calibration_report.h"
@@ -55,7 +54,8 @@ Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& c
 // (files from `calibrate-intrinsics` or calibration.json; a later file wins
 // for a serial given twice), with their standard deviations. InvalidArgument
 // names a camera no file gives, or one calibrated at another image size.
-Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_files, CaptureCalibrationInput* input);
+Status ApplyIntrinsicsPriors(const std::vector<std::string>& prior_files,
+                             CaptureCalibrationInput* input);
 
 struct CalibrateFolderOptions {
   CaptureCalibrationOptions calibration;
@@ -81,7 +81,8 @@ struct CalibratedFolder {
 
 // `hairrig calibrate`: loads the capture, solves it and writes
 // <capture>/calibration/ with its report.
-Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir, const CalibrateFolderOptions& options);
+Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
+                                                const CalibrateFolderOptions& options);
 
 struct CaptureCalibrationEvalOptions {
   std::string capture_dir;  // a calibrated capture of the simulated rig

@@ -10,10 +10,9 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
-#include <set>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "core/file_util.h"
 #include "core/json_file.h"
@@ -67,7 +66,8 @@ Result<std::string> Quarantine(const std::string& dir, const fs::path& file) {
   std::error_code ec;
   fs::create_directories(q, ec);
   fs::path target = q / file.filename();
-  for (int n = 1; Exists(target); ++n) target = q / (file.filename().string() + "." + std::to_string(n));
+  for (int n = 1; Exists(target); ++n)
+    target = q / (file.filename().string() + "." + std::to_string(n));
   fs::rename(file, target, ec);
   if (ec) return IoError(file.string() + ": cannot move it to quarantine/ (" + ec.message() + ")");
   return target.string();
@@ -79,9 +79,10 @@ Status RefuseSymlinks(const std::string& dir) {
     const fs::path path = fs::path(dir) / name;
     std::error_code ec;
     if (fs::is_symlink(fs::symlink_status(path, ec))) {
-      return FailedPrecondition(path.string() + " is a symlink (to " + fs::read_symlink(path, ec).string() +
-                                "); hairrig writes only into the capture folder itself: replace it by the " +
-                                (std::string(name) == kJournal ? "file" : "folder") + " it points to, then resume");
+      return FailedPrecondition(
+          path.string() + " is a symlink (to " + fs::read_symlink(path, ec).string() +
+          "); hairrig writes only into the capture folder itself: replace it by the " +
+          (std::string(name) == kJournal ? "file" : "folder") + " it points to, then resume");
     }
   }
   return Status::Ok();
@@ -91,26 +92,31 @@ Status CheckAgainstPlan(const FrameRecord& f, const std::map<int, PlannedViewRec
                         const std::string& where) {
   const auto plan = planned.find(f.view);
   if (plan == planned.end()) {
-    return CorruptData(where + ": field 'view': no view_planned record plans view " + std::to_string(f.view) + "; " +
-                       kAlteredAdvice);
+    return CorruptData(where + ": field 'view': no view_planned record plans view " +
+                       std::to_string(f.view) + "; " + kAlteredAdvice);
   }
   if (plan->second.serial != f.serial) {
-    return CorruptData(where + ": field 'serial': view " + std::to_string(f.view) + " is planned for camera " +
-                       plan->second.serial + ", the record names " + f.serial + "; " + kAlteredAdvice);
+    return CorruptData(where + ": field 'serial': view " + std::to_string(f.view) +
+                       " is planned for camera " + plan->second.serial + ", the record names " +
+                       f.serial + "; " + kAlteredAdvice);
   }
   return Status::Ok();
 }
 
 }  // namespace
 
-Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path, size_t* cut_short_bytes) {
+Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path,
+                                                       size_t* cut_short_bytes) {
   HR_ASSIGN_OR_RETURN(const std::string text, ReadFileText(journal_path, kMaxJsonFileBytes));
   std::vector<nlohmann::json> records;
   size_t line_start = 0;
   for (size_t end = text.find('\n'); end != std::string::npos; end = text.find('\n', line_start)) {
     const std::string where = JournalLine(journal_path, records.size());
-    Result<nlohmann::json> record = ParseJson(std::string_view(text).substr(line_start, end - line_start), where);
-    if (!record.ok()) return CorruptData(record.status().message() + " and is not the last line; " + kAlteredAdvice);
+    Result<nlohmann::json> record =
+        ParseJson(std::string_view(text).substr(line_start, end - line_start), where);
+    if (!record.ok())
+      return CorruptData(record.status().message() + " and is not the last line; " +
+                         kAlteredAdvice);
     const JsonObject envelope(*record, where);
     envelope.String("event");
     envelope.Integer("seq", {.min = 0, .max = kMaxSeq});
@@ -124,13 +130,15 @@ Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journa
 
 Result<CaptureMetadata> ReadCaptureMetadata(const std::string& capture_dir) {
   const std::string path = (fs::path(capture_dir) / kMetadata).string();
-  HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path, "is " + capture_dir + " a capture folder?"));
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j,
+                      ReadJsonFile(path, "is " + capture_dir + " a capture folder?"));
   return CaptureMetadata::FromJson(j, path);
 }
 
 Result<CaptureMetadata> ReadResumableCapture(const std::string& capture_dir) {
   if (!Exists(fs::path(capture_dir) / kJournal)) {
-    return NotFound(capture_dir + " is not a capture folder (no " + kJournal + "): nothing to resume");
+    return NotFound(capture_dir + " is not a capture folder (no " + kJournal +
+                    "): nothing to resume");
   }
   return ReadCaptureMetadata(capture_dir);
 }
@@ -146,8 +154,8 @@ Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal
     const PlannedViewRecord& view = *read;
     const auto [it, added] = planned.emplace(view.view, view);
     if (!added && !(it->second == view)) {
-      return CorruptData(where + ": plans " + view.Describe() + ", an earlier line " + it->second.Describe() + "; " +
-                         kAlteredAdvice);
+      return CorruptData(where + ": plans " + view.Describe() + ", an earlier line " +
+                         it->second.Describe() + "; " + kAlteredAdvice);
     }
   }
   return planned;
@@ -155,14 +163,17 @@ Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal
 
 Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, uint64_t bytes,
                        const std::string& sha256) {
-  HR_ASSIGN_OR_RETURN(const std::string path, ResolveInside((fs::path(capture_dir) / file).string(), capture_dir));
+  HR_ASSIGN_OR_RETURN(const std::string path,
+                      ResolveInside((fs::path(capture_dir) / file).string(), capture_dir));
   uint64_t file_bytes = 0;
   const Result<std::string> actual = Sha256OfFile(path, bytes, &file_bytes);
   if (actual.status().code() == StatusCode::kOutOfRange)
-    return CorruptData(path + ": larger than the " + std::to_string(bytes) + " bytes its record gives");
+    return CorruptData(path + ": larger than the " + std::to_string(bytes) +
+                       " bytes its record gives");
   if (!actual.ok()) return actual.status();
   if (file_bytes != bytes) {
-    return CorruptData(path + ": " + std::to_string(file_bytes) + " bytes, its record gives " + std::to_string(bytes));
+    return CorruptData(path + ": " + std::to_string(file_bytes) + " bytes, its record gives " +
+                       std::to_string(bytes));
   }
   if (*actual != sha256) return CorruptData(path + ": its SHA-256 does not match its record");
   return Status::Ok();
@@ -189,20 +200,26 @@ Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir
   for (const auto& [view, frame] : claimed) {
     const auto [other, inserted] = view_of_content.emplace(frame.sha256, view);
     if (!inserted) {
-      return CorruptData(JournalLine(journal, claimed_line[view]) + ": field 'sha256': view " + std::to_string(view) +
-                         " has the same frame content as view " + std::to_string(other->second) + " (" +
-                         JournalLine(journal, claimed_line[other->second]) + "); " + kAlteredAdvice);
+      return CorruptData(JournalLine(journal, claimed_line[view]) + ": field 'sha256': view " +
+                         std::to_string(view) + " has the same frame content as view " +
+                         std::to_string(other->second) + " (" +
+                         JournalLine(journal, claimed_line[other->second]) + "); " +
+                         kAlteredAdvice);
     }
   }
   std::map<int, FrameRecord> verified;
   for (auto& [view, frame] : claimed) {
-    if (VerifyFrameFile(capture_dir, frame.file, frame.bytes, frame.sha256).ok()) verified.emplace(view, std::move(frame));
+    if (VerifyFrameFile(capture_dir, frame.file, frame.bytes, frame.sha256).ok())
+      verified.emplace(view, std::move(frame));
   }
   return verified;
 }
 
-CaptureDataset::CaptureDataset(std::string dir, DatasetOptions options, std::shared_ptr<CaptureStorage> storage)
-    : dir_(std::move(dir)), options_(options), storage_(storage ? std::move(storage) : DefaultCaptureStorage()) {}
+CaptureDataset::CaptureDataset(std::string dir, DatasetOptions options,
+                               std::shared_ptr<CaptureStorage> storage)
+    : dir_(std::move(dir)),
+      options_(options),
+      storage_(storage ? std::move(storage) : DefaultCaptureStorage()) {}
 
 CaptureDataset::~CaptureDataset() {
   if (journal_fd_ >= 0) ::close(journal_fd_);
@@ -219,11 +236,9 @@ Status CaptureDataset::OpenJournal() {
   return Status::Ok();
 }
 
-Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string& dir,
-                                                               const std::string& config_text,
-                                                               CaptureMetadata metadata,
-                                                               const DatasetOptions& options,
-                                                               std::shared_ptr<CaptureStorage> storage) {
+Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(
+    const std::string& dir, const std::string& config_text, CaptureMetadata metadata,
+    const DatasetOptions& options, std::shared_ptr<CaptureStorage> storage) {
   std::error_code ec;
   if (Exists(dir)) {
     return FailedPrecondition(
@@ -236,26 +251,26 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(const std::string
   if (!fs::create_directory(dir, ec) || !fs::create_directory(fs::path(dir) / "frames", ec)) {
     return IoError(dir + ": cannot create the capture folder (" + ec.message() + ")");
   }
-  auto dataset = std::unique_ptr<CaptureDataset>(
-      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
+  auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(
+      fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
   CaptureStorage& out = *dataset->storage_;
-  HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text.data(), config_text.size(), {}));
+  HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text.data(),
+                                         config_text.size(), {}));
   metadata.created_utc = UtcNow();
   const std::string metadata_text = metadata.ToJson().dump(2) + "\n";
-  HR_RETURN_IF_ERROR(
-      out.WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata_text.data(), metadata_text.size(), {}));
+  HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata_text.data(),
+                                         metadata_text.size(), {}));
   dataset->metadata_ = std::move(metadata);
   HR_RETURN_IF_ERROR(dataset->OpenJournal());
   HR_RETURN_IF_ERROR(SyncFolder(parent.string()));
   return dataset;
 }
 
-Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(const std::string& dir,
-                                                                      const DatasetOptions& options,
-                                                                      ResumeReport* report,
-                                                                      std::shared_ptr<CaptureStorage> storage) {
-  auto dataset = std::unique_ptr<CaptureDataset>(
-      new CaptureDataset(fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
+Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(
+    const std::string& dir, const DatasetOptions& options, ResumeReport* report,
+    std::shared_ptr<CaptureStorage> storage) {
+  auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(
+      fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
   HR_ASSIGN_OR_RETURN(dataset->metadata_, ReadResumableCapture(dataset->dir_));
   ResumeReport local;
   HR_RETURN_IF_ERROR(dataset->Repair(report ? report : &local));
@@ -274,8 +289,10 @@ Status CaptureDataset::Repair(ResumeReport* report) {
   struct stat journal {};
   if (report->journal_bytes_dropped > 0 &&
       (::fstat(journal_fd_, &journal) != 0 ||
-       ::ftruncate(journal_fd_, journal.st_size - static_cast<off_t>(report->journal_bytes_dropped)) != 0)) {
-    return IoError(journal_path + ": cannot cut the interrupted record (" + std::strerror(errno) + ")");
+       ::ftruncate(journal_fd_,
+                   journal.st_size - static_cast<off_t>(report->journal_bytes_dropped)) != 0)) {
+    return IoError(journal_path + ": cannot cut the interrupted record (" + std::strerror(errno) +
+                   ")");
   }
   for (const auto& r : records_) {
     next_seq_ = std::max<int64_t>(next_seq_, r.value("seq", int64_t{0}) + 1);  // checked on reading
@@ -291,7 +308,8 @@ Status CaptureDataset::Repair(ResumeReport* report) {
   // Temporaries of interrupted atomic writes (files) in the capture folder itself.
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir_, ec)) {
-    if (entry.path().filename().string().find(".tmp.") != std::string::npos && !entry.is_directory(ec))
+    if (entry.path().filename().string().find(".tmp.") != std::string::npos &&
+        !entry.is_directory(ec))
       fs::remove(entry.path(), ec);
   }
   return Status::Ok();
@@ -313,7 +331,8 @@ Status CaptureDataset::ClearFramesFolder(ResumeReport* report) {
   for (const fs::path& entry : entries) {
     const std::string name = entry.filename().string();
     if (kept.count(name)) continue;
-    if (name.find(".tmp.") != std::string::npos && fs::is_regular_file(fs::symlink_status(entry, ec))) {
+    if (name.find(".tmp.") != std::string::npos &&
+        fs::is_regular_file(fs::symlink_status(entry, ec))) {
       fs::remove(entry, ec);
       report->partial_removed.push_back(name);
       HR_RETURN_IF_ERROR(AppendLocked({{"event", "partial_removed"}, {"file", "frames/" + name}}));
@@ -322,10 +341,11 @@ Status CaptureDataset::ClearFramesFolder(ResumeReport* report) {
     HR_ASSIGN_OR_RETURN(std::string moved, Quarantine(dir_, entry));
     const std::string why = "no journal record vouches for it (or its checksum does not match)";
     report->quarantined.push_back(name + ": " + why);
-    HR_RETURN_IF_ERROR(AppendLocked({{"event", "file_quarantined"},
-                                     {"file", "frames/" + name},
-                                     {"moved_to", fs::path(moved).lexically_relative(dir_).string()},
-                                     {"why", why}}));
+    HR_RETURN_IF_ERROR(
+        AppendLocked({{"event", "file_quarantined"},
+                      {"file", "frames/" + name},
+                      {"moved_to", fs::path(moved).lexically_relative(dir_).string()},
+                      {"why", why}}));
   }
   return Status::Ok();
 }
@@ -336,15 +356,18 @@ Status CaptureDataset::JournalPlan(const std::vector<PlannedViewRecord>& plan) {
   std::map<int, const PlannedViewRecord*> wanted;
   for (const PlannedViewRecord& v : plan) wanted[v.view] = &v;
   const std::string advice =
-      ": the plan of a capture cannot change once it started. Restore the plan in " + ConfigSnapshotPath() +
-      " (journal.jsonl lists the original view_planned records), or start a new capture with another --out";
+      ": the plan of a capture cannot change once it started. Restore the plan in " +
+      ConfigSnapshotPath() +
+      " (journal.jsonl lists the original view_planned records), or start a new capture with "
+      "another --out";
   for (const auto& [view, journaled] : planned_) {
     const auto now = wanted.find(view);
     if (now == wanted.end())
-      return FailedPrecondition("the capture was started with " + journaled.Describe() + ", now not planned" + advice);
+      return FailedPrecondition("the capture was started with " + journaled.Describe() +
+                                ", now not planned" + advice);
     if (!(*now->second == journaled)) {
-      return FailedPrecondition("the capture was started with " + journaled.Describe() + ", now planned as " +
-                                now->second->Describe() + advice);
+      return FailedPrecondition("the capture was started with " + journaled.Describe() +
+                                ", now planned as " + now->second->Describe() + advice);
     }
   }
   for (const PlannedViewRecord& v : plan) {
@@ -365,8 +388,9 @@ Status CaptureDataset::AppendLocked(nlohmann::json record) {
   record["seq"] = next_seq_;
   record["time_utc"] = UtcNow();
   const std::string line = record.dump() + "\n";
-  HR_RETURN_IF_ERROR(storage_->AppendDurably(journal_fd_, dir_ + "/" + kJournal, line.data(), line.size(),
-                                             [](const char*) { CrashPoint("journal_half_written"); }));
+  HR_RETURN_IF_ERROR(
+      storage_->AppendDurably(journal_fd_, dir_ + "/" + kJournal, line.data(), line.size(),
+                              [](const char*) { CrashPoint("journal_half_written"); }));
   ++next_seq_;
   records_.push_back(std::move(record));
   return Status::Ok();
@@ -433,10 +457,11 @@ Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
     std::lock_guard<std::mutex> lock(mutex_);
     const auto plan = planned_.find(context.view);
     if (plan == planned_.end())
-      return Internal("view " + std::to_string(context.view) + " is not in the journaled plan (JournalPlan)");
+      return Internal("view " + std::to_string(context.view) +
+                      " is not in the journaled plan (JournalPlan)");
     if (plan->second.serial != frame.camera_serial) {
-      return CorruptData("view " + std::to_string(context.view) + " is planned for camera " + plan->second.serial +
-                         ", the frame came from " + frame.camera_serial);
+      return CorruptData("view " + std::to_string(context.view) + " is planned for camera " +
+                         plan->second.serial + ", the frame came from " + frame.camera_serial);
     }
   }
   StoredFrameInfo info;
@@ -462,9 +487,9 @@ Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
   r.angle_measured_deg = context.angle_measured_deg;
   info.path = dir_ + "/" + r.file;
   HR_RETURN_IF_ERROR(ReserveSpace(bytes.size()));
-  const Status written = storage_->WriteFileAtomic(info.path, bytes.data(), bytes.size(), [](const char* stage) {
-    CrashPoint((std::string("frame_") + stage).c_str());
-  });
+  const Status written = storage_->WriteFileAtomic(
+      info.path, bytes.data(), bytes.size(),
+      [](const char* stage) { CrashPoint((std::string("frame_") + stage).c_str()); });
   ReleaseSpace(bytes.size());
   HR_RETURN_IF_ERROR(written);
   CrashPoint("frame_before_journal");
@@ -579,9 +604,11 @@ Status CaptureDataset::WriteManifestLocked(const std::string& status) {
                                    {"updated_utc", UtcNow()},
                                    {"frames", frames}};
   const std::string text = manifest.dump(2) + "\n";
-  return storage_->WriteFileAtomic(dir_ + "/" + kManifest, text.data(), text.size(), [](const char* stage) {
-    if (std::string(stage) == "half_written") CrashPoint("manifest_half_written");
-  });
+  return storage_->WriteFileAtomic(dir_ + "/" + kManifest, text.data(), text.size(),
+                                   [](const char* stage) {
+                                     if (std::string(stage) == "half_written")
+                                       CrashPoint("manifest_half_written");
+                                   });
 }
 
 }  // namespace hairrig

@@ -31,11 +31,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <string>
-#include <vector>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
 
 #include "core/capture_storage.h"
 #include "core/status.h"
@@ -45,7 +44,7 @@
 namespace hairrig {
 
 struct DatasetOptions {
-  int png_compression = 1;          // raw frames are stored as PNG, 0-9
+  int png_compression = 1;  // raw frames are stored as PNG, 0-9
   // Bytes a frame must leave free on the capture's disk (the rig config's
   // storage.min_free_mb): StoreFrame refuses a frame that would leave less.
   uint64_t min_free_bytes = 0;
@@ -63,17 +62,17 @@ struct FrameContext {
 };
 
 struct StoredFrameInfo {
-  FrameRecord record;     // the frame_stored journal record
-  std::string path;       // absolute path of the frame file
-  cv::Mat image;          // decoded pixels (BGR or single channel), for frame sinks
+  FrameRecord record;  // the frame_stored journal record
+  std::string path;    // absolute path of the frame file
+  cv::Mat image;       // decoded pixels (BGR or single channel), for frame sinks
 };
 
 // What OpenForResume found and did.
 struct ResumeReport {
   int frames_verified = 0;
-  std::vector<std::string> quarantined;     // files moved to quarantine/, with why
-  std::vector<std::string> partial_removed; // temporary files of interrupted writes
-  size_t journal_bytes_dropped = 0;         // a record cut short by the interruption
+  std::vector<std::string> quarantined;      // files moved to quarantine/, with why
+  std::vector<std::string> partial_removed;  // temporary files of interrupted writes
+  size_t journal_bytes_dropped = 0;          // a record cut short by the interruption
 };
 
 class CaptureDataset {
@@ -81,9 +80,9 @@ class CaptureDataset {
   // Creates `dir` (and its parents; FailedPrecondition if `dir` exists) with
   // the config snapshot, capture.json (metadata with its creation time) and
   // an empty journal. `storage` null: DefaultCaptureStorage(), the file system.
-  static Result<std::unique_ptr<CaptureDataset>> Create(const std::string& dir, const std::string& config_text,
-                                                        CaptureMetadata metadata, const DatasetOptions& options,
-                                                        std::shared_ptr<CaptureStorage> storage = nullptr);
+  static Result<std::unique_ptr<CaptureDataset>> Create(
+      const std::string& dir, const std::string& config_text, CaptureMetadata metadata,
+      const DatasetOptions& options, std::shared_ptr<CaptureStorage> storage = nullptr);
   // Opens an interrupted (or finished) capture: takes the journal's lock,
   // drops a journal record cut short, verifies every stored frame against its
   // record (VerifiedFrames), moves unvouched files in frames/ to quarantine/
@@ -93,9 +92,9 @@ class CaptureDataset {
   // a damaged capture.json or journal record. A missing frames/ is made anew.
   // The repair's journal records are written through `storage` (null: the
   // file system).
-  static Result<std::unique_ptr<CaptureDataset>> OpenForResume(const std::string& dir, const DatasetOptions& options,
-                                                               ResumeReport* report,
-                                                               std::shared_ptr<CaptureStorage> storage = nullptr);
+  static Result<std::unique_ptr<CaptureDataset>> OpenForResume(
+      const std::string& dir, const DatasetOptions& options, ResumeReport* report,
+      std::shared_ptr<CaptureStorage> storage = nullptr);
   ~CaptureDataset();
 
   const std::string& dir() const { return dir_; }
@@ -152,8 +151,8 @@ class CaptureDataset {
   void ReleaseSpace(uint64_t bytes);
   Status CheckFreeSpaceLocked(uint64_t bytes) const;
   Status ClearFramesFolder(ResumeReport* report);
-  Result<std::vector<uint8_t>> EncodeForStorage(const Frame& frame, const FrameContext& context, cv::Mat* image,
-                                                std::string* extension) const;
+  Result<std::vector<uint8_t>> EncodeForStorage(const Frame& frame, const FrameContext& context,
+                                                cv::Mat* image, std::string* extension) const;
 
   std::string dir_;
   DatasetOptions options_;
@@ -164,7 +163,7 @@ class CaptureDataset {
   mutable std::mutex space_mutex_;  // guards reserved_bytes_; taken without mutex_
   uint64_t reserved_bytes_ = 0;     // frames being written
   std::vector<nlohmann::json> records_;
-  std::map<int, FrameRecord> verified_;        // view -> frame_stored record
+  std::map<int, FrameRecord> verified_;       // view -> frame_stored record
   std::map<int, PlannedViewRecord> planned_;  // view -> view_planned record
   int64_t next_seq_ = 0;
   int frames_written_ = 0;  // frame_stored records over the capture's life
@@ -177,7 +176,8 @@ class CaptureDataset {
 // left out and its size is put in *cut_short_bytes; a complete line that is
 // not a JSON object with a string "event" and an integer "seq" in [0, 2^50] is
 // CorruptData naming the file, line and field.
-Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path, size_t* cut_short_bytes = nullptr);
+Result<std::vector<nlohmann::json>> ReadJournalRecords(const std::string& journal_path,
+                                                       size_t* cut_short_bytes = nullptr);
 
 // capture.json of a capture folder (a regular file; CorruptData naming it and the field).
 Result<CaptureMetadata> ReadCaptureMetadata(const std::string& capture_dir);

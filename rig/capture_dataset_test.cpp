@@ -1,10 +1,10 @@
 #include "rig/capture_dataset.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <functional>
-
-#include <gtest/gtest.h>
 
 #include "core/file_util.h"
 #include "core/sha256.h"
@@ -73,7 +73,8 @@ TEST(CaptureDataset, BadFramesAreRefusedAndNothingIsWritten) {
   garbage.encoding = "jpg";
   r = d->StoreFrame(garbage, {2, 0, "cam", 0, 0, 0, 0});
   EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
-  EXPECT_NE(r.status().message().find("does not decode"), std::string::npos) << r.status().ToString();
+  EXPECT_NE(r.status().message().find("does not decode"), std::string::npos)
+      << r.status().ToString();
   EXPECT_TRUE(fs::is_empty(d->dir() + "/frames"));
   EXPECT_EQ(CountEvents(ReadJournal(d->dir()), "frame_stored"), 0);
 }
@@ -144,7 +145,6 @@ TEST(CaptureDataset, AJournalAlteredInTheMiddleIsRefused) {
   EXPECT_NE(d.status().message().find("line 1"), std::string::npos) << d.status().ToString();
 }
 
-
 // ---- hostile or damaged capture folders -----------------------------------
 
 // A closed capture with verified frames of views 0 and 1, copied to a fresh
@@ -185,8 +185,10 @@ TEST(CaptureDatasetHostile, DamagedFrameRecordsAreRefusedNamingLineAndField) {
       {[](nlohmann::json& r) { r["sha256"] = 5; }, "field 'sha256': expected a string, got 5"},
       {[](nlohmann::json& r) { r["sha256"] = "abc"; }, "field 'sha256': expected 64"},
       {[](nlohmann::json& r) { r["view"] = "x"; }, "field 'view': expected an integer"},
-      {[](nlohmann::json& r) { r["view"] = -1; }, "field 'view': expected an integer in [0, 99999], got -1"},
-      {[](nlohmann::json& r) { r["view"] = 2.5; }, "field 'view': expected an integer in [0, 99999], got 2.5"},
+      {[](nlohmann::json& r) { r["view"] = -1; },
+       "field 'view': expected an integer in [0, 99999], got -1"},
+      {[](nlohmann::json& r) { r["view"] = 2.5; },
+       "field 'view': expected an integer in [0, 99999], got 2.5"},
       {[](nlohmann::json& r) { r["bytes"] = -1; }, "field 'bytes'"},
       {[](nlohmann::json& r) { r["file"] = 3; }, "field 'file': expected a string"},
       {[](nlohmann::json& r) { r["file"] = "../../outside/victim.png"; }, "field 'file'"},
@@ -210,9 +212,11 @@ TEST(CaptureDatasetHostile, DamagedFrameRecordsAreRefusedNamingLineAndField) {
     ASSERT_FALSE(d.ok()) << "case " << c;
     EXPECT_EQ(d.status().code(), StatusCode::kCorruptData) << d.status().ToString();
     const std::string line = dir + "/journal.jsonl: line " + std::to_string(index + 1) + ": ";
-    EXPECT_NE(d.status().message().find(line + cases[c].second), std::string::npos) << d.status().ToString();
+    EXPECT_NE(d.status().message().find(line + cases[c].second), std::string::npos)
+        << d.status().ToString();
     EXPECT_NE(d.status().message().find("by hand"), std::string::npos) << d.status().ToString();
-    EXPECT_TRUE(fs::exists(dir + "/frames/001_CAM-1.png")) << "nothing is moved when resume is refused";
+    EXPECT_TRUE(fs::exists(dir + "/frames/001_CAM-1.png"))
+        << "nothing is moved when resume is refused";
   }
 }
 
@@ -229,7 +233,8 @@ TEST(CaptureDatasetHostile, ARecordCopiedOntoAnotherViewIsRefused) {
   ResumeReport report;
   const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
   ASSERT_FALSE(d.ok());
-  EXPECT_NE(d.status().message().find("line " + std::to_string(records.size()) + ": field 'file'"), std::string::npos)
+  EXPECT_NE(d.status().message().find("line " + std::to_string(records.size()) + ": field 'file'"),
+            std::string::npos)
       << d.status().ToString();
   EXPECT_TRUE(fs::exists(dir + "/frames/001_CAM-1.png"));
   EXPECT_FALSE(fs::exists(dir + "/quarantine"));
@@ -254,9 +259,10 @@ TEST(CaptureDatasetHostile, AFrameCopiedWithItsRecordOntoAnotherViewIsRefused) {
   const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
   ASSERT_FALSE(d.ok());
   EXPECT_EQ(d.status().code(), StatusCode::kCorruptData) << d.status().ToString();
-  EXPECT_NE(d.status().message().find("line " + std::to_string(records.size()) +
-                                      ": field 'sha256': view 1 has the same frame content as view 0"),
-            std::string::npos)
+  EXPECT_NE(
+      d.status().message().find("line " + std::to_string(records.size()) +
+                                ": field 'sha256': view 1 has the same frame content as view 0"),
+      std::string::npos)
       << d.status().ToString();
   EXPECT_FALSE(fs::exists(dir + "/quarantine"));
   const auto verified = VerifiedFrames(dir, records);
@@ -275,14 +281,16 @@ TEST(CaptureDatasetHostile, SymlinksAreRefusedForWriting) {
       fs::rename(dir + "/" + entry, outside);
     }
     fs::create_symlink(outside, dir + "/" + entry);
-    std::ofstream(dir + "/journal.jsonl", std::ios::app) << "{\"event\":\"cut sh";  // would be truncated
-    std::ofstream(dir + "/frames/009_CAM-1.png") << "unvouched";                    // would be quarantined
+    std::ofstream(dir + "/journal.jsonl", std::ios::app)
+        << "{\"event\":\"cut sh";                                 // would be truncated
+    std::ofstream(dir + "/frames/009_CAM-1.png") << "unvouched";  // would be quarantined
     const auto before = ReadFileBytes(dir + "/journal.jsonl");
     ResumeReport report;
     const auto d = CaptureDataset::OpenForResume(dir, {}, &report);
     ASSERT_FALSE(d.ok()) << entry;
     EXPECT_EQ(d.status().code(), StatusCode::kFailedPrecondition) << d.status().ToString();
-    EXPECT_NE(d.status().message().find(dir + "/" + entry + " is a symlink"), std::string::npos) << d.status().ToString();
+    EXPECT_NE(d.status().message().find(dir + "/" + entry + " is a symlink"), std::string::npos)
+        << d.status().ToString();
     EXPECT_EQ(*ReadFileBytes(dir + "/journal.jsonl"), *before) << entry;
     EXPECT_TRUE(fs::exists(dir + "/frames/009_CAM-1.png")) << entry;
   }
@@ -351,13 +359,17 @@ TEST(CaptureDatasetHostile, DamagedCaptureJsonIsNamed) {
   ResumeReport report;
   auto d = CaptureDataset::OpenForResume(dir, {}, &report);
   ASSERT_FALSE(d.ok());
-  EXPECT_NE(d.status().message().find(dir + "/capture.json is a folder"), std::string::npos) << d.status().ToString();
+  EXPECT_NE(d.status().message().find(dir + "/capture.json is a folder"), std::string::npos)
+      << d.status().ToString();
 
   dir = DamageableCapture("dataset_metadata_type");
-  ASSERT_TRUE(WriteFileAtomic(dir + "/capture.json", R"({"format": "hairrig-capture", "version": 1, "config_dir": 5})").ok());
+  ASSERT_TRUE(WriteFileAtomic(dir + "/capture.json",
+                              R"({"format": "hairrig-capture", "version": 1, "config_dir": 5})")
+                  .ok());
   d = CaptureDataset::OpenForResume(dir, {}, &report);
   ASSERT_FALSE(d.ok());
-  EXPECT_NE(d.status().message().find("capture.json: field 'config_dir': expected a string"), std::string::npos)
+  EXPECT_NE(d.status().message().find("capture.json: field 'config_dir': expected a string"),
+            std::string::npos)
       << d.status().ToString();
 }
 
@@ -371,12 +383,14 @@ TEST(CaptureDatasetHostile, AChangedPlanIsRefused) {
   Status s = (*d)->JournalPlan(moved);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(s.message().find("view 3 (stop 3 at 108 deg"), std::string::npos) << s.ToString();
-  EXPECT_NE(s.message().find("now planned as view 3 (stop 3 at 100 deg"), std::string::npos) << s.ToString();
+  EXPECT_NE(s.message().find("now planned as view 3 (stop 3 at 100 deg"), std::string::npos)
+      << s.ToString();
   std::vector<PlannedViewRecord> grown = TestPlan();
   grown.push_back({10, 10, 0, "cam", "CAM-1", {}});
   s = (*d)->JournalPlan(grown);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(s.message().find("view 10 (stop 10 at 0 deg, camera cam CAM-1, lights) was added"), std::string::npos)
+  EXPECT_NE(s.message().find("view 10 (stop 10 at 0 deg, camera cam CAM-1, lights) was added"),
+            std::string::npos)
       << s.ToString();
   EXPECT_TRUE((*d)->JournalPlan(TestPlan()).ok());
 }
@@ -388,7 +402,8 @@ TEST(CaptureDatasetHostile, AnInterruptedStartGetsItsPlanCompleted) {
     auto d = CaptureDataset::Create(dir, "name: test\n", {}, {});
     ASSERT_TRUE(d.ok());
     const std::vector<PlannedViewRecord> plan = TestPlan();
-    ASSERT_TRUE((*d)->JournalPlan(std::vector<PlannedViewRecord>(plan.begin(), plan.begin() + 4)).ok());
+    ASSERT_TRUE(
+        (*d)->JournalPlan(std::vector<PlannedViewRecord>(plan.begin(), plan.begin() + 4)).ok());
   }
   ResumeReport report;
   auto d = CaptureDataset::OpenForResume(dir, {}, &report);
@@ -409,7 +424,8 @@ TEST(CaptureDatasetHostile, ReplayServesOnlyVerifiedFramesInsideTheCapture) {
   WriteJournal(dir, records);
   auto source = OpenReplaySource(dir, {});
   ASSERT_FALSE(source.ok());
-  EXPECT_NE(source.status().message().find("field 'file'"), std::string::npos) << source.status().ToString();
+  EXPECT_NE(source.status().message().find("field 'file'"), std::string::npos)
+      << source.status().ToString();
 
   const std::string linked = DamageableCapture("dataset_replay_symlink");
   for (const char* frame : {"/frames/000_CAM-1.png", "/frames/001_CAM-1.png"}) {
@@ -430,9 +446,11 @@ TEST(CaptureDatasetHostile, ReplayOutputMayNotLieInsideTheRecording) {
 }
 
 // A dataset on a disk of `quota_bytes` (sim_hw/quota_storage.h).
-std::unique_ptr<CaptureDataset> DatasetOnDisk(const std::string& name, std::shared_ptr<QuotaStorage> disk,
+std::unique_ptr<CaptureDataset> DatasetOnDisk(const std::string& name,
+                                              std::shared_ptr<QuotaStorage> disk,
                                               const DatasetOptions& options = {}) {
-  auto d = CaptureDataset::Create(FreshDir(name) + "/c", "name: test\n", {}, options, std::move(disk));
+  auto d =
+      CaptureDataset::Create(FreshDir(name) + "/c", "name: test\n", {}, options, std::move(disk));
   EXPECT_TRUE(d.ok()) << d.status().ToString();
   if (!d.ok()) return nullptr;
   EXPECT_TRUE((*d)->JournalPlan(TestPlan()).ok());
@@ -447,7 +465,8 @@ TEST(CaptureDatasetFullDisk, ARecordThatDoesNotFitLeavesTheJournalWhole) {
   ASSERT_TRUE(d);
   ASSERT_TRUE(d->StoreFrame(RawFrame(64, 48), {0, 0, "cam", 0, 0, 64, 48}).ok());
   disk->Consume(1'000'000 - disk->used_bytes() - 20);  // 20 bytes left: half a record fits
-  const Status full = d->Append({{"event", "fault"}, {"what", "a record longer than twenty bytes"}});
+  const Status full =
+      d->Append({{"event", "fault"}, {"what", "a record longer than twenty bytes"}});
   EXPECT_EQ(full.code(), StatusCode::kIoError);
   EXPECT_NE(full.message().find("No space left on device"), std::string::npos) << full.message();
   const std::string dir = d->dir();
@@ -470,8 +489,10 @@ TEST(CaptureDatasetFullDisk, AFrameThatWouldLeaveLessThanTheMinimumIsNotWritten)
   ASSERT_TRUE(d);
   const auto refused = d->StoreFrame(RawFrame(64, 48), {0, 0, "cam", 0, 0, 64, 48});
   EXPECT_EQ(refused.status().code(), StatusCode::kIoError);
-  EXPECT_NE(refused.status().message().find(d->dir() + ": "), std::string::npos) << refused.status().ToString();
-  EXPECT_NE(refused.status().message().find("MB free"), std::string::npos) << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find(d->dir() + ": "), std::string::npos)
+      << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find("MB free"), std::string::npos)
+      << refused.status().ToString();
   EXPECT_NE(refused.status().message().find("1.000 MB storage.min_free_mb"), std::string::npos)
       << refused.status().ToString();
   EXPECT_TRUE(fs::is_empty(d->dir() + "/frames"));

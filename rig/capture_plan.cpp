@@ -20,16 +20,20 @@ uint64_t CapturePolicies::MinFreeBytes() const {
   return bytes > 0 ? static_cast<uint64_t>(bytes) : 0;
 }
 
-uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views,
-                             const CapturePolicies& policies) {
-  const uint64_t bytes_per_pixel = static_cast<uint64_t>(std::max(1, BytesPerPixel(plan.camera_settings.format)));
+uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices,
+                             const std::vector<int>& views, const CapturePolicies& policies) {
+  const uint64_t bytes_per_pixel =
+      static_cast<uint64_t>(std::max(1, BytesPerPixel(plan.camera_settings.format)));
   uint64_t total = policies.MinFreeBytes();
   for (int v : views) {
-    const Camera* camera = devices.FindCameraBySerial(plan.views.at(static_cast<size_t>(v)).camera_serial);
+    const Camera* camera =
+        devices.FindCameraBySerial(plan.views.at(static_cast<size_t>(v)).camera_serial);
     const CameraCapabilities caps = camera->capabilities();
     const uint64_t frame = static_cast<uint64_t>(std::max(0, caps.width_px)) *
                            static_cast<uint64_t>(std::max(0, caps.height_px)) * bytes_per_pixel;
-    total = frame > std::numeric_limits<uint64_t>::max() - total ? std::numeric_limits<uint64_t>::max() : total + frame;
+    total = frame > std::numeric_limits<uint64_t>::max() - total
+                ? std::numeric_limits<uint64_t>::max()
+                : total + frame;
   }
   return total;
 }
@@ -51,7 +55,8 @@ std::string NamesOf(const std::vector<std::unique_ptr<Device>>& devices) {
 // off, a name that is no configured light is an error (a typo must not
 // switch a panel off).
 std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std::string& key,
-                                              const DeviceSet& devices, const std::map<std::string, double>& fallback) {
+                                              const DeviceSet& devices,
+                                              const std::map<std::string, double>& fallback) {
   if (!node.Has(key)) return fallback;
   const ConfigNode levels = node.Child(key);
   std::map<std::string, double> out;
@@ -60,8 +65,8 @@ std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std:
   }
   for (const std::string& name : levels.Keys()) {
     if (!out.count(name)) {
-      levels.Fail(name, "no light named " + QuotedExcerpt(name) + " in the devices section (lights: " +
-                            NamesOf(devices.lights) + ")");
+      levels.Fail(name, "no light named " + QuotedExcerpt(name) +
+                            " in the devices section (lights: " + NamesOf(devices.lights) + ")");
     }
   }
   return out;
@@ -112,15 +117,16 @@ const Camera* CameraByName(const DeviceSet& devices, const std::string& name) {
 }
 
 std::string NoCameraMessage(const DeviceSet& devices, const std::string& name) {
-  return "no camera named " + QuotedExcerpt(name) + " in the devices section (cameras: " + NamesOf(devices.cameras) +
-         ")";
+  return "no camera named " + QuotedExcerpt(name) +
+         " in the devices section (cameras: " + NamesOf(devices.cameras) + ")";
 }
 
 CaptureSettings ReadCameraSettings(const ConfigNode& plan) {
   CaptureSettings s;
   s.exposure_s = plan.Number("exposure_s", 0.02, {.min = 1e-6, .max = 60});
   s.gain_db = plan.Number("gain_db", 0.0, {.min = 0, .max = 48});
-  const std::string format = plan.Choice("pixel_format", {"rgb8", "bgr8", "mono8", "bayer_rg8"}, "rgb8");
+  const std::string format =
+      plan.Choice("pixel_format", {"rgb8", "bgr8", "mono8", "bayer_rg8"}, "rgb8");
   s.format = format == "mono8"       ? PixelFormat::kMono8
              : format == "bgr8"      ? PixelFormat::kBgr8
              : format == "bayer_rg8" ? PixelFormat::kBayerRG8
@@ -129,8 +135,8 @@ CaptureSettings ReadCameraSettings(const ConfigNode& plan) {
 }
 
 // `views: [{angle_deg, camera, lights}, ...]`.
-void ReadExplicitViews(const ConfigNode& node, const DeviceSet& devices, const std::map<std::string, double>& lights,
-                       CapturePlan* plan) {
+void ReadExplicitViews(const ConfigNode& node, const DeviceSet& devices,
+                       const std::map<std::string, double>& lights, CapturePlan* plan) {
   for (const ConfigNode& v : node.Items("views")) {
     v.AllowOnlyKeys({"angle_deg", "camera", "lights"});
     const double angle = v.Number("angle_deg", {.min = -kMaxAngleDeg, .max = kMaxAngleDeg});
@@ -139,7 +145,8 @@ void ReadExplicitViews(const ConfigNode& node, const DeviceSet& devices, const s
     const Camera* camera = CameraByName(devices, name);
     if (!v.ok()) return;
     if (!camera) return v.Fail("camera", NoCameraMessage(devices, name));
-    if (!AddView(plan, StopFor(plan, angle, view_lights), *camera)) return v.Fail("", TwiceMessage(*camera, angle));
+    if (!AddView(plan, StopFor(plan, angle, view_lights), *camera))
+      return v.Fail("", TwiceMessage(*camera, angle));
   }
 }
 
@@ -150,7 +157,8 @@ void ReadStopsTimesCameras(const ConfigNode& node, const DeviceSet& devices,
   if (node.Has("angles_deg")) {
     angles = node.Numbers("angles_deg", 0, {.min = -kMaxAngleDeg, .max = kMaxAngleDeg});
     if (angles.size() > static_cast<size_t>(kMaxStops)) {
-      return node.Fail("angles_deg", std::to_string(angles.size()) + " stops, more than " + std::to_string(kMaxStops));
+      return node.Fail("angles_deg", std::to_string(angles.size()) + " stops, more than " +
+                                         std::to_string(kMaxStops));
     }
   } else {
     const int stops = node.Integer("stops", 19, {.min = 1, .max = kMaxStops});
@@ -181,17 +189,21 @@ void ReadStopsTimesCameras(const ConfigNode& node, const DeviceSet& devices,
 Result<CapturePlan> ReadCapturePlan(const ConfigNode& root, const DeviceSet& devices) {
   const ConfigNode node = root.OptionalChild("plan");
   CapturePlan plan;
-  if (devices.cameras.empty()) return InvalidArgument(root.file() + ": the rig has no cameras to capture with");
+  if (devices.cameras.empty())
+    return InvalidArgument(root.file() + ": the rig has no cameras to capture with");
   std::map<std::string, double> all_on;
   for (const auto& light : devices.lights) all_on[light->info().name] = 1.0;
   // An absent section reads as an empty one: every field takes its default.
-  if (node.IsMap()) node.AllowOnlyKeys({"stops", "angles_deg", "cameras", "lights", "views", "speed_deg_s", "accel_deg_s2", "home",
-                      "exposure_s", "gain_db", "pixel_format", "trigger_pulse_us"});
+  if (node.IsMap())
+    node.AllowOnlyKeys({"stops", "angles_deg", "cameras", "lights", "views", "speed_deg_s",
+                        "accel_deg_s2", "home", "exposure_s", "gain_db", "pixel_format",
+                        "trigger_pulse_us"});
   plan.motion.speed_deg_s = node.Number("speed_deg_s", 30, {.min = 0.01, .max = 3600});
   plan.motion.accel_deg_s2 = node.Number("accel_deg_s2", 60, {.min = 0.01, .max = 36000});
   plan.home_first = node.Bool("home", true);
   plan.camera_settings = ReadCameraSettings(node);
-  plan.trigger_pulse = std::chrono::microseconds(node.Integer("trigger_pulse_us", 100, {.min = 1, .max = 1000000}));
+  plan.trigger_pulse =
+      std::chrono::microseconds(node.Integer("trigger_pulse_us", 100, {.min = 1, .max = 1000000}));
   const std::map<std::string, double> lights = ReadLightLevels(node, "lights", devices, all_on);
   if (node.Has("views")) {
     ReadExplicitViews(node, devices, lights, &plan);
@@ -208,16 +220,20 @@ Result<CapturePolicies> ReadCapturePolicies(const ConfigNode& root) {
   const ConfigNode retries = root.OptionalChild("retries");
   if (retries.IsMap()) {
     retries.AllowOnlyKeys({"camera", "turntable", "light", "frame_timeout_s", "move_timeout_s"});
-    for (auto [key, policy] : {std::pair{"camera", &p.camera}, {"turntable", &p.turntable}, {"light", &p.light}}) {
+    for (auto [key, policy] :
+         {std::pair{"camera", &p.camera}, {"turntable", &p.turntable}, {"light", &p.light}}) {
       const ConfigNode r = retries.OptionalChild(key);
       if (!r.IsMap()) continue;
       r.AllowOnlyKeys({"attempts", "backoff_s", "backoff_factor"});
       policy->attempts = r.Integer("attempts", policy->attempts, {.min = 1, .max = 100});
       policy->backoff_s = r.Number("backoff_s", policy->backoff_s, {.min = 0, .max = 600});
-      policy->backoff_factor = r.Number("backoff_factor", policy->backoff_factor, {.min = 1, .max = 10});
+      policy->backoff_factor =
+          r.Number("backoff_factor", policy->backoff_factor, {.min = 1, .max = 10});
     }
-    p.frame_timeout_s = retries.Number("frame_timeout_s", p.frame_timeout_s, {.min = 0.01, .max = 3600});
-    p.move_timeout_s = retries.Number("move_timeout_s", p.move_timeout_s, {.min = 0.01, .max = 3600});
+    p.frame_timeout_s =
+        retries.Number("frame_timeout_s", p.frame_timeout_s, {.min = 0.01, .max = 3600});
+    p.move_timeout_s =
+        retries.Number("move_timeout_s", p.move_timeout_s, {.min = 0.01, .max = 3600});
     if (!retries.ok()) return retries.status();
   }
   const ConfigNode storage = root.OptionalChild("storage");

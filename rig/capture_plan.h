@@ -51,7 +51,7 @@ struct CapturePlan {
 // backoff_s * factor, ... up to `attempts` tries in all.
 struct RetryPolicy {
   int attempts = 3;
-  double backoff_s = 0.2;       // wall-clock seconds
+  double backoff_s = 0.2;  // wall-clock seconds
   double backoff_factor = 2.0;
   double BackoffBefore(int attempt) const;  // attempt 2, 3, ...; 0 for the first
 };
@@ -60,12 +60,14 @@ struct CapturePolicies {
   RetryPolicy camera{3, 0.2, 2.0};     // reopen a camera, re-shoot a view
   RetryPolicy turntable{2, 0.5, 2.0};  // re-command a move that timed out
   RetryPolicy light{3, 0.1, 2.0};
-  double frame_timeout_s = 20;      // wall seconds a frame may be late: beyond exposure + readout + download
-                                    // after its trigger, or after the camera's previous frame when frames queue
-  double move_timeout_s = 60;       // wall seconds beyond the move's expected duration
-  double min_free_mb = 200;         // keep at least this much free on the capture's disk (1 MB = 10^6 bytes)
-  int png_compression = 1;          // 0-9 for raw frames stored as PNG
-  uint64_t MinFreeBytes() const;    // min_free_mb in bytes; UINT64_MAX when larger
+  double frame_timeout_s =
+      20;  // wall seconds a frame may be late: beyond exposure + readout + download
+           // after its trigger, or after the camera's previous frame when frames queue
+  double move_timeout_s = 60;  // wall seconds beyond the move's expected duration
+  double min_free_mb =
+      200;  // keep at least this much free on the capture's disk (1 MB = 10^6 bytes)
+  int png_compression = 1;        // 0-9 for raw frames stored as PNG
+  uint64_t MinFreeBytes() const;  // min_free_mb in bytes; UINT64_MAX when larger
 };
 
 // Reads `plan`, `retries` and `storage` from the rig config root, checking
@@ -79,7 +81,7 @@ Result<CapturePolicies> ReadCapturePolicies(const ConfigNode& root);
 // of the plan's format, at least 1; PNG stores raw pixels smaller) plus
 // policies.MinFreeBytes(). UINT64_MAX when larger. Every view's camera must be
 // in `devices` (ReadCapturePlan checked the plan against them).
-uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices, const std::vector<int>& views,
-                             const CapturePolicies& policies);
+uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices,
+                             const std::vector<int>& views, const CapturePolicies& policies);
 
 }  // namespace hairrig

@@ -1,5 +1,7 @@
 #include "rig/capture.h"
 
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -8,8 +10,6 @@
 #include <functional>
 #include <limits>
 #include <numeric>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -63,7 +63,8 @@ nlohmann::json Manifest(const std::string& dir) {
 void ExpectConsistent(const CaptureSummary& s) {
   const auto journal = ReadJournal(s.dir);
   const auto verified = VerifiedFramesOnDisk(s.dir);
-  EXPECT_EQ(static_cast<int>(verified.size()), CountEvents(journal, "frame_stored")) << "a journalled frame fails to verify";
+  EXPECT_EQ(static_cast<int>(verified.size()), CountEvents(journal, "frame_stored"))
+      << "a journalled frame fails to verify";
   EXPECT_EQ(static_cast<int>(verified.size()), s.views_completed);
   const auto manifest = Manifest(s.dir);
   EXPECT_EQ(manifest["views_completed"], s.views_completed);
@@ -99,17 +100,20 @@ void ExpectGroundTruthOfEveryView(const std::string& capture_dir, int views) {
   for (const auto& v : truth["views"]) {
     const int view = v["view"].get<int>();
     const double angle = v["turntable_deg"].get<double>();
-    EXPECT_NEAR(std::remainder(angle - 360.0 * v["stop"].get<int>() / 19, 360.0), 0.0, 1e-3) << "view " << view;
+    EXPECT_NEAR(std::remainder(angle - 360.0 * v["stop"].get<int>() / 19, 360.0), 0.0, 1e-3)
+        << "view " << view;
     auto recorded = ReadViewTruthMaps(capture_dir + "/ground_truth/views", view);
     ASSERT_TRUE(recorded.ok()) << recorded.status().ToString();
     if (view % 9 != 0) continue;  // a few views rendered again
     RenderOptions o;
     o.noise = false;
     o.ground_truth = true;
-    auto again = (*renderer)->Render(scene->FindCamera(v["camera_serial"].get<std::string>()), angle, o);
+    auto again =
+        (*renderer)->Render(scene->FindCamera(v["camera_serial"].get<std::string>()), angle, o);
     ASSERT_TRUE(again.ok());
     EXPECT_EQ(cv::countNonZero(recorded->label != again->truth.label), 0) << "view " << view;
-    EXPECT_EQ(cv::countNonZero(recorded->strand_id != again->truth.strand_id), 0) << "view " << view;
+    EXPECT_EQ(cv::countNonZero(recorded->strand_id != again->truth.strand_id), 0)
+        << "view " << view;
     cv::Mat alpha_error;
     cv::absdiff(recorded->hair_alpha, again->truth.hair_alpha, alpha_error);
     double worst = 0;
@@ -124,16 +128,18 @@ TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
   // When half the views are stored: the ETA and the wall time it gave.
   double eta_at_half = -1;
   std::chrono::steady_clock::time_point half;
-  const CaptureSummary s = Capture(WriteSmallRig(dir), dir + "/c", &sink, [&](const CaptureProgress& p) {
-    if (p.step.rfind("stored", 0) == 0 && p.views_done == 19 && eta_at_half < 0) {
-      eta_at_half = p.eta_s;
-      half = std::chrono::steady_clock::now();
-    }
-  });
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir), dir + "/c", &sink, [&](const CaptureProgress& p) {
+        if (p.step.rfind("stored", 0) == 0 && p.views_done == 19 && eta_at_half < 0) {
+          eta_at_half = p.eta_s;
+          half = std::chrono::steady_clock::now();
+        }
+      });
   // The renders (storage) lag the sweep here: the ETA follows them. A ratio
   // within one run, with room for a shared machine's noise.
   ASSERT_GE(eta_at_half, 0);
-  const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - half).count();
+  const double took_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - half).count();
   EXPECT_GT(eta_at_half, took_s / 3) << "ETA " << eta_at_half << " s, took " << took_s << " s";
   EXPECT_LT(eta_at_half, took_s * 3) << "ETA " << eta_at_half << " s, took " << took_s << " s";
   EXPECT_EQ(s.status, "complete") << s.message;
@@ -150,7 +156,8 @@ TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
   EXPECT_EQ(CountEvents(journal, "position_reached"), 19);
   for (const auto& [view, r] : VerifiedFramesOnDisk(s.dir)) {
     char name[64];
-    std::snprintf(name, sizeof name, "frames/%03d_%s.png", view, r["serial"].get<std::string>().c_str());
+    std::snprintf(name, sizeof name, "frames/%03d_%s.png", view,
+                  r["serial"].get<std::string>().c_str());
     EXPECT_EQ(r["file"], name);
     EXPECT_EQ(r["serial"], view % 2 == 0 ? "SIM-CAM-UPPER" : "SIM-CAM-LOWER");
     EXPECT_NEAR(r["angle_measured_deg"].get<double>(), 360.0 * (view / 2) / 19, 1e-3);
@@ -172,9 +179,10 @@ TEST(Capture, LowerBoundAndEfficiencyAtRealisticTimings) {
   const std::string dir = FreshDir("capture_efficiency");
   const double scale = 0.2;
   std::vector<CaptureProgress> progress;  // on_progress calls are serialised
-  const CaptureSummary s = Capture(
-      WriteSmallRig(dir, {{"sim", "sim:\n  scene: small_scene.yaml\n  time_scale: " + std::to_string(scale) + "\n"}}),
-      dir + "/c", nullptr, [&](const CaptureProgress& p) { progress.push_back(p); });
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir, {{"sim", "sim:\n  scene: small_scene.yaml\n  time_scale: " +
+                                              std::to_string(scale) + "\n"}}),
+              dir + "/c", nullptr, [&](const CaptureProgress& p) { progress.push_back(p); });
   ASSERT_EQ(s.status, "complete") << s.message;
   const double move_s = (360.0 / 19) / 30 + 30.0 / 60;
   const double expected = scale * (18 * (move_s + 0.5) + 19 * 0.02 + 0.05 + 0.25);
@@ -183,15 +191,17 @@ TEST(Capture, LowerBoundAndEfficiencyAtRealisticTimings) {
   // above 0 while a stop is being shot and is 0 once every stop is shot.
   ASSERT_GE(progress.size(), 19u);
   EXPECT_NEAR(progress.front().eta_s, scale * (18 * (move_s + 0.5) + 19 * 0.02), 1e-9);
-  for (const CaptureProgress& p : progress) {  // the sequencer's own steps, before their stop is done
+  for (const CaptureProgress& p :
+       progress) {  // the sequencer's own steps, before their stop is done
     if (p.step == "exposing" || p.step.rfind("moving", 0) == 0) {
       EXPECT_GT(p.eta_s, 0) << p.step << " at stop " << p.stop;
     }
   }
   EXPECT_EQ(progress.back().eta_s, 0) << progress.back().step;
-  EXPECT_GT(s.wall_s, 0.9 * s.lower_bound_s);  // the sweep cannot beat physics (10 % for clock granularity)
-  std::printf("small rig at time_scale %.1f: sweep %.3f s, lower bound %.3f s, efficiency %.3f\n", scale, s.wall_s,
-              s.lower_bound_s, s.efficiency);
+  EXPECT_GT(s.wall_s,
+            0.9 * s.lower_bound_s);  // the sweep cannot beat physics (10 % for clock granularity)
+  std::printf("small rig at time_scale %.1f: sweep %.3f s, lower bound %.3f s, efficiency %.3f\n",
+              scale, s.wall_s, s.lower_bound_s, s.efficiency);
 }
 
 TEST(Capture, RefusesAnExistingFolderWithoutResume) {
@@ -206,8 +216,8 @@ TEST(Capture, RefusesAnExistingFolderWithoutResume) {
 }
 
 // A capture with `text` as its `section` is refused naming `field`, and creates nothing.
-void ExpectSectionRefused(const std::string& dir, const std::string& section, const std::string& text,
-                          const std::string& field) {
+void ExpectSectionRefused(const std::string& dir, const std::string& section,
+                          const std::string& text, const std::string& field) {
   CaptureOptions o;
   o.config_path = WriteSmallRig(dir, {{section, text}});
   o.out_dir = dir + "/c";
@@ -229,7 +239,8 @@ TEST(Capture, BrokenConfigCreatesNothing) {
 // pass a capture and fail only its calibration).
 TEST(Capture, AnUnknownKeyInTheCalibrationSectionCreatesNothing) {
   ExpectSectionRefused(FreshDir("capture_bad_calibration"), "calibration",
-                       "calibration: {box: calib-box.yaml, box_height_mm: 600, box_yw_deg: 3}\n", "box_yw_deg");
+                       "calibration: {box: calib-box.yaml, box_height_mm: 600, box_yw_deg: 3}\n",
+                       "box_yw_deg");
 }
 
 // Plan mistakes that used to pass silently (a typo switching a panel off, a
@@ -239,16 +250,19 @@ TEST(Capture, PlanMistakesAreRefusedBeforeAnythingIsShot) {
   const std::string dir = FreshDir("capture_plan_mistakes");
   ExpectPlanRefused(dir, "plan: {lights: {top: 1, botom: 1}}\n",
                     "no light named 'botom' in the devices section (lights: top, bottom)");
-  ExpectPlanRefused(dir, "plan:\n  views:\n    - {angle_deg: 0, camera: upper, lights: {top: 1, botom: 0}}\n",
-                    "plan.views[0].lights.botom");
+  ExpectPlanRefused(
+      dir, "plan:\n  views:\n    - {angle_deg: 0, camera: upper, lights: {top: 1, botom: 0}}\n",
+      "plan.views[0].lights.botom");
   ExpectPlanRefused(dir, "plan: {angles_deg: [0, 1e12]}\n",
                     "plan.angles_deg': element 1: expected a number in [-3600, 3600]");
   ExpectPlanRefused(dir, "plan: {angles_deg: [0, 90, 0]}\n", "planned twice");
   ExpectPlanRefused(dir, "plan: {stops: 2, cameras: [upper, lower, upper]}\n", "planned twice");
-  ExpectPlanRefused(dir,
-                    "plan:\n  views:\n    - {angle_deg: 90, camera: upper}\n    - {angle_deg: 90, camera: lower}\n"
-                    "    - {angle_deg: 90, camera: upper}\n",
-                    "plan.views[2]': camera 'upper' at 90 deg under the same lights is planned twice");
+  ExpectPlanRefused(
+      dir,
+      "plan:\n  views:\n    - {angle_deg: 90, camera: upper}\n    - {angle_deg: 90, camera: "
+      "lower}\n"
+      "    - {angle_deg: 90, camera: upper}\n",
+      "plan.views[2]': camera 'upper' at 90 deg under the same lights is planned twice");
   ExpectPlanRefused(dir, "plan: {cameras: [uper]}\n",
                     "no camera named 'uper' in the devices section (cameras: upper, lower)");
   ExpectPlanRefused(dir, "plan:\n  stops: 2\n  stops: 3\n", "duplicate key 'stops' (first at line");
@@ -258,8 +272,8 @@ TEST(Capture, PlanMistakesAreRefusedBeforeAnythingIsShot) {
 TEST(Capture, TriggerPulseWidthIsAPlanField) {
   const std::string dir = FreshDir("capture_pulse");
   ExpectPlanRefused(dir, "plan: {trigger_pulse_us: 0}\n", "plan.trigger_pulse_us");
-  const CaptureSummary ok = Capture(WriteSmallRig(dir, {{"plan", "plan: {stops: 2, trigger_pulse_us: 20000}\n"}}),
-                                    dir + "/c2");
+  const CaptureSummary ok = Capture(
+      WriteSmallRig(dir, {{"plan", "plan: {stops: 2, trigger_pulse_us: 20000}\n"}}), dir + "/c2");
   EXPECT_EQ(ok.status, "complete");
 }
 
@@ -281,7 +295,8 @@ TEST(Capture, ExplicitViewsPlan) {
 // plans in one capture (it used to shoot the new views into the old capture).
 TEST(Capture, ResumeRefusesAChangedPlan) {
   const std::string dir = FreshDir("capture_plan_changed");
-  const CaptureSummary s = Capture(WriteSmallRig(dir, {{"plan", "plan: {stops: 2}\n"}}), dir + "/c");
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir, {{"plan", "plan: {stops: 2}\n"}}), dir + "/c");
   ASSERT_EQ(s.status, "complete");
   std::string snapshot;
   {
@@ -299,25 +314,29 @@ TEST(Capture, ResumeRefusesAChangedPlan) {
   const auto resumed = RunCapture(o);
   ASSERT_FALSE(resumed.ok());
   EXPECT_EQ(resumed.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(resumed.status().message().find("the plan of a capture cannot change"), std::string::npos)
+  EXPECT_NE(resumed.status().message().find("the plan of a capture cannot change"),
+            std::string::npos)
       << resumed.status().ToString();
   EXPECT_NE(resumed.status().message().find("another --out"), std::string::npos);
   EXPECT_EQ(ReadJournal(s.dir).size(), records) << "nothing journalled for a refused session";
 }
 
 std::map<std::string, std::string> SimWithFaults(const std::string& faults) {
-  return {{"sim", "sim:\n  scene: small_scene.yaml\n  time_scale: 0.01\n  faults:\n" + faults + "\n"}};
+  return {
+      {"sim", "sim:\n  scene: small_scene.yaml\n  time_scale: 0.01\n  faults:\n" + faults + "\n"}};
 }
 
-std::map<std::string, std::string> WithRetries(std::map<std::string, std::string> sections, const std::string& retries) {
+std::map<std::string, std::string> WithRetries(std::map<std::string, std::string> sections,
+                                               const std::string& retries) {
   sections["retries"] = retries;
   return sections;
 }
 
 TEST(CaptureFaults, DroppedFrameIsReshot) {
   const std::string dir = FreshDir("fault_drop");
-  const CaptureSummary s =
-      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: drop_frame, device: SIM-CAM-UPPER, at: 3}")), dir + "/c");
+  const CaptureSummary s = Capture(
+      WriteSmallRig(dir, SimWithFaults("    - {kind: drop_frame, device: SIM-CAM-UPPER, at: 3}")),
+      dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_completed, 38);
   EXPECT_GE(s.faults, 1);
@@ -329,7 +348,9 @@ TEST(CaptureFaults, DroppedFrameIsReshot) {
 TEST(CaptureFaults, CameraThatDropsOffIsReopened) {
   const std::string dir = FreshDir("fault_gone");
   const CaptureSummary s = Capture(
-      WriteSmallRig(dir, SimWithFaults("    - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 2}")), dir + "/c");
+      WriteSmallRig(
+          dir, SimWithFaults("    - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 2}")),
+      dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_completed, 38);
   EXPECT_EQ(CountEvents(ReadJournal(s.dir), "device_reopened"), 1);
@@ -339,13 +360,16 @@ TEST(CaptureFaults, CameraThatDropsOffIsReopened) {
 TEST(CaptureFaults, CameraThatStaysGoneLeavesTheCaptureIncomplete) {
   const std::string dir = FreshDir("fault_gone_for_good");
   const CaptureSummary s = Capture(
-      WriteSmallRig(dir, SimWithFaults("    - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 1000}")),
+      WriteSmallRig(
+          dir,
+          SimWithFaults("    - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 1000}")),
       dir + "/c");
   EXPECT_EQ(s.status, "incomplete");
   // Every upper view; of the lower views at most the 4 triggered before it went
   // (frames still in flight when a camera drops off are lost with it).
   const auto verified = VerifiedFramesOnDisk(s.dir);
-  for (int view = 0; view < 38; view += 2) EXPECT_TRUE(verified.count(view)) << "upper view " << view;
+  for (int view = 0; view < 38; view += 2)
+    EXPECT_TRUE(verified.count(view)) << "upper view " << view;
   EXPECT_LE(s.views_completed, 19 + 4);
   for (int view : s.missing_views) EXPECT_EQ(view % 2, 1) << "only lower views may be missing";
   EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
@@ -356,8 +380,12 @@ TEST(CaptureFaults, CameraThatStaysGoneLeavesTheCaptureIncomplete) {
 TEST(CaptureFaults, LateDownloadTimesOutAndIsReshot) {
   const std::string dir = FreshDir("fault_late");
   const CaptureSummary s = Capture(
-      WriteSmallRig(dir, WithRetries(SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 300}"),
-                                     "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n")),
+      WriteSmallRig(
+          dir,
+          WithRetries(
+              SimWithFaults(
+                  "    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 300}"),
+              "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n")),
       dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_completed, 38);
@@ -391,20 +419,23 @@ void ExpectEveryFrameShowsItsStop(const std::string& capture_dir, const std::str
   auto renderer = Renderer::Create(*scene);
   ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
   std::map<int, double> angle_of_view;
-  for (const auto& v : truth["views"]) angle_of_view[v["view"].get<int>()] = v["turntable_deg"].get<double>();
+  for (const auto& v : truth["views"])
+    angle_of_view[v["view"].get<int>()] = v["turntable_deg"].get<double>();
   int checked = 0;
   for (const auto& [view, record] : VerifiedFramesOnDisk(capture_dir)) {
     if (record["serial"] != serial) continue;
-    const cv::Mat frame = cv::imread(capture_dir + "/" + record["file"].get<std::string>(), cv::IMREAD_COLOR);
+    const cv::Mat frame =
+        cv::imread(capture_dir + "/" + record["file"].get<std::string>(), cv::IMREAD_COLOR);
     ASSERT_FALSE(frame.empty()) << record.dump();
     const double exposure_s = record.value("exposure_s", 0.0);
-    const double own = DifferenceFromRender(**renderer, *scene, frame, serial, angle_of_view.at(view), exposure_s);
-    const double next =
-        DifferenceFromRender(**renderer, *scene, frame, serial, angle_of_view.at(view) + 360.0 / 19, exposure_s);
+    const double own =
+        DifferenceFromRender(**renderer, *scene, frame, serial, angle_of_view.at(view), exposure_s);
+    const double next = DifferenceFromRender(**renderer, *scene, frame, serial,
+                                             angle_of_view.at(view) + 360.0 / 19, exposure_s);
     // Sensor noise and JPEG leave about 2.3 grey levels; one stop on, about 17.
     EXPECT_LT(own, 5.0) << "view " << view;
-    EXPECT_LT(own, 0.5 * next) << "view " << view << " looks like the next stop's (" << own << " vs " << next
-                               << " grey levels from the renders)";
+    EXPECT_LT(own, 0.5 * next) << "view " << view << " looks like the next stop's (" << own
+                               << " vs " << next << " grey levels from the renders)";
     ++checked;
   }
   EXPECT_EQ(checked, 19) << serial;
@@ -416,12 +447,13 @@ void ExpectEveryFrameShowsItsStop(const std::string& capture_dir, const std::str
 // and never stored as that next view.
 TEST(CaptureFaults, FrameArrivingAfterItsViewTimedOutIsNotStoredForTheNextView) {
   const std::string dir = FreshDir("fault_late_real_backends");
-  auto sections = WithRetries(SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 150}"),
-                              "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n");
-  sections["devices"] =
-      SmallRigDevices("{name: turntable, backend: sim, serial: SIM-TT-0001}",
-                      "{name: upper, backend: gphoto2, serial: SIM-CAM-UPPER, port: sim, trigger_line: trig0}",
-                      "{name: lower, backend: aravis, serial: SIM-CAM-LOWER, address: sim, trigger_line: trig0}");
+  auto sections = WithRetries(
+      SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 150}"),
+      "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n");
+  sections["devices"] = SmallRigDevices(
+      "{name: turntable, backend: sim, serial: SIM-TT-0001}",
+      "{name: upper, backend: gphoto2, serial: SIM-CAM-UPPER, port: sim, trigger_line: trig0}",
+      "{name: lower, backend: aravis, serial: SIM-CAM-LOWER, address: sim, trigger_line: trig0}");
   const CaptureSummary s = Capture(WriteSmallRig(dir, sections), dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_completed, 38);
@@ -435,8 +467,8 @@ TEST(CaptureFaults, FrameArrivingAfterItsViewTimedOutIsNotStoredForTheNextView) 
 
 TEST(CaptureFaults, TurntableTimeoutIsRetried) {
   const std::string dir = FreshDir("fault_tt_retry");
-  const CaptureSummary s =
-      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_timeout, at: 4}")), dir + "/c");
+  const CaptureSummary s = Capture(
+      WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_timeout, at: 4}")), dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.faults, 1);
   ExpectConsistent(s);
@@ -445,17 +477,20 @@ TEST(CaptureFaults, TurntableTimeoutIsRetried) {
 TEST(CaptureFaults, TurntableThatNeverArrivesStopsTheRun) {
   const std::string dir = FreshDir("fault_tt_timeout");
   const CaptureSummary s =
-      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_timeout, at: 4, count: 5}")), dir + "/c");
+      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_timeout, at: 4, count: 5}")),
+              dir + "/c");
   EXPECT_EQ(s.status, "stopped");
   EXPECT_NE(s.message.find("not in position"), std::string::npos) << s.message;
   EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
-  EXPECT_EQ(s.views_completed, 6);  // home is move 1; stop 0 needs no move; stops 1, 2 are moves 2, 3
+  EXPECT_EQ(s.views_completed,
+            6);  // home is move 1; stop 0 needs no move; stops 1, 2 are moves 2, 3
   ExpectConsistent(s);
 }
 
 TEST(CaptureFaults, TurntableStallStopsTheRun) {
   const std::string dir = FreshDir("fault_stall");
-  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_stall, at: 6}")), dir + "/c");
+  const CaptureSummary s = Capture(
+      WriteSmallRig(dir, SimWithFaults("    - {kind: turntable_stall, at: 6}")), dir + "/c");
   EXPECT_EQ(s.status, "stopped");
   EXPECT_NE(s.message.find("stall"), std::string::npos) << s.message;
   EXPECT_EQ(s.views_completed, 10);
@@ -464,7 +499,8 @@ TEST(CaptureFaults, TurntableStallStopsTheRun) {
 
 TEST(CaptureFaults, EstopStopsMotionAndSwitchesLightsOff) {
   const std::string dir = FreshDir("fault_estop");
-  const CaptureSummary s = Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: estop, at: 3}")), dir + "/c");
+  const CaptureSummary s =
+      Capture(WriteSmallRig(dir, SimWithFaults("    - {kind: estop, at: 3}")), dir + "/c");
   EXPECT_EQ(s.status, "stopped");
   EXPECT_NE(s.message.find("e-stop"), std::string::npos) << s.message;
   const auto journal = ReadJournal(s.dir);
@@ -497,7 +533,8 @@ void ExpectNoStopAfterTheFirstFault(const std::vector<nlohmann::json>& journal) 
   ASSERT_LT(fault, journal.size()) << "no fault journalled";
   EXPECT_EQ(journal[fault]["action"], "stop the run") << journal[fault].dump();
   for (size_t i = fault + 1; i < journal.size(); ++i) {
-    EXPECT_NE(journal[i]["event"], "position_reached") << "a stop was shot after the fault: " << journal[i].dump();
+    EXPECT_NE(journal[i]["event"], "position_reached")
+        << "a stop was shot after the fault: " << journal[i].dump();
   }
 }
 
@@ -525,7 +562,8 @@ TEST(CaptureFaults, FullDiskStopsTheRunAndResumeFinishesIt) {
   ExpectNoStopAfterTheFirstFault(journal);
   const size_t fault_at = FirstEvent(journal, "fault");
   ASSERT_LT(fault_at, journal.size());
-  EXPECT_NE(journal[fault_at]["what"].get<std::string>().find("No space left on device"), std::string::npos)
+  EXPECT_NE(journal[fault_at]["what"].get<std::string>().find("No space left on device"),
+            std::string::npos)
       << journal[fault_at].dump();
   const auto kept = VerifiedFramesOnDisk(s.dir);
   ASSERT_EQ(kept.size(), 10u);
@@ -545,7 +583,8 @@ TEST(CaptureFaults, FullDiskStopsTheRunAndResumeFinishesIt) {
   EXPECT_EQ(resumed->frames, 28);
   ExpectConsistent(*resumed);
   const auto after = VerifiedFramesOnDisk(s.dir);
-  for (const auto& [view, record] : kept) EXPECT_EQ(after.at(view)["sha256"], record["sha256"]) << "view " << view;
+  for (const auto& [view, record] : kept)
+    EXPECT_EQ(after.at(view)["sha256"], record["sha256"]) << "view " << view;
 }
 
 // The plan, devices and policies of a rig config, as RunCapture reads them.
@@ -585,13 +624,15 @@ uint64_t BytesNeeded(const std::string& config_path, const std::vector<int>& vie
 
 TEST(CaptureSpace, BytesNeededToFinishCountsOnlyTheViewsLeft) {
   const std::string dir = FreshDir("space_needed");
-  const PlanOfRig p = ReadPlanOfRig(WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 10}\n"}}));
+  const PlanOfRig p =
+      ReadPlanOfRig(WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 10}\n"}}));
   ASSERT_TRUE(p.rig);
   const DeviceSet& devices = p.rig->devices;
   const uint64_t frame = 300 * 400 * 3;  // the small scene's cameras, rgb8
   const uint64_t min_free = 10'000'000;
   EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {}, p.policies), min_free);
-  EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {3, 17, 30, 36, 37}, p.policies), min_free + 5 * frame);
+  EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {3, 17, 30, 36, 37}, p.policies),
+            min_free + 5 * frame);
   EXPECT_EQ(BytesNeededToFinish(p.plan, devices, AllViews(38), p.policies), min_free + 38 * frame);
   CapturePolicies huge = p.policies;
   huge.min_free_mb = 1e300;
@@ -626,7 +667,8 @@ TEST(CaptureSpace, ResumeNeedsRoomOnlyForTheMissingViews) {
 // the 4th frame it leaves room for about two more above storage.min_free_mb.
 class DiskFiller : public FrameSink {
  public:
-  DiskFiller(std::shared_ptr<QuotaStorage> disk, uint64_t min_free) : disk_(std::move(disk)), min_free_(min_free) {}
+  DiskFiller(std::shared_ptr<QuotaStorage> disk, uint64_t min_free)
+      : disk_(std::move(disk)), min_free_(min_free) {}
   void OnFrameStored(const StoredFrame& frame) override {
     if (++frames_ != 4) return;
     const uint64_t frame_bytes = fs::file_size(frame.path);
@@ -652,7 +694,8 @@ TEST(CaptureSpace, MinFreeSpaceIsKeptWhileFramesAreWritten) {
   const uint64_t for_all = BytesNeeded(config, AllViews(38));
   ASSERT_GT(for_all, 0u);
   const uint64_t min_free = 1'000'000;
-  auto disk = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = for_all + 2'000'000});
+  auto disk =
+      std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = for_all + 2'000'000});
   DiskFiller filler(disk, min_free);
   CaptureOptions o;
   o.config_path = config;

@@ -1,10 +1,10 @@
 #include "rig/capture_test_util.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "core/file_util.h"
 
@@ -19,7 +19,8 @@ std::string FreshDir(const std::string& name) {
   return dir.string();
 }
 
-std::string WriteSmallRig(const std::string& dir, const std::map<std::string, std::string>& sections) {
+std::string WriteSmallRig(const std::string& dir,
+                          const std::map<std::string, std::string>& sections) {
   const fs::path source = fs::absolute("tests/data/small_rig.yaml");
   std::ifstream in(source);
   std::string text, line;
@@ -44,7 +45,8 @@ std::string WriteSmallRig(const std::string& dir, const std::map<std::string, st
   const std::string scene = (source.parent_path() / "small_scene.yaml").string();
   // The scene path must resolve from the test's folder.
   const size_t at = text.find("scene: small_scene.yaml");
-  if (at != std::string::npos) text.replace(at, std::string("scene: small_scene.yaml").size(), "scene: " + scene);
+  if (at != std::string::npos)
+    text.replace(at, std::string("scene: small_scene.yaml").size(), "scene: " + scene);
   const std::string path = dir + "/rig.yaml";
   EXPECT_TRUE(WriteFileAtomic(path, text).ok());
   return path;
@@ -53,15 +55,21 @@ std::string WriteSmallRig(const std::string& dir, const std::map<std::string, st
 std::string SmallRigDevices(const std::string& turntable, const std::string& upper_camera,
                             const std::string& lower_camera) {
   return "devices:\n"
-         "  turntable: " + turntable + "\n"
+         "  turntable: " +
+         turntable +
+         "\n"
          "  lights:\n"
          "    - {name: top, backend: sim, serial: SIM-LED-TOP, light: top}\n"
          "    - {name: bottom, backend: sim, serial: SIM-LED-BOTTOM, light: bottom}\n"
          "  trigger_lines:\n"
          "    - {name: trig0, backend: sim, serial: SIM-GPIO-0}\n"
          "  cameras:\n"
-         "    - " + upper_camera + "\n"
-         "    - " + lower_camera + "\n"
+         "    - " +
+         upper_camera +
+         "\n"
+         "    - " +
+         lower_camera +
+         "\n"
          "  input_lines:\n"
          "    - {name: estop, backend: sim, serial: SIM-ESTOP}\n";
 }
@@ -95,7 +103,8 @@ std::map<int, nlohmann::json> VerifiedFramesOnDisk(const std::string& capture_di
     if (r.value("event", "") != "frame_stored") continue;
     const std::string path = capture_dir + "/" + r["file"].get<std::string>();
     std::error_code ec;
-    if (fs::file_size(path, ec) == r["bytes"].get<uint64_t>() && !ec && Sha256sum(path) == r["sha256"]) {
+    if (fs::file_size(path, ec) == r["bytes"].get<uint64_t>() && !ec &&
+        Sha256sum(path) == r["sha256"]) {
       verified[r["view"].get<int>()] = r;
     }
   }

@@ -4,10 +4,9 @@
 #pragma once
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace hairrig::testing {
 
@@ -15,7 +14,8 @@ namespace hairrig::testing {
 std::string FreshDir(const std::string& name);
 // Writes the small test rig into `dir` with top-level sections replaced or
 // added: {{"retries", "retries:\n  frame_timeout_s: 1\n"}}. Returns its path.
-std::string WriteSmallRig(const std::string& dir, const std::map<std::string, std::string>& sections = {});
+std::string WriteSmallRig(const std::string& dir,
+                          const std::map<std::string, std::string>& sections = {});
 // The small rig's `devices:` section with these turntable and camera entries
 // (YAML flow maps such as "{name: upper, backend: sim, serial: SIM-CAM-UPPER,
 // trigger_line: trig0}"); the lights, trigger line and e-stop as in the file.

@@ -5,11 +5,10 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <type_traits>
 #include <utility>
-
-#include <nlohmann/json.hpp>
 
 #include "core/status.h"
 
@@ -21,7 +20,7 @@ namespace hairrig {
 
 // Options every subcommand shares.
 struct CommonOptions {
-  bool json = false;      // print the summary as one JSON object on stdout
+  bool json = false;  // print the summary as one JSON object on stdout
   std::string log_level = "info";
 };
 

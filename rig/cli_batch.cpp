@@ -1,11 +1,10 @@
 // `hairrig batch <submit|status|wait|report|resubmit> --batch DIR`: the
 // pipeline's stages over an archive of captures, on this machine or on a
 // Slurm cluster (batch/batch.h).
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <map>
 #include <memory>
-
-#include <CLI/CLI.hpp>
 
 #include "batch/batch.h"
 #include "batch/process.h"

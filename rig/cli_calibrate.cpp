@@ -14,8 +14,9 @@ struct CalibrateArgs {
 };
 
 void AddCalibrateIntrinsicsCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = app.add_subcommand("calibrate-intrinsics",
-                                 "One camera's intrinsics from images of a ChArUco board (writes DIR/intrinsics.json)");
+  auto* cmd = app.add_subcommand(
+      "calibrate-intrinsics",
+      "One camera's intrinsics from images of a ChArUco board (writes DIR/intrinsics.json)");
   auto options = std::make_shared<IntrinsicsFolderOptions>();
   cmd->add_option("DIR", options->images_dir, "a folder of the camera's images of the board")
       ->required()
@@ -44,10 +45,14 @@ void AddCalibrateIntrinsicsCommand(CLI::App& app, CommonOptions& common, Dispatc
 }  // namespace
 
 void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = app.add_subcommand("calibrate", "Solve every view's camera from the AprilTag box (writes DIR/calibration/)");
+  auto* cmd = app.add_subcommand(
+      "calibrate", "Solve every view's camera from the AprilTag box (writes DIR/calibration/)");
   auto args = std::make_shared<CalibrateArgs>();
-  cmd->add_option("DIR", args->dir, "a capture folder made by `hairrig capture`")->required()->check(CLI::ExistingDirectory);
-  cmd->add_option("--mode", args->mode, "turntable: cameras fixed, box turning (default); free: a pose per view")
+  cmd->add_option("DIR", args->dir, "a capture folder made by `hairrig capture`")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--mode", args->mode,
+                  "turntable: cameras fixed, box turning (default); free: a pose per view")
       ->check(CLI::IsMember({"turntable", "free"}));
   cmd->add_option("--intrinsics", args->options.prior_files,
                   "intrinsics held fixed, matched by camera serial: files from "

@@ -1,8 +1,7 @@
 #include <unistd.h>
 
-#include <cstdio>
-
 #include <CLI/CLI.hpp>
+#include <cstdio>
 
 #include "core/log.h"
 #include "rig/capture_and_process.h"
@@ -16,8 +15,9 @@ std::function<void(const CaptureProgress&)> ProgressPrinter() {
   const bool terminal = ::isatty(STDERR_FILENO) != 0;
   return [terminal](const CaptureProgress& p) {
     char line[256];
-    std::snprintf(line, sizeof line, "%d of %d views stored | stop %d of %d | %s | ETA %.0f s | faults %d",
-                  p.views_done, p.views_total, p.stop + 1, p.stops_total, p.step.c_str(), p.eta_s, p.faults);
+    std::snprintf(
+        line, sizeof line, "%d of %d views stored | stop %d of %d | %s | ETA %.0f s | faults %d",
+        p.views_done, p.views_total, p.stop + 1, p.stops_total, p.step.c_str(), p.eta_s, p.faults);
     if (terminal) {
       std::fprintf(stderr, "\r\033[K%s", line);
       std::fflush(stderr);
@@ -35,7 +35,8 @@ void EndProgressLine(const CaptureSummary&) {
 }  // namespace
 
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = app.add_subcommand("capture", "Run the capture plan (38 views by default) into a new capture folder");
+  auto* cmd = app.add_subcommand(
+      "capture", "Run the capture plan (38 views by default) into a new capture folder");
   auto options = std::make_shared<CaptureAndProcessOptions>();
   cmd->add_option("--config", options->config_path,
                   "rig config (default: etc/sim-rig.yaml, the simulated rig)");

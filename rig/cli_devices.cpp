@@ -1,6 +1,5 @@
-#include <cstdio>
-
 #include <CLI/CLI.hpp>
+#include <cstdio>
 
 #include "rig/cli.h"
 #include "rig/device_check.h"
@@ -19,20 +18,25 @@ Result<nlohmann::json> RunDiscover() {
 }  // namespace
 
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = app.add_subcommand("devices", "List the configured devices with serial, backend and state, and health-check them");
+  auto* cmd = app.add_subcommand(
+      "devices",
+      "List the configured devices with serial, backend and state, and health-check them");
   auto options = std::make_shared<DeviceCheckOptions>();
   auto discover = std::make_shared<bool>(false);
   auto* config_option =
       cmd->add_option("--config", options->config_path,
                       "rig config (default: etc/sim-rig.yaml, the simulated rig)");
   cmd->add_flag("--discover", *discover,
-                "find the real devices connected to this machine and print each with its serial and a config snippet")
+                "find the real devices connected to this machine and print each with its serial "
+                "and a config snippet")
       ->excludes(config_option);
   cmd->add_flag("--json", common.json, "print the result as one JSON object");
   cmd->callback([options, discover, &dispatch] {
     if (*discover) {
       dispatch.action = [] { return RunDiscover(); };
-      dispatch.print_human = [](const nlohmann::json& j) { std::fputs(j["text"].get<std::string>().c_str(), stdout); };
+      dispatch.print_human = [](const nlohmann::json& j) {
+        std::fputs(j["text"].get<std::string>().c_str(), stdout);
+      };
       return;
     }
     DispatchSummary(dispatch, [options] { return CheckDevices(*options); });

@@ -15,7 +15,8 @@ struct FitArgs {
 }  // namespace
 
 void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = app.add_subcommand("fit", "Guide strands as G1 piecewise helices (adaptive floating tangents)");
+  auto* cmd = app.add_subcommand(
+      "fit", "Guide strands as G1 piecewise helices (adaptive floating tangents)");
   auto args = std::make_shared<FitArgs>();
   FitOptions& fit = args->options.fit;
   cmd->add_option("STRANDS", args->options.strands_file, "strand file (.hair, .data, .ply)")
@@ -29,7 +30,8 @@ void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
                   "RMS distance (mm) of strands to their guide, when K is not given")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--fixed-n", args->fixed_elements, "fixed element count per guide (the paper's N=15 baseline)")
+  cmd->add_option("--fixed-n", args->fixed_elements,
+                  "fixed element count per guide (the paper's N=15 baseline)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--target-error", fit.fitting.target_mean_error_mm,
                   "grow N past Algorithm 2 until the mean fit error is below this (mm); 0: "
@@ -39,7 +41,8 @@ void AddFitCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   cmd->add_option("--threads", fit.threads, "guides fitted in parallel (0: one thread per core)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_flag("--paper-root", args->paper_root, "relax the root too (Eq. 5 as printed) instead of anchoring it");
+  cmd->add_flag("--paper-root", args->paper_root,
+                "relax the root too (Eq. 5 as printed) instead of anchoring it");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     FitOptions& options = args->options.fit;

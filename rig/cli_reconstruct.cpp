@@ -3,12 +3,11 @@
 // rooted on the subject's scalp (reconstruction/strand_reconstruction.h).
 #include <unistd.h>
 
-#include <chrono>
-#include <memory>
-#include <cstdio>
-#include <mutex>
-
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <mutex>
 
 #include "core/log.h"
 #include "rig/cli.h"
@@ -51,8 +50,8 @@ ReconstructionProgress ProgressPrinter() {
     const double elapsed = std::chrono::duration<double>(now - state->start).count();
     const double eta = done > 0 ? elapsed * (total - done) / done : 0;
     char line[160];
-    std::snprintf(line, sizeof line, "reconstruct: %s %d of %d | %.0f s | ETA %.0f s", stage.c_str(), done, total,
-                  elapsed, eta);
+    std::snprintf(line, sizeof line, "reconstruct: %s %d of %d | %.0f s | ETA %.0f s",
+                  stage.c_str(), done, total, elapsed, eta);
     if (terminal) {
       std::fprintf(stderr, "\r\033[K%s", line);
       if (done == total && stage == "writing") std::fputc('\n', stderr);
@@ -89,38 +88,48 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
 
 void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
   auto args = std::make_shared<ReconstructArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "reconstruct",
-      "oriented 3D hair points, then strands rooted on the scalp, from a calibrated capture (or a COLMAP model) "
-      "into DIR/reconstruction/");
-  cmd->add_option("DIR", args->dir, "a calibrated capture folder (with --colmap: where reconstruction/ is written)")
+  CLI::App* cmd = app.add_subcommand("reconstruct",
+                                     "oriented 3D hair points, then strands rooted on the scalp, "
+                                     "from a calibrated capture (or a COLMAP model) "
+                                     "into DIR/reconstruction/");
+  cmd->add_option("DIR", args->dir,
+                  "a calibrated capture folder (with --colmap: where reconstruction/ is written)")
       ->required();
   cmd->add_option("--stage", args->stage, "points, strands (from the points already there), or all")
       ->check(CLI::IsMember({"points", "strands", "all"}))
       ->capture_default_str();
   cmd->add_option("--method", args->method,
-                  "strands: bao-qi (hybrid orientation field), luo (ribbons and wisps, Luo et al. 2013) or naive "
+                  "strands: bao-qi (hybrid orientation field), luo (ribbons and wisps, Luo et al. "
+                  "2013) or naive "
                   "(the baseline)")
       ->check(CLI::IsMember({"bao-qi", "luo", "naive"}))
       ->capture_default_str();
-  cmd->add_option("--head", args->head, "the subject's head (a YAML file with a head: map; default: the rig config's)")
+  cmd->add_option("--head", args->head,
+                  "the subject's head (a YAML file with a head: map; default: the rig config's)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--strands", args->strands, "how many strands to grow (roots on the scalp)")
       ->check(CLI::Range(1, 2000000))
       ->capture_default_str();
-  cmd->add_option("--colmap", args->colmap, "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")
+  cmd->add_option("--colmap", args->colmap,
+                  "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--images", args->images, "with --colmap: the folder of the model's images")
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--masks", args->masks, "with --colmap: hair masks, <image name>.png (non-zero = hair)")
+  cmd->add_option("--masks", args->masks,
+                  "with --colmap: hair masks, <image name>.png (non-zero = hair)")
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--views", args->views, "only these view numbers (capture) or IMAGE_IDs (COLMAP)");
-  cmd->add_option("--threads", args->threads, "worker threads")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--views", args->views,
+                  "only these view numbers (capture) or IMAGE_IDs (COLMAP)");
+  cmd->add_option("--threads", args->threads, "worker threads")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--cost", args->cost,
-                  "stereo cost: both (orientation and photometric), orientation, or photometric (the baseline)")
+                  "stereo cost: both (orientation and photometric), orientation, or photometric "
+                  "(the baseline)")
       ->check(CLI::IsMember({"both", "orientation", "photometric"}))
       ->capture_default_str();
-  cmd->add_option("--stride", args->stride, "stereo on every N-th pixel in x and y (1 = every pixel)")
+  cmd->add_option("--stride", args->stride,
+                  "stereo on every N-th pixel in x and y (1 = every pixel)")
       ->check(CLI::Range(1, 8))
       ->capture_default_str();
   cmd->add_option("--iterations", args->iterations, "stereo PatchMatch iterations")

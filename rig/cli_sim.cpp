@@ -1,9 +1,8 @@
 // `hairrig sim render | charuco | serve`: the simulated rig's renders and
 // protocol-level simulators (sim_hw/view_set.h, sim_hw/charuco_views.h,
 // sim_hw/sim_serve.h).
-#include <cstdio>
-
 #include <CLI/CLI.hpp>
+#include <cstdio>
 
 #include "rig/cli.h"
 #include "rig/rig_config.h"
@@ -25,8 +24,10 @@ Result<std::string> SceneOrDefault(const std::string& scene) {
 }
 
 void AddChArUcoCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = sim.add_subcommand("charuco", "Render what a technician records to calibrate each camera's intrinsics "
-                                            "alone: a ChArUco board held in front of it (OUT/<serial>/)");
+  auto* cmd =
+      sim.add_subcommand("charuco",
+                         "Render what a technician records to calibrate each camera's intrinsics "
+                         "alone: a ChArUco board held in front of it (OUT/<serial>/)");
   auto options = std::make_shared<ChArUcoSetsOptions>();
   cmd->add_option("--out", options->out_dir, "output folder")->required();
   cmd->add_option("--scene", options->scene_file, "scene file (default: etc/scenes/default.yaml)");
@@ -56,7 +57,8 @@ void PrintEndpoints(const std::string& endpoints) {
 }
 
 void AddServeCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) {
-  auto* serve = sim.add_subcommand("serve", "Run the protocol-level simulators for outside tools until Ctrl-C");
+  auto* serve = sim.add_subcommand(
+      "serve", "Run the protocol-level simulators for outside tools until Ctrl-C");
   auto options = std::make_shared<SimServeOptions>();
   serve->add_option("--scene", options->scene_file,
                     "scene file (default: etc/scenes/default.yaml)");
@@ -104,12 +106,15 @@ void AddRenderCommand(CLI::App& sim, CommonOptions& common, Dispatch& dispatch) 
   render->add_option("--scene", args->view.scene_file,
                      "scene file (default: etc/scenes/default.yaml)");
   auto* view = render->add_option("--view", args->view.view, "view index: stop * cameras + camera");
-  auto* all = render->add_flag("--all", args->all, "every view, a contact sheet and the ground truth");
+  auto* all =
+      render->add_flag("--all", args->all, "every view, a contact sheet and the ground truth");
   view->excludes(all);
   render->add_option("--out", args->view.out_file, "output image (--view) or folder (--all)")
       ->required();
   render->add_flag("!--no-noise", args->view.noise, "render without sensor noise");
-  render->add_option("--crop", args->crop, "with --view: write only the pixels X,Y,WIDTH,HEIGHT, at full resolution")
+  render
+      ->add_option("--crop", args->crop,
+                   "with --view: write only the pixels X,Y,WIDTH,HEIGHT, at full resolution")
       ->delimiter(',')
       ->expected(4)
       ->excludes(all);

@@ -20,7 +20,8 @@ struct SimulateArgs {
 Result<SimulateRunOptions> ParseSimulateArgs(const SimulateArgs& a) {
   SimulateRunOptions options = a.options;
   HR_ASSIGN_OR_RETURN(options.scenario, ParseScenario(a.scenario));
-  if (a.solver != "cg" && a.solver != "cholesky") return InvalidArgument("--solver must be cg or cholesky");
+  if (a.solver != "cg" && a.solver != "cholesky")
+    return InvalidArgument("--solver must be cg or cholesky");
   options.solver = a.solver == "cg" ? LinearSolver::kConjugateGradient : LinearSolver::kCholesky;
   options.head_contact = !a.no_head;
   options.up = Eigen::Vector3d(a.up[0], a.up[1], a.up[2]);
@@ -30,7 +31,8 @@ Result<SimulateRunOptions> ParseSimulateArgs(const SimulateArgs& a) {
 }  // namespace
 
 void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
-  auto* cmd = app.add_subcommand("simulate", "Super-helix dynamics of a fitted model: strand files and previews per frame");
+  auto* cmd = app.add_subcommand(
+      "simulate", "Super-helix dynamics of a fitted model: strand files and previews per frame");
   auto args = std::make_shared<SimulateArgs>();
   SimulateRunOptions& o = args->options;
   cmd->add_option("MODEL", o.model_file, "model file written by `hairrig fit`")
@@ -38,11 +40,13 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o.out_dir, "folder to write (frames/, previews/, summary.json)")
       ->required();
-  cmd->add_option("--scenario", args->scenario, "gravity, head-shake or wind")->capture_default_str();
+  cmd->add_option("--scenario", args->scenario, "gravity, head-shake or wind")
+      ->capture_default_str();
   cmd->add_option("--seconds", o.seconds, "simulated time")->capture_default_str();
   cmd->add_option("--fps", o.fps, "frames written per simulated second")->capture_default_str();
   cmd->add_option("--dt", o.time_step_s, "time step of the dynamics (s)")->capture_default_str();
-  cmd->add_option("--solver", args->solver, "linear solver of Eq. 11: cg (paper) or cholesky")->capture_default_str();
+  cmd->add_option("--solver", args->solver, "linear solver of Eq. 11: cg (paper) or cholesky")
+      ->capture_default_str();
   cmd->add_option(
       "--scene", o.scene_file,
       "scene giving the head and the preview camera (default: etc/scenes/default.yaml)");
@@ -52,7 +56,9 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
                   "ellipsoid for contact)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--no-head", args->no_head, "no contact with the head");
-  cmd->add_option("--up", args->up, "world up direction (x y z)")->expected(3)->capture_default_str();
+  cmd->add_option("--up", args->up, "world up direction (x y z)")
+      ->expected(3)
+      ->capture_default_str();
   cmd->add_option("--preview-every", o.preview_every, "render a preview every N frames (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

@@ -1,9 +1,8 @@
 // `hairrig stage <name> --capture DIR`: one pipeline stage of one capture
 // (batch/stage.h), the job `hairrig batch` runs per capture and stage.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
-
-#include <CLI/CLI.hpp>
 
 #include "batch/process.h"
 #include "batch/stage.h"

@@ -1,12 +1,12 @@
 #include "rig/crash_points.h"
 
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <string>
-
-#include <unistd.h>
 
 namespace hairrig {
 

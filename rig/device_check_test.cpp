@@ -1,6 +1,7 @@
 #include "rig/device_check.h"
 
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 
 #include "rig/capture_test_util.h"
@@ -39,10 +40,12 @@ TEST(DeviceCheck, UnknownKeysInTheCapturesSectionsAreNamed) {
       {"retries", {"retries: {camera: {attempts: 2}, frame_timout_s: 3}\n", "frame_timout_s"}},
       {"storage", {"storage: {min_free_mbb: 10}\n", "min_free_mbb"}},
       {"plan", {"plan: {stops: 2, expsure_s: 0.01}\n", "expsure_s"}},
-      {"calibration", {"calibration: {box: calib-box.yaml, box_height_mm: 600, box_yw_deg: 3}\n", "box_yw_deg"}}};
+      {"calibration",
+       {"calibration: {box: calib-box.yaml, box_height_mm: 600, box_yw_deg: 3}\n", "box_yw_deg"}}};
   for (const auto& [section, text_and_key] : cases) {
     const std::string dir = hairrig::testing::FreshDir("device_check_" + section);
-    const auto summary = CheckDevices({.config_path = hairrig::testing::WriteSmallRig(dir, {{section, text_and_key.first}})});
+    const auto summary = CheckDevices(
+        {.config_path = hairrig::testing::WriteSmallRig(dir, {{section, text_and_key.first}})});
     ASSERT_FALSE(summary.ok()) << section;
     EXPECT_NE(summary.status().message().find(text_and_key.second), std::string::npos)
         << section << ": " << summary.status().ToString();

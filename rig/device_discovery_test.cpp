@@ -3,6 +3,7 @@
 #include "rig/device_discovery.h"
 
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 
 namespace hairrig {
@@ -32,10 +33,12 @@ TEST(DeviceDiscovery, EachDeviceComesWithItsSerialAndASnippetToPaste) {
         std::vector<Gphoto2Detected>{{"Canon EOS 90D", "usb:001,004", "0320\"21", ""}});
   };
   f.aravis = [] {
-    return std::vector<AravisDetected>{{"Basler-22104387", "Basler", "acA2440-20gc", "22104387", "192.168.10.31",
-                                        "GigEVision"}};
+    return std::vector<AravisDetected>{
+        {"Basler-22104387", "Basler", "acA2440-20gc", "22104387", "192.168.10.31", "GigEVision"}};
   };
-  f.v4l2 = [] { return std::vector<V4l2Detected>{{"/dev/video0", "C920", "uvcvideo", "usb-1", "A1B2", ""}}; };
+  f.v4l2 = [] {
+    return std::vector<V4l2Detected>{{"/dev/video0", "C920", "uvcvideo", "usb-1", "A1B2", ""}};
+  };
   f.gpio = [] { return std::vector<GpioChipInfo>{{"gpiochip0", "pinctrl-bcm2711", 58}}; };
   f.relays = [] { return std::vector<UsbRelayDetected>{{"1-2.3", "USBRelay2", 2, "QAAMZ", ""}}; };
   const Discovery d = DiscoverDevices(f);
@@ -46,7 +49,9 @@ TEST(DeviceDiscovery, EachDeviceComesWithItsSerialAndASnippetToPaste) {
   EXPECT_EQ(d.devices[2].snippet, "- {name: uvc1, backend: v4l2, serial: \"A1B2\"}");
   EXPECT_NE(d.devices[3].snippet.find("chip: \"pinctrl-bcm2711\""), std::string::npos);
   EXPECT_NE(d.devices[4].what.find("2 channels"), std::string::npos);
-  EXPECT_EQ(d.devices[4].snippet, "- {name: relay1, backend: usbrelay, serial: PANEL-TOP-01, board: \"QAAMZ\", channel: 1}");
+  EXPECT_EQ(
+      d.devices[4].snippet,
+      "- {name: relay1, backend: usbrelay, serial: PANEL-TOP-01, board: \"QAAMZ\", channel: 1}");
   const std::string text = DiscoveryText(d);
   EXPECT_NE(text.find("found 5 device(s)"), std::string::npos) << text;
   EXPECT_NE(text.find("serial: 22104387"), std::string::npos) << text;
@@ -58,7 +63,9 @@ TEST(DeviceDiscovery, EachDeviceComesWithItsSerialAndASnippetToPaste) {
 
 TEST(DeviceDiscovery, AFailingSourceIsNamedAndTheOthersStillRun) {
   DeviceFinders f = NoneFound();
-  f.gphoto2 = [] { return Result<std::vector<Gphoto2Detected>>(IoError("cannot load its camera drivers")); };
+  f.gphoto2 = [] {
+    return Result<std::vector<Gphoto2Detected>>(IoError("cannot load its camera drivers"));
+  };
   f.gpio = [] { return std::vector<GpioChipInfo>{{"gpiochip0", "x", 8}}; };
   const Discovery d = DiscoverDevices(f);
   ASSERT_EQ(d.problems.size(), 1u);

@@ -1,8 +1,7 @@
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 #include <iostream>
-
-#include <CLI/CLI.hpp>
 
 #include "core/log.h"
 #include "core/version.h"
@@ -21,7 +20,8 @@ int Run(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", HairrigVersion());
   CommonOptions common;
-  app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")->capture_default_str();
+  app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")
+      ->capture_default_str();
   Dispatch dispatch;
   AddDevicesCommand(app, common, dispatch);
   AddCaptureCommand(app, common, dispatch);
@@ -44,8 +44,9 @@ int Run(int argc, char** argv) {
   }
   LogLevel level;
   if (!ParseLogLevel(common.log_level, &level)) {
-    std::fprintf(stderr, "hairrig: error: --log-level '%s' is not one of debug, info, warning, error, off\n",
-                 common.log_level.c_str());
+    std::fprintf(
+        stderr, "hairrig: error: --log-level '%s' is not one of debug, info, warning, error, off\n",
+        common.log_level.c_str());
     return 2;
   }
   SetLogLevel(level);

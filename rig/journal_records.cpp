@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdio>
-
 #include <nlohmann/json.hpp>
 
 #include "core/json_file.h"
@@ -16,14 +15,16 @@ constexpr int64_t kMaxPixels = 1 << 20;  // per image side
 
 // The text as a JSON string literal, control characters escaped, cut at 80 characters.
 std::string Quoted(const std::string& text) {
-  std::string q = nlohmann::json(text).dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
+  std::string q =
+      nlohmann::json(text).dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
   if (q.size() > 80) q = q.substr(0, 77) + "...";
   return q;
 }
 
 bool IsSha256Hex(const std::string& text) {
-  return text.size() == 64 &&
-         std::all_of(text.begin(), text.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
+  return text.size() == 64 && std::all_of(text.begin(), text.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
 }
 
 std::string ExtensionOf(const std::string& file) {
@@ -62,11 +63,14 @@ nlohmann::json CaptureMetadata::ToJson() const {
           {"config_dir", config_dir},    {"subject", subject}, {"created_utc", created_utc}};
 }
 
-Result<CaptureMetadata> CaptureMetadata::FromJson(const nlohmann::json& j, const std::string& where) {
+Result<CaptureMetadata> CaptureMetadata::FromJson(const nlohmann::json& j,
+                                                  const std::string& where) {
   const JsonObject o(j, where);
   if (o.StringOr("format", "") != "hairrig-capture" || !o.ok())
-    return CorruptData(where + " is not a hairrig capture description: was the folder made by hairrig?");
-  if (o.Integer("version") != 1 && o.ok()) o.Fail("version", "this build reads captures of version 1");
+    return CorruptData(where +
+                       " is not a hairrig capture description: was the folder made by hairrig?");
+  if (o.Integer("version") != 1 && o.ok())
+    o.Fail("version", "this build reads captures of version 1");
   CaptureMetadata m;
   m.config_source = o.StringOr("config_source", "");
   m.config_dir = o.StringOr("config_dir", "");
@@ -119,19 +123,22 @@ Result<FrameRecord> FrameRecord::FromJson(const nlohmann::json& j, const std::st
   if (o.ok() && !IsSha256Hex(f.sha256))
     o.Fail("sha256", "expected 64 lower-case hexadecimal characters, got " + Quoted(f.sha256));
   if (o.ok() && !IsFrameFileName(f.file, f.view, f.serial)) {
-    o.Fail("file", Quoted(f.file) + " is not the file of view " + std::to_string(f.view) + " from camera " +
-                       Quoted(f.serial) + " (" + FrameFileName(f.view, f.serial, ExtensionOf(f.file)) + ")");
+    o.Fail("file", Quoted(f.file) + " is not the file of view " + std::to_string(f.view) +
+                       " from camera " + Quoted(f.serial) + " (" +
+                       FrameFileName(f.view, f.serial, ExtensionOf(f.file)) + ")");
   }
   HR_RETURN_IF_ERROR(o.status());
   return f;
 }
 
 nlohmann::json PlannedViewRecord::ToJson() const {
-  return {{"event", "view_planned"}, {"view", view},     {"stop", stop},    {"angle_deg", angle_deg},
-          {"camera", camera},        {"serial", serial}, {"lights", lights}};
+  return {{"event", "view_planned"}, {"view", view},     {"stop", stop},
+          {"angle_deg", angle_deg},  {"camera", camera}, {"serial", serial},
+          {"lights", lights}};
 }
 
-Result<PlannedViewRecord> PlannedViewRecord::FromJson(const nlohmann::json& j, const std::string& where) {
+Result<PlannedViewRecord> PlannedViewRecord::FromJson(const nlohmann::json& j,
+                                                      const std::string& where) {
   const JsonObject o(j, where);
   PlannedViewRecord v;
   v.view = Index(o, "view");
@@ -142,7 +149,8 @@ Result<PlannedViewRecord> PlannedViewRecord::FromJson(const nlohmann::json& j, c
   if (o.ok() && v.serial.empty()) o.Fail("serial", "is empty");
   if (o.Has("lights")) {
     const JsonObject levels = o.Object("lights");
-    for (const std::string& name : levels.Keys()) v.lights[name] = levels.Number(name, {.min = 0, .max = 1});
+    for (const std::string& name : levels.Keys())
+      v.lights[name] = levels.Number(name, {.min = 0, .max = 1});
   }
   HR_RETURN_IF_ERROR(o.status());
   return v;
@@ -151,8 +159,8 @@ Result<PlannedViewRecord> PlannedViewRecord::FromJson(const nlohmann::json& j, c
 std::string PlannedViewRecord::Describe() const {
   char angle[32];
   std::snprintf(angle, sizeof angle, "%.6g", angle_deg);
-  std::string text = "view " + std::to_string(view) + " (stop " + std::to_string(stop) + " at " + angle +
-                     " deg, camera " + camera + " " + serial + ", lights";
+  std::string text = "view " + std::to_string(view) + " (stop " + std::to_string(stop) + " at " +
+                     angle + " deg, camera " + camera + " " + serial + ", lights";
   for (const auto& [name, level] : lights) {
     char value[32];
     std::snprintf(value, sizeof value, "%.6g", level);

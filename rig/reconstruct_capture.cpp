@@ -1,7 +1,6 @@
 #include "rig/reconstruct_capture.h"
 
 #include <algorithm>
-
 #include <nlohmann/json.hpp>
 
 #include "core/image_file.h"
@@ -22,7 +21,8 @@ Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input) {
   for (int id : ids) {
     const auto it = std::find_if(input->views.begin(), input->views.end(),
                                  [id](const ReconstructionView& v) { return v.id == id; });
-    if (it == input->views.end()) return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
+    if (it == input->views.end())
+      return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
     kept.push_back(*it);
   }
   input->views = std::move(kept);
@@ -44,17 +44,20 @@ Result<ReconstructionInput> LoadInput(const ReconstructCaptureOptions& o) {
 }
 
 // Four views evenly spread through the list (a turntable capture lists them by angle).
-std::vector<ReconstructionView> SpreadViews(const std::vector<ReconstructionView>& views, size_t count) {
+std::vector<ReconstructionView> SpreadViews(const std::vector<ReconstructionView>& views,
+                                            size_t count) {
   std::vector<ReconstructionView> chosen;
   const size_t n = std::min(count, views.size());
   for (size_t i = 0; i < n; ++i) chosen.push_back(views[i * views.size() / n]);
   return chosen;
 }
 
-Result<std::string> WriteOverViews(const ReconstructionInput& input, const std::string& strands_dir) {
+Result<std::string> WriteOverViews(const ReconstructionInput& input,
+                                   const std::string& strands_dir) {
   HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(strands_dir + "/strands.ply"));
-  HR_ASSIGN_OR_RETURN(const cv::Mat picture,
-                      RenderStrandsOverViews(SpreadViews(input.views, 4), strands, StrandOverlayOptions{}));
+  HR_ASSIGN_OR_RETURN(
+      const cv::Mat picture,
+      RenderStrandsOverViews(SpreadViews(input.views, 4), strands, StrandOverlayOptions{}));
   if (picture.empty()) return std::string();
   const std::string path = strands_dir + "/over_views.jpg";
   HR_RETURN_IF_ERROR(WriteImageAtomic(path, picture));
@@ -63,8 +66,8 @@ Result<std::string> WriteOverViews(const ReconstructionInput& input, const std::
 
 Result<StrandReconstructionSummary> RunStrands(const ReconstructCaptureOptions& o) {
   HR_ASSIGN_OR_RETURN(const SubjectHead head, LoadCaptureHead(o.dir, o.head_file));
-  LogInfo("reconstruct: strands (" + std::string(StrandMethodName(o.strands.method)) + ") from " + o.dir +
-          "/reconstruction/points.ply");
+  LogInfo("reconstruct: strands (" + std::string(StrandMethodName(o.strands.method)) + ") from " +
+          o.dir + "/reconstruction/points.ply");
   return ReconstructStrands(o.dir + "/reconstruction", head.spec, head.source, o.strands);
 }
 
@@ -83,7 +86,8 @@ Status ReconstructCaptureOptions::Validate() const {
     return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
   }
   if (!colmap_dir.empty() && stage != ReconstructStage::kPoints && head_file.empty()) {
-    return InvalidArgument("strands from a COLMAP model need --head FILE (the head in the model's frame)");
+    return InvalidArgument(
+        "strands from a COLMAP model need --head FILE (the head in the model's frame)");
   }
   if (stage != ReconstructStage::kPoints) HR_RETURN_IF_ERROR(strands.Check());
   return Status::Ok();
@@ -99,8 +103,10 @@ nlohmann::json ReconstructCaptureSummary::ToJson() const {
 }
 
 std::string ReconstructCaptureSummary::BriefReport() const {
-  std::string brief = (points ? points->BriefReport() : "") + (strands ? strands->BriefReport() : "");
-  if (!over_views_picture.empty()) brief += "  strands over the input views: " + over_views_picture + "\n";
+  std::string brief =
+      (points ? points->BriefReport() : "") + (strands ? strands->BriefReport() : "");
+  if (!over_views_picture.empty())
+    brief += "  strands over the input views: " + over_views_picture + "\n";
   return brief;
 }
 
@@ -109,11 +115,13 @@ Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOpt
   HR_ASSIGN_OR_RETURN(const ReconstructionInput input, LoadInput(o));
   ReconstructCaptureSummary summary;
   if (o.stage != ReconstructStage::kStrands) {
-    HR_ASSIGN_OR_RETURN(summary.points, ReconstructPoints(input, o.dir + "/reconstruction", o.points, o.progress));
+    HR_ASSIGN_OR_RETURN(summary.points,
+                        ReconstructPoints(input, o.dir + "/reconstruction", o.points, o.progress));
   }
   if (o.stage != ReconstructStage::kPoints) {
     HR_ASSIGN_OR_RETURN(summary.strands, RunStrands(o));
-    HR_ASSIGN_OR_RETURN(summary.over_views_picture, WriteOverViews(input, summary.strands->output_dir));
+    HR_ASSIGN_OR_RETURN(summary.over_views_picture,
+                        WriteOverViews(input, summary.strands->output_dir));
   }
   return summary;
 }

@@ -8,11 +8,10 @@
 // the input views, spread around the turntable.
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "core/status.h"
 #include "reconstruction/point_reconstruction.h"
@@ -25,7 +24,8 @@ enum class ReconstructStage { kPoints, kStrands, kAll };
 Result<ReconstructStage> ParseReconstructStage(const std::string& name);
 
 struct ReconstructCaptureOptions {
-  std::string dir;  // a calibrated capture folder; with colmap_dir, where reconstruction/ is written
+  std::string
+      dir;  // a calibrated capture folder; with colmap_dir, where reconstruction/ is written
   ReconstructStage stage = ReconstructStage::kAll;
   // A COLMAP text model instead of a capture: its folder, its images and
   // (optional) hair masks named <image name>.png. Strands then need head_file.

@@ -39,12 +39,14 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
 
   ReconstructionInput input;
   input.object_frame = calibration.mode == "turntable" ? "turntable" : "box";
-  input.object_from_box = calibration.mode == "turntable" ? calibration.turntable_from_box : Rigid3d();
+  input.object_from_box =
+      calibration.mode == "turntable" ? calibration.turntable_from_box : Rigid3d();
   for (const StoredCalibration::View& view : calibration.views) {
     const std::string name = fs::path(view.frame).stem().string();
     const StoredCalibration::Camera& camera = calibration.cameras[static_cast<size_t>(view.camera)];
     if (!view.solved || !camera.solved) {
-      const std::string why = !camera.solved ? "camera " + camera.name + " was not calibrated" : view.failure;
+      const std::string why =
+          !camera.solved ? "camera " + camera.name + " was not calibrated" : view.failure;
       input.left_out.push_back(name + ": the calibration failed (" + why + ")");
       continue;
     }
@@ -59,7 +61,8 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
     v.image_path = *path;
     v.camera = camera.intrinsics;
     v.cam_from_object = view.cam_from_object;
-    const std::vector<cv::Point2f> outline = ProjectedOutline(camera.intrinsics, view.cam_from_box, box_corners);
+    const std::vector<cv::Point2f> outline =
+        ProjectedOutline(camera.intrinsics, view.cam_from_box, box_corners);
     if (!outline.empty()) v.not_hair_px.push_back(outline);
     input.views.push_back(std::move(v));
   }
@@ -75,8 +78,10 @@ Result<SubjectHead> LoadCaptureHead(const std::string& capture_dir, const std::s
   }
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
   if (!config.head) {
-    return NotFound(capture_dir + "/rig.yaml has no head: section; give the subject's head with --head FILE "
-                    "(a YAML file with a head: map, as etc/heads/mannequin.yaml) or add head: to the rig config");
+    return NotFound(capture_dir +
+                    "/rig.yaml has no head: section; give the subject's head with --head FILE "
+                    "(a YAML file with a head: map, as etc/heads/mannequin.yaml) or add head: to "
+                    "the rig config");
   }
   head.spec = *config.head;
   head.source = capture_dir + "/rig.yaml";

@@ -126,15 +126,18 @@ namespace {
 
 // The recorded stops: each commanded angle once, with its measured angle and
 // the wall time from the previous arrival in the same session.
-Status AddStops(const std::string& journal_path, const std::vector<nlohmann::json>& records, ReplaySource* source) {
+Status AddStops(const std::string& journal_path, const std::vector<nlohmann::json>& records,
+                ReplaySource* source) {
   double previous_arrival = 0;
   for (size_t i = 0; i < records.size(); ++i) {
     const std::string event = JournalEvent(records[i]);
     if (event == "session_start") previous_arrival = 0;
     if (event != "position_reached") continue;
-    HR_ASSIGN_OR_RETURN(const PositionRecord p, PositionRecord::FromJson(records[i], JournalLine(journal_path, i)));
+    HR_ASSIGN_OR_RETURN(const PositionRecord p,
+                        PositionRecord::FromJson(records[i], JournalLine(journal_path, i)));
     const double t = UtcSeconds(p.time_utc);
-    const RecordedStop stop{p.commanded_deg, p.measured_deg, previous_arrival > 0 ? t - previous_arrival : 0};
+    const RecordedStop stop{p.commanded_deg, p.measured_deg,
+                            previous_arrival > 0 ? t - previous_arrival : 0};
     previous_arrival = t;
     if (!source->FindStop(stop.commanded_deg)) source->stops.push_back(stop);
   }
@@ -144,7 +147,8 @@ Status AddStops(const std::string& journal_path, const std::vector<nlohmann::jso
 // Recorded trigger-to-arrival time, within [0, 60] s: a journal's time stamps
 // cannot make a replayed camera wait longer than that.
 double DownloadSeconds(const FrameRecord& r) {
-  const double s = 1e-9 * (static_cast<double>(r.received_time_ns) - static_cast<double>(r.trigger_time_ns));
+  const double s =
+      1e-9 * (static_cast<double>(r.received_time_ns) - static_cast<double>(r.trigger_time_ns));
   return std::clamp(s, 0.0, 60.0);
 }
 
@@ -164,15 +168,16 @@ Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& captur
   source->options = options;
   HR_RETURN_IF_ERROR(AddStops(journal_path, records, source.get()));
   for (const auto& [view, r] : verified) {
-    const RecordedFrame f{capture_dir + "/" + r.file,
-                          r.sha256,
-                          r.bytes,
-                          planned.at(view).lights,  // VerifiedFrames checked that the view is planned
-                          FileExtension(r.file),
-                          r.angle_commanded_deg,
-                          r.exposure_s,
-                          r.gain_db,
-                          DownloadSeconds(r)};
+    const RecordedFrame f{
+        capture_dir + "/" + r.file,
+        r.sha256,
+        r.bytes,
+        planned.at(view).lights,  // VerifiedFrames checked that the view is planned
+        FileExtension(r.file),
+        r.angle_commanded_deg,
+        r.exposure_s,
+        r.gain_db,
+        DownloadSeconds(r)};
     source->frames.emplace(r.serial, f);
     source->sizes[r.serial] = {r.width_px, r.height_px};
   }
@@ -182,7 +187,8 @@ Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& captur
 }
 
 Status CheckReplayOutDir(const std::string& recorded_dir, const std::string& out_dir) {
-  // A file inside out_dir resolves inside the recording exactly when out_dir is the recording or lies inside it.
+  // A file inside out_dir resolves inside the recording exactly when out_dir is the recording or
+  // lies inside it.
   if (ResolveInside(out_dir + "/x", recorded_dir).ok()) {
     return InvalidArgument("--out " + out_dir + " lies inside the recording " + recorded_dir +
                            ", which replay never writes into: choose a folder outside it");
@@ -363,7 +369,8 @@ class ReplayCamera : public ReplayDevice<Camera> {
       return NotFound(Describe() + ": the recording has no frame of this camera at " +
                       std::to_string(next.angle_deg) + " deg under the current light state");
     }
-    HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, ReadFileBytes(next.frame->path, next.frame->bytes));
+    HR_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
+                        ReadFileBytes(next.frame->path, next.frame->bytes));
     if (Sha256Hex(bytes.data(), bytes.size()) != next.frame->sha256)
       return CorruptData(next.frame->path + ": changed since the replay verified it");
     Frame f;

@@ -29,7 +29,8 @@ struct ReplayOptions {
 // (rig/capture_dataset.h VerifiedFrames: inside the folder, size and SHA-256
 // as recorded; checked again when a frame is served). NotFound / CorruptData
 // name the folder, file, journal line and field.
-Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir, const ReplayOptions& options);
+Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir,
+                                                       const ReplayOptions& options);
 int ReplayFrameCount(const ReplaySource& source);
 
 // InvalidArgument when `out_dir` (symlinks resolved) is the recording or lies

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <filesystem>
-
 #include <nlohmann/json.hpp>
 
 #include "core/string_format.h"
@@ -14,8 +13,10 @@ namespace hairrig {
 namespace fs = std::filesystem;
 
 Status ReplayCaptureOptions::Validate() const {
-  if (recorded_dir.empty()) return InvalidArgument("replay: the recorded capture folder is required");
-  if (!std::isfinite(speed) || speed < 0) return InvalidArgument("replay: --speed must be 0 or a positive number");
+  if (recorded_dir.empty())
+    return InvalidArgument("replay: the recorded capture folder is required");
+  if (!std::isfinite(speed) || speed < 0)
+    return InvalidArgument("replay: --speed must be 0 or a positive number");
   return Status::Ok();
 }
 
@@ -38,7 +39,8 @@ std::string ReplayCaptureSummary::BriefReport() const {
 
 Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) {
   HR_RETURN_IF_ERROR(options.Validate());
-  const std::string out_dir = options.out_dir.empty() ? options.recorded_dir + "-replay" : options.out_dir;
+  const std::string out_dir =
+      options.out_dir.empty() ? options.recorded_dir + "-replay" : options.out_dir;
   HR_RETURN_IF_ERROR(CheckReplayOutDir(options.recorded_dir, out_dir));
   HR_ASSIGN_OR_RETURN(std::shared_ptr<ReplaySource> source,
                       OpenReplaySource(options.recorded_dir, {.speed = options.speed}));
@@ -47,7 +49,9 @@ Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) 
   capture.config_path = config.path;
   capture.config_relative_to = config.relative_to;
   capture.out_dir = out_dir;
-  capture.rig_build.register_backends = [source](DeviceRegistry* registry) { RegisterReplayBackends(registry, source); };
+  capture.rig_build.register_backends = [source](DeviceRegistry* registry) {
+    RegisterReplayBackends(registry, source);
+  };
   capture.rig_build.backend_override = "replay";
   capture.rig_build.attach_extensions = false;
   ReplayCaptureSummary summary;

@@ -2,9 +2,8 @@
 // the `replay` backend (rig/replay.h): what `hairrig replay` does.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "core/status.h"
 #include "rig/capture.h"
@@ -13,8 +12,9 @@ namespace hairrig {
 
 struct ReplayCaptureOptions {
   std::string recorded_dir;  // a capture folder made by `hairrig capture`
-  std::string out_dir;       // the new capture folder; must not exist (default: recorded_dir + "-replay")
-  double speed = 0;          // 0: as fast as possible; 1: recorded timing; 2: twice as fast
+  std::string
+      out_dir;       // the new capture folder; must not exist (default: recorded_dir + "-replay")
+  double speed = 0;  // 0: as fast as possible; 1: recorded timing; 2: twice as fast
 
   Status Validate() const;
 };

@@ -1,14 +1,14 @@
 #include "rig/replay.h"
-#include "rig/replay_capture.h"
-
-#include <filesystem>
 
 #include <gtest/gtest.h>
+
+#include <filesystem>
 
 #include "core/file_util.h"
 #include "rig/capture.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_test_util.h"
+#include "rig/replay_capture.h"
 #include "rig/sim_rig.h"
 
 namespace hairrig {
@@ -33,7 +33,9 @@ class ReplayTest : public ::testing::Test {
     // The head file lies beside the config, named by a relative path: the
     // replay must resolve it where the recording did, not in the capture folder.
     fs::create_directories(dir_ + "/heads");
-    ASSERT_TRUE(WriteFileAtomic(dir_ + "/heads/ball.yaml", "head:\n  center_mm: [0, 0, 250]\n  radii_mm: [70, 70, 90]\n").ok());
+    ASSERT_TRUE(WriteFileAtomic(dir_ + "/heads/ball.yaml",
+                                "head:\n  center_mm: [0, 0, 250]\n  radii_mm: [70, 70, 90]\n")
+                    .ok());
     CaptureOptions o;
     o.config_path = WriteSmallRig(dir_, {{"head", "head: heads/ball.yaml\n"}});
     o.out_dir = dir_ + "/recorded";
@@ -68,7 +70,8 @@ TEST_F(ReplayTest, CaptureFromReplayHasTheSameChecksums) {
     ASSERT_EQ(replayed.size(), 38u);
     for (const auto& [view, r] : original) {
       EXPECT_EQ(replayed.at(view)["sha256"], r["sha256"]) << "view " << view;
-      EXPECT_EQ(replayed.at(view)["angle_measured_deg"], r["angle_measured_deg"]) << "view " << view;
+      EXPECT_EQ(replayed.at(view)["angle_measured_deg"], r["angle_measured_deg"])
+          << "view " << view;
     }
     std::printf("replay at speed %.0f: %.3f s for 38 views\n", speed, s->wall_s);
   }
@@ -95,19 +98,23 @@ TEST_F(ReplayTest, ReplayLeavesTheRecordingUntouchedAndSkipsUnverifiedFrames) {
 TEST(Replay, SameAngleUnderTwoLightStates) {
   const std::string dir = FreshDir("replay_lights");
   CaptureOptions o;
-  o.config_path = WriteSmallRig(dir, {{"plan", "plan:\n  views:\n"
-                                               "    - {angle_deg: 30, camera: upper, lights: {top: 1, bottom: 0}}\n"
-                                               "    - {angle_deg: 30, camera: upper, lights: {top: 0, bottom: 1}}\n"}});
+  o.config_path =
+      WriteSmallRig(dir, {{"plan",
+                           "plan:\n  views:\n"
+                           "    - {angle_deg: 30, camera: upper, lights: {top: 1, bottom: 0}}\n"
+                           "    - {angle_deg: 30, camera: upper, lights: {top: 0, bottom: 1}}\n"}});
   o.out_dir = dir + "/recorded";
   auto recorded = RunCapture(o);
   ASSERT_TRUE(recorded.ok() && recorded->status == "complete");
   const auto original = VerifiedFramesOnDisk(o.out_dir);
-  ASSERT_NE(original.at(0)["sha256"], original.at(1)["sha256"]) << "the two light states should give different frames";
+  ASSERT_NE(original.at(0)["sha256"], original.at(1)["sha256"])
+      << "the two light states should give different frames";
   auto s = Replay(o.out_dir, dir + "/replayed", 0);
   ASSERT_TRUE(s.ok()) << s.status().ToString();
   EXPECT_EQ(s->status, "complete") << s->message;
   const auto replayed = VerifiedFramesOnDisk(dir + "/replayed");
-  for (int view : {0, 1}) EXPECT_EQ(replayed.at(view)["sha256"], original.at(view)["sha256"]) << "view " << view;
+  for (int view : {0, 1})
+    EXPECT_EQ(replayed.at(view)["sha256"], original.at(view)["sha256"]) << "view " << view;
 }
 
 TEST(Replay, RefusesAFolderThatIsNotACapture) {

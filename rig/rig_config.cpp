@@ -1,17 +1,16 @@
 #include "rig/rig_config.h"
 
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/head_config.h"
 #include "drivers/aravis_camera.h"
 #include "drivers/gphoto2_camera.h"
 #include "drivers/gpio_devices.h"
+#include "drivers/modbus_turntable.h"
 #include "drivers/usb_relay.h"
 #include "drivers/v4l2_camera.h"
-#include "drivers/modbus_turntable.h"
 #include "rig/rig_extension.h"
-
-#include "core/head_config.h"
-
-#include <cstdlib>
-#include <filesystem>
 
 namespace hairrig {
 
@@ -28,7 +27,8 @@ Result<std::string> EtcPath(const std::string& relative) {
     if (fs::exists(p)) return p.lexically_normal().string();
     tried += (tried.empty() ? "" : ", ") + p.string();
   }
-  return NotFound("cannot find " + relative + " (tried " + tried + "); set HAIRRIG_ETC to the project's etc/ folder");
+  return NotFound("cannot find " + relative + " (tried " + tried +
+                  "); set HAIRRIG_ETC to the project's etc/ folder");
 }
 
 Result<std::string> DefaultRigConfigPath() { return EtcPath("sim-rig.yaml"); }
@@ -47,15 +47,16 @@ Result<RigConfig> LoadRigConfig(const std::string& path, const std::string& rela
   }
   RigConfig config;
   config.path = path;
-  config.relative_to = relative_to.empty() ? fs::absolute(path).parent_path().string() : relative_to;
+  config.relative_to =
+      relative_to.empty() ? fs::absolute(path).parent_path().string() : relative_to;
   config.root = root;
   config.name = root.String("name", fs::path(path).stem().string());
   for (const auto& extension : extensions) HR_RETURN_IF_ERROR(extension->CheckConfig(config));
   if (root.Has("head")) {
     config.head.emplace();
     // ReadHeadConfig resolves relative paths beside a file: one inside relative_to.
-    HR_RETURN_IF_ERROR(ReadHeadConfig(root, "head", (fs::path(config.relative_to) / "rig.yaml").string(),
-                                      &*config.head));
+    HR_RETURN_IF_ERROR(ReadHeadConfig(
+        root, "head", (fs::path(config.relative_to) / "rig.yaml").string(), &*config.head));
   }
   root.Child("devices");
   if (!root.ok()) return root.status();
@@ -99,13 +100,15 @@ Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOpt
     }
   }
   RegisterRealBackends(&registry, hooks);
-  HR_ASSIGN_OR_RETURN(rig->devices, BuildDevices(config.root.Child("devices"), registry, build.backend_override));
+  HR_ASSIGN_OR_RETURN(rig->devices,
+                      BuildDevices(config.root.Child("devices"), registry, build.backend_override));
   for (const ConfigNode& camera : config.root.Child("devices").Items("cameras")) {
     const std::string line = camera.String("trigger_line", "");
     if (line.empty()) continue;
     bool known = false;
     for (const auto& l : rig->devices.trigger_lines) known = known || l->info().name == line;
-    if (!known) camera.Fail("trigger_line", "no trigger line named '" + line + "' in devices.trigger_lines");
+    if (!known)
+      camera.Fail("trigger_line", "no trigger line named '" + line + "' in devices.trigger_lines");
     rig->camera_trigger_lines[camera.String("name")] = line;
   }
   if (!config.root.ok()) return config.root.status();

@@ -19,13 +19,13 @@ namespace hairrig {
 // rig's `sim`) are in `root`; the extension checks them when the config is loaded.
 struct RigConfig {
   std::string path;
-  std::string relative_to;     // folder relative paths resolve against
+  std::string relative_to;  // folder relative paths resolve against
   std::string name;
   // The subject's head as the lab knows it (its `head:` section: a mannequin's
   // mesh and pose, or an ellipsoid, with the scalp region); absent when the
   // config has none.
   std::optional<HeadSpec> head;
-  ConfigNode root;             // the whole document
+  ConfigNode root;  // the whole document
 };
 
 // Finds etc/sim-rig.yaml: $HAIRRIG_ETC, then the etc/ of the source tree this

@@ -2,9 +2,9 @@
 // section, its hooks on a real backend, and a rig built without it.
 #include "rig/rig_extension.h"
 
-#include <filesystem>
-
 #include <gtest/gtest.h>
+
+#include <filesystem>
 
 #include "core/file_util.h"
 #include "rig/capture.h"

@@ -5,7 +5,9 @@
 namespace hairrig {
 namespace {
 
-bool IsPlainNameChar(unsigned char c) { return std::isalnum(c) || c == '-' || c == '_' || c == '.'; }
+bool IsPlainNameChar(unsigned char c) {
+  return std::isalnum(c) || c == '-' || c == '_' || c == '.';
+}
 
 std::string Printable(const std::string& text) {
   std::string out;
@@ -31,7 +33,8 @@ Result<std::string> SubjectFolderName(const std::string& subject) {
   for (unsigned char c : subject) {
     if (c < 0x20 || c == 0x7f) return InvalidArgument(shown + " contains a control character");
     if (c == '/' || c == '\\') {
-      return InvalidArgument(shown + " contains a path separator: give a plain name such as 'wig_03'");
+      return InvalidArgument(shown +
+                             " contains a path separator: give a plain name such as 'wig_03'");
     }
     if (c == ' ') {
       out += '_';
@@ -42,7 +45,8 @@ Result<std::string> SubjectFolderName(const std::string& subject) {
                              "': use letters, digits, spaces, '-', '_' and '.'");
     }
   }
-  if (out[0] == '.') return InvalidArgument(shown + " starts with '.': it would be hidden or mean a parent folder");
+  if (out[0] == '.')
+    return InvalidArgument(shown + " starts with '.': it would be hidden or mean a parent folder");
   return out;
 }
 

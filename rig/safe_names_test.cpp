@@ -1,8 +1,8 @@
 #include "rig/safe_names.h"
 
-#include <vector>
-
 #include <gtest/gtest.h>
+
+#include <vector>
 
 namespace hairrig {
 namespace {
@@ -10,15 +10,17 @@ namespace {
 TEST(SafeNames, SubjectNamesBecomeFolderNamesOrAreRefused) {
   EXPECT_EQ(*SubjectFolderName("wig_03"), "wig_03");
   EXPECT_EQ(*SubjectFolderName("Wig 03 long.v2"), "Wig_03_long.v2");
-  for (const std::string& bad : std::vector<std::string>{"", "../x", "..", ".hidden", "/etc/passwd", "a/b", "a\\b", std::string("a\nb"),
-                                std::string("tab\there"), std::string(101, 'a'), "semi;colon", "star*"}) {
+  for (const std::string& bad : std::vector<std::string>{
+           "", "../x", "..", ".hidden", "/etc/passwd", "a/b", "a\\b", std::string("a\nb"),
+           std::string("tab\there"), std::string(101, 'a'), "semi;colon", "star*"}) {
     auto r = SubjectFolderName(bad);
     EXPECT_FALSE(r.ok()) << "accepted '" << bad << "' as " << (r.ok() ? *r : "");
   }
   auto r = SubjectFolderName("../x");
   EXPECT_NE(r.status().message().find("separator"), std::string::npos) << r.status().ToString();
   r = SubjectFolderName(std::string("a\x01"));
-  EXPECT_NE(r.status().message().find("\\x01"), std::string::npos) << "control characters are shown escaped";
+  EXPECT_NE(r.status().message().find("\\x01"), std::string::npos)
+      << "control characters are shown escaped";
 }
 
 TEST(SafeNames, DeviceTextBecomesAFileNamePart) {

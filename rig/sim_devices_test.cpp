@@ -1,8 +1,8 @@
 // The simulated devices behind the driver interfaces, built from etc/sim-rig.yaml
 // as the CLI builds them.
-#include <numeric>
-
 #include <gtest/gtest.h>
+
+#include <numeric>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -31,14 +31,15 @@ std::unique_ptr<Rig> OpenDefaultRig() {
 
 // Mean grey level; an encoded frame (the gphoto2 camera's JPEG) is decoded first.
 double MeanDn(const Frame& f) {
-  if (f.format == PixelFormat::kEncoded) return cv::mean(cv::imdecode(f.data, cv::IMREAD_GRAYSCALE))[0];
+  if (f.format == PixelFormat::kEncoded)
+    return cv::mean(cv::imdecode(f.data, cv::IMREAD_GRAYSCALE))[0];
   return std::accumulate(f.data.begin(), f.data.end(), 0.0) / static_cast<double>(f.data.size());
 }
 
 // A rig built from a config text whose sim scene is etc/scenes/default.yaml.
 std::unique_ptr<Rig> OpenRigFromText(const std::string& devices_yaml) {
-  auto root = ConfigNode::LoadString("name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n" + devices_yaml,
-                                     "etc/test-rig.yaml");
+  auto root = ConfigNode::LoadString(
+      "name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n" + devices_yaml, "etc/test-rig.yaml");
   EXPECT_TRUE(root.ok()) << root.status().ToString();
   RigConfig config;
   config.path = "etc/test-rig.yaml";
@@ -55,9 +56,11 @@ std::unique_ptr<Rig> OpenRigFromText(const std::string& devices_yaml) {
 class SimTurntableTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(SimTurntableTest, ReachesItsTargetAfterTheProfileAndSettle) {
-  auto rig = GetParam() == "default" ? OpenDefaultRig()
-                                     : OpenRigFromText("  turntable: {name: t, backend: sim, serial: SIM-TT-0001}\n"
-                                                       "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n");
+  auto rig = GetParam() == "default"
+                 ? OpenDefaultRig()
+                 : OpenRigFromText(
+                       "  turntable: {name: t, backend: sim, serial: SIM-TT-0001}\n"
+                       "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n");
   Turntable& tt = *rig->devices.turntable;
   EXPECT_EQ(tt.info().backend, GetParam() == "default" ? "modbus" : "sim");
   ASSERT_TRUE(tt.Home(milliseconds(5000)).ok());
@@ -140,7 +143,8 @@ TEST(SimDevices, CallsInTheWrongStateExplainTheRemedy) {
 
 TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
   auto root = ConfigNode::LoadString(
-      "name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n  cameras:\n    - {name: c, backend: sim, serial: NOPE}\n",
+      "name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n  cameras:\n    - {name: c, backend: "
+      "sim, serial: NOPE}\n",
       "etc/test-rig.yaml");
   ASSERT_TRUE(root.ok());
   RigConfig config;
@@ -149,13 +153,16 @@ TEST(SimDevices, ACameraSerialTheSceneDoesNotHaveIsRefused) {
   config.root = *root;
   auto rig = BuildRig(config);
   ASSERT_FALSE(rig.ok());
-  EXPECT_NE(rig.status().message().find("no camera with serial 'NOPE'"), std::string::npos) << rig.status().ToString();
-  EXPECT_NE(rig.status().message().find("devices.cameras[0]"), std::string::npos) << rig.status().ToString();
+  EXPECT_NE(rig.status().message().find("no camera with serial 'NOPE'"), std::string::npos)
+      << rig.status().ToString();
+  EXPECT_NE(rig.status().message().find("devices.cameras[0]"), std::string::npos)
+      << rig.status().ToString();
 }
 
 // `device: sim` gives a v4l2 camera a fake UVC camera behind its system-call layer.
 TEST(SimDevices, AUvcCameraOnTheSimulatedRig) {
-  auto rig = OpenRigFromText("  cameras: [{name: uvc, backend: v4l2, serial: SIM-CAM-LOWER, device: sim}]\n");
+  auto rig = OpenRigFromText(
+      "  cameras: [{name: uvc, backend: v4l2, serial: SIM-CAM-LOWER, device: sim}]\n");
   Camera& cam = *rig->devices.cameras[0];
   EXPECT_EQ(cam.capabilities().width_px, 1200);  // the scene camera's size
   auto frame = hairrig_test::ShootOnce(cam, PixelFormat::kMono8);
@@ -168,7 +175,8 @@ TEST(SimDevices, RelaySwitchedPanelsLightTheView) {
   auto rig = OpenRigFromText(
       "  lights:\n"
       "    - {name: top, backend: usbrelay, serial: PANEL-1, board: RLY01, channel: 1, bus: sim}\n"
-      "    - {name: lower_panel, backend: usbrelay, serial: PANEL-2, board: RLY01, channel: 2, bus: sim, light: bottom}\n"
+      "    - {name: lower_panel, backend: usbrelay, serial: PANEL-2, board: RLY01, channel: 2, "
+      "bus: sim, light: bottom}\n"
       "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n");
   Camera& cam = *rig->devices.cameras[0];
   auto dark = hairrig_test::ShootOnce(cam, PixelFormat::kMono8);
@@ -184,7 +192,8 @@ TEST(SimDevices, ASceneLightNeedsTheSimulatedRelayBus) {
   auto root = ConfigNode::LoadString(
       "name: t\nsim: {scene: scenes/default.yaml}\ndevices:\n"
       "  lights:\n"
-      "    - {name: top, backend: usbrelay, serial: PANEL-1, board: RLY01, channel: 1, light: top}\n"
+      "    - {name: top, backend: usbrelay, serial: PANEL-1, board: RLY01, channel: 1, light: "
+      "top}\n"
       "  cameras: [{name: c, backend: sim, serial: SIM-CAM-UPPER}]\n",
       "etc/test-rig.yaml");
   ASSERT_TRUE(root.ok());
@@ -210,7 +219,8 @@ TEST(SimDevices, TheExampleRealRigConfigBuilds) {
   EXPECT_EQ(tt.backend, "modbus");
   EXPECT_NE(tt.model.find("tcp 192.168.10.20:502 unit 1"), std::string::npos) << tt.model;
   EXPECT_EQ((*rig)->devices.lights[0]->info().backend, "gpiod");
-  EXPECT_NE((*rig)->devices.input_lines[0]->info().model.find("line 23 of pinctrl-bcm2711"), std::string::npos);
+  EXPECT_NE((*rig)->devices.input_lines[0]->info().model.find("line 23 of pinctrl-bcm2711"),
+            std::string::npos);
   EXPECT_EQ((*rig)->devices.cameras[0]->info().backend, "gphoto2");
   EXPECT_EQ((*rig)->devices.cameras[1]->info().backend, "aravis");
 }
@@ -226,7 +236,8 @@ TEST(SimDevices, ASimulatedModbusControllerNeedsTheSimSection) {
   config.root = *root;
   auto rig = BuildRig(config);
   ASSERT_FALSE(rig.ok());
-  EXPECT_NE(rig.status().message().find("host 'sim' needs the rig config's sim section"), std::string::npos)
+  EXPECT_NE(rig.status().message().find("host 'sim' needs the rig config's sim section"),
+            std::string::npos)
       << rig.status().ToString();
 }
 

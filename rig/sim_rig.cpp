@@ -275,7 +275,8 @@ class SimRigExtension : public RigExtension {
 // The scene's first camera at turntable angle 0, without sensor noise.
 class SceneStrandPreviewer : public StrandPreviewer {
  public:
-  explicit SceneStrandPreviewer(std::unique_ptr<Renderer> renderer) : renderer_(std::move(renderer)) {}
+  explicit SceneStrandPreviewer(std::unique_ptr<Renderer> renderer)
+      : renderer_(std::move(renderer)) {}
   Result<cv::Mat> Draw(const StrandSet& strands) override {
     renderer_->SetStrands(strands);
     RenderOptions options;
@@ -294,7 +295,8 @@ Result<std::unique_ptr<StrandPreviewer>> MakeSceneStrandPreviewer(const std::str
   scene.head = head;
   scene.wig.num_strands = 1;  // replaced by the strands drawn
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Renderer> renderer, Renderer::Create(scene));
-  return std::unique_ptr<StrandPreviewer>(std::make_unique<SceneStrandPreviewer>(std::move(renderer)));
+  return std::unique_ptr<StrandPreviewer>(
+      std::make_unique<SceneStrandPreviewer>(std::move(renderer)));
 }
 
 }  // namespace

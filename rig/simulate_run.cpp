@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"
@@ -64,7 +63,8 @@ Result<HeadSpec> LoadHead(const SimulateRunOptions& o, const std::string& scene_
   return ReadHeadOfFile(scene_path);
 }
 
-Result<HairSimulationOptions> MakeSimulationOptions(const SimulateRunOptions& o, const HeadSpec& head) {
+Result<HairSimulationOptions> MakeSimulationOptions(const SimulateRunOptions& o,
+                                                    const HeadSpec& head) {
   HairSimulationOptions s;
   s.scenario = o.scenario;
   s.dynamics.time_step_s = o.time_step_s;

@@ -10,11 +10,10 @@
 //   summary.json               SimulateRunSummary::ToJson()
 #pragma once
 
-#include <cstddef>
-#include <string>
-
 #include <Eigen/Core>
+#include <cstddef>
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "core/status.h"
 #include "simulation/hair_simulation.h"

@@ -1,9 +1,9 @@
 #include "rig/simulate_run.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"

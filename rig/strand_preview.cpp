@@ -20,14 +20,16 @@ void RegisterStrandPreviewer(StrandPreviewerFactory factory) {
   Factory() = std::move(factory);
 }
 
-Result<std::unique_ptr<StrandPreviewer>> MakeStrandPreviewer(const std::string& scene_file, const HeadSpec& head) {
+Result<std::unique_ptr<StrandPreviewer>> MakeStrandPreviewer(const std::string& scene_file,
+                                                             const HeadSpec& head) {
   StrandPreviewerFactory factory;
   {
     std::lock_guard<std::mutex> lock(FactoryMutex());
     factory = Factory();
   }
   if (!factory) {
-    return FailedPrecondition("this program has no strand renderer for previews: ask for none (--preview-every 0)");
+    return FailedPrecondition(
+        "this program has no strand renderer for previews: ask for none (--preview-every 0)");
   }
   return factory(scene_file, head);
 }

@@ -5,9 +5,8 @@
 
 #include <functional>
 #include <memory>
-#include <string>
-
 #include <opencv2/core/mat.hpp>
+#include <string>
 
 #include "core/head_spec.h"
 #include "core/status.h"
@@ -24,8 +23,8 @@ class StrandPreviewer {
 
 // Builds a previewer from a scene file (its first camera, lights and
 // backdrop) with `head` in place of the scene's own head.
-using StrandPreviewerFactory =
-    std::function<Result<std::unique_ptr<StrandPreviewer>>(const std::string& scene_file, const HeadSpec& head)>;
+using StrandPreviewerFactory = std::function<Result<std::unique_ptr<StrandPreviewer>>(
+    const std::string& scene_file, const HeadSpec& head)>;
 
 // The factory MakeStrandPreviewer uses; a later registration replaces an
 // earlier one. Thread-safe.
@@ -33,6 +32,7 @@ void RegisterStrandPreviewer(StrandPreviewerFactory factory);
 
 // FailedPrecondition when no previewer is registered (the caller then asks
 // for no previews); otherwise the factory's result.
-Result<std::unique_ptr<StrandPreviewer>> MakeStrandPreviewer(const std::string& scene_file, const HeadSpec& head);
+Result<std::unique_ptr<StrandPreviewer>> MakeStrandPreviewer(const std::string& scene_file,
+                                                             const HeadSpec& head);
 
 }  // namespace hairrig

@@ -17,7 +17,8 @@ TEST(StrandPreview, NoneUntilRegisteredThenTheRegisteredFactoryWithItsArguments)
   auto none = MakeStrandPreviewer("scene.yaml", HeadSpec{});
   ASSERT_FALSE(none.ok());
   EXPECT_EQ(none.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(none.status().message().find("--preview-every 0"), std::string::npos) << none.status().message();
+  EXPECT_NE(none.status().message().find("--preview-every 0"), std::string::npos)
+      << none.status().message();
 
   std::string seen_scene;
   Eigen::Vector3d seen_radii = Eigen::Vector3d::Zero();

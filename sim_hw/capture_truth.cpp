@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <mutex>
 #include <map>
+#include <mutex>
 #include <set>
 
 #include "core/file_util.h"
@@ -29,7 +29,8 @@ Status WriteTruthJson(const Scene& scene, const std::vector<PlannedTruthView>& v
     const double angle = rendered != rendered_deg.end() ? rendered->second : v.turntable_deg;
     truths.push_back(MakeViewGroundTruth(scene, v.view, v.stop, camera, angle));
   }
-  return WriteFileAtomic(dir + "/ground_truth.json", GroundTruthJson(scene, truths, /*with_maps=*/true));
+  return WriteFileAtomic(dir + "/ground_truth.json",
+                         GroundTruthJson(scene, truths, /*with_maps=*/true));
 }
 
 std::vector<int> SceneCameras(const Scene& scene, const std::vector<PlannedTruthView>& views) {
@@ -56,14 +57,17 @@ struct CaptureGroundTruth::State {
       if (scene_cameras[i] != scene_camera || std::abs(off) > kAngleMatchDeg) continue;
       {
         std::lock_guard<std::mutex> lock(mutex);
-        if (!recording || written.count(views[i].view) > 0 || writing.count(views[i].view) > 0) continue;
+        if (!recording || written.count(views[i].view) > 0 || writing.count(views[i].view) > 0)
+          continue;
         writing.insert(views[i].view);
       }
       const Status s = WriteViewTruthMaps(maps_dir, views[i].view, maps);
       std::lock_guard<std::mutex> lock(mutex);
       writing.erase(views[i].view);
-      if (s.ok()) written[views[i].view] = turntable_deg;
-      else if (first_error.ok()) first_error = s;
+      if (s.ok())
+        written[views[i].view] = turntable_deg;
+      else if (first_error.ok())
+        first_error = s;
     }
   }
 };
@@ -71,8 +75,8 @@ struct CaptureGroundTruth::State {
 CaptureGroundTruth::CaptureGroundTruth(SimWorld& world, std::shared_ptr<State> state)
     : world_(world), state_(std::move(state)) {}
 
-Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(SimWorld& world, std::vector<PlannedTruthView> views,
-                                                                      const std::string& capture_dir) {
+Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(
+    SimWorld& world, std::vector<PlannedTruthView> views, const std::string& capture_dir) {
   const Scene& scene = WorldRenderer(world).scene();
   auto state = std::make_shared<State>();
   state->dir = capture_dir + "/ground_truth";
@@ -82,12 +86,14 @@ Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(SimWorld& 
   if (ec) return IoError(state->maps_dir + ": cannot create (" + ec.message() + ")");
   HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, state->dir));
   HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir));
-  HR_RETURN_IF_ERROR(WriteStrands(state->dir + "/ground_truth_strands.ply", WorldRenderer(world).strands_turntable_mm()));
+  HR_RETURN_IF_ERROR(WriteStrands(state->dir + "/ground_truth_strands.ply",
+                                  WorldRenderer(world).strands_turntable_mm()));
   state->scene_cameras = SceneCameras(scene, views);
   state->views = std::move(views);
-  SetWorldTruthRecorder(world, [state](int scene_camera, double turntable_deg, const ViewTruthMaps& maps) {
-    state->Record(scene_camera, turntable_deg, maps);
-  });
+  SetWorldTruthRecorder(world,
+                        [state](int scene_camera, double turntable_deg, const ViewTruthMaps& maps) {
+                          state->Record(scene_camera, turntable_deg, maps);
+                        });
   return std::unique_ptr<CaptureGroundTruth>(new CaptureGroundTruth(world, std::move(state)));
 }
 

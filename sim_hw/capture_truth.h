@@ -33,7 +33,8 @@ class CaptureGroundTruth {
   // view whose frame the world's cameras render (a render matches a view by
   // camera and by turntable angle, within 0.01 deg of the stop). Views of
   // cameras the scene lacks are left out. Errors name the file.
-  static Result<std::unique_ptr<CaptureGroundTruth>> Begin(SimWorld& world, std::vector<PlannedTruthView> views,
+  static Result<std::unique_ptr<CaptureGroundTruth>> Begin(SimWorld& world,
+                                                           std::vector<PlannedTruthView> views,
                                                            const std::string& capture_dir);
   ~CaptureGroundTruth();  // stops recording
 

@@ -1,14 +1,13 @@
 #include "sim_hw/charuco_views.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <random>
-
-#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
@@ -45,7 +44,8 @@ class BoardHitter {
     if (t <= 0) return kWall;
     const Eigen::Vector3d p = o + t * d;
     const Eigen::Vector2d size = board_.size_mm();
-    if (p.x() < -margin_mm_ || p.y() < -margin_mm_ || p.x() > size.x() + margin_mm_ || p.y() > size.y() + margin_mm_)
+    if (p.x() < -margin_mm_ || p.y() < -margin_mm_ || p.x() > size.x() + margin_mm_ ||
+        p.y() > size.y() + margin_mm_)
       return kWall;
     return board_.IsWhite(p.x(), p.y()) ? kWhite : kBlack;
   }
@@ -58,7 +58,9 @@ class BoardHitter {
 };
 
 double Albedo(int surface_class) {
-  return surface_class == kWhite ? kWhiteAlbedo : surface_class == kBlack ? kBlackAlbedo : kWallAlbedo;
+  return surface_class == kWhite   ? kWhiteAlbedo
+         : surface_class == kBlack ? kBlackAlbedo
+                                   : kWallAlbedo;
 }
 
 // Linear radiance of the view (uniform light of irradiance 1): pixels whose
@@ -69,7 +71,8 @@ cv::Mat3f BoardRadiance(const BoardHitter& hitter, int width, int height) {
   std::vector<int8_t> corner_class(static_cast<size_t>(gw * (height + 1)));
   for (int j = 0; j <= height; ++j)
     for (int i = 0; i <= width; ++i)
-      corner_class[static_cast<size_t>(j * gw + i)] = static_cast<int8_t>(hitter.Class(i - 0.5, j - 0.5));
+      corner_class[static_cast<size_t>(j * gw + i)] =
+          static_cast<int8_t>(hitter.Class(i - 0.5, j - 0.5));
   cv::Mat3f radiance(height, width);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -104,7 +107,8 @@ Eigen::Matrix3d FacingRotation(const ChArUcoBoard& board) {
   return Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitX()).toRotationMatrix();
 }
 
-double FractionInImage(const CameraIntrinsics& camera, const ChArUcoBoard& board, const Rigid3d& cam_from_board) {
+double FractionInImage(const CameraIntrinsics& camera, const ChArUcoBoard& board,
+                       const Rigid3d& cam_from_board) {
   int inside = 0;
   for (const Eigen::Vector3d& c : board.corners_board_mm) {
     Eigen::Vector2d uv;
@@ -117,8 +121,8 @@ double FractionInImage(const CameraIntrinsics& camera, const ChArUcoBoard& board
 
 }  // namespace
 
-std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChArUcoBoard& board, int count,
-                                       uint64_t seed) {
+std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChArUcoBoard& board,
+                                       int count, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const Eigen::Vector2d size = board.size_mm();
@@ -126,18 +130,22 @@ std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChA
   const Eigen::Vector3d centre_board(0.5 * size.x(), 0.5 * size.y(), 0);
   const Eigen::Matrix3d facing = FacingRotation(board);
   std::vector<Rigid3d> poses;
-  for (int attempt = 0; static_cast<int>(poses.size()) < count && attempt < 1000 * count; ++attempt) {
+  for (int attempt = 0; static_cast<int>(poses.size()) < count && attempt < 1000 * count;
+       ++attempt) {
     const double distance = filling_distance_mm * (0.9 + 0.6 * unit(rng));
     const double axis_angle = 2 * kPi * unit(rng);
     const Eigen::Vector3d tilt_axis(std::cos(axis_angle), std::sin(axis_angle), 0);
     const double tilt = DegToRad(10 + 30 * unit(rng));
     const double roll = DegToRad(-25 + 50 * unit(rng));
-    const Eigen::Vector2d target_px(camera.width_px * (0.3 + 0.4 * unit(rng)), camera.height_px * (0.3 + 0.4 * unit(rng)));
+    const Eigen::Vector2d target_px(camera.width_px * (0.3 + 0.4 * unit(rng)),
+                                    camera.height_px * (0.3 + 0.4 * unit(rng)));
     auto ray = UndistortPixel(camera, target_px);
     if (!ray.ok()) continue;
-    const Eigen::Vector3d centre_cam = distance * Eigen::Vector3d(ray->x(), ray->y(), 1.0).normalized();
+    const Eigen::Vector3d centre_cam =
+        distance * Eigen::Vector3d(ray->x(), ray->y(), 1.0).normalized();
     const Eigen::Matrix3d r = Eigen::AngleAxisd(tilt, tilt_axis).toRotationMatrix() *
-                              Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix() * facing;
+                              Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                              facing;
     const Rigid3d pose(r, centre_cam - r * centre_board);
     if (FractionInImage(camera, board, pose) >= 0.6) poses.push_back(pose);
   }
@@ -145,9 +153,12 @@ std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChA
 }
 
 Result<ChArUcoView> RenderChArUcoView(const SceneCamera& camera, const ChArUcoBoard& board,
-                                      const Rigid3d& cam_from_board, bool noise, uint64_t noise_seed) {
-  const Eigen::Vector3d centre_cam = cam_from_board * Eigen::Vector3d(0.5 * board.size_mm().x(), 0.5 * board.size_mm().y(), 0);
-  if (centre_cam.z() <= 0) return InvalidArgument("the ChArUco board is behind camera " + camera.serial);
+                                      const Rigid3d& cam_from_board, bool noise,
+                                      uint64_t noise_seed) {
+  const Eigen::Vector3d centre_cam =
+      cam_from_board * Eigen::Vector3d(0.5 * board.size_mm().x(), 0.5 * board.size_mm().y(), 0);
+  if (centre_cam.z() <= 0)
+    return InvalidArgument("the ChArUco board is behind camera " + camera.serial);
   const Eigen::Vector3d front_cam = cam_from_board.rotation * board.front_normal_board;
   if (front_cam.dot(-centre_cam) <= 0)
     return InvalidArgument("camera " + camera.serial + " sees the back of the ChArUco board");
@@ -155,19 +166,22 @@ Result<ChArUcoView> RenderChArUcoView(const SceneCamera& camera, const ChArUcoBo
   const int width = camera.intrinsics.width_px, height = camera.intrinsics.height_px;
   const BoardHitter hitter(rays, board, cam_from_board);
   ChArUcoView view;
-  view.image = render_support::ExposeRadiance(BoardRadiance(hitter, width, height), camera, 0, 0, noise, noise_seed);
+  view.image = render_support::ExposeRadiance(BoardRadiance(hitter, width, height), camera, 0, 0,
+                                              noise, noise_seed);
   view.cam_from_board = cam_from_board;
   for (const Eigen::Vector3d& c : board.corners_board_mm) {
     Eigen::Vector2d uv(-1, -1);
     const bool in_front = ProjectChecked(camera.intrinsics, cam_from_board * c, &uv);
     view.corners_px.push_back(uv);
-    view.corner_in_image.push_back(in_front && uv.x() >= 4 && uv.y() >= 4 && uv.x() <= width - 5 && uv.y() <= height - 5);
+    view.corner_in_image.push_back(in_front && uv.x() >= 4 && uv.y() >= 4 && uv.x() <= width - 5 &&
+                                   uv.y() <= height - 5);
   }
   return view;
 }
 
-Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, const ChArUcoBoard& board, int views,
-                                          uint64_t seed, const std::string& dir) {
+Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index,
+                                          const ChArUcoBoard& board, int views, uint64_t seed,
+                                          const std::string& dir) {
   if (camera_index < 0 || camera_index >= static_cast<int>(scene.cameras.size()))
     return OutOfRange("camera " + std::to_string(camera_index) + " is not in scene " + scene.path);
   const SceneCamera& camera = scene.cameras[static_cast<size_t>(camera_index)];
@@ -183,7 +197,8 @@ Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, 
   truth["images"] = nlohmann::json::array();
   const std::vector<Rigid3d> poses = ChArUcoBoardPoses(camera.intrinsics, board, views, seed);
   for (size_t i = 0; i < poses.size(); ++i) {
-    HR_ASSIGN_OR_RETURN(ChArUcoView view, RenderChArUcoView(camera, board, poses[i], true, seed * 1000003ull + i));
+    HR_ASSIGN_OR_RETURN(ChArUcoView view,
+                        RenderChArUcoView(camera, board, poses[i], true, seed * 1000003ull + i));
     char name[32];
     std::snprintf(name, sizeof(name), "view_%03zu.png", i);
     const std::string path = (std::filesystem::path(dir) / name).string();

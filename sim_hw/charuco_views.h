@@ -9,13 +9,12 @@
 // core/charuco_board.h; millimetres, pixels in the OpenCV convention.
 #pragma once
 
-#include <cstdint>
-#include <string>
-#include <vector>
-
 #include <Eigen/Core>
+#include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
 
 #include "core/charuco_board.h"
 #include "core/status.h"
@@ -35,8 +34,8 @@ struct ChArUcoView {
 // distance at which it would fill the image's width, tilted 10-40 degrees
 // about a random in-plane axis and rolled up to 25 degrees, with at least 60 %
 // of its corners in the image. Reproducible from `seed`.
-std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChArUcoBoard& board, int count,
-                                       uint64_t seed);
+std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChArUcoBoard& board,
+                                       int count, uint64_t seed);
 
 // The view `camera` records of `board` at `cam_from_board` in front of a grey
 // wall, exposed at the camera's nominal exposure with its sensor noise
@@ -44,7 +43,8 @@ std::vector<Rigid3d> ChArUcoBoardPoses(const CameraIntrinsics& camera, const ChA
 // board is behind the camera or seen from its back; an error when the lens
 // model cannot be inverted over the image.
 Result<ChArUcoView> RenderChArUcoView(const SceneCamera& camera, const ChArUcoBoard& board,
-                                      const Rigid3d& cam_from_board, bool noise, uint64_t noise_seed);
+                                      const Rigid3d& cam_from_board, bool noise,
+                                      uint64_t noise_seed);
 
 struct ChArUcoSetSummary {
   std::string dir;
@@ -57,8 +57,9 @@ struct ChArUcoSetSummary {
 // (format "hairrig-charuco-truth": the camera's serial and true intrinsics,
 // cam_from_board per image) for `hairrig eval intrinsics`. OutOfRange for a
 // camera index outside the scene; IoError names the file it cannot write.
-Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index, const ChArUcoBoard& board, int views,
-                                          uint64_t seed, const std::string& dir);
+Result<ChArUcoSetSummary> WriteChArUcoSet(const Scene& scene, int camera_index,
+                                          const ChArUcoBoard& board, int views, uint64_t seed,
+                                          const std::string& dir);
 
 // `hairrig sim charuco`: WriteChArUcoSet for several cameras of a scene, each
 // into <out_dir>/<serial>/, rendered in parallel.

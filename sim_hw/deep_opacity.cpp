@@ -42,13 +42,15 @@ bool LightShadowMap::ToTexel(const Eigen::Vector3d& p, double* u, double* v, dou
   return *u >= 0 && *v >= 0 && *u < res_ - 1 && *v < res_ - 1;
 }
 
-LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std::vector<Eigen::Vector3d>& points,
+LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm,
+                                     const std::vector<Eigen::Vector3d>& points,
                                      const std::vector<size_t>& offsets, double fibre_diameter_mm,
                                      const TriangleMesh& head, const ShadowMapOptions& o) {
   LightShadowMap m;
   m.light_mm_ = light_mm;
   m.res_ = o.resolution;
-  m.head_scale_ = std::max(1, static_cast<int>(std::lround(static_cast<double>(o.head_resolution) / o.resolution)));
+  m.head_scale_ = std::max(
+      1, static_cast<int>(std::lround(static_cast<double>(o.head_resolution) / o.resolution)));
   m.head_res_ = m.res_ * m.head_scale_;
   m.layers_ = o.layers;
   m.layer_mm_ = o.layer_mm;
@@ -62,7 +64,8 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
   m.light_from_frame_.row(2) = forward;
   double extent = 1e-6;
   for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+    const Eigen::Vector3d corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(),
+                                 (c & 4) ? hi.z() : lo.z());
     const Eigen::Vector3d q = m.light_from_frame_ * (corner - light_mm);
     if (q.z() > 1.0) extent = std::max(extent, std::max(std::abs(q.x()), std::abs(q.y())) / q.z());
   }
@@ -102,7 +105,8 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
     for (size_t s = 0; s + 1 < offsets.size(); ++s) {
       for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
         double ua, va, da, ub, vb, db;
-        if (!m.ToTexel(points[i - 1], &ua, &va, &da) || !m.ToTexel(points[i], &ub, &vb, &db)) continue;
+        if (!m.ToTexel(points[i - 1], &ua, &va, &da) || !m.ToTexel(points[i], &ub, &vb, &db))
+          continue;
         const int n = 1 + static_cast<int>(std::max(std::abs(ub - ua), std::abs(vb - va)));
         const double length = (points[i] - points[i - 1]).norm() / n;
         for (int k = 0; k < n; ++k) {
@@ -123,19 +127,22 @@ LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm, const std:
       for (int x = 1; x + 1 < m.res_; ++x)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx)
-            m.first_hair_mm_[static_cast<size_t>(y) * m.res_ + x] = std::min(
-                m.first_hair_mm_[static_cast<size_t>(y) * m.res_ + x], first[static_cast<size_t>(y + dy) * m.res_ + x + dx]);
+            m.first_hair_mm_[static_cast<size_t>(y) * m.res_ + x] =
+                std::min(m.first_hair_mm_[static_cast<size_t>(y) * m.res_ + x],
+                         first[static_cast<size_t>(y + dy) * m.res_ + x + dx]);
   }
   for_each_sample([&](double u, double v, double d, double length) {
     const int x = static_cast<int>(u), y = static_cast<int>(v);
     const double first = m.first_hair_mm_[static_cast<size_t>(y) * m.res_ + x];
     const int layer = std::clamp(static_cast<int>((d - first) / m.layer_mm_), 0, m.layers_ - 1);
     const double texel_mm = d / m.focal_;
-    m.Layer(x, y, layer) += static_cast<float>(o.fibre_opacity * fibre_diameter_mm * length / (texel_mm * texel_mm));
+    m.Layer(x, y, layer) +=
+        static_cast<float>(o.fibre_opacity * fibre_diameter_mm * length / (texel_mm * texel_mm));
   });
   // Accumulate front to back: a layer holds the optical depth up to its far side.
   for (size_t t = 0; t < texels; ++t) {
-    for (int k = 1; k < m.layers_; ++k) m.opacity_[t * m.layers_ + k] += m.opacity_[t * m.layers_ + k - 1];
+    for (int k = 1; k < m.layers_; ++k)
+      m.opacity_[t * m.layers_ + k] += m.opacity_[t * m.layers_ + k - 1];
   }
   BlurLayers(m.opacity_, m.res_, m.layers_);
   return m;
@@ -146,8 +153,8 @@ double LightShadowMap::HeadVisibility(const Eigen::Vector3d& p) const {
   return ToTexel(p, &u, &v, &d) ? HeadVisibilityAtTexel(u, v, d) : 1.0;
 }
 
-LightShadowMap::Visibility LightShadowMap::VisibilityAt(const Eigen::Vector3d& p,
-                                                       const Eigen::Vector3d* surface_normal) const {
+LightShadowMap::Visibility LightShadowMap::VisibilityAt(
+    const Eigen::Vector3d& p, const Eigen::Vector3d* surface_normal) const {
   double u, v, d;
   if (!ToTexel(p, &u, &v, &d)) return {};
   Visibility out{HairTransmittanceAtTexel(u, v, d), 1.0};

@@ -32,14 +32,16 @@ struct ViewGroundTruth {
 int NumViews(const Scene& scene);
 ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view);
 // Any plan: the view's camera (index into scene.cameras) at a turntable angle.
-ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int camera_index, double turntable_deg);
+ViewGroundTruth MakeViewGroundTruth(const Scene& scene, int view, int stop, int camera_index,
+                                    double turntable_deg);
 
 // JSON text: {"simulation_only": true, "scene": ..., "turntable_from_box": ...,
 // "head": ..., "views": [...]}, and with `with_maps` a "maps" entry that
 // documents the per-pixel files below (format version, file names, units and
 // scales). "head" is the scene's head (core/head_json.h) with its mesh, if it
 // has one, named as WriteTruthHeadMesh copies it beside the JSON file.
-std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views, bool with_maps = false);
+std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views,
+                            bool with_maps = false);
 
 // The name of the head's mesh in a ground truth folder: "head_mesh.ply" (or
 // "head_mesh.obj" for an OBJ mesh, copied as it is); "" for an ellipsoid head.

@@ -25,8 +25,9 @@ namespace {
 // follows (2), request id (2); then the command's words.
 constexpr uint32_t kGvcp = 8;
 constexpr uint32_t kCommandHeaderEnd = kGvcp + 8;
-constexpr uint32_t kFirstWord = kGvcp + 8;    // the address
-constexpr uint32_t kSecondWord = kGvcp + 12;  // a register's value; a memory read's size (low 16 bits)
+constexpr uint32_t kFirstWord = kGvcp + 8;  // the address
+constexpr uint32_t kSecondWord =
+    kGvcp + 12;  // a register's value; a memory read's size (low 16 bits)
 constexpr uint32_t kGvcpKey = 0x42;
 constexpr uint32_t kDiscovery = 0x0002;
 constexpr uint32_t kReadRegister = 0x0080;
@@ -39,7 +40,8 @@ class FilterProgram {
  public:
   void Statement(uint16_t code, uint32_t k = 0) { code_.push_back(BPF_STMT(code, k)); }
   // To `if_true`, else to `if_false`; "" is the next instruction.
-  void Jump(uint16_t code, uint32_t k, const std::string& if_true, const std::string& if_false = "") {
+  void Jump(uint16_t code, uint32_t k, const std::string& if_true,
+            const std::string& if_false = "") {
     jumps_.push_back({code_.size(), if_true, if_false});
     code_.push_back(BPF_JUMP(code, k, 0, 0));
   }
@@ -149,8 +151,8 @@ bool BoundToGvcpPort(int fd, sockaddr_in* bound) {
   socklen_t type_size = sizeof type;
   socklen_t size = sizeof *bound;
   return getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &type_size) == 0 && type == SOCK_DGRAM &&
-         getsockname(fd, reinterpret_cast<sockaddr*>(bound), &size) == 0 && bound->sin_family == AF_INET &&
-         ntohs(bound->sin_port) == kGvcpPort;
+         getsockname(fd, reinterpret_cast<sockaddr*>(bound), &size) == 0 &&
+         bound->sin_family == AF_INET && ntohs(bound->sin_port) == kGvcpPort;
 }
 
 // The name of the interface with IPv4 address `address` ("lo"); "" if none.
@@ -160,7 +162,8 @@ std::string InterfaceWithAddress(in_addr address) {
   std::string name;
   for (const ifaddrs* i = all; i != nullptr && name.empty(); i = i->ifa_next) {
     if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
-    if (reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr.s_addr == address.s_addr) name = i->ifa_name;
+    if (reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr.s_addr == address.s_addr)
+      name = i->ifa_name;
   }
   freeifaddrs(all);
   return name;
@@ -181,7 +184,8 @@ Status ReplaceWithUnboundSocket(int fd) {
   if (idle < 0 || dup3(idle, fd, O_CLOEXEC) < 0) {
     const std::string reason = std::strerror(errno);
     if (idle >= 0) close(idle);
-    return Internal("GVCP guard: cannot close the broadcast socket " + std::to_string(fd) + ": " + reason);
+    return Internal("GVCP guard: cannot close the broadcast socket " + std::to_string(fd) + ": " +
+                    reason);
   }
   close(idle);
   return Status::Ok();
@@ -193,8 +197,8 @@ Status AttachGvcpFilter(int fd, GvcpMemoryLimits limits) {
   std::vector<sock_filter> code = GvcpFilter(limits);
   const sock_fprog program{static_cast<unsigned short>(code.size()), code.data()};
   if (setsockopt(fd, SOL_SOCKET, SO_ATTACH_FILTER, &program, sizeof program) != 0) {
-    return Unavailable("GVCP guard: cannot attach the packet filter to socket " + std::to_string(fd) + ": " +
-                       std::strerror(errno));
+    return Unavailable("GVCP guard: cannot attach the packet filter to socket " +
+                       std::to_string(fd) + ": " + std::strerror(errno));
   }
   return Status::Ok();
 }
@@ -204,12 +208,14 @@ std::set<int> OpenDescriptors() {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
     const std::string name = entry.path().filename().string();
-    if (!name.empty() && std::all_of(name.begin(), name.end(), ::isdigit)) fds.insert(std::stoi(name));
+    if (!name.empty() && std::all_of(name.begin(), name.end(), ::isdigit))
+      fds.insert(std::stoi(name));
   }
   return fds;
 }
 
-Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before, const std::string& interface_address,
+Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before,
+                                            const std::string& interface_address,
                                             GvcpMemoryLimits limits) {
   in_addr served{};
   if (inet_pton(AF_INET, interface_address.c_str(), &served) != 1) {
@@ -223,9 +229,9 @@ Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before, const s
     HR_RETURN_IF_ERROR(AttachGvcpFilter(fd, limits));
     ++summary.filtered;
     if (bound.sin_addr.s_addr == served.s_addr) continue;
-    if (!device.empty() && (BoundDevice(fd) == device ||
-                            setsockopt(fd, SOL_SOCKET, SO_BINDTODEVICE, device.c_str(),
-                                       static_cast<socklen_t>(device.size())) == 0)) {
+    if (!device.empty() &&
+        (BoundDevice(fd) == device || setsockopt(fd, SOL_SOCKET, SO_BINDTODEVICE, device.c_str(),
+                                                 static_cast<socklen_t>(device.size())) == 0)) {
       ++summary.confined;
       continue;
     }
@@ -233,7 +239,8 @@ Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before, const s
     ++summary.closed;
   }
   if (summary.filtered == 0) {
-    return Unavailable("GVCP guard: the GigE fake camera opened no UDP socket on port " + std::to_string(kGvcpPort));
+    return Unavailable("GVCP guard: the GigE fake camera opened no UDP socket on port " +
+                       std::to_string(kGvcpPort));
   }
   return summary;
 }

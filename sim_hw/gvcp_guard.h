@@ -51,7 +51,8 @@ struct GvcpGuardSummary {
 // camera's), the fake serving on the interface with IPv4 address
 // `interface_address`. Unavailable when there is none, or the filter cannot
 // be attached: the fake must not serve unguarded.
-Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before, const std::string& interface_address,
+Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before,
+                                            const std::string& interface_address,
                                             GvcpMemoryLimits limits);
 
 }  // namespace hairrig

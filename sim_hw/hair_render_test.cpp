@@ -6,13 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <random>
 
-#include <opencv2/core.hpp>
-
 #include "core/camera_model.h"
-#include "sim_hw/ground_truth.h"
 #include "core/head_model.h"
+#include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
 #include "tests/support/default_scene.h"
 
@@ -21,7 +20,8 @@ namespace {
 
 using hairrig_test::DefaultScene;
 
-RenderedView RenderTruth(const Renderer& renderer, int camera, double turntable_deg, bool draw_hair = true) {
+RenderedView RenderTruth(const Renderer& renderer, int camera, double turntable_deg,
+                         bool draw_hair = true) {
   RenderOptions o;
   o.noise = false;
   o.ground_truth = true;
@@ -32,12 +32,15 @@ RenderedView RenderTruth(const Renderer& renderer, int camera, double turntable_
 }
 
 // Distance from p to strand `s` (polyline) and the segment it is nearest to.
-double DistanceToStrand(const StrandSet& strands, const std::vector<size_t>& offsets, int s, const Eigen::Vector3d& p,
-                        size_t* nearest) {
+double DistanceToStrand(const StrandSet& strands, const std::vector<size_t>& offsets, int s,
+                        const Eigen::Vector3d& p, size_t* nearest) {
   double best = 1e30;
-  for (size_t i = offsets[static_cast<size_t>(s)] + 1; i < offsets[static_cast<size_t>(s) + 1]; ++i) {
-    const Eigen::Vector3d a = strands.points_mm[i - 1].cast<double>(), b = strands.points_mm[i].cast<double>();
-    const double t = std::clamp((p - a).dot(b - a) / std::max(1e-12, (b - a).squaredNorm()), 0.0, 1.0);
+  for (size_t i = offsets[static_cast<size_t>(s)] + 1; i < offsets[static_cast<size_t>(s) + 1];
+       ++i) {
+    const Eigen::Vector3d a = strands.points_mm[i - 1].cast<double>(),
+                          b = strands.points_mm[i].cast<double>();
+    const double t =
+        std::clamp((p - a).dot(b - a) / std::max(1e-12, (b - a).squaredNorm()), 0.0, 1.0);
     const double d = (a + t * (b - a) - p).norm();
     if (d < best) best = d, *nearest = i;
   }
@@ -86,13 +89,16 @@ TEST(HairRender, GroundTruthMapsAgreeWithTheGeometry) {
       if (label != ViewTruthMaps::kHair && label != ViewTruthMaps::kHead) continue;
       auto ray = UndistortPixel(camera.intrinsics, Eigen::Vector2d(x, y));
       ASSERT_TRUE(ray.ok());
-      const Eigen::Vector3d p_cam = maps->depth_mm.at<float>(y, x) * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
+      const Eigen::Vector3d p_cam =
+          maps->depth_mm.at<float>(y, x) * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
       const Eigen::Vector3d p = turntable_from_cam * p_cam;
       if (label == ViewTruthMaps::kHead) {
         ++head;
         HeadHit hit;
-        const Eigen::Vector3d ray_dir = turntable_from_cam.rotation * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
-        const bool hits = (*renderer)->head().Intersect(turntable_from_cam.translation, ray_dir, 0, 1e9, &hit);
+        const Eigen::Vector3d ray_dir =
+            turntable_from_cam.rotation * Eigen::Vector3d(ray->x(), ray->y(), 1.0);
+        const bool hits =
+            (*renderer)->head().Intersect(turntable_from_cam.translation, ray_dir, 0, 1e9, &hit);
         off_head += !hits || std::abs(hit.t - maps->depth_mm.at<float>(y, x)) > 0.5 ? 1 : 0;
         continue;
       }
@@ -104,8 +110,10 @@ TEST(HairRender, GroundTruthMapsAgreeWithTheGeometry) {
       }
       // The projected direction of that segment.
       Eigen::Vector2d a, b;
-      const Eigen::Vector3d a_cam = turntable_from_cam.Inverse() * strands.points_mm[segment - 1].cast<double>();
-      const Eigen::Vector3d b_cam = turntable_from_cam.Inverse() * strands.points_mm[segment].cast<double>();
+      const Eigen::Vector3d a_cam =
+          turntable_from_cam.Inverse() * strands.points_mm[segment - 1].cast<double>();
+      const Eigen::Vector3d b_cam =
+          turntable_from_cam.Inverse() * strands.points_mm[segment].cast<double>();
       ProjectCamPoint(params.data(), a_cam.data(), a.data());
       ProjectCamPoint(params.data(), b_cam.data(), b.data());
       double angle = std::atan2(b.y() - a.y(), b.x() - a.x()) * 180 / M_PI;
@@ -115,8 +123,11 @@ TEST(HairRender, GroundTruthMapsAgreeWithTheGeometry) {
       bad_angle += diff > 1.0 ? 1 : 0;
     }
   }
-  std::printf("sampled hair pixels %d, head pixels %d; hair > 0.5 mm from its strand %d, angle off > 1 deg %d, "
-              "head depth off > 0.5 mm %d\n", hair, head, far_from_strand, bad_angle, off_head);
+  std::printf(
+      "sampled hair pixels %d, head pixels %d; hair > 0.5 mm from its strand %d, angle off > 1 deg "
+      "%d, "
+      "head depth off > 0.5 mm %d\n",
+      hair, head, far_from_strand, bad_angle, off_head);
   EXPECT_GT(hair, 2000);
   EXPECT_GT(head, 500);
   EXPECT_EQ(label_id_mismatch, 0);
@@ -134,12 +145,16 @@ TEST(HairRender, AMeshHeadAndAnEllipsoidHeadHaveOneSilhouette) {
   ellipsoid.head = HeadSpec{};
   ellipsoid.head.center_turntable_mm = Eigen::Vector3d(0, 0, 330);
   ellipsoid.head.scalp = scalp;
-  const TriangleMesh mesh = MakeEllipsoidMesh(ellipsoid.head.center_turntable_mm, ellipsoid.head.radii_mm, 120, 240);
-  const std::string path = (std::filesystem::temp_directory_path() / "hairrig_ellipsoid_head.obj").string();
+  const TriangleMesh mesh =
+      MakeEllipsoidMesh(ellipsoid.head.center_turntable_mm, ellipsoid.head.radii_mm, 120, 240);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "hairrig_ellipsoid_head.obj").string();
   {
     std::ofstream obj(path);
-    for (const auto& v : mesh.vertices_mm) obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
-    for (const auto& t : mesh.triangles) obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+    for (const auto& v : mesh.vertices_mm)
+      obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
+    for (const auto& t : mesh.triangles)
+      obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
   }
   Scene meshed = ellipsoid;
   meshed.head.mesh_file = path;
@@ -163,12 +178,13 @@ TEST(HairRender, AMeshHeadAndAnEllipsoidHeadHaveOneSilhouette) {
         // Away from the silhouette (all 8 neighbours agree in the ellipsoid's map) they must agree.
         bool edge = false;
         for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) edge = edge || (la.at<uint8_t>(y + dy, x + dx) == ViewTruthMaps::kHead) != ha;
+          for (int dx = -1; dx <= 1; ++dx)
+            edge = edge || (la.at<uint8_t>(y + dy, x + dx) == ViewTruthMaps::kHead) != ha;
         differ_inside += edge ? 0 : 1;
       }
     }
-    std::printf("camera %d: head pixels %d, differing %d (%d away from the silhouette)\n", camera, head_a, differ,
-                differ_inside);
+    std::printf("camera %d: head pixels %d, differing %d (%d away from the silhouette)\n", camera,
+                head_a, differ, differ_inside);
     EXPECT_GT(head_a, 20000);
     EXPECT_EQ(differ_inside, 0);
     EXPECT_LT(differ, head_a / 100);
@@ -188,21 +204,27 @@ TEST(HairRender, HairCastsAShadowOnTheHead) {
   const cv::Mat& label = with_hair.truth.label;
   for (int y = 12; y + 12 < label.rows; y += 2) {
     for (int x = 12; x + 12 < label.cols; x += 2) {
-      if (label.at<uint8_t>(y, x) != ViewTruthMaps::kHead || with_hair.truth.hair_alpha.at<float>(y, x) > 0.02f) continue;
+      if (label.at<uint8_t>(y, x) != ViewTruthMaps::kHead ||
+          with_hair.truth.hair_alpha.at<float>(y, x) > 0.02f)
+        continue;
       bool near_hair = false;
       for (int d = -12; d <= 12 && !near_hair; d += 4) {
-        near_hair = label.at<uint8_t>(y - 12, x + d) == ViewTruthMaps::kHair || label.at<uint8_t>(y + d, x - 12) == ViewTruthMaps::kHair ||
-                    label.at<uint8_t>(y + 12, x + d) == ViewTruthMaps::kHair || label.at<uint8_t>(y + d, x + 12) == ViewTruthMaps::kHair;
+        near_hair = label.at<uint8_t>(y - 12, x + d) == ViewTruthMaps::kHair ||
+                    label.at<uint8_t>(y + d, x - 12) == ViewTruthMaps::kHair ||
+                    label.at<uint8_t>(y + 12, x + d) == ViewTruthMaps::kHair ||
+                    label.at<uint8_t>(y + d, x + 12) == ViewTruthMaps::kHair;
       }
       if (!near_hair) continue;
-      const cv::Vec3b a = with_hair.image.at<cv::Vec3b>(y, x), b = without_hair.image.at<cv::Vec3b>(y, x);
+      const cv::Vec3b a = with_hair.image.at<cv::Vec3b>(y, x),
+                      b = without_hair.image.at<cv::Vec3b>(y, x);
       sum_with += a[0] + a[1] + a[2];
       sum_without += b[0] + b[1] + b[2];
       ++n;
     }
   }
-  std::printf("skin pixels near hair: %d; mean brightness with the hair's shadow %.1f, without %.1f\n", n,
-              sum_with / std::max(1, n) / 3, sum_without / std::max(1, n) / 3);
+  std::printf(
+      "skin pixels near hair: %d; mean brightness with the hair's shadow %.1f, without %.1f\n", n,
+      sum_with / std::max(1, n) / 3, sum_without / std::max(1, n) / 3);
   ASSERT_GT(n, 500);
   EXPECT_LT(sum_with, 0.7 * sum_without);  // measured: 0.48 as bright
 }

@@ -23,14 +23,15 @@
 namespace hairrig {
 
 struct FibreRadiance {
-  Eigen::Vector3d single;    // R + TT + TRT (linear RGB), per unit irradiance of a light
-  Eigen::Vector3d diffuse;   // the multiple-scattering part (shadowed more softly by the renderer)
+  Eigen::Vector3d single;   // R + TT + TRT (linear RGB), per unit irradiance of a light
+  Eigen::Vector3d diffuse;  // the multiple-scattering part (shadowed more softly by the renderer)
 };
 
 // Radiance towards `to_camera` from a fibre with tangent `tangent`, lit from
 // `to_light` with unit power. `albedo` is the fibre colour (0..1, linear RGB).
-FibreRadiance ShadeFibre(const HairShading& shading, const Eigen::Vector3d& albedo, const Eigen::Vector3d& tangent,
-                         const Eigen::Vector3d& to_light, const Eigen::Vector3d& to_camera);
+FibreRadiance ShadeFibre(const HairShading& shading, const Eigen::Vector3d& albedo,
+                         const Eigen::Vector3d& tangent, const Eigen::Vector3d& to_light,
+                         const Eigen::Vector3d& to_camera);
 
 // The longitudinal angle (rad) at which a lobe peaks for a light and camera in
 // the fibre's normal plane, as the model shifts it: R at alpha, TRT at -3/2 alpha.

@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <modbus/modbus.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <pty.h>
@@ -24,8 +25,6 @@
 #include <utility>
 #include <vector>
 
-#include <modbus/modbus.h>
-
 #include "sim_hw/sim_turntable_controller.h"
 
 namespace hairrig {
@@ -47,7 +46,8 @@ uint16_t Crc16(const uint8_t* data, size_t size) {
   uint16_t crc = 0xFFFF;
   for (size_t i = 0; i < size; ++i) {
     crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1u) ? static_cast<uint16_t>((crc >> 1) ^ 0xA001u) : crc >> 1;
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc & 1u) ? static_cast<uint16_t>((crc >> 1) ^ 0xA001u) : crc >> 1;
   }
   return crc;
 }
@@ -87,7 +87,8 @@ bool WellFormed(const uint8_t* query, int size, int header, int trailer) {
   if (size <= header) return false;
   const int function = query[header];
   if (function == kReadHolding || function == kWriteSingle) return size == header + 5;
-  if (function == kWriteMultiple) return size >= header + 6 && size == header + 6 + query[header + 5];
+  if (function == kWriteMultiple)
+    return size >= header + 6 && size == header + 6 + query[header + 5];
   return true;  // answered with exception 1 (illegal function) from the header alone
 }
 
@@ -133,7 +134,8 @@ struct ModbusTurntableServer::Impl {
   Status Setup() {
     const ModbusRegisterMap& m = options.map;
     mapping = modbus_mapping_new(0, 0, m.RegisterSpan(), 0);
-    if (mapping == nullptr) return Internal(std::string("modbus_mapping_new: ") + modbus_strerror(errno));
+    if (mapping == nullptr)
+      return Internal(std::string("modbus_mapping_new: ") + modbus_strerror(errno));
     const std::vector<uint16_t> serial = EncodeAscii(options.serial, m.serial_registers);
     std::copy(serial.begin(), serial.end(), mapping->tab_registers + m.serial);
     stop_fd = eventfd(0, EFD_CLOEXEC);
@@ -191,7 +193,8 @@ struct ModbusTurntableServer::Impl {
   int IdlestClient() const {
     const TcpClient* idlest = &clients.front();
     for (const TcpClient& c : clients) {
-      if (std::pair(c.spoke, c.last_active) < std::pair(idlest->spoke, idlest->last_active)) idlest = &c;
+      if (std::pair(c.spoke, c.last_active) < std::pair(idlest->spoke, idlest->last_active))
+        idlest = &c;
     }
     return idlest->fd;
   }
@@ -205,7 +208,8 @@ struct ModbusTurntableServer::Impl {
 
   void DropClient(int fd) {
     close(fd);
-    clients.erase(std::remove_if(clients.begin(), clients.end(), [fd](const TcpClient& c) { return c.fd == fd; }),
+    clients.erase(std::remove_if(clients.begin(), clients.end(),
+                                 [fd](const TcpClient& c) { return c.fd == fd; }),
                   clients.end());
   }
 
@@ -265,14 +269,17 @@ struct ModbusTurntableServer::Impl {
 
   void InjectInto(int fd, const PendingFault& f, const uint8_t* query) {
     switch (f.fault) {
-      case ModbusServerFault::kNoReply: return;
+      case ModbusServerFault::kNoReply:
+        return;
       case ModbusServerFault::kDisconnect:
         if (tcp) DropClient(fd);
         return;
       case ModbusServerFault::kException:
         modbus_reply_exception(ctx, query, static_cast<unsigned>(f.exception_code));
         return;
-      case ModbusServerFault::kMalformedReply: SendWrongFunction(fd, query); return;
+      case ModbusServerFault::kMalformedReply:
+        SendWrongFunction(fd, query);
+        return;
     }
   }
 
@@ -344,7 +351,9 @@ struct ModbusTurntableServer::Impl {
            code == m.cmd_clear_fault;
   }
 
-  int32_t Int32At(int address) const { return DecodeInt32(mapping->tab_registers + address, options.map.word_order); }
+  int32_t Int32At(int address) const {
+    return DecodeInt32(mapping->tab_registers + address, options.map.word_order);
+  }
 
   // Executes the command now in the command register, then clears it.
   void Execute() {
@@ -352,7 +361,8 @@ struct ModbusTurntableServer::Impl {
     const uint16_t code = mapping->tab_registers[m.command];
     mapping->tab_registers[m.command] = 0;
     if (code == m.cmd_move_absolute) {
-      const MotionProfile profile{CountsToDegrees(Int32At(m.speed), m), CountsToDegrees(Int32At(m.accel), m)};
+      const MotionProfile profile{CountsToDegrees(Int32At(m.speed), m),
+                                  CountsToDegrees(Int32At(m.accel), m)};
       controller->StartMove(CountsToDegrees(Int32At(m.target), m), profile);
     } else if (code == m.cmd_home) {
       controller->StartHome();
@@ -386,9 +396,9 @@ struct ModbusTurntableServer::Impl {
 ModbusTurntableServer::ModbusTurntableServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ModbusTurntableServer::~ModbusTurntableServer() { Stop(); }
 
-Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(std::shared_ptr<SimWorld> world,
-                                                                             ModbusServerOptions options,
-                                                                             const std::string& host, int port) {
+Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(
+    std::shared_ptr<SimWorld> world, ModbusServerOptions options, const std::string& host,
+    int port) {
   auto impl = std::make_unique<Impl>();
   impl->controller = &WorldTurntableController(*world);
   impl->world = std::move(world);
@@ -396,12 +406,13 @@ Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(s
   impl->tcp = true;
   impl->host = host;
   impl->ctx = modbus_new_tcp(host.c_str(), port);
-  if (impl->ctx == nullptr) return InvalidArgument("Modbus server: bad address " + host + ": " + modbus_strerror(errno));
+  if (impl->ctx == nullptr)
+    return InvalidArgument("Modbus server: bad address " + host + ": " + modbus_strerror(errno));
   HR_RETURN_IF_ERROR(impl->Setup());
   impl->listen_fd = modbus_tcp_listen(impl->ctx, kListenBacklog);
   if (impl->listen_fd < 0 || fcntl(impl->listen_fd, F_SETFL, O_NONBLOCK) != 0) {
-    return Unavailable("Modbus server: cannot listen on " + host + ":" + std::to_string(port) + ": " +
-                       modbus_strerror(errno));
+    return Unavailable("Modbus server: cannot listen on " + host + ":" + std::to_string(port) +
+                       ": " + modbus_strerror(errno));
   }
   sockaddr_in bound{};
   socklen_t length = sizeof bound;
@@ -412,8 +423,8 @@ Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(s
   return std::unique_ptr<ModbusTurntableServer>(new ModbusTurntableServer(std::move(impl)));
 }
 
-Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartRtu(std::shared_ptr<SimWorld> world,
-                                                                             ModbusServerOptions options) {
+Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartRtu(
+    std::shared_ptr<SimWorld> world, ModbusServerOptions options) {
   auto impl = std::make_unique<Impl>();
   impl->controller = &WorldTurntableController(*world);
   impl->world = std::move(world);
@@ -433,7 +444,8 @@ Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartRtu(s
   cfmakeraw(&raw);
   tcsetattr(impl->pty_slave, TCSANOW, &raw);
   impl->ctx = modbus_new_rtu(name, 115200, 'N', 8, 1);
-  if (impl->ctx == nullptr) return Internal(std::string("modbus_new_rtu: ") + modbus_strerror(errno));
+  if (impl->ctx == nullptr)
+    return Internal(std::string("modbus_new_rtu: ") + modbus_strerror(errno));
   HR_RETURN_IF_ERROR(impl->Setup());
   modbus_set_socket(impl->ctx, impl->pty_master);
   Impl* raw_impl = impl.get();

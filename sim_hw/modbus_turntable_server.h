@@ -51,9 +51,9 @@ struct ModbusServerOptions {
 class ModbusTurntableServer {
  public:
   // Serves TCP on `host`:`port` (0 picks a free port; see port()).
-  static Result<std::unique_ptr<ModbusTurntableServer>> StartTcp(std::shared_ptr<SimWorld> world,
-                                                                 ModbusServerOptions options,
-                                                                 const std::string& host = "127.0.0.1", int port = 0);
+  static Result<std::unique_ptr<ModbusTurntableServer>> StartTcp(
+      std::shared_ptr<SimWorld> world, ModbusServerOptions options,
+      const std::string& host = "127.0.0.1", int port = 0);
   // Serves RTU on the master side of a new pseudo-terminal pair.
   static Result<std::unique_ptr<ModbusTurntableServer>> StartRtu(std::shared_ptr<SimWorld> world,
                                                                  ModbusServerOptions options);

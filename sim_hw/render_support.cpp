@@ -5,10 +5,11 @@
 namespace hairrig {
 namespace render_support {
 
-cv::Mat ExposeRadiance(const cv::Mat3f& radiance, const SceneCamera& camera, double exposure_s, double gain_db,
-                       bool noise, uint64_t noise_seed) {
+cv::Mat ExposeRadiance(const cv::Mat3f& radiance, const SceneCamera& camera, double exposure_s,
+                       double gain_db, bool noise, uint64_t noise_seed) {
   const double exposure = exposure_s > 0 ? exposure_s : camera.exposure_s;
-  const float scale = static_cast<float>(255.0 * exposure * camera.sensitivity * std::pow(10.0, gain_db / 20.0));
+  const float scale =
+      static_cast<float>(255.0 * exposure * camera.sensitivity * std::pow(10.0, gain_db / 20.0));
   const float read = static_cast<float>(camera.read_noise_dn);
   const float shot = static_cast<float>(camera.shot_noise_gain);
   NoiseSource source(noise_seed);

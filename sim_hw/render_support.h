@@ -4,12 +4,11 @@
 // reproducible sensor noise. Internal to sim_hw.
 #pragma once
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
-#include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
+#include <vector>
 
 #include "core/camera_model.h"
 #include "core/status.h"
@@ -45,7 +44,9 @@ class RayTable {
     const double gy = std::clamp((v - kOrigin) / kStep, 0.0, rows_ - 1.001);
     const int c = static_cast<int>(gx), r = static_cast<int>(gy);
     const double fx = gx - c, fy = gy - r;
-    const auto at = [&](int rr, int cc) -> const Eigen::Vector2d& { return rays_[static_cast<size_t>(rr * cols_ + cc)]; };
+    const auto at = [&](int rr, int cc) -> const Eigen::Vector2d& {
+      return rays_[static_cast<size_t>(rr * cols_ + cc)];
+    };
     const Eigen::Vector2d xy = (1 - fy) * ((1 - fx) * at(r, c) + fx * at(r, c + 1)) +
                                fy * ((1 - fx) * at(r + 1, c) + fx * at(r + 1, c + 1));
     return {xy.x(), xy.y(), 1.0};
@@ -59,7 +60,8 @@ class RayTable {
 };
 
 inline uint32_t HashPixel(int x, int y, uint32_t salt) {
-  uint32_t h = static_cast<uint32_t>(x) * 0x9E3779B1u ^ (static_cast<uint32_t>(y) + 0x7F4A7C15u) * 0x85EBCA77u ^ salt;
+  uint32_t h = static_cast<uint32_t>(x) * 0x9E3779B1u ^
+               (static_cast<uint32_t>(y) + 0x7F4A7C15u) * 0x85EBCA77u ^ salt;
   h ^= h >> 15;
   h *= 0x2C1B3C6Du;
   h ^= h >> 12;
@@ -71,7 +73,8 @@ inline uint32_t HashPixel(int x, int y, uint32_t salt) {
 // Fast reproducible standard normal samples (xorshift + a precomputed table).
 class NoiseSource {
  public:
-  explicit NoiseSource(uint64_t seed) : state_(seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull) {
+  explicit NoiseSource(uint64_t seed)
+      : state_(seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull) {
     if (state_ == 0) state_ = 1;
   }
   float Next() {
@@ -118,8 +121,8 @@ class NoiseSource {
 // The 8-bit BGR image a camera records of `radiance` (linear, BGR): exposure
 // (s; 0 = the camera's nominal) and gain (dB) scale it, then read and shot
 // noise as the scene camera states, reproducible from `noise_seed`.
-cv::Mat ExposeRadiance(const cv::Mat3f& radiance, const SceneCamera& camera, double exposure_s, double gain_db,
-                       bool noise, uint64_t noise_seed);
+cv::Mat ExposeRadiance(const cv::Mat3f& radiance, const SceneCamera& camera, double exposure_s,
+                       double gain_db, bool noise, uint64_t noise_seed);
 
 }  // namespace render_support
 }  // namespace hairrig

@@ -7,14 +7,13 @@
 #include <limits>
 #include <mutex>
 #include <numeric>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/head_model.h"
 #include "core/parallel.h"
 #include "sim_hw/deep_opacity.h"
 #include "sim_hw/hair_shading.h"
-#include "core/head_model.h"
 #include "sim_hw/render_support.h"
 #include "sim_hw/tag_texture.h"
 #include "sim_hw/wig.h"
@@ -38,12 +37,12 @@ struct FaceTag {
 
 // One hair segment as the camera sees it.
 struct HairSegment {
-  Eigen::Vector2f a, b;      // pixel positions of its ends
-  float za = 0, zb = 0;      // their depths (mm)
-  float width_px = 0;        // the fibre's projected diameter
+  Eigen::Vector2f a, b;  // pixel positions of its ends
+  float za = 0, zb = 0;  // their depths (mm)
+  float width_px = 0;    // the fibre's projected diameter
   uint32_t strand = 0;
   cv::Vec3f color_a, color_b;  // radiance at its ends (BGR)
-  float angle_deg = 0;       // 2D direction in [0, 180)
+  float angle_deg = 0;         // 2D direction in [0, 180)
   float Depth() const { return 0.5f * (za + zb); }
 };
 
@@ -63,8 +62,8 @@ constexpr float kOcclusionMarginMm = 3.0f;
 // at depth `nearest_z_mm` or farther: `farthest_nearby` holds, per pixel, the
 // farthest opaque depth within 2 px (Chebyshev), and samples 2 px apart along
 // the segment leave no pixel within 1 px of it more than 2 px from a sample.
-bool HiddenBehindOpaque(const cv::Mat1f& farthest_nearby, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                        float nearest_z_mm) {
+bool HiddenBehindOpaque(const cv::Mat1f& farthest_nearby, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b, float nearest_z_mm) {
   const int samples = 1 + static_cast<int>(std::ceil((b - a).norm() / 2.0));
   for (int k = 0; k <= samples; ++k) {
     const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(k) / samples);
@@ -81,10 +80,10 @@ bool HiddenBehindOpaque(const cv::Mat1f& farthest_nearby, const Eigen::Vector2d&
 // 50,000-strand wig needs a few hundred MB, and fresh pages cost more than the
 // arithmetic that fills them.
 struct HairScratch {
-  std::vector<Eigen::Vector3d> p_cam;     // strand points, camera frame (mm)
-  std::vector<Eigen::Vector2d> uv;        // their projections (px)
-  std::vector<uint8_t> segment_visible;   // [i]: the segment ending at point i is drawn
-  std::vector<size_t> first_segment;      // per strand: index of its first drawn segment
+  std::vector<Eigen::Vector3d> p_cam;    // strand points, camera frame (mm)
+  std::vector<Eigen::Vector2d> uv;       // their projections (px)
+  std::vector<uint8_t> segment_visible;  // [i]: the segment ending at point i is drawn
+  std::vector<size_t> first_segment;     // per strand: index of its first drawn segment
   std::vector<HairSegment> segments;
   std::vector<std::vector<std::vector<uint64_t>>> share_keys;  // per thread, per band
 };
@@ -96,7 +95,8 @@ struct Renderer::Impl {
   std::vector<RayTable> ray_tables;
   std::vector<std::vector<FaceTag>> face_tags;  // per box face
 
-  // Scratch buffers of finished renders, for the next ones (as many as renders ran at once, up to 2).
+  // Scratch buffers of finished renders, for the next ones (as many as renders ran at once, up to
+  // 2).
   static constexpr size_t kMaxSpareScratch = 2;
   mutable std::mutex scratch_mutex;
   mutable std::vector<std::unique_ptr<HairScratch>> spare_scratch;
@@ -115,7 +115,8 @@ struct Renderer::Impl {
     }
     ~ScratchLease() {
       std::lock_guard<std::mutex> lock(impl_.scratch_mutex);
-      if (impl_.spare_scratch.size() < kMaxSpareScratch) impl_.spare_scratch.push_back(std::move(scratch_));
+      if (impl_.spare_scratch.size() < kMaxSpareScratch)
+        impl_.spare_scratch.push_back(std::move(scratch_));
     }
     ScratchLease(const ScratchLease&) = delete;
     ScratchLease& operator=(const ScratchLease&) = delete;
@@ -131,7 +132,7 @@ struct Renderer::Impl {
     const SceneCamera* camera = nullptr;
     const RayTable* rays = nullptr;
     Rigid3d cam_from_world, cam_from_turntable, box_from_cam;
-    std::vector<double> light_power;                 // level * intensity per light
+    std::vector<double> light_power;  // level * intensity per light
     std::vector<Eigen::Vector3d> light_pos_cam;
     double ambient = 0;
     int width = 0, height = 0;
@@ -147,7 +148,8 @@ struct Renderer::Impl {
     bool shade_hair = true;
   };
 
-  double Irradiance(const View& v, const Eigen::Vector3d& p_cam, const Eigen::Vector3d& n_cam) const {
+  double Irradiance(const View& v, const Eigen::Vector3d& p_cam,
+                    const Eigen::Vector3d& n_cam) const {
     double e = v.ambient;
     for (size_t i = 0; i < v.light_power.size(); ++i) {
       const Eigen::Vector3d l = (v.light_pos_cam[i] - p_cam).normalized();
@@ -162,7 +164,8 @@ struct Renderer::Impl {
     for (int y = 0; y < v.height; ++y) {
       // A gentle vertical falloff, as a lit backdrop shows.
       const double shade = total * (0.85 + 0.15 * (1.0 - static_cast<double>(y) / v.height));
-      const cv::Vec3f c(static_cast<float>(scene.backdrop_albedo.z() * shade), static_cast<float>(scene.backdrop_albedo.y() * shade),
+      const cv::Vec3f c(static_cast<float>(scene.backdrop_albedo.z() * shade),
+                        static_cast<float>(scene.backdrop_albedo.y() * shade),
                         static_cast<float>(scene.backdrop_albedo.x() * shade));
       for (int x = 0; x < v.width; ++x) v.radiance(y, x) = c;
     }
@@ -170,7 +173,8 @@ struct Renderer::Impl {
 
   // Bounding rectangle (pixels) of camera-frame points, clipped to the image;
   // empty if any point is behind the camera.
-  cv::Rect ProjectedBounds(const View& v, const std::vector<Eigen::Vector3d>& points_cam, int margin) const {
+  cv::Rect ProjectedBounds(const View& v, const std::vector<Eigen::Vector3d>& points_cam,
+                           int margin) const {
     double u0 = 1e30, v0 = 1e30, u1 = -1e30, v1 = -1e30;
     for (const auto& p : points_cam) {
       Eigen::Vector2d uv;
@@ -186,10 +190,12 @@ struct Renderer::Impl {
     return {x0, y0, x1 - x0 + 1, y1 - y0 + 1};
   }
 
-  std::vector<Eigen::Vector3d> BoxCorners(const Rigid3d& cam_from_frame, const Eigen::Vector3d& center,
+  std::vector<Eigen::Vector3d> BoxCorners(const Rigid3d& cam_from_frame,
+                                          const Eigen::Vector3d& center,
                                           const Eigen::Vector3d& half) const {
     std::vector<Eigen::Vector3d> corners;
-    for (const Eigen::Vector3d& p : BoxCornerPoints(half)) corners.push_back(cam_from_frame * (center + p));
+    for (const Eigen::Vector3d& p : BoxCornerPoints(half))
+      corners.push_back(cam_from_frame * (center + p));
     return corners;
   }
 
@@ -209,7 +215,8 @@ struct Renderer::Impl {
       e += power * wrapped;
     }
     const Eigen::Vector3d& a = scene.head.albedo;
-    return {static_cast<float>(a.z() * e), static_cast<float>(a.y() * e), static_cast<float>(a.x() * e)};
+    return {static_cast<float>(a.z() * e), static_cast<float>(a.y() * e),
+            static_cast<float>(a.x() * e)};
   }
 
   // The head, ray cast per pixel (rows spread over the view's threads).
@@ -220,8 +227,9 @@ struct Renderer::Impl {
     std::vector<Eigen::Vector3d> corners_cam;
     const Eigen::Vector3d lo = head->mesh().MinCorner(), hi = head->mesh().MaxCorner();
     for (int c = 0; c < 8; ++c) {
-      corners_cam.push_back(v.cam_from_turntable *
-                            Eigen::Vector3d((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z()));
+      corners_cam.push_back(v.cam_from_turntable * Eigen::Vector3d((c & 1) ? hi.x() : lo.x(),
+                                                                   (c & 2) ? hi.y() : lo.y(),
+                                                                   (c & 4) ? hi.z() : lo.z()));
     }
     const cv::Rect rect = ProjectedBounds(v, corners_cam, 2);
     ParallelFor(static_cast<size_t>(rect.height), v.threads, [&] {
@@ -230,7 +238,8 @@ struct Renderer::Impl {
         for (int x = rect.x; x < rect.x + rect.width; ++x) {
           const Eigen::Vector3d d = v.rays->Ray(x, y);
           HeadHit hit;
-          if (!head->Intersect(turntable_from_cam.translation, r * d, 0.0, v.depth(y, x), &hit)) continue;
+          if (!head->Intersect(turntable_from_cam.translation, r * d, 0.0, v.depth(y, x), &hit))
+            continue;
           const Eigen::Vector3d p = hit.t * d;  // the ray's z is 1: t is the depth
           v.radiance(y, x) = ShadeSkin(v, p, cam_r * hit.normal);
           v.depth(y, x) = static_cast<float>(hit.t);
@@ -260,7 +269,8 @@ struct Renderer::Impl {
     const Eigen::Vector3d p = o + t_near * d;
     BoxHit hit;
     hit.hit = true;
-    hit.face = 2 * axis + (d[axis] > 0 ? 1 : 0);  // entering through the face whose normal opposes d
+    hit.face =
+        2 * axis + (d[axis] > 0 ? 1 : 0);  // entering through the face whose normal opposes d
     hit.z = t_near * d_cam.z();
     hit.albedo = kWhiteAlbedo;
     const BoxFace& face = scene.box.faces[static_cast<size_t>(hit.face)];
@@ -283,20 +293,23 @@ struct Renderer::Impl {
   void DrawBox(View& v) const {
     const Eigen::Vector3d half = 0.5 * scene.box.size_mm;
     const Rigid3d cam_from_box = v.box_from_cam.Inverse();
-    const cv::Rect rect = ProjectedBounds(v, BoxCorners(cam_from_box, Eigen::Vector3d::Zero(), half), 3);
+    const cv::Rect rect =
+        ProjectedBounds(v, BoxCorners(cam_from_box, Eigen::Vector3d::Zero(), half), 3);
     if (rect.empty()) return;
     // Per-face radiance factor (the panels are far compared with the box).
     std::array<double, 6> face_irradiance{};
     for (size_t f = 0; f < 6; ++f) {
       const BoxFace& face = scene.box.faces[f];
-      face_irradiance[f] = Irradiance(v, cam_from_box * face.center_box_mm, cam_from_box.rotation * face.normal_box);
+      face_irradiance[f] =
+          Irradiance(v, cam_from_box * face.center_box_mm, cam_from_box.rotation * face.normal_box);
     }
     // Samples at pixel corners decide which pixels straddle an edge.
     const int gw = rect.width + 1, gh = rect.height + 1;
     std::vector<int> corner_class(static_cast<size_t>(gw * gh));
     for (int j = 0; j < gh; ++j) {
       for (int i = 0; i < gw; ++i) {
-        corner_class[static_cast<size_t>(j * gw + i)] = CastBox(v, rect.x + i - 0.5, rect.y + j - 0.5, half).Class();
+        corner_class[static_cast<size_t>(j * gw + i)] =
+            CastBox(v, rect.x + i - 0.5, rect.y + j - 0.5, half).Class();
       }
     }
     for (int j = 0; j < rect.height; ++j) {
@@ -312,7 +325,8 @@ struct Renderer::Impl {
         if (uniform) {
           const BoxHit h = CastBox(v, x, y, half);
           if (!h.hit || h.z >= behind_depth) continue;
-          const float value = static_cast<float>(h.albedo * face_irradiance[static_cast<size_t>(h.face)]);
+          const float value =
+              static_cast<float>(h.albedo * face_irradiance[static_cast<size_t>(h.face)]);
           v.radiance(y, x) = cv::Vec3f(value, value, value);
           v.depth(y, x) = static_cast<float>(h.z);
           v.surface(y, x) = static_cast<uint8_t>(kSurfaceFace0 + h.face);
@@ -351,7 +365,8 @@ struct Renderer::Impl {
     Eigen::Vector3d radiance = 0.9 * v.ambient * albedo;
     for (size_t i = 0; i < v.light_power.size(); ++i) {
       if (v.light_power[i] <= 0) continue;
-      const FibreRadiance f = ShadeFibre(scene.hair_shading, albedo, t, (v.light_pos_cam[i] - p).normalized(), to_camera);
+      const FibreRadiance f = ShadeFibre(scene.hair_shading, albedo, t,
+                                         (v.light_pos_cam[i] - p).normalized(), to_camera);
       if (v.shadows.empty()) {
         radiance += v.light_power[i] * (f.single + f.diffuse);
         continue;
@@ -359,9 +374,11 @@ struct Renderer::Impl {
       // Light scattered many times inside the volume is shadowed more softly than direct light.
       const LightShadowMap::Visibility seen = v.shadows[i].VisibilityAt(p);
       const double hair = seen.hair_transmittance;
-      radiance += v.light_power[i] * seen.head_visibility * (hair * f.single + std::sqrt(hair) * f.diffuse);
+      radiance +=
+          v.light_power[i] * seen.head_visibility * (hair * f.single + std::sqrt(hair) * f.diffuse);
     }
-    return {static_cast<float>(radiance.z()), static_cast<float>(radiance.y()), static_cast<float>(radiance.x())};
+    return {static_cast<float>(radiance.z()), static_cast<float>(radiance.y()),
+            static_cast<float>(radiance.x())};
   }
 
   // Draws `seg` into the rows [y_begin, y_end) of the view: per pixel within
@@ -439,7 +456,8 @@ struct Renderer::Impl {
       return p_cam[i - 1].z() > 1.0 && p_cam[i].z() > 1.0 && std::max(a.x(), b.x()) >= -2 &&
              std::min(a.x(), b.x()) <= v.width + 1 && std::max(a.y(), b.y()) >= -2 &&
              std::min(a.y(), b.y()) <= v.height + 1 &&
-             !HiddenBehindOpaque(occluders, a, b, static_cast<float>(std::min(p_cam[i - 1].z(), p_cam[i].z())));
+             !HiddenBehindOpaque(occluders, a, b,
+                                 static_cast<float>(std::min(p_cam[i - 1].z(), p_cam[i].z())));
     };
     const size_t n = strands.num_strands();
     std::vector<size_t>& first_segment = scratch.first_segment;
@@ -466,7 +484,8 @@ struct Renderer::Impl {
         // Radiance at each end of a visible segment, with the tangent of the chord around it.
         color.assign(last - first, cv::Vec3f(0, 0, 0));
         for (size_t i = first; i < last && v.shade_hair; ++i) {
-          const bool needed = (i > first && segment_visible[i]) || (i + 1 < last && segment_visible[i + 1]);
+          const bool needed =
+              (i > first && segment_visible[i]) || (i + 1 < last && segment_visible[i + 1]);
           if (!needed) continue;
           const size_t a = i == first ? i : i - 1, b = i + 1 < last ? i + 1 : i;
           color[i - first] = ShadeStrand(v, p_cam[i], (p_cam[b] - p_cam[a]).normalized());
@@ -521,15 +540,19 @@ struct Renderer::Impl {
     ParallelFor(shares, v.threads, [&] {
       return [&](size_t share) {
         auto& band_keys = share_keys[share];
-        const size_t begin = segments.size() * share / shares, end = segments.size() * (share + 1) / shares;
+        const size_t begin = segments.size() * share / shares,
+                     end = segments.size() * (share + 1) / shares;
         for (size_t i = begin; i < end; ++i) {
           const HairSegment& s = segments[i];
           uint32_t depth_bits;
           const float depth = std::max(0.0f, s.Depth());
           std::memcpy(&depth_bits, &depth, sizeof depth_bits);
           const uint64_t key = (static_cast<uint64_t>(depth_bits) << 32) | static_cast<uint32_t>(i);
-          const int b0 = std::max(0, static_cast<int>(std::floor(std::min(s.a.y(), s.b.y()) - 1.5f)) / kBandRows);
-          const int b1 = std::min(bands - 1, static_cast<int>(std::ceil(std::max(s.a.y(), s.b.y()) + 1.5f)) / kBandRows);
+          const int b0 = std::max(
+              0, static_cast<int>(std::floor(std::min(s.a.y(), s.b.y()) - 1.5f)) / kBandRows);
+          const int b1 =
+              std::min(bands - 1,
+                       static_cast<int>(std::ceil(std::max(s.a.y(), s.b.y()) + 1.5f)) / kBandRows);
           for (int b = b0; b <= b1; ++b) band_keys[static_cast<size_t>(b)].push_back(key);
         }
       };
@@ -541,8 +564,10 @@ struct Renderer::Impl {
           keys.insert(keys.end(), band_keys[b].begin(), band_keys[b].end());
         }
         std::sort(keys.begin(), keys.end(), std::greater<uint64_t>());
-        const int y_begin = static_cast<int>(b) * kBandRows, y_end = std::min(v.height, y_begin + kBandRows);
-        for (uint64_t key : keys) DrawSegment(v, segments[static_cast<uint32_t>(key)], y_begin, y_end);
+        const int y_begin = static_cast<int>(b) * kBandRows,
+                  y_end = std::min(v.height, y_begin + kBandRows);
+        for (uint64_t key : keys)
+          DrawSegment(v, segments[static_cast<uint32_t>(key)], y_begin, y_end);
       };
     });
   }
@@ -600,7 +625,8 @@ struct Renderer::Impl {
         if (hair) label = ViewTruthMaps::kHair;
         t.label.at<uint8_t>(y, x) = label;
         t.strand_id.at<int>(y, x) = hair ? v.hair_id(y, x) : -1;
-        t.orientation_deg.at<float>(y, x) = hair ? v.hair_angle(y, x) : std::numeric_limits<float>::quiet_NaN();
+        t.orientation_deg.at<float>(y, x) =
+            hair ? v.hair_angle(y, x) : std::numeric_limits<float>::quiet_NaN();
         const float opaque = std::isfinite(v.depth(y, x)) ? v.depth(y, x) : 0.0f;
         t.depth_mm.at<float>(y, x) = hair ? v.hair_front_z(y, x) : opaque;
       }
@@ -619,10 +645,14 @@ struct Renderer::Impl {
       const Eigen::Vector3d to_cam = (cam_center_box - tag.center_box_mm).normalized();
       t.facing_deg = RadToDeg(std::asin(std::clamp(to_cam.dot(face.normal_box), -1.0, 1.0)));
       bool in_front = true;
-      for (int k = 0; k < 4; ++k) in_front = ProjectChecked(v.camera->intrinsics, cam_from_box * tag.corners_box_mm[k], &t.corners_px[k]) && in_front;
+      for (int k = 0; k < 4; ++k)
+        in_front = ProjectChecked(v.camera->intrinsics, cam_from_box * tag.corners_box_mm[k],
+                                  &t.corners_px[k]) &&
+                   in_front;
       t.in_image = in_front;
       for (const auto& c : t.corners_px) {
-        t.in_image = t.in_image && c.x() >= 4 && c.y() >= 4 && c.x() <= v.width - 5 && c.y() <= v.height - 5;
+        t.in_image =
+            t.in_image && c.x() >= 4 && c.y() >= 4 && c.x() <= v.width - 5 && c.y() <= v.height - 5;
       }
       t.unoccluded = t.in_image && t.facing_deg > 0 && TagUnoccluded(v, cam_from_box, tag, face);
       truths.push_back(t);
@@ -631,15 +661,18 @@ struct Renderer::Impl {
   }
 
   // No head or hair over any of 9 x 9 points spread over the printed tag.
-  bool TagUnoccluded(const View& v, const Rigid3d& cam_from_box, const BoxTag& tag, const BoxFace& face) const {
+  bool TagUnoccluded(const View& v, const Rigid3d& cam_from_box, const BoxTag& tag,
+                     const BoxFace& face) const {
     const double half_printed = 0.5 * tag.size_mm * 10.0 / 8.0;
     for (int j = 0; j <= 8; ++j) {
       for (int i = 0; i <= 8; ++i) {
-        const double du = (i / 4.0 - 1.0) * half_printed * 0.98, dv = (j / 4.0 - 1.0) * half_printed * 0.98;
+        const double du = (i / 4.0 - 1.0) * half_printed * 0.98,
+                     dv = (j / 4.0 - 1.0) * half_printed * 0.98;
         const Eigen::Vector3d p = tag.center_box_mm + du * face.right_box + dv * face.down_box;
         Eigen::Vector2d uv;
         if (!ProjectChecked(v.camera->intrinsics, cam_from_box * p, &uv)) return false;
-        const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
+        const int x = static_cast<int>(std::lround(uv.x())),
+                  y = static_cast<int>(std::lround(uv.y()));
         if (x < 0 || y < 0 || x >= v.width || y >= v.height) return false;
         if (v.surface(y, x) != kSurfaceFace0 + tag.face || v.hair_alpha(y, x) > 0.02f) return false;
       }
@@ -648,14 +681,16 @@ struct Renderer::Impl {
   }
 
   cv::Mat Expose(const View& v, const RenderOptions& o) const {
-    return render_support::ExposeRadiance(v.radiance, *v.camera, o.exposure_s, o.gain_db, o.noise, o.noise_seed);
+    return render_support::ExposeRadiance(v.radiance, *v.camera, o.exposure_s, o.gain_db, o.noise,
+                                          o.noise_seed);
   }
 };
 
 namespace {
 
 Status CheckCameraIndex(const Scene& scene, int camera_index) {
-  if (camera_index >= 0 && camera_index < static_cast<int>(scene.cameras.size())) return Status::Ok();
+  if (camera_index >= 0 && camera_index < static_cast<int>(scene.cameras.size()))
+    return Status::Ok();
   return OutOfRange("camera index " + std::to_string(camera_index) + " is outside the scene's " +
                     std::to_string(scene.cameras.size()) + " cameras");
 }
@@ -667,7 +702,9 @@ Renderer::~Renderer() = default;
 const Scene& Renderer::scene() const { return impl_->scene; }
 const StrandSet& Renderer::strands_turntable_mm() const { return impl_->strands; }
 const HeadModel& Renderer::head() const { return *impl_->head; }
-void Renderer::SetStrands(StrandSet strands_turntable_mm) { impl_->strands = std::move(strands_turntable_mm); }
+void Renderer::SetStrands(StrandSet strands_turntable_mm) {
+  impl_->strands = std::move(strands_turntable_mm);
+}
 
 Result<std::unique_ptr<Renderer>> Renderer::Create(const Scene& scene) {
   auto impl = std::make_unique<Impl>();
@@ -686,14 +723,18 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const Scene& scene) {
   }
   // Point at the tags in the Impl's own copy of the scene.
   std::vector<size_t> next(impl->face_tags.size(), 0);
-  for (const BoxTag& tag : impl->scene.box.tags) impl->face_tags[static_cast<size_t>(tag.face)][next[static_cast<size_t>(tag.face)]++].tag = &tag;
+  for (const BoxTag& tag : impl->scene.box.tags)
+    impl->face_tags[static_cast<size_t>(tag.face)][next[static_cast<size_t>(tag.face)]++].tag =
+        &tag;
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
-Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, const RenderOptions& options) const {
+Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg,
+                                      const RenderOptions& options) const {
   const Scene& scene = impl_->scene;
   HR_RETURN_IF_ERROR(CheckCameraIndex(scene, camera_index));
-  if (!std::isfinite(turntable_deg)) return InvalidArgument("turntable angle is not a finite number");
+  if (!std::isfinite(turntable_deg))
+    return InvalidArgument("turntable angle is not a finite number");
   std::vector<double> levels = options.light_levels;
   if (levels.empty()) levels.assign(scene.lights.size(), 1.0);
   if (levels.size() != scene.lights.size()) {
@@ -710,7 +751,8 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, co
   v.box_from_cam = (v.cam_from_turntable * scene.turntable_from_box).Inverse();
   double total_power = 0;
   for (size_t i = 0; i < levels.size(); ++i) {
-    if (!(levels[i] >= 0 && levels[i] <= 1)) return InvalidArgument("light level outside 0..1 for light " + scene.lights[i].name);
+    if (!(levels[i] >= 0 && levels[i] <= 1))
+      return InvalidArgument("light level outside 0..1 for light " + scene.lights[i].name);
     v.light_power.push_back(levels[i] * scene.lights[i].intensity);
     v.light_pos_cam.push_back(v.cam_from_world * scene.lights[i].position_world_mm);
     total_power += levels[i];
@@ -743,17 +785,19 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg, co
   return out;
 }
 
-Result<cv::Mat> Renderer::Expose(int camera_index, const cv::Mat3f& radiance, const RenderOptions& options) const {
+Result<cv::Mat> Renderer::Expose(int camera_index, const cv::Mat3f& radiance,
+                                 const RenderOptions& options) const {
   const Scene& scene = impl_->scene;
   HR_RETURN_IF_ERROR(CheckCameraIndex(scene, camera_index));
   const SceneCamera& camera = scene.cameras[static_cast<size_t>(camera_index)];
   if (radiance.cols != camera.intrinsics.width_px || radiance.rows != camera.intrinsics.height_px) {
-    return InvalidArgument("radiance of " + std::to_string(radiance.cols) + "x" + std::to_string(radiance.rows) +
-                           " px for camera " + camera.serial + " of " + std::to_string(camera.intrinsics.width_px) +
-                           "x" + std::to_string(camera.intrinsics.height_px) + " px");
+    return InvalidArgument("radiance of " + std::to_string(radiance.cols) + "x" +
+                           std::to_string(radiance.rows) + " px for camera " + camera.serial +
+                           " of " + std::to_string(camera.intrinsics.width_px) + "x" +
+                           std::to_string(camera.intrinsics.height_px) + " px");
   }
-  return render_support::ExposeRadiance(radiance, camera, options.exposure_s, options.gain_db, options.noise,
-                                        options.noise_seed);
+  return render_support::ExposeRadiance(radiance, camera, options.exposure_s, options.gain_db,
+                                        options.noise, options.noise_seed);
 }
 
 }  // namespace hairrig

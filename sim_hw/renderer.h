@@ -16,12 +16,11 @@
 // All panels off gives a dark frame (noise only).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <memory>
-#include <vector>
-
-#include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
+#include <vector>
 
 #include "core/status.h"
 #include "core/strands.h"
@@ -35,21 +34,21 @@ struct RenderOptions {
   double exposure_s = 0;             // 0 = the camera's nominal exposure
   double gain_db = 0;
   bool noise = true;
-  uint64_t noise_seed = 0;           // same seed, same noise
+  uint64_t noise_seed = 0;  // same seed, same noise
   bool draw_hair = true;
-  int threads = 2;                   // for the hair and the head (a view is split in bands)
-  bool ground_truth = false;         // fill RenderedView::truth
-  bool shade_hair = true;            // false: fibres drawn unlit and no shadow maps built (for
-                                     // ground-truth maps alone: the geometry is the same, the image is not)
-  bool keep_radiance = false;        // fill RenderedView::radiance
+  int threads = 2;            // for the hair and the head (a view is split in bands)
+  bool ground_truth = false;  // fill RenderedView::truth
+  bool shade_hair = true;     // false: fibres drawn unlit and no shadow maps built (for
+                           // ground-truth maps alone: the geometry is the same, the image is not)
+  bool keep_radiance = false;  // fill RenderedView::radiance
 };
 
 // Ground truth of one tag in one rendered view.
 struct TagTruth {
   int id = -1;
   std::array<Eigen::Vector2d, 4> corners_px;  // projections, libapriltag corner order
-  double facing_deg = 0;  // elevation of the viewing ray above the face plane; <= 0: back-facing
-  bool in_image = false;  // all corners at least 4 px inside the image
+  double facing_deg = 0;    // elevation of the viewing ray above the face plane; <= 0: back-facing
+  bool in_image = false;    // all corners at least 4 px inside the image
   bool unoccluded = false;  // no head or hair over any part of the printed tag
 };
 
@@ -57,7 +56,8 @@ struct RenderedView {
   cv::Mat image;  // CV_8UC3, BGR
   std::vector<TagTruth> tags;
   ViewTruthMaps truth;  // with RenderOptions::ground_truth only
-  cv::Mat3f radiance;   // linear scene radiance before exposure; with RenderOptions::keep_radiance only
+  cv::Mat3f
+      radiance;  // linear scene radiance before exposure; with RenderOptions::keep_radiance only
 };
 
 class HeadModel;
@@ -80,12 +80,14 @@ class Renderer {
   // levels of the wrong count or outside 0..1. Thread-safe (const). The hair's
   // buffers of up to two finished renders are kept for the next ones (a few
   // hundred MB for a 50,000-strand wig), for as long as the renderer lives.
-  Result<RenderedView> Render(int camera_index, double turntable_deg, const RenderOptions& options) const;
+  Result<RenderedView> Render(int camera_index, double turntable_deg,
+                              const RenderOptions& options) const;
   // The 8-bit BGR image camera `camera_index` records of `radiance` (a
   // RenderedView::radiance of that camera) with `options`' exposure, gain and
   // noise: the same image Render gives for those options. OutOfRange for a
   // camera outside the scene, InvalidArgument for a radiance of another size.
-  Result<cv::Mat> Expose(int camera_index, const cv::Mat3f& radiance, const RenderOptions& options) const;
+  Result<cv::Mat> Expose(int camera_index, const cv::Mat3f& radiance,
+                         const RenderOptions& options) const;
 
  private:
   struct Impl;

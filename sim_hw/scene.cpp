@@ -18,12 +18,33 @@ int Scene::FindCamera(const std::string& serial) const {
 namespace {
 
 void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) {
-  n.AllowOnlyKeys({"style", "strands", "length_mm", "segment_mm", "scalp_min_elevation_deg", "face_dir",
-                   "face_half_angle_deg", "wave_amplitude_mm", "wave_period_mm", "curl_radius_mm",
-                   "curl_pitch_mm", "wisps", "clump", "clump_profile", "frizz_mm", "flyaways", "flyaway_mm", "comb",
-                   "bangs_depth_deg", "bangs_length_mm", "file", "file_pose", "fibre_diameter_um", "albedo",
+  n.AllowOnlyKeys({"style",
+                   "strands",
+                   "length_mm",
+                   "segment_mm",
+                   "scalp_min_elevation_deg",
+                   "face_dir",
+                   "face_half_angle_deg",
+                   "wave_amplitude_mm",
+                   "wave_period_mm",
+                   "curl_radius_mm",
+                   "curl_pitch_mm",
+                   "wisps",
+                   "clump",
+                   "clump_profile",
+                   "frizz_mm",
+                   "flyaways",
+                   "flyaway_mm",
+                   "comb",
+                   "bangs_depth_deg",
+                   "bangs_length_mm",
+                   "file",
+                   "file_pose",
+                   "fibre_diameter_um",
+                   "albedo",
                    "seed"});
-  const std::string style = n.Choice("style", {"straight", "wavy", "curly", "bangs", "file"}, "wavy");
+  const std::string style =
+      n.Choice("style", {"straight", "wavy", "curly", "bangs", "file"}, "wavy");
   w->style = style == "straight" ? WigStyle::kStraight
              : style == "curly"  ? WigStyle::kCurly
              : style == "bangs"  ? WigStyle::kBangs
@@ -35,32 +56,39 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
     if (l.size() == 2) {
       w->min_length_mm = l[0];
       w->max_length_mm = l[1];
-      if (!(l[0] > 0 && l[1] >= l[0] && l[1] < 5000)) n.Fail("length_mm", "expected [min, max] with 0 < min <= max < 5000");
+      if (!(l[0] > 0 && l[1] >= l[0] && l[1] < 5000))
+        n.Fail("length_mm", "expected [min, max] with 0 < min <= max < 5000");
     }
   }
   w->segment_mm = n.Number("segment_mm", w->segment_mm, {.min = 0.1, .max = 100});
-  w->scalp_min_elevation_deg = n.Number("scalp_min_elevation_deg", w->scalp_min_elevation_deg, {.min = -90, .max = 89});
+  w->scalp_min_elevation_deg =
+      n.Number("scalp_min_elevation_deg", w->scalp_min_elevation_deg, {.min = -90, .max = 89});
   w->face_dir = n.Vec3("face_dir", w->face_dir);
   if (w->face_dir.norm() < 1e-9) n.Fail("face_dir", "must not be the zero vector");
   w->face_dir.normalize();
-  w->face_half_angle_deg = n.Number("face_half_angle_deg", w->face_half_angle_deg, {.min = 0, .max = 180});
-  w->wave_amplitude_mm = n.Number("wave_amplitude_mm", w->wave_amplitude_mm, {.min = 0, .max = 200});
+  w->face_half_angle_deg =
+      n.Number("face_half_angle_deg", w->face_half_angle_deg, {.min = 0, .max = 180});
+  w->wave_amplitude_mm =
+      n.Number("wave_amplitude_mm", w->wave_amplitude_mm, {.min = 0, .max = 200});
   w->wave_period_mm = n.Number("wave_period_mm", w->wave_period_mm, {.min = 1, .max = 2000});
   w->curl_radius_mm = n.Number("curl_radius_mm", w->curl_radius_mm, {.min = 0, .max = 200});
   w->curl_pitch_mm = n.Number("curl_pitch_mm", w->curl_pitch_mm, {.min = 0.5, .max = 2000});
   w->wisps = n.Integer("wisps", w->wisps, {.min = 0, .max = 1e5});
   w->clump = n.Number("clump", w->clump, {.min = 0, .max = 1});
-  w->clump_profile = n.Choice("clump_profile", {"tip", "middle"}, "tip") == "middle" ? ClumpProfile::kMiddle
-                                                                                     : ClumpProfile::kTip;
+  w->clump_profile = n.Choice("clump_profile", {"tip", "middle"}, "tip") == "middle"
+                         ? ClumpProfile::kMiddle
+                         : ClumpProfile::kTip;
   w->frizz_mm = n.Number("frizz_mm", w->frizz_mm, {.min = 0, .max = 50});
   w->flyaway_fraction = n.Number("flyaways", w->flyaway_fraction, {.min = 0, .max = 1});
   w->flyaway_mm = n.Number("flyaway_mm", w->flyaway_mm, {.min = 0, .max = 500});
   w->comb = n.Number("comb", w->comb, {.min = 0, .max = 2});
   w->bangs_depth_deg = n.Number("bangs_depth_deg", w->bangs_depth_deg, {.min = 0, .max = 90});
   w->bangs_length_mm = n.Number("bangs_length_mm", w->bangs_length_mm, {.min = 5, .max = 1000});
-  w->fibre_diameter_um = n.Number("fibre_diameter_um", w->fibre_diameter_um, {.min = 10, .max = 500});
+  w->fibre_diameter_um =
+      n.Number("fibre_diameter_um", w->fibre_diameter_um, {.min = 10, .max = 500});
   w->albedo = n.Vec3("albedo", w->albedo);
-  if (n.ok() && (w->albedo.minCoeff() < 0 || w->albedo.maxCoeff() > 1)) n.Fail("albedo", "each channel must lie in 0..1");
+  if (n.ok() && (w->albedo.minCoeff() < 0 || w->albedo.maxCoeff() > 1))
+    n.Fail("albedo", "each channel must lie in 0..1");
   w->seed = static_cast<uint64_t>(n.Integer("seed", static_cast<int>(w->seed), {.min = 0}));
   if (w->style == WigStyle::kFile) {
     w->file = ResolveBesideFile(scene_path, n.String("file"));
@@ -94,7 +122,8 @@ SceneCamera ReadCamera(const ConfigNode& n) {
   c.intrinsics.k3 = in.Number("k3", 0.0, {.min = -2, .max = 2});
   const Eigen::Vector3d eye = n.Vec3("eye_mm");
   const Eigen::Vector3d target = n.Vec3("target_mm");
-  if (n.ok() && (eye - target).norm() < 1.0) n.Fail("target_mm", "the camera must look somewhere: eye_mm equals target_mm");
+  if (n.ok() && (eye - target).norm() < 1.0)
+    n.Fail("target_mm", "the camera must look somewhere: eye_mm equals target_mm");
   c.cam_from_world = LookAt(eye, target);
   c.read_noise_dn = n.Number("read_noise_dn", c.read_noise_dn, {.min = 0, .max = 100});
   c.shot_noise_gain = n.Number("shot_noise_gain", c.shot_noise_gain, {.min = 0, .max = 10});
@@ -107,8 +136,8 @@ SceneCamera ReadCamera(const ConfigNode& n) {
 
 Result<Scene> LoadScene(const std::string& path) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
-  root.AllowOnlyKeys({"name", "seed", "head", "wig", "hair_shading", "calib_box", "lights", "cameras", "backdrop_albedo",
-                      "ambient", "turntable"});
+  root.AllowOnlyKeys({"name", "seed", "head", "wig", "hair_shading", "calib_box", "lights",
+                      "cameras", "backdrop_albedo", "ambient", "turntable"});
   Scene scene;
   scene.path = path;
   scene.name = root.String("name", "unnamed scene");
@@ -118,12 +147,15 @@ Result<Scene> LoadScene(const std::string& path) {
   if (root.Has("hair_shading")) {
     const ConfigNode h = root.Child("hair_shading");
     h.AllowOnlyKeys({"model", "shadows", "cuticle_tilt_deg", "roughness_deg"});
-    scene.hair_shading.model = h.Choice("model", {"marschner", "kajiya-kay"}, "marschner") == "kajiya-kay"
-                                   ? HairShading::Model::kKajiyaKay
-                                   : HairShading::Model::kMarschner;
+    scene.hair_shading.model =
+        h.Choice("model", {"marschner", "kajiya-kay"}, "marschner") == "kajiya-kay"
+            ? HairShading::Model::kKajiyaKay
+            : HairShading::Model::kMarschner;
     scene.hair_shading.shadows = h.Bool("shadows", scene.hair_shading.shadows);
-    scene.hair_shading.cuticle_tilt_deg = h.Number("cuticle_tilt_deg", scene.hair_shading.cuticle_tilt_deg, {.min = -20, .max = 20});
-    scene.hair_shading.roughness_deg = h.Number("roughness_deg", scene.hair_shading.roughness_deg, {.min = 1, .max = 45});
+    scene.hair_shading.cuticle_tilt_deg =
+        h.Number("cuticle_tilt_deg", scene.hair_shading.cuticle_tilt_deg, {.min = -20, .max = 20});
+    scene.hair_shading.roughness_deg =
+        h.Number("roughness_deg", scene.hair_shading.roughness_deg, {.min = 1, .max = 45});
   }
   const ConfigNode box = root.Child("calib_box");
   box.AllowOnlyKeys({"file", "turntable_from_box"});
@@ -131,17 +163,21 @@ Result<Scene> LoadScene(const std::string& path) {
   scene.turntable_from_box = ReadPoseConfig(box.Child("turntable_from_box"));
   for (const ConfigNode& l : root.Items("lights")) {
     l.AllowOnlyKeys({"name", "position_mm", "intensity"});
-    scene.lights.push_back({l.String("name"), l.Vec3("position_mm"), l.Number("intensity", 1.0, {.min = 0})});
+    scene.lights.push_back(
+        {l.String("name"), l.Vec3("position_mm"), l.Number("intensity", 1.0, {.min = 0})});
   }
   for (const ConfigNode& c : root.Items("cameras")) scene.cameras.push_back(ReadCamera(c));
   scene.backdrop_albedo = root.Vec3("backdrop_albedo", scene.backdrop_albedo);
   scene.ambient = root.Number("ambient", scene.ambient, {.min = 0, .max = 1});
   if (root.Has("turntable")) {
     const ConfigNode t = root.Child("turntable");
-    t.AllowOnlyKeys({"stops", "speed_deg_s", "accel_deg_s2", "settle_s", "camera_readout_s", "camera_download_s"});
+    t.AllowOnlyKeys({"stops", "speed_deg_s", "accel_deg_s2", "settle_s", "camera_readout_s",
+                     "camera_download_s"});
     scene.turntable_stops = t.Integer("stops", scene.turntable_stops, {.min = 1, .max = 3600});
-    scene.turntable_speed_deg_s = t.Number("speed_deg_s", scene.turntable_speed_deg_s, {.min = 0.01});
-    scene.turntable_accel_deg_s2 = t.Number("accel_deg_s2", scene.turntable_accel_deg_s2, {.min = 0.01});
+    scene.turntable_speed_deg_s =
+        t.Number("speed_deg_s", scene.turntable_speed_deg_s, {.min = 0.01});
+    scene.turntable_accel_deg_s2 =
+        t.Number("accel_deg_s2", scene.turntable_accel_deg_s2, {.min = 0.01});
     scene.turntable_settle_s = t.Number("settle_s", scene.turntable_settle_s, {.min = 0});
     scene.camera_readout_s = t.Number("camera_readout_s", scene.camera_readout_s, {.min = 0});
     scene.camera_download_s = t.Number("camera_download_s", scene.camera_download_s, {.min = 0});
@@ -156,15 +192,18 @@ Status ValidateScene(const Scene& scene) {
   if (scene.cameras.empty()) return InvalidArgument(scene.path + ": the scene has no cameras");
   const Eigen::Vector3d half = 0.5 * scene.box.size_mm;
   for (const SceneCamera& cam : scene.cameras) {
-    HR_RETURN_IF_ERROR(cam.intrinsics.Validate().WithContext(scene.path + ": camera " + cam.serial));
+    HR_RETURN_IF_ERROR(
+        cam.intrinsics.Validate().WithContext(scene.path + ": camera " + cam.serial));
     for (int stop = 0; stop < scene.turntable_stops; ++stop) {
-      const Rigid3d cam_from_box =
-          cam.cam_from_world * WorldFromTurntable(scene.StopAngleDeg(stop)) * scene.turntable_from_box;
+      const Rigid3d cam_from_box = cam.cam_from_world *
+                                   WorldFromTurntable(scene.StopAngleDeg(stop)) *
+                                   scene.turntable_from_box;
       for (const Eigen::Vector3d& p_box : BoxCornerPoints(half)) {
         if ((cam_from_box * p_box).z() < 10.0) {
-          return InvalidArgument(scene.path + ": camera " + cam.serial + " has the calibration box behind it (or " +
-                                 "closer than 10 mm) at turntable stop " + std::to_string(stop) +
-                                 ": check calib_box.turntable_from_box and the camera's eye_mm/target_mm");
+          return InvalidArgument(
+              scene.path + ": camera " + cam.serial + " has the calibration box behind it (or " +
+              "closer than 10 mm) at turntable stop " + std::to_string(stop) +
+              ": check calib_box.turntable_from_box and the camera's eye_mm/target_mm");
         }
       }
     }
@@ -175,11 +214,14 @@ Status ValidateScene(const Scene& scene) {
   for (const Eigen::Vector3d& p_box : BoxCornerPoints(half)) {
     box_bottom_mm = std::min(box_bottom_mm, (scene.turntable_from_box * p_box).z());
   }
-  const double crown_mm = scene.head.center_turntable_mm.z() + scene.head.radii_mm.z() + kHairOnCrownMm;
+  const double crown_mm =
+      scene.head.center_turntable_mm.z() + scene.head.radii_mm.z() + kHairOnCrownMm;
   if (box_bottom_mm < crown_mm) {
-    return InvalidArgument(scene.path + ": the calibration box (lowest corner at z = " + std::to_string(box_bottom_mm) +
-                           " mm) does not hang clear of the head and its hair (crown at z = " +
-                           std::to_string(crown_mm) + " mm): raise calib_box.turntable_from_box.translation_mm");
+    return InvalidArgument(
+        scene.path +
+        ": the calibration box (lowest corner at z = " + std::to_string(box_bottom_mm) +
+        " mm) does not hang clear of the head and its hair (crown at z = " +
+        std::to_string(crown_mm) + " mm): raise calib_box.turntable_from_box.translation_mm");
   }
   for (const SceneLight& l : scene.lights) {
     if (l.name.empty()) return InvalidArgument(scene.path + ": a light has no name");

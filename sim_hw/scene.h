@@ -3,10 +3,9 @@
 // a default so a scene file states only what it changes.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/calib_box.h"
 #include "core/camera_model.h"
@@ -35,9 +34,9 @@ struct WigOptions {
   double scalp_min_elevation_deg = -5;
   Eigen::Vector3d face_dir{0, -1, 0};
   double face_half_angle_deg = 55;
-  double wave_amplitude_mm = 4;   // wavy
+  double wave_amplitude_mm = 4;  // wavy
   double wave_period_mm = 35;
-  double curl_radius_mm = 5;      // curly: ringlets of twice this diameter
+  double curl_radius_mm = 5;  // curly: ringlets of twice this diameter
   double curl_pitch_mm = 14;
   // Wisps: strands clumped around `wisps` wisp centres (0: every strand on its
   // own). A member keeps its root's offset from the wisp's root in the wisp's
@@ -46,10 +45,10 @@ struct WigOptions {
   int wisps = 0;
   ClumpProfile clump_profile = ClumpProfile::kTip;
   double clump = 0.7;
-  double frizz_mm = 0;            // random sideways wander of each fibre, growing to this at the tip
-  double flyaway_fraction = 0;    // share of strands that leave their wisp in a loose arc
-  double flyaway_mm = 25;         // how far a flyaway's tip strays
-  double comb = 0.6;              // how strongly hair leaves the parting sideways (0..2)
+  double frizz_mm = 0;          // random sideways wander of each fibre, growing to this at the tip
+  double flyaway_fraction = 0;  // share of strands that leave their wisp in a loose arc
+  double flyaway_mm = 25;       // how far a flyaway's tip strays
+  double comb = 0.6;            // how strongly hair leaves the parting sideways (0..2)
   // Bangs (style kBangs): strands rooted within `bangs_depth_deg` above the
   // front hairline (and within 60 deg of the face) fall forward over the
   // forehead, `bangs_length_mm` long; the rest falls as straight hair.
@@ -74,28 +73,29 @@ struct HairShading {
   Model model = Model::kMarschner;
   // Deep opacity maps from each LED panel: the hair shadows itself and the head.
   bool shadows = true;
-  double cuticle_tilt_deg = -5;   // alpha: R shifts by alpha, TT by -alpha/2, TRT by -3 alpha/2 (towards the root)
-  double roughness_deg = 7;       // beta: R's longitudinal width; TT beta/2, TRT 2 beta
+  double cuticle_tilt_deg =
+      -5;  // alpha: R shifts by alpha, TT by -alpha/2, TRT by -3 alpha/2 (towards the root)
+  double roughness_deg = 7;  // beta: R's longitudinal width; TT beta/2, TRT 2 beta
 };
 
 struct SceneLight {
-  std::string name;                 // "top", "bottom": matched to Light devices
+  std::string name;  // "top", "bottom": matched to Light devices
   Eigen::Vector3d position_world_mm{0, 0, 1000};
-  double intensity = 1.0;           // relative radiance scale
+  double intensity = 1.0;  // relative radiance scale
 };
 
 struct SceneCamera {
-  std::string serial;               // matched to Camera devices by serial
+  std::string serial;  // matched to Camera devices by serial
   CameraIntrinsics intrinsics;
   Rigid3d cam_from_world;
-  double read_noise_dn = 1.5;       // std dev of additive noise, 8-bit DN
-  double shot_noise_gain = 0.04;    // shot-noise variance per DN of signal
-  double exposure_s = 0.02;         // nominal exposure
-  double sensitivity = 50.0;        // DN per unit radiance per second / 255
+  double read_noise_dn = 1.5;     // std dev of additive noise, 8-bit DN
+  double shot_noise_gain = 0.04;  // shot-noise variance per DN of signal
+  double exposure_s = 0.02;       // nominal exposure
+  double sensitivity = 50.0;      // DN per unit radiance per second / 255
 };
 
 struct Scene {
-  std::string path;                 // file it came from (for messages)
+  std::string path;  // file it came from (for messages)
   std::string name;
   uint64_t seed = 1;
   HeadSpec head;
@@ -106,7 +106,7 @@ struct Scene {
   std::vector<SceneLight> lights;
   std::vector<SceneCamera> cameras;
   Eigen::Vector3d backdrop_albedo{0.08, 0.42, 0.12};  // keying green
-  double ambient = 0.04;            // fraction of light from the room (0 when all panels are off)
+  double ambient = 0.04;  // fraction of light from the room (0 when all panels are off)
   int turntable_stops = 19;
   // Realistic timings, scaled by the rig's time_scale in the simulated devices.
   double turntable_speed_deg_s = 30;

@@ -6,10 +6,9 @@
 #include <chrono>
 #include <deque>
 #include <mutex>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <thread>
-
-#include <opencv2/imgproc.hpp>
 
 #include "sim_hw/gvcp_guard.h"
 #include "sim_hw/sim_devices.h"
@@ -35,7 +34,8 @@ class SimAravisFeed::Impl {
 
   void Detach() {
     detaching_ = true;  // a fill waiting for its trigger gives up
-    if (subscription_ != 0) WorldTriggers(*world_).Unsubscribe(options_.trigger_line, subscription_);
+    if (subscription_ != 0)
+      WorldTriggers(*world_).Unsubscribe(options_.trigger_line, subscription_);
     subscription_ = 0;
     if (fake_ == nullptr) return;
     arv_fake_camera_set_fill_pattern(fake_, nullptr, nullptr);  // back to Aravis' own pattern
@@ -51,9 +51,11 @@ class SimAravisFeed::Impl {
     fake_gates_triggers_ = fake_gates_triggers;
     fake_ = static_cast<ArvFakeCamera*>(g_object_ref(fake));
     arv_fake_camera_set_trigger_frequency(fake, 1000.0);
-    if (options_.render || !fake_gates_triggers) arv_fake_camera_set_fill_pattern(fake, &Impl::Fill, this);
+    if (options_.render || !fake_gates_triggers)
+      arv_fake_camera_set_fill_pattern(fake, &Impl::Fill, this);
     if (!options_.trigger_line.empty()) {
-      subscription_ = WorldTriggers(*world_).Subscribe(options_.trigger_line, [this] { OnPulse(); });
+      subscription_ =
+          WorldTriggers(*world_).Subscribe(options_.trigger_line, [this] { OnPulse(); });
     }
   }
 
@@ -123,7 +125,8 @@ class SimAravisFeed::Impl {
     }
   }
 
-  static void Fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 gain, ArvPixelFormat format) {
+  static void Fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 gain,
+                   ArvPixelFormat format) {
     static_cast<Impl*>(data)->Render(buffer, exposure_time_us, gain, format);
   }
 
@@ -146,14 +149,21 @@ class SimAravisFeed::Impl {
     const int h = arv_buffer_get_image_height(buffer);
     auto* out = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
     const uint64_t sequence = static_cast<uint64_t>(frames_.fetch_add(1));
-    auto image = RenderWorldExposure(*world_, options_.scene_camera, exposure, exposure_time_us * 1e-6,
-                                     static_cast<double>(gain), FrameNoiseSeed(*world_, options_.serial, sequence));
-    if (!image.ok() || out == nullptr) return;  // the buffer keeps the fake's status; the client sees no image
+    auto image = RenderWorldExposure(*world_, options_.scene_camera, exposure,
+                                     exposure_time_us * 1e-6, static_cast<double>(gain),
+                                     FrameNoiseSeed(*world_, options_.serial, sequence));
+    if (!image.ok() || out == nullptr)
+      return;  // the buffer keeps the fake's status; the client sees no image
     cv::Mat converted;
     int type = CV_8UC1;
     switch (format) {
-      case ARV_PIXEL_FORMAT_RGB_8_PACKED: cv::cvtColor(*image, converted, cv::COLOR_BGR2RGB); type = CV_8UC3; break;
-      case ARV_PIXEL_FORMAT_BAYER_RG_8: converted = MosaicRGGB(*image); break;
+      case ARV_PIXEL_FORMAT_RGB_8_PACKED:
+        cv::cvtColor(*image, converted, cv::COLOR_BGR2RGB);
+        type = CV_8UC3;
+        break;
+      case ARV_PIXEL_FORMAT_BAYER_RG_8:
+        converted = MosaicRGGB(*image);
+        break;
       case ARV_PIXEL_FORMAT_MONO_16: {
         cv::Mat grey;
         cv::cvtColor(*image, grey, cv::COLOR_BGR2GRAY);
@@ -161,7 +171,9 @@ class SimAravisFeed::Impl {
         type = CV_16UC1;
         break;
       }
-      default: cv::cvtColor(*image, converted, cv::COLOR_BGR2GRAY); break;
+      default:
+        cv::cvtColor(*image, converted, cv::COLOR_BGR2GRAY);
+        break;
     }
     // Width, height and pixel format are registers a GigE client writes; the
     // buffer holds at least what the fake computes from them, which may wrap.
@@ -189,7 +201,9 @@ class SimAravisFeed::Impl {
 SimAravisFeed::SimAravisFeed(std::shared_ptr<SimWorld> world, SimAravisOptions options)
     : impl_(std::make_unique<Impl>(std::move(world), std::move(options))) {}
 SimAravisFeed::~SimAravisFeed() = default;
-void SimAravisFeed::Attach(ArvFakeCamera* fake, bool fake_gates_triggers) { impl_->Attach(fake, fake_gates_triggers); }
+void SimAravisFeed::Attach(ArvFakeCamera* fake, bool fake_gates_triggers) {
+  impl_->Attach(fake, fake_gates_triggers);
+}
 int SimAravisFeed::frames_rendered() const { return impl_->frames(); }
 
 Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptions& options) {
@@ -200,7 +214,8 @@ Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptio
     g_clear_error(&error);
     return Internal("Aravis fake device " + options.serial + ": " + text);
   }
-  feed.Attach(arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(device)), /*fake_gates_triggers=*/false);
+  feed.Attach(arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(device)),
+              /*fake_gates_triggers=*/false);
   ArvCamera* camera = arv_camera_new_with_device(device, &error);
   g_object_unref(device);  // the camera holds it
   if (camera == nullptr) {
@@ -213,9 +228,11 @@ Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptio
 
 class SimGigECamera::Impl {
  public:
-  Impl(std::shared_ptr<SimWorld> world, const SimAravisOptions& opts) : feed(std::move(world), opts), options(opts) {}
+  Impl(std::shared_ptr<SimWorld> world, const SimAravisOptions& opts)
+      : feed(std::move(world), opts), options(opts) {}
   ~Impl() {
-    if (gv != nullptr) g_object_unref(gv);  // stops serving; the feed releases the fake camera after
+    if (gv != nullptr)
+      g_object_unref(gv);  // stops serving; the feed releases the fake camera after
   }
   SimAravisFeed feed;
   SimAravisOptions options;
@@ -229,7 +246,8 @@ Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimW
   const std::set<int> before = OpenDescriptors();
   impl->gv = arv_gv_fake_camera_new(impl->address.c_str(), options.serial.c_str());
   if (impl->gv == nullptr || !arv_gv_fake_camera_is_running(impl->gv)) {
-    return Unavailable("simulated GigE Vision camera " + options.serial + ": Aravis cannot serve on " + impl->address +
+    return Unavailable("simulated GigE Vision camera " + options.serial +
+                       ": Aravis cannot serve on " + impl->address +
                        ":3956 (is the loopback interface up?)");
   }
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl->gv);
@@ -239,9 +257,14 @@ Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimW
                                 ARV_FAKE_CAMERA_MEMORY_SIZE};
   HR_RETURN_IF_ERROR(GuardGvFakeSockets(before, impl->address, limits).status());
   // The fake starts at 512 x 512; a client sees the scene camera's full frame.
-  const auto& intrinsics = WorldRenderer(*world).scene().cameras.at(static_cast<size_t>(options.scene_camera)).intrinsics;
-  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, static_cast<guint32>(intrinsics.width_px));
-  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, static_cast<guint32>(intrinsics.height_px));
+  const auto& intrinsics = WorldRenderer(*world)
+                               .scene()
+                               .cameras.at(static_cast<size_t>(options.scene_camera))
+                               .intrinsics;
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH,
+                                 static_cast<guint32>(intrinsics.width_px));
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT,
+                                 static_cast<guint32>(intrinsics.height_px));
   impl->feed.Attach(fake, /*fake_gates_triggers=*/true);
   return std::unique_ptr<SimGigECamera>(new SimGigECamera(std::move(impl)));
 }

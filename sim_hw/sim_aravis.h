@@ -40,7 +40,7 @@ struct SimAravisOptions {
   std::string serial;        // the camera's serial (DeviceSerialNumber)
   int scene_camera = 0;      // the scene camera whose view it renders
   std::string trigger_line;  // world trigger line wired to Line0; "" for none
-  bool render = true;        // false: Aravis' own test pattern (to time the transport alone; GigE only)
+  bool render = true;  // false: Aravis' own test pattern (to time the transport alone; GigE only)
 };
 
 // Renders the world into one fake camera's buffers. Keep it alive as long
@@ -75,7 +75,8 @@ class SimGigECamera {
   // Unavailable when Aravis cannot serve on 127.0.0.1. Two GigE fakes on one
   // machine both bind port 3956 and steal each other's packets: run one at a
   // time (tests hold the ctest resource lock gige_fake_port).
-  static Result<std::unique_ptr<SimGigECamera>> Start(std::shared_ptr<SimWorld> world, SimAravisOptions options);
+  static Result<std::unique_ptr<SimGigECamera>> Start(std::shared_ptr<SimWorld> world,
+                                                      SimAravisOptions options);
   ~SimGigECamera();
   const std::string& address() const;  // "127.0.0.1"
   const std::string& serial() const;

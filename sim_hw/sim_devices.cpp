@@ -5,9 +5,8 @@
 #include <deque>
 #include <map>
 #include <mutex>
-#include <thread>
-
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "drivers/always_present_device.h"
 #include "drivers/camera_support.h"
@@ -31,9 +30,12 @@ double TrapezoidPosition(double distance, const MotionProfile& p, double t) {
   const double t_acc = std::min(speed / accel, 0.5 * duration);
   const double peak = accel * t_acc;
   double pos;
-  if (t < t_acc) pos = 0.5 * accel * t * t;
-  else if (t < duration - t_acc) pos = 0.5 * peak * t_acc + peak * (t - t_acc);
-  else pos = d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
+  if (t < t_acc)
+    pos = 0.5 * accel * t * t;
+  else if (t < duration - t_acc)
+    pos = 0.5 * peak * t_acc + peak * (t - t_acc);
+  else
+    pos = d - 0.5 * accel * std::pow(std::max(0.0, duration - t), 2);
   return std::copysign(std::min(pos, d), distance);
 }
 }  // namespace
@@ -53,7 +55,8 @@ class SimWorld {
   // --- fault injection --------------------------------------------------
   // Counts one more event of `device` ("" for the turntable) and returns the
   // first configured fault of `kind` that hits it, or nullptr.
-  const SimFault* NextEventFault(const std::string& device, std::initializer_list<SimFaultKind> kinds) {
+  const SimFault* NextEventFault(const std::string& device,
+                                 std::initializer_list<SimFaultKind> kinds) {
     std::lock_guard<std::mutex> lock(mutex_);
     const int event = ++event_counts_[device];
     for (const SimFault& f : options_.faults) {
@@ -76,7 +79,8 @@ class SimWorld {
 
   // Sleeps `sim_seconds` of simulated time.
   void SleepSim(double sim_seconds) const {
-    if (sim_seconds > 0) std::this_thread::sleep_for(std::chrono::duration<double>(sim_seconds * options_.time_scale));
+    if (sim_seconds > 0)
+      std::this_thread::sleep_for(std::chrono::duration<double>(sim_seconds * options_.time_scale));
   }
   double SimSecondsSince(Clock::time_point t0) const {
     return std::chrono::duration<double>(Clock::now() - t0).count() / options_.time_scale;
@@ -125,8 +129,10 @@ class SimWorld {
   using InputFn = std::function<void(bool)>;
   void SetInputCallback(const std::string& line, InputFn fn) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (fn) input_callbacks_[line] = std::move(fn);
-    else input_callbacks_.erase(line);
+    if (fn)
+      input_callbacks_[line] = std::move(fn);
+    else
+      input_callbacks_.erase(line);
   }
   bool InputActive() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -178,7 +184,8 @@ class SimWorld {
 
   void SetTruthRecorder(WorldTruthRecorder recorder) {
     std::lock_guard<std::mutex> lock(mutex_);
-    truth_recorder_ = recorder ? std::make_shared<const WorldTruthRecorder>(std::move(recorder)) : nullptr;
+    truth_recorder_ =
+        recorder ? std::make_shared<const WorldTruthRecorder>(std::move(recorder)) : nullptr;
   }
   std::shared_ptr<const WorldTruthRecorder> truth_recorder() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -192,14 +199,16 @@ class SimWorld {
     WorldExposure world;
     cv::Mat3f radiance;
   };
-  std::shared_ptr<const CachedRadiance> CachedRadianceFor(int scene_camera, const WorldExposure& exposure) const {
+  std::shared_ptr<const CachedRadiance> CachedRadianceFor(int scene_camera,
+                                                          const WorldExposure& exposure) const {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto it = radiance_cache_.find(scene_camera);
     if (it == radiance_cache_.end() || !SameWorld(it->second->world, exposure)) return nullptr;
     return it->second;
   }
   void CacheRadiance(int scene_camera, const WorldExposure& exposure, cv::Mat3f radiance) const {
-    auto entry = std::make_shared<const CachedRadiance>(CachedRadiance{exposure, std::move(radiance)});
+    auto entry =
+        std::make_shared<const CachedRadiance>(CachedRadiance{exposure, std::move(radiance)});
     std::lock_guard<std::mutex> lock(mutex_);
     radiance_cache_[scene_camera] = std::move(entry);
   }
@@ -231,7 +240,8 @@ class SimWorld {
   mutable std::map<int, std::shared_ptr<const CachedRadiance>> radiance_cache_;
 };
 
-Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options) {
+Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene,
+                                                 const SimWorldOptions& options) {
   if (!(options.time_scale > 0) || !std::isfinite(options.time_scale)) {
     return InvalidArgument("sim time_scale must be a positive number (1 = real time)");
   }
@@ -248,9 +258,13 @@ std::shared_ptr<CaptureStorage> MakeWorldCaptureStorage(const SimWorld& world) {
   options.frame_files = full->at;
   return std::make_shared<QuotaStorage>(options);
 }
-SimTurntableController& WorldTurntableController(SimWorld& world) { return world.turntable_controller(); }
+SimTurntableController& WorldTurntableController(SimWorld& world) {
+  return world.turntable_controller();
+}
 TriggerBus& WorldTriggers(SimWorld& world) { return world.triggers(); }
-void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder) { world.SetTruthRecorder(std::move(recorder)); }
+void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder) {
+  world.SetTruthRecorder(std::move(recorder));
+}
 Status SetWorldLightLevel(SimWorld& world, const std::string& light, double level) {
   return world.SetLightLevel(light, level);
 }
@@ -259,8 +273,9 @@ WorldExposure ExposeWorldNow(const SimWorld& world) {
   return {world.AngleDeg(), world.LightLevels(), SteadyNowNs()};
 }
 
-Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
-                                    double exposure_s, double gain_db, uint64_t noise_seed) {
+Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera,
+                                    const WorldExposure& exposure, double exposure_s,
+                                    double gain_db, uint64_t noise_seed) {
   RenderOptions o;
   o.light_levels = exposure.light_levels;
   o.exposure_s = exposure_s;
@@ -275,7 +290,8 @@ Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, con
   }
   o.ground_truth = recorder != nullptr;
   o.keep_radiance = true;
-  HR_ASSIGN_OR_RETURN(RenderedView view, world.renderer().Render(scene_camera, exposure.angle_deg, o));
+  HR_ASSIGN_OR_RETURN(RenderedView view,
+                      world.renderer().Render(scene_camera, exposure.angle_deg, o));
   if (recorder) (*recorder)(scene_camera, exposure.angle_deg, view.truth);
   world.CacheRadiance(scene_camera, exposure, std::move(view.radiance));
   return std::move(view.image);
@@ -298,17 +314,20 @@ uint64_t FrameNoiseSeed(const SimWorld& world, const std::string& serial, uint64
 }
 
 const SimFault* NextCameraFault(SimWorld& world, const std::string& serial) {
-  return world.NextEventFault(serial,
-                              {SimFaultKind::kDropFrame, SimFaultKind::kCameraGone, SimFaultKind::kDownloadTimeout});
+  return world.NextEventFault(serial, {SimFaultKind::kDropFrame, SimFaultKind::kCameraGone,
+                                       SimFaultKind::kDownloadTimeout});
 }
 
 // --- the turntable controller ------------------------------------------------
 
 const char* TurntableFaultCodeName(TurntableFaultCode code) {
   switch (code) {
-    case TurntableFaultCode::kNone: return "no fault";
-    case TurntableFaultCode::kStall: return "a stall (following error)";
-    case TurntableFaultCode::kLimit: return "a move beyond the speed or acceleration limits";
+    case TurntableFaultCode::kNone:
+      return "no fault";
+    case TurntableFaultCode::kStall:
+      return "a stall (following error)";
+    case TurntableFaultCode::kLimit:
+      return "a move beyond the speed or acceleration limits";
   }
   return "an unknown fault";
 }
@@ -328,7 +347,8 @@ TurntableFaultCode SimTurntableController::StartMove(double target_deg, const Mo
   double estop_after_s = -1;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!std::isfinite(target_deg) || !(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s) ||
+    if (!std::isfinite(target_deg) ||
+        !(p.speed_deg_s > 0 && p.speed_deg_s <= caps.max_speed_deg_s) ||
         !(p.accel_deg_s2 > 0 && p.accel_deg_s2 <= caps.max_accel_deg_s2)) {
       fault_ = TurntableFaultCode::kLimit;
       return fault_;
@@ -345,8 +365,8 @@ void SimTurntableController::StartHome() {
   double estop_after_s = -1;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    estop_after_s =
-        StartMoveLocked(0.0, {world_.scene().turntable_speed_deg_s, world_.scene().turntable_accel_deg_s2});
+    estop_after_s = StartMoveLocked(
+        0.0, {world_.scene().turntable_speed_deg_s, world_.scene().turntable_accel_deg_s2});
     homing_ = true;
   }
   if (estop_after_s >= 0) world_.ScheduleEstop(estop_after_s);
@@ -362,10 +382,16 @@ double SimTurntableController::StartMoveLocked(double target_deg, const MotionPr
       "", {SimFaultKind::kTurntableTimeout, SimFaultKind::kTurntableStall, SimFaultKind::kEstop});
   if (!fault) return -1;
   switch (fault->kind) {
-    case SimFaultKind::kTurntableTimeout: world_.JamMove(); break;
-    case SimFaultKind::kTurntableStall: stall_after_s_ = 0.5 * move_s; break;
-    case SimFaultKind::kEstop: return 0.2 * move_s;
-    default: break;
+    case SimFaultKind::kTurntableTimeout:
+      world_.JamMove();
+      break;
+    case SimFaultKind::kTurntableStall:
+      stall_after_s_ = 0.5 * move_s;
+      break;
+    case SimFaultKind::kEstop:
+      return 0.2 * move_s;
+    default:
+      break;
   }
   return -1;
 }
@@ -435,12 +461,14 @@ class SimTurntable : public SimDevice<PolledTurntable> {
     HR_RETURN_IF_ERROR(CheckMoveRequest(Describe(), target_deg, p, capabilities()));
     controller_.ClearFault();
     const TurntableFaultCode refused = controller_.StartMove(target_deg, p);
-    if (refused != TurntableFaultCode::kNone) return Fault(DeviceFault(TurntableFaultCodeName(refused)));
+    if (refused != TurntableFaultCode::kNone)
+      return Fault(DeviceFault(TurntableFaultCodeName(refused)));
     MoveStarted(target_deg);
     return Status::Ok();
   }
   Result<TurntableStatus> ReadStatus() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
+    HR_RETURN_IF_ERROR(RequireState(
+        {DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
     const TurntableControllerStatus c = controller_.Poll();
     TurntableStatus s{.position_deg = c.position_deg,
                       .target_deg = target_deg(),
@@ -463,7 +491,8 @@ class SimTurntable : public SimDevice<PolledTurntable> {
     });
   }
   Status Stop() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
+    HR_RETURN_IF_ERROR(
+        RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
     controller_.Stop();
     StopRequested();
     StopDone();
@@ -536,7 +565,9 @@ class SimInputLine : public SimDevice<InputLine> {
 class SimCamera : public SimDevice<Camera> {
  public:
   SimCamera(DeviceInfo info, std::shared_ptr<SimWorld> world, int scene_camera, std::string line)
-      : SimDevice(std::move(info), std::move(world)), scene_camera_(scene_camera), configured_line_(std::move(line)) {
+      : SimDevice(std::move(info), std::move(world)),
+        scene_camera_(scene_camera),
+        configured_line_(std::move(line)) {
     settings_.trigger = configured_line_.empty() ? TriggerSource::kSoftware : TriggerSource::kLine;
     settings_.trigger_line = configured_line_;
     settings_.exposure_s = world_->scene().cameras[static_cast<size_t>(scene_camera_)].exposure_s;
@@ -547,7 +578,8 @@ class SimCamera : public SimDevice<Camera> {
     const auto& intr = world_->scene().cameras[static_cast<size_t>(scene_camera_)].intrinsics;
     return {.width_px = intr.width_px,
             .height_px = intr.height_px,
-            .formats = {PixelFormat::kRgb8, PixelFormat::kBgr8, PixelFormat::kMono8, PixelFormat::kBayerRG8},
+            .formats = {PixelFormat::kRgb8, PixelFormat::kBgr8, PixelFormat::kMono8,
+                        PixelFormat::kBayerRG8},
             .min_exposure_s = 1e-5,
             .max_exposure_s = 2.0,
             .line_trigger = true,
@@ -558,7 +590,8 @@ class SimCamera : public SimDevice<Camera> {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
     const auto caps = capabilities();
     HR_RETURN_IF_ERROR(CheckExposure(*this, caps, s.exposure_s));
-    if (s.format == PixelFormat::kEncoded) return OutOfRange(Describe() + ": delivers raw frames only");
+    if (s.format == PixelFormat::kEncoded)
+      return OutOfRange(Describe() + ": delivers raw frames only");
     if (s.trigger == TriggerSource::kLine && s.trigger_line.empty()) {
       return InvalidArgument(Describe() + ": line trigger needs a trigger_line");
     }
@@ -571,7 +604,8 @@ class SimCamera : public SimDevice<Camera> {
     if (gone_) {
       if (open_failures_left_ > 0) {
         --open_failures_left_;
-        return Unavailable(Describe() + ": not found on the bus (is it connected and switched on?)");
+        return Unavailable(Describe() +
+                           ": not found on the bus (is it connected and switched on?)");
       }
       gone_ = false;
     }
@@ -683,8 +717,10 @@ class SimCamera : public SimDevice<Camera> {
           if (stopping_ || !jobs_.empty()) break;
           auto wake = Clock::time_point::max();
           for (const auto& [due, frame] : late_) wake = std::min(wake, due);
-          if (wake == Clock::time_point::max()) cv_.wait(lock);
-          else cv_.wait_until(lock, wake);
+          if (wake == Clock::time_point::max())
+            cv_.wait(lock);
+          else
+            cv_.wait_until(lock, wake);
         }
         if (stopping_) return;
         job = std::move(jobs_.front());
@@ -694,10 +730,11 @@ class SimCamera : public SimDevice<Camera> {
       Result<Frame> frame = RenderFrame(job);
       // Exposure, readout and download take at least their simulated time.
       const Scene& scene = world_->scene();
-      const double minimum_s =
-          (job.settings.exposure_s + scene.camera_readout_s + scene.camera_download_s + job.extra_delay_s) *
-          world_->time_scale();
-      const auto due = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(minimum_s));
+      const double minimum_s = (job.settings.exposure_s + scene.camera_readout_s +
+                                scene.camera_download_s + job.extra_delay_s) *
+                               world_->time_scale();
+      const auto due = t0 + std::chrono::duration_cast<Clock::duration>(
+                                std::chrono::duration<double>(minimum_s));
       std::unique_lock<std::mutex> lock(mutex_);
       if (job.extra_delay_s > 0) {
         late_.emplace_back(due, std::move(frame));
@@ -714,15 +751,25 @@ class SimCamera : public SimDevice<Camera> {
 
   Result<Frame> RenderFrame(const Job& job) const {
     HR_ASSIGN_OR_RETURN(cv::Mat image,
-                        RenderWorldExposure(*world_, scene_camera_, job.exposure, job.settings.exposure_s,
-                                            job.settings.gain_db, FrameNoiseSeed(*world_, info().serial, job.sequence)));
+                        RenderWorldExposure(*world_, scene_camera_, job.exposure,
+                                            job.settings.exposure_s, job.settings.gain_db,
+                                            FrameNoiseSeed(*world_, info().serial, job.sequence)));
     cv::Mat out;
     switch (job.settings.format) {
-      case PixelFormat::kBgr8: out = image; break;
-      case PixelFormat::kRgb8: cv::cvtColor(image, out, cv::COLOR_BGR2RGB); break;
-      case PixelFormat::kMono8: cv::cvtColor(image, out, cv::COLOR_BGR2GRAY); break;
-      case PixelFormat::kBayerRG8: out = MosaicRGGB(image); break;
-      case PixelFormat::kEncoded: return Internal("encoded output is not simulated");
+      case PixelFormat::kBgr8:
+        out = image;
+        break;
+      case PixelFormat::kRgb8:
+        cv::cvtColor(image, out, cv::COLOR_BGR2RGB);
+        break;
+      case PixelFormat::kMono8:
+        cv::cvtColor(image, out, cv::COLOR_BGR2GRAY);
+        break;
+      case PixelFormat::kBayerRG8:
+        out = MosaicRGGB(image);
+        break;
+      case PixelFormat::kEncoded:
+        return Internal("encoded output is not simulated");
     }
     Frame f;
     f.camera_serial = info().serial;
@@ -772,42 +819,52 @@ class SimCamera : public SimDevice<Camera> {
 
 // A sim device with no fields of its own beyond name, backend and serial.
 template <typename Interface, typename Impl>
-void RegisterFieldlessSimBackend(DeviceRegistry* registry, DeviceKind kind, const std::string& model,
-                                 std::shared_ptr<SimWorld> world) {
-  registry->AddBackend<Interface>(kind, "sim", [world, model](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
-    c.node.AllowOnlyKeys({"name", "backend", "serial"});
-    if (!c.node.ok()) return c.node.status();
-    return std::unique_ptr<Interface>(std::make_unique<Impl>(c.Info(model), world));
-  });
+void RegisterFieldlessSimBackend(DeviceRegistry* registry, DeviceKind kind,
+                                 const std::string& model, std::shared_ptr<SimWorld> world) {
+  registry->AddBackend<Interface>(
+      kind, "sim", [world, model](const DeviceConfig& c) -> Result<std::unique_ptr<Interface>> {
+        c.node.AllowOnlyKeys({"name", "backend", "serial"});
+        if (!c.node.ok()) return c.node.status();
+        return std::unique_ptr<Interface>(std::make_unique<Impl>(c.Info(model), world));
+      });
 }
 
 }  // namespace
 
 void RegisterSimBackends(DeviceRegistry* registry, std::shared_ptr<SimWorld> world) {
-  RegisterFieldlessSimBackend<Turntable, SimTurntable>(registry, DeviceKind::kTurntable, "simulated turntable", world);
-  registry->AddBackend<Light>(DeviceKind::kLight, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
-    c.node.AllowOnlyKeys({"name", "backend", "serial", "light"});
-    const std::string scene_light = c.node.String("light", c.name);
-    if (!c.node.ok()) return c.node.status();
-    bool known = false;
-    for (const SceneLight& l : world->scene().lights) known = known || l.name == scene_light;
-    if (!known) return NotFound("the simulated scene has no light '" + scene_light + "' (set 'light:' to a scene light)");
-    return std::unique_ptr<Light>(std::make_unique<SimLight>(c.Info("simulated LED panel"), world, scene_light));
-  });
-  RegisterFieldlessSimBackend<TriggerLine, SimTriggerLine>(registry, DeviceKind::kTriggerLine, "simulated trigger line",
-                                                           world);
-  RegisterFieldlessSimBackend<InputLine, SimInputLine>(registry, DeviceKind::kInputLine, "simulated e-stop input",
-                                                       world);
-  registry->AddBackend<Camera>(DeviceKind::kCamera, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
-    c.node.AllowOnlyKeys({"name", "backend", "serial", "trigger_line"});
-    const std::string line = c.node.String("trigger_line", "");
-    if (!c.node.ok()) return c.node.status();
-    const int index = world->scene().FindCamera(c.serial);
-    if (index < 0) {
-      return NotFound("the simulated scene (" + world->scene().path + ") has no camera with serial '" + c.serial + "'");
-    }
-    return std::unique_ptr<Camera>(std::make_unique<SimCamera>(c.Info("simulated camera"), world, index, line));
-  });
+  RegisterFieldlessSimBackend<Turntable, SimTurntable>(registry, DeviceKind::kTurntable,
+                                                       "simulated turntable", world);
+  registry->AddBackend<Light>(
+      DeviceKind::kLight, "sim", [world](const DeviceConfig& c) -> Result<std::unique_ptr<Light>> {
+        c.node.AllowOnlyKeys({"name", "backend", "serial", "light"});
+        const std::string scene_light = c.node.String("light", c.name);
+        if (!c.node.ok()) return c.node.status();
+        bool known = false;
+        for (const SceneLight& l : world->scene().lights) known = known || l.name == scene_light;
+        if (!known)
+          return NotFound("the simulated scene has no light '" + scene_light +
+                          "' (set 'light:' to a scene light)");
+        return std::unique_ptr<Light>(
+            std::make_unique<SimLight>(c.Info("simulated LED panel"), world, scene_light));
+      });
+  RegisterFieldlessSimBackend<TriggerLine, SimTriggerLine>(registry, DeviceKind::kTriggerLine,
+                                                           "simulated trigger line", world);
+  RegisterFieldlessSimBackend<InputLine, SimInputLine>(registry, DeviceKind::kInputLine,
+                                                       "simulated e-stop input", world);
+  registry->AddBackend<Camera>(
+      DeviceKind::kCamera, "sim",
+      [world](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
+        c.node.AllowOnlyKeys({"name", "backend", "serial", "trigger_line"});
+        const std::string line = c.node.String("trigger_line", "");
+        if (!c.node.ok()) return c.node.status();
+        const int index = world->scene().FindCamera(c.serial);
+        if (index < 0) {
+          return NotFound("the simulated scene (" + world->scene().path +
+                          ") has no camera with serial '" + c.serial + "'");
+        }
+        return std::unique_ptr<Camera>(
+            std::make_unique<SimCamera>(c.Info("simulated camera"), world, index, line));
+      });
 }
 
 }  // namespace hairrig

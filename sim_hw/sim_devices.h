@@ -37,9 +37,10 @@ struct SimWorldOptions {
 };
 
 // Creates the world (renderer included) for `scene`.
-Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene, const SimWorldOptions& options);
+Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene,
+                                                 const SimWorldOptions& options);
 const Renderer& WorldRenderer(const SimWorld& world);
-double WorldTimeScale(const SimWorld& world);  // wall seconds per simulated second
+double WorldTimeScale(const SimWorld& world);          // wall seconds per simulated second
 double WorldTurntableAngleDeg(const SimWorld& world);  // measured angle now
 // The disk the world's captures are written to: with a `disk_full` fault, a
 // new QuotaStorage (sim_hw/quota_storage.h) that holds the fault's `at` frame
@@ -65,7 +66,8 @@ struct WorldExposure {
 WorldExposure ExposeWorldNow(const SimWorld& world);
 // Called with the ground-truth maps of every frame a simulated camera renders
 // (scene camera index, turntable angle in deg), on the camera's thread.
-using WorldTruthRecorder = std::function<void(int scene_camera, double turntable_deg, const ViewTruthMaps& maps)>;
+using WorldTruthRecorder =
+    std::function<void(int scene_camera, double turntable_deg, const ViewTruthMaps& maps)>;
 // Installs `recorder` (empty: none). Frames rendered while one is installed
 // also compute their maps.
 void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder);
@@ -74,8 +76,9 @@ void SetWorldTruthRecorder(SimWorld& world, WorldTruthRecorder recorder);
 // radiance is kept: a frame of the same turntable angle and light levels is
 // only exposed again (bit-identical to a new render), unless a truth recorder
 // is installed.
-Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera, const WorldExposure& exposure,
-                                    double exposure_s, double gain_db, uint64_t noise_seed);
+Result<cv::Mat> RenderWorldExposure(const SimWorld& world, int scene_camera,
+                                    const WorldExposure& exposure, double exposure_s,
+                                    double gain_db, uint64_t noise_seed);
 // The RGGB Bayer mosaic a colour sensor would record of an 8-bit BGR image.
 cv::Mat MosaicRGGB(const cv::Mat& bgr);
 // Noise seed of frame `sequence` of camera `serial`: distinct per camera and frame.

@@ -66,7 +66,8 @@ const std::string& Message::field(size_t i) const {
   return i < fields.size() ? fields[i] : kEmpty;
 }
 
-IoResult WriteMessage(int fd, uint64_t id, const std::vector<std::string>& fields, const std::string& payload) {
+IoResult WriteMessage(int fd, uint64_t id, const std::vector<std::string>& fields,
+                      const std::string& payload) {
   std::string header = std::to_string(id) + '\t';
   for (const std::string& f : fields) header += Clean(f) + '\t';
   header += std::to_string(payload.size()) + '\n';

@@ -40,11 +40,11 @@ inline constexpr const char* kStorageFolder = "/store_00010001";
 inline constexpr const char* kImageFolder = "/store_00010001/DCIM/100HRSIM";
 
 // Error kinds of an ERR reply; the camlib maps each to a libgphoto2 result.
-inline constexpr const char* kErrBusy = "busy";          // GP_ERROR_CAMERA_BUSY
-inline constexpr const char* kErrClaimed = "claimed";    // GP_ERROR_IO_USB_CLAIM
-inline constexpr const char* kErrNotFound = "not_found"; // GP_ERROR_FILE_NOT_FOUND
-inline constexpr const char* kErrBadValue = "bad_value"; // GP_ERROR_BAD_PARAMETERS
-inline constexpr const char* kErrIo = "io";              // GP_ERROR_IO
+inline constexpr const char* kErrBusy = "busy";           // GP_ERROR_CAMERA_BUSY
+inline constexpr const char* kErrClaimed = "claimed";     // GP_ERROR_IO_USB_CLAIM
+inline constexpr const char* kErrNotFound = "not_found";  // GP_ERROR_FILE_NOT_FOUND
+inline constexpr const char* kErrBadValue = "bad_value";  // GP_ERROR_BAD_PARAMETERS
+inline constexpr const char* kErrIo = "io";               // GP_ERROR_IO
 
 struct Message {
   uint64_t id = 0;
@@ -58,7 +58,8 @@ enum class IoResult { kOk, kTimeout, kClosed, kMalformed };
 
 // Writes one message; tabs and newlines inside fields become spaces.
 // kClosed when the peer is gone.
-IoResult WriteMessage(int fd, uint64_t id, const std::vector<std::string>& fields, const std::string& payload = {});
+IoResult WriteMessage(int fd, uint64_t id, const std::vector<std::string>& fields,
+                      const std::string& payload = {});
 // Reads one message, waiting at most `timeout_ms` (< 0: no limit) for each
 // chunk to arrive. A header over 64 KiB or a payload over 1 GiB is kMalformed.
 IoResult ReadMessage(int fd, int timeout_ms, Message* out);

@@ -7,18 +7,17 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <condition_variable>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <thread>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
@@ -32,9 +31,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-const std::vector<std::string> kShutterSpeeds = {"1/4000", "1/2000", "1/1000", "1/500", "1/250", "1/125", "1/100",
-                                                 "1/60",   "1/50",   "1/30",   "1/15",  "1/8",   "1/4",   "1/2",
-                                                 "1",      "2"};
+const std::vector<std::string> kShutterSpeeds = {
+    "1/4000", "1/2000", "1/1000", "1/500", "1/250", "1/125", "1/100", "1/60",
+    "1/50",   "1/30",   "1/15",   "1/8",   "1/4",   "1/2",   "1",     "2"};
 const std::vector<std::string> kIsoValues = {"100", "200", "400", "800", "1600", "3200", "6400"};
 const std::vector<std::string> kApertures = {"2.8", "4", "5.6", "8", "11", "16"};
 const std::vector<std::string> kImageFormats = {"Large Fine JPEG", "Large Normal JPEG"};
@@ -55,7 +54,9 @@ double ShutterSeconds(const std::string& text) {
 std::string NearestShutterSpeed(double seconds) {
   std::string best = kShutterSpeeds.front();
   for (const std::string& s : kShutterSpeeds) {
-    if (std::abs(std::log(ShutterSeconds(s) / seconds)) < std::abs(std::log(ShutterSeconds(best) / seconds))) best = s;
+    if (std::abs(std::log(ShutterSeconds(s) / seconds)) <
+        std::abs(std::log(ShutterSeconds(best) / seconds)))
+      best = s;
   }
   return best;
 }
@@ -84,10 +85,12 @@ class SimDslrServer::Impl {
     config_ = {
         {"iso", "ISO Speed", "imgsettings", false, "100", kIsoValues},
         {"shutterspeed", "Shutter Speed", "capturesettings", false,
-         NearestShutterSpeed(scene.cameras[static_cast<size_t>(options_.scene_camera)].exposure_s), kShutterSpeeds},
+         NearestShutterSpeed(scene.cameras[static_cast<size_t>(options_.scene_camera)].exposure_s),
+         kShutterSpeeds},
         {"aperture", "Aperture", "capturesettings", false, "8", kApertures},
         {"imageformat", "Image Format", "imgsettings", false, kImageFormats.front(), kImageFormats},
-        {"capturetarget", "Capture Target", "settings", false, kCaptureTargets.front(), kCaptureTargets},
+        {"capturetarget", "Capture Target", "settings", false, kCaptureTargets.front(),
+         kCaptureTargets},
         {"serialnumber", "Serial Number", "status", true, options_.serial, {}},
         {"cameramodel", "Camera Model", "status", true, proto::kModel, {}},
         {"manufacturer", "Camera Manufacturer", "status", true, "hairrig", {}},
@@ -96,21 +99,26 @@ class SimDslrServer::Impl {
 
   Status Listen() {
     socket_path_ = proto::SocketPathForPort(options_.folder);
-    if (socket_path_.empty()) return InvalidArgument("simulated DSLR: folder path too long for a Unix socket: " + options_.folder);
+    if (socket_path_.empty())
+      return InvalidArgument("simulated DSLR: folder path too long for a Unix socket: " +
+                             options_.folder);
     std::error_code ec;
     std::filesystem::remove(socket_path_, ec);
     listen_fd_ = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
     std::memcpy(address.sun_path, socket_path_.c_str(), socket_path_.size() + 1);
-    if (listen_fd_ < 0 || bind(listen_fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) != 0 ||
+    if (listen_fd_ < 0 ||
+        bind(listen_fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) != 0 ||
         listen(listen_fd_, 8) != 0) {
-      return IoError("simulated DSLR: cannot listen on " + socket_path_ + ": " + std::strerror(errno));
+      return IoError("simulated DSLR: cannot listen on " + socket_path_ + ": " +
+                     std::strerror(errno));
     }
     accept_thread_ = std::thread([this] { AcceptLoop(); });
     shooter_thread_ = std::thread([this] { ShooterLoop(); });
     if (!options_.trigger_line.empty()) {
-      subscription_ = WorldTriggers(*world_).Subscribe(options_.trigger_line, [this] { QueueShot(); });
+      subscription_ =
+          WorldTriggers(*world_).Subscribe(options_.trigger_line, [this] { QueueShot(); });
     }
     return Status::Ok();
   }
@@ -124,7 +132,8 @@ class SimDslrServer::Impl {
       stopped_ = true;
       cv_.notify_all();
     }
-    if (subscription_ != 0) WorldTriggers(*world_).Unsubscribe(options_.trigger_line, subscription_);
+    if (subscription_ != 0)
+      WorldTriggers(*world_).Unsubscribe(options_.trigger_line, subscription_);
     shutdown(listen_fd_, SHUT_RDWR);
     if (accept_thread_.joinable()) accept_thread_.join();
     if (shooter_thread_.joinable()) shooter_thread_.join();
@@ -226,8 +235,10 @@ class SimDslrServer::Impl {
       bool hang_up = false;
       {
         std::lock_guard<std::mutex> lock(mutex_);
-        if (TakeInjectedLocked(Fault::kDisconnect)) hang_up = true;
-        else if (TakeInjectedLocked(Fault::kNoReply)) reply = false;
+        if (TakeInjectedLocked(Fault::kDisconnect))
+          hang_up = true;
+        else if (TakeInjectedLocked(Fault::kNoReply))
+          reply = false;
         else if (TakeInjectedLocked(Fault::kBusy)) {
           Reply(client, {"ERR", proto::kErrBusy, "camera busy (injected)"});
           continue;
@@ -285,15 +296,18 @@ class SimDslrServer::Impl {
     return Reply(client, {"ERR", proto::kErrBadValue, "unknown request '" + verb + "'"});
   }
 
-  static bool Reply(const Client* client, const std::vector<std::string>& fields, const std::string& payload = {}) {
-    return proto::WriteMessage(client->fd, client->request_id, fields, payload) == proto::IoResult::kOk;
+  static bool Reply(const Client* client, const std::vector<std::string>& fields,
+                    const std::string& payload = {}) {
+    return proto::WriteMessage(client->fd, client->request_id, fields, payload) ==
+           proto::IoResult::kOk;
   }
 
   bool Hello(Client* client) {
     std::unique_lock<std::mutex> lock(mutex_);
     if (TakeInjectedLocked(Fault::kClaimed)) {
       lock.unlock();
-      Reply(client, {"ERR", proto::kErrClaimed, "the camera is claimed by process 4242 (injected)"});
+      Reply(client,
+            {"ERR", proto::kErrClaimed, "the camera is claimed by process 4242 (injected)"});
       return false;
     }
     if (owner_ != nullptr && owner_ != client) {
@@ -310,7 +324,8 @@ class SimDslrServer::Impl {
     }
     owner_ = client;
     lock.unlock();
-    return Reply(client, {"OK", proto::kModel, options_.serial, std::to_string(options_.reply_timeout_ms)});
+    return Reply(client,
+                 {"OK", proto::kModel, options_.serial, std::to_string(options_.reply_timeout_ms)});
   }
 
   // --- shooting ------------------------------------------------------------
@@ -339,7 +354,8 @@ class SimDslrServer::Impl {
       return false;
     }
     if (fault && fault->kind == SimFaultKind::kDropFrame) shot->drop = true;
-    if (fault && fault->kind == SimFaultKind::kDownloadTimeout) shot->extra_delay_s = fault->delay_s;
+    if (fault && fault->kind == SimFaultKind::kDownloadTimeout)
+      shot->extra_delay_s = fault->delay_s;
     return true;
   }
 
@@ -348,25 +364,29 @@ class SimDslrServer::Impl {
   Result<std::string> Develop(const Shot& shot) {
     const auto t0 = Clock::now();
     const uint64_t sequence = static_cast<uint64_t>(shots());
-    HR_ASSIGN_OR_RETURN(cv::Mat image,
-                        RenderWorldExposure(*world_, options_.scene_camera, shot.exposure, shot.exposure_s,
-                                            shot.gain_db, FrameNoiseSeed(*world_, options_.serial, sequence)));
+    HR_ASSIGN_OR_RETURN(
+        cv::Mat image,
+        RenderWorldExposure(*world_, options_.scene_camera, shot.exposure, shot.exposure_s,
+                            shot.gain_db, FrameNoiseSeed(*world_, options_.serial, sequence)));
     std::vector<uint8_t> jpeg;
     if (!cv::imencode(".jpg", image, jpeg, {cv::IMWRITE_JPEG_QUALITY, shot.jpeg_quality})) {
       return Internal("simulated DSLR " + options_.serial + ": JPEG encoding failed");
     }
     const Scene& scene = WorldRenderer(*world_).scene();
-    const double device_s = shot.exposure_s + scene.camera_readout_s + scene.camera_download_s + shot.extra_delay_s;
+    const double device_s =
+        shot.exposure_s + scene.camera_readout_s + scene.camera_download_s + shot.extra_delay_s;
     std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait_until(lock, t0 + std::chrono::duration_cast<Clock::duration>(
-                                  std::chrono::duration<double>(device_s * WorldTimeScale(*world_))),
+    cv_.wait_until(lock,
+                   t0 + std::chrono::duration_cast<Clock::duration>(
+                            std::chrono::duration<double>(device_s * WorldTimeScale(*world_))),
                    [this] { return stopped_; });
     if (shot.drop) return std::string();
     char name[32];
     std::snprintf(name, sizeof(name), "IMG_%04d.JPG", ++shots_);
     card_[name] = {std::string(jpeg.begin(), jpeg.end()),
                    std::chrono::duration_cast<std::chrono::seconds>(
-                       std::chrono::system_clock::now().time_since_epoch()).count()};
+                       std::chrono::system_clock::now().time_since_epoch())
+                       .count()};
     return std::string(name);
   }
 
@@ -438,12 +458,14 @@ class SimDslrServer::Impl {
     return out;
   }
 
-  bool FileRequest(const Client* client, const std::string& verb, const std::string& folder, const std::string& name) {
+  bool FileRequest(const Client* client, const std::string& verb, const std::string& folder,
+                   const std::string& name) {
     std::unique_lock<std::mutex> lock(mutex_);
     auto it = card_.find(name);
     if (folder != proto::kImageFolder || it == card_.end()) {
       lock.unlock();
-      return Reply(client, {"ERR", proto::kErrNotFound, "no file " + folder + "/" + name + " on the camera"});
+      return Reply(client, {"ERR", proto::kErrNotFound,
+                            "no file " + folder + "/" + name + " on the camera"});
     }
     if (verb == "INFO") {
       const std::vector<std::string> fields = {"OK", std::to_string(it->second.bytes.size()),
@@ -479,7 +501,8 @@ class SimDslrServer::Impl {
       if (std::find(item.choices.begin(), item.choices.end(), value) == item.choices.end()) {
         std::string list;
         for (const auto& c : item.choices) list += (list.empty() ? "" : ", ") + c;
-        return {"ERR", proto::kErrBadValue, "'" + value + "' is not a choice of " + name + " (" + list + ")"};
+        return {"ERR", proto::kErrBadValue,
+                "'" + value + "' is not a choice of " + name + " (" + list + ")"};
       }
       item.value = value;
       return {"OK"};
@@ -517,8 +540,10 @@ Result<std::string> SimDslrCamlibFolder() {
   const char* env = std::getenv("HAIRRIG_CAMLIBS");
   const std::string folder = env != nullptr && *env != '\0' ? env : HAIRRIG_CAMLIB_DIR;
   if (!std::filesystem::exists(std::filesystem::path(folder) / "hairrig_sim_dslr.so")) {
-    return NotFound(folder + " has no hairrig_sim_dslr.so, the simulated DSLR's camlib: build it (ninja -C build "
-                    "hairrig_sim_dslr) or point HAIRRIG_CAMLIBS at the folder holding it");
+    return NotFound(
+        folder +
+        " has no hairrig_sim_dslr.so, the simulated DSLR's camlib: build it (ninja -C build "
+        "hairrig_sim_dslr) or point HAIRRIG_CAMLIBS at the folder holding it");
   }
   return folder;
 }
@@ -529,7 +554,8 @@ Status ExportSimDslrCamlibs() {
   if (current != nullptr && *current != '\0' && std::string(current) != folder) {
     if (!std::filesystem::exists(std::filesystem::path(current) / "hairrig_sim_dslr.so")) {
       return InvalidArgument(std::string("CAMLIBS is set to ") + current +
-                             ", which lacks hairrig_sim_dslr.so: unset CAMLIBS, or set it to " + folder);
+                             ", which lacks hairrig_sim_dslr.so: unset CAMLIBS, or set it to " +
+                             folder);
     }
     return Status::Ok();
   }
@@ -549,7 +575,8 @@ bool SocketListens(const std::string& path) {
   address.sun_family = AF_UNIX;
   std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
   const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  const bool listens = fd >= 0 && connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  const bool listens =
+      fd >= 0 && connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
   if (fd >= 0) close(fd);
   return listens;
 }
@@ -564,7 +591,8 @@ pid_t FolderOwner(const std::filesystem::path& folder) {
 
 bool IsStaleFolder(const std::filesystem::path& folder) {
   struct stat info {};
-  if (lstat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != getuid()) return false;
+  if (lstat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != getuid())
+    return false;
   const pid_t owner = FolderOwner(folder);
   if (owner == 0 || kill(owner, 0) == 0 || errno != ESRCH) return false;
   return !SocketListens((folder / proto::kSocketName).string());
@@ -576,7 +604,9 @@ int RemoveStaleSimDslrFolders(const std::string& parent) {
   int removed = 0;
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(parent, ec)) {
-    if (entry.path().filename().string().rfind(kFolderPrefix, 0) != 0 || !IsStaleFolder(entry.path())) continue;
+    if (entry.path().filename().string().rfind(kFolderPrefix, 0) != 0 ||
+        !IsStaleFolder(entry.path()))
+      continue;
     std::error_code remove_error;
     std::filesystem::remove_all(entry.path(), remove_error);
     if (!remove_error) ++removed;
@@ -584,7 +614,8 @@ int RemoveStaleSimDslrFolders(const std::string& parent) {
   return removed;
 }
 
-Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimWorld> world, SimDslrOptions options) {
+Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimWorld> world,
+                                                            SimDslrOptions options) {
   if (options.serial.empty()) return InvalidArgument("simulated DSLR: a serial number is required");
   const Scene& scene = WorldRenderer(*world).scene();
   if (options.scene_camera < 0 || options.scene_camera >= static_cast<int>(scene.cameras.size())) {
@@ -597,8 +628,8 @@ Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimW
     RemoveStaleSimDslrFolders(parent.string());
     std::string pattern = (parent / (std::string(kFolderPrefix) + "XXXXXX")).string();
     if (mkdtemp(pattern.data()) == nullptr) {
-      return IoError("simulated DSLR " + options.serial + ": cannot make a folder under " + parent.string() + ": " +
-                     std::strerror(errno));
+      return IoError("simulated DSLR " + options.serial + ": cannot make a folder under " +
+                     parent.string() + ": " + std::strerror(errno));
     }
     options.folder = pattern;
     owns_folder = true;
@@ -606,7 +637,9 @@ Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimW
   } else {
     std::error_code ec;
     std::filesystem::create_directories(options.folder, ec);
-    if (ec) return IoError("simulated DSLR " + options.serial + ": cannot make " + options.folder + ": " + ec.message());
+    if (ec)
+      return IoError("simulated DSLR " + options.serial + ": cannot make " + options.folder + ": " +
+                     ec.message());
   }
   auto impl = std::make_unique<Impl>(std::move(world), std::move(options), owns_folder);
   HR_RETURN_IF_ERROR(impl->Listen());
@@ -617,7 +650,9 @@ SimDslrServer::SimDslrServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)
 SimDslrServer::~SimDslrServer() { Stop(); }
 const std::string& SimDslrServer::folder() const { return impl_->options().folder; }
 const std::string& SimDslrServer::serial() const { return impl_->options().serial; }
-std::string SimDslrServer::Describe() const { return "simulated DSLR " + serial() + " at " + port(); }
+std::string SimDslrServer::Describe() const {
+  return "simulated DSLR " + serial() + " at " + port();
+}
 void SimDslrServer::InjectFault(Fault fault, int count) { impl_->InjectFault(fault, count); }
 int SimDslrServer::shots() const { return impl_->shots(); }
 int SimDslrServer::connections() const { return impl_->connections(); }

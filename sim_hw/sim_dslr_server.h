@@ -34,11 +34,11 @@ namespace hairrig {
 class SimWorld;
 
 struct SimDslrOptions {
-  std::string serial;          // the camera's serial number (required)
-  int scene_camera = 0;        // the scene camera whose view it renders
-  std::string trigger_line;    // world trigger line that fires the shutter; "" for none
-  std::string folder;          // the port folder; "" makes a fresh one under $TMPDIR (removed on Stop;
-                               // stale ones of killed processes are removed first)
+  std::string serial;        // the camera's serial number (required)
+  int scene_camera = 0;      // the scene camera whose view it renders
+  std::string trigger_line;  // world trigger line that fires the shutter; "" for none
+  std::string folder;  // the port folder; "" makes a fresh one under $TMPDIR (removed on Stop;
+                       // stale ones of killed processes are removed first)
   int reply_timeout_ms = 30000;  // the camlib's limit on waiting for any reply (told in HELLO)
 };
 
@@ -69,7 +69,8 @@ class SimDslrServer {
 
   // Binds the socket and starts serving. InvalidArgument for a bad scene
   // camera or empty serial; IoError when the folder or socket cannot be made.
-  static Result<std::unique_ptr<SimDslrServer>> Start(std::shared_ptr<SimWorld> world, SimDslrOptions options);
+  static Result<std::unique_ptr<SimDslrServer>> Start(std::shared_ptr<SimWorld> world,
+                                                      SimDslrOptions options);
   ~SimDslrServer();
   SimDslrServer(const SimDslrServer&) = delete;
   SimDslrServer& operator=(const SimDslrServer&) = delete;

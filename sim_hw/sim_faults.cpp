@@ -34,8 +34,9 @@ Result<std::vector<SimFault>> ParseSimFaults(const ConfigNode& faults) {
   for (const ConfigNode& node : faults.OptionalItems("faults")) {
     node.AllowOnlyKeys({"kind", "device", "at", "count", "delay_s"});
     SimFault fault;
-    const std::string kind = node.Choice("kind", {"drop_frame", "camera_gone", "download_timeout", "turntable_timeout",
-                                                   "turntable_stall", "estop", "disk_full"});
+    const std::string kind =
+        node.Choice("kind", {"drop_frame", "camera_gone", "download_timeout", "turntable_timeout",
+                             "turntable_stall", "estop", "disk_full"});
     for (const auto& [k, name] : kKindNames) {
       if (kind == name) fault.kind = k;
     }
@@ -44,7 +45,8 @@ Result<std::vector<SimFault>> ParseSimFaults(const ConfigNode& faults) {
     fault.count = node.Integer("count", 1, {.min = 1});
     fault.delay_s = node.Number("delay_s", fault.delay_s, {.min = 0});
     if (node.ok() && IsCameraFault(fault.kind) && fault.device.empty()) {
-      node.Fail("device", std::string("a ") + kind + " fault needs the serial of the camera it hits");
+      node.Fail("device",
+                std::string("a ") + kind + " fault needs the serial of the camera it hits");
     }
     out.push_back(fault);
   }

@@ -4,7 +4,8 @@
 //
 //   sim:
 //     faults:
-//       - {kind: drop_frame, device: SIM-CAM-UPPER, at: 3}        # 3rd trigger's frame never arrives
+//       - {kind: drop_frame, device: SIM-CAM-UPPER, at: 3}        # 3rd trigger's frame never
+//       arrives
 //       - {kind: camera_gone, device: SIM-CAM-LOWER, at: 5, count: 2}
 //                                 # at its 5th trigger the camera drops off the bus; the next 2
 //                                 # Open() attempts fail, the one after succeeds

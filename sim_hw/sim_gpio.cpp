@@ -8,8 +8,7 @@
 
 namespace hairrig {
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 struct SimGpioProvider::Line {
   bool level = false;
@@ -83,7 +82,8 @@ Result<SimGpioProvider::Line*> SimGpioProvider::Claim(const GpioLineRequest& r, 
       continue;
     }
     if (r.offset < 0 || r.offset >= static_cast<int>(chip->lines.size())) {
-      return OutOfRange(r.Describe() + ": the chip has " + std::to_string(chip->lines.size()) + " lines");
+      return OutOfRange(r.Describe() + ": the chip has " + std::to_string(chip->lines.size()) +
+                        " lines");
     }
     Line& line = *chip->lines[static_cast<size_t>(r.offset)];
     if (!line.consumer.empty()) {
@@ -101,7 +101,8 @@ Result<SimGpioProvider::Line*> SimGpioProvider::Claim(const GpioLineRequest& r, 
     }
     return &line;
   }
-  return NotFound("GPIO chip '" + r.chip + "' not found (simulated chips: " + (known.empty() ? "none" : known) + ")");
+  return NotFound("GPIO chip '" + r.chip +
+                  "' not found (simulated chips: " + (known.empty() ? "none" : known) + ")");
 }
 
 void SimGpioProvider::Release(Line* line) {
@@ -139,7 +140,8 @@ bool SimGpioProvider::Level(const std::string& chip, int offset) const {
   return line != nullptr && line->level;
 }
 
-std::vector<SimGpioTransition> SimGpioProvider::Transitions(const std::string& chip, int offset) const {
+std::vector<SimGpioTransition> SimGpioProvider::Transitions(const std::string& chip,
+                                                            int offset) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const Line* line = FindLine(chips_, chip, offset);
   return line != nullptr ? line->transitions : std::vector<SimGpioTransition>{};
@@ -154,10 +156,11 @@ std::string SimGpioProvider::Consumer(const std::string& chip, int offset) const
 Status SimGpioProvider::DriveInput(const std::string& chip, int offset, bool level) {
   std::lock_guard<std::mutex> lock(mutex_);
   Line* line = FindLine(chips_, chip, offset);
-  if (line == nullptr) return NotFound("no simulated line " + std::to_string(offset) + " of " + chip);
+  if (line == nullptr)
+    return NotFound("no simulated line " + std::to_string(offset) + " of " + chip);
   if (line->output && !line->consumer.empty()) {
-    return FailedPrecondition("line " + std::to_string(offset) + " of " + chip + " is an output of '" +
-                              line->consumer + "'");
+    return FailedPrecondition("line " + std::to_string(offset) + " of " + chip +
+                              " is an output of '" + line->consumer + "'");
   }
   if (level == line->level) return Status::Ok();
   line->level = level;

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "core/string_format.h"

@@ -1,9 +1,9 @@
 #include "sim_hw/sim_serve.h"
 
+#include <gtest/gtest.h>
 #include <pthread.h>
 #include <signal.h>
 
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 namespace hairrig {

@@ -8,12 +8,15 @@ SimUsbRelayBus::SimUsbRelayBus(std::shared_ptr<SimWorld> world) : world_(std::mo
 
 Status SimUsbRelayBus::AddBoard(SimRelayBoard board) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (boards_.count(board.port_path)) return InvalidArgument("simulated relay: port " + board.port_path + " is taken");
+  if (boards_.count(board.port_path))
+    return InvalidArgument("simulated relay: port " + board.port_path + " is taken");
   if (board.channels != 1 && board.channels != 2 && board.channels != 4 && board.channels != 8) {
-    return InvalidArgument("simulated relay: boards have 1, 2, 4 or 8 channels, not " + std::to_string(board.channels));
+    return InvalidArgument("simulated relay: boards have 1, 2, 4 or 8 channels, not " +
+                           std::to_string(board.channels));
   }
   if (board.board_id.empty() || board.board_id.size() > 5) {
-    return InvalidArgument("simulated relay: a board id has 1 to 5 characters: '" + board.board_id + "'");
+    return InvalidArgument("simulated relay: a board id has 1 to 5 characters: '" + board.board_id +
+                           "'");
   }
   State s;
   s.board = std::move(board);
@@ -34,7 +37,8 @@ Status SimUsbRelayBus::Wire(const std::string& port_path, int channel, const std
   auto it = boards_.find(port_path);
   if (it == boards_.end()) return NotFound("simulated relay: no board at " + port_path);
   if (channel < 1 || channel > it->second.board.channels) {
-    return OutOfRange("simulated relay " + it->second.board.board_id + ": no channel " + std::to_string(channel));
+    return OutOfRange("simulated relay " + it->second.board.board_id + ": no channel " +
+                      std::to_string(channel));
   }
   it->second.board.lights[channel] = light;
   return Status::Ok();
@@ -55,7 +59,8 @@ void SimUsbRelayBus::Replug(const std::string& port_path) {
 
 void SimUsbRelayBus::StickChannel(const std::string& port_path, int channel) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (auto it = boards_.find(port_path); it != boards_.end()) it->second.stuck |= static_cast<uint8_t>(1u << (channel - 1));
+  if (auto it = boards_.find(port_path); it != boards_.end())
+    it->second.stuck |= static_cast<uint8_t>(1u << (channel - 1));
 }
 
 uint8_t SimUsbRelayBus::Mask(const std::string& port_path) const {
@@ -86,14 +91,24 @@ Status SimUsbRelayBus::SetReport(const std::string& port_path, const UsbRelayRep
   HR_ASSIGN_OR_RETURN(State * s, FindLocked(port_path));
   const uint8_t all = static_cast<uint8_t>((1u << s->board.channels) - 1);
   const int channel = report[1];
-  const uint8_t bit = channel >= 1 && channel <= s->board.channels ? static_cast<uint8_t>(1u << (channel - 1)) : 0;
+  const uint8_t bit =
+      channel >= 1 && channel <= s->board.channels ? static_cast<uint8_t>(1u << (channel - 1)) : 0;
   uint8_t wanted = s->mask;
   switch (report[0]) {
-    case 0xFF: wanted |= bit; break;
-    case 0xFD: wanted &= static_cast<uint8_t>(~bit); break;
-    case 0xFE: wanted = all; break;
-    case 0xFC: wanted = 0; break;
-    default: return Status::Ok();  // the firmware ignores what it does not know
+    case 0xFF:
+      wanted |= bit;
+      break;
+    case 0xFD:
+      wanted &= static_cast<uint8_t>(~bit);
+      break;
+    case 0xFE:
+      wanted = all;
+      break;
+    case 0xFC:
+      wanted = 0;
+      break;
+    default:
+      return Status::Ok();  // the firmware ignores what it does not know
   }
   s->mask = static_cast<uint8_t>((wanted & ~s->stuck) | (s->mask & s->stuck));
   ApplyLightsLocked(*s);
@@ -104,7 +119,8 @@ Result<UsbRelayReport> SimUsbRelayBus::GetReport(const std::string& port_path) {
   std::lock_guard<std::mutex> lock(mutex_);
   HR_ASSIGN_OR_RETURN(State * s, FindLocked(port_path));
   UsbRelayReport report{};
-  for (size_t i = 0; i < s->board.board_id.size(); ++i) report[i] = static_cast<uint8_t>(s->board.board_id[i]);
+  for (size_t i = 0; i < s->board.board_id.size(); ++i)
+    report[i] = static_cast<uint8_t>(s->board.board_id[i]);
   report[7] = s->mask;
   return report;
 }

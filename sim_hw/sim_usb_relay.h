@@ -19,10 +19,10 @@ namespace hairrig {
 class SimWorld;
 
 struct SimRelayBoard {
-  std::string port_path;                // "sim-1"
-  std::string board_id;                 // 5 characters at most
-  int channels = 2;                     // 1, 2, 4 or 8
-  std::map<int, std::string> lights;    // channel -> scene light it powers
+  std::string port_path;              // "sim-1"
+  std::string board_id;               // 5 characters at most
+  int channels = 2;                   // 1, 2, 4 or 8
+  std::map<int, std::string> lights;  // channel -> scene light it powers
 };
 
 class SimUsbRelayBus : public UsbRelayBus {

@@ -10,11 +10,10 @@
 #include <deque>
 #include <map>
 #include <mutex>
-#include <thread>
-#include <vector>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
+#include <vector>
 
 #include "sim_hw/sim_devices.h"
 
@@ -29,7 +28,9 @@ int Fail(int e) {
   return -1;
 }
 
-void CopyText(uint8_t* out, size_t size, const char* text) { std::snprintf(reinterpret_cast<char*>(out), size, "%s", text); }
+void CopyText(uint8_t* out, size_t size, const char* text) {
+  std::snprintf(reinterpret_cast<char*>(out), size, "%s", text);
+}
 
 // YUYV 4:2:2 of a BGR image, BT.601 limited range (Y 16-235, Cb/Cr 16-240)
 // as UVC cameras send it.
@@ -37,7 +38,9 @@ void PackYuyv(const cv::Mat& bgr, uint8_t* out) {
   cv::Mat ycrcb;
   cv::cvtColor(bgr, ycrcb, cv::COLOR_BGR2YCrCb);  // full range
   auto luma = [](int y) { return static_cast<uint8_t>(16 + (y * 219 + 127) / 255); };
-  auto chroma = [](int c0, int c1) { return static_cast<uint8_t>(128 + ((c0 + c1) / 2 - 128) * 224 / 255); };
+  auto chroma = [](int c0, int c1) {
+    return static_cast<uint8_t>(128 + ((c0 + c1) / 2 - 128) * 224 / 255);
+  };
   for (int y = 0; y < ycrcb.rows; ++y) {
     const cv::Vec3b* row = ycrcb.ptr<cv::Vec3b>(y);
     uint8_t* o = out + static_cast<size_t>(y) * ycrcb.cols * 2;
@@ -65,7 +68,10 @@ class SimV4l2Device::Impl {
  public:
   Impl(std::shared_ptr<SimWorld> world, SimV4l2Options options)
       : world_(std::move(world)), options_(std::move(options)) {
-    const auto& intrinsics = WorldRenderer(*world_).scene().cameras.at(static_cast<size_t>(options_.scene_camera)).intrinsics;
+    const auto& intrinsics = WorldRenderer(*world_)
+                                 .scene()
+                                 .cameras.at(static_cast<size_t>(options_.scene_camera))
+                                 .intrinsics;
     width_ = static_cast<uint32_t>(intrinsics.width_px);
     height_ = static_cast<uint32_t>(intrinsics.height_px);
   }
@@ -75,7 +81,9 @@ class SimV4l2Device::Impl {
     std::lock_guard<std::mutex> lock(mutex_);
     return unplugged_ ? std::vector<std::string>{} : std::vector<std::string>{options_.node};
   }
-  std::string UsbSerial(const std::string& node) { return node == options_.node ? options_.serial : ""; }
+  std::string UsbSerial(const std::string& node) {
+    return node == options_.node ? options_.serial : "";
+  }
 
   int Open(const std::string& path) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -101,14 +109,21 @@ class SimV4l2Device::Impl {
     if (!open_fds_.count(fd)) return Fail(EBADF);
     if (unplugged_) return Fail(ENODEV);
     switch (request) {
-      case VIDIOC_QUERYCAP: return QueryCap(static_cast<v4l2_capability*>(arg));
-      case VIDIOC_ENUM_FMT: return EnumFormat(static_cast<v4l2_fmtdesc*>(arg));
+      case VIDIOC_QUERYCAP:
+        return QueryCap(static_cast<v4l2_capability*>(arg));
+      case VIDIOC_ENUM_FMT:
+        return EnumFormat(static_cast<v4l2_fmtdesc*>(arg));
       case VIDIOC_S_FMT:
-      case VIDIOC_G_FMT: return SetFormat(static_cast<v4l2_format*>(arg), request == VIDIOC_S_FMT);
-      case VIDIOC_REQBUFS: return RequestBuffers(static_cast<v4l2_requestbuffers*>(arg));
-      case VIDIOC_QUERYBUF: return QueryBuffer(static_cast<v4l2_buffer*>(arg));
-      case VIDIOC_QBUF: return Queue(static_cast<v4l2_buffer*>(arg));
-      case VIDIOC_DQBUF: return Dequeue(static_cast<v4l2_buffer*>(arg), lock);
+      case VIDIOC_G_FMT:
+        return SetFormat(static_cast<v4l2_format*>(arg), request == VIDIOC_S_FMT);
+      case VIDIOC_REQBUFS:
+        return RequestBuffers(static_cast<v4l2_requestbuffers*>(arg));
+      case VIDIOC_QUERYBUF:
+        return QueryBuffer(static_cast<v4l2_buffer*>(arg));
+      case VIDIOC_QBUF:
+        return Queue(static_cast<v4l2_buffer*>(arg));
+      case VIDIOC_DQBUF:
+        return Dequeue(static_cast<v4l2_buffer*>(arg), lock);
       case VIDIOC_STREAMON:
         lock.unlock();
         StartStreaming();
@@ -117,10 +132,14 @@ class SimV4l2Device::Impl {
         lock.unlock();
         StopStreaming();
         return 0;
-      case VIDIOC_QUERYCTRL: return QueryControl(static_cast<v4l2_queryctrl*>(arg));
-      case VIDIOC_S_CTRL: return SetControl(static_cast<v4l2_control*>(arg));
-      case VIDIOC_G_CTRL: return GetControl(static_cast<v4l2_control*>(arg));
-      default: return Fail(ENOTTY);
+      case VIDIOC_QUERYCTRL:
+        return QueryControl(static_cast<v4l2_queryctrl*>(arg));
+      case VIDIOC_S_CTRL:
+        return SetControl(static_cast<v4l2_control*>(arg));
+      case VIDIOC_G_CTRL:
+        return GetControl(static_cast<v4l2_control*>(arg));
+      default:
+        return Fail(ENOTTY);
     }
   }
 
@@ -211,7 +230,8 @@ class SimV4l2Device::Impl {
     if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
     if (set) {
       if (streaming_) return Fail(EBUSY);
-      fourcc_ = f->fmt.pix.pixelformat == V4L2_PIX_FMT_YUYV ? V4L2_PIX_FMT_YUYV : V4L2_PIX_FMT_MJPEG;
+      fourcc_ =
+          f->fmt.pix.pixelformat == V4L2_PIX_FMT_YUYV ? V4L2_PIX_FMT_YUYV : V4L2_PIX_FMT_MJPEG;
     }
     f->fmt.pix.width = width_;  // the only size it has, whatever was asked
     f->fmt.pix.height = height_;
@@ -277,7 +297,8 @@ class SimV4l2Device::Impl {
       used = width_ * height_ * 2;
     } else if (image.ok()) {
       std::vector<uint8_t> jpeg;
-      if (!cv::imencode(".jpg", *image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90})) jpeg.clear();  // delivered empty: corrupt
+      if (!cv::imencode(".jpg", *image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90}))
+        jpeg.clear();  // delivered empty: corrupt
       // A corrupt frame is cut short, as when the USB transfer loses its tail.
       used = static_cast<uint32_t>(std::min(corrupt ? size_t{64} : jpeg.size(), capacity));
       std::memcpy(memory, jpeg.data(), used);
@@ -316,7 +337,9 @@ class SimV4l2Device::Impl {
   }
   static const std::map<uint32_t, std::pair<int, int>>& kControls() {
     static const std::map<uint32_t, std::pair<int, int>> controls = {
-        {V4L2_CID_EXPOSURE_AUTO, {0, 3}}, {V4L2_CID_EXPOSURE_ABSOLUTE, {1, 10000}}, {V4L2_CID_GAIN, {0, 255}}};
+        {V4L2_CID_EXPOSURE_AUTO, {0, 3}},
+        {V4L2_CID_EXPOSURE_ABSOLUTE, {1, 10000}},
+        {V4L2_CID_GAIN, {0, 255}}};
     return controls;
   }
 
@@ -383,7 +406,8 @@ class SimV4l2Device::Impl {
   std::thread producer_;
   uint32_t next_sequence_ = 0;
   std::map<uint32_t, int> controls_ = {{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_APERTURE_PRIORITY},
-                                       {V4L2_CID_EXPOSURE_ABSOLUTE, 200}, {V4L2_CID_GAIN, 0}};
+                                       {V4L2_CID_EXPOSURE_ABSOLUTE, 200},
+                                       {V4L2_CID_GAIN, 0}};
   int corrupt_left_ = 0;
   int delivered_ = 0;
   int dropped_ = 0;
@@ -396,10 +420,16 @@ std::vector<std::string> SimV4l2Device::ListNodes() { return impl_->ListNodes();
 std::string SimV4l2Device::UsbSerial(const std::string& node) { return impl_->UsbSerial(node); }
 int SimV4l2Device::Open(const std::string& path, int) { return impl_->Open(path); }
 int SimV4l2Device::Close(int fd) { return impl_->Close(fd); }
-int SimV4l2Device::Ioctl(int fd, unsigned long request, void* arg) { return impl_->Ioctl(fd, request, arg); }
-void* SimV4l2Device::Mmap(size_t length, int, int, int fd, int64_t offset) { return impl_->Mmap(length, fd, offset); }
+int SimV4l2Device::Ioctl(int fd, unsigned long request, void* arg) {
+  return impl_->Ioctl(fd, request, arg);
+}
+void* SimV4l2Device::Mmap(size_t length, int, int, int fd, int64_t offset) {
+  return impl_->Mmap(length, fd, offset);
+}
 int SimV4l2Device::Munmap(void*, size_t) { return 0; }
-int SimV4l2Device::PollReadable(int fd, int timeout_ms) { return impl_->PollReadable(fd, timeout_ms); }
+int SimV4l2Device::PollReadable(int fd, int timeout_ms) {
+  return impl_->PollReadable(fd, timeout_ms);
+}
 void SimV4l2Device::Unplug() { impl_->Unplug(); }
 void SimV4l2Device::Replug() { impl_->Replug(); }
 void SimV4l2Device::CorruptNextFrames(int count) { impl_->CorruptNextFrames(count); }

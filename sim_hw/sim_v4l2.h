@@ -29,10 +29,10 @@ namespace hairrig {
 class SimWorld;
 
 struct SimV4l2Options {
-  std::string serial;            // the USB serial sysfs reports
-  int scene_camera = 0;          // the scene camera whose view it shows
+  std::string serial;    // the USB serial sysfs reports
+  int scene_camera = 0;  // the scene camera whose view it shows
   std::string node = "/dev/video0";
-  double fps = 30;               // frames per device second
+  double fps = 30;  // frames per device second
 };
 
 class SimV4l2Device : public V4l2Io {

@@ -11,10 +11,13 @@ extern "C" {
 namespace hairrig {
 
 Result<TagPattern> MakeTagPattern(const std::string& family, int id) {
-  if (family != "tag36h11") return InvalidArgument("tag family '" + family + "' is not supported (use tag36h11)");
-  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> fam(tag36h11_create(), tag36h11_destroy);
+  if (family != "tag36h11")
+    return InvalidArgument("tag family '" + family + "' is not supported (use tag36h11)");
+  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> fam(tag36h11_create(),
+                                                                       tag36h11_destroy);
   if (id < 0 || static_cast<uint32_t>(id) >= fam->ncodes) {
-    return NotFound("tag36h11 has no tag id " + std::to_string(id) + " (ids 0-" + std::to_string(fam->ncodes - 1) + ")");
+    return NotFound("tag36h11 has no tag id " + std::to_string(id) + " (ids 0-" +
+                    std::to_string(fam->ncodes - 1) + ")");
   }
   image_u8_t* image = apriltag_to_image(fam.get(), id);
   if (image == nullptr) return Internal("libapriltag could not draw tag " + std::to_string(id));
@@ -23,7 +26,8 @@ Result<TagPattern> MakeTagPattern(const std::string& family, int id) {
   pattern.white.resize(static_cast<size_t>(image->width * image->height));
   for (int row = 0; row < image->height; ++row) {
     for (int col = 0; col < image->width; ++col) {
-      pattern.white[static_cast<size_t>(row * image->width + col)] = image->buf[row * image->stride + col] > 127;
+      pattern.white[static_cast<size_t>(row * image->width + col)] =
+          image->buf[row * image->stride + col] > 127;
     }
   }
   // Debian's libapriltag does not export image_u8_destroy: free what

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -50,7 +49,8 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
       g.tags = view->tags;
       const std::string path = out_dir + "/" + ViewFileName(static_cast<int>(v), g.camera_serial);
       errors[v] = WriteImageAtomic(path, view->image);
-      if (errors[v].ok()) errors[v] = WriteViewTruthMaps(out_dir + "/views", static_cast<int>(v), view->truth);
+      if (errors[v].ok())
+        errors[v] = WriteViewTruthMaps(out_dir + "/views", static_cast<int>(v), view->truth);
       images[v] = view->image;
       truths[v] = std::move(g);
     };
@@ -63,17 +63,20 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
   for (const ViewGroundTruth& g : truths) {
     summary.files.push_back(ViewFileName(g.view, g.camera_serial));
     char label[96];
-    std::snprintf(label, sizeof(label), "%d %s %.1f deg", g.view, g.camera_serial.c_str(), g.turntable_deg);
+    std::snprintf(label, sizeof(label), "%d %s %.1f deg", g.view, g.camera_serial.c_str(),
+                  g.turntable_deg);
     labels.emplace_back(label);
   }
   const int columns = static_cast<int>(scene.cameras.size()) * 4;
   summary.contact_sheet = "contact_sheet.png";
-  HR_RETURN_IF_ERROR(
-      WriteImageAtomic(out_dir + "/" + summary.contact_sheet, MakeContactSheet(images, labels, columns, 240)));
+  HR_RETURN_IF_ERROR(WriteImageAtomic(out_dir + "/" + summary.contact_sheet,
+                                      MakeContactSheet(images, labels, columns, 240)));
   HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, out_dir));
   summary.ground_truth = "ground_truth.json";
-  HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.ground_truth, GroundTruthJson(scene, truths, /*with_maps=*/true)));
-  HR_RETURN_IF_ERROR(WriteStrands(out_dir + "/ground_truth_strands.ply", renderer.strands_turntable_mm()));
+  HR_RETURN_IF_ERROR(WriteFileAtomic(out_dir + "/" + summary.ground_truth,
+                                     GroundTruthJson(scene, truths, /*with_maps=*/true)));
+  HR_RETURN_IF_ERROR(
+      WriteStrands(out_dir + "/ground_truth_strands.ply", renderer.strands_turntable_mm()));
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -3,13 +3,12 @@
 // view to an image file (`hairrig sim render --view N`).
 #pragma once
 
-#include <optional>
-#include <string>
-#include <vector>
-
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "core/status.h"
 #include "sim_hw/renderer.h"

@@ -90,7 +90,8 @@ std::vector<Eigen::Vector3f> Grow(const WigOptions& o, const HeadModel& head, co
     Eigen::Vector3d surface_normal;
     head.SignedDistance(centre, &surface_normal);
     const double into_head = tangent.dot(surface_normal);
-    if (into_head < 0 && head.IsNear(centre, 3.0)) tangent = (tangent - into_head * surface_normal).normalized();
+    if (into_head < 0 && head.IsNear(centre, 3.0))
+      tangent = (tangent - into_head * surface_normal).normalized();
     centre = head.KeepOutside(centre + seg * tangent, 1.0);
     // A frame around the centreline for the style's offset; it grows from 0 at the root.
     tangent = (centre - previous).normalized();
@@ -102,7 +103,8 @@ std::vector<Eigen::Vector3f> Grow(const WigOptions& o, const HeadModel& head, co
     const double ramp = std::min(1.0, arc / 30.0);
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
     if (s.style == WigStyle::kWavy) {
-      offset = ramp * o.wave_amplitude_mm * std::sin(2.0 * kPi * arc / s.period_mm + s.phase) * side;
+      offset =
+          ramp * o.wave_amplitude_mm * std::sin(2.0 * kPi * arc / s.period_mm + s.phase) * side;
     } else if (s.style == WigStyle::kCurly) {
       const double angle = 2.0 * kPi * arc / o.curl_pitch_mm + s.phase;
       offset = ramp * o.curl_radius_mm * (std::cos(angle) * side + std::sin(angle) * binormal);
@@ -165,7 +167,8 @@ StrandSeed ScalpSeed(const WigOptions& o, const HeadModel& head, const Eigen::Ve
   radial.z() = 0;
   if (azimuth < 110 && radial.norm() > 1e-9) {
     const double frontness = std::cos(DegToRad(std::min(90.0, azimuth)));
-    s.fall_dir = (s.fall_dir + 0.25 * radial.normalized() - 0.45 * frontness * scalp.face_dir).normalized();
+    s.fall_dir =
+        (s.fall_dir + 0.25 * radial.normalized() - 0.45 * frontness * scalp.face_dir).normalized();
     s.start_dir = (s.start_dir - 1.2 * frontness * scalp.face_dir).normalized();
   }
   if (o.style == WigStyle::kBangs) {
@@ -173,7 +176,8 @@ StrandSeed ScalpSeed(const WigOptions& o, const HeadModel& head, const Eigen::Ve
       // Forward and down over the forehead, cut short.
       s.start_dir = (normal + 0.8 * scalp.face_dir).normalized();
       s.fall_dir = (scalp.face_dir * 0.35 + Eigen::Vector3d(0, 0, -1)).normalized();
-      s.length_mm = o.bangs_length_mm * (0.85 + 0.15 * s.length_mm / std::max(1.0, o.max_length_mm));
+      s.length_mm =
+          o.bangs_length_mm * (0.85 + 0.15 * s.length_mm / std::max(1.0, o.max_length_mm));
       s.lift_mm *= 1.6;
     }
   }
@@ -194,7 +198,8 @@ Frames TransportFrames(const std::vector<Eigen::Vector3f>& points, const Eigen::
   for (size_t i = 0; i < n; ++i) {
     const size_t a = i == 0 ? 0 : i - 1, b = i + 1 < n ? i + 1 : i;
     const Eigen::Vector3d d = (points[b] - points[a]).cast<double>();
-    f.t[i] = d.norm() > 0 ? Eigen::Vector3d(d.normalized()) : (i > 0 ? f.t[i - 1] : Eigen::Vector3d::UnitZ());
+    f.t[i] = d.norm() > 0 ? Eigen::Vector3d(d.normalized())
+                          : (i > 0 ? f.t[i - 1] : Eigen::Vector3d::UnitZ());
     if (i > 0) f.arc_mm[i] = f.arc_mm[i - 1] + (points[i] - points[i - 1]).cast<double>().norm();
   }
   f.u[0] = (first_u - first_u.dot(f.t[0]) * f.t[0]);
@@ -244,7 +249,8 @@ std::vector<Eigen::Vector3f> Member(const WigOptions& o, const HeadModel& head, 
   const double length = guide_length * (0.82 + 0.18 * uniform(rng));
   // Frizz: two smooth random waves per axis, growing towards the tip.
   double frizz_phase[4], frizz_period[4];
-  for (int k = 0; k < 4; ++k) frizz_phase[k] = 2 * kPi * uniform(rng), frizz_period[k] = 18 + 30 * uniform(rng);
+  for (int k = 0; k < 4; ++k)
+    frizz_phase[k] = 2 * kPi * uniform(rng), frizz_period[k] = 18 + 30 * uniform(rng);
   const bool flyaway = uniform(rng) < o.flyaway_fraction;
   const double fly_start = 0.2 + 0.5 * uniform(rng), fly_angle = 2 * kPi * uniform(rng);
   const double fly_reach = o.flyaway_mm * (0.5 + uniform(rng));
@@ -263,7 +269,8 @@ std::vector<Eigen::Vector3f> Member(const WigOptions& o, const HeadModel& head, 
       const double r = fly_reach * std::pow((s - fly_start) / (1 - fly_start), 2);
       du += r * std::cos(fly_angle), dv += r * std::sin(fly_angle);
     }
-    Eigen::Vector3d p = wisp.points[i].cast<double>() + du * f.u[i] + dv * f.v[i] + (i == 0 ? a_t : 0.0) * f.t[i];
+    Eigen::Vector3d p =
+        wisp.points[i].cast<double>() + du * f.u[i] + dv * f.v[i] + (i == 0 ? a_t : 0.0) * f.t[i];
     if (i == 0) p = root;
     points.push_back(head.KeepOutside(p, 0.4).cast<float>());
   }
@@ -338,13 +345,16 @@ Result<StrandSet> FileGuidedWig(const WigOptions& o, const HeadModel& head) {
   const auto offsets = guides->Offsets();
   for (size_t s = 0; s < guides->num_strands(); ++s) {
     if (offsets[s + 1] - offsets[s] < 2) continue;
-    std::vector<Eigen::Vector3f> points(guides->points_mm.begin() + static_cast<std::ptrdiff_t>(offsets[s]),
-                                        guides->points_mm.begin() + static_cast<std::ptrdiff_t>(offsets[s + 1]));
+    std::vector<Eigen::Vector3f> points(
+        guides->points_mm.begin() + static_cast<std::ptrdiff_t>(offsets[s]),
+        guides->points_mm.begin() + static_cast<std::ptrdiff_t>(offsets[s + 1]));
     Eigen::Vector3d normal;
     head.SignedDistance(points.front().cast<double>(), &normal);
     wisps.push_back(MakeWisp(std::move(points), normal));
   }
-  if (wisps.empty()) return InvalidArgument("wig.file " + o.file + ": no strand with two or more points to guide wisps");
+  if (wisps.empty())
+    return InvalidArgument("wig.file " + o.file +
+                           ": no strand with two or more points to guide wisps");
   return Members(o, head, wisps);
 }
 

@@ -6,9 +6,9 @@
 // options give the same strands on every machine.
 #pragma once
 
+#include "core/head_model.h"
 #include "core/status.h"
 #include "core/strands.h"
-#include "core/head_model.h"
 #include "sim_hw/scene.h"
 
 namespace hairrig {

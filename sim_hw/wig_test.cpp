@@ -13,7 +13,8 @@ namespace {
 double MinEllipsoidLevel(const StrandSet& s, const HeadSpec& head) {
   double level = 1e30;
   for (const auto& p : s.points_mm) {
-    level = std::min(level, (p.cast<double>() - head.center_turntable_mm).cwiseQuotient(head.radii_mm).norm());
+    level = std::min(
+        level, (p.cast<double>() - head.center_turntable_mm).cwiseQuotient(head.radii_mm).norm());
   }
   return level;
 }
@@ -39,7 +40,8 @@ TEST(Wig, EveryStyleIsSeededHangsDownAndStaysOutsideTheHead) {
     // Tips are below roots on average: the hair falls.
     double drop = 0;
     const auto offsets = a->Offsets();
-    for (size_t s = 0; s < a->num_strands(); ++s) drop += a->points_mm[offsets[s]].z() - a->points_mm[offsets[s + 1] - 1].z();
+    for (size_t s = 0; s < a->num_strands(); ++s)
+      drop += a->points_mm[offsets[s]].z() - a->points_mm[offsets[s + 1] - 1].z();
     EXPECT_GT(drop / static_cast<double>(a->num_strands()), 50.0);
     const auto lengths = a->StrandLengths();
     for (double l : lengths) EXPECT_GE(l, o.min_length_mm * 0.95) << "strands keep their length";
@@ -90,15 +92,19 @@ TEST(Wig, StrandsHaveTheirFibreLengthAndCurlsAreSampledFinely) {
     std::vector<double> turns_deg;
     for (size_t k = 0; k < s->num_strands(); ++k) {
       for (size_t i = offsets[k] + 2; i < offsets[k + 1]; ++i) {
-        const Eigen::Vector3d a = (s->points_mm[i - 1] - s->points_mm[i - 2]).cast<double>().normalized();
-        const Eigen::Vector3d b = (s->points_mm[i] - s->points_mm[i - 1]).cast<double>().normalized();
+        const Eigen::Vector3d a =
+            (s->points_mm[i - 1] - s->points_mm[i - 2]).cast<double>().normalized();
+        const Eigen::Vector3d b =
+            (s->points_mm[i] - s->points_mm[i - 1]).cast<double>().normalized();
         turns_deg.push_back(std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180 / M_PI);
       }
     }
     // 360 / 12 = 30 deg a point on a circle, less on a helix; curls pressed
     // against the head turn more at a few points.
-    std::nth_element(turns_deg.begin(), turns_deg.begin() + turns_deg.size() * 9 / 10, turns_deg.end());
-    EXPECT_LT(turns_deg[turns_deg.size() * 9 / 10], 32) << "90th percentile: about 12 points per turn of the curl";
+    std::nth_element(turns_deg.begin(), turns_deg.begin() + turns_deg.size() * 9 / 10,
+                     turns_deg.end());
+    EXPECT_LT(turns_deg[turns_deg.size() * 9 / 10], 32)
+        << "90th percentile: about 12 points per turn of the curl";
   }
 }
 

@@ -1,6 +1,6 @@
-#include <algorithm>
-
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <opencv2/core.hpp>
 
 #include "core/truth_maps.h"
@@ -19,7 +19,8 @@ std::shared_ptr<SimWorld> NoisyWorld() {
   options.noise = true;
   auto world = CreateSimWorld(*scene, options);
   EXPECT_TRUE(world.ok()) << world.status().ToString();
-  for (const SceneLight& l : scene->lights) EXPECT_TRUE(SetWorldLightLevel(**world, l.name, 1.0).ok());
+  for (const SceneLight& l : scene->lights)
+    EXPECT_TRUE(SetWorldLightLevel(**world, l.name, 1.0).ok());
   return std::move(world).value();
 }
 

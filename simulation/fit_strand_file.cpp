@@ -1,7 +1,6 @@
 #include "simulation/fit_strand_file.h"
 
 #include <filesystem>
-
 #include <nlohmann/json.hpp>
 
 #include "core/strand_io.h"

@@ -2,9 +2,8 @@
 // (simulation/helix_model.h), the model recording the strand file as its source.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "core/status.h"
 #include "simulation/helix_model.h"

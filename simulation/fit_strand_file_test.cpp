@@ -1,9 +1,9 @@
 #include "simulation/fit_strand_file.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "core/strand_io.h"

@@ -95,7 +95,8 @@ std::vector<CohelicalCondition> CohelicalConditions(const std::vector<Eigen::Vec
     const Eigen::Vector3d n = dt.normalized();
     rows.push_back({j, n});
     const Eigen::Vector3d sum = t0 + t[static_cast<size_t>(j + 1)];
-    if (planar[static_cast<size_t>(j)] && sum.norm() > 1e-12) rows.push_back({j, n.cross(sum).normalized()});
+    if (planar[static_cast<size_t>(j)] && sum.norm() > 1e-12)
+      rows.push_back({j, n.cross(sum).normalized()});
   }
   return rows;
 }
@@ -105,9 +106,12 @@ std::vector<CohelicalCondition> CohelicalConditions(const std::vector<Eigen::Vec
 class BandCholesky {
  public:
   BandCholesky(int size, int bandwidth)
-      : m_(size), b_(bandwidth), a_(static_cast<size_t>(size) * static_cast<size_t>(bandwidth + 1), 0.0) {}
+      : m_(size),
+        b_(bandwidth),
+        a_(static_cast<size_t>(size) * static_cast<size_t>(bandwidth + 1), 0.0) {}
   double& at(int row, int col) {  // row >= col, row - col <= b
-    return a_[static_cast<size_t>(row) * static_cast<size_t>(b_ + 1) + static_cast<size_t>(row - col)];
+    return a_[static_cast<size_t>(row) * static_cast<size_t>(b_ + 1) +
+              static_cast<size_t>(row - col)];
   }
   // False if the matrix is not (numerically) positive definite.
   bool Factor() {
@@ -128,11 +132,13 @@ class BandCholesky {
   void Solve(std::vector<double>* x) {
     std::vector<double>& v = *x;
     for (int i = 0; i < m_; ++i) {
-      for (int k = std::max(0, i - b_); k < i; ++k) v[static_cast<size_t>(i)] -= at(i, k) * v[static_cast<size_t>(k)];
+      for (int k = std::max(0, i - b_); k < i; ++k)
+        v[static_cast<size_t>(i)] -= at(i, k) * v[static_cast<size_t>(k)];
       v[static_cast<size_t>(i)] /= at(i, i);
     }
     for (int i = m_ - 1; i >= 0; --i) {
-      for (int k = i + 1; k < std::min(m_, i + b_ + 1); ++k) v[static_cast<size_t>(i)] -= at(k, i) * v[static_cast<size_t>(k)];
+      for (int k = i + 1; k < std::min(m_, i + b_ + 1); ++k)
+        v[static_cast<size_t>(i)] -= at(k, i) * v[static_cast<size_t>(k)];
       v[static_cast<size_t>(i)] /= at(i, i);
     }
   }
@@ -202,7 +208,8 @@ std::vector<Eigen::Vector3d> ProjectOntoCohelical(const std::vector<Eigen::Vecto
     bool changed = false;
     for (size_t j = 0; j + 1 < t.size(); ++j) {
       if (!gentle[j] || planar[j] || (t[j + 1] - t[j]).norm() < kStraightTangentGap) continue;
-      if (!ShortRotationExists(relaxed[j + 1] - relaxed[j], t[j], t[j + 1])) planar[j] = changed = true;
+      if (!ShortRotationExists(relaxed[j + 1] - relaxed[j], t[j], t[j + 1]))
+        planar[j] = changed = true;
     }
     if (!changed) break;
     relaxed = ProjectOntoConditions(p, CohelicalConditions(t, planar));
@@ -297,7 +304,8 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
   const size_t segments = curve.size() > 1 ? curve.size() - 1 : 0;
   // About sqrt(segments) blocks of sqrt(segments) segments: as many sphere
   // tests per point as segment tests in a block it cannot prune.
-  const size_t block = std::max<size_t>(4, static_cast<size_t>(std::sqrt(static_cast<double>(segments))));
+  const size_t block =
+      std::max<size_t>(4, static_cast<size_t>(std::sqrt(static_cast<double>(segments))));
   std::vector<Eigen::Vector3d> centers;
   std::vector<double> radii;
   for (size_t first = 0; first < segments; first += block) {
@@ -322,8 +330,8 @@ void DistanceToCurve(const std::vector<Eigen::Vector3d>& points,
       for (size_t b = 0; b < centers.size(); ++b) {
         const double reach = radii[b] + best;
         if ((q - centers[b]).squaredNorm() >= reach * reach) continue;
-        best2 = SquaredDistanceToSegments(q, curve, b * block, std::min(segments, b * block + block), best2,
-                                          &nearest);
+        best2 = SquaredDistanceToSegments(q, curve, b * block,
+                                          std::min(segments, b * block + block), best2, &nearest);
         best = std::sqrt(best2);
       }
     }
@@ -402,7 +410,8 @@ struct BreakPoints {
   std::vector<Eigen::Vector3d> p, t, relaxed;
   double max_relaxation_elements = 0;  // the largest |p*_i - p_i|, in elements
 };
-BreakPoints RelaxedBreakPoints(const StrandSpline& spline, int n, const FloatingTangentsOptions& options) {
+BreakPoints RelaxedBreakPoints(const StrandSpline& spline, int n,
+                               const FloatingTangentsOptions& options) {
   const double length = spline.length_mm();
   BreakPoints b;
   for (int i = 0; i <= n; ++i) {
@@ -410,19 +419,21 @@ BreakPoints RelaxedBreakPoints(const StrandSpline& spline, int n, const Floating
     b.t.push_back(spline.TangentAt(length * i / n));
   }
   StraightenRuns(length / n, options.straight_sagitta_mm, &b.t);
-  b.relaxed = RelaxBreakPoints(b.p, b.t, options.anchor_root,
-                               options.planar_arcs ? GentleElements(spline, n) : std::vector<char>{});
+  b.relaxed =
+      RelaxBreakPoints(b.p, b.t, options.anchor_root,
+                       options.planar_arcs ? GentleElements(spline, n) : std::vector<char>{});
   for (int i = 0; i <= n; ++i) {
-    b.max_relaxation_elements = std::max(b.max_relaxation_elements,
-                                         (b.relaxed[static_cast<size_t>(i)] - b.p[static_cast<size_t>(i)]).norm() * n / length);
+    b.max_relaxation_elements = std::max(
+        b.max_relaxation_elements,
+        (b.relaxed[static_cast<size_t>(i)] - b.p[static_cast<size_t>(i)]).norm() * n / length);
   }
   return b;
 }
 
 // Algorithm 1, line 8, for the break points of a given element count.
 Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, const BreakPoints& b,
-                                           const FloatingTangentsOptions& options, Measures measures,
-                                           StrandFitSummary* summary) {
+                                           const FloatingTangentsOptions& options,
+                                           Measures measures, StrandFitSummary* summary) {
   const double length = spline.length_mm();
   const int n = static_cast<int>(b.p.size()) - 1;
   const std::vector<Eigen::Vector3d>& p = b.p;
@@ -441,8 +452,10 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, const Bre
           std::max(s.max_cohelical_residual, std::abs(chord.dot(dt)) / chord.norm());
     // The preferred length: the strand's arc between the break points,
     // stretched as the relaxation stretched their chord.
-    const double original_chord = (p[static_cast<size_t>(i + 1)] - p[static_cast<size_t>(i)]).norm();
-    const double preferred = original_chord > 0 ? length / n * chord.norm() / original_chord : length / n;
+    const double original_chord =
+        (p[static_cast<size_t>(i + 1)] - p[static_cast<size_t>(i)]).norm();
+    const double preferred =
+        original_chord > 0 ? length / n * chord.norm() / original_chord : length / n;
     auto element = HelixThrough(relaxed[static_cast<size_t>(i)], t[static_cast<size_t>(i)],
                                 relaxed[static_cast<size_t>(i + 1)], t[static_cast<size_t>(i + 1)],
                                 preferred, &axis_angle);
@@ -486,7 +499,9 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
   // fit error only when the growth below needs it.
   const bool grows = options.adaptive && options.target_mean_error_mm > 0;
   auto measures = [&](int elements) {
-    return summary ? Measures::kAll : grows && elements < options.max_elements ? Measures::kError : Measures::kNone;
+    return summary                                    ? Measures::kAll
+           : grows && elements < options.max_elements ? Measures::kError
+                                                      : Measures::kNone;
   };
   // Ours: a relaxation that moves a break point by more than a quarter of an
   // element is a resonance, not a fit. Elements of about half a curl make
@@ -508,7 +523,8 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
     return b;
   };
   StrandFitSummary s;
-  HR_ASSIGN_OR_RETURN(PiecewiseHelix model, FitWithElementCount(spline, break_points(n), options, measures(n), &s));
+  HR_ASSIGN_OR_RETURN(PiecewiseHelix model,
+                      FitWithElementCount(spline, break_points(n), options, measures(n), &s));
   // Ours beside Algorithm 2: more elements while the fit error exceeds the
   // target, aimed straight at it by the error law e ~ N^-k. k starts at 2
   // (measured on the bench's strands: 1.9 from N = 3 to 15; a cubic law
@@ -516,13 +532,17 @@ Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& p
   // fits, within [1, 4]. N grows by at least a quarter each time.
   double exponent = 2;
   while (grows && s.mean_error_mm > options.target_mean_error_mm && n < options.max_elements) {
-    const double predicted = n * std::pow(s.mean_error_mm / options.target_mean_error_mm, 1 / exponent);
+    const double predicted =
+        n * std::pow(s.mean_error_mm / options.target_mean_error_mm, 1 / exponent);
     const int previous_n = n;
     const double previous_error = s.mean_error_mm;
-    n = std::min(options.max_elements, std::max(n + std::max(1, n / 4), static_cast<int>(std::ceil(predicted))));
-    HR_ASSIGN_OR_RETURN(model, FitWithElementCount(spline, break_points(n), options, measures(n), &s));
+    n = std::min(options.max_elements,
+                 std::max(n + std::max(1, n / 4), static_cast<int>(std::ceil(predicted))));
+    HR_ASSIGN_OR_RETURN(model,
+                        FitWithElementCount(spline, break_points(n), options, measures(n), &s));
     if (s.mean_error_mm > 0 && previous_error > s.mean_error_mm) {
-      exponent = std::clamp(std::log(previous_error / s.mean_error_mm) / std::log(static_cast<double>(n) / previous_n),
+      exponent = std::clamp(std::log(previous_error / s.mean_error_mm) /
+                                std::log(static_cast<double>(n) / previous_n),
                             1.0, 4.0);
     }
   }

@@ -87,13 +87,15 @@ TEST(FloatingTangents, TheModelIsTheSameWithOrWithoutASummary) {
   }
   StrandFitSummary bent_fit;
   ASSERT_TRUE(FitFloatingTangents(bent, {}, &bent_fit).ok());
-  EXPECT_GT(bent_fit.elements, algorithm2) << "the bent strand's growth (which needs the error) took part";
+  EXPECT_GT(bent_fit.elements, algorithm2)
+      << "the bent strand's growth (which needs the error) took part";
   EXPECT_LT(bent_fit.elements, 25) << "and stopped below N_max, at the target";
 }
 
 // A curl whose radius grows from 0 at the root over `ramp_mm` of its axis
 // (as the simulated wig's curls do), radius and pitch in mm, `fibre_mm` long.
-std::vector<Eigen::Vector3d> RampedCurl(double fibre_mm, double radius, double pitch, double ramp_mm) {
+std::vector<Eigen::Vector3d> RampedCurl(double fibre_mm, double radius, double pitch,
+                                        double ramp_mm) {
   std::vector<Eigen::Vector3d> p;
   const double axis_length = fibre_mm / std::hypot(1.0, 2 * M_PI * radius / pitch);
   for (double u = 0; u <= axis_length; u += pitch / 16) {
@@ -151,7 +153,8 @@ struct CoilComparison {
   int coils[2] = {-1, -1};
   StrandFitSummary fits[2];
 };
-CoilComparison CompareCoils(const std::vector<Eigen::Vector3d>& points, const FloatingTangentsOptions& first,
+CoilComparison CompareCoils(const std::vector<Eigen::Vector3d>& points,
+                            const FloatingTangentsOptions& first,
                             const FloatingTangentsOptions& second) {
   CoilComparison c;
   const FloatingTangentsOptions* options[2] = {&first, &second};
@@ -162,7 +165,8 @@ CoilComparison CompareCoils(const std::vector<Eigen::Vector3d>& points, const Fl
       continue;
     }
     c.coils[k] = 0;
-    for (const auto& e : model->elements) c.coils[k] += e.darboux_per_mm.norm() * e.length_mm > M_PI;
+    for (const auto& e : model->elements)
+      c.coils[k] += e.darboux_per_mm.norm() * e.length_mm > M_PI;
   }
   return c;
 }
@@ -177,7 +181,8 @@ TEST(FloatingTangents, PlanarArcsReplaceTheCoilsOfNoisyStraightStretches) {
   std::vector<Eigen::Vector3d> p;
   for (int i = 0; i <= 60; ++i) {
     const double a = 0.02 * i;
-    p.emplace_back(100 * (1 - std::cos(a)) + noise(rng), noise(rng), -100 * std::sin(a) + noise(rng));
+    p.emplace_back(100 * (1 - std::cos(a)) + noise(rng), noise(rng),
+                   -100 * std::sin(a) + noise(rng));
   }
   FloatingTangentsOptions planar;
   planar.planar_arcs = true;
@@ -195,7 +200,8 @@ TEST(FloatingTangents, PlanarArcsReplaceTheCoilsOfNoisyStraightStretches) {
 // torsion per element). Straight runs (the default) make them straight.
 TEST(FloatingTangents, StraightRunsReplaceTheCoilsOfRoundingNoise) {
   std::vector<Eigen::Vector3d> p;
-  const Eigen::Vector3d root(83.1, -41.7, 112.9), down = Eigen::Vector3d(0.05, 0.02, -1).normalized();
+  const Eigen::Vector3d root(83.1, -41.7, 112.9),
+      down = Eigen::Vector3d(0.05, 0.02, -1).normalized();
   Eigen::Vector3d point = root;
   for (int i = 0; i <= 80; ++i) {
     const double w = std::exp(-5.0 * i / 8);
@@ -222,7 +228,8 @@ TEST(FloatingTangents, CurlsStartAtAnElementPerQuarterTurn) {
   const std::vector<Eigen::Vector3d> curl = HelixPoints(2, 5, 14, 700);
   auto spline = StrandSpline::Create(curl);
   ASSERT_TRUE(spline.ok());
-  EXPECT_NEAR(spline->turning_rad(), 14 * 2 * M_PI * 2 * M_PI * 2 / std::hypot(2 * M_PI * 2, 5), 0.5)
+  EXPECT_NEAR(spline->turning_rad(), 14 * 2 * M_PI * 2 * M_PI * 2 / std::hypot(2 * M_PI * 2, 5),
+              0.5)
       << "the tangent turns by k L = 2 pi r / sqrt((2 pi r)^2 + c^2) per turn";
   FloatingTangentsOptions paper, ours;
   paper.target_mean_error_mm = 0;
@@ -233,7 +240,8 @@ TEST(FloatingTangents, CurlsStartAtAnElementPerQuarterTurn) {
   EXPECT_EQ(paper_fit.elements, AdaptiveElementCount(*spline, paper));
   EXPECT_LT(paper_fit.elements, 20);
   const int quarter_turns = static_cast<int>(std::ceil(spline->turning_rad() / (M_PI / 2)));
-  EXPECT_EQ(ours_fit.elements, std::min(ours.max_elements, std::max(paper_fit.elements, quarter_turns)));
+  EXPECT_EQ(ours_fit.elements,
+            std::min(ours.max_elements, std::max(paper_fit.elements, quarter_turns)));
   EXPECT_GT(ours_fit.elements, paper_fit.elements);
 }
 

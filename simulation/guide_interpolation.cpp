@@ -1,11 +1,10 @@
 #include "simulation/guide_interpolation.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <string>
-
-#include <Eigen/Dense>
 
 namespace hairrig {
 
@@ -15,7 +14,8 @@ namespace {
 template <typename Point>
 std::vector<double> ArcFractions(const Point* points, size_t count) {
   std::vector<double> f(count, 0.0);
-  for (size_t i = 1; i < count; ++i) f[i] = f[i - 1] + (points[i] - points[i - 1]).template cast<double>().norm();
+  for (size_t i = 1; i < count; ++i)
+    f[i] = f[i - 1] + (points[i] - points[i - 1]).template cast<double>().norm();
   const double total = count > 1 ? f.back() : 0.0;
   for (double& x : f) x = total > 0 ? x / total : 0.0;
   return f;
@@ -42,12 +42,13 @@ void Locate(const std::vector<double>& fractions, double u, int* index, double* 
 }
 
 Eigen::Vector3d Blend(const std::vector<Eigen::Vector3d>& curve, int index, double blend) {
-  return (1 - blend) * curve[static_cast<size_t>(index) - 1] + blend * curve[static_cast<size_t>(index)];
+  return (1 - blend) * curve[static_cast<size_t>(index) - 1] +
+         blend * curve[static_cast<size_t>(index)];
 }
 
 // min |sum w_k (g_k - p)|^2 + beta sum d_k^2 w_k^2 s.t. sum w_k = 1 (KKT system).
-Eigen::VectorXd ConstrainedWeights(const std::vector<Eigen::Vector3d>& candidates, const Eigen::Vector3d& p,
-                                   double beta) {
+Eigen::VectorXd ConstrainedWeights(const std::vector<Eigen::Vector3d>& candidates,
+                                   const Eigen::Vector3d& p, double beta) {
   const int k = static_cast<int>(candidates.size());
   Eigen::MatrixXd b(3, k);
   for (int i = 0; i < k; ++i) b.col(i) = candidates[static_cast<size_t>(i)] - p;
@@ -64,9 +65,9 @@ Eigen::VectorXd ConstrainedWeights(const std::vector<Eigen::Vector3d>& candidate
 
 }  // namespace
 
-Result<GuideInterpolation> GuideInterpolation::Build(const StrandSet& full_rest,
-                                                     const std::vector<std::vector<Eigen::Vector3d>>& guides_rest,
-                                                     const GuideInterpolationOptions& options) {
+Result<GuideInterpolation> GuideInterpolation::Build(
+    const StrandSet& full_rest, const std::vector<std::vector<Eigen::Vector3d>>& guides_rest,
+    const GuideInterpolationOptions& options) {
   if (options.guides_per_strand < 1 || options.guides_per_strand > 8) {
     return InvalidArgument("guide interpolation: guides_per_strand must lie in 1..8");
   }
@@ -81,9 +82,12 @@ Result<GuideInterpolation> GuideInterpolation::Build(const StrandSet& full_rest,
   std::vector<std::vector<double>> guide_fractions;
   for (size_t g = 0; g < guides_rest.size(); ++g) {
     const auto& curve = guides_rest[g];
-    if (curve.size() < 2) return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " has < 2 points");
+    if (curve.size() < 2)
+      return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " has < 2 points");
     for (const auto& p : curve) {
-      if (!p.allFinite()) return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " is not finite");
+      if (!p.allFinite())
+        return InvalidArgument("guide interpolation: guide " + std::to_string(g) +
+                               " is not finite");
     }
     guide_fractions.push_back(ArcFractions(curve.data(), curve.size()));
   }
@@ -100,14 +104,16 @@ Result<GuideInterpolation> GuideInterpolation::Build(const StrandSet& full_rest,
       return (guides_rest[static_cast<size_t>(a)][0] - root).squaredNorm() <
              (guides_rest[static_cast<size_t>(b)][0] - root).squaredNorm();
     });
-    const std::vector<double> fractions = ArcFractions(&full_rest.points_mm[offsets[s]], offsets[s + 1] - offsets[s]);
+    const std::vector<double> fractions =
+        ArcFractions(&full_rest.points_mm[offsets[s]], offsets[s + 1] - offsets[s]);
     for (size_t i = offsets[s]; i < offsets[s + 1]; ++i) {
       Particle& particle = out.particles_[i];
       std::vector<Eigen::Vector3d> candidates;
       for (int j = 0; j < k; ++j) {
         const size_t g = static_cast<size_t>(order[static_cast<size_t>(j)]);
         particle.guides[j] = static_cast<int>(g);
-        Locate(guide_fractions[g], fractions[i - offsets[s]], &particle.segment[j], &particle.blend[j]);
+        Locate(guide_fractions[g], fractions[i - offsets[s]], &particle.segment[j],
+               &particle.blend[j]);
         candidates.push_back(Blend(guides_rest[g], particle.segment[j], particle.blend[j]));
       }
       const Eigen::Vector3d p = full_rest.points_mm[i].cast<double>();
@@ -120,18 +126,21 @@ Result<GuideInterpolation> GuideInterpolation::Build(const StrandSet& full_rest,
       squared_error += (fit - p).squaredNorm();
     }
   }
-  out.rest_fit_rms_mm_ = std::sqrt(squared_error / static_cast<double>(std::max<size_t>(1, full_rest.num_points())));
+  out.rest_fit_rms_mm_ =
+      std::sqrt(squared_error / static_cast<double>(std::max<size_t>(1, full_rest.num_points())));
   return out;
 }
 
-Result<StrandSet> GuideInterpolation::Apply(const std::vector<std::vector<Eigen::Vector3d>>& guides_now) const {
+Result<StrandSet> GuideInterpolation::Apply(
+    const std::vector<std::vector<Eigen::Vector3d>>& guides_now) const {
   if (guides_now.size() != guides_rest_.size()) {
-    return InvalidArgument("guide interpolation: " + std::to_string(guides_now.size()) + " guides given, " +
-                           std::to_string(guides_rest_.size()) + " at rest");
+    return InvalidArgument("guide interpolation: " + std::to_string(guides_now.size()) +
+                           " guides given, " + std::to_string(guides_rest_.size()) + " at rest");
   }
   for (size_t g = 0; g < guides_now.size(); ++g) {
     if (guides_now[g].size() != guides_rest_[g].size()) {
-      return InvalidArgument("guide interpolation: guide " + std::to_string(g) + " changed its point count");
+      return InvalidArgument("guide interpolation: guide " + std::to_string(g) +
+                             " changed its point count");
     }
   }
   StrandSet out = rest_;
@@ -140,8 +149,9 @@ Result<StrandSet> GuideInterpolation::Apply(const std::vector<std::vector<Eigen:
     Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
     for (int j = 0; j < per_particle_; ++j) {
       const size_t g = static_cast<size_t>(particle.guides[j]);
-      displacement += particle.weights[j] * (Blend(guides_now[g], particle.segment[j], particle.blend[j]) -
-                                             Blend(guides_rest_[g], particle.segment[j], particle.blend[j]));
+      displacement +=
+          particle.weights[j] * (Blend(guides_now[g], particle.segment[j], particle.blend[j]) -
+                                 Blend(guides_rest_[g], particle.segment[j], particle.blend[j]));
     }
     out.points_mm[i] += displacement.cast<float>();
   }

@@ -14,9 +14,8 @@
 // shape is reproduced exactly (ours: ref. [40] interpolates positions).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/status.h"
 #include "core/strands.h"
@@ -24,7 +23,7 @@
 namespace hairrig {
 
 struct GuideInterpolationOptions {
-  int guides_per_strand = 4;   // K
+  int guides_per_strand = 4;    // K
   double regularisation = 0.1;  // beta
 };
 
@@ -33,9 +32,9 @@ class GuideInterpolation {
   // `full_rest` are the strands to drive; `guides_rest` the guides' curves at
   // rest (root first, any number of points each). InvalidArgument for no
   // guide, a guide of fewer than 2 points, non-finite input or bad options.
-  static Result<GuideInterpolation> Build(const StrandSet& full_rest,
-                                          const std::vector<std::vector<Eigen::Vector3d>>& guides_rest,
-                                          const GuideInterpolationOptions& options);
+  static Result<GuideInterpolation> Build(
+      const StrandSet& full_rest, const std::vector<std::vector<Eigen::Vector3d>>& guides_rest,
+      const GuideInterpolationOptions& options);
 
   // The full strands for the guides' curves now (same guides, same point
   // counts as at rest). InvalidArgument if the counts differ.
@@ -54,7 +53,7 @@ class GuideInterpolation {
   };
   StrandSet rest_;
   std::vector<std::vector<Eigen::Vector3d>> guides_rest_;
-  std::vector<Particle> particles_;                   // one per point of rest_
+  std::vector<Particle> particles_;  // one per point of rest_
   int per_particle_ = 0;
   double rest_fit_rms_mm_ = 0;
 };

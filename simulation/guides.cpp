@@ -6,9 +6,11 @@
 
 namespace hairrig {
 
-std::vector<Eigen::Vector3f> ResampleByArcLength(const Eigen::Vector3f* points, size_t count, int samples) {
+std::vector<Eigen::Vector3f> ResampleByArcLength(const Eigen::Vector3f* points, size_t count,
+                                                 int samples) {
   std::vector<double> cumulative{0};
-  for (size_t i = 1; i < count; ++i) cumulative.push_back(cumulative.back() + (points[i] - points[i - 1]).norm());
+  for (size_t i = 1; i < count; ++i)
+    cumulative.push_back(cumulative.back() + (points[i] - points[i - 1]).norm());
   std::vector<Eigen::Vector3f> out;
   const double total = cumulative.back();
   size_t seg = 0;
@@ -20,7 +22,8 @@ std::vector<Eigen::Vector3f> ResampleByArcLength(const Eigen::Vector3f* points, 
       continue;
     }
     const double span = cumulative[seg + 1] - cumulative[seg];
-    const float u = static_cast<float>(span > 0 ? std::clamp((s - cumulative[seg]) / span, 0.0, 1.0) : 0.0);
+    const float u =
+        static_cast<float>(span > 0 ? std::clamp((s - cumulative[seg]) / span, 0.0, 1.0) : 0.0);
     out.push_back(points[seg] + u * (points[seg + 1] - points[seg]));
   }
   return out;
@@ -34,7 +37,9 @@ struct Cluster {
   std::vector<int> members;
   int guide = -1;
   double sum_squared = 0;  // of member-to-guide distances, per sample
-  double Rms() const { return members.empty() ? 0 : std::sqrt(sum_squared / static_cast<double>(members.size())); }
+  double Rms() const {
+    return members.empty() ? 0 : std::sqrt(sum_squared / static_cast<double>(members.size()));
+  }
 };
 
 double Distance2(const Features& f, int a, const Eigen::RowVectorXf& b, int samples) {
@@ -61,7 +66,8 @@ void ChooseGuide(const Features& f, int samples, Cluster* c) {
   for (int m : c->members) c->sum_squared += Distance2(f, m, guide, samples);
 }
 
-int Farthest(const Features& f, const std::vector<int>& members, const Eigen::RowVectorXf& from, int samples) {
+int Farthest(const Features& f, const std::vector<int>& members, const Eigen::RowVectorXf& from,
+             int samples) {
   int best = members.front();
   double best_d = -1;
   for (int m : members) {
@@ -82,7 +88,9 @@ std::pair<Cluster, Cluster> Split(const Features& f, const Cluster& c, const Gui
   for (int it = 0; it < o.kmeans_iterations; ++it) {
     halves = {};
     for (int m : c.members) {
-      (Distance2(f, m, a, o.samples) <= Distance2(f, m, b, o.samples) ? halves.first : halves.second).members.push_back(m);
+      (Distance2(f, m, a, o.samples) <= Distance2(f, m, b, o.samples) ? halves.first
+                                                                      : halves.second)
+          .members.push_back(m);
     }
     if (halves.first.members.empty() || halves.second.members.empty()) break;
     Eigen::RowVectorXf na = Eigen::RowVectorXf::Zero(f.cols()), nb = na;
@@ -97,7 +105,8 @@ std::pair<Cluster, Cluster> Split(const Features& f, const Cluster& c, const Gui
   if (halves.first.members.empty() || halves.second.members.empty()) {
     // Identical members: split the list in half.
     halves = {};
-    for (size_t i = 0; i < c.members.size(); ++i) (i % 2 ? halves.second : halves.first).members.push_back(c.members[i]);
+    for (size_t i = 0; i < c.members.size(); ++i)
+      (i % 2 ? halves.second : halves.first).members.push_back(c.members[i]);
   }
   ChooseGuide(f, o.samples, &halves.first);
   ChooseGuide(f, o.samples, &halves.second);
@@ -110,16 +119,18 @@ Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions
   HR_RETURN_IF_ERROR(strands.Validate());
   const int n = static_cast<int>(strands.num_strands());
   if (n == 0) return InvalidArgument("guide selection: the hair model has no strands");
-  if (o.samples < 2 || o.num_guides < 0 || o.num_guides > n || !(o.target_rms_mm > 0) || o.kmeans_iterations < 1) {
-    return InvalidArgument("guide selection: need samples >= 2, 0 <= num_guides <= " + std::to_string(n) +
-                           " strands, target_rms_mm > 0");
+  if (o.samples < 2 || o.num_guides < 0 || o.num_guides > n || !(o.target_rms_mm > 0) ||
+      o.kmeans_iterations < 1) {
+    return InvalidArgument("guide selection: need samples >= 2, 0 <= num_guides <= " +
+                           std::to_string(n) + " strands, target_rms_mm > 0");
   }
   Features f(n, 3 * o.samples);
   const auto offsets = strands.Offsets();
   for (int s = 0; s < n; ++s) {
     const auto pts = ResampleByArcLength(&strands.points_mm[offsets[static_cast<size_t>(s)]],
                                          strands.point_counts[static_cast<size_t>(s)], o.samples);
-    for (int k = 0; k < o.samples; ++k) f.block<1, 3>(s, 3 * k) = pts[static_cast<size_t>(k)].transpose();
+    for (int k = 0; k < o.samples; ++k)
+      f.block<1, 3>(s, 3 * k) = pts[static_cast<size_t>(k)].transpose();
   }
   std::vector<Cluster> clusters(1);
   for (int s = 0; s < n; ++s) clusters[0].members.push_back(s);
@@ -133,8 +144,9 @@ Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions
       if (std::sqrt(total / n) <= o.target_rms_mm) break;
     }
     // The cluster that contributes most error is split next.
-    auto worst = std::max_element(clusters.begin(), clusters.end(),
-                                  [](const Cluster& x, const Cluster& y) { return x.sum_squared < y.sum_squared; });
+    auto worst = std::max_element(
+        clusters.begin(), clusters.end(),
+        [](const Cluster& x, const Cluster& y) { return x.sum_squared < y.sum_squared; });
     if (worst->members.size() < 2) break;
     auto [a, b] = Split(f, *worst, o);
     *worst = std::move(a);
@@ -145,7 +157,8 @@ Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions
   double total = 0;
   for (size_t g = 0; g < clusters.size(); ++g) {
     out.guide_strands.push_back(clusters[g].guide);
-    for (int m : clusters[g].members) out.cluster_of_strand[static_cast<size_t>(m)] = static_cast<int>(g);
+    for (int m : clusters[g].members)
+      out.cluster_of_strand[static_cast<size_t>(m)] = static_cast<int>(g);
     total += clusters[g].sum_squared;
     out.max_cluster_rms_mm = std::max(out.max_cluster_rms_mm, clusters[g].Rms());
   }

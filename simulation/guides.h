@@ -10,9 +10,8 @@
 // nearest to the cluster mean.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/status.h"
 #include "core/strands.h"
@@ -20,10 +19,10 @@
 namespace hairrig {
 
 struct GuideOptions {
-  int num_guides = 0;            // K; 0: grow until target_rms_mm is met
-  double target_rms_mm = 5.0;    // used when num_guides is 0
-  int samples = 16;              // resampling per strand
-  int max_guides = 100000;       // safety bound when growing by target
+  int num_guides = 0;          // K; 0: grow until target_rms_mm is met
+  double target_rms_mm = 5.0;  // used when num_guides is 0
+  int samples = 16;            // resampling per strand
+  int max_guides = 100000;     // safety bound when growing by target
   int kmeans_iterations = 12;
 };
 
@@ -36,7 +35,8 @@ struct GuideSelection {
 
 // Points of one strand resampled to `samples` points at equal arc length
 // (root first). A strand of one point repeats it.
-std::vector<Eigen::Vector3f> ResampleByArcLength(const Eigen::Vector3f* points, size_t count, int samples);
+std::vector<Eigen::Vector3f> ResampleByArcLength(const Eigen::Vector3f* points, size_t count,
+                                                 int samples);
 
 // InvalidArgument for an empty model, bad options, or K above the strand count.
 Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions& options);

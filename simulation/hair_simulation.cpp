@@ -1,10 +1,9 @@
 #include "simulation/hair_simulation.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include <Eigen/Geometry>
 
 #include "core/parallel.h"
 #include "core/transform.h"
@@ -16,7 +15,7 @@ namespace hairrig {
 namespace {
 
 constexpr double kGravity = 9.81;
-constexpr double kRampS = 0.5;      // scenarios start smoothly over this time
+constexpr double kRampS = 0.5;  // scenarios start smoothly over this time
 constexpr double kGustHz = 0.7;
 constexpr double kGustFraction = 0.4;
 
@@ -37,9 +36,12 @@ Result<Scenario> ParseScenario(const std::string& name) {
 
 const char* ScenarioName(Scenario scenario) {
   switch (scenario) {
-    case Scenario::kGravity: return "gravity";
-    case Scenario::kHeadShake: return "head-shake";
-    case Scenario::kWind: return "wind";
+    case Scenario::kGravity:
+      return "gravity";
+    case Scenario::kHeadShake:
+      return "head-shake";
+    case Scenario::kWind:
+      return "wind";
   }
   return "?";
 }
@@ -55,12 +57,15 @@ struct HairSimulation::Impl {
   // The head's turn about `up` (rad) at time t.
   double ShakeAngle(double t) const {
     if (options.scenario != Scenario::kHeadShake) return 0;
-    return options.shake_amplitude_deg * kPi / 180 * Ramp(t) * std::sin(2 * kPi * options.shake_frequency_hz * t);
+    return options.shake_amplitude_deg * kPi / 180 * Ramp(t) *
+           std::sin(2 * kPi * options.shake_frequency_hz * t);
   }
   Eigen::Matrix3d HeadRotation(double t) const {
     return Eigen::AngleAxisd(ShakeAngle(t), options.up).toRotationMatrix();
   }
-  Eigen::Vector3d PivotMm() const { return options.has_head ? options.head_center_mm : Eigen::Vector3d::Zero(); }
+  Eigen::Vector3d PivotMm() const {
+    return options.has_head ? options.head_center_mm : Eigen::Vector3d::Zero();
+  }
 };
 
 Environment HairSimulation::EnvironmentAt(double t) const {
@@ -72,8 +77,10 @@ Environment HairSimulation::EnvironmentAt(double t) const {
   if (m.options.scenario == Scenario::kHeadShake) {
     const double h = 1e-4;
     const double rate = (m.ShakeAngle(t + h) - m.ShakeAngle(t - h)) / (2 * h);
-    const double acceleration = (m.ShakeAngle(t + h) - 2 * m.ShakeAngle(t) + m.ShakeAngle(t - h)) / (h * h);
-    env.frame_angular_velocity = rate * m.options.up;  // `up` is the turn's axis: the same in both frames
+    const double acceleration =
+        (m.ShakeAngle(t + h) - 2 * m.ShakeAngle(t) + m.ShakeAngle(t - h)) / (h * h);
+    env.frame_angular_velocity =
+        rate * m.options.up;  // `up` is the turn's axis: the same in both frames
     env.frame_angular_acceleration = acceleration * m.options.up;
   }
   if (m.options.scenario == Scenario::kWind) {
@@ -83,8 +90,8 @@ Environment HairSimulation::EnvironmentAt(double t) const {
   return env;
 }
 
-Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(const HelixModel& model,
-                                                               const HairSimulationOptions& options) {
+Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(
+    const HelixModel& model, const HairSimulationOptions& options) {
   if (model.guides.empty()) return InvalidArgument("simulation: the model has no guide strand");
   HR_RETURN_IF_ERROR(options.material.Validate());
   std::string why;
@@ -109,13 +116,15 @@ Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(const HelixModel&
   for (size_t g = 0; g < model.guides.size(); ++g) {
     Eigen::VectorXd q;
     auto strand = SuperHelixFromPiecewiseHelix(model.guides[g], options.up, &q);
-    if (!strand.ok()) return InvalidArgument("guide " + std::to_string(g) + ": " + strand.status().message());
+    if (!strand.ok())
+      return InvalidArgument("guide " + std::to_string(g) + ": " + strand.status().message());
     m.dynamics.emplace_back(*strand, options.material, dynamics_options);
     if (options.contact_from_rest) m.dynamics.back().HoldContactAtRest(q);
     if (options.inverse_statics) {
       InverseStaticsReport report;
       HR_RETURN_IF_ERROR(SolveInverseStatics(at_rest, q, &m.dynamics.back(), &report));
-      m.stats.max_inverse_statics_change = std::max(m.stats.max_inverse_statics_change, report.max_rest_change);
+      m.stats.max_inverse_statics_change =
+          std::max(m.stats.max_inverse_statics_change, report.max_rest_change);
     }
     m.states.push_back({q, Eigen::VectorXd::Zero(q.size())});
   }
@@ -140,7 +149,8 @@ Status HairSimulation::Advance(double seconds) {
     return [&](size_t g) {
       for (int k = 0; k < steps; ++k) {
         StepReport report;
-        statuses[g] = m.dynamics[g].Step(environments[static_cast<size_t>(k)], &m.states[g], &report);
+        statuses[g] =
+            m.dynamics[g].Step(environments[static_cast<size_t>(k)], &m.states[g], &report);
         if (!statuses[g].ok()) break;
         contacts[g] += report.contacts;
         iterations[g] += report.solver_iterations;
@@ -175,7 +185,8 @@ std::vector<std::vector<Eigen::Vector3d>> HairSimulation::GuideCurves(int per_el
   const Eigen::Vector3d translation = head_translation_mm();
   std::vector<std::vector<Eigen::Vector3d>> curves;
   for (size_t g = 0; g < impl_->dynamics.size(); ++g) {
-    std::vector<Eigen::Vector3d> curve = Centreline(impl_->dynamics[g].strand(), impl_->states[g].q, per_element);
+    std::vector<Eigen::Vector3d> curve =
+        Centreline(impl_->dynamics[g].strand(), impl_->states[g].q, per_element);
     for (Eigen::Vector3d& p : curve) p = rotation * (1e3 * p) + translation;
     curves.push_back(std::move(curve));
   }

@@ -5,11 +5,10 @@
 // model's world frame; the dynamics run in SI units in the head's frame.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 #include "simulation/helix_model.h"
@@ -38,17 +37,17 @@ struct HairSimulationOptions {
   double shake_amplitude_deg = 30;  // head-shake: a turn about `up` through the head centre
   double shake_frequency_hz = 1.5;
   Eigen::Vector3d wind_m_s{2.0, 0, 0};  // wind: mean air velocity, gusting +-40 % at 0.7 Hz
-  bool inverse_statics = true;      // Sec. VI: the fitted shape is the rest state
+  bool inverse_statics = true;          // Sec. VI: the fitted shape is the rest state
   // Contact holds each point of a guide no nearer the head than it rests
   // (SuperHelixDynamics::HoldContactAtRest), so a guide fitted onto or into
   // the head starts without contact forces; false: the margin everywhere.
   bool contact_from_rest = true;
-  int threads = 0;                  // 0: one per core
+  int threads = 0;  // 0: one per core
 };
 
 struct HairSimulationStats {
   long long steps = 0;
-  long long contact_samples = 0;     // summed over guides and steps
+  long long contact_samples = 0;  // summed over guides and steps
   double mean_solver_iterations = 0;
   double max_inverse_statics_change = 0;  // rad/m
 };
@@ -57,7 +56,8 @@ class HairSimulation {
  public:
   // InvalidArgument for a model with no guide, bad options (named), or a guide
   // that cannot become a super-helix (named by index).
-  static Result<std::unique_ptr<HairSimulation>> Create(const HelixModel& model, const HairSimulationOptions& options);
+  static Result<std::unique_ptr<HairSimulation>> Create(const HelixModel& model,
+                                                        const HairSimulationOptions& options);
   ~HairSimulation();
 
   // Steps until `seconds` more of simulated time have passed. A failing guide

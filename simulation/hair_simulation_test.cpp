@@ -1,9 +1,9 @@
 #include "simulation/hair_simulation.h"
 
-#include <cmath>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
 
 #include "core/head_model.h"
 #include "simulation/guide_interpolation.h"
@@ -23,8 +23,10 @@ HelixModel SmallHairstyle(int guides) {
     Eigen::Vector3d t = out.normalized();
     PiecewiseHelix guide;
     for (int e = 0; e < 6; ++e) {
-      const Eigen::Vector3d normal = (Eigen::Vector3d(0, 0, -1) - t.dot(Eigen::Vector3d(0, 0, -1)) * t).normalized();
-      const HelixElement h = HelixFromCurvatureTorsion(p, t, normal, e < 3 ? 0.02 : 0.002, 0.001, 20);
+      const Eigen::Vector3d normal =
+          (Eigen::Vector3d(0, 0, -1) - t.dot(Eigen::Vector3d(0, 0, -1)) * t).normalized();
+      const HelixElement h =
+          HelixFromCurvatureTorsion(p, t, normal, e < 3 ? 0.02 : 0.002, 0.001, 20);
       guide.elements.push_back(h);
       p = h.PointAt(h.length_mm);
       t = h.TangentAt(h.length_mm);
@@ -43,7 +45,8 @@ HairSimulationOptions WithHead() {
   return o;
 }
 
-double MaxTipMove(const std::vector<std::vector<Eigen::Vector3d>>& a, const std::vector<std::vector<Eigen::Vector3d>>& b) {
+double MaxTipMove(const std::vector<std::vector<Eigen::Vector3d>>& a,
+                  const std::vector<std::vector<Eigen::Vector3d>>& b) {
   double worst = 0;
   for (size_t g = 0; g < a.size(); ++g) worst = std::max(worst, (a[g].back() - b[g].back()).norm());
   return worst;
@@ -89,7 +92,8 @@ TEST(HairSimulation, ContactIsWithTheHeadSurfaceAndHeldFromRest) {
   ASSERT_TRUE((*held)->Advance(0.5).ok());
   EXPECT_LT(MaxTipMove(start, (*held)->GuideCurves(4)), 0.5);  // mm
   EXPECT_EQ((*held)->stats().contact_samples, 0);
-  EXPECT_NEAR((*held)->stats().max_inverse_statics_change, (*free)->stats().max_inverse_statics_change, 1e-9);
+  EXPECT_NEAR((*held)->stats().max_inverse_statics_change,
+              (*free)->stats().max_inverse_statics_change, 1e-9);
 
   // With the plain margin the surface pushes on every buried sample, and the
   // rest curvatures must change far more to hold the fit against it.
@@ -97,7 +101,8 @@ TEST(HairSimulation, ContactIsWithTheHeadSurfaceAndHeldFromRest) {
   ASSERT_TRUE(pushed.ok()) << pushed.status().ToString();
   ASSERT_TRUE((*pushed)->Advance(0.5).ok());
   EXPECT_GT((*pushed)->stats().contact_samples, 0);
-  EXPECT_GT((*pushed)->stats().max_inverse_statics_change, 2 * (*free)->stats().max_inverse_statics_change);
+  EXPECT_GT((*pushed)->stats().max_inverse_statics_change,
+            2 * (*free)->stats().max_inverse_statics_change);
 }
 
 TEST(HairSimulation, HeadShakeCarriesRootsAndSwingsTips) {
@@ -115,7 +120,8 @@ TEST(HairSimulation, HeadShakeCarriesRootsAndSwingsTips) {
   }
   // The tips lag behind the head: they are not where a rigid turn puts them.
   double lag = 0;
-  for (size_t g = 0; g < now.size(); ++g) lag = std::max(lag, (now[g].back() - turn * start[g].back()).norm());
+  for (size_t g = 0; g < now.size(); ++g)
+    lag = std::max(lag, (now[g].back() - turn * start[g].back()).norm());
   EXPECT_GT(lag, 2.0);
 }
 
@@ -129,7 +135,8 @@ TEST(HairSimulation, WindBlowsDownwind) {
   ASSERT_TRUE((*sim)->Advance(1.5).ok());
   const auto now = (*sim)->GuideCurves(4);
   double mean_dx = 0;
-  for (size_t g = 0; g < now.size(); ++g) mean_dx += (now[g].back() - start[g].back()).x() / static_cast<double>(now.size());
+  for (size_t g = 0; g < now.size(); ++g)
+    mean_dx += (now[g].back() - start[g].back()).x() / static_cast<double>(now.size());
   EXPECT_GT(mean_dx, 2.0);
 }
 
@@ -185,7 +192,8 @@ TEST(GuideInterpolation, RestIsExactAndMotionFollowsGuides) {
   ASSERT_TRUE(interp.ok()) << interp.status().ToString();
   auto at_rest = interp->Apply(guides);
   ASSERT_TRUE(at_rest.ok());
-  for (size_t i = 0; i < full.num_points(); ++i) EXPECT_EQ(at_rest->points_mm[i], full.points_mm[i]);
+  for (size_t i = 0; i < full.num_points(); ++i)
+    EXPECT_EQ(at_rest->points_mm[i], full.points_mm[i]);
 
   // Translate every guide: every particle translates with them (weights sum to 1).
   auto moved = guides;

@@ -27,8 +27,8 @@ constexpr double kZeroTurnTolerance = kTurnPenalty;
 
 // Eq. 8's offset over arc length s from a point with unit tangent t, for the
 // unit axis, tau_bar = <t, axis>, w = |Omega| and the sine and cosine of w s.
-Eigen::Vector3d OffsetAlong(const Eigen::Vector3d& t, const Eigen::Vector3d& axis, double tau_bar, double w, double s,
-                            double sin_ws, double cos_ws) {
+Eigen::Vector3d OffsetAlong(const Eigen::Vector3d& t, const Eigen::Vector3d& axis, double tau_bar,
+                            double w, double s, double sin_ws, double cos_ws) {
   return tau_bar * s * axis + sin_ws / w * (t - tau_bar * axis) - (1 - cos_ws) / w * t.cross(axis);
 }
 }  // namespace
@@ -72,7 +72,8 @@ Eigen::Vector3d HelixElement::TangentAt(double s) const {
 }
 
 // Eq. 8 and its derivative with one sine and cosine.
-void HelixElement::PointAndTangentAt(double s, Eigen::Vector3d* point, Eigen::Vector3d* tangent) const {
+void HelixElement::PointAndTangentAt(double s, Eigen::Vector3d* point,
+                                     Eigen::Vector3d* tangent) const {
   const double w = darboux_per_mm.norm();
   if (w < 1e-15) {
     *point = start_mm + s * start_tangent;
@@ -83,7 +84,8 @@ void HelixElement::PointAndTangentAt(double s, Eigen::Vector3d* point, Eigen::Ve
   const double tau_bar = start_tangent.dot(axis);
   const double sin_ws = std::sin(w * s), cos_ws = std::cos(w * s);
   *point = start_mm + OffsetAlong(start_tangent, axis, tau_bar, w, s, sin_ws, cos_ws);
-  *tangent = start_tangent + (cos_ws - 1) * (start_tangent - tau_bar * axis) - sin_ws * start_tangent.cross(axis);
+  *tangent = start_tangent + (cos_ws - 1) * (start_tangent - tau_bar * axis) -
+             sin_ws * start_tangent.cross(axis);
 }
 
 double HelixElement::torsion_per_mm() const {
@@ -195,7 +197,8 @@ class HelixSearch {
     step.resize(count);
     thread_local std::vector<double> half_turn;  // atan2(c, M |sin phi|) per distinct |sin phi|
     half_turn.resize(angles.abs_sin.size());
-    for (size_t j = 0; j < half_turn.size(); ++j) half_turn[j] = std::atan2(c_, m_ * angles.abs_sin[j]);
+    for (size_t j = 0; j < half_turn.size(); ++j)
+      half_turn[j] = std::atan2(c_, m_ * angles.abs_sin[j]);
     for (size_t k = 0; k < count; ++k) {
       const double sin_phi = angles.sin_phi[k], cos_phi = angles.cos_phi[k];
       theta0[k] = ThetaFromHalf(sin_phi, half_turn[angles.abs_sin_index[k]], 0);
@@ -205,7 +208,8 @@ class HelixSearch {
     }
     double best_score = std::numeric_limits<double>::infinity();
     bool found = false;
-    if (const Root* closest = known.Closest(preferred_length_mm); closest && preferred_length_mm > 0) {
+    if (const Root* closest = known.Closest(preferred_length_mm);
+        closest && preferred_length_mm > 0) {
       best_score = std::abs(closest->helix.length_mm - preferred_length_mm);
       *best = *closest;
       found = true;
@@ -219,11 +223,16 @@ class HelixSearch {
         const double f_b = f_at(static_cast<size_t>(i));
         Root candidate;
         const bool bracket = (f_a == 0 || f_a * f_b < 0) &&
-                             !(turns == 0 && known.Within(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)]));
-        if (bracket && CanBeat(angles, theta0, static_cast<size_t>(i), turns, preferred_length_mm, best_score - turn_cost) &&
-            Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, f_b, turns, &candidate)) {
+                             !(turns == 0 && known.Within(phi[static_cast<size_t>(i) - 1],
+                                                          phi[static_cast<size_t>(i)]));
+        if (bracket &&
+            CanBeat(angles, theta0, static_cast<size_t>(i), turns, preferred_length_mm,
+                    best_score - turn_cost) &&
+            Refine(phi[static_cast<size_t>(i) - 1], phi[static_cast<size_t>(i)], f_a, f_b, turns,
+                   &candidate)) {
           const double length = candidate.helix.length_mm;
-          const double score = preferred_length_mm > 0 ? std::abs(length - preferred_length_mm) + turn_cost : length;
+          const double score =
+              preferred_length_mm > 0 ? std::abs(length - preferred_length_mm) + turn_cost : length;
           if (score < best_score && EndsAtTarget(candidate.helix)) {
             best_score = score;
             *best = candidate;
@@ -253,8 +262,9 @@ class HelixSearch {
   void ShortRotation(double hint, ZeroTurnRoots* roots) const {
     constexpr double kSmallTurn = 0.25;  // c, the sine of half the turn: 29 deg
     const bool hint_on_half = hint > kTwoPi / 2 && hint < kTwoPi;
-    const double guess =
-        c_ > kSmallTurn && hint_on_half ? hint : kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
+    const double guess = c_ > kSmallTurn && hint_on_half
+                             ? hint
+                             : kTwoPi + std::atan2(-1.0, 3 * m_ * m_ * sin_psi_ / (c_ * c_));
     ZeroTurnRoot(-1, guess, roots);
   }
   void LongRotation(double hint, ZeroTurnRoots* roots) const { ZeroTurnRoot(1, hint, roots); }
@@ -274,7 +284,9 @@ class HelixSearch {
       const double lo = first + quarter * kPi / 2, hi = lo + kPi / 2;
       Root& root = roots->root[roots->count];
       root.phi = guess > lo && guess < hi ? guess : 0.5 * (lo + hi);
-      if (RefineFrom(root.phi, lo, hi, f[quarter], f[quarter + 1], 0, &root) && EndsAtTarget(root.helix)) ++roots->count;
+      if (RefineFrom(root.phi, lo, hi, f[quarter], f[quarter + 1], 0, &root) &&
+          EndsAtTarget(root.helix))
+        ++roots->count;
     }
   }
 
@@ -290,7 +302,7 @@ class HelixSearch {
       return theta * chord_len_ / GNorm(m_ * theta * angles.cos_phi[j]);
     };
     const double lo = std::min(length(k - 1), length(k)), hi = std::max(length(k - 1), length(k));
-    const double miss = preferred_length_mm < lo ? lo - preferred_length_mm
+    const double miss = preferred_length_mm < lo   ? lo - preferred_length_mm
                         : preferred_length_mm > hi ? preferred_length_mm - hi
                                                    : 0.0;
     return miss < budget * 1.5 + 1e-9 * preferred_length_mm;
@@ -329,11 +341,16 @@ class HelixSearch {
   // below 500, and 2c below 2).
   double GNorm(double axial) const { return std::sqrt(axial * axial + 4 * c_ * c_); }
   // The sine and cosine of psi - phi (the chord's angle from the axis).
-  double SinChordFromAxis(double sin_phi, double cos_phi) const { return sin_psi_ * cos_phi - cos_psi_ * sin_phi; }
-  double CosChordFromAxis(double sin_phi, double cos_phi) const { return cos_psi_ * cos_phi + sin_psi_ * sin_phi; }
+  double SinChordFromAxis(double sin_phi, double cos_phi) const {
+    return sin_psi_ * cos_phi - cos_psi_ * sin_phi;
+  }
+  double CosChordFromAxis(double sin_phi, double cos_phi) const {
+    return cos_psi_ * cos_phi + sin_psi_ * sin_phi;
+  }
   // f from the sine and cosine of phi.
   double FromSinCos(double sin_phi, double cos_phi, double theta) const {
-    return m_ * theta * cos_phi * SinChordFromAxis(sin_phi, cos_phi) - 2 * c_ * CosChordFromAxis(sin_phi, cos_phi);
+    return m_ * theta * cos_phi * SinChordFromAxis(sin_phi, cos_phi) -
+           2 * c_ * CosChordFromAxis(sin_phi, cos_phi);
   }
 
   // An axis angle with its sine and cosine, the turn theta about it (with
@@ -352,7 +369,8 @@ class HelixSearch {
   // theta'' step^2 / 2 (|theta''| up to about 2 (M / c)^2) is below 1e-16 rad
   // for turns over 0.01 deg (c > 1e-4); EndsAtTarget checks the helix in any case.
   static Axis MovedSlightly(const Axis& a, double step) {
-    return {a.phi + step, a.sin + a.cos * step, a.cos - a.sin * step, a.theta + a.dtheta * step, a.dtheta};
+    return {a.phi + step, a.sin + a.cos * step, a.cos - a.sin * step, a.theta + a.dtheta * step,
+            a.dtheta};
   }
 
   // The root on [lo, hi]; true with the helix if g points along the chord.
@@ -363,7 +381,8 @@ class HelixSearch {
     return RefineFrom(0.5 * (lo + hi), lo, hi, f_lo, f_hi, turns, out);
   }
   // From phi.
-  bool RefineFrom(double phi, double lo, double hi, double f_lo, double f_hi, int turns, Root* out) const {
+  bool RefineFrom(double phi, double lo, double hi, double f_lo, double f_hi, int turns,
+                  Root* out) const {
     constexpr double kTolerance = 1e-12;
     if (f_lo == 0) {
       out->phi = lo;
@@ -453,7 +472,8 @@ namespace {
 
 // HelixThrough's conditions on its input (the co-helical one unless the
 // tangents are equal).
-Status CheckPair(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0, const Eigen::Vector3d& t1) {
+Status CheckPair(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0,
+                 const Eigen::Vector3d& t1) {
   const double chord_len = chord.norm();
   if (!(chord_len > 1e-12) || !chord.allFinite())
     return InvalidArgument("helix: the two points coincide or are not finite");
@@ -470,8 +490,10 @@ Status CheckPair(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0, const 
 
 }  // namespace
 
-std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
-                                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1) {
+std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0,
+                                                  const Eigen::Vector3d& t0,
+                                                  const Eigen::Vector3d& p1,
+                                                  const Eigen::Vector3d& t1) {
   std::vector<HelixElement> helices;
   if (!CheckPair(p1 - p0, t0, t1).ok() || (t1 - t0).norm() < kStraightTangentGap) return helices;
   const HelixSearch search(p0, t0, p1, t1);
@@ -515,9 +537,13 @@ Result<HelixElement> HelixThrough(const Eigen::Vector3d& p0, const Eigen::Vector
   ZeroTurnRoots known;
   if (preferred_length_mm > 0) {
     search.ShortRotation(hint, &known);
-    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return found(*root);
+    if (const auto* root = known.Closest(preferred_length_mm);
+        root && close_to_preferred(root->helix))
+      return found(*root);
     search.LongRotation(hint, &known);
-    if (const auto* root = known.Closest(preferred_length_mm); root && close_to_preferred(root->helix)) return found(*root);
+    if (const auto* root = known.Closest(preferred_length_mm);
+        root && close_to_preferred(root->helix))
+      return found(*root);
   }
   Root best;
   for (int samples : {kCoarseScan, kFineScan}) {

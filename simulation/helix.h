@@ -65,8 +65,10 @@ bool ShortRotationExists(const Eigen::Vector3d& chord, const Eigen::Vector3d& t0
 // scan; HelixThrough takes one of them when its length is within 2 % of the
 // preferred one. At most one per quarter; empty when the pair is not
 // co-helical, the tangents are equal or none checks out.
-std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0, const Eigen::Vector3d& t0,
-                                                  const Eigen::Vector3d& p1, const Eigen::Vector3d& t1);
+std::vector<HelixElement> HelicesWithoutExtraTurn(const Eigen::Vector3d& p0,
+                                                  const Eigen::Vector3d& t0,
+                                                  const Eigen::Vector3d& p1,
+                                                  const Eigen::Vector3d& t1);
 
 // The helix through p0 with tangent t0 that reaches p1 with tangent t1
 // (interpolation of two points and two tangents, Sec. V-C after ref. [38]).

@@ -4,9 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <vector>
-
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "core/file_util.h"
 #include "core/geometry_json.h"
@@ -30,12 +29,14 @@ HelixElement ElementFromJson(const JsonObject& e) {
   element.darboux_per_mm = Vector3Field(e, "darboux_per_mm");
   element.length_mm = e.Number("length_mm", {.min = 0});
   if (e.ok() && !(element.length_mm > 0)) e.Fail("length_mm", "must be positive");
-  if (e.ok() && std::abs(element.start_tangent.norm() - 1) > 1e-6) e.Fail("start_tangent", "is not a unit vector");
+  if (e.ok() && std::abs(element.start_tangent.norm() - 1) > 1e-6)
+    e.Fail("start_tangent", "is not a unit vector");
   return element;
 }
 }  // namespace
 
-Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& options, FitSummary* summary) {
+Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& options,
+                                FitSummary* summary) {
   const auto t0 = std::chrono::steady_clock::now();
   HR_ASSIGN_OR_RETURN(GuideSelection selection, SelectGuides(strands, options.guides));
   HelixModel model;
@@ -51,18 +52,21 @@ Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& opti
   std::vector<Result<PiecewiseHelix>> fitted(count, Result<PiecewiseHelix>(Internal("not fitted")));
   std::vector<StrandFitSummary> fits(count);
   // At most one thread per 8 guides.
-  const int threads = std::min(ResolveThreads(options.threads), std::max(1, static_cast<int>(count / 8)));
+  const int threads =
+      std::min(ResolveThreads(options.threads), std::max(1, static_cast<int>(count / 8)));
   ParallelFor(count, threads, [&] {
     return [&, points = std::vector<Eigen::Vector3d>()](size_t k) mutable {
       const size_t g = static_cast<size_t>(selection.guide_strands[k]);
       points.clear();
-      for (size_t i = offsets[g]; i < offsets[g + 1]; ++i) points.push_back(strands.points_mm[i].cast<double>());
+      for (size_t i = offsets[g]; i < offsets[g + 1]; ++i)
+        points.push_back(strands.points_mm[i].cast<double>());
       fitted[k] = FitFloatingTangents(points, options.fitting, &fits[k]);
     };
   });
   double error_sum = 0, elements = 0;
   for (size_t k = 0; k < count; ++k) {
-    if (!fitted[k].ok()) return fitted[k].status().WithContext("strand " + std::to_string(selection.guide_strands[k]));
+    if (!fitted[k].ok())
+      return fitted[k].status().WithContext("strand " + std::to_string(selection.guide_strands[k]));
     model.guides.push_back(std::move(fitted[k]).value());
     const StrandFitSummary& fit = fits[k];
     error_sum += fit.mean_error_mm;
@@ -111,15 +115,17 @@ Status WriteHelixModel(const std::string& path, const HelixModel& model, const F
 }
 
 Result<HelixModel> ReadHelixModel(const std::string& path) {
-  HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path, "give a model written by `hairrig fit`"));
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j,
+                      ReadJsonFile(path, "give a model written by `hairrig fit`"));
   const JsonObject root(j, path);
   if (root.StringOr("format", "") != "hairrig-helix-model" || !root.ok()) {
     return CorruptData(path + ": not a hairrig helix model (made by `hairrig fit`)");
   }
   const int64_t version = root.Integer("version");
   if (root.ok() && version != kModelVersion) {
-    return CorruptData(path + ": model version " + std::to_string(version) + ", this build reads version " +
-                       std::to_string(kModelVersion) + ": fit the strands again with this build");
+    return CorruptData(path + ": model version " + std::to_string(version) +
+                       ", this build reads version " + std::to_string(kModelVersion) +
+                       ": fit the strands again with this build");
   }
   HelixModel model;
   model.source = root.StringOr("source", "");
@@ -129,10 +135,12 @@ Result<HelixModel> ReadHelixModel(const std::string& path) {
     if (elements.empty()) guide.Fail("elements", "is empty");
     for (const JsonObject& e : elements) helix.elements.push_back(ElementFromJson(e));
     model.guides.push_back(std::move(helix));
-    model.guide_strands.push_back(static_cast<int>(guide.IntegerOr("strand", -1, {.min = -1, .max = kMaxIndex})));
+    model.guide_strands.push_back(
+        static_cast<int>(guide.IntegerOr("strand", -1, {.min = -1, .max = kMaxIndex})));
     if (!root.ok()) break;
   }
-  for (int64_t g : root.IntegersOr("cluster_of_strand", {.min = -1, .max = static_cast<int64_t>(model.guides.size()) - 1}))
+  for (int64_t g : root.IntegersOr(
+           "cluster_of_strand", {.min = -1, .max = static_cast<int64_t>(model.guides.size()) - 1}))
     model.cluster_of_strand.push_back(static_cast<int>(g));
   HR_RETURN_IF_ERROR(root.status());
   return model;

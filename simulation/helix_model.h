@@ -26,25 +26,27 @@ struct FitOptions {
 struct FitSummary {
   int strands = 0;
   int guides = 0;
-  double guide_rms_mm = 0;        // strands to their guides
-  double mean_elements = 0;       // per guide
-  double mean_error_mm = 0;       // helical curve to its guide strand, mean over guides
+  double guide_rms_mm = 0;   // strands to their guides
+  double mean_elements = 0;  // per guide
+  double mean_error_mm = 0;  // helical curve to its guide strand, mean over guides
   double max_error_mm = 0;
   double max_g1_defect_deg = 0;
   double max_cohelical_residual = 0;
-  double max_relaxation_elements = 0;  // the relaxation's largest move of a break point, in elements
+  double max_relaxation_elements =
+      0;  // the relaxation's largest move of a break point, in elements
   double wall_s = 0;
 };
 
 struct HelixModel {
-  std::string source;                  // strand file it came from
-  std::vector<int> guide_strands;      // strand index of each guide
+  std::string source;              // strand file it came from
+  std::vector<int> guide_strands;  // strand index of each guide
   std::vector<PiecewiseHelix> guides;
   std::vector<int> cluster_of_strand;
 };
 
 // Guides, then floating tangents on each guide. Errors name the strand.
-Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& options, FitSummary* summary);
+Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& options,
+                                FitSummary* summary);
 
 Status WriteHelixModel(const std::string& path, const HelixModel& model, const FitSummary& summary);
 // CorruptData names the file and field; a model of another format version is refused.

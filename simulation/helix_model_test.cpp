@@ -1,9 +1,9 @@
 #include "simulation/helix_model.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "core/file_util.h"
 
@@ -16,7 +16,8 @@ StrandSet Curls() {
     std::vector<Eigen::Vector3f> p;
     for (int k = 0; k < 80; ++k) {
       const float a = 0.25f * static_cast<float>(k);
-      p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a), 20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
+      p.emplace_back(20.0f * static_cast<float>(s % 4) + 5 * std::cos(a),
+                     20.0f * static_cast<float>(s / 4) + 5 * std::sin(a),
                      -0.6f * static_cast<float>(k));
     }
     set.AddStrand(p);
@@ -46,17 +47,21 @@ TEST(HelixModel, FitWriteReadRoundTrip) {
 
 TEST(HelixModel, BadModelsAreRefusedWithTheReason) {
   const std::string dir = ::testing::TempDir();
-  ASSERT_TRUE(WriteFileAtomic(dir + "/v2.json", R"({"format": "hairrig-helix-model", "version": 2, "guides": []})").ok());
+  ASSERT_TRUE(WriteFileAtomic(dir + "/v2.json",
+                              R"({"format": "hairrig-helix-model", "version": 2, "guides": []})")
+                  .ok());
   auto r = ReadHelixModel(dir + "/v2.json");
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.status().message().find("version 2"), std::string::npos) << r.status().ToString();
-  ASSERT_TRUE(WriteFileAtomic(dir + "/nan.json", R"({"format": "hairrig-helix-model", "version": 1, "guides":
+  ASSERT_TRUE(WriteFileAtomic(dir + "/nan.json",
+                              R"({"format": "hairrig-helix-model", "version": 1, "guides":
       [{"strand": 0, "elements": [{"start_mm": [0, 0, 0], "start_tangent": [1, 0, 0],
         "darboux_per_mm": [0, 0, 0], "length_mm": -1}]}]})")
                   .ok());
   r = ReadHelixModel(dir + "/nan.json");
   ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.status().message().find("guides[0].elements[0]"), std::string::npos) << r.status().ToString();
+  EXPECT_NE(r.status().message().find("guides[0].elements[0]"), std::string::npos)
+      << r.status().ToString();
   ASSERT_TRUE(WriteFileAtomic(dir + "/other.json", "{\"hello\": 1}").ok());
   EXPECT_FALSE(ReadHelixModel(dir + "/other.json").ok());
 }
@@ -68,8 +73,10 @@ TEST(HelixModel, MistypedFieldsAreNamed) {
   const std::string element =
       R"({"start_mm": [0, 0, 0], "start_tangent": [1, 0, 0], "darboux_per_mm": [0, 0, 0], "length_mm": 1})";
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {R"("guides": [{"strand": 0, "elements": [E]}], "cluster_of_strand": "abc")", "field 'cluster_of_strand'"},
-      {R"("guides": [{"strand": 0, "elements": [E]}], "cluster_of_strand": [0, 1])", "field 'cluster_of_strand': item 1"},
+      {R"("guides": [{"strand": 0, "elements": [E]}], "cluster_of_strand": "abc")",
+       "field 'cluster_of_strand'"},
+      {R"("guides": [{"strand": 0, "elements": [E]}], "cluster_of_strand": [0, 1])",
+       "field 'cluster_of_strand': item 1"},
       {R"("guides": [{"strand": "x", "elements": [E]}])", "field 'guides[0].strand'"},
       {R"("guides": {"a": 1})", "field 'guides'"},
       {R"("guides": [{"elements": [3]}])", "field 'guides[0].elements[0]'"},
@@ -78,12 +85,14 @@ TEST(HelixModel, MistypedFieldsAreNamed) {
   for (const auto& [fields, expected] : cases) {
     std::string text = R"({"format": "hairrig-helix-model", "version": 1, )" + fields + "}";
     const size_t at = text.find('E');
-    if (at != std::string::npos && text.compare(at - 1, 3, "[E]") == 0) text.replace(at, 1, element);
+    if (at != std::string::npos && text.compare(at - 1, 3, "[E]") == 0)
+      text.replace(at, 1, element);
     ASSERT_TRUE(WriteFileAtomic(dir + "/typed.json", text).ok());
     const auto r = ReadHelixModel(dir + "/typed.json");
     ASSERT_FALSE(r.ok()) << text;
     EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
-    EXPECT_NE(r.status().message().find(dir + "/typed.json: " + expected), std::string::npos) << r.status().ToString();
+    EXPECT_NE(r.status().message().find(dir + "/typed.json: " + expected), std::string::npos)
+        << r.status().ToString();
   }
 }
 
@@ -94,7 +103,8 @@ TEST(HelixModel, DegenerateStrandsAreNamed) {
   o.guides.num_guides = 13;  // every strand a guide
   auto model = FitHairModel(set, o, nullptr);
   ASSERT_FALSE(model.ok());
-  EXPECT_NE(model.status().message().find("strand 12: fewer than 2 distinct points"), std::string::npos)
+  EXPECT_NE(model.status().message().find("strand 12: fewer than 2 distinct points"),
+            std::string::npos)
       << model.status().ToString();
 }
 
@@ -105,15 +115,17 @@ TEST(HelixModel, AZeroLengthGuideIsNamedByItsStrandIndex) {
   const StrandSet curls = Curls();
   const auto offsets = curls.Offsets();
   for (size_t s = 0; s < 5; ++s) {
-    set.AddStrand(std::vector<Eigen::Vector3f>(curls.points_mm.begin() + static_cast<long>(offsets[s]),
-                                               curls.points_mm.begin() + static_cast<long>(offsets[s + 1])));
+    set.AddStrand(
+        std::vector<Eigen::Vector3f>(curls.points_mm.begin() + static_cast<long>(offsets[s]),
+                                     curls.points_mm.begin() + static_cast<long>(offsets[s + 1])));
   }
   set.AddStrand({{500, 500, 0}, {500, 500, 0}});  // strand 5, far from the others: its own guide
   FitOptions o;
   o.guides.target_rms_mm = 1;
   auto model = FitHairModel(set, o, nullptr);
   ASSERT_FALSE(model.ok());
-  EXPECT_NE(model.status().message().find("strand 5: fewer than 2 distinct points"), std::string::npos)
+  EXPECT_NE(model.status().message().find("strand 5: fewer than 2 distinct points"),
+            std::string::npos)
       << model.status().ToString();
 }
 
@@ -127,8 +139,10 @@ TEST(HelixModel, CoordinatesThatOverflowNameTheStrandAndVertex) {
   o.guides.num_guides = 4;
   auto model = FitHairModel(set, o, nullptr);
   ASSERT_FALSE(model.ok());
-  EXPECT_NE(model.status().message().find("strand 5 vertex 2"), std::string::npos) << model.status().ToString();
-  EXPECT_EQ(model.status().message().find("strand -1"), std::string::npos) << model.status().ToString();
+  EXPECT_NE(model.status().message().find("strand 5 vertex 2"), std::string::npos)
+      << model.status().ToString();
+  EXPECT_EQ(model.status().message().find("strand -1"), std::string::npos)
+      << model.status().ToString();
 }
 
 }  // namespace

@@ -36,8 +36,8 @@ TEST(Helix, ExactHelixIsRecoveredFromItsEndsToOnePartPerMillion) {
   };
   for (const Case c :
        {Case{0.05, 0.02, 60}, Case{0.05, -0.02, 60}, Case{0.2, 0.1, 25}, Case{0.002, 0.001, 300},
-        Case{0.1, 0.0, 40}, Case{0.15, 0.3, 30}, Case{0.08, 0.01, 70},
-        Case{0.15, 0.05, 26}, Case{0.17, 0.06, 33},  // long rotations: 1.3 and 1.9 pi
+        Case{0.1, 0.0, 40}, Case{0.15, 0.3, 30}, Case{0.08, 0.01, 70}, Case{0.15, 0.05, 26},
+        Case{0.17, 0.06, 33},      // long rotations: 1.3 and 1.9 pi
         Case{0.18, 0.07, 200}}) {  // the last: a curl of about six turns
     const HelixElement truth = Reference(c.k, c.tau, c.length);
     auto fitted = HelixThrough(truth.start_mm, truth.start_tangent, truth.PointAt(c.length),
@@ -58,13 +58,15 @@ TEST(Helix, ShortAndLongRotationsAreFoundWithoutTheScan) {
     double k, tau, length;
     bool long_rotation;
   };
-  for (const Case c : {Case{0.05, 0.02, 30, false}, Case{0.1, 0.0, 20, false}, Case{0.15, 0.05, 26, true},
-                       Case{0.17, 0.06, 33, true}, Case{0.1, 0.08, 45, true}}) {
+  for (const Case c :
+       {Case{0.05, 0.02, 30, false}, Case{0.1, 0.0, 20, false}, Case{0.15, 0.05, 26, true},
+        Case{0.17, 0.06, 33, true}, Case{0.1, 0.08, 45, true}}) {
     const HelixElement truth = Reference(c.k, c.tau, c.length);
     const double turn = truth.darboux_per_mm.norm() * c.length;
     ASSERT_EQ(turn > M_PI, c.long_rotation) << "the case's turn is " << turn << " rad";
     const Eigen::Vector3d end = truth.PointAt(c.length), end_tangent = truth.TangentAt(c.length);
-    const auto helices = HelicesWithoutExtraTurn(truth.start_mm, truth.start_tangent, end, end_tangent);
+    const auto helices =
+        HelicesWithoutExtraTurn(truth.start_mm, truth.start_tangent, end, end_tangent);
     int matches = 0;
     for (const HelixElement& h : helices) {
       EXPECT_LT((h.PointAt(h.length_mm) - end).norm(), 1e-6 * c.length) << "k " << c.k;
@@ -88,7 +90,8 @@ TEST(Helix, SamplesByRecurrenceFollowEquation8) {
   h.AppendSamples(90, &samples);
   ASSERT_EQ(samples.size(), 90u);
   for (int k = 1; k <= 90; ++k) {
-    EXPECT_NEAR((samples[static_cast<size_t>(k - 1)] - h.PointAt(30.0 * k / 90)).norm(), 0, 1e-12) << k;
+    EXPECT_NEAR((samples[static_cast<size_t>(k - 1)] - h.PointAt(30.0 * k / 90)).norm(), 0, 1e-12)
+        << k;
   }
   HelixElement straight = h;
   straight.darboux_per_mm.setZero();

@@ -4,11 +4,11 @@
 
 namespace hairrig {
 
-Status SolveInverseStatics(const Environment& environment, const Eigen::VectorXd& q, SuperHelixDynamics* dynamics,
-                           InverseStaticsReport* report) {
+Status SolveInverseStatics(const Environment& environment, const Eigen::VectorXd& q,
+                           SuperHelixDynamics* dynamics, InverseStaticsReport* report) {
   if (q.size() != dynamics->strand().num_dofs() || !q.allFinite()) {
-    return InvalidArgument("inverse statics: the coordinates must be " + std::to_string(dynamics->strand().num_dofs()) +
-                           " finite values");
+    return InvalidArgument("inverse statics: the coordinates must be " +
+                           std::to_string(dynamics->strand().num_dofs()) + " finite values");
   }
   const Eigen::VectorXd forces = dynamics->StaticForces(environment, q);
   const Eigen::VectorXd& stiffness = dynamics->StiffnessDiagonal();

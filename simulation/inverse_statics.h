@@ -19,13 +19,13 @@
 namespace hairrig {
 
 struct InverseStaticsReport {
-  double max_rest_change = 0;    // |q^0 - q| max over coordinates, rad/m
-  double residual_force = 0;     // |K (q - q^0) - Q| after the solve, relative to |Q|
+  double max_rest_change = 0;  // |q^0 - q| max over coordinates, rad/m
+  double residual_force = 0;   // |K (q - q^0) - Q| after the solve, relative to |Q|
 };
 
 // Sets dynamics->strand().rest_q. InvalidArgument if q has the wrong size or
 // is not finite.
-Status SolveInverseStatics(const Environment& environment, const Eigen::VectorXd& q, SuperHelixDynamics* dynamics,
-                           InverseStaticsReport* report = nullptr);
+Status SolveInverseStatics(const Environment& environment, const Eigen::VectorXd& q,
+                           SuperHelixDynamics* dynamics, InverseStaticsReport* report = nullptr);
 
 }  // namespace hairrig

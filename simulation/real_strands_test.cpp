@@ -99,14 +99,16 @@ TEST(InverseStatics, FittedRealStrandsDoNotSag) {
   const std::vector<double> lengths = strands->StrandLengths();
   std::vector<size_t> order(lengths.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return lengths[a] > lengths[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return lengths[a] > lengths[b]; });
   Environment env;
   env.gravity_m_s2 = Eigen::Vector3d(-9.81, 0, 0);
   const HairMaterial material;
   const DynamicsOptions options;
   for (size_t k : {order[0], order[1], order[2], order[10], order[30]}) {
     std::vector<Eigen::Vector3d> points;
-    for (size_t i = offsets[k]; i < offsets[k + 1]; ++i) points.push_back(strands->points_mm[i].cast<double>());
+    for (size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+      points.push_back(strands->points_mm[i].cast<double>());
     auto fitted = FitFloatingTangents(points, FloatingTangentsOptions{});
     ASSERT_TRUE(fitted.ok()) << fitted.status().ToString();
     Eigen::VectorXd q;
@@ -129,8 +131,10 @@ TEST(InverseStatics, FittedRealStrandsDoNotSag) {
       }
       drift[with_statics] = 1e3 * worst;
     }
-    std::printf("strand %zu (%.0f mm, %d elements): tip drift over 2 s %.4f mm with inverse statics, %.1f mm without\n",
-                k, lengths[k], strand->num_elements(), drift[1], drift[0]);
+    std::printf(
+        "strand %zu (%.0f mm, %d elements): tip drift over 2 s %.4f mm with inverse statics, %.1f "
+        "mm without\n",
+        k, lengths[k], strand->num_elements(), drift[1], drift[0]);
     EXPECT_LT(drift[1], 0.5);
     if (lengths[k] > 60) {
       EXPECT_GT(drift[0], 2.5) << "without inverse statics a long strand sags";

@@ -17,17 +17,19 @@ namespace {
 // short (quarters: 8 um, 0.4 um).
 constexpr int kSamplesPerSegment = 2;
 constexpr double kGaussOffset = 0.2113248654051871;  // (1 - 1/sqrt(3)) / 2
-}
+}  // namespace
 
 Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& points_mm) {
   StrandSpline s;
   for (size_t i = 0; i < points_mm.size(); ++i) {
     const Eigen::Vector3d& p = points_mm[i];
-    if (!p.allFinite()) return InvalidArgument("vertex " + std::to_string(i) + " is not a finite point");
+    if (!p.allFinite())
+      return InvalidArgument("vertex " + std::to_string(i) + " is not a finite point");
     if (s.points_.empty() || (p - s.points_.back()).norm() > 1e-9) s.points_.push_back(p);
   }
   if (s.points_.size() < 2)
-    return InvalidArgument("fewer than 2 distinct points (zero length): remove or repair this strand");
+    return InvalidArgument(
+        "fewer than 2 distinct points (zero length): remove or repair this strand");
   const int n = static_cast<int>(s.points_.size());
   // Catmull-Rom tangents scaled by the neighbouring chord lengths (C1 at joints).
   std::vector<Eigen::Vector3d> tangent(static_cast<size_t>(n));
@@ -36,7 +38,8 @@ Result<StrandSpline> StrandSpline::Create(const std::vector<Eigen::Vector3d>& po
     const auto& next = s.points_[static_cast<size_t>(std::min(n - 1, i + 1))];
     tangent[static_cast<size_t>(i)] = (next - prev).normalized();
     if (i > 0) {
-      const double cos_turn = tangent[static_cast<size_t>(i)].dot(tangent[static_cast<size_t>(i - 1)]);
+      const double cos_turn =
+          tangent[static_cast<size_t>(i)].dot(tangent[static_cast<size_t>(i - 1)]);
       s.turning_rad_ += std::acos(std::clamp(cos_turn, -1.0, 1.0));
     }
   }

@@ -30,7 +30,8 @@ class StrandSpline {
  private:
   // Segment index and Bezier parameter u in [0, 1] at arc length s.
   void Locate(double s_mm, int* segment, double* u) const;
-  std::array<Eigen::Vector3d, 4> Controls(int segment) const;  // the segment's Bezier control points
+  std::array<Eigen::Vector3d, 4> Controls(
+      int segment) const;  // the segment's Bezier control points
   Eigen::Vector3d Bezier(int segment, double u) const;
   // B'(u) = 3 (d0 + u (q1 + u q2)) on a segment, from its control polygon's
   // legs d0, d1, d2: q1 = 2 (d1 - d0), q2 = d0 - 2 d1 + d2.

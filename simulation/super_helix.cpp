@@ -1,9 +1,8 @@
 #include "simulation/super_helix.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "core/transform.h"
 #include "simulation/helix.h"
@@ -19,13 +18,17 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 }
 }  // namespace
 
-double HairMaterial::LinearDensity() const { return density_kg_m3 * kPi * semi_axis_1_m * semi_axis_2_m; }
+double HairMaterial::LinearDensity() const {
+  return density_kg_m3 * kPi * semi_axis_1_m * semi_axis_2_m;
+}
 
-// Sec. VI: I_0 = pi a1^3 a2^3 / (2 (1 + sigma) (a1^2 + a2^2)), I_1 = pi/4 a1 a2^3, I_2 = pi/4 a1^3 a2.
+// Sec. VI: I_0 = pi a1^3 a2^3 / (2 (1 + sigma) (a1^2 + a2^2)), I_1 = pi/4 a1 a2^3, I_2 = pi/4 a1^3
+// a2.
 Eigen::Vector3d HairMaterial::SecondMoments() const {
   const double a1 = semi_axis_1_m;
   const double a2 = semi_axis_2_m;
-  const double i0 = kPi * a1 * a1 * a1 * a2 * a2 * a2 / (2 * (1 + poisson_ratio) * (a1 * a1 + a2 * a2));
+  const double i0 =
+      kPi * a1 * a1 * a1 * a2 * a2 * a2 / (2 * (1 + poisson_ratio) * (a1 * a1 + a2 * a2));
   return {i0, kPi / 4 * a1 * a2 * a2 * a2, kPi / 4 * a1 * a1 * a1 * a2};
 }
 
@@ -36,12 +39,13 @@ Status HairMaterial::Validate() const {
                                                    {"semi_axis_2_m", semi_axis_2_m}};
   for (const auto& [name, value] : fields) {
     if (!std::isfinite(value) || value <= 0) {
-      return InvalidArgument(std::string("hair material: ") + name + " must be finite and positive, got " +
-                             std::to_string(value));
+      return InvalidArgument(std::string("hair material: ") + name +
+                             " must be finite and positive, got " + std::to_string(value));
     }
   }
   if (!std::isfinite(poisson_ratio) || poisson_ratio <= -1 || poisson_ratio >= 0.5) {
-    return InvalidArgument("hair material: poisson_ratio must lie in (-1, 0.5), got " + std::to_string(poisson_ratio));
+    return InvalidArgument("hair material: poisson_ratio must lie in (-1, 0.5), got " +
+                           std::to_string(poisson_ratio));
   }
   if (!std::isfinite(internal_friction_s) || internal_friction_s < 0) {
     return InvalidArgument("hair material: internal_friction_s must be finite and >= 0");
@@ -88,13 +92,15 @@ std::vector<ElementFrame> ElementFrames(const SuperHelix& strand, const Eigen::V
     const double length = strand.lengths_m[static_cast<size_t>(e)];
     const ElementFrame& start = frames[static_cast<size_t>(e)];
     ElementFrame& end = frames[static_cast<size_t>(e) + 1];
-    end.start_m = start.start_m + start.frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, length);
+    end.start_m =
+        start.start_m + start.frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, length);
     end.frame = start.frame * RotationFromVector(length * omega);
   }
   return frames;
 }
 
-std::vector<Eigen::Vector3d> Centreline(const SuperHelix& strand, const Eigen::VectorXd& q, int per_element) {
+std::vector<Eigen::Vector3d> Centreline(const SuperHelix& strand, const Eigen::VectorXd& q,
+                                        int per_element) {
   const std::vector<ElementFrame> frames = ElementFrames(strand, q);
   std::vector<Eigen::Vector3d> points{strand.root_m};
   for (int e = 0; e < strand.num_elements(); ++e) {
@@ -103,7 +109,8 @@ std::vector<Eigen::Vector3d> Centreline(const SuperHelix& strand, const Eigen::V
     for (int i = 1; i <= per_element; ++i) {
       const double s = length * i / per_element;
       points.push_back(frames[static_cast<size_t>(e)].start_m +
-                       frames[static_cast<size_t>(e)].frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, s));
+                       frames[static_cast<size_t>(e)].frame *
+                           HelixOffset(Eigen::Vector3d::UnitX(), omega, s));
     }
   }
   return points;
@@ -113,9 +120,11 @@ Eigen::Vector3d TipPosition(const SuperHelix& strand, const Eigen::VectorXd& q) 
   return ElementFrames(strand, q).back().start_m;
 }
 
-Result<SuperHelix> SuperHelixFromPiecewiseHelix(const PiecewiseHelix& guide, const Eigen::Vector3d& root_normal_hint,
+Result<SuperHelix> SuperHelixFromPiecewiseHelix(const PiecewiseHelix& guide,
+                                                const Eigen::Vector3d& root_normal_hint,
                                                 Eigen::VectorXd* q) {
-  if (guide.elements.empty()) return InvalidArgument("super-helix: the guide has no helical element");
+  if (guide.elements.empty())
+    return InvalidArgument("super-helix: the guide has no helical element");
   const Eigen::Vector3d t0 = guide.elements[0].start_tangent.normalized();
   Eigen::Vector3d n1 = root_normal_hint - root_normal_hint.dot(t0) * t0;
   if (n1.norm() < 1e-6) n1 = t0.unitOrthogonal();

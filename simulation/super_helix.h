@@ -10,9 +10,8 @@
 // metre); conversions from the millimetre strands and helix models are here.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/status.h"
 #include "simulation/floating_tangents.h"
@@ -65,7 +64,8 @@ struct ElementFrame {
 std::vector<ElementFrame> ElementFrames(const SuperHelix& strand, const Eigen::VectorXd& q);
 
 // Points along the centreline, `per_element` per element plus the root, metres.
-std::vector<Eigen::Vector3d> Centreline(const SuperHelix& strand, const Eigen::VectorXd& q, int per_element);
+std::vector<Eigen::Vector3d> Centreline(const SuperHelix& strand, const Eigen::VectorXd& q,
+                                        int per_element);
 Eigen::Vector3d TipPosition(const SuperHelix& strand, const Eigen::VectorXd& q);
 
 // Rotation by the body-frame rotation vector phi (Rodrigues) and the right
@@ -77,7 +77,8 @@ Eigen::Matrix3d RightJacobianSO3(const Eigen::Vector3d& phi);
 // its coordinates; the rest shape is the fitted shape (q^0 = q) until inverse
 // statics changes it. `root_normal_hint` fixes n1 at the root (any direction
 // not along the root tangent). InvalidArgument for an empty or degenerate guide.
-Result<SuperHelix> SuperHelixFromPiecewiseHelix(const PiecewiseHelix& guide, const Eigen::Vector3d& root_normal_hint,
+Result<SuperHelix> SuperHelixFromPiecewiseHelix(const PiecewiseHelix& guide,
+                                                const Eigen::Vector3d& root_normal_hint,
                                                 Eigen::VectorXd* q);
 
 }  // namespace hairrig

@@ -1,10 +1,9 @@
 #include "simulation/super_helix_dynamics.h"
 
-#include <cmath>
-#include <string>
-
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
+#include <cmath>
+#include <string>
 
 #include "core/head_model.h"
 #include "simulation/helix.h"
@@ -21,18 +20,19 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 
 // Gauss-Legendre nodes on [0, 1] and weights summing to 1.
 void GaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
-  static const double kNodes[5][5] = {{0},
-                                      {-0.5773502691896257, 0.5773502691896257},
-                                      {-0.7745966692414834, 0, 0.7745966692414834},
-                                      {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526},
-                                      {-0.9061798459386640, -0.5384693101056831, 0, 0.5384693101056831,
-                                       0.9061798459386640}};
-  static const double kWeights[5][5] = {{2},
-                                        {1, 1},
-                                        {0.5555555555555556, 0.8888888888888888, 0.5555555555555556},
-                                        {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538},
-                                        {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
-                                         0.2369268850561891}};
+  static const double kNodes[5][5] = {
+      {0},
+      {-0.5773502691896257, 0.5773502691896257},
+      {-0.7745966692414834, 0, 0.7745966692414834},
+      {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526},
+      {-0.9061798459386640, -0.5384693101056831, 0, 0.5384693101056831, 0.9061798459386640}};
+  static const double kWeights[5][5] = {
+      {2},
+      {1, 1},
+      {0.5555555555555556, 0.8888888888888888, 0.5555555555555556},
+      {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538},
+      {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
+       0.2369268850561891}};
   nodes->clear();
   weights->clear();
   for (int i = 0; i < n; ++i) {
@@ -52,7 +52,8 @@ Eigen::Matrix3d OffsetJacobian(const Eigen::Vector3d& omega, double s, double le
     Eigen::Vector3d minus = omega;
     plus[j] += h;
     minus[j] -= h;
-    d.col(j) = (HelixOffset(Eigen::Vector3d::UnitX(), plus, s) - HelixOffset(Eigen::Vector3d::UnitX(), minus, s)) /
+    d.col(j) = (HelixOffset(Eigen::Vector3d::UnitX(), plus, s) -
+                HelixOffset(Eigen::Vector3d::UnitX(), minus, s)) /
                (2 * h);
   }
   return d;
@@ -78,15 +79,20 @@ bool DynamicsOptions::IsValid(std::string* why) const {
     *why = message;
     return false;
   };
-  if (!std::isfinite(time_step_s) || time_step_s <= 0) return fail("time_step_s must be finite and positive");
-  if (quadrature_points < 1 || quadrature_points > 5) return fail("quadrature_points must lie in 1..5");
+  if (!std::isfinite(time_step_s) || time_step_s <= 0)
+    return fail("time_step_s must be finite and positive");
+  if (quadrature_points < 1 || quadrature_points > 5)
+    return fail("quadrature_points must lie in 1..5");
   if (!std::isfinite(air_drag) || air_drag < 0) return fail("air_drag must be finite and >= 0");
-  if (!(cg_relative_tolerance > 0) || cg_relative_tolerance >= 1) return fail("cg_relative_tolerance must lie in (0, 1)");
-  if (use_head && (!head.radii_m.allFinite() || head.radii_m.minCoeff() <= 0 || !head.center_m.allFinite())) {
+  if (!(cg_relative_tolerance > 0) || cg_relative_tolerance >= 1)
+    return fail("cg_relative_tolerance must lie in (0, 1)");
+  if (use_head &&
+      (!head.radii_m.allFinite() || head.radii_m.minCoeff() <= 0 || !head.center_m.allFinite())) {
     return fail("head radii must be finite and positive and its centre finite");
   }
-  if (!std::isfinite(contact_margin_m) || contact_margin_m < 0 || !std::isfinite(contact_stiffness) ||
-      contact_stiffness < 0 || !std::isfinite(contact_friction) || contact_friction < 0) {
+  if (!std::isfinite(contact_margin_m) || contact_margin_m < 0 ||
+      !std::isfinite(contact_stiffness) || contact_stiffness < 0 ||
+      !std::isfinite(contact_friction) || contact_friction < 0) {
     return fail("contact margin, stiffness and friction must be finite and >= 0");
   }
   return true;
@@ -104,7 +110,8 @@ SuperHelixDynamics::SuperHelixDynamics(const SuperHelix& strand, const HairMater
     const double length = strand_.lengths_m[static_cast<size_t>(e)];
     stiffness_.segment<3>(3 * e) = length * c;  // V = 1/2 int H^T C^H H ds, H constant per element
     first_sample_.push_back(static_cast<int>(samples_.size()));
-    for (size_t k = 0; k < nodes.size(); ++k) samples_.push_back({e, nodes[k] * length, weights[k] * length});
+    for (size_t k = 0; k < nodes.size(); ++k)
+      samples_.push_back({e, nodes[k] * length, weights[k] * length});
   }
   first_sample_.push_back(static_cast<int>(samples_.size()));
   contact_margin_m_.assign(samples_.size(), options_.contact_margin_m);
@@ -126,7 +133,8 @@ std::vector<Eigen::Vector3d> SuperHelixDynamics::SamplePositions(const Eigen::Ve
   out.reserve(samples_.size());
   for (const Sample& sample : samples_) {
     const ElementFrame& f = frames[static_cast<size_t>(sample.element)];
-    out.push_back(f.start_m + f.frame * HelixOffset(Eigen::Vector3d::UnitX(), q.segment<3>(3 * sample.element), sample.s));
+    out.push_back(f.start_m + f.frame * HelixOffset(Eigen::Vector3d::UnitX(),
+                                                    q.segment<3>(3 * sample.element), sample.s));
   }
   return out;
 }
@@ -153,11 +161,13 @@ void SuperHelixDynamics::Evaluate(const Eigen::VectorXd& q) {
     const double length = strand_.lengths_m[ue];
     const ElementFrame& start = frames[ue];
     turn_[ue] = frames[ue + 1].frame * (length * RightJacobianSO3(length * omega));
-    move_[ue] = start.frame * OffsetJacobian(omega, length, length) + Skew(frames[ue + 1].start_m) * turn_[ue];
+    move_[ue] = start.frame * OffsetJacobian(omega, length, length) +
+                Skew(frames[ue + 1].start_m) * turn_[ue];
     for (int i = first_sample_[ue]; i < first_sample_[ue + 1]; ++i) {
       const size_t ui = static_cast<size_t>(i);
       const double s = samples_[ui].s;
-      positions_[ui] = start.start_m + start.frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, s);
+      positions_[ui] =
+          start.start_m + start.frame * HelixOffset(Eigen::Vector3d::UnitX(), omega, s);
       frames_[ui] = start.frame * RotationFromVector(s * omega);
       local_jacobian_[ui] = start.frame * OffsetJacobian(omega, s, length);
       local_angular_jacobian_[ui] = frames_[ui] * (s * RightJacobianSO3(s * omega));
@@ -165,7 +175,8 @@ void SuperHelixDynamics::Evaluate(const Eigen::VectorXd& q) {
   }
 }
 
-void SuperHelixDynamics::AddProjected(int i, double weight, const Eigen::Matrix3d& metric, Eigen::MatrixXd* out) const {
+void SuperHelixDynamics::AddProjected(int i, double weight, const Eigen::Matrix3d& metric,
+                                      Eigen::MatrixXd* out) const {
   const size_t ui = static_cast<size_t>(i);
   const int e = samples_[ui].element;
   Eigen::Matrix<double, 3, Eigen::Dynamic> j(3, 3 * (e + 1));
@@ -187,7 +198,8 @@ void SuperHelixDynamics::AddProjected(int i, double weight, const Eigen::Matrix3
 //   T_pq = C_p^T (m0 C_q - [m1]x B_q + P) + B_p^T ([m1]x C_q + m2 B_q + Q),
 //   R_pq = B_p^T (W B_q + V),
 // so assembling M costs O(N^2) 3 x 3 products instead of O(N^2) per point.
-void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational, Eigen::MatrixXd* rotational) const {
+void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational,
+                                        Eigen::MatrixXd* rotational) const {
   const int n = strand_.num_elements();
   const Eigen::Vector3d inertia = material_.density_kg_m3 * material_.SecondMoments();
   translational->setZero(3 * n, 3 * n);
@@ -198,8 +210,10 @@ void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational, Eigen::M
   Eigen::Matrix3d w_beyond = Eigen::Matrix3d::Zero();
   for (int q = n - 1; q >= 0; --q) {
     const size_t uq = static_cast<size_t>(q);
-    Eigen::Matrix3d p_sum = Eigen::Matrix3d::Zero(), q_sum = Eigen::Matrix3d::Zero(), v_sum = Eigen::Matrix3d::Zero();
-    Eigen::Matrix3d t_own = Eigen::Matrix3d::Zero(), r_own = Eigen::Matrix3d::Zero(), w_own = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d p_sum = Eigen::Matrix3d::Zero(), q_sum = Eigen::Matrix3d::Zero(),
+                    v_sum = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d t_own = Eigen::Matrix3d::Zero(), r_own = Eigen::Matrix3d::Zero(),
+                    w_own = Eigen::Matrix3d::Zero();
     double m0_own = 0;
     Eigen::Vector3d m1_own = Eigen::Vector3d::Zero();
     Eigen::Matrix3d m2_own = Eigen::Matrix3d::Zero();
@@ -209,7 +223,8 @@ void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational, Eigen::M
       const Eigen::Vector3d& r = positions_[ui];
       const Eigen::Matrix3d& j = local_jacobian_[ui];
       const Eigen::Matrix3d& jw = local_angular_jacobian_[ui];
-      const Eigen::Matrix3d world_inertia = frames_[ui] * inertia.asDiagonal() * frames_[ui].transpose();
+      const Eigen::Matrix3d world_inertia =
+          frames_[ui] * inertia.asDiagonal() * frames_[ui].transpose();
       p_sum += w * j;
       q_sum += w * Skew(r) * j;
       v_sum += w * world_inertia * jw;
@@ -224,7 +239,8 @@ void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational, Eigen::M
     const Eigen::Matrix3d& c = move_[uq];
     const Eigen::Matrix3d g_beyond = m0 * c - Skew(m1) * b;
     const Eigen::Matrix3d h_beyond = Skew(m1) * c + m2 * b;
-    translational->block<3, 3>(3 * q, 3 * q) = c.transpose() * g_beyond + b.transpose() * h_beyond + t_own;
+    translational->block<3, 3>(3 * q, 3 * q) =
+        c.transpose() * g_beyond + b.transpose() * h_beyond + t_own;
     rotational->block<3, 3>(3 * q, 3 * q) = b.transpose() * w_beyond * b + r_own;
     const Eigen::Matrix3d g = g_beyond + p_sum;
     const Eigen::Matrix3d h = h_beyond + q_sum;
@@ -246,13 +262,15 @@ void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational, Eigen::M
 }
 
 // Q_p = C_p^T int F + B_p^T int r x F over the points beyond p, plus p's own points.
-Eigen::VectorXd SuperHelixDynamics::GeneralisedForce(const std::vector<Eigen::Vector3d>& force_per_m) const {
+Eigen::VectorXd SuperHelixDynamics::GeneralisedForce(
+    const std::vector<Eigen::Vector3d>& force_per_m) const {
   const int n = strand_.num_elements();
   Eigen::VectorXd f(3 * n);
   Eigen::Vector3d force_beyond = Eigen::Vector3d::Zero(), torque_beyond = Eigen::Vector3d::Zero();
   for (int q = n - 1; q >= 0; --q) {
     const size_t uq = static_cast<size_t>(q);
-    Eigen::Vector3d own = move_[uq].transpose() * force_beyond + turn_[uq].transpose() * torque_beyond;
+    Eigen::Vector3d own =
+        move_[uq].transpose() * force_beyond + turn_[uq].transpose() * torque_beyond;
     for (int i = first_sample_[uq]; i < first_sample_[uq + 1]; ++i) {
       const size_t ui = static_cast<size_t>(i);
       const Eigen::Vector3d weighted = samples_[ui].weight * force_per_m[ui];
@@ -288,8 +306,9 @@ Eigen::Vector3d SuperHelixDynamics::StaticForce(const Environment& env, size_t s
   const Eigen::Vector3d& w = env.frame_angular_velocity;
   const Eigen::Vector3d arm = r - env.pivot_m;
   // Gravity and the fictitious forces of the frame's motion (all but Coriolis).
-  const Eigen::Vector3d frame_acceleration =
-      env.frame_acceleration_m_s2 + env.frame_angular_acceleration.cross(arm) + w.cross(w.cross(arm));
+  const Eigen::Vector3d frame_acceleration = env.frame_acceleration_m_s2 +
+                                             env.frame_angular_acceleration.cross(arm) +
+                                             w.cross(w.cross(arm));
   Eigen::Vector3d force = rho_s * (env.gravity_m_s2 - frame_acceleration);
   // Air drag toward the air's velocity relative to the moving frame at r (Eq. 10).
   force += options_.air_drag * (env.air_velocity_m_s - w.cross(arm));
@@ -308,7 +327,8 @@ double SuperHelixDynamics::HeadDistance(const Eigen::Vector3d& p_m, Eigen::Vecto
   return 1e-3 * options_.head_surface->SignedDistance(1e3 * p_m, normal);
 }
 
-Eigen::VectorXd SuperHelixDynamics::StaticForces(const Environment& environment, const Eigen::VectorXd& q) {
+Eigen::VectorXd SuperHelixDynamics::StaticForces(const Environment& environment,
+                                                 const Eigen::VectorXd& q) {
   Evaluate(q);
   std::vector<Eigen::Vector3d> forces(samples_.size());
   for (size_t i = 0; i < samples_.size(); ++i) forces[i] = StaticForce(environment, i);
@@ -320,7 +340,8 @@ Eigen::VectorXd SuperHelixDynamics::ElasticForces(const Eigen::VectorXd& q) cons
 }
 
 // Jacobi-preconditioned conjugate gradient (the paper's solver) or Cholesky.
-int SuperHelixDynamics::SolveLinear(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, Eigen::VectorXd* x) const {
+int SuperHelixDynamics::SolveLinear(const Eigen::MatrixXd& a, const Eigen::VectorXd& b,
+                                    Eigen::VectorXd* x) const {
   if (options_.solver == LinearSolver::kCholesky) {
     *x = a.llt().solve(b);
     return 1;
@@ -384,8 +405,8 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   int contacts = 0;
   for (size_t i = 0; i < samples_.size(); ++i) {
-    forces[i] = StaticForce(env, i) -
-                rho_s * (velocity_acceleration[i] + 2 * env.frame_angular_velocity.cross(velocities[i]));
+    forces[i] = StaticForce(env, i) - rho_s * (velocity_acceleration[i] +
+                                               2 * env.frame_angular_velocity.cross(velocities[i]));
     if (!options_.use_head) continue;
     Eigen::Vector3d normal;
     if (HeadDistance(positions_[i], &normal) < contact_margin_m_[i]) {
@@ -403,8 +424,9 @@ Status SuperHelixDynamics::Step(const Environment& env, StrandState* state, Step
   Eigen::VectorXd dv;
   const int iterations = SolveLinear(system, rhs, &dv);
   if (!dv.allFinite()) {
-    return FailedPrecondition("super-helix step: the linear solve gave a non-finite velocity (time step " +
-                              std::to_string(h) + " s too large or a degenerate strand)");
+    return FailedPrecondition(
+        "super-helix step: the linear solve gave a non-finite velocity (time step " +
+        std::to_string(h) + " s too large or a degenerate strand)");
   }
   previous_dv_ = dv;
   state->q += h * (v + theta * dv);
@@ -421,12 +443,14 @@ StrandEnergy SuperHelixDynamics::Energy(const Environment& env, const StrandStat
   Eigen::MatrixXd translational, rotational;
   KineticMetrics(&translational, &rotational);
   StrandEnergy energy;
-  energy.kinetic_j = 0.5 * state.v.dot((material_.LinearDensity() * translational + rotational) * state.v);
+  energy.kinetic_j =
+      0.5 * state.v.dot((material_.LinearDensity() * translational + rotational) * state.v);
   const Eigen::VectorXd strain = state.q - strand_.rest_q;
   energy.elastic_j = 0.5 * strain.dot(stiffness_.cwiseProduct(strain));
   const double rho_s = material_.LinearDensity();
   for (size_t i = 0; i < samples_.size(); ++i) {
-    energy.gravity_j -= samples_[i].weight * rho_s * env.gravity_m_s2.dot(positions_[i] - strand_.root_m);
+    energy.gravity_j -=
+        samples_[i].weight * rho_s * env.gravity_m_s2.dot(positions_[i] - strand_.root_m);
   }
   return energy;
 }

@@ -29,10 +29,9 @@
 // are part of F.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/status.h"
 #include "simulation/super_helix.h"
@@ -61,17 +60,17 @@ struct DynamicsOptions {
   // 45 unknowns), with the same result (bench/dynamics_bench.cpp).
   LinearSolver solver = LinearSolver::kCholesky;
   double cg_relative_tolerance = 1e-10;
-  int quadrature_points = 3;        // Gauss-Legendre points per element (1-5)
-  double air_drag = 1e-4;           // nu of Eq. 10, N s / m^2 (force per length per velocity)
+  int quadrature_points = 3;  // Gauss-Legendre points per element (1-5)
+  double air_drag = 1e-4;     // nu of Eq. 10, N s / m^2 (force per length per velocity)
   bool use_head = false;
   HeadEllipsoid head;
   // When set (with use_head), contact is with this head's surface (its
   // signed distance; mm in the same frame as the simulation's metres)
   // instead of the ellipsoid: the head strands were reconstructed or grown on.
   std::shared_ptr<const HeadModel> head_surface;
-  double contact_margin_m = 0.5e-3;     // hair keeps this far from the head
-  double contact_stiffness = 50;        // N / m^2: force per length per metre of penetration
-  double contact_friction = 2e-3;       // viscous friction along the head, N s / m^2
+  double contact_margin_m = 0.5e-3;  // hair keeps this far from the head
+  double contact_stiffness = 50;     // N / m^2: force per length per metre of penetration
+  double contact_friction = 2e-3;    // viscous friction along the head, N s / m^2
   bool IsValid(std::string* why) const;
 };
 
@@ -110,7 +109,8 @@ struct StrandEnergy {
 // one per thread or per strand.
 class SuperHelixDynamics {
  public:
-  SuperHelixDynamics(const SuperHelix& strand, const HairMaterial& material, const DynamicsOptions& options);
+  SuperHelixDynamics(const SuperHelix& strand, const HairMaterial& material,
+                     const DynamicsOptions& options);
 
   // Advances `state` by one time step. FailedPrecondition if the state is not
   // finite after the step (the state is left unchanged).
@@ -153,7 +153,8 @@ class SuperHelixDynamics {
   Eigen::VectorXd GeneralisedForce(const std::vector<Eigen::Vector3d>& force_per_m) const;
   std::vector<Eigen::Vector3d> SampleVelocities(const Eigen::VectorXd& v) const;
   // out += weight * J_i^T metric J_i over the columns sample i depends on.
-  void AddProjected(int i, double weight, const Eigen::Matrix3d& metric, Eigen::MatrixXd* out) const;
+  void AddProjected(int i, double weight, const Eigen::Matrix3d& metric,
+                    Eigen::MatrixXd* out) const;
   int SolveLinear(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
 
   SuperHelix strand_;
@@ -161,9 +162,9 @@ class SuperHelixDynamics {
   DynamicsOptions options_;
   Eigen::VectorXd stiffness_;  // diagonal of K
   std::vector<Sample> samples_;
-  std::vector<int> first_sample_;  // per element, and one past the last sample
+  std::vector<int> first_sample_;         // per element, and one past the last sample
   std::vector<double> contact_margin_m_;  // per sample (HoldContactAtRest)
-  Eigen::VectorXd previous_dv_;    // warm start of the conjugate gradient
+  Eigen::VectorXd previous_dv_;           // warm start of the conjugate gradient
   // Filled by Evaluate(q). Per element p, for any point r beyond it:
   //   dr/dq_p = move_[p] - [r]x turn_[p],  its frame turns by turn_[p] dq_p.
   std::vector<Eigen::Matrix3d> move_, turn_;

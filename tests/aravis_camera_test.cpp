@@ -1,23 +1,23 @@
 // The `aravis` camera backend against Aravis' own fake camera fed with the
 // rendered world: in-process (ArvFakeDevice) and as a GigE Vision camera on
 // 127.0.0.1, over real GVCP/GVSP packets.
+#include "drivers/aravis_camera.h"
+
+#include <gtest/gtest.h>
 #include <sys/socket.h>
 
 #include <cmath>
 #include <cstring>
 #include <memory>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/config.h"
 #include "core/clock.h"
-#include "drivers/aravis_camera.h"
+#include "core/config.h"
+#include "sim_hw/gvcp_guard.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_aravis.h"
 #include "sim_hw/sim_devices.h"
-#include "sim_hw/gvcp_guard.h"
 #include "tests/support/camera_checks.h"
 #include "tests/support/gvcp_packets.h"
 #include "tests/support/sim_world.h"
@@ -55,7 +55,8 @@ struct InProcess {
 };
 
 // The backend on Aravis' in-process fake with serial `fake_serial`, configured for `device_serial`.
-InProcess StartInProcess(const std::string& trigger_line = "", const std::string& fake_serial = kSerial,
+InProcess StartInProcess(const std::string& trigger_line = "",
+                         const std::string& fake_serial = kSerial,
                          const std::string& device_serial = kSerial) {
   InProcess p;
   p.w = MakeWorld();
@@ -67,8 +68,6 @@ InProcess StartInProcess(const std::string& trigger_line = "", const std::string
   p.camera = MakeAravisCamera({DeviceKind::kCamera, "lower", "aravis", device_serial, "test"}, o);
   return p;
 }
-
-
 
 cv::Mat Reference(const World& w) {
   return RenderWorldExposure(*w.world, kSceneCamera, ExposeWorldNow(*w.world), 0.02, 0, 0).value();
@@ -199,17 +198,21 @@ TEST(AravisCamera, SettingsOutsideTheCameraAreRefused) {
 }
 
 TEST(AravisCamera, ASerialNoInterfaceHasIsUnavailable) {
-  auto camera = MakeAravisCamera({DeviceKind::kCamera, "x", "aravis", "NO-SUCH-CAMERA", "test"}, BaseOptions());
+  auto camera = MakeAravisCamera({DeviceKind::kCamera, "x", "aravis", "NO-SUCH-CAMERA", "test"},
+                                 BaseOptions());
   const Status s = camera->Open();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
-  EXPECT_NE(s.message().find("not found on any Aravis interface"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("not found on any Aravis interface"), std::string::npos)
+      << s.message();
 }
 
 TEST(AravisCamera, ConfigErrorsNameTheField) {
-  auto root = ConfigNode::LoadString("{name: c, backend: aravis, serial: X, buffers: 1}", "rig.yaml");
+  auto root =
+      ConfigNode::LoadString("{name: c, backend: aravis, serial: X, buffers: 1}", "rig.yaml");
   auto parsed = ParseAravisCameraOptions(*root);
   ASSERT_FALSE(parsed.ok());
-  EXPECT_NE(parsed.status().message().find("buffers"), std::string::npos) << parsed.status().message();
+  EXPECT_NE(parsed.status().message().find("buffers"), std::string::npos)
+      << parsed.status().message();
 }
 
 // Over GigE Vision on loopback: real UDP streaming through Aravis' GigE fake.
@@ -262,8 +265,8 @@ TEST(AravisGigE, HostileControlPacketsDoNotCrashTheFake) {
   auto gige = SimGigECamera::Start(w.world, {kSerial, kSceneCamera, ""});
   ASSERT_TRUE(gige.ok()) << gige.status().ToString();
   const std::string host = (*gige)->address();
-  const auto read_test_register = hairrig_test::GvcpCommand(hairrig_test::kGvcpReadRegister,
-                                                            {hairrig_test::kFakeTestRegister});
+  const auto read_test_register =
+      hairrig_test::GvcpCommand(hairrig_test::kGvcpReadRegister, {hairrig_test::kFakeTestRegister});
   ASSERT_EQ(hairrig_test::AskGvcp(host, read_test_register), 12);
   for (const auto& packet : hairrig_test::HostileGvcpPackets()) {
     EXPECT_EQ(hairrig_test::AskGvcp(host, packet, 100), -1) << "a hostile packet was answered";
@@ -273,8 +276,9 @@ TEST(AravisGigE, HostileControlPacketsDoNotCrashTheFake) {
   for (int fd : OpenDescriptors()) {
     sockaddr_in bound{};
     socklen_t size = sizeof bound;
-    if (getsockname(fd, reinterpret_cast<sockaddr*>(&bound), &size) != 0 || bound.sin_family != AF_INET ||
-        ntohs(bound.sin_port) != kGvcpPort || bound.sin_addr.s_addr != htonl(INADDR_BROADCAST)) {
+    if (getsockname(fd, reinterpret_cast<sockaddr*>(&bound), &size) != 0 ||
+        bound.sin_family != AF_INET || ntohs(bound.sin_port) != kGvcpPort ||
+        bound.sin_addr.s_addr != htonl(INADDR_BROADCAST)) {
       continue;
     }
     ++broadcast_sockets;

@@ -12,6 +12,7 @@
 //
 // Skipped (exit 77) where the cluster cannot run: not root, or Slurm and
 // munge not installed (scripts/install-deps installs them).
+#include <gtest/gtest.h>
 #include <stdlib.h>
 #include <sys/stat.h>
 
@@ -20,10 +21,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <thread>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "batch/process.h"
 #include "batch/stage.h"

@@ -6,17 +6,17 @@
 // bundle adjustment's statistics; bench/calibration_uncertainty_bench.cpp
 // does the same on rendered, detected captures. The same captures show that
 // the views pass each camera's own intrinsics prior and reject the other's.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "calibration/calibration_report.h"
 #include "calibration/capture_calibration.h"
 #include "calibration/uncertainty_check.h"
-#include "tests/support/scene_calibration_input.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/scene.h"
+#include "tests/support/scene_calibration_input.h"
 
 namespace hairrig {
 namespace {
@@ -26,20 +26,23 @@ constexpr int kCaptures = 20;
 
 // The tags a view sees well: facing the camera by more than 25 degrees and
 // 5 px inside the image, with noisy corners.
-ViewObservations NoisyObservations(const Scene& scene, const ViewGroundTruth& truth, std::mt19937_64& rng) {
+ViewObservations NoisyObservations(const Scene& scene, const ViewGroundTruth& truth,
+                                   std::mt19937_64& rng) {
   std::normal_distribution<double> noise(0.0, kCornerNoisePx);
   ViewObservations out;
   const Eigen::Vector3d camera_in_box = truth.cam_from_box.Inverse().translation;
   for (const BoxTag& tag : scene.box.tags) {
     const Eigen::Vector3d normal = scene.box.faces[static_cast<size_t>(tag.face)].normal_box;
-    const double facing = std::asin(std::clamp((camera_in_box - tag.center_box_mm).normalized().dot(normal), -1.0, 1.0));
+    const double facing = std::asin(
+        std::clamp((camera_in_box - tag.center_box_mm).normalized().dot(normal), -1.0, 1.0));
     if (facing < DegToRad(25)) continue;
     TagObservation obs;
     obs.id = tag.id;
     bool inside = true;
     for (size_t k = 0; k < 4; ++k) {
       obs.corners_box_mm[k] = tag.corners_box_mm[k];
-      const Eigen::Vector2d uv = Project(truth.intrinsics, truth.cam_from_box * tag.corners_box_mm[k]);
+      const Eigen::Vector2d uv =
+          Project(truth.intrinsics, truth.cam_from_box * tag.corners_box_mm[k]);
       inside = inside && uv.x() > 5 && uv.y() > 5 && uv.x() < truth.intrinsics.width_px - 6 &&
                uv.y() < truth.intrinsics.height_px - 6;
       obs.corners_px[k] = uv + Eigen::Vector2d(noise(rng), noise(rng));
@@ -66,23 +69,26 @@ CaptureCalibrationInput NoisyCapture(const Scene& scene, uint64_t seed) {
   return input;
 }
 
-// A prior as a ChArUco calibration gives it: the truth plus an error drawn from its standard deviations.
+// A prior as a ChArUco calibration gives it: the truth plus an error drawn from its standard
+// deviations.
 void AddNoisyPriors(const Scene& scene, uint64_t seed, CaptureCalibrationInput* input) {
   std::mt19937_64 rng(seed * 7919 + 1);
   std::normal_distribution<double> unit(0.0, 1.0);
-  const std::array<double, CameraIntrinsics::kNumParams> sd = {0.15, 0.15, 0.15, 0.18, 3e-4, 1.5e-3, 3e-5, 2.5e-5, 0};
+  const std::array<double, CameraIntrinsics::kNumParams> sd = {0.15,   0.15, 0.15,   0.18, 3e-4,
+                                                               1.5e-3, 3e-5, 2.5e-5, 0};
   for (size_t c = 0; c < input->cameras.size(); ++c) {
     auto params = scene.cameras[c].intrinsics.ToParams();
     for (size_t p = 0; p < params.size(); ++p) params[p] += sd[p] * unit(rng);
-    input->cameras[c].nominal = CameraIntrinsics::FromParams(params.data(), input->cameras[c].width_px,
-                                                            input->cameras[c].height_px);
+    input->cameras[c].nominal = CameraIntrinsics::FromParams(
+        params.data(), input->cameras[c].width_px, input->cameras[c].height_px);
     input->cameras[c].nominal_stddev = sd;
   }
 }
 
 UncertaintyRatios RatiosOverCaptures(const Scene& scene, bool with_prior, CalibrationMode mode) {
   std::vector<UncertaintySample> samples;
-  double worst_prior_sigma = -INFINITY;  // the priors' check against the views (all the cameras' own)
+  double worst_prior_sigma =
+      -INFINITY;  // the priors' check against the views (all the cameras' own)
   for (int seed = 1; seed <= kCaptures; ++seed) {
     CaptureCalibrationInput input = NoisyCapture(scene, static_cast<uint64_t>(seed));
     CaptureCalibrationOptions options;
@@ -102,18 +108,22 @@ UncertaintyRatios RatiosOverCaptures(const Scene& scene, bool with_prior, Calibr
     }
     for (size_t f = 0; f < input.frames.size(); ++f) {
       if (!result->frames[f].solved) continue;
-      samples.push_back(MakeUncertaintySample(result->frames[f].cam_from_box,
-                                              MakeViewGroundTruth(scene, input.frames[f].view).cam_from_box,
-                                              result->frames[f].uncertainty));
+      samples.push_back(
+          MakeUncertaintySample(result->frames[f].cam_from_box,
+                                MakeViewGroundTruth(scene, input.frames[f].view).cam_from_box,
+                                result->frames[f].uncertainty));
     }
   }
   const UncertaintyRatios r = ObservedOverPredicted(samples);
-  std::printf("%s, %s mode, %d captures, %d views: observed / predicted rotation %.3f, centre %.3f "
-              "(Mahalanobis %.3f, %.3f)\n",
-              with_prior ? "Gaussian prior" : "intrinsics from the views",
-              mode == CalibrationMode::kTurntable ? "turntable" : "free", kCaptures, r.views, r.rotation, r.centre,
-              r.rotation_mahalanobis, r.centre_mahalanobis);
-  if (with_prior) std::printf("  the priors' largest disagreement with the views: %.2f sigma\n", worst_prior_sigma);
+  std::printf(
+      "%s, %s mode, %d captures, %d views: observed / predicted rotation %.3f, centre %.3f "
+      "(Mahalanobis %.3f, %.3f)\n",
+      with_prior ? "Gaussian prior" : "intrinsics from the views",
+      mode == CalibrationMode::kTurntable ? "turntable" : "free", kCaptures, r.views, r.rotation,
+      r.centre, r.rotation_mahalanobis, r.centre_mahalanobis);
+  if (with_prior)
+    std::printf("  the priors' largest disagreement with the views: %.2f sigma\n",
+                worst_prior_sigma);
   return r;
 }
 
@@ -153,7 +163,8 @@ TEST_F(CalibrationUncertainty, FreeMode) {
 TEST_F(CalibrationUncertainty, TheViewsRejectAPriorOfTheOtherCamera) {
   CaptureCalibrationInput own = NoisyCapture(scene_, 1);
   AddNoisyPriors(scene_, 1, &own);
-  for (CalibrationCamera& camera : own.cameras) camera.prior_source = camera.serial + "/intrinsics.json";
+  for (CalibrationCamera& camera : own.cameras)
+    camera.prior_source = camera.serial + "/intrinsics.json";
   CaptureCalibrationOptions options;
   options.fix_intrinsics = true;
   const auto good = CalibrateCapture(own, options);
@@ -178,10 +189,12 @@ TEST_F(CalibrationUncertainty, TheViewsRejectAPriorOfTheOtherCamera) {
     const auto bad = CalibrateCapture(relabelled, options);
     ASSERT_TRUE(bad.ok()) << bad.status().ToString();
     const PriorCheck& check = bad->cameras[1].prior_check;
-    std::printf("%s prior of the other camera: %s\n", hard ? "hard" : "soft", DescribePriorCheck(check).c_str());
+    std::printf("%s prior of the other camera: %s\n", hard ? "hard" : "soft",
+                DescribePriorCheck(check).c_str());
     EXPECT_TRUE(check.rejected) << DescribePriorCheck(check);
     EXPECT_GT(check.sigma, 1.5 * options.prior_check.reject_sigma) << "not a clear rejection";
-    EXPECT_FALSE(bad->cameras[0].prior_check.rejected) << DescribePriorCheck(bad->cameras[0].prior_check);
+    EXPECT_FALSE(bad->cameras[0].prior_check.rejected)
+        << DescribePriorCheck(bad->cameras[0].prior_check);
     const CalibrationVerdict verdict = JudgeCalibration(relabelled, *bad);
     EXPECT_EQ(verdict.level, CalibrationVerdict::Level::kFailed);
     ASSERT_FALSE(verdict.reasons.empty());
@@ -203,7 +216,8 @@ TEST_F(CalibrationUncertainty, APriorForAnotherImageSizeIsRefused) {
   const auto result = CalibrateCapture(input, options);
   ASSERT_FALSE(result.ok());
   EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(result.status().message().find("half_size.json"), std::string::npos) << result.status().message();
+  EXPECT_NE(result.status().message().find("half_size.json"), std::string::npos)
+      << result.status().message();
 }
 
 }  // namespace

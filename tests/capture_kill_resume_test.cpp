@@ -4,6 +4,7 @@
 // instants), then resumed with `hairrig capture --resume`. Each resumed capture
 // must be complete, every checksum must verify (recomputed with sha256sum), and
 // no frame that verified before the resume may be shot again or touched.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -13,10 +14,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <thread>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "rig/capture_test_util.h"
 
@@ -37,8 +36,10 @@ RunResult RunHairrig(const std::vector<std::string>& args, const std::string& cr
                      std::chrono::milliseconds kill_after) {
   const pid_t pid = ::fork();
   if (pid == 0) {
-    if (!crash_at.empty()) ::setenv("HAIRRIG_CRASH_AT", crash_at.c_str(), 1);
-    else ::unsetenv("HAIRRIG_CRASH_AT");
+    if (!crash_at.empty())
+      ::setenv("HAIRRIG_CRASH_AT", crash_at.c_str(), 1);
+    else
+      ::unsetenv("HAIRRIG_CRASH_AT");
     std::freopen("/dev/null", "w", stdout);
     std::freopen("/dev/null", "w", stderr);
     std::vector<char*> argv{const_cast<char*>(HAIRRIG_BIN)};
@@ -62,7 +63,9 @@ RunResult RunHairrig(const std::vector<std::string>& args, const std::string& cr
 struct FileIdentity {
   ino_t inode = 0;
   int64_t mtime_ns = 0;
-  bool operator==(const FileIdentity& o) const { return inode == o.inode && mtime_ns == o.mtime_ns; }
+  bool operator==(const FileIdentity& o) const {
+    return inode == o.inode && mtime_ns == o.mtime_ns;
+  }
 };
 FileIdentity Identify(const std::string& path) {
   struct stat st {};
@@ -72,20 +75,24 @@ FileIdentity Identify(const std::string& path) {
 
 // One moment: interrupt, resume, check. Returns whether the first run was
 // really interrupted.
-bool KillAndResume(const std::string& name, const std::string& crash_at, std::chrono::milliseconds kill_after) {
+bool KillAndResume(const std::string& name, const std::string& crash_at,
+                   std::chrono::milliseconds kill_after) {
   SCOPED_TRACE(name);
   const std::string dir = FreshDir("kill_" + name);
   const std::string config = WriteSmallRig(dir);
   const std::string capture = dir + "/c";
-  const RunResult first = RunHairrig({"capture", "--config", config, "--out", capture}, crash_at, kill_after);
+  const RunResult first =
+      RunHairrig({"capture", "--config", config, "--out", capture}, crash_at, kill_after);
   if (!first.killed) {
     EXPECT_TRUE(crash_at.empty()) << "crash point " << crash_at << " was never reached";
     return false;
   }
-  if (!fs::exists(capture + "/journal.jsonl")) return true;  // killed before the folder existed: nothing to resume
+  if (!fs::exists(capture + "/journal.jsonl"))
+    return true;  // killed before the folder existed: nothing to resume
   const auto before = VerifiedFramesOnDisk(capture);
   std::map<int, FileIdentity> identity;
-  for (const auto& [view, r] : before) identity[view] = Identify(capture + "/" + r["file"].get<std::string>());
+  for (const auto& [view, r] : before)
+    identity[view] = Identify(capture + "/" + r["file"].get<std::string>());
   const size_t records_before = ReadJournal(capture).size();
 
   const RunResult resumed = RunHairrig({"capture", "--out", capture, "--resume", "--json"}, "", {});
@@ -95,11 +102,13 @@ bool KillAndResume(const std::string& name, const std::string& crash_at, std::ch
   const auto journal = ReadJournal(capture);
   int frame_records = 0;
   for (const auto& r : journal) frame_records += r.value("event", "") == "frame_stored" ? 1 : 0;
-  EXPECT_EQ(frame_records, static_cast<int>(after.size())) << "a journalled frame fails to verify, or a view was stored twice";
+  EXPECT_EQ(frame_records, static_cast<int>(after.size()))
+      << "a journalled frame fails to verify, or a view was stored twice";
   for (size_t i = std::min(records_before, journal.size()); i < journal.size(); ++i) {
     const auto& r = journal[i];
     if (r.value("event", "") == "frame_stored") {
-      EXPECT_FALSE(before.count(r["view"].get<int>())) << "verified view " << r["view"] << " was shot again";
+      EXPECT_FALSE(before.count(r["view"].get<int>()))
+          << "verified view " << r["view"] << " was shot again";
     }
   }
   for (const auto& [view, r] : before) {
@@ -108,7 +117,8 @@ bool KillAndResume(const std::string& name, const std::string& crash_at, std::ch
       continue;
     }
     EXPECT_EQ(after.at(view)["sha256"], r["sha256"]) << "view " << view;
-    EXPECT_TRUE(Identify(capture + "/" + r["file"].get<std::string>()) == identity[view]) << "view " << view << " touched";
+    EXPECT_TRUE(Identify(capture + "/" + r["file"].get<std::string>()) == identity[view])
+        << "view " << view << " touched";
   }
   std::ifstream in(capture + "/manifest.json");
   const auto manifest = nlohmann::json::parse(in);
@@ -119,17 +129,20 @@ bool KillAndResume(const std::string& name, const std::string& crash_at, std::ch
 
 TEST(CaptureKillResume, TwentyAndMoreMomentsResumeToACompleteVerifiedCapture) {
   int interrupted = 0;
-  for (const char* point : {"frame_half_written", "frame_before_rename", "frame_before_journal", "journal_half_written",
-                            "manifest_half_written"}) {
+  for (const char* point : {"frame_half_written", "frame_before_rename", "frame_before_journal",
+                            "journal_half_written", "manifest_half_written"}) {
     for (int n : {1, 9, 23, 37}) {
       const std::string name = std::string(point) + "_" + std::to_string(n);
       interrupted += KillAndResume(name, std::string(point) + ":" + std::to_string(n), {}) ? 1 : 0;
     }
   }
   for (int ms : {20, 60, 120, 200, 300, 450}) {
-    interrupted += KillAndResume("timed_" + std::to_string(ms) + "ms", "", std::chrono::milliseconds(ms)) ? 1 : 0;
+    interrupted +=
+        KillAndResume("timed_" + std::to_string(ms) + "ms", "", std::chrono::milliseconds(ms)) ? 1
+                                                                                               : 0;
   }
-  std::printf("capture interrupted by SIGKILL at %d moments, each resumed and verified\n", interrupted);
+  std::printf("capture interrupted by SIGKILL at %d moments, each resumed and verified\n",
+              interrupted);
   EXPECT_GE(interrupted, 20);
 }
 

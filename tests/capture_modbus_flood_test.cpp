@@ -5,6 +5,7 @@
 // ends. The capture completes with every view verified. Its own executable:
 // it raises the open-file limit, and skips (77) where it cannot.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/select.h>
 
@@ -15,8 +16,6 @@
 #include <deque>
 #include <mutex>
 #include <thread>
-
-#include <gtest/gtest.h>
 
 #include "rig/capture.h"
 #include "rig/capture_test_util.h"
@@ -54,7 +53,8 @@ class ConnectionFlood {
   // True once kHeld connections are open; false after `limit` or a failure (see error()).
   bool WaitHeld(Ms limit) {
     const auto end = std::chrono::steady_clock::now() + limit;
-    while (held_ < kHeld && error_ == 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(Ms(5));
+    while (held_ < kHeld && error_ == 0 && std::chrono::steady_clock::now() < end)
+      std::this_thread::sleep_for(Ms(5));
     return held_ >= kHeld;
   }
   void Stop() {
@@ -70,7 +70,8 @@ class ConnectionFlood {
   static int Connect(const sockaddr_in& address) {
     const int fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd < 0) return -errno;
-    if (connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0 && errno != EINPROGRESS) {
+    if (connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0 &&
+        errno != EINPROGRESS) {
       const int error = errno;
       close(fd);
       return -error;
@@ -98,7 +99,8 @@ class ConnectionFlood {
       for (int i = 0; i < kChurnBatch && !fds.empty(); ++i) {
         close(fds.front());
         fds.pop_front();
-        const int fd = Connect(address);  // refused once the capture has ended and its server stopped
+        const int fd =
+            Connect(address);  // refused once the capture has ended and its server stopped
         if (fd < 0) continue;
         fds.push_back(fd);
         ++opened_;
@@ -116,15 +118,18 @@ class ConnectionFlood {
 };
 
 TEST(CaptureUnderModbusFlood, CompletesWithEveryViewVerified) {
-  if (!hairrig_test::AllowOpenFiles(kFloodFdBase + kHeld + 512)) GTEST_SKIP() << "cannot open " << kHeld << " more files in this process";
+  if (!hairrig_test::AllowOpenFiles(kFloodFdBase + kHeld + 512))
+    GTEST_SKIP() << "cannot open " << kHeld << " more files in this process";
   const std::string dir = FreshDir("capture_modbus_flood");
   CaptureOptions options;
   options.config_path = WriteSmallRig(
-      dir, {{"devices",
-             SmallRigDevices("{name: turntable, backend: modbus, serial: SIM-TT-0001, transport: tcp, host: sim}",
-                             "{name: upper, backend: sim, serial: SIM-CAM-UPPER, trigger_line: trig0}",
-                             "{name: lower, backend: sim, serial: SIM-CAM-LOWER, trigger_line: trig0}")},
-            {"plan", "plan:\n  stops: " + std::to_string(kStops) + "\n"}});
+      dir,
+      {{"devices",
+        SmallRigDevices(
+            "{name: turntable, backend: modbus, serial: SIM-TT-0001, transport: tcp, host: sim}",
+            "{name: upper, backend: sim, serial: SIM-CAM-UPPER, trigger_line: trig0}",
+            "{name: lower, backend: sim, serial: SIM-CAM-LOWER, trigger_line: trig0}")},
+       {"plan", "plan:\n  stops: " + std::to_string(kStops) + "\n"}});
   options.out_dir = dir + "/capture";
   sockaddr_in server{};
   std::string served_by;
@@ -151,19 +156,24 @@ TEST(CaptureUnderModbusFlood, CompletesWithEveryViewVerified) {
   const long opened_during_capture = flood.opened();
   flood.Stop();
   ASSERT_TRUE(summary.ok()) << summary.status().ToString();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("%s: %ld connections opened while %d views were captured in %.1f s (%d faults)\n", served_by.c_str(),
-              opened_during_capture, summary->views_planned, wall_s, summary->faults);
-  EXPECT_EQ(flood.error(), 0) << "the flood could not open its connections: " << std::strerror(flood.error());
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("%s: %ld connections opened while %d views were captured in %.1f s (%d faults)\n",
+              served_by.c_str(), opened_during_capture, summary->views_planned, wall_s,
+              summary->faults);
+  EXPECT_EQ(flood.error(), 0) << "the flood could not open its connections: "
+                              << std::strerror(flood.error());
   EXPECT_TRUE(held_before_first_move) << "the flood did not reach " << kHeld << " held connections";
-  EXPECT_GT(opened_during_capture, static_cast<long>(kHeld)) << "no connection churned during the moves";
+  EXPECT_GT(opened_during_capture, static_cast<long>(kHeld))
+      << "no connection churned during the moves";
 
   EXPECT_EQ(summary->status, "complete") << summary->message;
   EXPECT_EQ(summary->views_planned, 2 * kStops);
   EXPECT_EQ(summary->views_completed, summary->views_planned) << summary->message;
   EXPECT_EQ(static_cast<int>(VerifiedFramesOnDisk(summary->dir).size()), summary->views_planned);
   const auto journal = ReadJournal(summary->dir);
-  EXPECT_GE(CountEvents(journal, "position_reached"), kStops) << "every stop reached under the flood";
+  EXPECT_GE(CountEvents(journal, "position_reached"), kStops)
+      << "every stop reached under the flood";
   EXPECT_EQ(journal.back()["event"], "session_end");
 }
 

@@ -3,17 +3,18 @@
 // and 20 views recover the camera's intrinsics within their stated
 // uncertainty; OpenCV's own corners, which the detector refines again, are
 // half a pixel off. Bad input gets a message naming the images and what to do.
+#include "calibration/charuco_intrinsics.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
-#include "calibration/charuco_intrinsics.h"
 #include "sim_hw/charuco_views.h"
 
 namespace hairrig {
@@ -35,19 +36,22 @@ Fixture Load() {
 }
 
 fs::path FreshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("hairrig_charuco_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("hairrig_charuco_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
 }
 
 // Renders `count` views of camera 0 into `dir`; returns the paths.
-std::vector<std::string> RenderViews(const Fixture& f, const fs::path& dir, int count, uint64_t seed) {
+std::vector<std::string> RenderViews(const Fixture& f, const fs::path& dir, int count,
+                                     uint64_t seed) {
   const SceneCamera& camera = f.scene.cameras[0];
   std::vector<std::string> paths;
   int i = 0;
   for (const Rigid3d& pose : ChArUcoBoardPoses(camera.intrinsics, f.board, count, seed)) {
-    auto view = RenderChArUcoView(camera, f.board, pose, true, seed * 1000 + static_cast<uint64_t>(i));
+    auto view =
+        RenderChArUcoView(camera, f.board, pose, true, seed * 1000 + static_cast<uint64_t>(i));
     EXPECT_TRUE(view.ok()) << view.status().ToString();
     paths.push_back((dir / ("view_" + std::to_string(i++) + ".png")).string());
     cv::imwrite(paths.back(), view->image);
@@ -81,8 +85,9 @@ TEST(ChArUcoIntrinsics, RenderedCornersAreFoundWhereTheCameraProjectsThem) {
   }
   const double rms = std::sqrt(sum_sq / found);
   mean_offset /= found;
-  std::printf("ChArUco corners: %d of %d visible found, RMS error %.4f px, mean offset (%.4f, %.4f) px\n", found,
-              visible, rms, mean_offset.x(), mean_offset.y());
+  std::printf(
+      "ChArUco corners: %d of %d visible found, RMS error %.4f px, mean offset (%.4f, %.4f) px\n",
+      found, visible, rms, mean_offset.x(), mean_offset.y());
   EXPECT_GT(found, 0.8 * visible);  // 90 % measured; corners by a cut marker are not interpolated
   EXPECT_LT(rms, 0.08);
 }
@@ -95,7 +100,8 @@ TEST(ChArUcoIntrinsics, OpenCvsInterpolatedCornersAreHalfAPixelOff) {
   const SceneCamera& camera = f.scene.cameras[0];
   const cv::Ptr<cv::aruco::CharucoBoard> cv_board = cv::aruco::CharucoBoard::create(
       f.board.squares_x, f.board.squares_y, static_cast<float>(f.board.square_mm),
-      static_cast<float>(f.board.marker_mm), cv::aruco::getPredefinedDictionary(f.board.opencv_dictionary));
+      static_cast<float>(f.board.marker_mm),
+      cv::aruco::getPredefinedDictionary(f.board.opencv_dictionary));
   const auto poses = ChArUcoBoardPoses(camera.intrinsics, f.board, 4, 7);
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   int found = 0;
@@ -112,14 +118,15 @@ TEST(ChArUcoIntrinsics, OpenCvsInterpolatedCornersAreHalfAPixelOff) {
     cv::aruco::interpolateCornersCharuco(marker_corners, marker_ids, gray, cv_board, corners, ids);
     for (size_t k = 0; k < ids.size(); ++k) {
       ASSERT_LT(static_cast<size_t>(ids[k]), view->corners_px.size());
-      sum += Eigen::Vector2d(corners[k].x, corners[k].y) - view->corners_px[static_cast<size_t>(ids[k])];
+      sum += Eigen::Vector2d(corners[k].x, corners[k].y) -
+             view->corners_px[static_cast<size_t>(ids[k])];
       ++found;
     }
   }
   ASSERT_GT(found, 100);
   const Eigen::Vector2d mean = sum / found;
-  std::printf("OpenCV's interpolated ChArUco corners: %d, mean offset (%+.3f, %+.3f) px\n", found, mean.x(),
-              mean.y());
+  std::printf("OpenCV's interpolated ChArUco corners: %d, mean offset (%+.3f, %+.3f) px\n", found,
+              mean.x(), mean.y());
   EXPECT_NEAR(mean.x(), 0.5, 0.15);
   EXPECT_NEAR(mean.y(), 0.5, 0.15);
 }
@@ -135,8 +142,8 @@ TEST(ChArUcoIntrinsics, TwentyViewsRecoverTheCameraWithinTheirUncertainty) {
   std::printf("ChArUco calibration: %d images, RMS %.3f px\n", result->images_used, result->rms_px);
   for (int p = 0; p < 8; ++p) {
     const double error = solved[p] - truth[p], sd = result->stddev[p];
-    std::printf("  %-6s truth %12.6f solved %12.6f error %+.3g sd %.3g (%.2f sd)\n", CameraIntrinsics::kParamNames[p],
-                truth[p], solved[p], error, sd, error / sd);
+    std::printf("  %-6s truth %12.6f solved %12.6f error %+.3g sd %.3g (%.2f sd)\n",
+                CameraIntrinsics::kParamNames[p], truth[p], solved[p], error, sd, error / sd);
     EXPECT_LT(std::abs(error), 4 * sd) << CameraIntrinsics::kParamNames[p];
   }
   EXPECT_EQ(result->images_used, 20);
@@ -161,7 +168,8 @@ TEST(ChArUcoIntrinsics, TooFewUsableImagesNameWhatFailed) {
   EXPECT_NE(m.find("3 of 5 images"), std::string::npos) << m;
   EXPECT_NE(m.find("blank.png: 0 chessboard corners found (0 markers)"), std::string::npos) << m;
   EXPECT_NE(m.find("missing.png: cannot be read"), std::string::npos) << m;
-  EXPECT_EQ(CalibrateIntrinsicsFromChArUco({}, f.board).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(CalibrateIntrinsicsFromChArUco({}, f.board).status().code(),
+            StatusCode::kInvalidArgument);
   fs::remove_all(dir);
 }
 

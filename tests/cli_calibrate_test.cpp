@@ -3,6 +3,7 @@
 // accuracy against the ground truth, the planar start beside the bundle
 // adjustment, the two modes, and bad input (no capture, a frame outside the
 // capture folder, a corrupt frame, a capture not yet calibrated).
+#include <gtest/gtest.h>
 #include <sched.h>
 
 #include <cmath>
@@ -12,8 +13,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "reconstruction/colmap_model.h"
 #include "rig/reconstruction_input.h"
@@ -59,8 +58,8 @@ class CliCalibrate : public ::testing::Test {
     capture_ = ::testing::TempDir() + "/cli_calibrate_capture";
     fs::remove_all(capture_);
     // Tags detected as the frames land, calibration when the capture completes.
-    const CommandRun r =
-        Hairrig("--log-level warning capture --out " + capture_ + RigConfigOption() + " --calibrate --json");
+    const CommandRun r = Hairrig("--log-level warning capture --out " + capture_ +
+                                 RigConfigOption() + " --calibrate --json");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     calibrated_during_capture_ = LastLineJson(r.output)["calibration"];
   }
@@ -78,9 +77,11 @@ TEST_F(CliCalibrate, CaptureCalibratesWithTagsDetectedAsFramesLand) {
   EXPECT_EQ(c["verdict"], "good") << c.dump();
   EXPECT_EQ(c["frames_detected_during_capture"], 38);
   EXPECT_EQ(c["views_solved"], 38);
-  std::printf("capture --calibrate: last frame's detection done %.2f s after it, calibration.json %.2f s, report %.2f s\n",
-              c["detection_backlog_s"].get<double>(), c["calibration_after_last_frame_s"].get<double>(),
-              c["delay_after_last_frame_s"].get<double>());
+  std::printf(
+      "capture --calibrate: last frame's detection done %.2f s after it, calibration.json %.2f s, "
+      "report %.2f s\n",
+      c["detection_backlog_s"].get<double>(), c["calibration_after_last_frame_s"].get<double>(),
+      c["delay_after_last_frame_s"].get<double>());
   const CommandRun r = Hairrig("eval calibration " + capture_ + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_LT(LastLineJson(r.output)["solved"]["rotation_deg"]["median"].get<double>(), 0.15);
@@ -99,9 +100,10 @@ TEST_F(CliCalibrate, BothModesWriteEveryOutputAndMeetTheGroundTruth) {
   EXPECT_EQ(summary["verdict"], "good") << summary.dump();
   EXPECT_EQ(summary["views_solved"], 38);
   const std::string out = capture_ + "/calibration";
-  for (const char* file : {"calibration.json", "opencv/SIM-CAM-UPPER.yaml", "opencv/SIM-CAM-LOWER.yaml",
-                           "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt", "report/report.txt",
-                           "report/view_rms.png", "report/residuals/000_SIM-CAM-UPPER.jpg"})
+  for (const char* file :
+       {"calibration.json", "opencv/SIM-CAM-UPPER.yaml", "opencv/SIM-CAM-LOWER.yaml",
+        "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt", "report/report.txt",
+        "report/view_rms.png", "report/residuals/000_SIM-CAM-UPPER.jpg"})
     EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
 
   r = Hairrig("eval calibration " + capture_ + " --json");
@@ -111,12 +113,16 @@ TEST_F(CliCalibrate, BothModesWriteEveryOutputAndMeetTheGroundTruth) {
   const nlohmann::json& ours = eval["solved"];
   const nlohmann::json& start = eval["initial"];
   std::printf("turntable: rotation %.4f deg, centre %.3f mm, focal %.4f %%, RMS %.3f px\n",
-              Median(ours, "rotation_deg"), Median(ours, "camera_centre_mm"), Max(ours, "focal_percent"),
-              Median(ours, "reprojection_rms_px"));
-  std::printf("free:      rotation %.4f deg, centre %.3f mm, focal %.4f %%\n", Median(free_mode["solved"], "rotation_deg"),
-              Median(free_mode["solved"], "camera_centre_mm"), Max(free_mode["solved"], "focal_percent"));
-  std::printf("planar start (Zhang + per-view IPPE): rotation %.4f deg, centre %.3f mm, focal %.4f %%\n",
-              Median(start, "rotation_deg"), Median(start, "camera_centre_mm"), Max(start, "focal_percent"));
+              Median(ours, "rotation_deg"), Median(ours, "camera_centre_mm"),
+              Max(ours, "focal_percent"), Median(ours, "reprojection_rms_px"));
+  std::printf("free:      rotation %.4f deg, centre %.3f mm, focal %.4f %%\n",
+              Median(free_mode["solved"], "rotation_deg"),
+              Median(free_mode["solved"], "camera_centre_mm"),
+              Max(free_mode["solved"], "focal_percent"));
+  std::printf(
+      "planar start (Zhang + per-view IPPE): rotation %.4f deg, centre %.3f mm, focal %.4f %%\n",
+      Median(start, "rotation_deg"), Median(start, "camera_centre_mm"),
+      Max(start, "focal_percent"));
   // Measured on the mannequin scene: rotation 0.074 deg, centre 0.60 mm, focal
   // 0.068 %, RMS 0.095 px; the planar start 0.147 deg, 1.25 mm, 0.147 %.
   // Without intrinsic priors the principal point is the weak parameter (see
@@ -154,7 +160,8 @@ TEST_F(CliCalibrate, TheColmapExportReadsBackAsTheCalibratedViews) {
     EXPECT_EQ(a.name, b.name);
     EXPECT_EQ(fs::path(a.image_path).filename(), fs::path(b.image_path).filename());
     const auto pa = a.camera.ToParams(), pb = b.camera.ToParams();
-    for (size_t k = 0; k < pa.size(); ++k) EXPECT_NEAR(pa[k], pb[k], 1e-9 + 1e-9 * std::abs(pa[k])) << k;
+    for (size_t k = 0; k < pa.size(); ++k)
+      EXPECT_NEAR(pa[k], pb[k], 1e-9 + 1e-9 * std::abs(pa[k])) << k;
     EXPECT_LT(hairrig::RotationDifferenceDeg(a.cam_from_object, b.cam_from_object), 1e-6);
     EXPECT_LT((a.cam_from_object.translation - b.cam_from_object.translation).norm(), 1e-6);
   }
@@ -171,7 +178,8 @@ TEST_F(CliCalibrate, ChArUcoPriorsGiveTheTargetAccuracy) {
   std::string priors;
   for (const char* serial : {"SIM-CAM-UPPER", "SIM-CAM-LOWER"}) {
     const std::string dir = boards + "/" + serial;
-    r = Hairrig("calibrate-intrinsics " + dir + " --board etc/charuco-board.yaml --serial " + serial + " --json");
+    r = Hairrig("calibrate-intrinsics " + dir + " --board etc/charuco-board.yaml --serial " +
+                serial + " --json");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(LastLineJson(r.output)["images_used"], 20);
     r = Hairrig("eval intrinsics " + dir + " --json");
@@ -195,7 +203,8 @@ TEST_F(CliCalibrate, ChArUcoPriorsGiveTheTargetAccuracy) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json start = LastLineJson(r.output)["initial"];
 
-  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + boards + "/SIM-CAM-UPPER/intrinsics.json");
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + boards +
+              "/SIM-CAM-UPPER/intrinsics.json");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("no file gives camera SIM-CAM-LOWER"), std::string::npos) << r.output;
 
@@ -206,22 +215,25 @@ TEST_F(CliCalibrate, ChArUcoPriorsGiveTheTargetAccuracy) {
   upper["serial"] = "SIM-CAM-LOWER";
   const std::string relabelled = boards + "/upper_as_lower.json";
   std::ofstream(relabelled) << upper.dump();
-  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + upper_file + " --intrinsics " +
-              relabelled + " --json");
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + upper_file +
+              " --intrinsics " + relabelled + " --json");
   EXPECT_EQ(r.exit_code, 3) << r.output;
   const nlohmann::json rejected = LastLineJson(r.output);
   EXPECT_EQ(rejected["verdict"], "failed") << rejected.dump();
   ASSERT_FALSE(rejected["reasons"].empty()) << rejected.dump();
   const std::string reason = rejected["reasons"][0].get<std::string>();
-  EXPECT_NE(reason.find("check that " + relabelled + " belongs to camera SIM-CAM-LOWER"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("check that " + relabelled + " belongs to camera SIM-CAM-LOWER"),
+            std::string::npos)
+      << reason;
   std::printf("relabelled prior: %s\n", reason.c_str());
   // ... and refused outright when it was calibrated at another image size.
   upper["intrinsics"]["width_px"] = 1280;
   std::ofstream(relabelled) << upper.dump();
-  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + upper_file + " --intrinsics " +
-              relabelled);
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --intrinsics " + upper_file +
+              " --intrinsics " + relabelled);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find(relabelled + ": camera SIM-CAM-LOWER was calibrated at 1280 x 1600 px"), std::string::npos)
+  EXPECT_NE(r.output.find(relabelled + ": camera SIM-CAM-LOWER was calibrated at 1280 x 1600 px"),
+            std::string::npos)
       << r.output;
 
   r = Hairrig("--log-level warning calibrate " + capture_ + priors + " --json");
@@ -231,18 +243,23 @@ TEST_F(CliCalibrate, ChArUcoPriorsGiveTheTargetAccuracy) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json eval = LastLineJson(r.output);
   const nlohmann::json& ours = eval["solved"];
-  std::printf("reprojection RMS / corner noise of the same detections: %.3f; observed / predicted error: rotation "
-              "%.2f, centre %.2f\n",
-              eval["rms_over_corner_noise"].get<double>(), eval["uncertainty"]["rotation_ratio"].get<double>(),
-              eval["uncertainty"]["centre_ratio"].get<double>());
+  std::printf(
+      "reprojection RMS / corner noise of the same detections: %.3f; observed / predicted error: "
+      "rotation "
+      "%.2f, centre %.2f\n",
+      eval["rms_over_corner_noise"].get<double>(),
+      eval["uncertainty"]["rotation_ratio"].get<double>(),
+      eval["uncertainty"]["centre_ratio"].get<double>());
   EXPECT_LE(eval["rms_over_corner_noise"].get<double>(), 1.25);  // measured 0.98
   EXPECT_EQ(eval["uncertainty"]["views"], 38);
-  std::printf("with ChArUco priors: rotation %.4f deg (max %.4f), centre %.3f mm, focal %.4f %%, RMS %.3f px; "
-              "planar start rotation %.1fx, centre %.1fx ours\n",
-              Median(ours, "rotation_deg"), Max(ours, "rotation_deg"), Median(ours, "camera_centre_mm"),
-              Max(ours, "focal_percent"), Median(ours, "reprojection_rms_px"),
-              Median(start, "rotation_deg") / Median(ours, "rotation_deg"),
-              Median(start, "camera_centre_mm") / Median(ours, "camera_centre_mm"));
+  std::printf(
+      "with ChArUco priors: rotation %.4f deg (max %.4f), centre %.3f mm, focal %.4f %%, RMS %.3f "
+      "px; "
+      "planar start rotation %.1fx, centre %.1fx ours\n",
+      Median(ours, "rotation_deg"), Max(ours, "rotation_deg"), Median(ours, "camera_centre_mm"),
+      Max(ours, "focal_percent"), Median(ours, "reprojection_rms_px"),
+      Median(start, "rotation_deg") / Median(ours, "rotation_deg"),
+      Median(start, "camera_centre_mm") / Median(ours, "camera_centre_mm"));
   // Measured: 0.0081 deg (max 0.0101), 0.113 mm, 0.010 %; planar start 18x and 11x.
   EXPECT_LE(Median(ours, "rotation_deg"), 0.016);
   EXPECT_LE(Max(ours, "rotation_deg"), 0.02);
@@ -269,7 +286,8 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
                           "angle_measured_deg": 0, "bytes": 10, "sha256": "00"}]})";
   r = Hairrig("calibrate " + fake);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find("field 'frames[0].file': ../../etc/passwd is not the file of view 0"), std::string::npos)
+  EXPECT_NE(r.output.find("field 'frames[0].file': ../../etc/passwd is not the file of view 0"),
+            std::string::npos)
       << r.output;
 
   // The frame list repeated 2,000 times: refused at its first repeat, before
@@ -285,7 +303,8 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
   std::ofstream(repeated + "/manifest.json") << manifest.dump();
   r = Hairrig("calibrate " + repeated);
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("field 'frames[" + std::to_string(frames.size()) + "].view': view 0 is listed twice"),
+  EXPECT_NE(r.output.find("field 'frames[" + std::to_string(frames.size()) +
+                          "].view': view 0 is listed twice"),
             std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(repeated + "/calibration/calibration.json"));
@@ -299,15 +318,18 @@ TEST_F(CliCalibrate, BadInputIsNamed) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("run `hairrig calibrate`"), std::string::npos) << r.output;
   // Half a frame: still a PNG header, but not the size and checksum the manifest records.
-  std::filesystem::resize_file(damaged + "/frames/005_SIM-CAM-LOWER.png",
-                               std::filesystem::file_size(damaged + "/frames/005_SIM-CAM-LOWER.png") / 2);
+  std::filesystem::resize_file(
+      damaged + "/frames/005_SIM-CAM-LOWER.png",
+      std::filesystem::file_size(damaged + "/frames/005_SIM-CAM-LOWER.png") / 2);
   r = Hairrig("--log-level warning calibrate " + damaged + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json summary = LastLineJson(r.output);
   EXPECT_EQ(summary["verdict"], "check these views");
   EXPECT_EQ(summary["views_solved"], 37);
-  EXPECT_NE(summary["reasons"].dump().find("005_SIM-CAM-LOWER.png"), std::string::npos) << summary.dump();
-  EXPECT_NE(summary["reasons"].dump().find("bytes, its record gives"), std::string::npos) << summary.dump();
+  EXPECT_NE(summary["reasons"].dump().find("005_SIM-CAM-LOWER.png"), std::string::npos)
+      << summary.dump();
+  EXPECT_NE(summary["reasons"].dump().find("bytes, its record gives"), std::string::npos)
+      << summary.dump();
 }
 
 // The same frames calibrate to the same bytes in other processes: copies of

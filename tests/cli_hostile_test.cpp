@@ -3,6 +3,7 @@
 // the file and the field ("hairrig: error: ..."), never a crash (exit 134), a
 // hang, a write outside the capture folder or a success on a damaged dataset.
 
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 
 #include <array>
@@ -11,10 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "tests/support/command_run.h"
 
@@ -25,7 +24,9 @@ using hairrig_test::CommandRun;
 using hairrig_test::Hairrig;
 
 // Every command runs under `timeout`: a hang fails the test (exit 124) instead of blocking ctest.
-CommandRun Hostile(const std::string& args) { return Hairrig("--log-level error " + args, "timeout -k 5 60 "); }
+CommandRun Hostile(const std::string& args) {
+  return Hairrig("--log-level error " + args, "timeout -k 5 60 ");
+}
 
 void ExpectCleanError(const CommandRun& r, const std::string& expected) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
@@ -45,7 +46,8 @@ class CliHostile : public ::testing::Test {
     root_ = ::testing::TempDir() + "/hairrig_cli_hostile";
     fs::remove_all(root_);
     fs::create_directories(root_);
-    const CommandRun r = Hostile("capture --config tests/data/small_rig.yaml --out " + root_ + "/recorded");
+    const CommandRun r =
+        Hostile("capture --config tests/data/small_rig.yaml --out " + root_ + "/recorded");
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   // A fresh copy of the recorded capture.
@@ -56,7 +58,8 @@ class CliHostile : public ::testing::Test {
     return dir;
   }
   // Applies `edit` to the capture's first frame_stored record.
-  static void EditFirstFrameRecord(const std::string& dir, const std::function<void(nlohmann::json&)>& edit) {
+  static void EditFirstFrameRecord(const std::string& dir,
+                                   const std::function<void(nlohmann::json&)>& edit) {
     std::ifstream in(dir + "/journal.jsonl");
     std::string line, text;
     bool done = false;
@@ -89,7 +92,8 @@ TEST_F(CliHostile, DamagedFrameRecordsStopResumeWithLineAndField) {
     const std::string manifest = ReadText(dir + "/manifest.json");
     ExpectCleanError(Hostile("capture --resume --out " + dir), "journal.jsonl: line ");
     ExpectCleanError(Hostile("replay " + dir + " --out " + dir + "-replay"), expected);
-    EXPECT_EQ(ReadText(dir + "/manifest.json"), manifest) << "a refused resume leaves the manifest alone";
+    EXPECT_EQ(ReadText(dir + "/manifest.json"), manifest)
+        << "a refused resume leaves the manifest alone";
     EXPECT_FALSE(nlohmann::json::parse(manifest, nullptr, false).is_discarded());
   }
 }
@@ -124,7 +128,8 @@ TEST_F(CliHostile, ResumeFollowsNoSymlinkOutOfTheCapture) {
 
 TEST_F(CliHostile, ReplayStaysInsideTheRecording) {
   const std::string dir = Copy("replay_escape");
-  fs::copy_file(dir + "/frames/001_SIM-CAM-LOWER.png", root_ + "/victim.png", fs::copy_options::overwrite_existing);
+  fs::copy_file(dir + "/frames/001_SIM-CAM-LOWER.png", root_ + "/victim.png",
+                fs::copy_options::overwrite_existing);
   EditFirstFrameRecord(dir, [](nlohmann::json& r) { r["file"] = "../victim.png"; });
   ExpectCleanError(Hostile("replay " + dir + " --out " + root_ + "/escape_out"), "field 'file'");
   EXPECT_FALSE(fs::exists(root_ + "/escape_out"));
@@ -151,17 +156,21 @@ TEST_F(CliHostile, HostileStrandFilesAndModelsAreRefused) {
   std::memcpy(header.data() + 8, &huge, 4);
   std::memcpy(header.data() + 12, &points_only, 4);
   std::ofstream(root_ + "/huge.hair", std::ios::binary).write(header.data(), 128);
-  ExpectCleanError(Hostile("fit " + root_ + "/huge.hair --out " + root_ + "/m.json"), "header claims 4294967295 strands");
+  ExpectCleanError(Hostile("fit " + root_ + "/huge.hair --out " + root_ + "/m.json"),
+                   "header claims 4294967295 strands");
   // A PLY element of 9e18 empty records (it used to loop for ever).
-  std::ofstream(root_ + "/junk.ply") << "ply\nformat ascii 1.0\nelement junk 9000000000000000000\nelement vertex 1\n"
-                                        "property float x\nproperty float y\nproperty float z\nelement strand 1\n"
-                                        "property int nsegs\nend_header\n0 0 0\n0\n";
-  ExpectCleanError(Hostile("fit " + root_ + "/junk.ply --out " + root_ + "/m.json"), "element 'junk'");
+  std::ofstream(root_ + "/junk.ply")
+      << "ply\nformat ascii 1.0\nelement junk 9000000000000000000\nelement vertex 1\n"
+         "property float x\nproperty float y\nproperty float z\nelement strand 1\n"
+         "property int nsegs\nend_header\n0 0 0\n0\n";
+  ExpectCleanError(Hostile("fit " + root_ + "/junk.ply --out " + root_ + "/m.json"),
+                   "element 'junk'");
   // A helix model whose cluster_of_strand is a string (it used to end in std::terminate).
   std::ofstream(root_ + "/model.json")
       << R"({"format": "hairrig-helix-model", "version": 1, "guides": [{"strand": 0, "elements": [{"start_mm": [0, 0, 0],
             "start_tangent": [1, 0, 0], "darboux_per_mm": [0, 0, 0], "length_mm": 1}]}], "cluster_of_strand": "abc"})";
-  ExpectCleanError(Hostile("simulate " + root_ + "/model.json --out " + root_ + "/sim"), "field 'cluster_of_strand'");
+  ExpectCleanError(Hostile("simulate " + root_ + "/model.json --out " + root_ + "/sim"),
+                   "field 'cluster_of_strand'");
 }
 
 // A FIFO under the journal's name used to block `capture --resume` for ever
@@ -171,7 +180,8 @@ TEST_F(CliHostile, ResumeRefusesAJournalThatIsNotARegularFile) {
   fs::remove(dir + "/journal.jsonl");
   ASSERT_EQ(::mkfifo((dir + "/journal.jsonl").c_str(), 0600), 0);
   ExpectCleanError(Hostile("capture --resume --out " + dir), "journal.jsonl is a FIFO");
-  ExpectCleanError(Hostile("replay " + dir + " --out " + dir + "-replay"), "journal.jsonl is a FIFO");
+  ExpectCleanError(Hostile("replay " + dir + " --out " + dir + "-replay"),
+                   "journal.jsonl is a FIFO");
 }
 
 // A frame record vouches for the frame's exact size: one claiming more bytes
@@ -187,7 +197,8 @@ TEST_F(CliHostile, AFrameLargerOnRecordThanOnDiskIsNotTrusted) {
   });
   const CommandRun replay = Hostile("replay " + dir + " --out " + dir + "-replay --json");
   EXPECT_EQ(replay.exit_code, 3) << replay.output;  // incomplete: that view is not served
-  EXPECT_NE(replay.output.find("\"missing_views\":[" + std::to_string(view) + "]"), std::string::npos)
+  EXPECT_NE(replay.output.find("\"missing_views\":[" + std::to_string(view) + "]"),
+            std::string::npos)
       << replay.output;
   const CommandRun resume = Hostile("capture --resume --out " + dir);
   EXPECT_EQ(resume.exit_code, 0) << resume.output;  // the frame is shot again
@@ -195,7 +206,8 @@ TEST_F(CliHostile, AFrameLargerOnRecordThanOnDiskIsNotTrusted) {
 }
 
 // The small test rig named `rig_name` on the scene file `scene`, written as `file`.
-std::string SmallRigVariant(const std::string& file, const std::string& rig_name, const std::string& scene) {
+std::string SmallRigVariant(const std::string& file, const std::string& rig_name,
+                            const std::string& scene) {
   std::string text = ReadText("tests/data/small_rig.yaml");
   const auto replace = [&text](const std::string& from, const std::string& to) {
     text.replace(text.find(from), from.size(), to);
@@ -210,9 +222,10 @@ std::string SmallRigVariant(const std::string& file, const std::string& rig_name
 // Config text is written to JSON (capture.json): text that is not UTF-8 used
 // to end in "internal error" from the JSON writer; it is refused on reading.
 TEST_F(CliHostile, ConfigTextThatIsNotUtf8IsRefusedNamingTheField) {
-  const std::string config =
-      SmallRigVariant("latin1.yaml", "caf\xE9 rig", fs::absolute("tests/data/small_scene.yaml").string());
-  const CommandRun r = Hostile("capture --config " + config + " --out " + root_ + "/latin1_capture");
+  const std::string config = SmallRigVariant("latin1.yaml", "caf\xE9 rig",
+                                             fs::absolute("tests/data/small_scene.yaml").string());
+  const CommandRun r =
+      Hostile("capture --config " + config + " --out " + root_ + "/latin1_capture");
   ExpectCleanError(r, config + ":3:7: field 'name': text that is not valid UTF-8");
   EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
 }
@@ -221,27 +234,34 @@ TEST_F(CliHostile, ConfigTextThatIsNotUtf8IsRefusedNamingTheField) {
 // its content appearing in the message.
 TEST_F(CliHostile, AForeignFileNamedAsASceneIsNotQuoted) {
   const std::string foreign = root_ + "/passwd";
-  std::ofstream(foreign) << "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n";
+  std::ofstream(foreign)
+      << "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n";
   const std::string config = SmallRigVariant("foreign_scene.yaml", "small simulated rig", foreign);
-  const CommandRun r = Hostile("capture --config " + config + " --out " + root_ + "/foreign_capture");
+  const CommandRun r =
+      Hostile("capture --config " + config + " --out " + root_ + "/foreign_capture");
   ExpectCleanError(r, foreign + ": expected a YAML map at the top level, got text of 79 bytes");
   EXPECT_EQ(r.output.find("root:x"), std::string::npos) << r.output;
 }
 
 // Argument errors, CLI11's existence checks included, end as every other error.
 TEST_F(CliHostile, ArgumentErrorsExitOneWithTheErrorForm) {
-  ExpectCleanError(Hostile("calibrate " + root_ + "/recorded --intrinsics " + root_ + "/absent.json"),
-                   "File does not exist");
+  ExpectCleanError(
+      Hostile("calibrate " + root_ + "/recorded --intrinsics " + root_ + "/absent.json"),
+      "File does not exist");
   ExpectCleanError(Hostile("calibrate " + root_ + "/recorded --intrinsics " + root_), root_);
-  ExpectCleanError(Hostile("simulate " + root_ + "/absent_model.json --out " + root_ + "/sim"), "absent_model.json");
+  ExpectCleanError(Hostile("simulate " + root_ + "/absent_model.json --out " + root_ + "/sim"),
+                   "absent_model.json");
   ExpectCleanError(Hostile("devices --no-such-option"), "--no-such-option");
   EXPECT_EQ(Hostile("--help").exit_code, 0);
 }
 
 // A USC-HairSalon .data file of the given strands.
-void WriteData(const std::string& path, const std::vector<std::vector<std::array<float, 3>>>& strands) {
+void WriteData(const std::string& path,
+               const std::vector<std::vector<std::array<float, 3>>>& strands) {
   std::ofstream out(path, std::ios::binary);
-  const auto put = [&](const auto& value) { out.write(reinterpret_cast<const char*>(&value), sizeof value); };
+  const auto put = [&](const auto& value) {
+    out.write(reinterpret_cast<const char*>(&value), sizeof value);
+  };
   put(static_cast<int32_t>(strands.size()));
   for (const auto& strand : strands) {
     put(static_cast<int32_t>(strand.size()));
@@ -253,7 +273,8 @@ void WriteData(const std::string& path, const std::vector<std::vector<std::array
 // order) and, for a coordinate, the vertex: near float's largest (3.4e38)
 // differences overflow, which once reached the fit as "strand -1".
 TEST_F(CliHostile, StrandErrorsNameTheFileAndTheStrand) {
-  const std::vector<std::array<float, 3>> straight = {{0, 0, 0}, {0, 0, -10}, {0, 0, -20}, {0, 0, -30}};
+  const std::vector<std::array<float, 3>> straight = {
+      {0, 0, 0}, {0, 0, -10}, {0, 0, -20}, {0, 0, -30}};
   const std::string huge = root_ + "/huge_coordinate.data";
   WriteData(huge, {straight, straight, {{0, 0, 0}, {0, 0, -10}, {3.4e38f, 0, -20}}});
   CommandRun r = Hostile("fit " + huge + " --out " + root_ + "/m.json");

@@ -1,6 +1,7 @@
 // The hairrig command line as a user meets it: clear errors with non-zero exit
 // codes on bad input, JSON summaries with --json, files where it says.
 
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -9,17 +10,14 @@
 
 #include <array>
 #include <chrono>
-#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
+#include <thread>
 
 #include "tests/support/command_run.h"
 #include "tests/support/gvcp_packets.h"
@@ -69,7 +67,8 @@ TEST(Cli, DiscoverListsRealDevicesOrSaysThereAreNone) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = LastLineJson(r.output);
   EXPECT_EQ(j["found"].get<size_t>(), j["devices"].size());
-  for (const auto& d : j["devices"]) EXPECT_NE(d["snippet"].get<std::string>().find("backend: "), std::string::npos);
+  for (const auto& d : j["devices"])
+    EXPECT_NE(d["snippet"].get<std::string>().find("backend: "), std::string::npos);
   if (j["found"] == 0) {
     EXPECT_NE(j["text"].get<std::string>().find("No devices found"), std::string::npos) << r.output;
   }
@@ -85,8 +84,8 @@ TEST(Cli, BrokenYamlNamesTheFileAndLine) {
 }
 
 TEST(Cli, UnknownBackendNamesTheFieldAndTheChoices) {
-  const std::string path =
-      TempFile("rig.yaml", "name: x\ndevices:\n  cameras:\n    - {name: c, backend: ximea, serial: X1}\n");
+  const std::string path = TempFile(
+      "rig.yaml", "name: x\ndevices:\n  cameras:\n    - {name: c, backend: ximea, serial: X1}\n");
   const CommandRun r = Hairrig("devices --config " + path);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("devices.cameras[0].backend"), std::string::npos) << r.output;
@@ -100,8 +99,8 @@ TEST(Cli, SceneWithTheBoxBehindACameraIsRefused) {
   // Turn the upper camera round: it looks away from the box.
   scene.replace(scene.find("target_mm: [0, 0, 390]"), std::string("target_mm: [0, 0, 390]").size(),
                 "target_mm: [1800, 0, 700]");
-  const CommandRun r = Hairrig("sim render --view 0 --out " + ::testing::TempDir() + "/x.png --scene " +
-                        TempFile("behind.yaml", scene));
+  const CommandRun r = Hairrig("sim render --view 0 --out " + ::testing::TempDir() +
+                               "/x.png --scene " + TempFile("behind.yaml", scene));
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("has the calibration box behind it"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("SIM-CAM-UPPER"), std::string::npos) << r.output;
@@ -119,7 +118,8 @@ TEST(Cli, RenderOneViewWritesTheImage) {
 }
 
 TEST(Cli, RenderCropIsThoseFullResolutionPixels) {
-  const std::string full = ::testing::TempDir() + "/view8_full.png", crop = ::testing::TempDir() + "/view8_crop.png";
+  const std::string full = ::testing::TempDir() + "/view8_full.png",
+                    crop = ::testing::TempDir() + "/view8_crop.png";
   ASSERT_EQ(Hairrig("sim render --view 8 --no-noise --out " + full).exit_code, 0);
   const CommandRun r = Hairrig("sim render --view 8 --no-noise --crop 340,680,56,60 --out " + crop);
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -153,7 +153,8 @@ SimServe StartSimServe(const std::string& name) {
   serve.pid = fork();
   if (serve.pid == 0) {
     std::freopen(serve.log.c_str(), "w", stdout);
-    execl(HAIRRIG_BIN, HAIRRIG_BIN, "sim", "serve", "--no-rtu", "--time-scale", "0.01", static_cast<char*>(nullptr));
+    execl(HAIRRIG_BIN, HAIRRIG_BIN, "sim", "serve", "--no-rtu", "--time-scale", "0.01",
+          static_cast<char*>(nullptr));
     _exit(127);
   }
   for (int i = 0; i < 600 && serve.pid > 0 && serve.modbus_port.empty(); ++i) {
@@ -161,7 +162,8 @@ SimServe StartSimServe(const std::string& name) {
     const std::string text = ReadText(serve.log);
     const size_t at = text.find("127.0.0.1:");
     const size_t end = text.find(' ', at);
-    if (at != std::string::npos && end != std::string::npos) serve.modbus_port = text.substr(at + 10, end - at - 10);
+    if (at != std::string::npos && end != std::string::npos)
+      serve.modbus_port = text.substr(at + 10, end - at - 10);
   }
   return serve;
 }
@@ -183,11 +185,13 @@ TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
   ASSERT_GT(serve.pid, 0);
   const std::string& port = serve.modbus_port;
   ASSERT_FALSE(port.empty()) << "no endpoint printed:\n" << ReadText(serve.log);
-  const std::string mbpoll = "mbpoll -m tcp -p " + port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
+  const std::string mbpoll =
+      "mbpoll -m tcp -p " + port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
   EXPECT_EQ(std::system(mbpoll.c_str()), 0) << mbpoll;
   // Aravis' own test client streams from the GigE fake for 4 s (then SIGINT, which it handles).
   const std::string arv_log = ::testing::TempDir() + "/arv_camera_test.out";
-  const std::string arv = "timeout -s INT 4 arv-camera-test-0.8 -n 127.0.0.1 > " + arv_log + " 2>&1";
+  const std::string arv =
+      "timeout -s INT 4 arv-camera-test-0.8 -n 127.0.0.1 > " + arv_log + " 2>&1";
   std::system(arv.c_str());
   const std::string arv_text = ReadText(arv_log);
   EXPECT_NE(arv_text.find("device serial number   = SIM-CAM-LOWER"), std::string::npos) << arv_text;
@@ -198,10 +202,14 @@ TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
   EXPECT_NE(text.find("try: mbpoll -m tcp -p " + port), std::string::npos) << text;
   EXPECT_NE(text.find("stopped (SIGINT)"), std::string::npos) << text;
   EXPECT_NE(text.find(": 1 requests served"), std::string::npos) << text;
-  EXPECT_NE(text.find("try: gphoto2 --camera 'Hairrig Simulated DSLR' --port disk:"), std::string::npos) << text;
+  EXPECT_NE(text.find("try: gphoto2 --camera 'Hairrig Simulated DSLR' --port disk:"),
+            std::string::npos)
+      << text;
   EXPECT_NE(text.find("export CAMLIBS="), std::string::npos) << text;
-  EXPECT_EQ(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: 0 frames"), std::string::npos) << text;
-  EXPECT_NE(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: "), std::string::npos) << text;
+  EXPECT_EQ(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: 0 frames"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("GigE Vision camera SIM-CAM-LOWER at 127.0.0.1: "), std::string::npos)
+      << text;
 }
 
 // Whether the simulated DSLR serving `port` ("disk:<folder>") accepts a connection.
@@ -211,7 +219,8 @@ bool DslrAccepts(const std::string& port) {
   sockaddr_un address{};
   address.sun_family = AF_UNIX;
   std::snprintf(address.sun_path, sizeof address.sun_path, "%s", path.c_str());
-  const bool ok = fd >= 0 && connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+  const bool ok =
+      fd >= 0 && connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
   if (fd >= 0) close(fd);
   return ok;
 }
@@ -222,19 +231,22 @@ TEST(Cli, SimServeSurvivesHostileGigEControlPackets) {
   const SimServe serve = StartSimServe("sim_serve_hostile");
   ASSERT_GT(serve.pid, 0);
   ASSERT_FALSE(serve.modbus_port.empty()) << "no endpoint printed:\n" << ReadText(serve.log);
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // every simulator printed and serving
-  for (const auto& packet : hairrig_test::HostileGvcpPackets()) hairrig_test::AskGvcp("127.0.0.1", packet, 100);
+  std::this_thread::sleep_for(
+      std::chrono::milliseconds(200));  // every simulator printed and serving
+  for (const auto& packet : hairrig_test::HostileGvcpPackets())
+    hairrig_test::AskGvcp("127.0.0.1", packet, 100);
   EXPECT_EQ(waitpid(serve.pid, nullptr, WNOHANG), 0) << "sim serve died:\n" << ReadText(serve.log);
   const auto read_test_register =
       hairrig_test::GvcpCommand(hairrig_test::kGvcpReadRegister, {hairrig_test::kFakeTestRegister});
   EXPECT_EQ(hairrig_test::AskGvcp("127.0.0.1", read_test_register), 12);
-  const std::string mbpoll =
-      "mbpoll -m tcp -p " + serve.modbus_port + " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
+  const std::string mbpoll = "mbpoll -m tcp -p " + serve.modbus_port +
+                             " -a 1 -0 -1 -t 4:hex -r 100 -c 2 127.0.0.1 > /dev/null";
   EXPECT_EQ(std::system(mbpoll.c_str()), 0) << mbpoll;
   const std::string text = ReadText(serve.log);
   const size_t disk = text.find("--port disk:");
   ASSERT_NE(disk, std::string::npos) << text;
-  const std::string dslr_port = text.substr(disk + 7, text.find_first_of(" \n", disk + 7) - disk - 7);
+  const std::string dslr_port =
+      text.substr(disk + 7, text.find_first_of(" \n", disk + 7) - disk - 7);
   EXPECT_TRUE(DslrAccepts(dslr_port)) << dslr_port;
   EXPECT_EQ(StopSimServe(serve), 0);
 }
@@ -258,7 +270,8 @@ TEST(CliCapture, OutIsTheOnlyFlagANewUserNeeds) {
   const CommandRun r = Hairrig("--log-level warning capture --out " + out + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = LastLineJson(r.output);
-  for (const char* key : {"views_planned", "views_completed", "frames", "bytes", "wall_s", "lower_bound_s", "efficiency"}) {
+  for (const char* key : {"views_planned", "views_completed", "frames", "bytes", "wall_s",
+                          "lower_bound_s", "efficiency"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["views_planned"], 38);
@@ -270,7 +283,8 @@ TEST(CliCapture, OutIsTheOnlyFlagANewUserNeeds) {
 TEST(CliCapture, SubjectFolderResumeAndReplay) {
   const std::string root = FreshPath("subjects");
   const std::string small = "--config tests/data/small_rig.yaml";
-  CommandRun r = Hairrig("--log-level warning capture " + small + " --out " + root + " --subject 'Wig 03' --json");
+  CommandRun r = Hairrig("--log-level warning capture " + small + " --out " + root +
+                         " --subject 'Wig 03' --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string capture = root + "/Wig_03";
   EXPECT_EQ(LastLineJson(r.output)["dir"], fs::absolute(capture).lexically_normal().string());
@@ -294,8 +308,8 @@ TEST(CliCapture, SubjectFolderResumeAndReplay) {
 TEST(CliCapture, UnsafeSubjectsAreRefusedAndNothingIsWritten) {
   const std::string root = FreshPath("unsafe");
   for (const std::string subject : {"../x", "/tmp/abs", "$'a\\nb'", "'.hidden'"}) {
-    const CommandRun r =
-        Hairrig("capture --config tests/data/small_rig.yaml --out " + root + " --subject " + subject);
+    const CommandRun r = Hairrig("capture --config tests/data/small_rig.yaml --out " + root +
+                                 " --subject " + subject);
     EXPECT_EQ(r.exit_code, 1) << subject << ": " << r.output;
     EXPECT_NE(r.output.find("subject name"), std::string::npos) << r.output;
   }
@@ -312,13 +326,15 @@ TEST(CliCapture, ResumeOfAFolderThatIsNoCaptureIsRefused) {
 
 // Twelve curls as an ASCII PLY strand file (vertex + strand element).
 std::string CurlsPly() {
-  std::string text = "ply\nformat ascii 1.0\nelement vertex 480\nproperty float x\nproperty float y\n"
-                     "property float z\nelement strand 12\nproperty ushort nsegs\nend_header\n";
+  std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 480\nproperty float x\nproperty float y\n"
+      "property float z\nelement strand 12\nproperty ushort nsegs\nend_header\n";
   for (int s = 0; s < 12; ++s) {
     for (int k = 0; k < 40; ++k) {
       const double a = 0.3 * k;
-      text += std::to_string(20 * (s % 4) + 5 * std::cos(a)) + " " + std::to_string(20 * (s / 4) + 5 * std::sin(a)) +
-              " " + std::to_string(-0.8 * k) + "\n";
+      text += std::to_string(20 * (s % 4) + 5 * std::cos(a)) + " " +
+              std::to_string(20 * (s / 4) + 5 * std::sin(a)) + " " + std::to_string(-0.8 * k) +
+              "\n";
     }
   }
   for (int s = 0; s < 12; ++s) text += "39\n";
@@ -335,7 +351,8 @@ TEST(CliFit, FitsStrandsAndRefusesBadInput) {
   EXPECT_LT(j["mean_error_mm"].get<double>(), 0.5);
   EXPECT_LT(j["max_g1_defect_deg"].get<double>(), 1e-3);
   ASSERT_TRUE(j.contains("max_relaxation_elements")) << r.output;
-  EXPECT_LT(j["max_relaxation_elements"].get<double>(), 0.25) << "no resonance of the relaxation on these curls";
+  EXPECT_LT(j["max_relaxation_elements"].get<double>(), 0.25)
+      << "no resonance of the relaxation on these curls";
   EXPECT_TRUE(fs::exists(out));
   r = Hairrig("fit " + strands + " --out " + out + " --guides 1000");
   EXPECT_EQ(r.exit_code, 1);
@@ -351,16 +368,17 @@ TEST(CliSimulate, WritesFramesPreviewsAndSummaryAndRefusesBadInput) {
   const std::string model = FreshPath("sim_model.json");
   ASSERT_EQ(Hairrig("fit " + strands + " --out " + model + " --guides 4").exit_code, 0);
   const std::string out = FreshPath("sim_out");
-  CommandRun r = Hairrig("simulate " + model + " --out " + out +
-                         " --scenario wind --seconds 0.2 --fps 10 --no-head --preview-every 2 --json");
+  CommandRun r =
+      Hairrig("simulate " + model + " --out " + out +
+              " --scenario wind --seconds 0.2 --fps 10 --no-head --preview-every 2 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = LastLineJson(r.output);
   EXPECT_EQ(j["frames"], 3);
   EXPECT_EQ(j["guides"], 4);
   EXPECT_EQ(j["strands"], 12) << "every strand of the source, interpolated from the guides";
   EXPECT_GT(j["max_tip_move_mm"].get<double>(), 0.0);
-  for (const char* f : {"frames/frame_0000.hair", "frames/frame_0002.hair", "previews/frame_0000.png",
-                        "previews/frame_0002.png", "summary.json"}) {
+  for (const char* f : {"frames/frame_0000.hair", "frames/frame_0002.hair",
+                        "previews/frame_0000.png", "previews/frame_0002.png", "summary.json"}) {
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   }
   EXPECT_FALSE(fs::exists(out + "/previews/frame_0001.png"));

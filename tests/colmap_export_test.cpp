@@ -4,6 +4,7 @@
 // image poses COLMAP writes are the calibration's, in COLMAP's conventions
 // (pixel centres at +0.5, poses cam_from_object). Skipped when no `colmap` is
 // on the PATH (Debian's package `colmap`, which scripts/install-deps installs).
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -14,8 +15,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "calibration/calibration_io.h"
 #include "tests/support/command_run.h"

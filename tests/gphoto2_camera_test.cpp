@@ -1,24 +1,24 @@
 // The `gphoto2` camera backend against the simulated DSLR, through the
 // unmodified libgphoto2 loading the project's camlib (CAMLIBS); and the
 // simulated DSLR against an independent client, the `gphoto2` command.
+#include "drivers/gphoto2_camera.h"
+
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <thread>
 
-#include <gtest/gtest.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "core/clock.h"
-#include "drivers/gphoto2_camera.h"
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_dslr_protocol.h"
@@ -78,7 +78,8 @@ Bench StartBench(std::vector<SimFault> faults = {}, const std::string& trigger_l
 // to start removes such folders whose owner is gone, and no other.
 TEST(SimDslrServer, RemovesTheFoldersKilledProcessesLeft) {
   namespace fs = std::filesystem;
-  const fs::path parent = fs::path(::testing::TempDir()) / ("dslr_stale_" + std::to_string(getpid()));
+  const fs::path parent =
+      fs::path(::testing::TempDir()) / ("dslr_stale_" + std::to_string(getpid()));
   fs::remove_all(parent);
   fs::create_directories(parent);
   const pid_t gone = fork();
@@ -180,15 +181,17 @@ TEST(Gphoto2Camera, SettingsOutsideTheChoicesAreRefusedWithTheChoices) {
   bad.reset();  // releases the camera
 
   o.settings = {{"whitebalance", "Daylight"}};
-  auto unknown = MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"}, o);
+  auto unknown =
+      MakeGphoto2Camera({DeviceKind::kCamera, "upper", "gphoto2", kSerial, "test DSLR"}, o);
   s = unknown->Open();
   EXPECT_NE(s.message().find("no setting named 'whitebalance'"), std::string::npos) << s.message();
 }
 
 TEST(Gphoto2Camera, AnotherSerialAtThePortIsRefusedNamingBoth) {
   Bench b = StartBench();
-  auto other = MakeGphoto2Camera({DeviceKind::kCamera, "lower", "gphoto2", "SIM-CAM-LOWER", "test DSLR"},
-                                 ClientOptions(*b.server));
+  auto other =
+      MakeGphoto2Camera({DeviceKind::kCamera, "lower", "gphoto2", "SIM-CAM-LOWER", "test DSLR"},
+                        ClientOptions(*b.server));
   const Status s = other->Open();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
   EXPECT_NE(s.message().find("SIM-CAM-UPPER"), std::string::npos) << s.message();
@@ -332,16 +335,19 @@ TEST(Gphoto2Camera, NoCameraAtThePortSaysWhatToStart) {
 }
 
 TEST(Gphoto2Camera, ConfigErrorsNameTheField) {
-  auto root = ConfigNode::LoadString("{name: c, backend: gphoto2, serial: X, port: 'disk:/tmp/x', sttings: {}}",
-                                     "rig.yaml");
+  auto root = ConfigNode::LoadString(
+      "{name: c, backend: gphoto2, serial: X, port: 'disk:/tmp/x', sttings: {}}", "rig.yaml");
   ASSERT_TRUE(root.ok());
   auto parsed = ParseGphoto2CameraOptions(*root);
   ASSERT_FALSE(parsed.ok());
-  EXPECT_NE(parsed.status().message().find("sttings"), std::string::npos) << parsed.status().message();
-  root = ConfigNode::LoadString("{name: c, backend: gphoto2, serial: X, port: 'disk:/tmp/x'}", "rig.yaml");
+  EXPECT_NE(parsed.status().message().find("sttings"), std::string::npos)
+      << parsed.status().message();
+  root = ConfigNode::LoadString("{name: c, backend: gphoto2, serial: X, port: 'disk:/tmp/x'}",
+                                "rig.yaml");
   parsed = ParseGphoto2CameraOptions(*root);
   ASSERT_FALSE(parsed.ok());
-  EXPECT_NE(parsed.status().message().find("model"), std::string::npos) << parsed.status().message();
+  EXPECT_NE(parsed.status().message().find("model"), std::string::npos)
+      << parsed.status().message();
 }
 
 // --- the gphoto2 command against the simulated DSLR ---------------------------
@@ -375,7 +381,8 @@ class Gphoto2Command : public ::testing::Test {
       GTEST_FAIL() << "the gphoto2 command is not installed: run scripts/install-deps";
     }
     bench_ = StartBench();
-    target_ = "--camera '" + std::string(sim_dslr::kModel) + "' --port " + bench_.server->port() + " ";
+    target_ =
+        "--camera '" + std::string(sim_dslr::kModel) + "' --port " + bench_.server->port() + " ";
   }
   Bench bench_;
   std::string target_;
@@ -408,10 +415,12 @@ TEST_F(Gphoto2Command, AutoDetectListsTheSimulatedBodyOnAUsbBus) {
 }
 
 TEST_F(Gphoto2Command, CapturesAndDownloadsAJpegOfTheView) {
-  const auto dir = std::filesystem::temp_directory_path() / ("hairrig-gphoto2-" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("hairrig-gphoto2-" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const std::string file = (dir / "shot.jpg").string();
-  auto out = RunGphoto2(target_ + "--capture-image-and-download --force-overwrite --filename " + file);
+  auto out =
+      RunGphoto2(target_ + "--capture-image-and-download --force-overwrite --filename " + file);
   ASSERT_TRUE(out);
   const cv::Mat image = cv::imread(file, cv::IMREAD_COLOR);
   EXPECT_EQ(image.cols, 1200) << *out;

@@ -1,11 +1,12 @@
 // The `gpiod` devices over the simulated GPIO provider, and the real libgpiod
 // provider's behaviour on a machine without the requested chip.
-#include <condition_variable>
-#include <mutex>
+#include "drivers/gpio_devices.h"
 
 #include <gtest/gtest.h>
 
-#include "drivers/gpio_devices.h"
+#include <condition_variable>
+#include <mutex>
+
 #include "sim_hw/sim_gpio.h"
 
 namespace hairrig {
@@ -34,7 +35,8 @@ struct Gpio {
 
 TEST(GpioDevices, PanelPowerFollowsSetOnAndGoesOffOnClose) {
   Gpio g;
-  auto light = g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: hairrig-io, line: 5, active_low: true}");
+  auto light = g.Make<Light>(
+      DeviceKind::kLight, "{name: top, serial: P1, chip: hairrig-io, line: 5, active_low: true}");
   ASSERT_TRUE(light.ok()) << light.status().ToString();
   ASSERT_TRUE((*light)->Open().ok());
   EXPECT_EQ(g.provider->Consumer("hairrig-io", 5), "hairrig top");
@@ -51,7 +53,8 @@ TEST(GpioDevices, PanelPowerFollowsSetOnAndGoesOffOnClose) {
 
 TEST(GpioDevices, TriggerPulseHasAtLeastTheRequestedWidth) {
   Gpio g;
-  auto trig = g.Make<TriggerLine>(DeviceKind::kTriggerLine, "{name: trig0, serial: T0, chip: gpiochip0, line: 27}");
+  auto trig = g.Make<TriggerLine>(DeviceKind::kTriggerLine,
+                                  "{name: trig0, serial: T0, chip: gpiochip0, line: 27}");
   ASSERT_TRUE(trig.ok()) << trig.status().ToString();
   ASSERT_TRUE((*trig)->Open().ok());
   ASSERT_TRUE((*trig)->Pulse(std::chrono::microseconds(2000)).ok());
@@ -65,8 +68,9 @@ TEST(GpioDevices, TriggerPulseHasAtLeastTheRequestedWidth) {
 
 TEST(GpioDevices, SafetyInputReportsEveryEdgeWithItsPolarity) {
   Gpio g;
-  auto estop = g.Make<InputLine>(DeviceKind::kInputLine,
-                                 "{name: estop, serial: E1, chip: hairrig-io, line: 3, active_low: true, bias: pull_up}");
+  auto estop = g.Make<InputLine>(
+      DeviceKind::kInputLine,
+      "{name: estop, serial: E1, chip: hairrig-io, line: 3, active_low: true, bias: pull_up}");
   ASSERT_TRUE(estop.ok()) << estop.status().ToString();
   ASSERT_TRUE(g.provider->DriveInput("hairrig-io", 3, true).ok());  // released button, pulled up
   ASSERT_TRUE((*estop)->Open().ok());
@@ -97,7 +101,8 @@ TEST(GpioDevices, SafetyInputReportsEveryEdgeWithItsPolarity) {
 
 TEST(GpioDevices, ALineHeldByAnotherDeviceIsRefusedNamingTheHolder) {
   Gpio g;
-  auto a = g.Make<TriggerLine>(DeviceKind::kTriggerLine, "{name: trig0, serial: T0, chip: hairrig-io, line: 4}");
+  auto a = g.Make<TriggerLine>(DeviceKind::kTriggerLine,
+                               "{name: trig0, serial: T0, chip: hairrig-io, line: 4}");
   auto b = g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: hairrig-io, line: 4}");
   ASSERT_TRUE(a.ok() && b.ok());
   ASSERT_TRUE((*a)->Open().ok());
@@ -111,18 +116,22 @@ TEST(GpioDevices, ALineHeldByAnotherDeviceIsRefusedNamingTheHolder) {
 
 TEST(GpioDevices, BadChipLineOrConfigIsNamed) {
   Gpio g;
-  auto nochip = g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: pinctrl-bcm2711, line: 4}");
+  auto nochip =
+      g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: pinctrl-bcm2711, line: 4}");
   ASSERT_TRUE(nochip.ok());
   Status s = (*nochip)->Open();
   EXPECT_EQ(s.code(), StatusCode::kNotFound);
   EXPECT_NE(s.message().find("gpiochip0 [hairrig-io]"), std::string::npos) << s.message();
-  auto far = g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: hairrig-io, line: 40}");
+  auto far =
+      g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: hairrig-io, line: 40}");
   s = (*far)->Open();
   EXPECT_EQ(s.code(), StatusCode::kOutOfRange);
   EXPECT_NE(s.message().find("32 lines"), std::string::npos) << s.message();
   auto missing = g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, line: 4}");
-  EXPECT_NE(missing.status().message().find("chip"), std::string::npos) << missing.status().ToString();
-  auto bias = g.Make<Light>(DeviceKind::kLight, "{name: top, serial: P1, chip: hairrig-io, line: 4, bias: pull_up}");
+  EXPECT_NE(missing.status().message().find("chip"), std::string::npos)
+      << missing.status().ToString();
+  auto bias = g.Make<Light>(DeviceKind::kLight,
+                            "{name: top, serial: P1, chip: hairrig-io, line: 4, bias: pull_up}");
   EXPECT_NE(bias.status().message().find("bias"), std::string::npos) << bias.status().ToString();
 }
 
@@ -137,8 +146,10 @@ TEST(LibgpiodProvider, AnAbsentChipIsNotFoundWithAHint) {
   auto out = provider->RequestOutput(r);
   ASSERT_FALSE(out.ok());
   EXPECT_EQ(out.status().code(), StatusCode::kNotFound);
-  EXPECT_NE(out.status().message().find("'hairrig-no-such-chip'"), std::string::npos) << out.status().ToString();
-  EXPECT_NE(out.status().message().find("gpiodetect"), std::string::npos) << out.status().ToString();
+  EXPECT_NE(out.status().message().find("'hairrig-no-such-chip'"), std::string::npos)
+      << out.status().ToString();
+  EXPECT_NE(out.status().message().find("gpiodetect"), std::string::npos)
+      << out.status().ToString();
   EXPECT_FALSE(provider->RequestInput(r).ok());
 }
 

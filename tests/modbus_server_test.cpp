@@ -1,12 +1,12 @@
 // The simulated Modbus controller (sim_hw/modbus_turntable_server.h) against
 // hostile peers: requests for other unit ids, bytes that are not Modbus, RTU
 // broadcasts. (tests/modbus_flood_test.cpp floods it with connections.)
+#include <gtest/gtest.h>
+#include <modbus/modbus.h>
+
 #include <cerrno>
 #include <chrono>
 #include <thread>
-
-#include <gtest/gtest.h>
-#include <modbus/modbus.h>
 
 #include "tests/support/modbus_tcp_peer.h"
 
@@ -24,7 +24,9 @@ TEST(ModbusServer, AnswersItsOwnUnitIdOnly) {
     EXPECT_EQ(Exchange(fd, ReadRequest(other, status_register), std::chrono::milliseconds(300)), "")
         << "unit " << int{other};
   }
-  EXPECT_EQ(Exchange(fd, ReadRequest(kUnit, status_register), std::chrono::milliseconds(2000)).size(), 11u);
+  EXPECT_EQ(
+      Exchange(fd, ReadRequest(kUnit, status_register), std::chrono::milliseconds(2000)).size(),
+      11u);
   close(fd);
 }
 
@@ -73,14 +75,19 @@ TEST(ModbusServer, DisconnectsAPeerThatDoesNotSpeakModbus) {
   const int fd = ConnectTo(*b.server);
   ASSERT_GE(fd, 0);
   const std::string http = "GET / HTTP/1.1\r\nHost: x\r\n\r\n";
-  EXPECT_EQ(Exchange(fd, std::vector<uint8_t>(http.begin(), http.end()), std::chrono::milliseconds(2000)), "closed");
+  EXPECT_EQ(
+      Exchange(fd, std::vector<uint8_t>(http.begin(), http.end()), std::chrono::milliseconds(2000)),
+      "closed");
   close(fd);
   // A request whose PDU is shorter than its function needs is ignored, not read past its end.
   const int fd2 = ConnectTo(*b.server);
   ASSERT_GE(fd2, 0);
   const std::vector<uint8_t> short_write = {0, 1, 0, 0, 0, 4, kUnit, 0x10, 0, 20};
   EXPECT_EQ(Exchange(fd2, short_write, std::chrono::milliseconds(300)), "");
-  EXPECT_EQ(Exchange(fd2, ReadRequest(kUnit, ModbusRegisterMap{}.status), std::chrono::milliseconds(2000)).size(), 11u);
+  EXPECT_EQ(
+      Exchange(fd2, ReadRequest(kUnit, ModbusRegisterMap{}.status), std::chrono::milliseconds(2000))
+          .size(),
+      11u);
   close(fd2);
 }
 

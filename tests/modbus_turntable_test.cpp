@@ -1,7 +1,10 @@
 // The `modbus` turntable driver against the simulated controller, a real
 // libmodbus server, over TCP on loopback and RTU over a pseudo-terminal pair;
 // and the server against an independent client, mbpoll.
+#include "drivers/modbus_turntable.h"
+
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -12,10 +15,7 @@
 #include <memory>
 #include <thread>
 
-#include <gtest/gtest.h>
-
 #include "drivers/modbus_link.h"
-#include "drivers/modbus_turntable.h"
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/scene.h"
 #include "tests/support/sim_world.h"
@@ -58,13 +58,14 @@ ModbusTurntableOptions ClientOptions(const ModbusTurntableServer& server, Transp
   return o;
 }
 
-Bench StartBench(Transport transport, const ModbusRegisterMap& map = {}, std::vector<SimFault> faults = {},
-                 const std::string& unit_serial = kSerial) {
+Bench StartBench(Transport transport, const ModbusRegisterMap& map = {},
+                 std::vector<SimFault> faults = {}, const std::string& unit_serial = kSerial) {
   Bench b;
   b.world = MakeWorld(std::move(faults));
   ModbusServerOptions server_options{map, unit_serial, 1};
-  auto server = transport == Transport::kTcp ? ModbusTurntableServer::StartTcp(b.world, server_options)
-                                             : ModbusTurntableServer::StartRtu(b.world, server_options);
+  auto server = transport == Transport::kTcp
+                    ? ModbusTurntableServer::StartTcp(b.world, server_options)
+                    : ModbusTurntableServer::StartRtu(b.world, server_options);
   EXPECT_TRUE(server.ok()) << server.status().ToString();
   b.server = std::move(server).value();
   const DeviceInfo info{DeviceKind::kTurntable, "turntable", "modbus", kSerial, "test"};
@@ -141,14 +142,16 @@ TEST_P(ModbusTurntableTest, PersistentFaultsGiveClearErrorsAndReopenRecovers) {
   const long requests = ModbusTurntableLinkStats(tt).requests;
   s = tt.StartMove(30, kProfile);
   EXPECT_EQ(s.code(), StatusCode::kDeviceFault) << s.ToString();
-  EXPECT_NE(s.message().find("exception 4 (server device failure)"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("exception 4 (server device failure)"), std::string::npos)
+      << s.message();
   EXPECT_EQ(ModbusTurntableLinkStats(tt).requests, requests + 1) << "an exception is not retried";
   ASSERT_TRUE(tt.Open().ok());
   EXPECT_TRUE(tt.MoveTo(30, kProfile, kMoveWait).ok());
 }
 
 TEST_P(ModbusTurntableTest, ControllerStallIsADeviceFaultClearedOnReopen) {
-  Bench b = StartBench(GetParam(), {}, {SimFault{.kind = SimFaultKind::kTurntableStall, .device = "", .at = 2}});
+  Bench b = StartBench(GetParam(), {},
+                       {SimFault{.kind = SimFaultKind::kTurntableStall, .device = "", .at = 2}});
   Turntable& tt = *b.table;
   ASSERT_TRUE(tt.Open().ok());
   ASSERT_TRUE(tt.Home(kMoveWait).ok());  // move 1
@@ -185,8 +188,11 @@ TEST_P(ModbusTurntableTest, StopFromAnotherThreadEndsTheWait) {
   EXPECT_LT(stopped_at, 359);
 }
 
-INSTANTIATE_TEST_SUITE_P(Transports, ModbusTurntableTest, ::testing::Values(Transport::kTcp, Transport::kRtu),
-                         [](const auto& param) { return param.param == Transport::kTcp ? "Tcp" : "Rtu"; });
+INSTANTIATE_TEST_SUITE_P(Transports, ModbusTurntableTest,
+                         ::testing::Values(Transport::kTcp, Transport::kRtu),
+                         [](const auto& param) {
+                           return param.param == Transport::kTcp ? "Tcp" : "Rtu";
+                         });
 
 TEST(ModbusTurntable, LowWordFirstMapAndNegativeAngles) {
   ModbusRegisterMap map;
@@ -218,7 +224,8 @@ TEST(ModbusTurntable, NoServerIsUnavailableNamingTheEndpoint) {
   b.server.reset();  // nothing listens on the port any more
   const Status s = b.table->Open();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
-  EXPECT_NE(s.message().find("127.0.0.1:" + std::to_string(port)), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("127.0.0.1:" + std::to_string(port)), std::string::npos)
+      << s.message();
 }
 
 // A listening TCP socket on 127.0.0.1 with an ephemeral port.
@@ -228,8 +235,8 @@ int ListenOnLoopback(int backlog, int* port) {
   a.sin_family = AF_INET;
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   socklen_t length = sizeof a;
-  if (fd < 0 || bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || listen(fd, backlog) != 0 ||
-      getsockname(fd, reinterpret_cast<sockaddr*>(&a), &length) != 0) {
+  if (fd < 0 || bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      listen(fd, backlog) != 0 || getsockname(fd, reinterpret_cast<sockaddr*>(&a), &length) != 0) {
     return -1;
   }
   *port = ntohs(a.sin_port);
@@ -258,7 +265,8 @@ class HttpPeer {
       pollfd c{client, POLLIN, 0};
       char request[512];
       if (poll(&c, 1, 1000) == 1 && recv(client, request, sizeof request, 0) > 0) {
-        const std::string reply = "HTTP/1.1 400 Bad Request\r\nconnection: close\r\ncontent-length: 0\r\n\r\n";
+        const std::string reply =
+            "HTTP/1.1 400 Bad Request\r\nconnection: close\r\ncontent-length: 0\r\n\r\n";
         (void)!send(client, reply.data(), reply.size(), MSG_NOSIGNAL);
       }
       close(client);
@@ -291,7 +299,8 @@ TEST(ModbusLink, APeerThatDoesNotSpeakModbusIsCannotConnect) {
   EXPECT_EQ(read.status().code(), StatusCode::kUnavailable) << m;
   const std::string endpoint = "127.0.0.1:" + std::to_string(peer.port());
   EXPECT_NE(m.find("cannot connect to Modbus tcp " + endpoint), std::string::npos) << m;
-  EXPECT_NE(m.find("check that " + endpoint + " is the controller's address and Modbus TCP port"), std::string::npos)
+  EXPECT_NE(m.find("check that " + endpoint + " is the controller's address and Modbus TCP port"),
+            std::string::npos)
       << m;
 }
 
@@ -327,7 +336,8 @@ TEST(ModbusLink, AHostNameThatDoesNotResolveIsNamed) {
   e.host = "no-such-controller.invalid";
   const Status s = ModbusLink(e).Connect();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
-  EXPECT_NE(s.message().find("'no-such-controller.invalid' does not resolve"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("'no-such-controller.invalid' does not resolve"), std::string::npos)
+      << s.message();
 }
 
 TEST(ModbusTurntable, ServerRefusesReadOnlyRegistersAndUnknownCommands) {
@@ -339,7 +349,8 @@ TEST(ModbusTurntable, ServerRefusesReadOnlyRegistersAndUnknownCommands) {
   ASSERT_TRUE(link.Connect().ok());
   Status s = link.Write(ModbusRegisterMap{}.position, {1, 2});
   EXPECT_EQ(s.code(), StatusCode::kDeviceFault);
-  EXPECT_NE(s.message().find("exception 2 (illegal data address)"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("exception 2 (illegal data address)"), std::string::npos)
+      << s.message();
   s = link.Write(ModbusRegisterMap{}.command, {99});
   EXPECT_NE(s.message().find("exception 3 (illegal data value)"), std::string::npos) << s.message();
   auto serial = link.Read(ModbusRegisterMap{}.serial, ModbusRegisterMap{}.serial_registers);
@@ -380,7 +391,8 @@ TEST_P(MbpollConformance, ReadsAndWritesTheSimulatedControllersRegisters) {
   ASSERT_TRUE(serial);
   EXPECT_NE(serial->find("[100]: \t0x5349"), std::string::npos) << *serial;
   EXPECT_NE(serial->find("[101]: \t0x4D2D"), std::string::npos) << *serial;
-  // Target 45 deg, speed 60 deg/s, acceleration 240 deg/s^2 (32-bit, high word first), then move_absolute.
+  // Target 45 deg, speed 60 deg/s, acceleration 240 deg/s^2 (32-bit, high word first), then
+  // move_absolute.
   ASSERT_TRUE(Mbpoll(where, "-t 4:int -B -r 12 45000 60000 240000"));
   ASSERT_TRUE(Mbpoll(where, "-t 4 -r 0 1"));
   std::string position;
@@ -399,8 +411,11 @@ TEST_P(MbpollConformance, ReadsAndWritesTheSimulatedControllersRegisters) {
   EXPECT_NE(status.find("[1]: \t1\n"), std::string::npos) << status;
 }
 
-INSTANTIATE_TEST_SUITE_P(Transports, MbpollConformance, ::testing::Values(Transport::kTcp, Transport::kRtu),
-                         [](const auto& param) { return param.param == Transport::kTcp ? "Tcp" : "Rtu"; });
+INSTANTIATE_TEST_SUITE_P(Transports, MbpollConformance,
+                         ::testing::Values(Transport::kTcp, Transport::kRtu),
+                         [](const auto& param) {
+                           return param.param == Transport::kTcp ? "Tcp" : "Rtu";
+                         });
 
 }  // namespace
 }  // namespace hairrig

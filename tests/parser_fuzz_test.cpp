@@ -12,16 +12,16 @@
 // three strand formats (.hair, .data, .ply binary and ascii) and COLMAP text
 // models (cameras.txt, images.txt).
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "calibration/calibration_io.h"
 #include "core/file_util.h"
@@ -48,7 +48,8 @@ constexpr uint32_t kSeed = 20261124;
 
 // ---- mutations --------------------------------------------------------------
 
-void CollectPointers(const json& j, const json::json_pointer& here, std::vector<json::json_pointer>* out) {
+void CollectPointers(const json& j, const json::json_pointer& here,
+                     std::vector<json::json_pointer>* out) {
   out->push_back(here);
   if (j.is_object()) {
     for (auto it = j.begin(); it != j.end(); ++it) CollectPointers(*it, here / it.key(), out);
@@ -58,14 +59,27 @@ void CollectPointers(const json& j, const json::json_pointer& here, std::vector<
 }
 
 const std::vector<json>& HostileValues() {
-  static const std::vector<json> values = {
-      json(nullptr),        json(true),          json(0),
-      json(-1),             json(2.5),           json(-2.5),
-      json(1e308),          json(-1e308),        json(int64_t{4294967296}),
-      json(INT64_MAX),      json(UINT64_MAX),    json(INT64_MIN),
-      json(""),             json("x"),           json("NaN"),
-      json("../../etc/passwd"), json(std::string(1000, 'a')), json::array(),
-      json::object(),       json::array({1, 2, 3}), json::object({{"a", 1}})};
+  static const std::vector<json> values = {json(nullptr),
+                                           json(true),
+                                           json(0),
+                                           json(-1),
+                                           json(2.5),
+                                           json(-2.5),
+                                           json(1e308),
+                                           json(-1e308),
+                                           json(int64_t{4294967296}),
+                                           json(INT64_MAX),
+                                           json(UINT64_MAX),
+                                           json(INT64_MIN),
+                                           json(""),
+                                           json("x"),
+                                           json("NaN"),
+                                           json("../../etc/passwd"),
+                                           json(std::string(1000, 'a')),
+                                           json::array(),
+                                           json::object(),
+                                           json::array({1, 2, 3}),
+                                           json::object({{"a", 1}})};
   return values;
 }
 
@@ -73,18 +87,24 @@ class Mutator {
  public:
   explicit Mutator(uint32_t seed) : rng_(seed) {}
 
-  size_t Below(size_t n) { return n == 0 ? 0 : std::uniform_int_distribution<size_t>(0, n - 1)(rng_); }
+  size_t Below(size_t n) {
+    return n == 0 ? 0 : std::uniform_int_distribution<size_t>(0, n - 1)(rng_);
+  }
 
   std::string MutateBytes(std::string t) {
-    static const char* const kTokens[] = {"NaN", "-1", "1e999", "-0", "99999999999999999999999", "\"\"", "null", "[",
-                                          "{",   "]",  "}",     ",",  "\n", "\"\\u0000\"", "../../", "\xff\xfe"};
+    static const char* const kTokens[] = {
+        "NaN",     "-1",   "1e999", "-0",          "99999999999999999999999",
+        "\"\"",    "null", "[",     "{",           "]",
+        "}",       ",",    "\n",    "\"\\u0000\"", "../../",
+        "\xff\xfe"};
     const size_t at = Below(t.size() + 1);
     switch (Below(6)) {
       case 0:  // truncation
         t.resize(at);
         break;
       case 1:  // bit flips
-        for (size_t k = 0, n = 1 + Below(8); k < n && !t.empty(); ++k) t[Below(t.size())] ^= static_cast<char>(1 << Below(8));
+        for (size_t k = 0, n = 1 + Below(8); k < n && !t.empty(); ++k)
+          t[Below(t.size())] ^= static_cast<char>(1 << Below(8));
         break;
       case 2:
         t.insert(at, kTokens[Below(std::size(kTokens))]);
@@ -141,14 +161,18 @@ class Mutator {
   // A mutated document as text: structural, byte-level, or both.
   std::string MutateJsonText(const json& seed) {
     switch (Below(3)) {
-      case 0: return MutateBytes(seed.dump(1));
-      case 1: return MutateJson(seed).dump(1);
-      default: return MutateBytes(MutateJson(seed).dump(1));
+      case 0:
+        return MutateBytes(seed.dump(1));
+      case 1:
+        return MutateJson(seed).dump(1);
+      default:
+        return MutateBytes(MutateJson(seed).dump(1));
     }
   }
 
   std::vector<uint8_t> MutateBinary(std::vector<uint8_t> b) {
-    static const uint32_t kCounts[] = {0, 1, 65535, 65536, 0x7fffffffu, 0x80000000u, 0xfffffffeu, 0xffffffffu};
+    static const uint32_t kCounts[] = {0,           1,           65535,       65536,
+                                       0x7fffffffu, 0x80000000u, 0xfffffffeu, 0xffffffffu};
     switch (Below(3)) {
       case 0: {
         const std::string t = MutateBytes(std::string(b.begin(), b.end()));
@@ -181,7 +205,8 @@ void ExpectClean(const std::string& what, size_t iteration, const std::string& n
   try {
     const Status s = parse();
     if (!s.ok()) {
-      EXPECT_NE(s.message().find(name), std::string::npos) << what << " input " << iteration << ": " << s.ToString();
+      EXPECT_NE(s.message().find(name), std::string::npos)
+          << what << " input " << iteration << ": " << s.ToString();
     }
   } catch (const std::exception& e) {
     ADD_FAILURE() << what << " input " << iteration << " threw: " << e.what();
@@ -207,7 +232,8 @@ void FuzzJsonFile(const std::string& what, const json& seed, int iterations, uin
                   const std::function<Status(const std::string&)>& read) {
   const std::string path = TestDir(what) + "/" + what + ".json";
   WriteText(path, seed.dump(1));
-  ASSERT_TRUE(read(path).ok()) << what << ": the unmutated seed must be valid: " << read(path).ToString();
+  ASSERT_TRUE(read(path).ok()) << what
+                               << ": the unmutated seed must be valid: " << read(path).ToString();
   Mutator m(seed_number);
   for (int i = 0; i < iterations; ++i) {
     WriteText(path, m.MutateJsonText(seed));
@@ -218,7 +244,9 @@ void FuzzJsonFile(const std::string& what, const json& seed, int iterations, uin
 // ---- seeds ------------------------------------------------------------------
 
 json HelixSeed() {
-  const json element = {{"start_mm", {0, 0, 0}}, {"start_tangent", {0, 0, -1}}, {"darboux_per_mm", {0.1, 0, 0.02}},
+  const json element = {{"start_mm", {0, 0, 0}},
+                        {"start_tangent", {0, 0, -1}},
+                        {"darboux_per_mm", {0.1, 0, 0.02}},
                         {"length_mm", 4.5}};
   const json guide = {{"strand", 0}, {"elements", {element, element, element}}};
   return {{"format", "hairrig-helix-model"},
@@ -263,37 +291,42 @@ TEST(ParserFuzz, CaptureJson) {
 }
 
 TEST(ParserFuzz, CalibrationJson) {
-  FuzzJsonFile("calibration", hairrig_test::CalibrationDocument(), 600, kSeed + 2, [](const std::string& path) {
-    const auto read = ReadCalibration(path);
-    if (read.ok()) {
-      for (const auto& view : read->views) {
-        EXPECT_TRUE(view.camera >= 0 && view.camera < static_cast<int>(read->cameras.size()));
-      }
-    }
-    return read.status();
-  });
+  FuzzJsonFile(
+      "calibration", hairrig_test::CalibrationDocument(), 600, kSeed + 2,
+      [](const std::string& path) {
+        const auto read = ReadCalibration(path);
+        if (read.ok()) {
+          for (const auto& view : read->views) {
+            EXPECT_TRUE(view.camera >= 0 && view.camera < static_cast<int>(read->cameras.size()));
+          }
+        }
+        return read.status();
+      });
 }
 
 TEST(ParserFuzz, IntrinsicsFiles) {
-  FuzzJsonFile("intrinsics", hairrig_test::IntrinsicsDocument(), 600, kSeed + 3, [](const std::string& path) {
-    const auto read = ReadIntrinsicsPriors(path);
-    if (read.ok()) {
-      for (const IntrinsicsPrior& prior : *read) {
-        EXPECT_FALSE(prior.serial.empty());
-        for (double sd : prior.stddev) EXPECT_TRUE(std::isfinite(sd) && sd >= 0);
-      }
-    }
-    return read.status();
-  });
+  FuzzJsonFile("intrinsics", hairrig_test::IntrinsicsDocument(), 600, kSeed + 3,
+               [](const std::string& path) {
+                 const auto read = ReadIntrinsicsPriors(path);
+                 if (read.ok()) {
+                   for (const IntrinsicsPrior& prior : *read) {
+                     EXPECT_FALSE(prior.serial.empty());
+                     for (double sd : prior.stddev) EXPECT_TRUE(std::isfinite(sd) && sd >= 0);
+                   }
+                 }
+                 return read.status();
+               });
 }
 
 TEST(ParserFuzz, HelixModels) {
   FuzzJsonFile("helix", HelixSeed(), 600, kSeed + 4, [](const std::string& path) {
     const auto read = ReadHelixModel(path);
     if (read.ok()) {
-      for (int c : read->cluster_of_strand) EXPECT_TRUE(c >= -1 && c < static_cast<int>(read->guides.size()));
+      for (int c : read->cluster_of_strand)
+        EXPECT_TRUE(c >= -1 && c < static_cast<int>(read->guides.size()));
       for (const PiecewiseHelix& guide : read->guides) {
-        for (const HelixElement& e : guide.elements) EXPECT_TRUE(std::isfinite(e.length_mm) && e.length_mm > 0);
+        for (const HelixElement& e : guide.elements)
+          EXPECT_TRUE(std::isfinite(e.length_mm) && e.length_mm > 0);
       }
     }
     return read.status();
@@ -314,7 +347,8 @@ TEST(ParserFuzz, Heads) {
 // ---- the strand formats -------------------------------------------------------
 
 void FuzzStrands(StrandFormat format, const std::string& name, uint32_t seed_number) {
-  const StrandSet seed = StrandSeed(format == StrandFormat::kPlyBinary || format == StrandFormat::kPlyAscii);
+  const StrandSet seed =
+      StrandSeed(format == StrandFormat::kPlyBinary || format == StrandFormat::kPlyAscii);
   const auto encoded = EncodeStrands(seed, format);
   ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
   ASSERT_TRUE(DecodeStrands(*encoded, format, name).ok());
@@ -373,7 +407,9 @@ TEST(ParserFuzz, ColmapTextModels) {
 TEST(ParserFuzz, HairFiles) { FuzzStrands(StrandFormat::kHair, "fuzz.hair", kSeed + 6); }
 TEST(ParserFuzz, DataFiles) { FuzzStrands(StrandFormat::kData, "fuzz.data", kSeed + 7); }
 TEST(ParserFuzz, BinaryPlyFiles) { FuzzStrands(StrandFormat::kPlyBinary, "fuzz.ply", kSeed + 8); }
-TEST(ParserFuzz, AsciiPlyFiles) { FuzzStrands(StrandFormat::kPlyAscii, "fuzz_ascii.ply", kSeed + 9); }
+TEST(ParserFuzz, AsciiPlyFiles) {
+  FuzzStrands(StrandFormat::kPlyAscii, "fuzz_ascii.ply", kSeed + 9);
+}
 
 // ---- a capture folder: journal and manifest -------------------------------------
 
@@ -383,9 +419,11 @@ std::string SeedCapture() {
   auto d = CaptureDataset::Create(dir, "name: fuzz\n", {}, {});
   EXPECT_TRUE(d.ok()) << d.status().ToString();
   std::vector<PlannedViewRecord> plan;
-  for (int v = 0; v < 6; ++v) plan.push_back({v, v / 2, 60.0 * (v / 2), "cam", "CAM-1", {{"top", 1.0}}});
+  for (int v = 0; v < 6; ++v)
+    plan.push_back({v, v / 2, 60.0 * (v / 2), "cam", "CAM-1", {{"top", 1.0}}});
   EXPECT_TRUE((*d)->JournalPlan(plan).ok());
-  (void)(*d)->Append({{"event", "position_reached"}, {"stop", 0}, {"commanded_deg", 0.0}, {"measured_deg", 0.01}});
+  (void)(*d)->Append(
+      {{"event", "position_reached"}, {"stop", 0}, {"commanded_deg", 0.0}, {"measured_deg", 0.01}});
   for (int v = 0; v < 3; ++v) {
     Frame f;
     f.camera_serial = "CAM-1";
@@ -407,7 +445,8 @@ std::string ReadText(const std::string& path) {
 std::string MutateJournal(Mutator& m, const std::string& journal) {
   if (m.Below(2) == 0) return m.MutateBytes(journal);
   std::vector<std::string> lines;
-  for (size_t start = 0, end; (end = journal.find('\n', start)) != std::string::npos; start = end + 1)
+  for (size_t start = 0, end; (end = journal.find('\n', start)) != std::string::npos;
+       start = end + 1)
     lines.push_back(journal.substr(start, end - start));
   std::string& line = lines[m.Below(lines.size())];
   line = m.MutateJson(json::parse(line)).dump();
@@ -419,11 +458,13 @@ std::string MutateJournal(Mutator& m, const std::string& journal) {
 
 // Every verified frame is a planned view of the planned camera, stored under
 // its one name, and its file verifies.
-void ExpectOnlyGenuineFrames(const std::string& dir, const std::map<int, FrameRecord>& frames, size_t i) {
+void ExpectOnlyGenuineFrames(const std::string& dir, const std::map<int, FrameRecord>& frames,
+                             size_t i) {
   for (const auto& [view, f] : frames) {
     EXPECT_TRUE(view >= 0 && view < 6 && f.serial == "CAM-1") << "input " << i << ": view " << view;
     EXPECT_TRUE(IsFrameFileName(f.file, f.view, f.serial)) << "input " << i << ": " << f.file;
-    EXPECT_TRUE(VerifyFrameFile(dir, f.file, f.bytes, f.sha256).ok()) << "input " << i << ": " << f.file;
+    EXPECT_TRUE(VerifyFrameFile(dir, f.file, f.bytes, f.sha256).ok())
+        << "input " << i << ": " << f.file;
   }
 }
 
@@ -483,7 +524,8 @@ std::string CalibrationCapture(json* seed) {
                       {"sha256", Sha256Hex(content.data(), content.size())},
                       {"angle_measured_deg", 0.01}});
   }
-  *seed = {{"format", "hairrig-capture"}, {"version", 1}, {"status", "complete"}, {"frames", frames}};
+  *seed = {
+      {"format", "hairrig-capture"}, {"version", 1}, {"status", "complete"}, {"frames", frames}};
   return dir;
 }
 
@@ -494,7 +536,8 @@ TEST(ParserFuzz, Manifests) {
   WriteText(path, seed.dump(1));
   const auto unmutated = LoadCaptureCalibrationInput(dir);
   ASSERT_TRUE(unmutated.ok()) << unmutated.status().ToString();
-  for (const CalibrationFrame& frame : unmutated->frames) EXPECT_EQ(frame.unusable, "") << frame.name;
+  for (const CalibrationFrame& frame : unmutated->frames)
+    EXPECT_EQ(frame.unusable, "") << frame.name;
   Mutator m(kSeed + 11);
   for (size_t i = 0; i < 300; ++i) {
     WriteText(path, m.MutateJsonText(seed));
@@ -502,7 +545,8 @@ TEST(ParserFuzz, Manifests) {
       const auto input = LoadCaptureCalibrationInput(dir);
       if (input.ok()) {
         for (const CalibrationFrame& frame : input->frames) {
-          EXPECT_TRUE(IsFrameFileName(frame.name, frame.view, input->cameras[static_cast<size_t>(frame.camera)].serial))
+          EXPECT_TRUE(IsFrameFileName(frame.name, frame.view,
+                                      input->cameras[static_cast<size_t>(frame.camera)].serial))
               << "input " << i << ": " << frame.name;
         }
       }

@@ -6,13 +6,11 @@
 // reconstructed. The true strands, given as the reconstruction's strands,
 // check the strand protocol's plumbing (frames, true samples, the true head).
 // The reconstructed strand files are read back and fitted as `fit` does.
-#include <cstdio>
-#include <filesystem>
-
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <filesystem>
 #include <map>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -21,8 +19,8 @@
 #include "core/truth_maps.h"
 #include "reconstruction/point_cloud.h"
 #include "reconstruction/point_reconstruction.h"
-#include "reconstruction/strand_reconstruction.h"
 #include "reconstruction/reconstruction_evaluation.h"
+#include "reconstruction/strand_reconstruction.h"
 #include "simulation/helix_model.h"
 #include "tests/support/reconstruction_scene.h"
 
@@ -31,7 +29,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool LeftOutWith(const PointReconstructionSummary& s, const std::string& name, const std::string& why) {
+bool LeftOutWith(const PointReconstructionSummary& s, const std::string& name,
+                 const std::string& why) {
   for (const std::string& l : s.left_out)
     if (l.find(name) != std::string::npos && l.find(why) != std::string::npos) return true;
   return false;
@@ -43,9 +42,11 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   ReconstructionInput input = hairrig_test::RenderReducedCapture(dir, {});
   ASSERT_EQ(input.views.size(), 24u);
   // View 5: a black frame; view 6: a frame of another size.
-  const cv::Mat black(input.views[5].camera.height_px, input.views[5].camera.width_px, CV_8UC3, cv::Scalar::all(0));
+  const cv::Mat black(input.views[5].camera.height_px, input.views[5].camera.width_px, CV_8UC3,
+                      cv::Scalar::all(0));
   ASSERT_TRUE(cv::imwrite(input.views[5].image_path, black));
-  ASSERT_TRUE(cv::imwrite(input.views[6].image_path, cv::Mat(100, 80, CV_8UC3, cv::Scalar::all(90))));
+  ASSERT_TRUE(
+      cv::imwrite(input.views[6].image_path, cv::Mat(100, 80, CV_8UC3, cv::Scalar::all(90))));
 
   PointReconstructionOptions options;
   options.mvs.stride_px = 2;  // half-size images: as dense on the hair as stride 4 at full size
@@ -55,7 +56,8 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   EXPECT_EQ(summary->views.size(), 22u);
   EXPECT_TRUE(LeftOutWith(*summary, input.views[5].name, "black frame"));
   EXPECT_TRUE(LeftOutWith(*summary, input.views[6].name, "80x100 px"));
-  for (const char* file : {"points.ply", "summary.json"}) EXPECT_TRUE(fs::exists(dir + "/reconstruction/" + file));
+  for (const char* file : {"points.ply", "summary.json"})
+    EXPECT_TRUE(fs::exists(dir + "/reconstruction/" + file));
   EXPECT_TRUE(fs::exists(dir + "/reconstruction/report/" + input.views[0].name + ".jpg"));
   EXPECT_TRUE(fs::exists(dir + "/reconstruction/depth/" + input.views[0].name + "_depth.png"));
   auto points = ReadPointCloudPly(dir + "/reconstruction/points.ply");
@@ -79,7 +81,8 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   EXPECT_GT(e.visible[2].precision, 0.65);
   EXPECT_GT(e.visible[2].recall, 0.45);
   // The looser the threshold, the more matches.
-  for (size_t k = 1; k < e.visible.size(); ++k) EXPECT_GE(e.visible[k].precision, e.visible[k - 1].precision);
+  for (size_t k = 1; k < e.visible.size(); ++k)
+    EXPECT_GE(e.visible[k].precision, e.visible[k - 1].precision);
   EXPECT_FALSE(e.strands.has_value()) << "no strands/strands.ply: no strand scores";
   EXPECT_FALSE(e.ToJson().contains("strands"));
 
@@ -97,11 +100,13 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   ASSERT_TRUE(rig_head.ok()) << rig_head.status().ToString();
   std::map<std::string, StrandEvaluation> by_method;
   // bao-qi last: its files are the ones read back below.
-  for (const StrandMethod method : {StrandMethod::kNaive, StrandMethod::kLuo, StrandMethod::kBaoQi}) {
+  for (const StrandMethod method :
+       {StrandMethod::kNaive, StrandMethod::kLuo, StrandMethod::kBaoQi}) {
     StrandReconstructionOptions strand_options;
     strand_options.method = method;
     strand_options.strands = 4000;
-    auto grown = ReconstructStrands(dir + "/reconstruction", *rig_head, "etc/heads/mannequin.yaml", strand_options);
+    auto grown = ReconstructStrands(dir + "/reconstruction", *rig_head, "etc/heads/mannequin.yaml",
+                                    strand_options);
     ASSERT_TRUE(grown.ok()) << grown.status().ToString();
     std::printf("%s", grown->BriefReport().c_str());
     EXPECT_EQ(grown->growth.strands, 4000);
@@ -120,10 +125,12 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   ASSERT_EQ(bao_qi.all.directed.size(), 4u);
   EXPECT_GT(bao_qi.all.directed[1].precision, 0.8);
   EXPECT_GT(bao_qi.all.directed[1].recall, 0.35);
-  EXPECT_GT(bao_qi.all.directed[1].f1, 1.3 * naive.all.directed[1].f1) << "the structure analysis pays";
+  EXPECT_GT(bao_qi.all.directed[1].f1, 1.3 * naive.all.directed[1].f1)
+      << "the structure analysis pays";
   EXPECT_GT(luo.all.directed[1].precision, 0.6);
   EXPECT_GT(luo.all.directed[1].recall, 0.38);
-  EXPECT_GT(luo.all.directed[1].f1, 1.3 * naive.all.directed[1].f1) << "the structure analysis pays";
+  EXPECT_GT(luo.all.directed[1].f1, 1.3 * naive.all.directed[1].f1)
+      << "the structure analysis pays";
   for (const StrandEvaluation* method : {&bao_qi, &luo, &naive}) {
     ASSERT_TRUE(method->rooted_on_scalp_fraction.has_value());
     EXPECT_GT(*method->rooted_on_scalp_fraction, 0.98);
@@ -145,8 +152,10 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   FitSummary fitted;
   auto model = FitHairModel(*from_ply, fit, &fitted);
   ASSERT_TRUE(model.ok()) << model.status().ToString();
-  std::printf("fit of the reconstructed strands: %d guides, %.1f elements per guide, error mean %.3f mm, max %.3f mm\n",
-              fitted.guides, fitted.mean_elements, fitted.mean_error_mm, fitted.max_error_mm);
+  std::printf(
+      "fit of the reconstructed strands: %d guides, %.1f elements per guide, error mean %.3f mm, "
+      "max %.3f mm\n",
+      fitted.guides, fitted.mean_elements, fitted.mean_error_mm, fitted.max_error_mm);
   EXPECT_EQ(fitted.strands, 4000);
   EXPECT_EQ(fitted.guides, 60);
   EXPECT_LT(fitted.mean_error_mm, 0.5);
@@ -167,7 +176,8 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   EXPECT_EQ(st.truth_samples, with_strands->truth_samples);
   ASSERT_TRUE(st.visible_truth_samples.has_value());
   EXPECT_EQ(*st.visible_truth_samples, with_strands->visible_truth_samples);
-  for (const auto* scores : {&st.all.undirected, &st.all.directed, &st.visible.undirected, &st.visible.directed}) {
+  for (const auto* scores :
+       {&st.all.undirected, &st.all.directed, &st.visible.undirected, &st.visible.directed}) {
     ASSERT_EQ(scores->size(), 4u);
     for (const MatchScore& s : *scores) {
       EXPECT_GT(s.precision, 0.999);

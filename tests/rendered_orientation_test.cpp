@@ -1,9 +1,9 @@
 // The reconstruction's per-view stages on a rendered view of the default
 // scene against its ground-truth maps: orientation maps (the front-most
 // strand's 2D direction on hair pixels) and hair segmentation.
-#include <cstdio>
-
 #include <gtest/gtest.h>
+
+#include <cstdio>
 
 #include "core/calib_box.h"
 #include "reconstruction/evaluation.h"
@@ -27,14 +27,15 @@ TEST(RenderedOrientation, DefaultViewAgainstTheTrueStrandDirections) {
   OrientationOptions paper;
   paper.quadrature = false;
   paper.refinement_passes = 2;
-  for (const auto& [name, options] : {std::pair<const char*, OrientationOptions>{"default", OrientationOptions{}},
-                                      std::pair<const char*, OrientationOptions>{"even kernel, 2 refinements", paper}}) {
+  for (const auto& [name, options] :
+       {std::pair<const char*, OrientationOptions>{"default", OrientationOptions{}},
+        std::pair<const char*, OrientationOptions>{"even kernel, 2 refinements", paper}}) {
     auto map = ComputeOrientationMap(view->image, hair, options);
     ASSERT_TRUE(map.ok());
     auto accuracy = MeasureOrientation(*map, view->truth.orientation_deg, hair, 0.0);
     ASSERT_TRUE(accuracy.ok());
-    std::printf("%s: %d hair pixels, median error %.2f deg, 90th percentile %.2f deg\n", name, accuracy->hair_pixels,
-                accuracy->median_error_deg, accuracy->p90_error_deg);
+    std::printf("%s: %d hair pixels, median error %.2f deg, 90th percentile %.2f deg\n", name,
+                accuracy->hair_pixels, accuracy->median_error_deg, accuracy->p90_error_deg);
     EXPECT_GT(accuracy->hair_pixels, 100000);
     if (std::string(name) == "default") {
       // Measured 7.6-7.9 deg (median) and 42-43 deg (90th percentile) on this view.
@@ -66,8 +67,10 @@ TEST(RenderedSegmentation, DefaultViewsAgainstTheTrueLabels) {
     const cv::Mat true_box = rendered->truth.label == ViewTruthMaps::kBox;
     const double hair_iou = *MaskIoU(hair, true_hair);
     const double box_iou = *MaskIoU(box, true_box);
-    const double backdrop_iou = *MaskIoU(segmentation->label == kSegBackdrop, rendered->truth.label == ViewTruthMaps::kBackdrop);
-    std::printf("view %d: IoU hair %.3f, box %.3f, backdrop %.3f\n", view, hair_iou, box_iou, backdrop_iou);
+    const double backdrop_iou = *MaskIoU(segmentation->label == kSegBackdrop,
+                                         rendered->truth.label == ViewTruthMaps::kBackdrop);
+    std::printf("view %d: IoU hair %.3f, box %.3f, backdrop %.3f\n", view, hair_iou, box_iou,
+                backdrop_iou);
     // Measured on the demo capture's 38 views: hair IoU 0.86 mean, 0.69 worst
     // (skin taken for hair where the face is shaded); the backdrop and box are keyed well.
     EXPECT_GT(hair_iou, 0.6) << "view " << view;
@@ -80,7 +83,8 @@ TEST(RenderedSegmentation, ABlackFrameIsRefused) {
   const cv::Mat black(400, 300, CV_8UC3, cv::Scalar(0, 0, 0));
   auto segmentation = SegmentHair(black, {}, SegmentationOptions{});
   EXPECT_EQ(segmentation.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(segmentation.status().message().find("black frame"), std::string::npos) << segmentation.status().message();
+  EXPECT_NE(segmentation.status().message().find("black frame"), std::string::npos)
+      << segmentation.status().message();
 }
 
 }  // namespace

@@ -3,13 +3,13 @@
 // turned towards the camera by more than 25 degrees and not occluded, never
 // reads a wrong id, and its corners agree with the ground-truth projections;
 // their bias grows with the lens distortion.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "calibration/apriltag_detector.h"
 #include "sim_hw/renderer.h"

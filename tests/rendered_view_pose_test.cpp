@@ -1,15 +1,14 @@
 // Per-view pose initialisation (calibration/view_pose.h) on rendered views of
 // the default scene against the simulated rig's ground truth: detection,
 // matching to etc/calib-box.yaml, SQPnP + RANSAC + refinement, each view alone.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <vector>
 
-#include <gtest/gtest.h>
-
-#include "core/statistics.h"
-
 #include "calibration/view_pose.h"
+#include "core/statistics.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
 #include "tests/support/rendered_observations.h"
@@ -35,11 +34,15 @@ TEST(RenderedViewPose, EveryViewIsInitialisedCloseToTheTruth) {
       auto pose = EstimateViewPose(*observations, truth.intrinsics);
       ASSERT_TRUE(pose.ok()) << "view " << view << ": " << pose.status().ToString();
       const Rigid3d& estimate = pose->cam_from_box;
-      rotation_deg.push_back(estimate.rotation.angularDistance(truth.cam_from_box.rotation) * 180 / 3.14159265358979);
-      centre_mm.push_back((estimate.Inverse().translation - truth.cam_from_box.Inverse().translation).norm());
+      rotation_deg.push_back(estimate.rotation.angularDistance(truth.cam_from_box.rotation) * 180 /
+                             3.14159265358979);
+      centre_mm.push_back(
+          (estimate.Inverse().translation - truth.cam_from_box.Inverse().translation).norm());
       rms_px.push_back(pose->rms_px);
-      std::printf("view %2d: %d tags, %zu left out, rotation %.4f deg, centre %.3f mm, RMS %.3f px\n", view,
-                  pose->tags_used, pose->rejected.size(), rotation_deg.back(), centre_mm.back(), rms_px.back());
+      std::printf(
+          "view %2d: %d tags, %zu left out, rotation %.4f deg, centre %.3f mm, RMS %.3f px\n", view,
+          pose->tags_used, pose->rejected.size(), rotation_deg.back(), centre_mm.back(),
+          rms_px.back());
     }
   }
   // Measured: rotation median 0.007 deg, max 0.030; centre median 0.095 mm,

@@ -1,8 +1,9 @@
 // The `usbrelay` light backend against simulated HID relay boards behind
 // its bus interface; discovery over the same bus.
+#include "drivers/usb_relay.h"
+
 #include <gtest/gtest.h>
 
-#include "drivers/usb_relay.h"
 #include "drivers/usb_relay_discovery.h"
 #include "sim_hw/sim_usb_relay.h"
 
@@ -100,10 +101,12 @@ TEST(UsbRelay, DiscoveryReadsEachBoardsId) {
 }
 
 TEST(UsbRelay, ConfigNeedsAChannel) {
-  auto root = ConfigNode::LoadString("{name: top, backend: usbrelay, serial: P1, board: AAAAA}", "rig.yaml");
+  auto root = ConfigNode::LoadString("{name: top, backend: usbrelay, serial: P1, board: AAAAA}",
+                                     "rig.yaml");
   auto parsed = ParseUsbRelayLightOptions(*root);
   ASSERT_FALSE(parsed.ok());
-  EXPECT_NE(parsed.status().message().find("channel"), std::string::npos) << parsed.status().message();
+  EXPECT_NE(parsed.status().message().find("channel"), std::string::npos)
+      << parsed.status().message();
 }
 
 }  // namespace

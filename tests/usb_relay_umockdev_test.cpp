@@ -3,9 +3,9 @@
 // attributes and descriptors of a 16c0:05df "USBRelay2" board, written for
 // this test). ctest runs this binary under `umockdev-run`; run alone, it
 // reports itself skipped.
-#include <cstdlib>
-
 #include <gtest/gtest.h>
+
+#include <cstdlib>
 
 #include "drivers/usb_relay.h"
 #include "drivers/usb_relay_discovery.h"

@@ -1,16 +1,16 @@
 // The `v4l2` camera backend against a fake UVC camera behind its system-call
 // layer (open/ioctl/mmap/poll), showing the rendered world.
+#include "drivers/v4l2_camera.h"
+
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <linux/videodev2.h>
 
 #include <cmath>
 #include <memory>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "drivers/v4l2_camera.h"
 #include "sim_hw/sim_devices.h"
 #include "sim_hw/sim_v4l2.h"
 #include "tests/support/camera_checks.h"
@@ -32,7 +32,8 @@ struct Bench {
   std::unique_ptr<Camera> camera;
 };
 
-Bench Start(V4l2Wire wire = V4l2Wire::kAuto, const std::string& device_serial = kSerial, int width = 1200) {
+Bench Start(V4l2Wire wire = V4l2Wire::kAuto, const std::string& device_serial = kSerial,
+            int width = 1200) {
   Bench b;
   b.world = hairrig_test::MakeSimWorld({}, /*lights_on=*/true);
   b.fake = std::make_shared<SimV4l2Device>(b.world, SimV4l2Options{kSerial, 0, "/dev/video0", 30});
@@ -43,8 +44,6 @@ Bench Start(V4l2Wire wire = V4l2Wire::kAuto, const std::string& device_serial = 
   b.camera = MakeV4l2Camera({DeviceKind::kCamera, "uvc", "v4l2", device_serial, "test"}, o);
   return b;
 }
-
-
 
 cv::Mat Reference(const Bench& b) {
   return RenderWorldExposure(*b.world, 0, ExposeWorldNow(*b.world), 0.02, 0, 0).value();
@@ -101,10 +100,12 @@ TEST(V4l2Camera, FramesQueuedBeforeTheTriggerAreSkipped) {
   CaptureSettings s;
   s.format = PixelFormat::kMono8;
   ASSERT_TRUE(b.camera->Configure(s).ok());
-  for (const char* light : {"top", "bottom"}) ASSERT_TRUE(SetWorldLightLevel(*b.world, light, 0.0).ok());
+  for (const char* light : {"top", "bottom"})
+    ASSERT_TRUE(SetWorldLightLevel(*b.world, light, 0.0).ok());
   ASSERT_TRUE(b.camera->Arm().ok());
   ASSERT_TRUE(b.fake->WaitUntilQueuedBuffersFilled(kFrameWait));  // every buffer holds a dark frame
-  for (const char* light : {"top", "bottom"}) ASSERT_TRUE(SetWorldLightLevel(*b.world, light, 1.0).ok());
+  for (const char* light : {"top", "bottom"})
+    ASSERT_TRUE(SetWorldLightLevel(*b.world, light, 1.0).ok());
   ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
   auto frame = b.camera->WaitFrame(kFrameWait);
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
@@ -160,10 +161,12 @@ TEST(V4l2Camera, ACorruptFrameIsReportedAndTheNextOneIsFine) {
 }
 
 TEST(V4l2Camera, ConfigErrorsNameTheField) {
-  auto root = ConfigNode::LoadString("{name: c, backend: v4l2, serial: X, format: h264}", "rig.yaml");
+  auto root =
+      ConfigNode::LoadString("{name: c, backend: v4l2, serial: X, format: h264}", "rig.yaml");
   auto parsed = ParseV4l2CameraOptions(*root);
   ASSERT_FALSE(parsed.ok());
-  EXPECT_NE(parsed.status().message().find("format"), std::string::npos) << parsed.status().message();
+  EXPECT_NE(parsed.status().message().find("format"), std::string::npos)
+      << parsed.status().message();
 }
 
 }  // namespace

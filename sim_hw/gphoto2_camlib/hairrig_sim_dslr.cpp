@@ -49,7 +49,8 @@ int ErrorFromKind(const std::string& kind) {
 
 // Sends one request and reads its reply. A reply of ERR is reported through
 // the context and returned as the matching libgphoto2 error.
-int Call(Camera* camera, GPContext* context, const std::vector<std::string>& request, proto::Message* reply) {
+int Call(Camera* camera, GPContext* context, const std::vector<std::string>& request,
+         proto::Message* reply) {
   CameraPrivateLibrary* pl = camera->pl;
   if (pl->fd < 0) {
     gp_context_error(context, "The simulated camera connection is closed; reopen the camera.");
@@ -66,16 +67,18 @@ int Call(Camera* camera, GPContext* context, const std::vector<std::string>& req
     read = proto::ReadMessage(pl->fd, pl->reply_timeout_ms, reply);
   } while (read == proto::IoResult::kOk && reply->id < id);
   switch (read) {
-    case proto::IoResult::kOk: break;
+    case proto::IoResult::kOk:
+      break;
     case proto::IoResult::kTimeout:
-      gp_context_error(context, "The simulated camera did not answer %s within %d ms.", request[0].c_str(),
-                       pl->reply_timeout_ms);
+      gp_context_error(context, "The simulated camera did not answer %s within %d ms.",
+                       request[0].c_str(), pl->reply_timeout_ms);
       return GP_ERROR_TIMEOUT;
     case proto::IoResult::kClosed:
       gp_context_error(context, "The simulated camera went away during %s.", request[0].c_str());
       return GP_ERROR_IO;
     case proto::IoResult::kMalformed:
-      gp_context_error(context, "The simulated camera sent a malformed reply to %s.", request[0].c_str());
+      gp_context_error(context, "The simulated camera sent a malformed reply to %s.",
+                       request[0].c_str());
       return GP_ERROR_CORRUPTED_DATA;
   }
   if (reply->field(0) == "OK") return GP_OK;
@@ -101,7 +104,8 @@ void CopyText(char* out, size_t size, const std::string& text) {
 
 // --- filesystem ------------------------------------------------------------
 
-int ListEntries(const char* verb, const char* folder, CameraList* list, void* data, GPContext* context) {
+int ListEntries(const char* verb, const char* folder, CameraList* list, void* data,
+                GPContext* context) {
   auto* camera = static_cast<Camera*>(data);
   proto::Message reply;
   const int r = Call(camera, context, {verb, folder}, &reply);
@@ -110,47 +114,54 @@ int ListEntries(const char* verb, const char* folder, CameraList* list, void* da
   return GP_OK;
 }
 
-int FileList(CameraFilesystem*, const char* folder, CameraList* list, void* data, GPContext* context) {
+int FileList(CameraFilesystem*, const char* folder, CameraList* list, void* data,
+             GPContext* context) {
   return ListEntries("FILES", folder, list, data, context);
 }
 
-int FolderList(CameraFilesystem*, const char* folder, CameraList* list, void* data, GPContext* context) {
+int FolderList(CameraFilesystem*, const char* folder, CameraList* list, void* data,
+               GPContext* context) {
   return ListEntries("FOLDERS", folder, list, data, context);
 }
 
-int GetInfo(CameraFilesystem*, const char* folder, const char* name, CameraFileInfo* info, void* data,
-            GPContext* context) {
+int GetInfo(CameraFilesystem*, const char* folder, const char* name, CameraFileInfo* info,
+            void* data, GPContext* context) {
   proto::Message reply;
   const int r = Call(static_cast<Camera*>(data), context, {"INFO", folder, name}, &reply);
   if (r < GP_OK) return r;
   std::memset(info, 0, sizeof(*info));
-  info->file.fields = static_cast<CameraFileInfoFields>(GP_FILE_INFO_SIZE | GP_FILE_INFO_TYPE | GP_FILE_INFO_MTIME);
+  info->file.fields =
+      static_cast<CameraFileInfoFields>(GP_FILE_INFO_SIZE | GP_FILE_INFO_TYPE | GP_FILE_INFO_MTIME);
   info->file.size = std::strtoull(reply.field(1).c_str(), nullptr, 10);
   info->file.mtime = static_cast<time_t>(std::atoll(reply.field(2).c_str()));
   CopyText(info->file.type, sizeof(info->file.type), GP_MIME_JPEG);
   return GP_OK;
 }
 
-int GetFile(CameraFilesystem*, const char* folder, const char* name, CameraFileType type, CameraFile* file,
-            void* data, GPContext* context) {
+int GetFile(CameraFilesystem*, const char* folder, const char* name, CameraFileType type,
+            CameraFile* file, void* data, GPContext* context) {
   if (type != GP_FILE_TYPE_NORMAL) return GP_ERROR_NOT_SUPPORTED;
   proto::Message reply;
   const int r = Call(static_cast<Camera*>(data), context, {"GET", folder, name}, &reply);
   if (r < GP_OK) return r;
   gp_file_set_mime_type(file, GP_MIME_JPEG);
-  return gp_file_append(file, reply.payload.data(), static_cast<unsigned long>(reply.payload.size()));
+  return gp_file_append(file, reply.payload.data(),
+                        static_cast<unsigned long>(reply.payload.size()));
 }
 
-int DeleteFile(CameraFilesystem*, const char* folder, const char* name, void* data, GPContext* context) {
+int DeleteFile(CameraFilesystem*, const char* folder, const char* name, void* data,
+               GPContext* context) {
   proto::Message reply;
   return Call(static_cast<Camera*>(data), context, {"DELETE", folder, name}, &reply);
 }
 
-int StorageInfo(CameraFilesystem*, CameraStorageInformation** infos, int* count, void*, GPContext*) {
+int StorageInfo(CameraFilesystem*, CameraStorageInformation** infos, int* count, void*,
+                GPContext*) {
   auto* info = static_cast<CameraStorageInformation*>(calloc(1, sizeof(CameraStorageInformation)));
   if (info == nullptr) return GP_ERROR_NO_MEMORY;
-  info->fields = static_cast<CameraStorageInfoFields>(GP_STORAGEINFO_BASE | GP_STORAGEINFO_DESCRIPTION |
-                                                      GP_STORAGEINFO_ACCESS | GP_STORAGEINFO_STORAGETYPE);
+  info->fields =
+      static_cast<CameraStorageInfoFields>(GP_STORAGEINFO_BASE | GP_STORAGEINFO_DESCRIPTION |
+                                           GP_STORAGEINFO_ACCESS | GP_STORAGEINFO_STORAGETYPE);
   CopyText(info->basedir, sizeof(info->basedir), proto::kStorageFolder);
   CopyText(info->description, sizeof(info->description), "simulated card");
   info->access = GP_STORAGEINFO_AC_READWRITE;
@@ -192,7 +203,8 @@ int TriggerCapture(Camera* camera, GPContext* context) {
   return Call(camera, context, {"TRIGGER"}, &reply);
 }
 
-int WaitForEvent(Camera* camera, int timeout_ms, CameraEventType* type, void** data, GPContext* context) {
+int WaitForEvent(Camera* camera, int timeout_ms, CameraEventType* type, void** data,
+                 GPContext* context) {
   *type = GP_EVENT_TIMEOUT;
   *data = nullptr;
   proto::Message reply;
@@ -229,7 +241,8 @@ int GetConfig(Camera* camera, CameraWidget** window, GPContext* context) {
       gp_widget_append(*window, section);
     }
     CameraWidget* widget = nullptr;
-    gp_widget_new(item.choices.empty() ? GP_WIDGET_TEXT : GP_WIDGET_RADIO, item.label.c_str(), &widget);
+    gp_widget_new(item.choices.empty() ? GP_WIDGET_TEXT : GP_WIDGET_RADIO, item.label.c_str(),
+                  &widget);
     gp_widget_set_name(widget, item.name.c_str());
     for (const std::string& choice : item.choices) gp_widget_add_choice(widget, choice.c_str());
     gp_widget_set_value(widget, item.value.c_str());
@@ -257,21 +270,25 @@ int SetChanged(Camera* camera, CameraWidget* widget, GPContext* context) {
   return Call(camera, context, {"SET", name, value ? value : ""}, &reply);
 }
 
-int SetConfig(Camera* camera, CameraWidget* window, GPContext* context) { return SetChanged(camera, window, context); }
+int SetConfig(Camera* camera, CameraWidget* window, GPContext* context) {
+  return SetChanged(camera, window, context);
+}
 
 int Summary(Camera* camera, CameraText* text, GPContext* context) {
   proto::Message reply;
   const int r = Call(camera, context, {"FILES", proto::kImageFolder}, &reply);
   if (r < GP_OK) return r;
-  const std::string summary = std::string("Model: ") + proto::kModel + "\nSerial Number: " + camera->pl->serial +
-                              "\nFiles on the camera: " + std::to_string(Lines(reply.payload).size()) + "\n";
+  const std::string summary =
+      std::string("Model: ") + proto::kModel + "\nSerial Number: " + camera->pl->serial +
+      "\nFiles on the camera: " + std::to_string(Lines(reply.payload).size()) + "\n";
   CopyText(text->text, sizeof(text->text), summary);
   return GP_OK;
 }
 
 int About(Camera*, CameraText* text, GPContext*) {
   CopyText(text->text, sizeof(text->text),
-           "hairrig's simulated DSLR: renders the simulated rig's scene and serves each shot as a JPEG.\n");
+           "hairrig's simulated DSLR: renders the simulated rig's scene and serves each shot as a "
+           "JPEG.\n");
   return GP_OK;
 }
 
@@ -283,7 +300,8 @@ int Exit(Camera* camera, GPContext*) {
     const uint64_t id = camera->pl->next_id++;
     if (proto::WriteMessage(camera->pl->fd, id, {"BYE"}) == proto::IoResult::kOk) {
       proto::Message reply;
-      while (proto::ReadMessage(camera->pl->fd, camera->pl->reply_timeout_ms, &reply) == proto::IoResult::kOk &&
+      while (proto::ReadMessage(camera->pl->fd, camera->pl->reply_timeout_ms, &reply) ==
+                 proto::IoResult::kOk &&
              reply.id < id) {
       }
     }
@@ -303,14 +321,15 @@ int Connect(Camera* camera, GPContext* context) {
   gp_port_info_get_path(info, &port_path);
   const std::string socket_path = proto::SocketPathForPort(port_path ? port_path : "");
   if (socket_path.empty()) {
-    gp_context_error(context, "Port '%s' does not name a simulated camera's folder (use disk:<folder>).",
+    gp_context_error(context,
+                     "Port '%s' does not name a simulated camera's folder (use disk:<folder>).",
                      port_path ? port_path : "");
     return GP_ERROR_BAD_PARAMETERS;
   }
   camera->pl->fd = proto::ConnectUnix(socket_path);
   if (camera->pl->fd < 0) {
-    gp_context_error(context, "No simulated camera at %s (%s). Is `hairrig sim serve` running?", socket_path.c_str(),
-                     std::strerror(errno));
+    gp_context_error(context, "No simulated camera at %s (%s). Is `hairrig sim serve` running?",
+                     socket_path.c_str(), std::strerror(errno));
     return GP_ERROR_IO_USB_FIND;
   }
   proto::Message reply;
@@ -324,7 +343,8 @@ int Connect(Camera* camera, GPContext* context) {
   camera->pl->serial = reply.field(2);
   const int timeout_ms = std::atoi(reply.field(3).c_str());
   if (timeout_ms > 0) camera->pl->reply_timeout_ms = timeout_ms;
-  gp_log(GP_LOG_DEBUG, kLogDomain, "connected to %s (serial %s)", socket_path.c_str(), camera->pl->serial.c_str());
+  gp_log(GP_LOG_DEBUG, kLogDomain, "connected to %s (serial %s)", socket_path.c_str(),
+         camera->pl->serial.c_str());
   return GP_OK;
 }
 
@@ -350,8 +370,8 @@ int camera_abilities(CameraAbilitiesList* list) {
   a.port = static_cast<GPPortType>(GP_PORT_DISK | GP_PORT_USB);
   a.usb_vendor = proto::kUsbVendorId;
   a.usb_product = proto::kUsbProductId;
-  a.operations = static_cast<CameraOperation>(GP_OPERATION_CAPTURE_IMAGE | GP_OPERATION_TRIGGER_CAPTURE |
-                                              GP_OPERATION_CONFIG);
+  a.operations = static_cast<CameraOperation>(GP_OPERATION_CAPTURE_IMAGE |
+                                              GP_OPERATION_TRIGGER_CAPTURE | GP_OPERATION_CONFIG);
   a.file_operations = GP_FILE_OPERATION_DELETE;
   a.folder_operations = GP_FOLDER_OPERATION_NONE;
   a.device_type = GP_DEVICE_STILL_CAMERA;

@@ -26,10 +26,10 @@ inline hairrig::CameraIntrinsics SmallTestIntrinsics() {
 }
 
 inline nlohmann::json CalibrationDocument() {
-  using nlohmann::json;
   using hairrig::IntrinsicsToJson;
   using hairrig::PoseToJson;
   using hairrig::Rigid3d;
+  using nlohmann::json;
   const json camera = {{"name", "upper"},
                        {"serial", "CAM-UPPER"},
                        {"solved", true},
@@ -46,7 +46,10 @@ inline nlohmann::json CalibrationDocument() {
                      {"rms_px", 0.3},
                      {"uncertainty", {{"rotation_sd_deg", 0.01}, {"centre_sd_mm", 0.1}}},
                      {"tags", {{{"id", 4}, {"corners_px", {{1, 2}, {3, 4}, {5, 6}, {7, 8}}}}}}};
-  const json failed = {{"view", 1}, {"camera", 0}, {"frame", "frames/001_CAM-UPPER.png"}, {"solved", false},
+  const json failed = {{"view", 1},
+                       {"camera", 0},
+                       {"frame", "frames/001_CAM-UPPER.png"},
+                       {"solved", false},
                        {"failure", "no tags"}};
   return {{"format", "hairrig-calibration"},
           {"version", 1},

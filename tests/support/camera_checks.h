@@ -1,13 +1,13 @@
 // Test helpers for camera backends: one software-triggered shot, arming for
-// a line trigger, and the PSNR between a delivered frame and the world rendered directly. Header-only.
+// a line trigger, and the PSNR between a delivered frame and the world rendered directly.
+// Header-only.
 #pragma once
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "drivers/camera.h"
 
@@ -18,7 +18,8 @@ namespace hairrig_test {
 constexpr std::chrono::milliseconds kFrameWait{20000};
 
 // Configure, Arm, SoftwareTrigger, WaitFrame, Disarm.
-inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera, hairrig::PixelFormat format,
+inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera,
+                                                 hairrig::PixelFormat format,
                                                  double exposure_s = 0.02, double gain_db = 0) {
   hairrig::CaptureSettings s;
   s.format = format;

@@ -14,7 +14,8 @@ inline hairrig::HeadSpec EllipsoidHeadWithWideScalp() {
   spec.scalp.defined = true;
   spec.scalp.center_turntable_mm = spec.center_turntable_mm;
   spec.scalp.parting = false;
-  spec.scalp.hairline_front_deg = spec.scalp.hairline_temple_deg = spec.scalp.hairline_ear_deg = -30;
+  spec.scalp.hairline_front_deg = spec.scalp.hairline_temple_deg = spec.scalp.hairline_ear_deg =
+      -30;
   spec.scalp.hairline_nape_deg = -30;
   return spec;
 }

@@ -24,10 +24,17 @@ inline constexpr uint32_t kFakeTestRegister = 0x1f0;  // Aravis' fake: reads 0x1
 
 // A GVCP command: key 0x42, flags, command, length (`length`, or the words'
 // bytes when negative), request id 1, then the words big-endian.
-inline std::vector<uint8_t> GvcpCommand(uint16_t command, const std::vector<uint32_t>& words, int length = -1) {
+inline std::vector<uint8_t> GvcpCommand(uint16_t command, const std::vector<uint32_t>& words,
+                                        int length = -1) {
   const int n = length >= 0 ? length : static_cast<int>(4 * words.size());
-  std::vector<uint8_t> p = {0x42, 0x01, static_cast<uint8_t>(command >> 8), static_cast<uint8_t>(command),
-                            static_cast<uint8_t>(n >> 8), static_cast<uint8_t>(n), 0, 1};
+  std::vector<uint8_t> p = {0x42,
+                            0x01,
+                            static_cast<uint8_t>(command >> 8),
+                            static_cast<uint8_t>(command),
+                            static_cast<uint8_t>(n >> 8),
+                            static_cast<uint8_t>(n),
+                            0,
+                            1};
   for (uint32_t w : words) {
     for (int shift = 24; shift >= 0; shift -= 8) p.push_back(static_cast<uint8_t>(w >> shift));
   }
@@ -37,9 +44,12 @@ inline std::vector<uint8_t> GvcpCommand(uint16_t command, const std::vector<uint
 // Packets each of which crashed Aravis 0.8's GigE fake camera (reads and
 // writes outside its memory, sizes that wrap).
 inline std::vector<std::vector<uint8_t>> HostileGvcpPackets() {
-  return {GvcpCommand(kGvcpReadMemory, {0xFFFFFFF0, 4}), GvcpCommand(kGvcpReadMemory, {0x00100000, 512}),
-          GvcpCommand(kGvcpReadRegister, {0xFFFFFFFE}), GvcpCommand(kGvcpWriteRegister, {0xFFFFFFFC, 7}),
-          GvcpCommand(kGvcpWriteMemory, {0xFFFFFFFC, 9, 9}), GvcpCommand(kGvcpWriteMemory, {8}, 2)};
+  return {GvcpCommand(kGvcpReadMemory, {0xFFFFFFF0, 4}),
+          GvcpCommand(kGvcpReadMemory, {0x00100000, 512}),
+          GvcpCommand(kGvcpReadRegister, {0xFFFFFFFE}),
+          GvcpCommand(kGvcpWriteRegister, {0xFFFFFFFC, 7}),
+          GvcpCommand(kGvcpWriteMemory, {0xFFFFFFFC, 9, 9}),
+          GvcpCommand(kGvcpWriteMemory, {8}, 2)};
 }
 
 // Sends `packet` to `host`:3956 and returns the size of the reply within

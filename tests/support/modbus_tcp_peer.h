@@ -4,6 +4,7 @@
 #pragma once
 
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -14,8 +15,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "sim_hw/modbus_turntable_server.h"
 #include "tests/support/sim_world.h"
@@ -57,8 +56,11 @@ inline int ConnectTo(const ModbusTurntableServer& server) {
 
 // Sends `request` and returns what comes back within `wait`: "" for nothing,
 // "closed" when the server closed the connection.
-inline std::string Exchange(int fd, const std::vector<uint8_t>& request, std::chrono::milliseconds wait) {
-  if (send(fd, request.data(), request.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(request.size())) return "closed";
+inline std::string Exchange(int fd, const std::vector<uint8_t>& request,
+                            std::chrono::milliseconds wait) {
+  if (send(fd, request.data(), request.size(), MSG_NOSIGNAL) !=
+      static_cast<ssize_t>(request.size()))
+    return "closed";
   pollfd p{fd, POLLIN, 0};
   if (poll(&p, 1, static_cast<int>(wait.count())) != 1) return "";
   char reply[300];
@@ -68,7 +70,18 @@ inline std::string Exchange(int fd, const std::vector<uint8_t>& request, std::ch
 
 // Modbus TCP "read holding registers" (03) of one register at `address` from `unit`.
 inline std::vector<uint8_t> ReadRequest(uint8_t unit, int address) {
-  return {0x12, 0x34, 0, 0, 0, 6, unit, 0x03, static_cast<uint8_t>(address >> 8), static_cast<uint8_t>(address), 0, 1};
+  return {0x12,
+          0x34,
+          0,
+          0,
+          0,
+          6,
+          unit,
+          0x03,
+          static_cast<uint8_t>(address >> 8),
+          static_cast<uint8_t>(address),
+          0,
+          1};
 }
 
 // The simulated controller serving TCP on loopback as unit kUnit.
@@ -76,7 +89,8 @@ struct TcpServerBench {
   std::shared_ptr<hairrig::SimWorld> world = MakeSimWorld();
   std::unique_ptr<ModbusTurntableServer> server;
   TcpServerBench() {
-    auto started = ModbusTurntableServer::StartTcp(world, {hairrig::ModbusRegisterMap{}, kModbusSerial, kUnit});
+    auto started = ModbusTurntableServer::StartTcp(
+        world, {hairrig::ModbusRegisterMap{}, kModbusSerial, kUnit});
     EXPECT_TRUE(started.ok()) << started.status().ToString();
     server = std::move(started).value();
   }

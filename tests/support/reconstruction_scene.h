@@ -6,10 +6,10 @@
 // the true cameras in the turntable frame, as a perfect calibration would.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "core/calib_box.h"
 #include "core/truth_maps.h"
@@ -43,7 +43,8 @@ inline hairrig::Scene ReducedScene(const ReducedCaptureOptions& o) {
 }
 
 // Renders the reduced capture into <dir>/ground_truth/ and returns its views.
-inline hairrig::ReconstructionInput RenderReducedCapture(const std::string& dir, const ReducedCaptureOptions& o) {
+inline hairrig::ReconstructionInput RenderReducedCapture(const std::string& dir,
+                                                         const ReducedCaptureOptions& o) {
   namespace fs = std::filesystem;
   const std::string truth_dir = dir + "/ground_truth";
   fs::create_directories(truth_dir);

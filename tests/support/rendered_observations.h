@@ -7,12 +7,14 @@
 
 namespace hairrig {
 
-inline Result<ViewObservations> RenderedObservations(const Renderer& renderer, TagDetector& detector, int camera,
-                                                     int stop) {
+inline Result<ViewObservations> RenderedObservations(const Renderer& renderer,
+                                                     TagDetector& detector, int camera, int stop) {
   const Scene& scene = renderer.scene();
   RenderOptions options;
-  options.noise_seed = static_cast<uint64_t>(stop * static_cast<int>(scene.cameras.size()) + camera);
-  HR_ASSIGN_OR_RETURN(RenderedView rendered, renderer.Render(camera, scene.StopAngleDeg(stop), options));
+  options.noise_seed =
+      static_cast<uint64_t>(stop * static_cast<int>(scene.cameras.size()) + camera);
+  HR_ASSIGN_OR_RETURN(RenderedView rendered,
+                      renderer.Render(camera, scene.StopAngleDeg(stop), options));
   HR_ASSIGN_OR_RETURN(std::vector<TagDetection> detections, detector.Detect(rendered.image));
   return MatchToBox(detections, scene.box);
 }

@@ -6,21 +6,21 @@
 // repository root (as ctest does).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "sim_hw/scene.h"
 #include "sim_hw/sim_devices.h"
 
 namespace hairrig_test {
 
-inline std::shared_ptr<hairrig::SimWorld> MakeSimWorld(std::vector<hairrig::SimFault> faults = {},
-                                                       bool lights_on = false,
-                                                       const std::string& scene_path = "etc/scenes/default.yaml") {
+inline std::shared_ptr<hairrig::SimWorld> MakeSimWorld(
+    std::vector<hairrig::SimFault> faults = {}, bool lights_on = false,
+    const std::string& scene_path = "etc/scenes/default.yaml") {
   auto scene = hairrig::LoadScene(scene_path);
   EXPECT_TRUE(scene.ok()) << scene.status().ToString();
   constexpr int kDriverTestStrands = 3000;
