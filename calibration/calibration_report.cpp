@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -209,6 +210,15 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
   return out.str();
 }
 
+// The verdict for programs (the operator console, scripts): its level, the
+// reasons and the frames of the views to check.
+nlohmann::json VerdictJson(const CaptureCalibrationInput& input,
+                           const CalibrationVerdict& verdict) {
+  nlohmann::json views = nlohmann::json::array();
+  for (int f : verdict.views_to_check) views.push_back(input.frames[static_cast<size_t>(f)].name);
+  return {{"verdict", verdict.name()}, {"reasons", verdict.reasons}, {"views_to_check", views}};
+}
+
 }  // namespace
 
 Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
@@ -222,6 +232,8 @@ Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationIn
                    ")");
   HR_RETURN_IF_ERROR(
       WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "verdict.json").string(),
+                                     VerdictJson(input, verdict).dump(2) + "\n"));
   HR_RETURN_IF_ERROR(
       WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
   // One residual image per solved view, spread over the threads (they dominate the report's time).

@@ -4,6 +4,8 @@
 //   report.txt           the verdict (good / check these views / failed, with
 //                        why), per-camera intrinsics and their standard
 //                        deviations, per-view RMS, failed views and rejected tags
+//   verdict.json         the verdict for programs: {"verdict", "reasons",
+//                        "views_to_check": [frame names]}
 //   view_rms.png         per-view reprojection RMS as a bar chart (red: outlier
 //                        or failed)
 //   residuals/<frame>.jpg  each solved view at half size with the corners'

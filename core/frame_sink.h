@@ -7,6 +7,7 @@
 
 #include <opencv2/core/mat.hpp>
 #include <string>
+#include <vector>
 
 namespace hairrig {
 
@@ -31,6 +32,24 @@ class FrameSink {
   virtual void OnFrameStored(const StoredFrame& frame) = 0;
   // Called once after the last frame of a session.
   virtual void OnCaptureFinished() {}
+};
+
+// Hands each frame to several sinks, in the order they were added.
+class FrameSinks : public FrameSink {
+ public:
+  void Add(FrameSink* sink) {
+    if (sink) sinks_.push_back(sink);
+  }
+  bool empty() const { return sinks_.empty(); }
+  void OnFrameStored(const StoredFrame& frame) override {
+    for (FrameSink* sink : sinks_) sink->OnFrameStored(frame);
+  }
+  void OnCaptureFinished() override {
+    for (FrameSink* sink : sinks_) sink->OnCaptureFinished();
+  }
+
+ private:
+  std::vector<FrameSink*> sinks_;
 };
 
 }  // namespace hairrig

@@ -24,6 +24,8 @@ const char* StatusCodeName(StatusCode code) {
       return "DeviceFault";
     case StatusCode::kOutOfRange:
       return "OutOfRange";
+    case StatusCode::kUnimplemented:
+      return "Unimplemented";
     case StatusCode::kInternal:
       return "Internal";
   }

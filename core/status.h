@@ -24,6 +24,7 @@ enum class StatusCode {
   kFailedPrecondition,  // a call made in the wrong device state
   kDeviceFault,         // a device that reports a fault of its own
   kOutOfRange,          // a value outside what a device or model accepts
+  kUnimplemented,       // a device or backend that cannot do this (a camera without live view)
   kInternal,            // a bug; please report
 };
 
@@ -63,6 +64,7 @@ inline Status FailedPrecondition(std::string m) {
 }
 inline Status DeviceFault(std::string m) { return {StatusCode::kDeviceFault, std::move(m)}; }
 inline Status OutOfRange(std::string m) { return {StatusCode::kOutOfRange, std::move(m)}; }
+inline Status Unimplemented(std::string m) { return {StatusCode::kUnimplemented, std::move(m)}; }
 inline Status Internal(std::string m) { return {StatusCode::kInternal, std::move(m)}; }
 
 // Either a T or a non-ok Status.

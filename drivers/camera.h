@@ -79,6 +79,16 @@ class Camera : public Device {
   // frame. Backends that see the pulse themselves (simulated, replayed) ignore it.
   virtual void LineTriggerSent(int64_t sent_ns) = 0;
   virtual Result<Frame> WaitFrame(std::chrono::milliseconds timeout) = 0;
+  // One frame of the camera's live-view stream (a DSLR's preview, smaller than
+  // its shots), taken without firing the shutter, storing a file or counting a
+  // shot; ready state (not armed), with the exposure of the last Configure.
+  // Unimplemented when the camera has no such stream: a live view then
+  // triggers full frames (harmless for industrial cameras, which have no
+  // mechanical shutter).
+  virtual Result<Frame> CapturePreview(std::chrono::milliseconds timeout) {
+    (void)timeout;
+    return Unimplemented(Describe() + ": no live-view stream");
+  }
 };
 
 }  // namespace hairrig

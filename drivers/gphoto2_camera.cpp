@@ -416,6 +416,33 @@ class Gphoto2Camera : public Camera {
 
   void LineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
 
+  // The body's live view (gp_camera_capture_preview): no shutter, no file.
+  Result<Frame> CapturePreview(std::chrono::milliseconds timeout) override {
+    (void)timeout;  // libgphoto2 bounds the call itself
+    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "CapturePreview"));
+    std::lock_guard<std::mutex> lock(mutex_);
+    CameraFile* raw_file = nullptr;
+    gp_file_new(&raw_file);
+    std::unique_ptr<CameraFile, FileDeleter> file(raw_file);
+    const int r = gp_camera_capture_preview(session_->camera(), file.get(), session_->context());
+    if (r == GP_ERROR_NOT_SUPPORTED)
+      return Unimplemented(Describe() + ": the body offers no live view through libgphoto2");
+    HR_RETURN_IF_ERROR(FaultIfGone(session_->Check(r, Describe() + ": live view")));
+    const char* bytes = nullptr;
+    unsigned long size = 0;
+    gp_file_get_data_and_size(file.get(), &bytes, &size);
+    Frame f;
+    f.camera_serial = info().serial;
+    f.format = PixelFormat::kEncoded;
+    f.encoding = "jpg";
+    f.data.assign(bytes, bytes + size);
+    f.exposure_s = exposure_s_;
+    f.gain_db = settings_.gain_db;
+    f.received_time_ns = SteadyNowNs();
+    f.trigger_time_ns = f.received_time_ns;
+    return f;  // width and height stay 0: the preview's size is the body's, read on decoding
+  }
+
   Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
     const auto deadline = Clock::now() + timeout;

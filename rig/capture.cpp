@@ -18,6 +18,7 @@
 #include "core/log.h"
 #include "drivers/camera_support.h"
 #include "rig/capture_calibration_input.h"
+#include "rig/capture_control.h"
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/rig_config.h"
@@ -94,6 +95,9 @@ class Sequencer {
   Status Setup();
   void StopCollectors();
   void OnSafetyInput(const Device& line, bool active);
+  void OnControl(CaptureControl::Kind kind, const std::string& reason);
+  void SafetyStop(const std::string& what, const std::string& input_name, const Device* device,
+                  const Status& fault);
 
   // --- the sweep -------------------------------------------------------------
   void RunPass(const std::vector<int>& views, int pass);
@@ -123,7 +127,6 @@ class Sequencer {
   double EtaLocked(int views_left) const;
   double PlannedBoundLeftLocked() const;
   double ExpectedFrameWallS(const Camera& camera) const;
-  double LowerBoundOfStop(double from_deg, const PlannedStop& stop) const;
 
   Rig& rig_;
   const CapturePlan& plan_;
@@ -147,11 +150,13 @@ class Sequencer {
   double lower_bound_s_ = 0;
   double last_download_s_ = 0;
   std::atomic<int> stops_done_{0}, stops_total_{0};
+  std::atomic<int> sweep_stop_{0};  // the stop the turntable is at or moving to
   int pass_ = 0;
   std::mutex progress_mutex_;
   // The ETA, guarded by progress_mutex_: the lower bound of each stop this
   // pass has still to shoot, and of the stops done since the sweep began.
   std::map<int, double> bound_left_s_;
+  std::string last_fault_;  // guarded by progress_mutex_
   double bound_done_s_ = 0;
 };
 
@@ -165,6 +170,10 @@ void Sequencer::RecordFault(const Device* device, const Status& status, const st
   }
   if (view >= 0) r["view"] = view;
   LogWarning("fault: " + status.ToString() + " -> " + action);
+  {
+    std::lock_guard<std::mutex> lock(progress_mutex_);
+    last_fault_ = status.ToString() + " -> " + action;
+  }
   (void)dataset_.Append(std::move(r));  // a journal failure must not hide the fault itself
 }
 
@@ -189,25 +198,6 @@ double Sequencer::ExpectedFrameWallS(const Camera& camera) const {
   const CameraCapabilities caps = camera.capabilities();
   return (plan_.camera_settings.exposure_s + caps.readout_s + caps.download_s) *
          camera.time_scale();
-}
-
-// Section "How it is judged" of the capture issue: moves, settles and
-// exposures, each at the device's own time scale.
-double Sequencer::LowerBoundOfStop(double from_deg, const PlannedStop& stop) const {
-  const Turntable& table = *rig_.devices.turntable;
-  const double distance = std::abs(stop.angle_deg - from_deg);
-  double s = 0;
-  if (distance >= table.capabilities().resolution_deg) {
-    s += (MoveDurationS(distance, plan_.motion) + table.capabilities().settle_s) *
-         table.time_scale();
-  }
-  double exposure = 0;
-  for (int v : stop.views) {
-    const Camera* c =
-        rig_.devices.FindCameraBySerial(plan_.views[static_cast<size_t>(v)].camera_serial);
-    exposure = std::max(exposure, plan_.camera_settings.exposure_s * c->time_scale());
-  }
-  return s + exposure;
 }
 
 Status Sequencer::Setup() {
@@ -280,13 +270,31 @@ void Sequencer::StopCollectors() {
 
 void Sequencer::OnSafetyInput(const Device& line, bool active) {
   if (!active) return;
+  SafetyStop(line.Describe() + " went active (e-stop or interlock)", line.info().name, &line,
+             Unavailable("safety input active"));
+}
+
+void Sequencer::OnControl(CaptureControl::Kind kind, const std::string& reason) {
+  if (kind == CaptureControl::Kind::kEmergency) {
+    SafetyStop("software e-stop (" + reason + ")", "software", nullptr,
+               Unavailable("software e-stop: " + reason));
+    return;
+  }
+  StopRun("stopped by the operator (" + reason +
+          "). The frames stored so far are kept; continue with --resume");
+  RecordFault(nullptr, Unavailable("stop requested: " + reason), "end the run after this stop");
+}
+
+// Motion stops and the lights go off at once, then the run ends.
+void Sequencer::SafetyStop(const std::string& what, const std::string& input_name,
+                           const Device* device, const Status& fault) {
   estop_ = true;
   (void)rig_.devices.turntable->Stop();
   AllLightsOff();
-  StopRun(line.Describe() +
-          " went active (e-stop or interlock): motion stopped and lights off. "
+  StopRun(what +
+          ": motion stopped and lights off. "
           "Release it, check the rig, then continue with --resume");
-  RecordFault(&line, Unavailable("safety input active"), "stop motion, lights off, end the run");
+  RecordFault(device, fault, "stop motion, lights off, end the run");
   // What the devices report right after, for the record (and the tests).
   nlohmann::json lights_on = nlohmann::json::array();
   for (const auto& l : rig_.devices.lights) {
@@ -295,7 +303,7 @@ void Sequencer::OnSafetyInput(const Device& line, bool active) {
   }
   auto table = rig_.devices.turntable->ReadStatus();
   (void)dataset_.Append({{"event", "safety_stop"},
-                         {"input", line.info().name},
+                         {"input", input_name},
                          {"lights_on", lights_on},
                          {"turntable_moving", table.ok() && table->moving && !table->in_position},
                          {"turntable_deg", table.ok() ? table->position_deg : std::nan("")}});
@@ -421,6 +429,7 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
     }
   }
   if (shooting.empty()) return !Stopping();
+  sweep_stop_ = stop.index;
   Progress("moving to " + DegText(stop.angle_deg), stop.index);
   double measured = 0;
   const auto before = rig_.devices.turntable->ReadStatus();
@@ -439,7 +448,7 @@ bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views
     }
     return false;
   }
-  lower_bound_s_ += LowerBoundOfStop(from, stop);
+  lower_bound_s_ += StopLowerBoundS(plan_, rig_.devices, from, stop);
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (Stopping()) return false;
@@ -575,7 +584,7 @@ bool Sequencer::Collect(CameraSlot& slot, const Shot& shot) {
       std::lock_guard<std::mutex> lock(mutex_);
       last_frame_ = Clock::now();
     }
-    Progress("stored view " + std::to_string(shot.view), shot.stop);
+    Progress("stored view " + std::to_string(shot.view), sweep_stop_.load());
     if (options_.sink) {
       StoredFrame out{shot.view,
                       shot.stop,
@@ -620,6 +629,7 @@ void Sequencer::Progress(const std::string& step, int stop) {
   p.stops_total = static_cast<int>(plan_.stops.size());
   p.step = step;
   p.faults = faults_.load();
+  p.last_fault = last_fault_;
   p.eta_s = EtaLocked(p.views_total - p.views_done);
   options_.on_progress(p);
 }
@@ -653,7 +663,7 @@ void Sequencer::PlanEta(const std::map<int, std::vector<int>>& views_by_stop) {
   bound_left_s_.clear();
   for (const auto& [stop, views] : views_by_stop) {
     const PlannedStop& planned = plan_.stops[static_cast<size_t>(stop)];
-    bound_left_s_[stop] = LowerBoundOfStop(from, planned);
+    bound_left_s_[stop] = StopLowerBoundS(plan_, rig_.devices, from, planned);
     from = planned.angle_deg;
   }
 }
@@ -690,6 +700,10 @@ CaptureSummary Sequencer::Run() {
   summary.views_planned = static_cast<int>(plan_.views.size());
   summary.views_kept = dataset_.VerifiedFrameCount();
   const auto t0 = Clock::now();
+  if (options_.control) {
+    options_.control->Attach(
+        [this](CaptureControl::Kind kind, const std::string& why) { OnControl(kind, why); });
+  }
   Status setup = Setup();
   summary.setup_s = std::chrono::duration<double>(Clock::now() - t0).count();
   if (!setup.ok()) {
@@ -707,6 +721,7 @@ CaptureSummary Sequencer::Run() {
   AllLightsOff();
   for (const auto& c : rig_.devices.cameras) (void)c->Disarm();
   for (const auto& l : rig_.devices.input_lines) l->OnChange(nullptr);
+  if (options_.control) options_.control->Detach();
 
   summary.missing_views = MissingViews();
   summary.views_completed = summary.views_planned - static_cast<int>(summary.missing_views.size());
@@ -798,6 +813,10 @@ Result<RigConfig> LoadSessionConfig(const CaptureOptions& options, std::string* 
         options.out_dir +
         " already exists: choose a new --out folder, or add --resume to continue it");
   }
+  if (options.rig) {  // the rig's own config, as it was loaded
+    *config_text = ReadText(options.rig->config.path);
+    return options.rig->config;
+  }
   HR_ASSIGN_OR_RETURN(RigConfig config,
                       LoadRigConfig(options.config_path, options.config_relative_to, unclaimed));
   *config_text = ReadText(options.config_path);
@@ -834,7 +853,11 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
     return InvalidArgument("--out is required: the folder the capture is written to");
   std::string config_text;
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadSessionConfig(options, &config_text));
-  HR_ASSIGN_OR_RETURN(std::unique_ptr<Rig> rig, BuildRig(config, options.rig_build));
+  std::unique_ptr<Rig> built;
+  if (!options.rig) {
+    HR_ASSIGN_OR_RETURN(built, BuildRig(config, options.rig_build));
+  }
+  Rig* const rig = options.rig ? options.rig : built.get();
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
   HR_RETURN_IF_ERROR(CheckCalibrationSection(config));

@@ -36,16 +36,20 @@
 
 namespace hairrig {
 
+class CaptureControl;  // rig/capture_control.h
+
 struct CaptureProgress {
   int views_done = 0;  // verified views, earlier sessions included
   int views_total = 0;
-  int stop = 0;  // current stop (0-based)
+  int stop = 0;  // the stop the turntable is at or moving to (0-based); frames of earlier
+                 // stops may still be being stored
   int stops_total = 0;
   std::string step;  // "moving to 37.9 deg", "exposing", "re-shooting 2 views", ...
   double eta_s = 0;  // wall seconds left: the longer of the sweep's (the plan's lower bound of the
                      // stops left times its pace so far) and the storage's (views left times the
                      // wall time per view stored so far)
   int faults = 0;
+  std::string last_fault;  // the newest fault and what was done about it; empty before the first
 };
 
 struct CaptureOptions {
@@ -63,6 +67,12 @@ struct CaptureOptions {
   // Where the capture's files are written (core/capture_storage.h). Null: the
   // rig's own (Rig::capture_storage: the simulated rig's disk), else the file system.
   std::shared_ptr<CaptureStorage> storage;
+  // Stop or e-stop the run from another thread (rig/capture_control.h); optional.
+  std::shared_ptr<CaptureControl> control;
+  // A rig already built from the config (the operator console's, its devices
+  // closed): the capture opens, uses and closes its devices instead of
+  // building its own. Null: RunCapture builds the rig (rig_build).
+  Rig* rig = nullptr;
 };
 
 struct CaptureSummary {

@@ -46,7 +46,8 @@ Result<CaptureOptions> MakeCaptureOptions(const CaptureAndProcessOptions& o) {
   capture.resume = o.resume;
   capture.out_dir = o.out_dir;
   if (!o.subject.empty()) {
-    HR_ASSIGN_OR_RETURN(const std::string folder, SubjectFolderName(o.subject));
+    HR_ASSIGN_OR_RETURN(const std::string folder,
+                        SubjectFolderName(o.folder_name.empty() ? o.subject : o.folder_name));
     std::error_code ec;
     std::filesystem::create_directories(o.out_dir, ec);
     if (ec)
@@ -54,7 +55,8 @@ Result<CaptureOptions> MakeCaptureOptions(const CaptureAndProcessOptions& o) {
     capture.out_dir = (std::filesystem::path(o.out_dir) / folder).string();
     capture.subject = o.subject;
   }
-  capture.config_path = o.config_path;
+  capture.config_path = o.rig ? o.rig->config.path : o.config_path;
+  capture.rig = o.rig;
   if (capture.config_path.empty() && !o.resume) {
     HR_ASSIGN_OR_RETURN(capture.config_path, DefaultRigConfigPath());
   }
@@ -135,8 +137,12 @@ Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOption
   std::unique_ptr<TagDetectionSink> sink;
   if (options.calibrate) {
     HR_ASSIGN_OR_RETURN(sink, MakeDetectionSink(capture, options.threads));
-    capture.sink = sink.get();
   }
+  FrameSinks sinks;
+  sinks.Add(sink.get());
+  sinks.Add(options.sink);
+  if (!sinks.empty()) capture.sink = &sinks;
+  capture.control = options.control;
   CaptureAndProcessSummary summary;
   HR_ASSIGN_OR_RETURN(summary.capture, RunCapture(capture));
   if (options.on_captured) options.on_captured(summary.capture);

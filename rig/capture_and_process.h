@@ -26,7 +26,10 @@ struct CaptureAndProcessOptions {
   // folder of captures (created), the capture going to <out_dir>/<subject's
   // folder name> (rig/safe_names.h SubjectFolderName).
   std::string out_dir;
-  std::string subject;       // the subject or wig name; recorded in the journal and manifest
+  std::string subject;  // the subject or wig name; recorded in the journal and manifest
+  // With a subject: the capture's folder name under out_dir instead of the
+  // subject's (checked as SubjectFolderName checks a subject).
+  std::string folder_name;
   bool resume = false;       // continue an interrupted capture
   bool calibrate = false;    // detect the box's tags as frames land, calibrate a complete capture
   bool reconstruct = false;  // needs calibrate
@@ -36,7 +39,10 @@ struct CaptureAndProcessOptions {
   std::function<void(const CaptureProgress&)>
       on_progress;  // optional, called from the sequencer thread
   std::function<void(const CaptureSummary&)>
-      on_captured;  // optional, once the capture ends, before calibrating
+      on_captured;            // optional, once the capture ends, before calibrating
+  FrameSink* sink = nullptr;  // optional: told of each stored frame, beside the tag detection
+  std::shared_ptr<CaptureControl> control;  // optional: stop or e-stop the capture
+  Rig* rig = nullptr;  // optional: a rig already built (CaptureOptions::rig); config_path unused
 
   // InvalidArgument naming the option: no out_dir, intrinsics_files or
   // reconstruct without calibrate, threads below 1.

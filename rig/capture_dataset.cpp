@@ -17,6 +17,7 @@
 #include "core/file_util.h"
 #include "core/json_file.h"
 #include "core/sha256.h"
+#include "drivers/frame_image.h"
 #include "rig/crash_points.h"
 #include "rig/safe_names.h"
 
@@ -403,12 +404,19 @@ Result<std::vector<uint8_t>> CaptureDataset::EncodeForStorage(const Frame& frame
   const std::string who =
       "view " + std::to_string(context.view) + " from camera " + frame.camera_serial;
   const bool size_known = context.expected_width_px > 0 && context.expected_height_px > 0;
+  if (frame.format != PixelFormat::kEncoded && frame.width_px > 0 && frame.height_px > 0 &&
+      size_known &&
+      (frame.width_px != context.expected_width_px ||
+       frame.height_px != context.expected_height_px)) {
+    return CorruptData(who + ": frame is " + std::to_string(frame.width_px) + "x" +
+                       std::to_string(frame.height_px) + ", the camera's sensor is " +
+                       std::to_string(context.expected_width_px) + "x" +
+                       std::to_string(context.expected_height_px));
+  }
+  Result<cv::Mat> decoded = FrameImage(frame);
+  if (!decoded.ok()) return CorruptData(who + ": " + decoded.status().message());
+  *image = std::move(*decoded);
   if (frame.format == PixelFormat::kEncoded) {
-    const std::string ext = FileNamePart(frame.encoding);
-    *image = cv::imdecode(frame.data, cv::IMREAD_UNCHANGED);
-    if (image->empty())
-      return CorruptData(who + ": the " + ext + " file does not decode (" +
-                         std::to_string(frame.data.size()) + " bytes)");
     if (size_known &&
         (image->cols != context.expected_width_px || image->rows != context.expected_height_px)) {
       return CorruptData(who + ": decodes to " + std::to_string(image->cols) + "x" +
@@ -416,29 +424,9 @@ Result<std::vector<uint8_t>> CaptureDataset::EncodeForStorage(const Frame& frame
                          std::to_string(context.expected_width_px) + "x" +
                          std::to_string(context.expected_height_px));
     }
-    *extension = ext;
+    *extension = FileNamePart(frame.encoding);
     return frame.data;
   }
-  if (frame.width_px <= 0 || frame.height_px <= 0 || frame.data.size() != frame.ExpectedBytes()) {
-    return CorruptData(who + ": " + std::to_string(frame.data.size()) + " bytes for a " +
-                       std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) +
-                       " " + PixelFormatName(frame.format) + " frame (expected " +
-                       std::to_string(frame.ExpectedBytes()) + ")");
-  }
-  if (size_known && (frame.width_px != context.expected_width_px ||
-                     frame.height_px != context.expected_height_px)) {
-    return CorruptData(who + ": frame is " + std::to_string(frame.width_px) + "x" +
-                       std::to_string(frame.height_px) + ", the camera's sensor is " +
-                       std::to_string(context.expected_width_px) + "x" +
-                       std::to_string(context.expected_height_px));
-  }
-  const int channels = BytesPerPixel(frame.format);
-  const cv::Mat raw(frame.height_px, frame.width_px, channels == 3 ? CV_8UC3 : CV_8UC1,
-                    const_cast<uint8_t*>(frame.data.data()));
-  if (frame.format == PixelFormat::kRgb8)
-    cv::cvtColor(raw, *image, cv::COLOR_RGB2BGR);
-  else
-    *image = raw.clone();
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", *image, png, {cv::IMWRITE_PNG_COMPRESSION, options_.png_compression})) {
     return Internal(who + ": PNG encoding failed");

@@ -38,6 +38,32 @@ uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices,
   return total;
 }
 
+double StopLowerBoundS(const CapturePlan& plan, const DeviceSet& devices, double from_deg,
+                       const PlannedStop& stop) {
+  const Turntable& table = *devices.turntable;
+  const double distance = std::abs(stop.angle_deg - from_deg);
+  double s = 0;
+  if (distance >= table.capabilities().resolution_deg) {
+    s +=
+        (MoveDurationS(distance, plan.motion) + table.capabilities().settle_s) * table.time_scale();
+  }
+  double exposure = 0;
+  for (int v : stop.views) {
+    const Camera* c = devices.FindCameraBySerial(plan.views[static_cast<size_t>(v)].camera_serial);
+    exposure = std::max(exposure, plan.camera_settings.exposure_s * c->time_scale());
+  }
+  return s + exposure;
+}
+
+double PlanLowerBoundS(const CapturePlan& plan, const DeviceSet& devices, double from_deg) {
+  double total = 0;
+  for (const PlannedStop& stop : plan.stops) {
+    total += StopLowerBoundS(plan, devices, from_deg, stop);
+    from_deg = stop.angle_deg;
+  }
+  return total;
+}
+
 namespace {
 
 constexpr double kMaxAngleDeg = 3600;  // ten turns either way

@@ -84,4 +84,14 @@ Result<CapturePolicies> ReadCapturePolicies(const ConfigNode& root);
 uint64_t BytesNeededToFinish(const CapturePlan& plan, const DeviceSet& devices,
                              const std::vector<int>& views, const CapturePolicies& policies);
 
+// Wall seconds a stop takes at least: the move from `from_deg` (none when it is
+// within the table's resolution) and its settle, then the longest exposure of
+// the stop's cameras, each at its device's own time scale. The stop's cameras
+// must be in `devices`.
+double StopLowerBoundS(const CapturePlan& plan, const DeviceSet& devices, double from_deg,
+                       const PlannedStop& stop);
+// The plan's stops in order from `from_deg` (0: a homed table): the physical
+// lower bound of a whole capture, without the last frame's download.
+double PlanLowerBoundS(const CapturePlan& plan, const DeviceSet& devices, double from_deg = 0);
+
 }  // namespace hairrig

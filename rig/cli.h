@@ -61,5 +61,8 @@ void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddStageCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddBatchCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+// `hairrig serve`: the operator console (console/console_server.h).
+// `hairrig serve`: the operator console (console/console_server.h).
+void AddConsoleCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

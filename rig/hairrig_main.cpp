@@ -34,6 +34,7 @@ int Run(int argc, char** argv) {
   AddSimCommand(app, common, dispatch);
   AddStageCommand(app, common, dispatch);
   AddBatchCommand(app, common, dispatch);
+  AddConsoleCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -14,7 +14,8 @@
 //     8\tGET\t/store_00010001/DCIM/100HRSIM\tIMG_0001.JPG\t0\n
 //     8\tOK\t812345\n<812345 bytes of JPEG>
 // A client that gave up waiting for a reply skips it by id when it comes late.
-// Requests: HELLO, CAPTURE, TRIGGER, EVENT <timeout_ms>, FOLDERS <folder>,
+// Requests: HELLO, CAPTURE, TRIGGER, PREVIEW (a live-view JPEG as the
+// payload, no shot), EVENT <timeout_ms>, FOLDERS <folder>,
 // FILES <folder>, INFO <folder> <name>, GET <folder> <name>,
 // DELETE <folder> <name>, CONFIG, SET <name> <value>, BYE.
 // Replies: OK <fields...>, or ERR <kind> <message> with the kinds below.

@@ -6,6 +6,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 #include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <thread>
 #include <vector>
 
@@ -24,6 +26,11 @@
 #include "sim_hw/sim_dslr_protocol.h"
 
 namespace hairrig {
+
+namespace {
+// A body's live-view frames are about this wide (a DSLR streams 640 x 424 or so).
+constexpr int kPreviewWidthPx = 640;
+}  // namespace
 
 namespace proto = sim_dslr;
 using proto::Message;
@@ -282,6 +289,7 @@ class SimDslrServer::Impl {
       QueueShot();
       return Reply(client, {"OK"});
     }
+    if (verb == "PREVIEW") return Preview(client);
     if (verb == "EVENT") return Reply(client, NextEvent(std::atoi(m.field(1).c_str())));
     if (verb == "FOLDERS") return Reply(client, {"OK"}, Folders(NormalFolder(m.field(1))));
     if (verb == "FILES") return Reply(client, {"OK"}, Files(NormalFolder(m.field(1))));
@@ -388,6 +396,28 @@ class SimDslrServer::Impl {
                        std::chrono::system_clock::now().time_since_epoch())
                        .count()};
     return std::string(name);
+  }
+
+  // The live view: the world now, at the shot's settings, scaled to a body's
+  // live-view size (kPreviewWidthPx wide), as a JPEG; no shot is counted.
+  bool Preview(const Client* client) {
+    Shot shot;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!StartShotLocked(&shot))
+        return Reply(client, {"ERR", proto::kErrIo, "the camera dropped off the bus"});
+    }
+    Result<cv::Mat> image =
+        RenderWorldExposure(*world_, options_.scene_camera, shot.exposure, shot.exposure_s,
+                            shot.gain_db, FrameNoiseSeed(*world_, options_.serial, ++previews_));
+    if (!image.ok()) return Reply(client, {"ERR", proto::kErrIo, image.status().message()});
+    cv::Mat small;
+    const double scale = std::min(1.0, static_cast<double>(kPreviewWidthPx) / image->cols);
+    cv::resize(*image, small, cv::Size(), scale, scale, cv::INTER_AREA);
+    std::vector<uint8_t> jpeg;
+    if (!cv::imencode(".jpg", small, jpeg, {cv::IMWRITE_JPEG_QUALITY, 80}))
+      return Reply(client, {"ERR", proto::kErrIo, "live view: JPEG encoding failed"});
+    return Reply(client, {"OK"}, std::string(jpeg.begin(), jpeg.end()));
   }
 
   std::vector<std::string> CaptureNow() {
@@ -533,6 +563,7 @@ class SimDslrServer::Impl {
   bool gone_ = false;
   int gone_connects_left_ = 0;
   int shots_ = 0;
+  std::atomic<uint64_t> previews_{0};  // live-view frames served (their noise seeds)
   int connections_ = 0;
 };
 

@@ -15,6 +15,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <thread>
 
@@ -144,6 +145,31 @@ TEST(Gphoto2Camera, OpensBySerialShootsAndDownloadsTheRenderedView) {
   EXPECT_LT(Psnr(decoded, *darker), Psnr(decoded, *reference) - 6.0);
   EXPECT_GT(cv::mean(decoded)[1], 20.0);  // lit, not a black frame
   EXPECT_EQ(b.server->shots(), 1);
+}
+
+TEST(Gphoto2Camera, LiveViewFramesAreSmallViewsOfTheSceneAndFireNoShot) {
+  Bench b = StartBench();
+  ASSERT_TRUE(b.camera->Open().ok());
+  CaptureSettings s;
+  s.exposure_s = 0.02;
+  s.gain_db = 6.0;
+  ASSERT_TRUE(b.camera->Configure(s).ok());
+  const WorldExposure exposure = ExposeWorldNow(*b.world);
+  auto frame = b.camera->CapturePreview(kFrameWait);
+  ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_EQ(frame->format, PixelFormat::kEncoded);
+  const cv::Mat decoded = cv::imdecode(frame->data, cv::IMREAD_COLOR);
+  ASSERT_EQ(decoded.cols, 640);
+  ASSERT_EQ(decoded.rows, 853);
+  auto reference = RenderWorldExposure(*b.world, 0, exposure, 0.02, 20 * std::log10(2.0), 0);
+  ASSERT_TRUE(reference.ok());
+  cv::Mat small;
+  cv::resize(*reference, small, decoded.size(), 0, 0, cv::INTER_AREA);
+  EXPECT_GT(Psnr(decoded, small), 30.0);
+  EXPECT_EQ(b.server->shots(), 0) << "live view fires no shutter and stores no file";
+  // Armed for shots, the body takes no live-view request.
+  ASSERT_TRUE(b.camera->Arm().ok());
+  EXPECT_EQ(b.camera->CapturePreview(kFrameWait).status().code(), StatusCode::kFailedPrecondition);
 }
 
 TEST(Gphoto2Camera, SecondShotIsNumberedOnAndTheCardIsEmptiedAfterDownload) {

@@ -203,6 +203,15 @@ int TriggerCapture(Camera* camera, GPContext* context) {
   return Call(camera, context, {"TRIGGER"}, &reply);
 }
 
+// A live-view frame: a small JPEG of what the sensor sees, no shot taken.
+int CapturePreview(Camera* camera, CameraFile* file, GPContext* context) {
+  proto::Message reply;
+  const int r = Call(camera, context, {"PREVIEW"}, &reply);
+  if (r < GP_OK) return r;
+  gp_file_set_mime_type(file, GP_MIME_JPEG);
+  return gp_file_append(file, reply.payload.data(), reply.payload.size());
+}
+
 int WaitForEvent(Camera* camera, int timeout_ms, CameraEventType* type, void** data,
                  GPContext* context) {
   *type = GP_EVENT_TIMEOUT;
@@ -384,6 +393,7 @@ int camera_init(Camera* camera, GPContext* context) {
   camera->functions->exit = Exit;
   camera->functions->capture = Capture;
   camera->functions->trigger_capture = TriggerCapture;
+  camera->functions->capture_preview = CapturePreview;
   camera->functions->wait_for_event = WaitForEvent;
   camera->functions->get_config = GetConfig;
   camera->functions->set_config = SetConfig;

@@ -1,0 +1,432 @@
+// The console's API end to end on the simulated rig (tests/data/batch_rig.yaml:
+// 16 views), through HTTP as a lab script or the page would use it.
+#include "console/console_server.h"
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <thread>
+
+#include "rig/capture_test_util.h"
+#include "rig/sim_rig.h"
+
+namespace hairrig {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+constexpr const char* kRig = "tests/data/batch_rig.yaml";
+
+struct SseEvent {
+  std::string name;
+  nlohmann::json data;
+};
+
+// Listens to GET /api/events on its own thread, as a page does.
+class EventStream {
+ public:
+  explicit EventStream(int port, const std::string& query = "") : client_("127.0.0.1", port) {
+    client_.set_read_timeout(60, 0);
+    thread_ = std::thread([this, query] {
+      std::string buffer;
+      client_.Get("/api/events" + query, [&](const char* data, size_t size) {
+        buffer.append(data, size);
+        for (size_t end; (end = buffer.find("\n\n")) != std::string::npos;) {
+          Parse(buffer.substr(0, end));
+          buffer.erase(0, end + 2);
+        }
+        return !stop_.load();
+      });
+    });
+  }
+  ~EventStream() {
+    stop_ = true;
+    client_.stop();
+    thread_.join();
+  }
+
+  // Waits until `done` holds over the events so far; false after `timeout`.
+  bool WaitFor(const std::function<bool(const std::vector<SseEvent>&)>& done,
+               std::chrono::seconds timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return changed_.wait_for(lock, timeout, [&] { return done(events_); });
+  }
+  std::vector<SseEvent> Events() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return events_;
+  }
+
+ private:
+  void Parse(const std::string& block) {
+    SseEvent e;
+    std::istringstream lines(block);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.rfind("event: ", 0) == 0) e.name = line.substr(7);
+      if (line.rfind("data: ", 0) == 0) e.data = nlohmann::json::parse(line.substr(6));
+    }
+    if (e.name.empty()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    events_.push_back(std::move(e));
+    changed_.notify_all();
+  }
+
+  httplib::Client client_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<SseEvent> events_;
+};
+
+bool Has(const std::vector<SseEvent>& events, const std::string& name,
+         const std::function<bool(const nlohmann::json&)>& match = nullptr) {
+  for (const SseEvent& e : events) {
+    if (e.name == name && (!match || match(e.data))) return true;
+  }
+  return false;
+}
+
+class ConsoleServerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { RegisterSimRig(); }
+
+  void StartServer(const std::string& listen = "127.0.0.1:0", const std::string& token = "",
+                   const std::string& config = kRig) {
+    ConsoleOptions options;
+    options.rig.config_path = config;
+    options.rig.captures_dir = captures_ = testing::FreshDir("console_captures");
+    options.listen = listen;
+    options.token = token;
+    server_ = std::make_unique<ConsoleServer>(options);
+    const Status started = server_->Start();
+    ASSERT_TRUE(started.ok()) << started.ToString();
+    client_ = std::make_unique<httplib::Client>("127.0.0.1", server_->port());
+    client_->set_read_timeout(60, 0);
+  }
+  void TearDown() override {
+    client_.reset();
+    if (server_) server_->Stop();
+  }
+
+  nlohmann::json GetJson(const std::string& path, int expected = 200) {
+    auto res = client_->Get(path.c_str());
+    EXPECT_TRUE(res) << path;
+    if (!res) return nullptr;
+    EXPECT_EQ(res->status, expected) << path << ": " << res->body;
+    return nlohmann::json::parse(res->body, nullptr, false);
+  }
+  // POST with a JSON body and, when given, the lease; returns (status, body).
+  std::pair<int, nlohmann::json> Post(const std::string& path, const nlohmann::json& body,
+                                      const std::string& lease = "") {
+    httplib::Headers headers;
+    if (!lease.empty()) headers.emplace("X-Hairrig-Lease", lease);
+    auto res = client_->Post(path.c_str(), headers, body.dump(), "application/json");
+    if (!res) return {0, nullptr};
+    return {res->status, nlohmann::json::parse(res->body, nullptr, false)};
+  }
+  std::string Claim(const std::string& client) {
+    const auto [status, body] = Post("/api/control", {{"client", client}});
+    EXPECT_EQ(status, 200) << body.dump();
+    return status == 200 ? body["lease"].get<std::string>() : "";
+  }
+
+  std::string captures_;
+  std::unique_ptr<ConsoleServer> server_;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+TEST_F(ConsoleServerTest, ServesThePageTheStateTheDevicesAndThePlan) {
+  StartServer();
+  auto page = client_->Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("app.js"), std::string::npos);
+  EXPECT_EQ(client_->Get("/app.js")->status, 200);
+  EXPECT_EQ(client_->Get("/style.css")->status, 200);
+  EXPECT_EQ(client_->Get("/nothing.js")->status, 404);
+
+  const nlohmann::json state = GetJson("/api/state");
+  EXPECT_EQ(state["rig"]["name"], "batch test rig");
+  EXPECT_EQ(state["busy"], "idle");
+  EXPECT_FALSE(state["estop"]["active"].get<bool>());
+  EXPECT_TRUE(state["control"]["holder"].is_null());
+  EXPECT_TRUE(state["turntable"]["angle_deg"].is_number());
+
+  const nlohmann::json devices = GetJson("/api/devices")["devices"];
+  ASSERT_EQ(devices.size(), 7u) << devices.dump();
+  for (const nlohmann::json& d : devices) EXPECT_EQ(d["health"], "ok") << d.dump();
+
+  const nlohmann::json plan = GetJson("/api/plan");
+  EXPECT_EQ(plan["views"], 16);
+  EXPECT_EQ(plan["stops"], 8);
+  EXPECT_GT(plan["expected_s"].get<double>(), 0);
+  EXPECT_EQ(GetJson("/api/cameras")["cameras"].size(), 2u);
+}
+
+cv::Mat PreviewImage(httplib::Client& client, const std::string& camera) {
+  auto jpeg = client.Get(("/api/cameras/" + camera + "/preview.jpg").c_str());
+  if (!jpeg || jpeg->status != 200) return {};
+  EXPECT_EQ(jpeg->get_header_value("Content-Type"), "image/jpeg");
+  return cv::imdecode(std::vector<uint8_t>(jpeg->body.begin(), jpeg->body.end()), cv::IMREAD_COLOR);
+}
+
+TEST_F(ConsoleServerTest, LiveViewShowsEachCameraAsTheLightsChange) {
+  StartServer();
+  EventStream events(server_->port());
+  // The lights are off between captures: the live view is dark.
+  auto frames_after = [&](const std::string& camera, int seq) {
+    return events.WaitFor(
+        [&](const std::vector<SseEvent>& e) {
+          return Has(e, "preview", [&](const nlohmann::json& d) {
+            return d["camera"] == camera && d["seq"].get<int>() >= seq;
+          });
+        },
+        120s);
+  };
+  std::map<std::string, int> seq;
+  for (const std::string camera : {"upper", "lower"}) {
+    ASSERT_TRUE(frames_after(camera, 3)) << camera << " sent fewer than 3 live-view frames";
+    const cv::Mat dark = PreviewImage(*client_, camera);
+    ASSERT_FALSE(dark.empty());
+    EXPECT_LE(dark.cols, 480);
+    EXPECT_LT(cv::mean(dark)[1], 5.0) << "lights off";
+    seq[camera] = GetJson("/api/cameras")["cameras"][camera == "upper" ? 0 : 1]["live"]["seq"];
+  }
+  const std::string lease = Claim("operator");
+  ASSERT_EQ(Post("/api/lights", {{"top", true}, {"bottom", true}}, lease).first, 200);
+  for (const std::string camera : {"upper", "lower"}) {
+    ASSERT_TRUE(frames_after(camera, seq[camera] + 3));
+    EXPECT_GT(cv::mean(PreviewImage(*client_, camera))[1], 5.0) << camera << ": lights on";
+  }
+  const nlohmann::json cameras = GetJson("/api/cameras")["cameras"];
+  EXPECT_EQ(cameras[0]["live"]["histogram"].size(), 64u);
+  EXPECT_EQ(client_->Get("/api/cameras/side/preview.jpg")->status, 404);
+}
+
+TEST_F(ConsoleServerTest, OneClientControlsTheOthersReadAndMayTakeOver) {
+  StartServer();
+  const std::string a = Claim("operator-a");
+  auto [status, body] = Post("/api/control", {{"client", "operator-b"}});
+  EXPECT_EQ(status, 409);
+  EXPECT_EQ(body["holder"], "operator-a");
+  std::tie(status, body) = Post("/api/lights", {{"top", true}});
+  EXPECT_EQ(status, 403);
+  EXPECT_EQ(body["error"], "read-only: operator-a holds control");
+  std::tie(status, body) = Post("/api/lights", {{"top", true}}, a);
+  EXPECT_EQ(status, 200) << body.dump();
+  EXPECT_TRUE(GetJson("/api/state")["lights"]["top"].get<bool>());
+  EXPECT_EQ(GetJson("/api/state")["control"]["holder"], "operator-a");
+
+  std::tie(status, body) = Post("/api/turntable/jog", {{"degrees", 15}}, a);
+  ASSERT_EQ(status, 200) << body.dump();
+  EXPECT_NEAR(body["angle_deg"].get<double>(), 15, 0.5);
+
+  std::tie(status, body) = Post("/api/control", {{"client", "operator-b"}, {"take", true}});
+  ASSERT_EQ(status, 200);
+  const std::string b = body["lease"];
+  EXPECT_EQ(Post("/api/lights", {{"top", false}}, a).first, 403) << "the taken lease is dead";
+  EXPECT_EQ(Post("/api/control/heartbeat", nlohmann::json::object(), b).first, 200);
+  httplib::Headers headers{{"X-Hairrig-Lease", b}};
+  auto released = client_->Delete("/api/control", headers, "{}", "application/json");
+  ASSERT_TRUE(released);
+  EXPECT_EQ(released->status, 200);
+  EXPECT_TRUE(GetJson("/api/state")["control"]["holder"].is_null());
+}
+
+TEST_F(ConsoleServerTest, BadInputGetsAClearErrorAndChangesNothing) {
+  StartServer();
+  const std::string lease = Claim("script");
+  EXPECT_EQ(GetJson("/api/captures/absent", 404)["error"], "no capture 'absent' in " + captures_);
+  for (const std::string path :
+       {"/api/captures/..", "/api/captures/.hidden", "/api/captures/a%20b",
+        "/api/captures/x/files/rig.yaml", "/api/captures/x/files/../../etc/passwd"}) {
+    auto res = client_->Get(path.c_str());
+    ASSERT_TRUE(res) << path;
+    EXPECT_TRUE(res->status == 400 || res->status == 404) << path << " " << res->status;
+    EXPECT_EQ(res->body.find("root:"), std::string::npos) << path;
+  }
+  httplib::Headers headers{{"X-Hairrig-Lease", lease}};
+  auto malformed = client_->Post("/api/captures", headers, "{\"subject\": ", "application/json");
+  ASSERT_TRUE(malformed);
+  EXPECT_EQ(malformed->status, 400);
+  EXPECT_NE(malformed->body.find("not valid JSON"), std::string::npos) << malformed->body;
+  auto not_json = client_->Post("/api/estop", "x", "text/plain");
+  ASSERT_TRUE(not_json);
+  EXPECT_EQ(not_json->status, 415) << "a cross-site form cannot press buttons";
+  EXPECT_FALSE(GetJson("/api/state")["estop"]["active"].get<bool>());
+
+  auto [status, body] = Post("/api/captures", nlohmann::json::array(), lease);
+  EXPECT_EQ(status, 400);
+  std::tie(status, body) = Post("/api/captures", {{"subject", "../escape"}}, lease);
+  EXPECT_EQ(status, 400) << body.dump();
+  std::tie(status, body) = Post("/api/captures", {{"subject", 12}}, lease);
+  EXPECT_EQ(status, 400);
+  EXPECT_NE(body["error"].get<std::string>().find("subject"), std::string::npos);
+  std::tie(status, body) = Post("/api/turntable/jog", {{"degrees", 1e9}}, lease);
+  EXPECT_EQ(status, 400);
+  std::tie(status, body) = Post("/api/cameras/side/settings", {{"exposure_s", 0.01}}, lease);
+  EXPECT_EQ(status, 404);
+  std::tie(status, body) = Post("/api/cameras/upper/settings", {{"exposure_s", -1}}, lease);
+  EXPECT_EQ(status, 400);
+  std::tie(status, body) = Post("/api/lights", {{"side", true}}, lease);
+  EXPECT_EQ(status, 404);
+  std::tie(status, body) = Post("/api/capture/stop", nlohmann::json::object(), lease);
+  EXPECT_EQ(status, 409) << "no capture is running";
+  std::tie(status, body) = Post("/api/captures/absent/resume", nlohmann::json::object(), lease);
+  EXPECT_EQ(status, 404);
+  EXPECT_TRUE(fs::is_empty(captures_)) << "nothing was written";
+
+  httplib::Client foreign("127.0.0.1", server_->port());
+  foreign.set_default_headers({{"Host", "attacker.example"}});
+  auto rebound = foreign.Get("/api/state");
+  ASSERT_TRUE(rebound);
+  EXPECT_EQ(rebound->status, 403) << "a loopback console answers only to a loopback Host";
+}
+
+TEST_F(ConsoleServerTest, BeyondLoopbackEveryApiRequestNeedsTheToken) {
+  ConsoleOptions options;
+  options.rig.captures_dir = testing::FreshDir("console_token");
+  options.listen = "0.0.0.0:0";
+  EXPECT_EQ(options.Validate().code(), StatusCode::kInvalidArgument);
+  options.token = "short";
+  EXPECT_EQ(options.Validate().code(), StatusCode::kInvalidArgument);
+
+  const std::string token = "0123456789abcdef-token";
+  StartServer("0.0.0.0:0", token);
+  EXPECT_EQ(client_->Get("/api/state")->status, 401);
+  EXPECT_EQ(client_->Get("/api/state?token=wrong-token-wrong-token")->status, 401);
+  EXPECT_EQ(client_->Get(("/api/state?token=" + token).c_str())->status, 200);
+  EXPECT_EQ(client_->Get("/api/state", {{"Authorization", "Bearer " + token}})->status, 200);
+  EXPECT_EQ(client_->Post("/api/estop", "{}", "application/json")->status, 401);
+  EXPECT_EQ(client_->Get("/")->status, 200) << "the page itself holds no data";
+}
+
+TEST_F(ConsoleServerTest, ACaptureShowsProgressThumbnailsAndItsCalibration) {
+  StartServer();
+  EventStream events(server_->port());
+  const std::string lease = Claim("operator");
+  auto [status, body] = Post("/api/captures", {{"subject", "wig A"}, {"calibrate", true}}, lease);
+  ASSERT_EQ(status, 202) << body.dump();
+  const std::string id = body["id"];
+  EXPECT_EQ(id.rfind("wig_A-", 0), 0u) << id;
+  EXPECT_EQ(Post("/api/captures", {{"subject", "wig B"}}, lease).first, 409)
+      << "one capture at a time";
+
+  ASSERT_TRUE(
+      events.WaitFor([](const std::vector<SseEvent>& e) { return Has(e, "processed"); }, 600s));
+  const std::vector<SseEvent> seen = events.Events();
+  ASSERT_TRUE(Has(seen, "capture_end", [](const nlohmann::json& d) {
+    return d["status"] == "complete" && d["views_done"] == 16;
+  }));
+  ASSERT_TRUE(Has(seen, "progress", [](const nlohmann::json& d) { return d["views_done"] == 16; }));
+  int views = 0;
+  for (const SseEvent& e : seen) {
+    if (e.name != "view") continue;
+    ++views;
+    auto thumb = client_->Get(e.data["thumb"].get<std::string>().c_str());
+    ASSERT_TRUE(thumb);
+    EXPECT_EQ(thumb->status, 200);
+    EXPECT_EQ(thumb->get_header_value("Content-Type"), "image/jpeg");
+  }
+  EXPECT_EQ(views, 16);
+  ASSERT_TRUE(Has(seen, "processed", [](const nlohmann::json& d) {
+    return d["calibration"].is_object() && d["calibration"]["verdict"] == "good";
+  })) << "the calibration verdict arrives with the capture";
+
+  const nlohmann::json archive = GetJson("/api/captures")["captures"];
+  ASSERT_EQ(archive.size(), 1u);
+  EXPECT_EQ(archive[0]["status"], "complete");
+  EXPECT_EQ(archive[0]["calibration"]["verdict"], "good");
+  const nlohmann::json details = GetJson("/api/captures/" + id);
+  EXPECT_EQ(details["calibration"]["views"].size(), 16u);
+  EXPECT_EQ(details["calibration"]["residuals"].size(), 16u);
+  ASSERT_TRUE(details["files"]["contact_sheet"].is_string());
+  EXPECT_EQ(client_->Get(details["files"]["contact_sheet"].get<std::string>().c_str())->status,
+            200);
+  EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
+  EXPECT_EQ(GetJson("/api/state")["busy"], "idle");
+}
+
+// The test rig with its device timings at `time_scale` (tests/data/batch_rig.yaml
+// runs at 0.01: its whole sweep takes a fraction of a second).
+std::string RigAtTimeScale(const std::string& dir, double time_scale) {
+  std::ifstream in(kRig);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string data = fs::absolute("tests/data").string() + "/";
+  const std::string etc = fs::absolute("etc").string() + "/";
+  for (auto [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"time_scale: 0.01", "time_scale: " + std::to_string(time_scale)},
+           {"scene: batch_scene.yaml", "scene: " + data + "batch_scene.yaml"},
+           {"../../etc/", etc}}) {
+    for (size_t at = yaml.find(from); at != std::string::npos; at = yaml.find(from, at + 1))
+      yaml.replace(at, from.size(), to);
+  }
+  const std::string path = dir + "/rig.yaml";
+  std::ofstream(path) << yaml;
+  return path;
+}
+
+TEST_F(ConsoleServerTest, TheEStopStopsACaptureFromAnyClientAndResumeCompletesIt) {
+  StartServer("127.0.0.1:0", "", RigAtTimeScale(testing::FreshDir("console_slow_rig"), 0.5));
+  std::unique_ptr<EventStream> events = std::make_unique<EventStream>(server_->port());
+  const std::string lease = Claim("operator");
+  auto [status, body] = Post("/api/captures", {{"subject", "wig C"}, {"calibrate", false}}, lease);
+  ASSERT_EQ(status, 202) << body.dump();
+  const std::string id = body["id"];
+  // Mid-sweep: the turntable on its way to the third of eight stops.
+  ASSERT_TRUE(events->WaitFor(
+      [](const std::vector<SseEvent>& e) {
+        return Has(e, "progress", [](const nlohmann::json& d) { return d["stop"] >= 2; });
+      },
+      300s));
+  // Another client, without control, presses the e-stop.
+  std::tie(status, body) = Post("/api/estop", {{"client", "visitor"}});
+  ASSERT_EQ(status, 200) << body.dump();
+  EXPECT_TRUE(body["estop"]["active"].get<bool>());
+  ASSERT_TRUE(events->WaitFor(
+      [](const std::vector<SseEvent>& e) {
+        return Has(e, "capture_end",
+                   [](const nlohmann::json& d) { return d["status"] == "stopped"; });
+      },
+      120s));
+  const std::vector<nlohmann::json> journal = testing::ReadJournal(captures_ + "/" + id);
+  bool safety_stop = false;
+  for (const nlohmann::json& r : journal) {
+    if (r["event"] != "safety_stop") continue;
+    safety_stop = true;
+    EXPECT_EQ(r["input"], "software");
+    EXPECT_FALSE(r["turntable_moving"].get<bool>());
+    EXPECT_TRUE(r["lights_on"].empty());
+  }
+  EXPECT_TRUE(safety_stop);
+  const size_t stored = testing::VerifiedFramesOnDisk(captures_ + "/" + id).size();
+  EXPECT_LT(stored, 16u);
+  EXPECT_EQ(Post("/api/captures", {{"subject", "wig D"}}, lease).first, 409)
+      << "no capture while the e-stop is active";
+  EXPECT_EQ(Post("/api/estop/release", nlohmann::json::object()).first, 403);
+
+  // The page that watched goes away; the resumed capture does not care.
+  events.reset();
+  EXPECT_EQ(Post("/api/estop/release", nlohmann::json::object(), lease).first, 200);
+  std::tie(status, body) = Post("/api/captures/" + id + "/resume", {{"calibrate", false}}, lease);
+  ASSERT_EQ(status, 202) << body.dump();
+  for (int i = 0; i < 600 && GetJson("/api/state")["busy"] != "idle"; ++i)
+    std::this_thread::sleep_for(500ms);
+  const nlohmann::json entry = GetJson("/api/captures/" + id);
+  EXPECT_EQ(entry["status"], "complete");
+  EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
+}
+
+}  // namespace
+}  // namespace hairrig

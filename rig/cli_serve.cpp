@@ -1,0 +1,58 @@
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+
+#include "console/console_server.h"
+#include "rig/cli.h"
+
+namespace hairrig {
+namespace {
+
+std::atomic<bool> g_stop_serving{false};
+
+void OnStopSignal(int) { g_stop_serving = true; }
+
+}  // namespace
+
+void AddConsoleCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
+  auto* cmd = app.add_subcommand(
+      "serve", "Run the operator console: the rig's devices, a web page and a JSON API");
+  auto options = std::make_shared<ConsoleOptions>();
+  options->rig.captures_dir = "captures";
+  cmd->add_option("--config", options->rig.config_path,
+                  "rig config (default: etc/sim-rig.yaml, the simulated rig)");
+  cmd->add_option("--listen", options->listen,
+                  "host:port to listen on; beyond loopback a token is required")
+      ->capture_default_str();
+  cmd->add_option("--captures", options->rig.captures_dir,
+                  "folder of captures: new captures go here, the archive lists it")
+      ->capture_default_str();
+  cmd->add_option("--token", options->token,
+                  "token every API request must carry (default: $HAIRRIG_CONSOLE_TOKEN)");
+  cmd->add_option("--live-fps", options->rig.live.fps, "live-view frames per second per camera")
+      ->capture_default_str();
+  cmd->add_option("--threads", options->rig.threads,
+                  "threads for tag detection, calibration and reconstruction after a capture")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_flag("--json", common.json, "print the summary as one JSON object when it stops");
+  cmd->callback([options, &dispatch] {
+    if (options->token.empty()) {
+      if (const char* env = std::getenv("HAIRRIG_CONSOLE_TOKEN")) options->token = env;
+    }
+    const Status valid = options->Validate();
+    if (!valid.ok()) throw CLI::ValidationError("serve", valid.message());
+    std::signal(SIGINT, OnStopSignal);
+    std::signal(SIGTERM, OnStopSignal);
+    DispatchSummary(dispatch, [options] {
+      return RunConsole(*options, g_stop_serving, [](const std::string& url) {
+        std::fprintf(stderr, "hairrig serve: the console is at %s (Ctrl-C stops it)\n",
+                     url.c_str());
+      });
+    });
+  });
+}
+
+}  // namespace hairrig
