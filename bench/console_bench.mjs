@@ -2,9 +2,14 @@
 // live view's rate, then a capture with the page open; prints JSON with the
 // capture's wall time, each view's delay from frame_stored to its thumbnail
 // loaded in the page, and the live frames per second per camera.
-import { chromium } from 'playwright-core';
 import fs from 'node:fs';
+import { createRequire } from 'node:module';
 import path from 'node:path';
+
+// playwright-core as tests/console_browser installs it (scripts/install-deps).
+const here = path.dirname(new URL(import.meta.url).pathname);
+const require = createRequire(path.join(here, '../tests/console_browser/package.json'));
+const { chromium } = require('playwright-core');
 
 const [url, captures] = process.argv.slice(2);
 const browser = await chromium.launch({

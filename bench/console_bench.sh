@@ -13,22 +13,14 @@ runs="${1:-3}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 hairrig="$root/build/rig/hairrig"
 out="$root/out/console-bench"
+source "$root/tests/support/start_console.sh"
 rm -rf "$out"
 mkdir -p "$out"
 for i in $(seq 1 "$runs"); do
   "$hairrig" capture --out "$out/cli-$i" --json > "$out/cli-$i.json" 2>/dev/null || true
-  log="$out/serve-$i.log"
-  "$hairrig" serve --listen 127.0.0.1:0 --captures "$out/console-$i" 2>"$log" &
-  server=$!
-  url=""
-  for _ in $(seq 1 600); do
-    url=$(sed -n 's/.*the console is at \(http[^ ]*\).*/\1/p' "$log" | head -n 1)
-    [ -n "$url" ] && break
-    sleep 0.1
-  done
-  NODE_PATH="$root/tests/console_browser/node_modules" \
-    node "$root/bench/console_bench.mjs" "$url" "$out/console-$i" > "$out/console-$i.json"
-  kill "$server"; wait "$server" || true
+  start_console "$out/serve-$i.log" "$hairrig" --captures "$out/console-$i"
+  node "$root/bench/console_bench.mjs" "$console_url" "$out/console-$i" > "$out/console-$i.json"
+  stop_console
 done
 python3 - "$out" "$runs" <<'PY'
 import json, statistics, sys

@@ -346,6 +346,40 @@ std::string UtcStamp() {
 
 }  // namespace
 
+// A capture's status as the page shows it, before its first progress.
+nlohmann::json ConsoleRig::NewCaptureStatus(const std::string& id, const std::string& subject,
+                                            int views_done, int views_total,
+                                            const std::string& step) const {
+  return {{"id", id},
+          {"subject", subject},
+          {"status", "running"},
+          {"views_done", views_done},
+          {"views_total", views_total},
+          {"stop", 0},
+          {"stops_total", plan_.stops.size()},
+          {"step", step},
+          {"eta_s", plan_lower_bound_s_},
+          {"faults", 0},
+          {"message", ""},
+          {"calibration", nullptr}};
+}
+
+Status ConsoleRig::ClaimForCapture(const std::string& what, nlohmann::json status) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  if (busy_ != Busy::kIdle)
+    return FailedPrecondition(what + ": the rig is " + BusyName(busy_) + "; wait for it");
+  if (estop_active_)
+    return FailedPrecondition(what + ": the e-stop is active (" + estop_reason_ +
+                              "); release it first");
+  busy_ = Busy::kCapturing;
+  control_ = std::make_shared<CaptureControl>();
+  capture_ = std::move(status);
+  thumbnails_.clear();
+  last_progress_views_ = -1;
+  last_faults_ = 0;
+  return Status::Ok();
+}
+
 Result<std::string> ConsoleRig::StartCapture(const std::string& subject, bool calibrate,
                                              bool reconstruct) {
   if (reconstruct && !calibrate) return InvalidArgument("reconstruct needs calibrate");
@@ -353,32 +387,10 @@ Result<std::string> ConsoleRig::StartCapture(const std::string& subject, bool ca
   std::string id = folder.substr(0, 100) + "-" + UtcStamp();
   for (int n = 2; fs::exists(fs::path(options_.captures_dir) / id); ++n)
     id = folder.substr(0, 100) + "-" + UtcStamp() + "-" + std::to_string(n);
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    if (busy_ != Busy::kIdle)
-      return FailedPrecondition(std::string("a capture cannot start: the rig is ") +
-                                BusyName(busy_));
-    if (estop_active_)
-      return FailedPrecondition("a capture cannot start: the e-stop is active (" + estop_reason_ +
-                                "); release it first");
-    busy_ = Busy::kCapturing;
-    control_ = std::make_shared<CaptureControl>();
-    capture_ = {{"id", id},
-                {"subject", subject},
-                {"status", "running"},
-                {"views_done", 0},
-                {"views_total", plan_.views.size()},
-                {"stop", 0},
-                {"stops_total", plan_.stops.size()},
-                {"step", "opening the devices"},
-                {"eta_s", plan_lower_bound_s_},
-                {"faults", 0},
-                {"message", ""},
-                {"calibration", nullptr}};
-    thumbnails_.clear();
-    last_progress_views_ = -1;
-    last_faults_ = 0;
-  }
+  HR_RETURN_IF_ERROR(
+      ClaimForCapture("a capture cannot start",
+                      NewCaptureStatus(id, subject, 0, static_cast<int>(plan_.views.size()),
+                                       "opening the devices")));
   RunOnWorker([this, id, subject, calibrate, reconstruct] {
     RunCaptureJob(id, subject, false, calibrate, reconstruct);
   });
@@ -391,31 +403,9 @@ Result<std::string> ConsoleRig::ResumeCapture(const std::string& id, bool calibr
   HR_ASSIGN_OR_RETURN(const ArchiveEntry entry, archive_.Entry(id));
   if (entry.status == "complete")
     return FailedPrecondition("capture '" + id + "' is complete: nothing to resume");
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    if (busy_ != Busy::kIdle)
-      return FailedPrecondition(std::string("cannot resume: the rig is ") + BusyName(busy_));
-    if (estop_active_)
-      return FailedPrecondition("cannot resume: the e-stop is active (" + estop_reason_ +
-                                "); release it first");
-    busy_ = Busy::kCapturing;
-    control_ = std::make_shared<CaptureControl>();
-    capture_ = {{"id", id},
-                {"subject", entry.subject},
-                {"status", "running"},
-                {"views_done", entry.views_completed},
-                {"views_total", entry.views_planned},
-                {"stop", 0},
-                {"stops_total", plan_.stops.size()},
-                {"step", "resuming"},
-                {"eta_s", 0},
-                {"faults", 0},
-                {"message", ""},
-                {"calibration", nullptr}};
-    thumbnails_.clear();
-    last_progress_views_ = -1;
-    last_faults_ = 0;
-  }
+  HR_RETURN_IF_ERROR(ClaimForCapture(
+      "cannot resume",
+      NewCaptureStatus(id, entry.subject, entry.views_completed, entry.views_planned, "resuming")));
   RunOnWorker(
       [this, id, calibrate, reconstruct] { RunCaptureJob(id, "", true, calibrate, reconstruct); });
   return id;

@@ -106,6 +106,11 @@ class ConsoleRig {
   // when `moves` (motion or light) and the e-stop is active.
   Status CheckDevicesFree(const char* what, bool moves) const;
   void ReturnDevicesToConsole();
+  nlohmann::json NewCaptureStatus(const std::string& id, const std::string& subject, int views_done,
+                                  int views_total, const std::string& step) const;
+  // Makes the rig busy with a capture whose status is `status`; FailedPrecondition
+  // starting with `what` while busy or in e-stop.
+  Status ClaimForCapture(const std::string& what, nlohmann::json status);
   void PublishState();
   void RunOnWorker(std::function<void()> job);
   void StartLiveView();

@@ -95,6 +95,27 @@ bool Has(const std::vector<SseEvent>& events, const std::string& name,
   return false;
 }
 
+// The test rig with its device timings at `time_scale` (tests/data/batch_rig.yaml
+// runs at 0.01: its whole sweep takes a fraction of a second).
+std::string RigAtTimeScale(const std::string& dir, double time_scale) {
+  std::ifstream in(kRig);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string data = fs::absolute("tests/data").string() + "/";
+  const std::string etc = fs::absolute("etc").string() + "/";
+  for (auto [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"time_scale: 0.01", "time_scale: " + std::to_string(time_scale)},
+           {"scene: batch_scene.yaml", "scene: " + data + "batch_scene.yaml"},
+           {"../../etc/", etc}}) {
+    for (size_t at = yaml.find(from); at != std::string::npos; at = yaml.find(from, at + 1))
+      yaml.replace(at, from.size(), to);
+  }
+  const std::string path = dir + "/rig.yaml";
+  std::ofstream(path) << yaml;
+  return path;
+}
+
 class ConsoleServerTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { RegisterSimRig(); }
@@ -242,6 +263,29 @@ TEST_F(ConsoleServerTest, OneClientControlsTheOthersReadAndMayTakeOver) {
   EXPECT_TRUE(GetJson("/api/state")["control"]["holder"].is_null());
 }
 
+TEST_F(ConsoleServerTest, TheControllerReconnectsADeviceSetsExposureAndHomesTheTable) {
+  StartServer();
+  const std::string lease = Claim("technician");
+  auto [status, body] = Post("/api/devices/lower/reconnect", nlohmann::json::object(), lease);
+  ASSERT_EQ(status, 200) << body.dump();
+  EXPECT_EQ(body["name"], "lower");
+  EXPECT_EQ(body["health"], "ok");
+  EXPECT_EQ(Post("/api/devices/side/reconnect", nlohmann::json::object(), lease).first, 404);
+
+  std::tie(status, body) =
+      Post("/api/cameras/upper/settings", {{"exposure_s", 0.01}, {"gain_db", 3}}, lease);
+  ASSERT_EQ(status, 200) << body.dump();
+  EXPECT_DOUBLE_EQ(body["exposure_s"].get<double>(), 0.01);
+  EXPECT_DOUBLE_EQ(body["gain_db"].get<double>(), 3);
+  EXPECT_DOUBLE_EQ(GetJson("/api/cameras")["cameras"][0]["exposure_s"].get<double>(), 0.01);
+
+  std::tie(status, body) = Post("/api/turntable/jog", {{"degrees", -30}}, lease);
+  ASSERT_EQ(status, 200) << body.dump();
+  std::tie(status, body) = Post("/api/turntable/home", nlohmann::json::object(), lease);
+  ASSERT_EQ(status, 200) << body.dump();
+  EXPECT_NEAR(body["angle_deg"].get<double>(), 0, 0.5);
+}
+
 TEST_F(ConsoleServerTest, BadInputGetsAClearErrorAndChangesNothing) {
   StartServer();
   const std::string lease = Claim("script");
@@ -354,27 +398,46 @@ TEST_F(ConsoleServerTest, ACaptureShowsProgressThumbnailsAndItsCalibration) {
             200);
   EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
   EXPECT_EQ(GetJson("/api/state")["busy"], "idle");
+
+  // The archive's replay runs the recording through the replay backend.
+  std::tie(status, body) = Post("/api/captures/" + id + "/replay", nlohmann::json::object(), lease);
+  ASSERT_EQ(status, 202) << body.dump();
+  EXPECT_EQ(body["id"], id + "-replay");
+  ASSERT_TRUE(events.WaitFor(
+      [&](const std::vector<SseEvent>& e) {
+        return Has(e, "capture_end", [&](const nlohmann::json& d) {
+          return d["id"] == id + "-replay" && d["status"] == "complete";
+        });
+      },
+      300s));
+  EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id + "-replay").size(), 16u);
+  EXPECT_EQ(Post("/api/captures/" + id + "/replay", nlohmann::json::object(), lease).first, 409)
+      << "the replay's folder exists";
 }
 
-// The test rig with its device timings at `time_scale` (tests/data/batch_rig.yaml
-// runs at 0.01: its whole sweep takes a fraction of a second).
-std::string RigAtTimeScale(const std::string& dir, double time_scale) {
-  std::ifstream in(kRig);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const std::string data = fs::absolute("tests/data").string() + "/";
-  const std::string etc = fs::absolute("etc").string() + "/";
-  for (auto [from, to] : std::vector<std::pair<std::string, std::string>>{
-           {"time_scale: 0.01", "time_scale: " + std::to_string(time_scale)},
-           {"scene: batch_scene.yaml", "scene: " + data + "batch_scene.yaml"},
-           {"../../etc/", etc}}) {
-    for (size_t at = yaml.find(from); at != std::string::npos; at = yaml.find(from, at + 1))
-      yaml.replace(at, from.size(), to);
-  }
-  const std::string path = dir + "/rig.yaml";
-  std::ofstream(path) << yaml;
-  return path;
+TEST_F(ConsoleServerTest, StopEndsTheCaptureAfterTheCurrentStopResumably) {
+  StartServer("127.0.0.1:0", "", RigAtTimeScale(testing::FreshDir("console_stop_rig"), 0.5));
+  EventStream events(server_->port());
+  const std::string lease = Claim("operator");
+  auto [status, body] = Post("/api/captures", {{"subject", "wig E"}, {"calibrate", false}}, lease);
+  ASSERT_EQ(status, 202) << body.dump();
+  const std::string id = body["id"];
+  ASSERT_TRUE(events.WaitFor(
+      [](const std::vector<SseEvent>& e) {
+        return Has(e, "progress", [](const nlohmann::json& d) { return d["stop"] >= 1; });
+      },
+      300s));
+  std::tie(status, body) = Post("/api/capture/stop", nlohmann::json::object(), lease);
+  ASSERT_EQ(status, 200) << body.dump();
+  ASSERT_TRUE(events.WaitFor(
+      [](const std::vector<SseEvent>& e) {
+        return Has(e, "capture_end",
+                   [](const nlohmann::json& d) { return d["status"] == "stopped"; });
+      },
+      120s));
+  EXPECT_LT(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
+  EXPECT_FALSE(GetJson("/api/state")["estop"]["active"].get<bool>()) << "a stop is no e-stop";
+  EXPECT_EQ(GetJson("/api/captures/" + id)["status"], "stopped");
 }
 
 TEST_F(ConsoleServerTest, TheEStopStopsACaptureFromAnyClientAndResumeCompletesIt) {

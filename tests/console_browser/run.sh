@@ -21,17 +21,9 @@ fi
 rm -rf "$out"
 mkdir -p "$out/captures" "$out/screenshots"
 log="$out/serve.log"
-"$hairrig" serve --config "$here/rig.yaml" --listen 127.0.0.1:0 --captures "$out/captures" 2>"$log" &
-server=$!
-trap 'kill "$server" 2>/dev/null || true; wait "$server" 2>/dev/null || true' EXIT
-url=""
-for _ in $(seq 1 600); do
-  url=$(sed -n 's/.*the console is at \(http[^ ]*\).*/\1/p' "$log" | head -n 1)
-  [ -n "$url" ] && break
-  kill -0 "$server" 2>/dev/null || { echo "hairrig serve ended:"; cat "$log"; exit 1; }
-  sleep 0.1
-done
-[ -n "$url" ] || { echo "hairrig serve did not start within 60 s:"; cat "$log"; exit 1; }
+source "$here/../support/start_console.sh"
+start_console "$log" "$hairrig" --config "$here/rig.yaml" --captures "$out/captures"
+url="$console_url"
 echo "console at $url"
 status=0
 node "$here/console_browser.mjs" "$url" "$out/screenshots" || status=$?
