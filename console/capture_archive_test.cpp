@@ -113,6 +113,40 @@ TEST_F(CaptureArchiveTest, ThumbnailsAndDetailsComeFromTheManifest) {
   EXPECT_TRUE((*details)["calibration"].is_null());
   EXPECT_EQ((*details)["files"]["journal"], "/api/captures/older/files/journal.jsonl");
   EXPECT_TRUE((*details)["files"]["contact_sheet"].is_null());
+  EXPECT_TRUE((*details)["files"]["reconstruction"].empty());
+}
+
+TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
+  const fs::path dir = fs::path(root_) / "older";
+  WriteText(dir / "reconstruction/strands/preview.jpg", "jpeg");
+  WriteText(dir / "reconstruction/strands/strands.ply", "ply");  // data, not a picture
+  WriteText(dir / "simulation/head-shake/frame_0000.png", "png");
+  WriteText(dir / "calibration/report/verdict.json",
+            R"({"verdict": "good", "reasons": [], "views_to_check": []})");
+  WriteText(dir / "calibration/calibration.json",
+            R"({"rms_px": 0.1, "views": [{"frame": "frames/000_CAM.png", "solved": true,
+                "rms_px": 0.1}, {"frame": "frames/001_CAM.png", "solved": false}]})");
+  WriteText(dir / "calibration/report/residuals/000_CAM.jpg", "jpeg");
+  const CaptureArchive archive(root_);
+  const Result<nlohmann::json> details = archive.Details("older");
+  ASSERT_TRUE(details.ok()) << details.status().ToString();
+  const nlohmann::json& files = (*details)["files"];
+  EXPECT_EQ(
+      files["reconstruction"],
+      nlohmann::json::array({"/api/captures/older/files/reconstruction/strands/preview.jpg"}));
+  EXPECT_EQ(
+      files["simulation"],
+      nlohmann::json::array({"/api/captures/older/files/simulation/head-shake/frame_0000.png"}));
+  const nlohmann::json& calibration = (*details)["calibration"];
+  EXPECT_EQ(calibration["verdict"], "good");
+  ASSERT_EQ(calibration["views"].size(), 2u);
+  EXPECT_FALSE(calibration["views"][1]["solved"].get<bool>());
+  EXPECT_EQ(calibration["residuals"].size(), 1u);
+  EXPECT_TRUE(archive.Entry("older")->reconstructed);
+  EXPECT_EQ(archive.Entry("older")->verdict.value_or(""), "good");
+  EXPECT_TRUE(archive.FilePath("older", "reconstruction/strands/preview.jpg").ok());
+  EXPECT_EQ(archive.FilePath("older", "reconstruction/strands/strands.ply").status().code(),
+            StatusCode::kInvalidArgument);
 }
 
 TEST(ContentTypeOf, ByExtension) {

@@ -58,10 +58,16 @@ int HttpStatusOf(const Status& s) {
   }
 }
 
+// JSON text that never throws: bytes that are not UTF-8 (a name read from a
+// capture's files) become U+FFFD.
+std::string JsonText(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 void SendJson(Response& res, int status, const nlohmann::json& body) {
   res.status = status;
   res.set_header("Cache-Control", "no-store");
-  res.set_content(body.dump(), "application/json");
+  res.set_content(JsonText(body), "application/json");
 }
 
 void SendError(Response& res, const Status& s) {
@@ -94,7 +100,7 @@ std::string HostOfHeader(const std::string& host_header) {
 }
 
 std::string SseMessage(const ConsoleEvent& e) {
-  return "id: " + std::to_string(e.seq) + "\nevent: " + e.name + "\ndata: " + e.data.dump() +
+  return "id: " + std::to_string(e.seq) + "\nevent: " + e.name + "\ndata: " + JsonText(e.data) +
          "\n\n";
 }
 

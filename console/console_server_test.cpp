@@ -329,6 +329,13 @@ TEST_F(ConsoleServerTest, BadInputGetsAClearErrorAndChangesNothing) {
   EXPECT_EQ(status, 404);
   EXPECT_TRUE(fs::is_empty(captures_)) << "nothing was written";
 
+  // A capture folder whose manifest is not UTF-8 is listed as unreadable, not a failure.
+  fs::create_directories(captures_ + "/odd");
+  std::ofstream(captures_ + "/odd/manifest.json") << "{\"subject\": \"\xff\xfe\", \"status\": 1}";
+  const nlohmann::json listed = GetJson("/api/captures")["captures"];
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0]["status"], "unreadable");
+
   httplib::Client foreign("127.0.0.1", server_->port());
   foreign.set_default_headers({{"Host", "attacker.example"}});
   auto rebound = foreign.Get("/api/state");
