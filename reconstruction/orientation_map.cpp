@@ -173,7 +173,7 @@ Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat
   OrientationMap pass = FilterPass(input, bank, options.quadrature, options.threads);
   for (int p = 0; p < options.refinement_passes; ++p) {
     // The confidence in response units (high on the fibres, where the even kernel peaks).
-    const cv::Mat1f ridges = pass.confidence.mul(pass.response);
+    const cv::Mat1f ridges(cv::Mat(pass.confidence.mul(pass.response)));
     pass = FilterPass(ridges, bank, options.quadrature, options.threads);
   }
 

@@ -28,7 +28,7 @@ CarvingView PrepareView(const SilhouetteView& v) {
   c.rotation = v.cam_from_object.RotationMatrix();
   c.translation = v.cam_from_object.translation;
   c.focal_px = std::max(v.camera.fx_px, v.camera.fy_px);
-  const cv::Mat1b empty = v.silhouette == kSilhouetteEmpty;
+  const cv::Mat1b empty(cv::Mat(v.silhouette == kSilhouetteEmpty));
   cv::distanceTransform(empty, c.distance_to_subject_px, cv::DIST_L2, cv::DIST_MASK_PRECISE);
   return c;
 }

@@ -21,6 +21,13 @@ namespace hairrig {
 // Unit tangents closer than this are equal: the element between them is straight.
 constexpr double kStraightTangentGap = 1e-9;
 
+// [v]x: the matrix of the cross product, CrossMatrix(v) * w = v x w.
+inline Eigen::Matrix3d CrossMatrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
 struct HelixElement {
   Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d start_tangent = Eigen::Vector3d::UnitZ();  // unit

@@ -9,15 +9,6 @@
 
 namespace hairrig {
 
-namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-}  // namespace
-
 double HairMaterial::LinearDensity() const {
   return density_kg_m3 * kPi * semi_axis_1_m * semi_axis_2_m;
 }
@@ -61,13 +52,13 @@ double SuperHelix::length_m() const {
 
 Eigen::Matrix3d RotationFromVector(const Eigen::Vector3d& phi) {
   const double angle = phi.norm();
-  if (angle < 1e-12) return Eigen::Matrix3d::Identity() + Skew(phi);
+  if (angle < 1e-12) return Eigen::Matrix3d::Identity() + CrossMatrix(phi);
   return Eigen::AngleAxisd(angle, phi / angle).toRotationMatrix();
 }
 
 Eigen::Matrix3d RightJacobianSO3(const Eigen::Vector3d& phi) {
   const double t = phi.norm();
-  const Eigen::Matrix3d k = Skew(phi);
+  const Eigen::Matrix3d k = CrossMatrix(phi);
   double a;  // (1 - cos t) / t^2
   double b;  // (t - sin t) / t^3
   if (t < 1e-4) {

@@ -12,12 +12,6 @@ namespace hairrig {
 
 namespace {
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 // Gauss-Legendre nodes on [0, 1] and weights summing to 1.
 void GaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
   static const double kNodes[5][5] = {
@@ -162,7 +156,7 @@ void SuperHelixDynamics::Evaluate(const Eigen::VectorXd& q) {
     const ElementFrame& start = frames[ue];
     turn_[ue] = frames[ue + 1].frame * (length * RightJacobianSO3(length * omega));
     move_[ue] = start.frame * OffsetJacobian(omega, length, length) +
-                Skew(frames[ue + 1].start_m) * turn_[ue];
+                CrossMatrix(frames[ue + 1].start_m) * turn_[ue];
     for (int i = first_sample_[ue]; i < first_sample_[ue + 1]; ++i) {
       const size_t ui = static_cast<size_t>(i);
       const double s = samples_[ui].s;
@@ -180,7 +174,7 @@ void SuperHelixDynamics::AddProjected(int i, double weight, const Eigen::Matrix3
   const size_t ui = static_cast<size_t>(i);
   const int e = samples_[ui].element;
   Eigen::Matrix<double, 3, Eigen::Dynamic> j(3, 3 * (e + 1));
-  const Eigen::Matrix3d lever = Skew(positions_[ui]);
+  const Eigen::Matrix3d lever = CrossMatrix(positions_[ui]);
   for (int p = 0; p < e; ++p) {
     j.middleCols<3>(3 * p) = move_[static_cast<size_t>(p)] - lever * turn_[static_cast<size_t>(p)];
   }
@@ -226,7 +220,7 @@ void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational,
       const Eigen::Matrix3d world_inertia =
           frames_[ui] * inertia.asDiagonal() * frames_[ui].transpose();
       p_sum += w * j;
-      q_sum += w * Skew(r) * j;
+      q_sum += w * CrossMatrix(r) * j;
       v_sum += w * world_inertia * jw;
       t_own += w * j.transpose() * j;
       r_own += w * jw.transpose() * world_inertia * jw;
@@ -237,8 +231,8 @@ void SuperHelixDynamics::KineticMetrics(Eigen::MatrixXd* translational,
     }
     const Eigen::Matrix3d& b = turn_[uq];
     const Eigen::Matrix3d& c = move_[uq];
-    const Eigen::Matrix3d g_beyond = m0 * c - Skew(m1) * b;
-    const Eigen::Matrix3d h_beyond = Skew(m1) * c + m2 * b;
+    const Eigen::Matrix3d g_beyond = m0 * c - CrossMatrix(m1) * b;
+    const Eigen::Matrix3d h_beyond = CrossMatrix(m1) * c + m2 * b;
     translational->block<3, 3>(3 * q, 3 * q) =
         c.transpose() * g_beyond + b.transpose() * h_beyond + t_own;
     rotational->block<3, 3>(3 * q, 3 * q) = b.transpose() * w_beyond * b + r_own;
