@@ -155,6 +155,7 @@ class ConsoleServer::Impl {
   bool HoldsControl(const Request& req, Response& res);
   std::string WhoAsks(const Request& req, const nlohmann::json& body) const;
   nlohmann::json StateWithControl();
+  nlohmann::json ControlJson() const;  // {"holder": name or null}
   void Routes();
   void StaticRoutes();
   void RigRoutes();
@@ -219,10 +220,14 @@ std::string ConsoleServer::Impl::WhoAsks(const Request& req, const nlohmann::jso
   return "a client at " + req.remote_addr;
 }
 
+nlohmann::json ConsoleServer::Impl::ControlJson() const {
+  const std::optional<std::string> holder = lease_.Holder();
+  return {{"holder", holder ? nlohmann::json(*holder) : nlohmann::json(nullptr)}};
+}
+
 nlohmann::json ConsoleServer::Impl::StateWithControl() {
   nlohmann::json state = rig_.State();
-  const std::optional<std::string> holder = lease_.Holder();
-  state["control"] = {{"holder", holder ? nlohmann::json(*holder) : nlohmann::json(nullptr)}};
+  state["control"] = ControlJson();
   return state;
 }
 
@@ -448,7 +453,7 @@ void ConsoleServer::Impl::EventRoutes() {
           }
           std::string text = events.empty() ? ": keep-alive\n\n" : "";
           for (ConsoleEvent e : events) {
-            if (e.name == "state") e.data["control"] = StateWithControl()["control"];
+            if (e.name == "state") e.data["control"] = ControlJson();
             text += SseMessage(e);
             after = e.seq;
           }
