@@ -1,13 +1,14 @@
 // Reconstruction I on a calibrated capture of the simulated rig, per stereo
 // cost side by side: each step's time and the accuracy against the ground
 // truth. Run from the repository root:
-//   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric] [--stride N]
-//   [--iterations N]
-//       [--mls SIGMA_MM]
+//   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric]
+//       [--stride N] [--iterations N] [--mls SIGMA_MM] [--views 0,1,2,...]
+//       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-behind MM]
+//       [--min-confidence C] [--tag SUFFIX]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
-// reconstructions go to CAPTURE/bench-reconstruction-<cost>/ (the capture's
-// own reconstruction/ is left alone). The last line compares the costs as
-// ratios measured in this one run.
+// reconstructions go to CAPTURE/bench-reconstruction-<cost>[-mls]<SUFFIX>/
+// (the capture's own reconstruction/ is left alone). The last line compares
+// the costs as ratios measured in this one run.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -48,6 +49,8 @@ int main(int argc, char** argv) {
   const std::string capture = argv[1];
   std::vector<std::string> costs = {"both", "photometric"};
   PointReconstructionOptions options;
+  std::vector<int> views;
+  std::string tag;
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--costs") == 0) {
       costs.clear();
@@ -59,6 +62,24 @@ int main(int argc, char** argv) {
       options.fusion.mls_sigma_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--iterations") == 0) {
       options.mvs.iterations = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--neighbours") == 0) {
+      options.mvs.neighbours = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--views-in-cost") == 0) {
+      options.mvs.views_in_cost = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--samples") == 0) {
+      options.mvs.samples = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--prior-behind") == 0) {
+      options.mvs.prior_behind_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--min-confidence") == 0) {
+      options.min_orientation_confidence = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--views") == 0) {
+      std::stringstream list(argv[i + 1]);
+      for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));
+    } else if (std::strcmp(argv[i], "--tag") == 0) {
+      tag = argv[i + 1];
+    } else {
+      std::fprintf(stderr, "unknown option %s\n", argv[i]);
+      return 2;
     }
   }
   auto input = LoadCaptureReconstructionInput(capture);
@@ -66,11 +87,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", input.status().ToString().c_str());
     return 1;
   }
+  if (const Status selected = SelectViews(views, &*input); !selected.ok()) {
+    std::fprintf(stderr, "%s\n", selected.ToString().c_str());
+    return 2;
+  }
   std::vector<Row> rows;
   for (const std::string& cost : costs) {
     options.mvs.cost = ParseCost(cost);
-    const std::string out =
-        capture + "/bench-reconstruction-" + cost + (options.fusion.mls_sigma_mm > 0 ? "-mls" : "");
+    const std::string out = capture + "/bench-reconstruction-" + cost +
+                            (options.fusion.mls_sigma_mm > 0 ? "-mls" : "") + tag;
     auto summary = ReconstructPoints(*input, out, options);
     if (!summary.ok()) {
       std::fprintf(stderr, "%s: %s\n", cost.c_str(), summary.status().ToString().c_str());

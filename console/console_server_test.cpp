@@ -160,6 +160,40 @@ class ConsoleServerTest : public ::testing::Test {
     return status == 200 ? body["lease"].get<std::string>() : "";
   }
 
+  // Keeps `lease` alive while it exists, as the page does with its heartbeat
+  // (a capture under the sanitizers outlasts the lease's 15 s).
+  class Heartbeat {
+   public:
+    Heartbeat(int port, std::string lease) : lease_(std::move(lease)) {
+      thread_ = std::thread([this, port] {
+        httplib::Client client("127.0.0.1", port);
+        httplib::Headers headers{{"X-Hairrig-Lease", lease_}};
+        std::unique_lock<std::mutex> lock(mutex_);
+        while (!stop_) {
+          lock.unlock();
+          client.Post("/api/control/heartbeat", headers, "{}", "application/json");
+          lock.lock();
+          wake_.wait_for(lock, 2s, [this] { return stop_; });
+        }
+      });
+    }
+    ~Heartbeat() {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;
+      }
+      wake_.notify_all();
+      thread_.join();
+    }
+
+   private:
+    std::string lease_;
+    std::mutex mutex_;
+    std::condition_variable wake_;
+    bool stop_ = false;
+    std::thread thread_;
+  };
+
   std::string captures_;
   std::unique_ptr<ConsoleServer> server_;
   std::unique_ptr<httplib::Client> client_;
@@ -365,6 +399,7 @@ TEST_F(ConsoleServerTest, ACaptureShowsProgressThumbnailsAndItsCalibration) {
   StartServer();
   EventStream events(server_->port());
   const std::string lease = Claim("operator");
+  const Heartbeat heartbeat(server_->port(), lease);
   auto [status, body] = Post("/api/captures", {{"subject", "wig A"}, {"calibrate", true}}, lease);
   ASSERT_EQ(status, 202) << body.dump();
   const std::string id = body["id"];
@@ -426,6 +461,7 @@ TEST_F(ConsoleServerTest, StopEndsTheCaptureAfterTheCurrentStopResumably) {
   StartServer("127.0.0.1:0", "", RigAtTimeScale(testing::FreshDir("console_stop_rig"), 0.5));
   EventStream events(server_->port());
   const std::string lease = Claim("operator");
+  const Heartbeat heartbeat(server_->port(), lease);
   auto [status, body] = Post("/api/captures", {{"subject", "wig E"}, {"calibrate", false}}, lease);
   ASSERT_EQ(status, 202) << body.dump();
   const std::string id = body["id"];
@@ -451,6 +487,7 @@ TEST_F(ConsoleServerTest, TheEStopStopsACaptureFromAnyClientAndResumeCompletesIt
   StartServer("127.0.0.1:0", "", RigAtTimeScale(testing::FreshDir("console_slow_rig"), 0.5));
   std::unique_ptr<EventStream> events = std::make_unique<EventStream>(server_->port());
   const std::string lease = Claim("operator");
+  const Heartbeat heartbeat(server_->port(), lease);
   auto [status, body] = Post("/api/captures", {{"subject", "wig C"}, {"calibrate", false}}, lease);
   ASSERT_EQ(status, 202) << body.dump();
   const std::string id = body["id"];

@@ -33,25 +33,32 @@ CarvingView PrepareView(const SilhouetteView& v) {
   return c;
 }
 
-// True when the view sees the whole ball of `radius_mm` around p on the backdrop.
-bool SeesEmpty(const CarvingView& v, const Eigen::Vector3d& p_object, double radius_mm) {
+// What a view says about the ball of `radius_mm` around a point.
+enum class Verdict { kOutOfFrame, kSubject, kEmpty };
+
+Verdict Judge(const CarvingView& v, const Eigen::Vector3d& p_object, double radius_mm) {
   const Eigen::Vector3d p = v.rotation * p_object + v.translation;
-  if (p.z() <= radius_mm) return false;
+  if (p.z() <= radius_mm) return Verdict::kOutOfFrame;
   double uv[2];
   ProjectCamPoint(v.params.data(), p.data(), uv);
   const int x = static_cast<int>(std::lround(uv[0])), y = static_cast<int>(std::lround(uv[1]));
   if (x < 0 || y < 0 || x >= v.distance_to_subject_px.cols || y >= v.distance_to_subject_px.rows)
-    return false;
-  return v.distance_to_subject_px(y, x) > v.focal_px * radius_mm / p.z() + 0.5;
+    return Verdict::kOutOfFrame;
+  // Empty when the whole ball projects onto the backdrop.
+  return v.distance_to_subject_px(y, x) > v.focal_px * radius_mm / p.z() + 0.5 ? Verdict::kEmpty
+                                                                               : Verdict::kSubject;
 }
 
 bool Survives(const std::vector<CarvingView>& views, const Eigen::Vector3d& p, double radius_mm,
-              int max_empty) {
-  int empty = 0;
+              int max_empty, int min_in_frame) {
+  int empty = 0, in_frame = 0;
   for (const CarvingView& v : views) {
-    if (SeesEmpty(v, p, radius_mm) && ++empty > max_empty) return false;
+    const Verdict verdict = Judge(v, p, radius_mm);
+    if (verdict == Verdict::kOutOfFrame) continue;
+    ++in_frame;
+    if (verdict == Verdict::kEmpty && ++empty > max_empty) return false;
   }
-  return true;
+  return in_frame >= min_in_frame;
 }
 
 // The point nearest every camera's optical axis (least squares).
@@ -71,8 +78,8 @@ Result<Eigen::Vector3d> CommonTarget(const std::vector<SilhouetteView>& views) {
 }
 
 // Carves a grid of `grid` (occupied pre-filled with where to test) in place.
-void Carve(const std::vector<CarvingView>& views, double radius_mm, int max_empty, int threads,
-           VisualHull* grid) {
+void Carve(const std::vector<CarvingView>& views, double radius_mm, int max_empty, int min_in_frame,
+           int threads, VisualHull* grid) {
   const size_t slice = static_cast<size_t>(grid->nx) * static_cast<size_t>(grid->ny);
   ParallelFor(static_cast<size_t>(grid->nz), threads, [&] {
     return [&](size_t z) {
@@ -84,7 +91,7 @@ void Carve(const std::vector<CarvingView>& views, double radius_mm, int max_empt
           if (cell == 0) continue;
           const Eigen::Vector3d p =
               grid->origin_mm + grid->voxel_mm * Eigen::Vector3d(x, y, static_cast<double>(z));
-          cell = Survives(views, p, radius_mm, max_empty) ? 1 : 0;
+          cell = Survives(views, p, radius_mm, max_empty, min_in_frame) ? 1 : 0;
         }
       }
     };
@@ -115,6 +122,8 @@ Status VisualHullOptions::Check() const {
   if (!(search_radius_mm > search_voxel_mm && search_radius_mm <= 5000))
     return InvalidArgument("hull search_radius_mm must be in (search_voxel_mm, 5000]");
   if (max_empty_views < 0) return InvalidArgument("hull max_empty_views must not be negative");
+  if (!(min_in_frame_share >= 0 && min_in_frame_share <= 1))
+    return InvalidArgument("hull min_in_frame_share must be in [0, 1]");
   if (threads < 1) return InvalidArgument("hull threads must be at least 1");
   return Status::Ok();
 }
@@ -152,8 +161,11 @@ Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views,
       2 * static_cast<int>(std::ceil(options.search_radius_mm / coarse.voxel_mm)) + 1;
   coarse.origin_mm = target - Eigen::Vector3d::Constant(coarse.voxel_mm * (coarse.nx / 2));
   coarse.occupied.assign(static_cast<size_t>(coarse.nx) * coarse.ny * coarse.nz, 1);
-  Carve(carving, coarse.voxel_mm * std::sqrt(3.0) / 2, options.max_empty_views, options.threads,
-        &coarse);
+  const int min_in_frame = std::max(
+      1,
+      static_cast<int>(std::ceil(options.min_in_frame_share * static_cast<double>(views.size()))));
+  Carve(carving, coarse.voxel_mm * std::sqrt(3.0) / 2, options.max_empty_views, min_in_frame,
+        options.threads, &coarse);
   Eigen::Vector3i lo, hi;
   if (!OccupiedBounds(coarse, &lo, &hi))
     return FailedPrecondition(
@@ -179,7 +191,7 @@ Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views,
         if (coarse.OccupiedAt(p))
           fine.occupied[(static_cast<size_t>(z) * fine.ny + y) * fine.nx + x] = 1;
       }
-  Carve(carving, 0.0, options.max_empty_views, options.threads, &fine);
+  Carve(carving, 0.0, options.max_empty_views, min_in_frame, options.threads, &fine);
   if (fine.OccupiedCount() == 0)
     return FailedPrecondition(
         "no voxel survives carving: the calibration or the segmentation is wrong");

@@ -1,9 +1,10 @@
 // The visual hull of the subject (head and hair) from the views' silhouettes
 // (Laurentini 1994): the voxels whose projection falls on the foreground in
-// every view that can judge them. Hair is the subject's outer layer, so the
-// hull's front surface seen from a view lies on or just in front of the hair
-// there (in front where the hull cannot see a concavity): the multi-view
-// stereo searches behind it instead of over the whole depth range.
+// every view that can judge them, and that most views have in their frame.
+// Hair is the subject's outer layer, so the hull's front surface seen from a
+// view lies on or just in front of the hair there (in front where the hull
+// cannot see a concavity): the multi-view stereo searches behind it instead
+// of over the whole depth range.
 //
 // Frames and units as core/transform.h: the grid lives in the views' object
 // frame, mm; depth maps are along each camera's optical axis.
@@ -41,6 +42,12 @@ struct VisualHullOptions {
   // A voxel is carved when more than this many views see it on the backdrop
   // (1 tolerates one view's segmentation error).
   int max_empty_views = 0;
+  // A voxel is kept only when at least this share of the views has it in
+  // their frame (in front of the camera and inside the image). Every view
+  // frames the subject, so space that few views see is not the subject's;
+  // without this, the views of part of a turn would keep all the space that
+  // the others' frames miss, in front of the subject included.
+  double min_in_frame_share = 0.75;
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.

@@ -14,21 +14,6 @@ namespace hairrig {
 
 namespace {
 
-// Keeps the listed view ids; an id that is not among the views is an error.
-Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input) {
-  if (ids.empty()) return Status::Ok();
-  std::vector<ReconstructionView> kept;
-  for (int id : ids) {
-    const auto it = std::find_if(input->views.begin(), input->views.end(),
-                                 [id](const ReconstructionView& v) { return v.id == id; });
-    if (it == input->views.end())
-      return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
-    kept.push_back(*it);
-  }
-  input->views = std::move(kept);
-  return Status::Ok();
-}
-
 Result<ReconstructionInput> LoadInput(const ReconstructCaptureOptions& o) {
   ReconstructionInput input;
   if (!o.colmap_dir.empty()) {

@@ -1,5 +1,6 @@
 #include "rig/reconstruction_input.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "calibration/calibration_io.h"
@@ -86,6 +87,20 @@ Result<SubjectHead> LoadCaptureHead(const std::string& capture_dir, const std::s
   head.spec = *config.head;
   head.source = capture_dir + "/rig.yaml";
   return head;
+}
+
+Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input) {
+  if (ids.empty()) return Status::Ok();
+  std::vector<ReconstructionView> kept;
+  for (int id : ids) {
+    const auto it = std::find_if(input->views.begin(), input->views.end(),
+                                 [id](const ReconstructionView& v) { return v.id == id; });
+    if (it == input->views.end())
+      return InvalidArgument("--views: view " + std::to_string(id) + " is not usable here");
+    kept.push_back(*it);
+  }
+  input->views = std::move(kept);
+  return Status::Ok();
 }
 
 }  // namespace hairrig

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/head_spec.h"
 #include "reconstruction/views.h"
@@ -17,6 +18,10 @@ namespace hairrig {
 // or whose frame is missing or outside the capture folder is listed in
 // `left_out` with the reason; the rest are returned.
 Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& capture_dir);
+
+// Keeps the views with the listed ids, in the listed order (all when `ids` is
+// empty). InvalidArgument naming an id that is not among the usable views.
+Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input);
 
 // The subject's head for the strands, in the turntable frame: the head file
 // `head_file` when given (core/head_config.h), else the `head:` of the

@@ -139,15 +139,27 @@ TEST(Cli, BadArgumentsAreRefused) {
   EXPECT_NE(Hairrig("frobnicate").exit_code, 0);
 }
 
-// A running `hairrig sim serve --no-rtu`, its stdout in `log`.
+// A running `hairrig sim serve --no-rtu`, its stdout in `log`. A test that
+// ends before stopping it (a failed assertion) kills it, so that no server
+// outlives its test and holds the test's output open.
 struct SimServe {
   pid_t pid = -1;
   std::string log;
   std::string modbus_port;  // empty when no endpoint was printed
+
+  SimServe() = default;
+  SimServe(const SimServe&) = delete;
+  SimServe& operator=(const SimServe&) = delete;
+  ~SimServe() {
+    if (pid <= 0) return;
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+  }
 };
 
-SimServe StartSimServe(const std::string& name) {
-  SimServe serve;
+// Waits up to 2 minutes for the endpoint (the sanitizer build starts slowly).
+void StartSimServe(const std::string& name, SimServe* out) {
+  SimServe& serve = *out;
   serve.log = ::testing::TempDir() + "/" + name + ".out";
   std::filesystem::remove(serve.log);
   serve.pid = fork();
@@ -157,7 +169,7 @@ SimServe StartSimServe(const std::string& name) {
           static_cast<char*>(nullptr));
     _exit(127);
   }
-  for (int i = 0; i < 600 && serve.pid > 0 && serve.modbus_port.empty(); ++i) {
+  for (int i = 0; i < 2400 && serve.pid > 0 && serve.modbus_port.empty(); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const std::string text = ReadText(serve.log);
     const size_t at = text.find("127.0.0.1:");
@@ -165,14 +177,15 @@ SimServe StartSimServe(const std::string& name) {
     if (at != std::string::npos && end != std::string::npos)
       serve.modbus_port = text.substr(at + 10, end - at - 10);
   }
-  return serve;
 }
 
 // Stops it with SIGINT; its exit code, -1 when it did not exit by itself.
-int StopSimServe(const SimServe& serve) {
-  kill(serve.pid, SIGINT);
+int StopSimServe(SimServe* serve) {
+  kill(serve->pid, SIGINT);
   int status = 0;
-  if (waitpid(serve.pid, &status, 0) != serve.pid || !WIFEXITED(status)) return -1;
+  const pid_t reaped = waitpid(serve->pid, &status, 0);
+  if (reaped == serve->pid) serve->pid = -1;
+  if (reaped <= 0 || !WIFEXITED(status)) return -1;
   return WEXITSTATUS(status);
 }
 
@@ -181,7 +194,8 @@ int StopSimServe(const SimServe& serve) {
 // Serves the Modbus controller, the DSLRs and the GigE Vision camera; outside
 // tools (mbpoll, Aravis' arv-camera-test) reach them until Ctrl-C.
 TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
-  const SimServe serve = StartSimServe("sim_serve");
+  SimServe serve;
+  StartSimServe("sim_serve", &serve);
   ASSERT_GT(serve.pid, 0);
   const std::string& port = serve.modbus_port;
   ASSERT_FALSE(port.empty()) << "no endpoint printed:\n" << ReadText(serve.log);
@@ -197,7 +211,7 @@ TEST(Cli, SimServeAnswersOutsideToolsUntilCtrlC) {
   EXPECT_NE(arv_text.find("device serial number   = SIM-CAM-LOWER"), std::string::npos) << arv_text;
   EXPECT_NE(arv_text.find("image width            = 1200"), std::string::npos) << arv_text;
   EXPECT_NE(arv_text.find("n_completed_buffers"), std::string::npos) << arv_text;
-  EXPECT_EQ(StopSimServe(serve), 0);
+  EXPECT_EQ(StopSimServe(&serve), 0);
   const std::string text = ReadText(serve.log);
   EXPECT_NE(text.find("try: mbpoll -m tcp -p " + port), std::string::npos) << text;
   EXPECT_NE(text.find("stopped (SIGINT)"), std::string::npos) << text;
@@ -228,7 +242,8 @@ bool DslrAccepts(const std::string& port) {
 // One GVCP packet at 0xFFFFFFF0 crashed Aravis' GigE fake and took the
 // Modbus and DSLR simulators of `sim serve` down with it.
 TEST(Cli, SimServeSurvivesHostileGigEControlPackets) {
-  const SimServe serve = StartSimServe("sim_serve_hostile");
+  SimServe serve;
+  StartSimServe("sim_serve_hostile", &serve);
   ASSERT_GT(serve.pid, 0);
   ASSERT_FALSE(serve.modbus_port.empty()) << "no endpoint printed:\n" << ReadText(serve.log);
   std::this_thread::sleep_for(
@@ -248,7 +263,7 @@ TEST(Cli, SimServeSurvivesHostileGigEControlPackets) {
   const std::string dslr_port =
       text.substr(disk + 7, text.find_first_of(" \n", disk + 7) - disk - 7);
   EXPECT_TRUE(DslrAccepts(dslr_port)) << dslr_port;
-  EXPECT_EQ(StopSimServe(serve), 0);
+  EXPECT_EQ(StopSimServe(&serve), 0);
 }
 
 }  // namespace
