@@ -219,9 +219,12 @@ class SimDslrServer::Impl {
   }
 
   // The camera dropped off the bus (a camera_gone fault): every connection
-  // closes and the next `refused_connects` connections are dropped unanswered.
+  // closes, the session's claim goes with the device (it comes back
+  // unclaimed, however late the old connection's thread ends), and the next
+  // `refused_connects` connections are dropped unanswered.
   void GoneLocked(int refused_connects) {
     gone_ = true;
+    owner_ = nullptr;
     gone_connects_left_ = std::max(1, refused_connects);
     for (auto& c : clients_) shutdown(c->fd, SHUT_RDWR);
     cv_.notify_all();

@@ -337,7 +337,8 @@ TEST(Gphoto2Camera, ADroppedCameraFaultsAndReopensWhenItIsBack) {
   EXPECT_EQ(b.camera->state(), DeviceState::kFaulted);
   s = b.camera->Open();
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
-  ASSERT_TRUE(b.camera->Open().ok());
+  s = b.camera->Open();
+  ASSERT_TRUE(s.ok()) << s.ToString();
   EXPECT_TRUE(ShootOnce(*b.camera, PixelFormat::kRgb8).ok());
 }
 
