@@ -4,7 +4,8 @@
 //   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric]
 //       [--stride N] [--iterations N] [--mls SIGMA_MM] [--views 0,1,2,...]
 //       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-behind MM]
-//       [--min-confidence C] [--tag SUFFIX]
+//       [--min-confidence C] [--min-agreeing N] [--multiview-direction yes|no]
+//       [--direction-sigma MM] [--tag SUFFIX]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
 // reconstructions go to CAPTURE/bench-reconstruction-<cost>[-mls]<SUFFIX>/
 // (the capture's own reconstruction/ is left alone). The last line compares
@@ -42,7 +43,9 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] "
-                 "[--mls SIGMA_MM]\n",
+                 "[--mls SIGMA_MM] [--views 0,1,...] [--neighbours N] [--views-in-cost N] "
+                 "[--samples N] [--prior-behind MM] [--min-confidence C] [--min-agreeing N] "
+                 "[--multiview-direction yes|no] [--direction-sigma MM] [--tag SUFFIX]\n",
                  argv[0]);
     return 2;
   }
@@ -68,6 +71,12 @@ int main(int argc, char** argv) {
       options.mvs.views_in_cost = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--samples") == 0) {
       options.mvs.samples = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--multiview-direction") == 0) {
+      options.fusion.multiview_direction = std::strcmp(argv[i + 1], "yes") == 0;
+    } else if (std::strcmp(argv[i], "--min-agreeing") == 0) {
+      options.fusion.min_agreeing_views = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--direction-sigma") == 0) {
+      options.fusion.direction_sigma_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--prior-behind") == 0) {
       options.mvs.prior_behind_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--min-confidence") == 0) {

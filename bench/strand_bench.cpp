@@ -7,7 +7,8 @@
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
 // reconstruction is left alone); preview_truth.jpg beside them shows the
 // model over the ground truth's strands, and each method's strands are scored
-// by the strand protocol of `hairrig eval reconstruction` (unless --score no).
+// by the strand protocol of `hairrig eval reconstruction` (unless --score no),
+// then the consistency the truth's own strands score at the same count.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include "core/image_file.h"
 #include "core/strand_io.h"
 #include "reconstruction/reconstruction_evaluation.h"
+#include "reconstruction/strand_evaluation.h"
 #include "reconstruction/strand_preview.h"
 #include "reconstruction/strand_reconstruction.h"
 #include "rig/reconstruction_input.h"
@@ -93,6 +95,17 @@ int main(int argc, char** argv) {
     }
     std::printf("%s scored as `hairrig eval reconstruction` does:\n%s", name.c_str(),
                 scored->strands->BriefReport().c_str());
+  }
+  if (score) {
+    const auto reference = ConsistencyOfTruthSubset(*truth, options.strands, StrandEvalOptions{});
+    if (!reference.ok()) {
+      std::fprintf(stderr, "%s\n", reference.status().ToString().c_str());
+      return 1;
+    }
+    std::printf(
+        "consistency reference: %d of the true strands against the others score %.3f "
+        "(strand_evaluation.h, ConsistencyOfTruthSubset)\n",
+        options.strands, *reference);
   }
   return 0;
 }

@@ -1,11 +1,13 @@
 #include "reconstruction/point_fusion.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
 #include "core/parallel.h"
 #include "reconstruction/mls.h"
+#include "reconstruction/point_orientation_field.h"
 
 namespace hairrig {
 namespace {
@@ -34,6 +36,73 @@ bool Agrees(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3
   return std::abs(direction.dot(Eigen::Vector3f(d[0], d[1], d[2]))) >= cos_tolerance;
 }
 
+// The plane through view w's camera centre that holds the 2D orientation
+// seen at p (object frame), as its unit normal in the object frame: a
+// direction X lies in it when its projection moves along the orientation,
+// i.e. normal = J^T d_perp with J the projection's Jacobian at p. False where
+// p is behind the camera, outside the frame or the view has no orientation.
+bool OrientationPlaneNormal(const MvsView& view, const ViewGeometry& g, const Eigen::Vector3d& p,
+                            Eigen::Vector3d* normal) {
+  const Eigen::Vector3d q = g.cam_from_object_rotation * p + g.cam_from_object_translation;
+  if (q.z() <= 1.0) return false;
+  double uv[2];
+  ProjectCamPoint(g.params.data(), q.data(), uv);
+  const int x = static_cast<int>(std::lround(uv[0])), y = static_cast<int>(std::lround(uv[1]));
+  if (x < 0 || y < 0 || x >= view.orientation_deg.cols || y >= view.orientation_deg.rows)
+    return false;
+  const float angle = view.orientation_deg(y, x);
+  if (!std::isfinite(angle)) return false;
+  const double a = DegToRad(angle);
+  const Eigen::Vector2d across(-std::sin(a), std::cos(a));
+  const double step = 1e-3 * q.z();  // mm; the Jacobian by forward differences
+  Eigen::Vector3d in_cam;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Vector3d moved = q;
+    moved[k] += step;
+    double uv_moved[2];
+    ProjectCamPoint(g.params.data(), moved.data(), uv_moved);
+    in_cam[k] = across.dot(Eigen::Vector2d(uv_moved[0] - uv[0], uv_moved[1] - uv[1])) / step;
+  }
+  if (!(in_cam.norm() > 0)) return false;
+  *normal = g.cam_from_object_rotation.transpose() * in_cam.normalized();
+  return true;
+}
+
+// Luo 2013 Sec. 4 Eq. 1 without a surface normal: the unit o minimising
+// sum_V (o . m_V)^2 over the views' orientation planes m_V, plus
+// kStereoWeight (1 - (o . stereo)^2), which settles the directions the planes
+// leave open (views whose planes nearly coincide). A view whose plane is
+// further than the fusion's angle tolerance from the stereo's direction sees
+// another strand there and is left out (Luo's T_o test); with fewer than two
+// planes left the stereo's direction stays.
+Eigen::Vector3f MultiviewDirection(const std::vector<MvsView>& views,
+                                   const std::vector<ViewGeometry>& geometry,
+                                   const Eigen::Vector3d& p, const Eigen::Vector3f& stereo,
+                                   const std::vector<uint16_t>& seen_by, double sin_tolerance) {
+  constexpr double kStereoWeight = 0.25;
+  const Eigen::Vector3d s = stereo.cast<double>().normalized();
+  Eigen::Matrix3d tensor = kStereoWeight * (Eigen::Matrix3d::Identity() - s * s.transpose());
+  int planes = 0;
+  for (uint16_t w : seen_by) {
+    Eigen::Vector3d m;
+    if (!OrientationPlaneNormal(views[w], geometry[w], p, &m)) continue;
+    if (std::abs(m.dot(s)) > sin_tolerance) continue;
+    tensor += m * m.transpose();
+    ++planes;
+  }
+  if (planes < 2) return stereo;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(tensor);
+  return eigen.eigenvectors().col(0).cast<float>().normalized();  // the smallest eigenvalue's
+}
+
+// (1 - cost) (1 - 2^-agreeing): the views that agree say more of a point
+// than its cost does (on the demo capture, 24 % of the points that one other
+// view confirms lie over 2 mm from every strand, 11 % for two, 5 % for three,
+// at any cost).
+float PointConfidence(float cost, int agreeing) {
+  return (1.0f - cost) * (1.0f - std::ldexp(1.0f, -agreeing));
+}
+
 // The consistent points of reference view r, before merging.
 std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
                                             const std::vector<LineDepthMap>& maps,
@@ -42,6 +111,7 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
   std::vector<OrientedPoint> out;
   const LineDepthMap& map = maps[r];
   const double cos_tolerance = std::cos(DegToRad(options.angle_tolerance_deg));
+  const double sin_tolerance = std::sin(DegToRad(options.angle_tolerance_deg));
   for (int gy = 0; gy < map.depth_mm.rows; ++gy) {
     for (int gx = 0; gx < map.depth_mm.cols; ++gx) {
       const float depth = map.depth_mm(gy, gx);
@@ -58,13 +128,18 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
       OrientedPoint point;
       point.position_mm = p.cast<float>();
       point.direction = Eigen::Vector3f(d[0], d[1], d[2]);
-      point.confidence = 1.0f - cost;
       point.views.push_back(static_cast<uint16_t>(r));
       for (size_t w = 0; w < views.size(); ++w) {
         if (w != r && Agrees(geometry[w], maps[w], p, point.direction, options, cos_tolerance))
           point.views.push_back(static_cast<uint16_t>(w));
       }
-      if (static_cast<int>(point.views.size()) - 1 < options.min_agreeing_views) continue;
+      const int agreeing = static_cast<int>(point.views.size()) - 1;
+      if (agreeing < options.min_agreeing_views) continue;
+      point.confidence = PointConfidence(cost, agreeing);
+      if (options.multiview_direction) {
+        point.direction =
+            MultiviewDirection(views, geometry, p, point.direction, point.views, sin_tolerance);
+      }
       std::sort(point.views.begin(), point.views.end());
       out.push_back(std::move(point));
     }
@@ -121,6 +196,8 @@ Status FusionOptions::Check() const {
   if (!(merge_mm >= 0.01)) return InvalidArgument("fusion merge_mm must be at least 0.01");
   if (!(mls_sigma_mm >= 0 && mls_sigma_mm <= 50))
     return InvalidArgument("fusion mls_sigma_mm must be in [0, 50]");
+  if (!(direction_sigma_mm >= 0 && direction_sigma_mm <= 50))
+    return InvalidArgument("fusion direction_sigma_mm must be in [0, 50]");
   if (threads < 1) return InvalidArgument("fusion threads must be at least 1");
   return Status::Ok();
 }
@@ -162,6 +239,11 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
   if (options.mls_sigma_mm > 0) {
     merged = SmoothByMls(merged, options.mls_sigma_mm, options.threads);
     s.mls = true;
+  }
+  if (options.direction_sigma_mm > 0) {
+    // Only neighbours whose direction agrees within the fusion's tolerance.
+    merged = SmoothDirections(merged, options.direction_sigma_mm,
+                              std::cos(DegToRad(options.angle_tolerance_deg)), options.threads);
   }
   s.points = static_cast<int64_t>(merged.size());
   if (summary != nullptr) *summary = s;

@@ -250,4 +250,29 @@ std::string StrandEvaluation::BriefReport() const {
   return s.str();
 }
 
+Result<double> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
+                                        const StrandEvalOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
+  if (const Status s = truth.Validate(); !s.ok())
+    return InvalidArgument("true strands: " + s.message());
+  if (strands < 1) return InvalidArgument("consistency reference: strands must be at least 1");
+  const int64_t every = std::max<int64_t>(
+      2, std::llround(static_cast<double>(truth.num_strands()) / static_cast<double>(strands)));
+  std::vector<uint32_t> sample_strand;
+  const std::vector<OrientedSample> samples =
+      SampleStrands(truth, options.sample_step_mm, &sample_strand);
+  std::vector<OrientedSample> kept, others;
+  std::vector<uint32_t> kept_strand, other_strand;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const bool keep = sample_strand[i] % every == 0;
+    (keep ? kept : others).push_back(samples[i]);
+    (keep ? kept_strand : other_strand).push_back(sample_strand[i]);
+  }
+  const std::vector<int64_t> nearest = NearestMatches(
+      kept, others, kStrandConsistencyThreshold, {.directed = false, .threads = options.threads});
+  StrandEvaluation scored;
+  MeasureConsistency(nearest, other_strand, kept_strand, &scored);
+  return scored.consistency;
+}
+
 }  // namespace hairrig

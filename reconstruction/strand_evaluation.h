@@ -117,4 +117,14 @@ Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_fram
                                          const HeadModel* true_head,
                                          const StrandEvalOptions& options);
 
+// The consistency a reconstruction as faithful as the truth itself scores
+// with `strands` strands: every k-th true strand (k = the true count /
+// `strands`, rounded, at least 2) taken as the reconstruction, and the other
+// true strands scored against it. Neighbouring true strands weave around one
+// another, so even this stays well under 1 and falls as `strands` grows: the
+// reference a reconstruction's consistency is read against. InvalidArgument
+// for bad options, an invalid truth or `strands` < 1.
+Result<double> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
+                                        const StrandEvalOptions& options);
+
 }  // namespace hairrig

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -129,6 +130,38 @@ TEST(StrandEvaluation, AStrandCutInTwoHalvesIsHalfConsistent) {
   EXPECT_DOUBLE_EQ(e.consistency, 0.5);
   EXPECT_EQ(e.strands, 12);
   EXPECT_DOUBLE_EQ(e.lengths.mean_mm, 9);
+}
+
+// `count` strands up +z, 60 points 1 mm apart, 1 mm apart along x (every
+// odd one shifted 0.3 mm towards the next, so no sample is equally near two
+// even ones), each swaying along x by `sway_mm` with its own phase.
+StrandSet SwayingStrands(int count, double sway_mm) {
+  StrandSet set;
+  for (int i = 0; i < count; ++i) {
+    std::vector<Eigen::Vector3f> strand;
+    const double x0 = i + (i % 2 == 1 ? 0.3 : 0.0), phase = 2.4 * i;
+    for (int k = 0; k < 60; ++k) {
+      strand.emplace_back(static_cast<float>(x0 + sway_mm * std::sin(0.3 * k + phase)), 0.f,
+                          static_cast<float>(k));
+    }
+    set.AddStrand(strand);
+  }
+  return set;
+}
+
+TEST(StrandEvaluation, TheTruthsOwnConsistencyFallsWhenItsStrandsWeave) {
+  const auto straight = ConsistencyOfTruthSubset(SwayingStrands(20, 0), 10, StrandEvalOptions{});
+  ASSERT_TRUE(straight.ok()) << straight.status().ToString();
+  EXPECT_DOUBLE_EQ(*straight, 1.0);  // each odd strand keeps its nearest even one
+  const auto weaving = ConsistencyOfTruthSubset(SwayingStrands(20, 1.5), 10, StrandEvalOptions{});
+  ASSERT_TRUE(weaving.ok());
+  std::printf(
+      "consistency of half the strands against the other half: straight %.3f, weaving %.3f\n",
+      *straight, *weaving);
+  EXPECT_LT(*weaving, 0.8);
+  EXPECT_GT(*weaving, 0.2);
+  EXPECT_EQ(ConsistencyOfTruthSubset(SwayingStrands(4, 0), 0, StrandEvalOptions{}).status().code(),
+            StatusCode::kInvalidArgument);
 }
 
 TEST(StrandEvaluation, VisibleSurfaceRecallCountsTheMaskedTruthAndKeepsThePrecision) {

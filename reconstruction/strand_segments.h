@@ -16,36 +16,9 @@
 #include "reconstruction/mls.h"
 #include "reconstruction/point_cloud.h"
 #include "reconstruction/point_grid.h"
+#include "reconstruction/point_orientation_field.h"
 
 namespace hairrig {
-
-// The 3D orientation at any position from the oriented points (Luo Eq. 2):
-// the unit o maximising sum_q w_q rho_q (o . o_q)^2 over the points q within
-// 2 sigma, w_q = exp(-|p - q|^2 / (2 sigma^2)), rho_q the point's confidence;
-// the principal eigenvector of that structure tensor.
-class PointOrientationField {
- public:
-  // `points` must outlive the field. sigma_mm > 0.
-  PointOrientationField(const std::vector<OrientedPoint>& points, double sigma_mm);
-
-  // The orientation at p from the neighbours whose direction is within
-  // acos(min_abs_cos) of `reference` (unsigned; Luo Sec. 5.1 keeps crossing
-  // wisps apart this way), signed to agree with `reference`. A zero
-  // reference uses every neighbour. False when fewer than `min_neighbours`
-  // points qualify; *neighbours (optional) is their number either way.
-  bool At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference, double min_abs_cos,
-          int min_neighbours, Eigen::Vector3f* orientation, int* neighbours = nullptr) const;
-
-  const PointGrid& grid() const { return grid_; }
-  const std::vector<OrientedPoint>& points() const { return points_; }
-  double sigma_mm() const { return sigma_mm_; }
-
- private:
-  const std::vector<OrientedPoint>& points_;
-  std::vector<Eigen::Vector3f> positions_;
-  double sigma_mm_;
-  PointGrid grid_;
-};
 
 struct SegmentGrowthOptions {
   double step_mm = 2.0;       // delta: the forward Euler step

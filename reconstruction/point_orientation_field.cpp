@@ -1,0 +1,65 @@
+#include "reconstruction/point_orientation_field.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace hairrig {
+namespace {
+
+std::vector<Eigen::Vector3f> Positions(const std::vector<OrientedPoint>& points) {
+  std::vector<Eigen::Vector3f> positions(points.size());
+  for (size_t i = 0; i < points.size(); ++i) positions[i] = points[i].position_mm;
+  return positions;
+}
+
+}  // namespace
+
+PointOrientationField::PointOrientationField(const std::vector<OrientedPoint>& points,
+                                             double sigma_mm)
+    : points_(points),
+      positions_(Positions(points)),
+      sigma_mm_(sigma_mm),
+      grid_(positions_, 2 * sigma_mm) {}
+
+bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference,
+                               double min_abs_cos, int min_neighbours, Eigen::Vector3f* orientation,
+                               int* neighbours) const {
+  const bool filter = reference.squaredNorm() > 0;
+  const double inv_two_sigma2 = 1.0 / (2 * sigma_mm_ * sigma_mm_);
+  Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
+  int count = 0;
+  grid_.ForEachWithin(p, 2 * sigma_mm_, [&](uint32_t i, double d2) {
+    const Eigen::Vector3f& o = points_[i].direction;
+    if (filter && std::abs(o.dot(reference)) <= min_abs_cos) return;
+    const Eigen::Vector3d od = o.cast<double>();
+    tensor += std::exp(-d2 * inv_two_sigma2) * std::max(points_[i].confidence, 1e-3f) * od *
+              od.transpose();
+    ++count;
+  });
+  if (neighbours != nullptr) *neighbours = count;
+  if (count < min_neighbours || count == 0) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(tensor);
+  Eigen::Vector3f o = eigen.eigenvectors().col(2).cast<float>();  // the largest eigenvalue's
+  if (filter && o.dot(reference) < 0) o = -o;
+  *orientation = o.normalized();
+  return true;
+}
+
+std::vector<OrientedPoint> SmoothDirections(const std::vector<OrientedPoint>& points,
+                                            double sigma_mm, double min_abs_cos, int threads) {
+  const PointOrientationField field(points, sigma_mm);
+  std::vector<OrientedPoint> out = points;
+  ParallelFor(points.size(), threads, [&] {
+    return [&](size_t i) {
+      Eigen::Vector3f o;
+      if (field.At(points[i].position_mm, points[i].direction, min_abs_cos, 1, &o))
+        out[i].direction = o;
+    };
+  });
+  return out;
+}
+
+}  // namespace hairrig
