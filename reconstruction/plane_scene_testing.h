@@ -1,8 +1,7 @@
-// For tests: an analytic scene for the stereo and the fusion, a plane of
-// strands (z = 0 in the object frame, 180 mm square) whose direction turns
-// across it, seen by four cameras on an arc 600 mm away. The orientation
-// maps and the grey images are exact projections; the true depth of each
-// pixel is kept beside them.
+// For tests: a centred pinhole camera, and an analytic scene for the stereo and the fusion, a plane
+// of strands (z = 0 in the object frame, 180 mm square) whose direction turns across it, seen by
+// four cameras on an arc 600 mm away. The orientation maps and the grey images are exact
+// projections; the true depth of each pixel is kept beside them.
 #pragma once
 
 #include <cmath>
@@ -23,13 +22,20 @@ struct PlaneScene {
   std::vector<cv::Mat1f> true_depth;
 };
 
+// A pinhole camera with its principal point at the image centre.
+inline CameraIntrinsics CentredCamera(int width_px, int height_px, double focal_px) {
+  CameraIntrinsics camera;
+  camera.width_px = width_px;
+  camera.height_px = height_px;
+  camera.fx_px = camera.fy_px = focal_px;
+  camera.cx_px = width_px / 2.0 - 0.5;
+  camera.cy_px = height_px / 2.0 - 0.5;
+  return camera;
+}
+
 inline MvsView RenderPlane(double azimuth_deg, cv::Mat1f* true_depth) {
   MvsView v;
-  v.camera.width_px = kSceneWidth;
-  v.camera.height_px = kSceneHeight;
-  v.camera.fx_px = v.camera.fy_px = 400;
-  v.camera.cx_px = kSceneWidth / 2.0 - 0.5;
-  v.camera.cy_px = kSceneHeight / 2.0 - 0.5;
+  v.camera = CentredCamera(kSceneWidth, kSceneHeight, 400);
   v.camera.k1 = -0.02;
   const double a = DegToRad(azimuth_deg);
   const Eigen::Vector3d eye(600 * std::sin(a), -100, -600 * std::cos(a));

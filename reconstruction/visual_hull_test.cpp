@@ -9,6 +9,8 @@
 #include <cmath>
 #include <vector>
 
+#include "reconstruction/plane_scene_testing.h"
+
 namespace hairrig {
 namespace {
 
@@ -18,11 +20,7 @@ const Eigen::Vector3d kCentre(5, -10, 20);
 
 SilhouetteView RingView(double azimuth_deg, double elevation_mm) {
   SilhouetteView v;
-  v.camera.width_px = kWidth;
-  v.camera.height_px = kHeight;
-  v.camera.fx_px = v.camera.fy_px = 420;
-  v.camera.cx_px = kWidth / 2.0 - 0.5;
-  v.camera.cy_px = kHeight / 2.0 - 0.5;
+  v.camera = CentredCamera(kWidth, kHeight, 420);
   const double a = DegToRad(azimuth_deg);
   const Eigen::Vector3d eye(700 * std::sin(a), elevation_mm, -700 * std::cos(a));
   v.cam_from_object = LookAt(eye, kCentre, Eigen::Vector3d::UnitY());
