@@ -72,6 +72,10 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--samples") == 0) {
       options.mvs.samples = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--multiview-direction") == 0) {
+      if (std::strcmp(argv[i + 1], "yes") != 0 && std::strcmp(argv[i + 1], "no") != 0) {
+        std::fprintf(stderr, "--multiview-direction takes yes or no\n");
+        return 2;
+      }
       options.fusion.multiview_direction = std::strcmp(argv[i + 1], "yes") == 0;
     } else if (std::strcmp(argv[i], "--min-agreeing") == 0) {
       options.fusion.min_agreeing_views = std::atoi(argv[i + 1]);

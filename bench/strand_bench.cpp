@@ -103,9 +103,10 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::printf(
-        "consistency reference: %d of the true strands against the others score %.3f "
-        "(strand_evaluation.h, ConsistencyOfTruthSubset)\n",
-        options.strands, *reference);
+        "consistency reference: %lld of the true strands taken as the reconstruction, the other "
+        "%lld score %.3f (strand_evaluation.h, ConsistencyOfTruthSubset)\n",
+        static_cast<long long>(reference->kept_strands),
+        static_cast<long long>(reference->scored_strands), reference->consistency);
   }
   return 0;
 }

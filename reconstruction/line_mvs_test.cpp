@@ -13,6 +13,8 @@
 namespace hairrig {
 namespace {
 
+using namespace plane_scene;
+
 // Median absolute depth error over the estimated cells of view `v`, and the share estimated.
 std::pair<double, double> DepthError(const PlaneScene& scene, const LineDepthMap& map, int v) {
   std::vector<double> errors;

@@ -10,7 +10,7 @@
 
 #include "reconstruction/line_mvs.h"
 
-namespace hairrig {
+namespace hairrig::plane_scene {
 
 inline constexpr int kSceneWidth = 240, kSceneHeight = 200;
 
@@ -89,4 +89,4 @@ inline Eigen::Vector3d StrandDirection(const Eigen::Vector3d& p) {
   return {std::cos(psi), std::sin(psi), 0};
 }
 
-}  // namespace hairrig
+}  // namespace hairrig::plane_scene

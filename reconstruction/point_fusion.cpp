@@ -40,7 +40,8 @@ bool Agrees(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3
 // seen at p (object frame), as its unit normal in the object frame: a
 // direction X lies in it when its projection moves along the orientation,
 // i.e. normal = J^T d_perp with J the projection's Jacobian at p. False where
-// p is behind the camera, outside the frame or the view has no orientation.
+// p is behind the camera, outside the frame or off the view's hair, or the
+// view has no orientation there.
 bool OrientationPlaneNormal(const MvsView& view, const ViewGeometry& g, const Eigen::Vector3d& p,
                             Eigen::Vector3d* normal) {
   const Eigen::Vector3d q = g.cam_from_object_rotation * p + g.cam_from_object_translation;
@@ -48,7 +49,8 @@ bool OrientationPlaneNormal(const MvsView& view, const ViewGeometry& g, const Ei
   double uv[2];
   ProjectCamPoint(g.params.data(), q.data(), uv);
   const int x = static_cast<int>(std::lround(uv[0])), y = static_cast<int>(std::lround(uv[1]));
-  if (x < 0 || y < 0 || x >= view.orientation_deg.cols || y >= view.orientation_deg.rows)
+  if (x < 0 || y < 0 || x >= view.orientation_deg.cols || y >= view.orientation_deg.rows ||
+      !view.hair(y, x))
     return false;
   const float angle = view.orientation_deg(y, x);
   if (!std::isfinite(angle)) return false;
@@ -244,6 +246,7 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
     // Only neighbours whose direction agrees within the fusion's tolerance.
     merged = SmoothDirections(merged, options.direction_sigma_mm,
                               std::cos(DegToRad(options.angle_tolerance_deg)), options.threads);
+    s.smoothed_directions = true;
   }
   s.points = static_cast<int64_t>(merged.size());
   if (summary != nullptr) *summary = s;

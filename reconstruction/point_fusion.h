@@ -5,7 +5,10 @@
 // merge distance are merged (the most confident wins), so that the 38 views'
 // overlapping maps give one surface, not 38 copies. A point's confidence is
 // (1 - its cost) (1 - 2^-k), k the views besides the reference that agree:
-// agreement predicts a point's error, its cost hardly does.
+// agreement predicts a point's error, its cost hardly does (0 for a point no
+// other view confirms, kept only when min_agreeing_views is 0). After the
+// merge, each direction is smoothed over its neighbours (Luo 2013 Sec. 4
+// Eq. 2; FusionOptions::direction_sigma_mm).
 //
 // Frames and units: points in the views' object frame (the turntable frame
 // for a capture), mm; directions unsigned.
@@ -29,11 +32,15 @@ struct FusionOptions {
   // Each consistent point's direction from the 2D orientation maps of every
   // view that agrees with it (Luo 2013 Sec. 4 Eq. 1, after Wei et al. 2005):
   // the direction closest to lying in each view's plane through its camera
-  // and the orientation seen there; false keeps the stereo's direction. Off:
-  // on the demo capture it changes point precision by under 0.01 (README).
+  // and the orientation seen there, with the stereo's direction weighted as a
+  // quarter of a view. A view whose plane is further than angle_tolerance_deg
+  // from the stereo's direction is left out; with fewer than two views left
+  // the stereo's direction stays. Off: on the demo capture it changes point
+  // precision by under 0.01 (README).
   bool multiview_direction = false;
   // Luo 2013 Sec. 4 Eq. 2 on the merged points (point_orientation_field.h):
-  // each direction replaced by the field's of this sigma (mm), 0 = off.
+  // each direction replaced by the field's of this sigma (mm) over the
+  // neighbours whose direction is within angle_tolerance_deg of it; 0 = off.
   double direction_sigma_mm = 2.0;  // Luo's sigma_d
   // Luo 2013 Sec. 4's MLS filtering of the merged points (reconstruction/mls.h):
   // the Gaussian's sigma in mm, 0 = off.
@@ -45,10 +52,11 @@ struct FusionOptions {
 };
 
 struct FusionSummary {
-  int64_t candidates = 0;  // cells with an estimate under max_cost
-  int64_t consistent = 0;  // ... that enough other views agree with
-  int64_t points = 0;      // after merging
-  bool mls = false;        // the points were MLS-filtered
+  int64_t candidates = 0;            // cells with an estimate under max_cost
+  int64_t consistent = 0;            // ... that enough other views agree with
+  int64_t points = 0;                // after merging
+  bool mls = false;                  // the points were MLS-filtered
+  bool smoothed_directions = false;  // ... and their directions smoothed by Eq. 2
 };
 
 // `views` and `maps` as given to and returned by ComputeLineDepthMaps (the

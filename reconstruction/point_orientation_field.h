@@ -18,6 +18,9 @@ class PointOrientationField {
  public:
   // `points` must outlive the field. sigma_mm > 0.
   PointOrientationField(const std::vector<OrientedPoint>& points, double sigma_mm);
+  // Not copied or moved: the grid refers to the field's own positions.
+  PointOrientationField(const PointOrientationField&) = delete;
+  PointOrientationField& operator=(const PointOrientationField&) = delete;
 
   // The orientation at p from the neighbours whose direction is within
   // acos(min_abs_cos) of `reference` (unsigned; Luo Sec. 5.1 keeps crossing
@@ -40,9 +43,9 @@ class PointOrientationField {
 
 // Every point's direction replaced by the field's at its position (Luo Eq. 2
 // evaluated on the cloud itself), over the neighbours within acos(min_abs_cos)
-// of the point's own direction, so that crossing layers keep their own
-// directions. A point with no such neighbour keeps its direction; positions,
-// confidences and views are unchanged. sigma_mm > 0.
+// of the point's own direction (the point itself among them), so that
+// crossing layers keep their own directions. Positions, confidences and
+// views are unchanged. sigma_mm > 0; min_abs_cos in [0, 1).
 std::vector<OrientedPoint> SmoothDirections(const std::vector<OrientedPoint>& points,
                                             double sigma_mm, double min_abs_cos, int threads);
 

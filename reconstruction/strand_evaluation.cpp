@@ -250,8 +250,8 @@ std::string StrandEvaluation::BriefReport() const {
   return s.str();
 }
 
-Result<double> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
-                                        const StrandEvalOptions& options) {
+Result<TruthConsistencyReference> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
+                                                           const StrandEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
   if (const Status s = truth.Validate(); !s.ok())
     return InvalidArgument("true strands: " + s.message());
@@ -272,7 +272,11 @@ Result<double> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
       kept, others, kStrandConsistencyThreshold, {.directed = false, .threads = options.threads});
   StrandEvaluation scored;
   MeasureConsistency(nearest, other_strand, kept_strand, &scored);
-  return scored.consistency;
+  TruthConsistencyReference out;
+  out.consistency = scored.consistency;
+  out.scored_strands = scored.consistency_strands;
+  out.kept_strands = (static_cast<int64_t>(truth.num_strands()) + every - 1) / every;
+  return out;
 }
 
 }  // namespace hairrig

@@ -118,13 +118,19 @@ Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_fram
                                          const StrandEvalOptions& options);
 
 // The consistency a reconstruction as faithful as the truth itself scores
-// with `strands` strands: every k-th true strand (k = the true count /
-// `strands`, rounded, at least 2) taken as the reconstruction, and the other
-// true strands scored against it. Neighbouring true strands weave around one
-// another, so even this stays well under 1 and falls as `strands` grows: the
-// reference a reconstruction's consistency is read against. InvalidArgument
-// for bad options, an invalid truth or `strands` < 1.
-Result<double> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
-                                        const StrandEvalOptions& options);
+// at about `strands` strands: every k-th true strand (k = the true count /
+// `strands`, rounded, at least 2, so at most half the truth is kept) taken as
+// the reconstruction, and the other true strands scored against it as
+// EvaluateStrands scores consistency. Neighbouring true strands weave around
+// one another, so even this stays under 1, and it falls as more strands are
+// kept: the reference a reconstruction's consistency is read against.
+struct TruthConsistencyReference {
+  double consistency = 0;      // mean over scored_strands; 0 when none has a match
+  int64_t kept_strands = 0;    // true strands taken as the reconstruction
+  int64_t scored_strands = 0;  // the other true strands with a matched sample
+};
+// InvalidArgument for bad options, an invalid truth or `strands` < 1.
+Result<TruthConsistencyReference> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
+                                                           const StrandEvalOptions& options);
 
 }  // namespace hairrig

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -150,17 +151,21 @@ StrandSet SwayingStrands(int count, double sway_mm) {
 }
 
 TEST(StrandEvaluation, TheTruthsOwnConsistencyFallsWhenItsStrandsWeave) {
-  const auto straight = ConsistencyOfTruthSubset(SwayingStrands(20, 0), 10, StrandEvalOptions{});
+  const StrandEvalOptions options;
+  const auto straight = ConsistencyOfTruthSubset(SwayingStrands(20, 0), 10, options);
   ASSERT_TRUE(straight.ok()) << straight.status().ToString();
-  EXPECT_DOUBLE_EQ(*straight, 1.0);  // each odd strand keeps its nearest even one
-  const auto weaving = ConsistencyOfTruthSubset(SwayingStrands(20, 1.5), 10, StrandEvalOptions{});
-  ASSERT_TRUE(weaving.ok());
-  std::printf(
-      "consistency of half the strands against the other half: straight %.3f, weaving %.3f\n",
-      *straight, *weaving);
-  EXPECT_LT(*weaving, 0.8);
-  EXPECT_GT(*weaving, 0.2);
-  EXPECT_EQ(ConsistencyOfTruthSubset(SwayingStrands(4, 0), 0, StrandEvalOptions{}).status().code(),
+  EXPECT_DOUBLE_EQ(straight->consistency, 1.0);  // each odd strand keeps its nearest even one
+  EXPECT_EQ(straight->kept_strands, 10);
+  EXPECT_EQ(straight->scored_strands, 10);
+  const auto half = ConsistencyOfTruthSubset(SwayingStrands(20, 1.5), 10, options);
+  const auto quarter = ConsistencyOfTruthSubset(SwayingStrands(20, 1.5), 5, options);
+  ASSERT_TRUE(half.ok() && quarter.ok());
+  std::printf("consistency of the truth's own weaving strands: half kept %.3f, a quarter %.3f\n",
+              half->consistency, quarter->consistency);
+  EXPECT_NEAR(half->consistency, 0.46, 0.05);
+  EXPECT_EQ(quarter->kept_strands, 5);
+  EXPECT_GT(quarter->consistency, half->consistency + 0.05);  // fewer kept: fewer to change hands
+  EXPECT_EQ(ConsistencyOfTruthSubset(SwayingStrands(4, 0), 0, options).status().code(),
             StatusCode::kInvalidArgument);
 }
 

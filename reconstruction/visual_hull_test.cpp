@@ -14,6 +14,8 @@
 namespace hairrig {
 namespace {
 
+using plane_scene::CentredCamera;
+
 constexpr int kWidth = 320, kHeight = 240;
 constexpr double kRadiusMm = 80;
 const Eigen::Vector3d kCentre(5, -10, 20);
