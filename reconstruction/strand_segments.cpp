@@ -1,6 +1,5 @@
 #include "reconstruction/strand_segments.h"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
