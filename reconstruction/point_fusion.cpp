@@ -244,7 +244,7 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
   }
   if (options.direction_sigma_mm > 0) {
     // Only neighbours whose direction agrees within the fusion's tolerance.
-    merged = SmoothDirections(merged, options.direction_sigma_mm,
+    merged = SmoothDirections(std::move(merged), options.direction_sigma_mm,
                               std::cos(DegToRad(options.angle_tolerance_deg)), options.threads);
     s.smoothed_directions = true;
   }

@@ -48,18 +48,22 @@ bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& 
   return true;
 }
 
-std::vector<OrientedPoint> SmoothDirections(const std::vector<OrientedPoint>& points,
-                                            double sigma_mm, double min_abs_cos, int threads) {
-  const PointOrientationField field(points, sigma_mm);
-  std::vector<OrientedPoint> out = points;
-  ParallelFor(points.size(), threads, [&] {
-    return [&](size_t i) {
-      Eigen::Vector3f o;
-      if (field.At(points[i].position_mm, points[i].direction, min_abs_cos, 1, &o))
-        out[i].direction = o;
-    };
-  });
-  return out;
+std::vector<OrientedPoint> SmoothDirections(std::vector<OrientedPoint> points, double sigma_mm,
+                                            double min_abs_cos, int threads) {
+  // The new directions first, then written into the points the field has
+  // stopped reading (no copy of the points and their view lists).
+  std::vector<Eigen::Vector3f> directions(points.size());
+  {
+    const PointOrientationField field(points, sigma_mm);
+    ParallelFor(points.size(), threads, [&] {
+      return [&](size_t i) {
+        directions[i] = points[i].direction;
+        field.At(points[i].position_mm, points[i].direction, min_abs_cos, 1, &directions[i]);
+      };
+    });
+  }
+  for (size_t i = 0; i < points.size(); ++i) points[i].direction = directions[i];
+  return points;
 }
 
 }  // namespace hairrig

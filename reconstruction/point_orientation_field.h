@@ -46,7 +46,7 @@ class PointOrientationField {
 // of the point's own direction (the point itself among them), so that
 // crossing layers keep their own directions. Positions, confidences and
 // views are unchanged. sigma_mm > 0; min_abs_cos in [0, 1).
-std::vector<OrientedPoint> SmoothDirections(const std::vector<OrientedPoint>& points,
-                                            double sigma_mm, double min_abs_cos, int threads);
+std::vector<OrientedPoint> SmoothDirections(std::vector<OrientedPoint> points, double sigma_mm,
+                                            double min_abs_cos, int threads);
 
 }  // namespace hairrig
