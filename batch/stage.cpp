@@ -20,6 +20,7 @@
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_dataset.h"
 #include "rig/reconstruct_capture.h"
+#include "rig/reconstruction_input.h"
 #include "rig/rig_config.h"
 #include "simulation/helix_model.h"
 
@@ -301,7 +302,7 @@ Result<InputFiles> StageInputFiles(Stage stage, const std::string& capture_dir,
       HR_RETURN_IF_ERROR(AddCaptureFiles(capture_dir, &files));
       HR_RETURN_IF_ERROR(Require(capture_dir, "calibration/calibration.json",
                                  "run the calibrate stage first", &files));
-      if (!settings.reconstruct.head.empty()) {
+      if (!settings.reconstruct.head.empty() && settings.reconstruct.head != kFittedHead) {
         HR_RETURN_IF_ERROR(AddOptionFile("head", settings.reconstruct.head, &files));
       }
       break;

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/json_file.h"
+#include "rig/reconstruction_input.h"
 #include "simulation/hair_simulation.h"
 
 namespace hairrig {
@@ -84,7 +85,8 @@ void ReadReconstruct(const JsonObject& o, const std::string& base_dir, Reconstru
   s->method = o.StringOr("method", s->method);
   CheckChoice(o, "method", s->method, {"bao-qi", "luo", "naive"});
   s->strands = static_cast<int>(o.IntegerOr("strands", s->strands, {.min = 1, .max = 2000000}));
-  s->head = ResolveAgainst(base_dir, o.StringOr("head", s->head));
+  const std::string head = o.StringOr("head", s->head);
+  s->head = head == kFittedHead ? head : ResolveAgainst(base_dir, head);
   s->stride_px = static_cast<int>(o.IntegerOr("stride_px", s->stride_px, {.min = 1, .max = 8}));
   s->iterations = static_cast<int>(o.IntegerOr("iterations", s->iterations, {.min = 1, .max = 50}));
   s->hull_voxel_mm = o.NumberOr("hull_voxel_mm", s->hull_voxel_mm, {.min = 0.25, .max = 50});

@@ -68,7 +68,9 @@ struct CalibrateSettings {
 struct ReconstructSettings {
   std::string method = "bao-qi";  // bao-qi, luo or naive (`reconstruct --method`)
   int strands = StrandReconstructionOptions{}.strands;  // strands grown (`reconstruct --strands`)
-  std::string head;  // the subject's head file; empty: the capture's rig.yaml head
+  // The subject's head file; "fit": fitted to the views; empty: the capture's
+  // rig.yaml head (fitted where it has none).
+  std::string head;
   int stride_px =
       LineMvsOptions{}.stride_px;  // stereo on every N-th pixel (`reconstruct --stride`)
   int iterations =

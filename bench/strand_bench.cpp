@@ -1,9 +1,10 @@
 // Reconstruction II on a capture of the simulated rig whose points exist
 // (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
 // timed, side by side. Run from the repository root:
-//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head
-//   FILE]
-//                                    [--volume-bound B] [--out-suffix S] [--score yes|no]
+//   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N]
+//       [--head FILE|fit] [--volume-bound B] [--out-suffix S] [--score yes|no]
+// --head fit roots the strands on a head fitted to the capture's labels
+// (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
 // reconstruction is left alone); preview_truth.jpg beside them shows the
 // model over the ground truth's strands, and each method's strands are scored
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
   namespace fs = std::filesystem;
   if (argc < 2) {
     std::fprintf(stderr,
-                 "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE] "
+                 "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
                  "[--volume-bound B] [--out-suffix S] [--score yes|no]\n",
                  argv[0]);
     return 2;
@@ -56,7 +57,18 @@ int main(int argc, char** argv) {
       score = std::strcmp(argv[i + 1], "no") != 0;
     }
   }
-  auto head = LoadCaptureHead(capture, head_file);
+  auto input = LoadCaptureReconstructionInput(capture);
+  if (!input.ok()) {
+    std::fprintf(stderr, "%s\n", input.status().ToString().c_str());
+    return 1;
+  }
+  SubjectHeadRequest request;
+  request.head_file = head_file;
+  request.capture_dir = capture;
+  request.reconstruction_dir = capture + "/reconstruction";
+  request.views = &input->views;
+  auto head = ResolveSubjectHead(request);
+  if (head.ok() && head->fit) std::printf("%s", head->fit->BriefReport().c_str());
   auto truth = ReadStrands(capture + "/ground_truth/ground_truth_strands.ply");
   if (!head.ok() || !truth.ok()) {
     std::fprintf(stderr, "%s\n", (!head.ok() ? head.status() : truth.status()).ToString().c_str());

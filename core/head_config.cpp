@@ -1,6 +1,10 @@
 #include "core/head_config.h"
 
+#include <Eigen/Geometry>
 #include <filesystem>
+#include <sstream>
+
+#include "core/file_util.h"
 
 namespace hairrig {
 namespace {
@@ -44,7 +48,58 @@ void ReadHeadMap(const ConfigNode& h, const std::string& base_file, HeadSpec* he
   if (h.Has("scalp")) ReadScalp(h.Child("scalp"), &head->scalp);
 }
 
+std::string NumberYaml(double x) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(2);
+  out << x;
+  return out.str();
+}
+
+std::string Vec3Yaml(const Eigen::Vector3d& v) {
+  return "[" + NumberYaml(v.x()) + ", " + NumberYaml(v.y()) + ", " + NumberYaml(v.z()) + "]";
+}
+
+// rotation_deg [rx, ry, rz] with R = Rz * Ry * Rx (ReadPoseConfig's order).
+Eigen::Vector3d RotationDeg(const Rigid3d& pose) {
+  const Eigen::Vector3d zyx = pose.RotationMatrix().eulerAngles(2, 1, 0);
+  return Eigen::Vector3d(RadToDeg(zyx[2]), RadToDeg(zyx[1]), RadToDeg(zyx[0]));
+}
+
 }  // namespace
+
+std::string HeadSpecToYaml(const HeadSpec& head) {
+  std::ostringstream out;
+  out << "head:\n";
+  if (!head.mesh_file.empty()) {
+    out << "  mesh: \"" << head.mesh_file << "\"\n"
+        << "  mesh_pose:\n"
+        << "    rotation_deg: " << Vec3Yaml(RotationDeg(head.turntable_from_mesh)) << "\n"
+        << "    translation_mm: " << Vec3Yaml(head.turntable_from_mesh.translation) << "\n";
+  }
+  out << "  center_mm: " << Vec3Yaml(head.center_turntable_mm) << "\n"
+      << "  radii_mm: " << Vec3Yaml(head.radii_mm) << "\n"
+      << "  albedo: " << Vec3Yaml(head.albedo) << "\n";
+  const ScalpSpec& s = head.scalp;
+  if (s.defined) {
+    out << "  scalp:\n"
+        << "    center_mm: " << Vec3Yaml(s.center_turntable_mm) << "\n"
+        << "    face_dir: " << Vec3Yaml(s.face_dir) << "\n"
+        << "    hairline_front_deg: " << NumberYaml(s.hairline_front_deg) << "\n"
+        << "    hairline_temple_deg: " << NumberYaml(s.hairline_temple_deg) << "\n"
+        << "    hairline_ear_deg: " << NumberYaml(s.hairline_ear_deg) << "\n"
+        << "    hairline_nape_deg: " << NumberYaml(s.hairline_nape_deg) << "\n"
+        << "    parting: " << (s.parting ? "true" : "false") << "\n"
+        << "    parting_offset_deg: " << NumberYaml(s.parting_offset_deg) << "\n"
+        << "    parting_width_mm: " << NumberYaml(s.parting_width_mm) << "\n"
+        << "    parting_back_deg: " << NumberYaml(s.parting_back_deg) << "\n";
+  }
+  return out.str();
+}
+
+Status WriteHeadFile(const std::string& path, const HeadSpec& head) {
+  return WriteFileAtomic(path, HeadSpecToYaml(head));
+}
 
 std::string ResolveBesideFile(const std::string& base_file, const std::string& relative) {
   if (relative.empty() || relative[0] == '/') return relative;

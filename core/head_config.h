@@ -43,6 +43,14 @@ Status ReadHeadConfig(const ConfigNode& parent, const std::string& key,
 // A head file: a YAML document with a top-level `head:` map.
 Result<HeadSpec> LoadHeadFile(const std::string& path);
 
+// A head file's text (the schema above, every field, numbers to 0.01 mm or
+// deg): what LoadHeadFile reads back. A mesh is written by its path as the
+// spec holds it.
+std::string HeadSpecToYaml(const HeadSpec& head);
+
+// Writes HeadSpecToYaml(head) to `path` atomically. IoError naming the path.
+Status WriteHeadFile(const std::string& path, const HeadSpec& head);
+
 // The `head:` of any YAML file that may have one (a scene, a rig config),
 // its other top-level keys not read; HeadSpec's defaults when it has none.
 Result<HeadSpec> ReadHeadOfFile(const std::string& path);

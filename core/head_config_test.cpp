@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
 
@@ -43,6 +44,42 @@ TEST(HeadConfig, AHeadSectionIsAMapOrTheNameOfAHeadFileWithPathsBesideIt) {
   EXPECT_TRUE(inline_head.mesh_file.empty());
   EXPECT_EQ(inline_head.radii_mm, Eigen::Vector3d(60, 70, 80));
   EXPECT_FALSE(inline_head.scalp.defined);
+}
+
+TEST(HeadConfig, AWrittenHeadFileReadsBackAsTheSameHead) {
+  const fs::path dir = TempDir("write");
+  HeadSpec head;
+  head.mesh_file = (dir / "m.ply").string();
+  head.turntable_from_mesh = Rigid3d(Eigen::AngleAxisd(DegToRad(-90), Eigen::Vector3d::UnitY()) *
+                                         Eigen::AngleAxisd(DegToRad(20), Eigen::Vector3d::UnitX()),
+                                     Eigen::Vector3d(121, -140, 180));
+  head.center_turntable_mm = Eigen::Vector3d(1.25, -3.5, 312.75);
+  head.radii_mm = Eigen::Vector3d(77, 96.5, 108);
+  head.scalp.defined = true;
+  head.scalp.center_turntable_mm = Eigen::Vector3d(0, 4, 320);
+  head.scalp.face_dir = Eigen::Vector3d(0.6, -0.8, 0);
+  head.scalp.hairline_front_deg = 31.5;
+  head.scalp.hairline_nape_deg = -27.25;
+  head.scalp.parting = false;
+  const std::string path = (dir / "head.yaml").string();
+  ASSERT_TRUE(WriteHeadFile(path, head).ok());
+  const Result<HeadSpec> back = LoadHeadFile(path);
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->mesh_file, head.mesh_file);
+  EXPECT_TRUE(back->turntable_from_mesh.RotationMatrix().isApprox(
+      head.turntable_from_mesh.RotationMatrix(), 1e-4));
+  EXPECT_TRUE(back->turntable_from_mesh.translation.isApprox(head.turntable_from_mesh.translation));
+  EXPECT_TRUE(back->center_turntable_mm.isApprox(head.center_turntable_mm));
+  EXPECT_TRUE(back->radii_mm.isApprox(head.radii_mm));
+  EXPECT_TRUE(back->scalp.defined);
+  EXPECT_TRUE(back->scalp.face_dir.isApprox(head.scalp.face_dir));
+  EXPECT_DOUBLE_EQ(back->scalp.hairline_front_deg, 31.5);
+  EXPECT_DOUBLE_EQ(back->scalp.hairline_nape_deg, -27.25);
+  EXPECT_DOUBLE_EQ(back->scalp.hairline_ear_deg, head.scalp.hairline_ear_deg);
+  EXPECT_FALSE(back->scalp.parting);
+
+  EXPECT_EQ(WriteHeadFile((dir / "no/such/folder/head.yaml").string(), head).code(),
+            StatusCode::kIoError);
 }
 
 TEST(HeadConfig, ErrorsNameTheFileAndTheField) {

@@ -1,5 +1,6 @@
 #include "core/image_file.h"
 
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/file_util.h"
@@ -19,6 +20,14 @@ Status WriteImageAtomic(const std::string& path, const cv::Mat& image,
   }
   if (!encoded) return Internal(path + ": cannot encode the image as ." + ext);
   return WriteFileAtomic(path, bytes.data(), bytes.size());
+}
+
+Result<cv::Mat> ReadImageFile(const std::string& path, int flags) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return NotFound(path + " is missing");
+  cv::Mat image = cv::imread(path, flags);
+  if (image.empty()) return CorruptData(path + ": not a readable image");
+  return image;
 }
 
 }  // namespace hairrig

@@ -12,6 +12,7 @@
 
 #include "core/geometry_json.h"
 #include "core/head_model.h"
+#include "core/image_file.h"
 #include "core/json_file.h"
 #include "core/parallel.h"
 #include "core/statistics.h"
@@ -64,14 +65,6 @@ Result<int> ViewNumber(const std::string& name) {
   return view;
 }
 
-Result<cv::Mat> ReadPng(const std::string& path, int flags) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return NotFound(path + " is missing");
-  cv::Mat image = cv::imread(path, flags);
-  if (image.empty()) return CorruptData(path + ": not a readable PNG");
-  return image;
-}
-
 struct ViewResult {
   Status status;
   ViewReconstructionAccuracy accuracy;
@@ -91,13 +84,14 @@ ViewResult EvaluateView(const std::string& dir, const std::string& name,
                         ReadViewTruthMaps(truth.views_dir, r.accuracy.view));
     const cv::Mat true_hair = maps.label == ViewTruthMaps::kHair;
     HR_ASSIGN_OR_RETURN(const cv::Mat label,
-                        ReadPng(dir + "/masks/" + name + "_label.png", cv::IMREAD_UNCHANGED));
+                        ReadImageFile(dir + "/masks/" + name + "_label.png", cv::IMREAD_UNCHANGED));
     HR_ASSIGN_OR_RETURN(r.accuracy.mask_iou, MaskIoU(label == 3, true_hair));
-    HR_ASSIGN_OR_RETURN(const cv::Mat angle,
-                        ReadPng(dir + "/orientation/" + name + "_angle.png", cv::IMREAD_UNCHANGED));
+    HR_ASSIGN_OR_RETURN(
+        const cv::Mat angle,
+        ReadImageFile(dir + "/orientation/" + name + "_angle.png", cv::IMREAD_UNCHANGED));
     HR_ASSIGN_OR_RETURN(
         const cv::Mat confidence,
-        ReadPng(dir + "/orientation/" + name + "_confidence.png", cv::IMREAD_UNCHANGED));
+        ReadImageFile(dir + "/orientation/" + name + "_confidence.png", cv::IMREAD_UNCHANGED));
     OrientationMap map;
     angle.convertTo(map.angle_deg, CV_32F, 0.01);
     map.angle_deg.setTo(std::numeric_limits<float>::quiet_NaN(), angle == 65535);
@@ -106,7 +100,7 @@ ViewResult EvaluateView(const std::string& dir, const std::string& name,
         r.accuracy.orientation,
         MeasureOrientation(map, maps.orientation_deg, true_hair, recon.min_confidence));
     HR_ASSIGN_OR_RETURN(const cv::Mat depth,
-                        ReadPng(dir + "/depth/" + name + "_depth.png", cv::IMREAD_UNCHANGED));
+                        ReadImageFile(dir + "/depth/" + name + "_depth.png", cv::IMREAD_UNCHANGED));
     if (depth.type() != CV_16U)
       return CorruptData(dir + "/depth/" + name + "_depth.png: not a 16-bit PNG");
     for (int gy = 0; gy < depth.rows; ++gy) {

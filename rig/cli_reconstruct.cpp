@@ -12,6 +12,7 @@
 #include "core/log.h"
 #include "rig/cli.h"
 #include "rig/reconstruct_capture.h"
+#include "rig/reconstruction_input.h"
 
 namespace hairrig {
 namespace {
@@ -105,8 +106,10 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
       ->check(CLI::IsMember({"bao-qi", "luo", "naive"}))
       ->capture_default_str();
   cmd->add_option("--head", args->head,
-                  "the subject's head (a YAML file with a head: map; default: the rig config's)")
-      ->check(CLI::ExistingFile);
+                  "the subject's head: a YAML file with a head: map, or 'fit' for an ellipsoid "
+                  "fitted to the views' skin (default: the rig config's head, fitted where it has "
+                  "none)")
+      ->check(CLI::ExistingFile | CLI::IsMember(std::vector<std::string>{kFittedHead}));
   cmd->add_option("--strands", args->strands, "how many strands to grow (roots on the scalp)")
       ->check(CLI::Range(1, 2000000))
       ->capture_default_str();

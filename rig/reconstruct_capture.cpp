@@ -49,11 +49,21 @@ Result<std::string> WriteOverViews(const ReconstructionInput& input,
   return path;
 }
 
-Result<StrandReconstructionSummary> RunStrands(const ReconstructCaptureOptions& o) {
-  HR_ASSIGN_OR_RETURN(const SubjectHead head, LoadCaptureHead(o.dir, o.head_file));
+Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput& input,
+                  ReconstructCaptureSummary* summary) {
+  SubjectHeadRequest request;
+  request.head_file = o.head_file;
+  request.capture_dir = o.colmap_dir.empty() ? o.dir : "";
+  request.reconstruction_dir = o.dir + "/reconstruction";
+  request.views = &input.views;
+  request.threads = o.strands.threads;
+  HR_ASSIGN_OR_RETURN(const SubjectHead head, ResolveSubjectHead(request));
+  summary->head_fit = head.fit;
   LogInfo("reconstruct: strands (" + std::string(StrandMethodName(o.strands.method)) + ") from " +
-          o.dir + "/reconstruction/points.ply");
-  return ReconstructStrands(o.dir + "/reconstruction", head.spec, head.source, o.strands);
+          o.dir + "/reconstruction/points.ply, head " + head.source);
+  HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
+                                                           head.source, o.strands));
+  return Status::Ok();
 }
 
 }  // namespace
@@ -70,10 +80,6 @@ Status ReconstructCaptureOptions::Validate() const {
   if (!colmap_dir.empty() && images_dir.empty()) {
     return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
   }
-  if (!colmap_dir.empty() && stage != ReconstructStage::kPoints && head_file.empty()) {
-    return InvalidArgument(
-        "strands from a COLMAP model need --head FILE (the head in the model's frame)");
-  }
   if (stage != ReconstructStage::kPoints) HR_RETURN_IF_ERROR(strands.Check());
   return Status::Ok();
 }
@@ -81,6 +87,7 @@ Status ReconstructCaptureOptions::Validate() const {
 nlohmann::json ReconstructCaptureSummary::ToJson() const {
   nlohmann::json j = nlohmann::json::object();
   if (points) j["points"] = points->ToJson();
+  if (head_fit) j["head_fit"] = head_fit->ToJson();
   if (strands) j["strands"] = strands->ToJson();
   if (!over_views_picture.empty()) j["over_views_picture"] = over_views_picture;
   j["brief"] = BriefReport();
@@ -88,8 +95,9 @@ nlohmann::json ReconstructCaptureSummary::ToJson() const {
 }
 
 std::string ReconstructCaptureSummary::BriefReport() const {
-  std::string brief =
-      (points ? points->BriefReport() : "") + (strands ? strands->BriefReport() : "");
+  std::string brief = (points ? points->BriefReport() : "") +
+                      (head_fit ? head_fit->BriefReport() : "") +
+                      (strands ? strands->BriefReport() : "");
   if (!over_views_picture.empty())
     brief += "  strands over the input views: " + over_views_picture + "\n";
   return brief;
@@ -104,7 +112,7 @@ Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOpt
                         ReconstructPoints(input, o.dir + "/reconstruction", o.points, o.progress));
   }
   if (o.stage != ReconstructStage::kPoints) {
-    HR_ASSIGN_OR_RETURN(summary.strands, RunStrands(o));
+    HR_RETURN_IF_ERROR(RunStrands(o, input, &summary));
     HR_ASSIGN_OR_RETURN(summary.over_views_picture,
                         WriteOverViews(input, summary.strands->output_dir));
   }

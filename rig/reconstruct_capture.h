@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/status.h"
+#include "reconstruction/head_fit.h"
 #include "reconstruction/point_reconstruction.h"
 #include "reconstruction/strand_reconstruction.h"
 
@@ -28,10 +29,13 @@ struct ReconstructCaptureOptions {
       dir;  // a calibrated capture folder; with colmap_dir, where reconstruction/ is written
   ReconstructStage stage = ReconstructStage::kAll;
   // A COLMAP text model instead of a capture: its folder, its images and
-  // (optional) hair masks named <image name>.png. Strands then need head_file.
+  // (optional) hair masks named <image name>.png. Strands there are rooted on
+  // head_file's head, or on one fitted to the views (rig/reconstruction_input.h).
   std::string colmap_dir, images_dir, masks_dir;
   std::vector<int> views;  // only these view numbers (capture) or IMAGE_IDs (COLMAP); empty: all
-  std::string head_file;   // the subject's head; empty: the capture's rig.yaml head
+  // The subject's head: a head file, kFittedHead ("fit"), or empty for the
+  // rig.yaml's head (fitted where it has none); ResolveSubjectHead.
+  std::string head_file;
   PointReconstructionOptions points;
   StrandReconstructionOptions strands;
   ReconstructionProgress progress;  // optional
@@ -41,6 +45,7 @@ struct ReconstructCaptureOptions {
 
 struct ReconstructCaptureSummary {
   std::optional<PointReconstructionSummary> points;
+  std::optional<HeadFitSummary> head_fit;  // when the strands' head was fitted to the views
   std::optional<StrandReconstructionSummary> strands;
   std::string over_views_picture;  // empty when the strands stage did not run
   nlohmann::json ToJson() const;

@@ -70,22 +70,42 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
   return input;
 }
 
-Result<SubjectHead> LoadCaptureHead(const std::string& capture_dir, const std::string& head_file) {
+namespace {
+
+Result<SubjectHead> FitSubjectHead(const SubjectHeadRequest& r) {
+  if (r.views == nullptr) return InvalidArgument("a head fit needs the views");
+  HeadFitOptions options;
+  options.threads = r.threads;
   SubjectHead head;
-  if (!head_file.empty()) {
-    HR_ASSIGN_OR_RETURN(head.spec, LoadHeadFile(head_file));
-    head.source = head_file;
+  HR_ASSIGN_OR_RETURN(head.fit, FitHeadToReconstruction(*r.views, r.reconstruction_dir, options));
+  head.spec = head.fit->head;
+  const std::string path = r.reconstruction_dir + "/head.yaml";
+  HR_RETURN_IF_ERROR(WriteHeadFile(path, head.spec));
+  head.source = "fitted to the views' skin, " + path;
+  return head;
+}
+
+}  // namespace
+
+Result<SubjectHead> ResolveSubjectHead(const SubjectHeadRequest& r) {
+  if (r.head_file == kFittedHead) return FitSubjectHead(r);
+  SubjectHead head;
+  if (!r.head_file.empty()) {
+    HR_ASSIGN_OR_RETURN(head.spec, LoadHeadFile(r.head_file));
+    head.source = r.head_file;
     return head;
   }
-  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
+  if (r.capture_dir.empty()) return FitSubjectHead(r);
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(r.capture_dir));
   if (!config.head) {
-    return NotFound(capture_dir +
-                    "/rig.yaml has no head: section; give the subject's head with --head FILE "
-                    "(a YAML file with a head: map, as etc/heads/mannequin.yaml) or add head: to "
-                    "the rig config");
+    Result<SubjectHead> fitted = FitSubjectHead(r);
+    if (!fitted.ok())
+      return fitted.status().WithContext(r.capture_dir +
+                                         "/rig.yaml has no head:, and fitting one failed");
+    return fitted;
   }
   head.spec = *config.head;
-  head.source = capture_dir + "/rig.yaml";
+  head.source = r.capture_dir + "/rig.yaml";
   return head;
 }
 

@@ -5,10 +5,12 @@
 // projected outline as a region that holds no hair.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/head_spec.h"
+#include "reconstruction/head_fit.h"
 #include "reconstruction/views.h"
 
 namespace hairrig {
@@ -23,14 +25,34 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
 // empty). InvalidArgument naming an id that is not among the usable views.
 Status SelectViews(const std::vector<int>& ids, ReconstructionInput* input);
 
-// The subject's head for the strands, in the turntable frame: the head file
-// `head_file` when given (core/head_config.h), else the `head:` of the
-// capture's rig.yaml snapshot. `source` says which, for reports. NotFound
-// naming both when there is neither (the rig config's `head:` or --head FILE).
+// The value of --head that asks for a head fitted to the views even where
+// the rig config gives one.
+inline constexpr char kFittedHead[] = "fit";
+
+// The subject's head for the strands, in the object frame (the turntable
+// frame for a capture), and where it came from:
+//  - `head_file` naming a file: that head file (core/head_config.h);
+//  - `head_file` kFittedHead, or empty where `capture_dir` has no rig.yaml
+//    with a `head:` (a COLMAP model, a rig config without one): an ellipsoid
+//    and scalp fitted to the views' labels in reconstruction_dir/masks
+//    (reconstruction/head_fit.h), written to reconstruction_dir/head.yaml
+//    so that reconstruct --head and simulate --head take it;
+//  - empty: the `head:` of capture_dir/rig.yaml.
+// `source` says which, for reports. Errors: a head file's, a damaged
+// rig.yaml, or the fit's (no labels: run the points stage; no skin seen:
+// give --head FILE).
 struct SubjectHead {
   HeadSpec spec;
   std::string source;
+  std::optional<HeadFitSummary> fit;  // set when the head was fitted
 };
-Result<SubjectHead> LoadCaptureHead(const std::string& capture_dir, const std::string& head_file);
+struct SubjectHeadRequest {
+  std::string head_file;
+  std::string capture_dir;  // empty for a COLMAP model
+  std::string reconstruction_dir;
+  const std::vector<ReconstructionView>* views = nullptr;  // for a fit
+  int threads = 2;
+};
+Result<SubjectHead> ResolveSubjectHead(const SubjectHeadRequest& request);
 
 }  // namespace hairrig
