@@ -74,9 +74,16 @@ Status AddCaptureFiles(const std::string& capture_dir, InputFiles* files) {
 }
 
 // The head file the capture's rig.yaml names ("head: heads/mannequin.yaml");
-// "" when its head is written inline or absent.
+// without a head there, the one the reconstruct stage fitted
+// (reconstruction/head.yaml, rig/reconstruction_input.h) if it exists; ""
+// when the head is written inline, or absent and not fitted.
 Result<std::string> CaptureHeadFile(const std::string& capture_dir) {
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
+  if (!config.root.Has("head")) {
+    const std::string fitted = (fs::path(capture_dir) / "reconstruction" / "head.yaml").string();
+    std::error_code ec;
+    return fs::is_regular_file(fitted, ec) ? fitted : std::string();
+  }
   if (!config.root.HasScalar("head")) return std::string();
   return ResolveBesideFile((fs::path(config.relative_to) / "rig.yaml").string(),
                            config.root.String("head"));
@@ -110,7 +117,10 @@ Result<HashedInputs> HashInputs(const StageOptions& o) {
   }
   // The files options name count by their contents (inputs), not their paths.
   nlohmann::json options = o.settings.StageJson(o.stage);
-  for (const char* key : {"threads", "intrinsics", "head", "scene"}) options.erase(key);
+  for (const char* key : {"threads", "intrinsics", "head", "scene"}) {
+    if (options.value(key, nlohmann::json()) != kFittedHead)
+      options.erase(key);  // "fit" is no file
+  }
   const nlohmann::json identity{{"hairrig_version", HairrigVersion()},
                                 {"stage", StageName(o.stage)},
                                 {"options", options},

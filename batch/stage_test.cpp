@@ -188,13 +188,15 @@ TEST(StageSettings, DefaultsRoundTripAndRelativeFilesResolve) {
   EXPECT_EQ(defaults.fit.guides, 300);  // scripts/demo's
   EXPECT_EQ(defaults.simulate.scenario, "head-shake");
 
-  const nlohmann::json j = {{"calibrate", {{"intrinsics", {"cam.json"}}, {"threads", 1}}},
-                            {"reconstruct", {{"strands", 200}, {"hull_voxel_mm", 4.0}}},
-                            {"simulate", {{"head", "heads/h.yaml"}, {"seconds", 0.2}}}};
+  const nlohmann::json j = {
+      {"calibrate", {{"intrinsics", {"cam.json"}}, {"threads", 1}}},
+      {"reconstruct", {{"strands", 200}, {"hull_voxel_mm", 4.0}, {"head", "fit"}}},
+      {"simulate", {{"head", "heads/h.yaml"}, {"seconds", 0.2}}}};
   const Result<StageSettings> s = StageSettingsFromJson(j, "opts.json", "/base");
   ASSERT_TRUE(s.ok()) << s.status().ToString();
   EXPECT_EQ(s->calibrate.intrinsics, std::vector<std::string>{"/base/cam.json"});
   EXPECT_EQ(s->reconstruct.strands, 200);
+  EXPECT_EQ(s->reconstruct.head, "fit") << "a fitted head is no file to resolve";
   EXPECT_EQ(s->simulate.head, "/base/heads/h.yaml");
   EXPECT_EQ(s->Threads(Stage::kCalibrate), 1);
   EXPECT_EQ(s->Threads(Stage::kSimulate), 1);

@@ -6,8 +6,8 @@
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
-// reconstruction is left alone); preview_truth.jpg beside them shows the
-// model over the ground truth's strands, and each method's strands are scored
+// reconstruction is left alone, but for the head.yaml a fitted head writes); preview_truth.jpg
+// beside them shows the model over the ground truth's strands, and each method's strands are scored
 // by the strand protocol of `hairrig eval reconstruction` (unless --score no),
 // then the consistency the truth's own strands score at the same count.
 #include <cstdio>

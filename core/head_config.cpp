@@ -48,16 +48,24 @@ void ReadHeadMap(const ConfigNode& h, const std::string& base_file, HeadSpec* he
   if (h.Has("scalp")) ReadScalp(h.Child("scalp"), &head->scalp);
 }
 
-std::string NumberYaml(double x) {
+std::string NumberYaml(double x, int decimals = 2) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
-  out.precision(2);
+  out.precision(decimals);
   out << x;
   return out.str();
 }
 
-std::string Vec3Yaml(const Eigen::Vector3d& v) {
-  return "[" + NumberYaml(v.x()) + ", " + NumberYaml(v.y()) + ", " + NumberYaml(v.z()) + "]";
+std::string Vec3Yaml(const Eigen::Vector3d& v, int decimals = 2) {
+  return "[" + NumberYaml(v.x(), decimals) + ", " + NumberYaml(v.y(), decimals) + ", " +
+         NumberYaml(v.z(), decimals) + "]";
+}
+
+// A single-quoted YAML scalar: every ' doubled, nothing else escaped.
+std::string QuotedYaml(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return quoted + "'";
 }
 
 // rotation_deg [rx, ry, rz] with R = Rz * Ry * Rx (ReadPoseConfig's order).
@@ -72,19 +80,19 @@ std::string HeadSpecToYaml(const HeadSpec& head) {
   std::ostringstream out;
   out << "head:\n";
   if (!head.mesh_file.empty()) {
-    out << "  mesh: \"" << head.mesh_file << "\"\n"
+    out << "  mesh: " << QuotedYaml(std::filesystem::absolute(head.mesh_file).string()) << "\n"
         << "  mesh_pose:\n"
         << "    rotation_deg: " << Vec3Yaml(RotationDeg(head.turntable_from_mesh)) << "\n"
         << "    translation_mm: " << Vec3Yaml(head.turntable_from_mesh.translation) << "\n";
   }
   out << "  center_mm: " << Vec3Yaml(head.center_turntable_mm) << "\n"
       << "  radii_mm: " << Vec3Yaml(head.radii_mm) << "\n"
-      << "  albedo: " << Vec3Yaml(head.albedo) << "\n";
+      << "  albedo: " << Vec3Yaml(head.albedo, 4) << "\n";
   const ScalpSpec& s = head.scalp;
   if (s.defined) {
     out << "  scalp:\n"
         << "    center_mm: " << Vec3Yaml(s.center_turntable_mm) << "\n"
-        << "    face_dir: " << Vec3Yaml(s.face_dir) << "\n"
+        << "    face_dir: " << Vec3Yaml(s.face_dir, 6) << "\n"
         << "    hairline_front_deg: " << NumberYaml(s.hairline_front_deg) << "\n"
         << "    hairline_temple_deg: " << NumberYaml(s.hairline_temple_deg) << "\n"
         << "    hairline_ear_deg: " << NumberYaml(s.hairline_ear_deg) << "\n"

@@ -43,9 +43,9 @@ Status ReadHeadConfig(const ConfigNode& parent, const std::string& key,
 // A head file: a YAML document with a top-level `head:` map.
 Result<HeadSpec> LoadHeadFile(const std::string& path);
 
-// A head file's text (the schema above, every field, numbers to 0.01 mm or
-// deg): what LoadHeadFile reads back. A mesh is written by its path as the
-// spec holds it.
+// A head file's text (the schema above, every field; lengths and angles to
+// 0.01 mm or deg, albedo to 4 decimals, face_dir to 6): what LoadHeadFile
+// reads back. A mesh is written by its absolute path.
 std::string HeadSpecToYaml(const HeadSpec& head);
 
 // Writes HeadSpecToYaml(head) to `path` atomically. IoError naming the path.

@@ -49,7 +49,7 @@ TEST(HeadConfig, AHeadSectionIsAMapOrTheNameOfAHeadFileWithPathsBesideIt) {
 TEST(HeadConfig, AWrittenHeadFileReadsBackAsTheSameHead) {
   const fs::path dir = TempDir("write");
   HeadSpec head;
-  head.mesh_file = (dir / "m.ply").string();
+  head.mesh_file = (dir / "it's here.ply").string();
   head.turntable_from_mesh = Rigid3d(Eigen::AngleAxisd(DegToRad(-90), Eigen::Vector3d::UnitY()) *
                                          Eigen::AngleAxisd(DegToRad(20), Eigen::Vector3d::UnitX()),
                                      Eigen::Vector3d(121, -140, 180));

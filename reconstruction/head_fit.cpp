@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
@@ -100,8 +101,8 @@ std::vector<SurfaceSample> CastOntoHull(const VisualHull& hull, const HeadFitVie
   return samples;
 }
 
-// The views' samples pooled per cell: the mean position, skin where more
-// views saw skin there than hair.
+// The views' samples pooled per cell: the mean position, skin where more of
+// the samples in it are skin than hair (a tie is hair).
 std::vector<SurfaceSample> PoolSamples(const std::vector<std::vector<SurfaceSample>>& per_view,
                                        double cell_mm) {
   struct Cell {
@@ -212,29 +213,34 @@ Start SearchCentre(const std::vector<SurfaceSample>& samples, const HeadFitOptio
                     Eigen::Vector3i::Constant(2 * coarse_mm / fine_mm + 1), fine_mm);
 }
 
-// Returns the final cost (prior included).
+// Returns the final cost (prior included); infinity when the solver found no
+// usable solution.
 double SolveEllipsoid(const std::vector<SurfaceSample>& samples, const HeadFitOptions& o,
                       const Eigen::Vector3d& typical, Eigen::Vector3d* centre,
                       Eigen::Vector3d* radii) {
   ceres::Problem problem;
   double* c = centre->data();
   double* r = radii->data();
-  ceres::LossFunction* outside_loss = new ceres::HuberLoss(o.outside_huber_mm / o.outside_scale_mm);
-  ceres::LossFunction* skin_loss = new ceres::CauchyLoss(1.0);
-  ceres::LossFunction* hair_loss =
-      new ceres::ScaledLoss(new ceres::CauchyLoss(1.0), o.hair_weight, ceres::TAKE_OWNERSHIP);
+  // Each loss is shared by its residual blocks; the problem deletes it once.
+  // Held here until its first block, so that an unused one is freed too.
+  auto outside_loss = std::make_unique<ceres::HuberLoss>(o.outside_huber_mm / o.outside_scale_mm);
+  auto skin_loss = std::make_unique<ceres::CauchyLoss>(1.0);
+  auto hair_loss = std::make_unique<ceres::ScaledLoss>(new ceres::CauchyLoss(1.0), o.hair_weight,
+                                                       ceres::TAKE_OWNERSHIP);
+  ceres::LossFunction *outside = outside_loss.release(), *skin = skin_loss.get(),
+                      *hair = hair_loss.get();
   for (const SurfaceSample& s : samples) {
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<OutsideResidual, 1, 3, 3>(
                                  new OutsideResidual{s.p, o.outside_scale_mm}),
-                             outside_loss, c, r);
+                             outside, c, r);
+    const double scale = s.skin ? o.skin_scale_mm : o.hair_scale_mm;
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<SkinResidual, 1, 3, 3>(new SkinResidual{s.p, scale}),
+        s.skin ? skin : hair, c, r);
     if (s.skin) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SkinResidual, 1, 3, 3>(
-                                   new SkinResidual{s.p, o.skin_scale_mm}),
-                               skin_loss, c, r);
+      skin_loss.release();
     } else {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SkinResidual, 1, 3, 3>(
-                                   new SkinResidual{s.p, o.hair_scale_mm}),
-                               hair_loss, c, r);
+      hair_loss.release();
     }
   }
   const double weight = std::sqrt(o.prior_samples) / o.radii_sigma_mm;
@@ -248,7 +254,9 @@ double SolveEllipsoid(const std::vector<SurfaceSample>& samples, const HeadFitOp
   solver.num_threads = std::max(1, o.threads);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
-  return summary.final_cost;
+  const bool usable = summary.IsSolutionUsable() && std::isfinite(summary.final_cost) &&
+                      centre->allFinite() && radii->allFinite();
+  return usable ? summary.final_cost : std::numeric_limits<double>::infinity();
 }
 
 // The skin samples within skin_scale_mm of the fitted ellipsoid.
@@ -263,8 +271,9 @@ std::vector<Eigen::Vector3d> SkinOnHead(const std::vector<SurfaceSample>& sample
   return on;
 }
 
-// The face: the horizontal mean direction of the skin on the upper half of
-// the head (the face; the ears cancel out). False when it is too weak to say.
+// The face: the horizontal mean direction of the skin on the head above half
+// its height radius below the centre (the face; the ears cancel out). False when it is too weak to
+// say.
 bool FaceDirection(const std::vector<Eigen::Vector3d>& skin, const HeadSpec& head,
                    Eigen::Vector3d* face) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -349,7 +358,7 @@ Result<HeadFitSummary> FitHeadToViews(const std::vector<HeadFitView>& views,
                               ": give the subject's head instead");
   }
   // The face along x or along y: each searched and solved, the cheaper kept.
-  Eigen::Vector3d centre, radii;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero(), radii = o.typical_radii_mm;
   double best_cost = std::numeric_limits<double>::infinity();
   for (int face_axis : {0, 1}) {
     const Eigen::Vector3d typical = TypicalRadii(o, face_axis);
@@ -361,6 +370,8 @@ Result<HeadFitSummary> FitHeadToViews(const std::vector<HeadFitView>& views,
       radii = r;
     }
   }
+  if (!std::isfinite(best_cost))
+    return Internal("the head fit's solver found no usable ellipsoid; give the subject's head");
   summary.head.center_turntable_mm = centre;
   summary.head.radii_mm = radii;
 

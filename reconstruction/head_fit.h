@@ -6,7 +6,7 @@
 //     = subject, box = unknown).
 //  2. Surface samples: every `stride_px`-th head or hair pixel of each view
 //     cast onto the hull's front surface, pooled on a `voxel_mm` grid, each
-//     cell labelled skin or hair by the views' majority.
+//     cell labelled skin or hair by the majority of its samples.
 //  3. The ellipsoid (centre and radii along the object frame's axes): every
 //     surface sample lies outside it (the hull holds the head, and hair lies
 //     on it), the skin samples lie on it (a Cauchy loss: the neck and the
@@ -21,9 +21,10 @@
 //     70 deg off the true hairline). No parting: the views cannot tell a
 //     bare line from a wig's parting.
 //
-// Frames and units: the views' object frame (the turntable frame for a
-// capture, +z up), mm. The ellipsoid's axes are the frame's: a head turned
-// 45 deg about z gets radii in between its width and depth (a HeadSpec
+// Frames and units: the views' object frame must be in mm with +z up (the
+// turntable frame of a capture): the prior, the grids and the horizontal face
+// direction assume it, so a COLMAP model's arbitrary frame does not do. The ellipsoid's axes are
+// the frame's: a head turned 45 deg about z gets radii in between its width and depth (a HeadSpec
 // ellipsoid has no rotation).
 #pragma once
 
@@ -65,8 +66,7 @@ struct HeadFitOptions {
   Eigen::Vector3d typical_radii_mm{78, 95, 110};
   double radii_sigma_mm = 12.0;
   double prior_samples = 2000;
-  int min_skin_samples = 30;    // fewer: no fit (the views show no skin)
-  int min_sector_samples = 20;  // fewer skin pixels seen on a hairline sector: its default
+  int min_skin_samples = 30;  // fewer: no fit (the views show no skin)
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.

@@ -29,8 +29,8 @@ struct ReconstructCaptureOptions {
       dir;  // a calibrated capture folder; with colmap_dir, where reconstruction/ is written
   ReconstructStage stage = ReconstructStage::kAll;
   // A COLMAP text model instead of a capture: its folder, its images and
-  // (optional) hair masks named <image name>.png. Strands there are rooted on
-  // head_file's head, or on one fitted to the views (rig/reconstruction_input.h).
+  // (optional) hair masks named <image name>.png. Strands there need
+  // head_file: a head file, or kFittedHead when the model is in mm with +z up.
   std::string colmap_dir, images_dir, masks_dir;
   std::vector<int> views;  // only these view numbers (capture) or IMAGE_IDs (COLMAP); empty: all
   // The subject's head: a head file, kFittedHead ("fit"), or empty for the

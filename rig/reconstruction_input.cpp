@@ -73,7 +73,10 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
 namespace {
 
 Result<SubjectHead> FitSubjectHead(const SubjectHeadRequest& r) {
-  if (r.views == nullptr) return InvalidArgument("a head fit needs the views");
+  if (r.views == nullptr || r.reconstruction_dir.empty())
+    return InvalidArgument(
+        "a head fit needs the views and the reconstruction folder their labels are in; give the "
+        "subject's head with --head FILE instead");
   HeadFitOptions options;
   options.threads = r.threads;
   SubjectHead head;
@@ -95,7 +98,11 @@ Result<SubjectHead> ResolveSubjectHead(const SubjectHeadRequest& r) {
     head.source = r.head_file;
     return head;
   }
-  if (r.capture_dir.empty()) return FitSubjectHead(r);
+  if (r.capture_dir.empty()) {
+    return InvalidArgument(
+        "strands from a COLMAP model need --head FILE (the head in the model's frame), or --head "
+        "fit when the model's frame is in mm with +z up");
+  }
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(r.capture_dir));
   if (!config.head) {
     Result<SubjectHead> fitted = FitSubjectHead(r);

@@ -32,12 +32,14 @@ inline constexpr char kFittedHead[] = "fit";
 // The subject's head for the strands, in the object frame (the turntable
 // frame for a capture), and where it came from:
 //  - `head_file` naming a file: that head file (core/head_config.h);
-//  - `head_file` kFittedHead, or empty where `capture_dir` has no rig.yaml
-//    with a `head:` (a COLMAP model, a rig config without one): an ellipsoid
-//    and scalp fitted to the views' labels in reconstruction_dir/masks
+//  - `head_file` kFittedHead, or empty where capture_dir/rig.yaml has no
+//    `head:`: an ellipsoid and scalp fitted to the views' labels in
+//    reconstruction_dir/masks
 //    (reconstruction/head_fit.h), written to reconstruction_dir/head.yaml
 //    so that reconstruct --head and simulate --head take it;
-//  - empty: the `head:` of capture_dir/rig.yaml.
+//  - empty: the `head:` of capture_dir/rig.yaml; InvalidArgument without a
+//    capture_dir (a COLMAP model's frame need not be in mm with +z up, as the
+//    fit assumes).
 // `source` says which, for reports. Errors: a head file's, a damaged
 // rig.yaml, or the fit's (no labels: run the points stage; no skin seen:
 // give --head FILE).

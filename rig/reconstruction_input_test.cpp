@@ -55,12 +55,16 @@ TEST(SubjectHead, AHeadFileIsTakenAsItIs) {
   EXPECT_EQ(resolved->spec.center_turntable_mm, head.center_turntable_mm);
 }
 
-TEST(SubjectHead, WithoutAHeadItIsFittedAndWrittenForTheNextStages) {
+TEST(SubjectHead, AFittedHeadIsWrittenForTheNextStages) {
   const std::string dir = FreshDir("fit");
   const std::vector<ReconstructionView> views = LabelledViews(dir + "/reconstruction");
-  SubjectHeadRequest request;  // no head file and no capture (a COLMAP model): fitted
+  SubjectHeadRequest request;  // no head file and no capture (a COLMAP model): refused
   request.reconstruction_dir = dir + "/reconstruction";
   request.views = &views;
+  const Result<SubjectHead> refused = ResolveSubjectHead(request);
+  ASSERT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.status().message().find("--head fit"), std::string::npos);
+  request.head_file = kFittedHead;
   const Result<SubjectHead> resolved = ResolveSubjectHead(request);
   ASSERT_TRUE(resolved.ok()) << resolved.status().ToString();
   ASSERT_TRUE(resolved->fit.has_value());

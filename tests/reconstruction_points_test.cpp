@@ -100,7 +100,7 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   auto rig_head = LoadHeadFile("etc/heads/mannequin.yaml");
   ASSERT_TRUE(rig_head.ok()) << rig_head.status().ToString();
   std::map<std::string, StrandEvaluation> by_method;
-  // bao-qi last: its files are the ones read back below.
+  // bao-qi last (and again on the fitted head below): its files are the ones read back.
   for (const StrandMethod method :
        {StrandMethod::kNaive, StrandMethod::kLuo, StrandMethod::kBaoQi}) {
     StrandReconstructionOptions strand_options;
