@@ -71,12 +71,14 @@ struct RadiiPrior {
   }
 };
 
+// Head or hair is the subject; the box is carved like the backdrop, so that
+// no skin pixel's ray stops on the box's volume (HeadFitOptions::
+// max_empty_views tolerates the few views where the box hides part of the head).
 std::vector<SilhouetteView> Silhouettes(const std::vector<HeadFitView>& views) {
   std::vector<SilhouetteView> silhouettes;
   for (const HeadFitView& v : views) {
     cv::Mat1b s(v.label.size(), uint8_t{kSilhouetteEmpty});
     s.setTo(kSilhouetteSubject, (v.label == kSegHead) | (v.label == kSegHair));
-    s.setTo(kSilhouetteUnknown, v.label == kSegBox);
     silhouettes.push_back({v.camera, v.cam_from_object, s});
   }
   return silhouettes;
@@ -166,11 +168,26 @@ struct Start {
   double cost = std::numeric_limits<double>::infinity();
 };
 
-// The best centre on the grid lo + k * grid_mm (k up to n along each axis),
-// with the typical radii for the face along `face_axis` times radii_scale.
-Start SearchGrid(const std::vector<SurfaceSample>& subset, const HeadFitOptions& o, int face_axis,
-                 double radii_scale, const Eigen::Vector3d& lo, const Eigen::Vector3i& n,
-                 double grid_mm) {
+// Whether a typical head centred at c could carry the skin: c lies inside the
+// hull (the head is part of the subject) and within the largest typical
+// radius of a skin sample. Elsewhere (empty space, the calibration box, which
+// the hull keeps) an ellipsoid contradicts no sample and the skin's
+// saturating loss hardly grows with the distance, so the fit would settle there.
+bool PlausibleCentre(const Eigen::Vector3d& c, const std::vector<SurfaceSample>& subset,
+                     const VisualHull& hull, const HeadFitOptions& o) {
+  if (!hull.OccupiedAt(c)) return false;
+  const double reach = o.typical_radii_mm.maxCoeff();
+  for (const SurfaceSample& s : subset)
+    if (s.skin && (s.p - c).squaredNorm() <= reach * reach) return true;
+  return false;
+}
+
+// The best plausible centre on the grid lo + k * grid_mm (k up to n along
+// each axis), with the typical radii for the face along `face_axis` times
+// radii_scale.
+Start SearchGrid(const std::vector<SurfaceSample>& subset, const VisualHull& hull,
+                 const HeadFitOptions& o, int face_axis, double radii_scale,
+                 const Eigen::Vector3d& lo, const Eigen::Vector3i& n, double grid_mm) {
   const Eigen::Vector3d radii = radii_scale * TypicalRadii(o, face_axis);
   const size_t count = static_cast<size_t>(n.x()) * n.y() * n.z();
   std::vector<Start> best(count);
@@ -179,7 +196,8 @@ Start SearchGrid(const std::vector<SurfaceSample>& subset, const HeadFitOptions&
       const int ix = static_cast<int>(i % n.x()), iy = static_cast<int>(i / n.x() % n.y()),
                 iz = static_cast<int>(i / n.x() / n.y());
       const Eigen::Vector3d c = lo + grid_mm * Eigen::Vector3d(ix, iy, iz);
-      best[i] = {c, face_axis, FitCost(c, radii, subset, o)};
+      if (PlausibleCentre(c, subset, hull, o))
+        best[i] = {c, face_axis, FitCost(c, radii, subset, o)};
     };
   });
   return *std::min_element(best.begin(), best.end(),
@@ -190,8 +208,8 @@ Start SearchGrid(const std::vector<SurfaceSample>& subset, const HeadFitOptions&
 // with radii shrunk to 3/4 (so that a centre up to half a cell off the head's
 // does not push the ellipsoid out through the hair), then a 5 mm grid with
 // the typical radii around its best.
-Start SearchCentre(const std::vector<SurfaceSample>& samples, const HeadFitOptions& o,
-                   int face_axis) {
+Start SearchCentre(const std::vector<SurfaceSample>& samples, const VisualHull& hull,
+                   const HeadFitOptions& o, int face_axis) {
   std::vector<SurfaceSample> subset;
   const size_t step = std::max<size_t>(1, samples.size() / 3000);
   for (size_t i = 0; i < samples.size(); i += step) subset.push_back(samples[i]);
@@ -206,10 +224,10 @@ Start SearchCentre(const std::vector<SurfaceSample>& samples, const HeadFitOptio
   hi += Eigen::Vector3d::Constant(margin);
   const double coarse_mm = 20.0, fine_mm = 5.0;
   const Start coarse =
-      SearchGrid(subset, o, face_axis, 0.75, lo,
+      SearchGrid(subset, hull, o, face_axis, 0.75, lo,
                  ((hi - lo) / coarse_mm).array().ceil().cast<int>() + 1, coarse_mm);
   const Eigen::Vector3d fine_lo = coarse.centre - Eigen::Vector3d::Constant(coarse_mm);
-  return SearchGrid(subset, o, face_axis, 1.0, fine_lo,
+  return SearchGrid(subset, hull, o, face_axis, 1.0, fine_lo,
                     Eigen::Vector3i::Constant(2 * coarse_mm / fine_mm + 1), fine_mm);
 }
 
@@ -313,6 +331,7 @@ Status HeadFitOptions::Check() const {
   if (!(voxel_mm >= 0.5 && voxel_mm <= 20))
     return InvalidArgument("head fit voxel_mm must be in [0.5, 20]");
   if (stride_px < 1) return InvalidArgument("head fit stride_px must be at least 1");
+  if (max_empty_views < 0) return InvalidArgument("head fit max_empty_views must not be negative");
   if (!(skin_scale_mm > 0) || !(outside_scale_mm > 0) || !(outside_huber_mm > 0))
     return InvalidArgument(
         "head fit skin_scale_mm, outside_scale_mm and outside_huber_mm must be "
@@ -340,6 +359,7 @@ Result<HeadFitSummary> FitHeadToViews(const std::vector<HeadFitView>& views,
   VisualHullOptions hull_options;
   hull_options.voxel_mm = o.voxel_mm;
   hull_options.threads = o.threads;
+  hull_options.max_empty_views = o.max_empty_views;
   HR_ASSIGN_OR_RETURN(const VisualHull hull, CarveVisualHull(Silhouettes(views), hull_options));
 
   std::vector<std::vector<SurfaceSample>> per_view(views.size());
@@ -362,8 +382,11 @@ Result<HeadFitSummary> FitHeadToViews(const std::vector<HeadFitView>& views,
   double best_cost = std::numeric_limits<double>::infinity();
   for (int face_axis : {0, 1}) {
     const Eigen::Vector3d typical = TypicalRadii(o, face_axis);
-    Eigen::Vector3d c = SearchCentre(samples, o, face_axis).centre, r = typical;
-    const double cost = SolveEllipsoid(samples, o, typical, &c, &r);
+    const Start start = SearchCentre(samples, hull, o, face_axis);
+    if (!std::isfinite(start.cost)) continue;
+    Eigen::Vector3d c = start.centre, r = typical;
+    double cost = SolveEllipsoid(samples, o, typical, &c, &r);
+    if (!PlausibleCentre(c, samples, hull, o)) cost = std::numeric_limits<double>::infinity();
     if (cost < best_cost) {
       best_cost = cost;
       centre = c;
@@ -371,7 +394,9 @@ Result<HeadFitSummary> FitHeadToViews(const std::vector<HeadFitView>& views,
     }
   }
   if (!std::isfinite(best_cost))
-    return Internal("the head fit's solver found no usable ellipsoid; give the subject's head");
+    return FailedPrecondition(
+        "the head fit found no ellipsoid centred inside the subject's hull that the solver could "
+        "settle; give the subject's head instead");
   summary.head.center_turntable_mm = centre;
   summary.head.radii_mm = radii;
 

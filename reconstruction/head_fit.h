@@ -2,17 +2,23 @@
 // fitted to what the segmented views see of the subject (the head/skin and
 // hair labels of hair_segmentation.h).
 //
-//  1. The subject's visual hull (visual_hull.h) from the labels (head or hair
-//     = subject, box = unknown).
+//  1. The subject's visual hull (visual_hull.h) from the labels: head or hair
+//     is the subject, the box is carved like the backdrop (else the hull
+//     keeps the box's volume and skin pixels' rays stop on it).
 //  2. Surface samples: every `stride_px`-th head or hair pixel of each view
 //     cast onto the hull's front surface, pooled on a `voxel_mm` grid, each
 //     cell labelled skin or hair by the majority of its samples.
 //  3. The ellipsoid (centre and radii along the object frame's axes): every
 //     surface sample lies outside it (the hull holds the head, and hair lies
 //     on it), the skin samples lie on it (a Cauchy loss: the neck and the
-//     mannequin's base are skin that is not the skull), and radii near a
-//     typical adult head's (a Gaussian prior, so that the hair-covered back
-//     of the head has a size). A grid search over the centre, then Ceres.
+//     mannequin's base are skin that is not the skull), the hair samples
+//     near it (a weaker Cauchy loss), and radii near a typical adult head's
+//     (a Gaussian prior, so that the hair-covered back of the head has a
+//     size). A grid search over the centre, then Ceres, with the face along
+//     x and along y, the cheaper kept. The centre must lie inside the hull
+//     and within the largest typical radius of the skin: elsewhere an
+//     ellipsoid in empty space contradicts no sample, and the skin's
+//     saturating loss hardly grows with the distance.
 //  4. The scalp: centred on the ellipsoid; the face direction is where the
 //     skin on the ellipsoid is (horizontal mean); the hairline is ScalpSpec's
 //     typical one. The skin the views see does not bound the hairline: a
@@ -23,9 +29,9 @@
 //
 // Frames and units: the views' object frame must be in mm with +z up (the
 // turntable frame of a capture): the prior, the grids and the horizontal face
-// direction assume it, so a COLMAP model's arbitrary frame does not do. The ellipsoid's axes are
-// the frame's: a head turned 45 deg about z gets radii in between its width and depth (a HeadSpec
-// ellipsoid has no rotation).
+// direction assume it, so a COLMAP model's arbitrary frame does not do. The
+// ellipsoid's axes are the frame's: a head turned 45 deg about z gets radii
+// in between its width and depth (a HeadSpec ellipsoid has no rotation).
 #pragma once
 
 #include <Eigen/Core>
@@ -50,7 +56,10 @@ struct HeadFitView {
 };
 
 struct HeadFitOptions {
-  double voxel_mm = 3.0;       // the hull's and the samples' grid
+  double voxel_mm = 3.0;  // the hull's and the samples' grid
+  // A voxel stays in the hull unless more than this many views see it off
+  // the subject (the box in front of the head, a segmentation error).
+  int max_empty_views = 2;
   int stride_px = 4;           // every n-th pixel of each view, in both directions
   double skin_scale_mm = 5.0;  // the Cauchy scale of a skin sample's distance to the ellipsoid
   // Hair lies close over the scalp where it is short (the crown) and far
@@ -87,8 +96,9 @@ struct HeadFitSummary {
 
 // InvalidArgument for bad options, fewer than two views or a label of
 // another size than its camera; FailedPrecondition when the hull is empty
-// (labels and calibration disagree) or the views show fewer than
-// min_skin_samples of skin (give the head instead).
+// (labels and calibration disagree), the views show fewer than
+// min_skin_samples of skin, or no plausible centre settles (give the head
+// instead).
 Result<HeadFitSummary> FitHeadToViews(const std::vector<HeadFitView>& views,
                                       const HeadFitOptions& options);
 
