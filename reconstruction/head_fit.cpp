@@ -163,8 +163,7 @@ Eigen::Vector3d TypicalRadii(const HeadFitOptions& o, int face_axis) {
 }
 
 struct Start {
-  Eigen::Vector3d centre;
-  int face_axis = 1;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double cost = std::numeric_limits<double>::infinity();
 };
 
@@ -196,8 +195,7 @@ Start SearchGrid(const std::vector<SurfaceSample>& subset, const VisualHull& hul
       const int ix = static_cast<int>(i % n.x()), iy = static_cast<int>(i / n.x() % n.y()),
                 iz = static_cast<int>(i / n.x() / n.y());
       const Eigen::Vector3d c = lo + grid_mm * Eigen::Vector3d(ix, iy, iz);
-      if (PlausibleCentre(c, subset, hull, o))
-        best[i] = {c, face_axis, FitCost(c, radii, subset, o)};
+      if (PlausibleCentre(c, subset, hull, o)) best[i] = {c, FitCost(c, radii, subset, o)};
     };
   });
   return *std::min_element(best.begin(), best.end(),
