@@ -43,9 +43,7 @@ void PrintScalpDistance(const char* what, const HeadSpec& h, const HeadSpec& tru
   std::vector<double> distances;
   for (const Eigen::Vector3d& v : (*model)->mesh().vertices_mm) {
     if (!(*model)->OnScalp(v)) continue;
-    const Eigen::Vector3d q = v - h.center_turntable_mm;
-    const double scaled = q.cwiseQuotient(h.radii_mm).norm();
-    distances.push_back(std::abs(q.norm() - q.norm() / scaled));
+    distances.push_back(std::abs(EllipsoidRadialDistance(h, v)));
   }
   if (distances.empty()) return;
   std::sort(distances.begin(), distances.end());

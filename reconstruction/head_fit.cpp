@@ -325,6 +325,10 @@ void FitScalp(const std::vector<SurfaceSample>& samples, const HeadFitOptions& o
 
 }  // namespace
 
+double EllipsoidRadialDistance(const HeadSpec& head, const Eigen::Vector3d& p) {
+  return RadialDistance(head.center_turntable_mm.data(), head.radii_mm.data(), p);
+}
+
 Status HeadFitOptions::Check() const {
   if (!(voxel_mm >= 0.5 && voxel_mm <= 20))
     return InvalidArgument("head fit voxel_mm must be in [0.5, 20]");

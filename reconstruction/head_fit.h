@@ -94,6 +94,10 @@ struct HeadFitSummary {
   std::string BriefReport() const;  // a few lines for the CLI
 };
 
+// The distance (mm) from p to `head`'s ellipsoid along the ray from its
+// centre: positive outside, negative inside; what the fit minimises.
+double EllipsoidRadialDistance(const HeadSpec& head, const Eigen::Vector3d& p);
+
 // InvalidArgument for bad options, fewer than two views or a label of
 // another size than its camera; FailedPrecondition when the hull is empty
 // (labels and calibration disagree), the views show fewer than

@@ -80,11 +80,8 @@ Status ReconstructCaptureOptions::Validate() const {
   if (!colmap_dir.empty() && images_dir.empty()) {
     return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
   }
-  if (!colmap_dir.empty() && stage != ReconstructStage::kPoints && head_file.empty()) {
-    return InvalidArgument(
-        "strands from a COLMAP model need --head FILE (the head in the model's frame), or --head "
-        "fit when the model's frame is in mm with +z up");
-  }
+  if (!colmap_dir.empty() && stage != ReconstructStage::kPoints)
+    HR_RETURN_IF_ERROR(CheckColmapHead(head_file));
   if (stage != ReconstructStage::kPoints) HR_RETURN_IF_ERROR(strands.Check());
   return Status::Ok();
 }

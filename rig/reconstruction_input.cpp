@@ -90,6 +90,13 @@ Result<SubjectHead> FitSubjectHead(const SubjectHeadRequest& r) {
 
 }  // namespace
 
+Status CheckColmapHead(const std::string& head_file) {
+  if (!head_file.empty()) return Status::Ok();
+  return InvalidArgument(
+      "strands from a COLMAP model need --head FILE (the head in the model's frame), or --head "
+      "fit when the model's frame is in mm with +z up");
+}
+
 Result<SubjectHead> ResolveSubjectHead(const SubjectHeadRequest& r) {
   if (r.head_file == kFittedHead) return FitSubjectHead(r);
   SubjectHead head;
@@ -98,11 +105,7 @@ Result<SubjectHead> ResolveSubjectHead(const SubjectHeadRequest& r) {
     head.source = r.head_file;
     return head;
   }
-  if (r.capture_dir.empty()) {
-    return InvalidArgument(
-        "strands from a COLMAP model need --head FILE (the head in the model's frame), or --head "
-        "fit when the model's frame is in mm with +z up");
-  }
+  if (r.capture_dir.empty()) return CheckColmapHead(r.head_file);
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(r.capture_dir));
   if (!config.head) {
     Result<SubjectHead> fitted = FitSubjectHead(r);

@@ -57,4 +57,8 @@ struct SubjectHeadRequest {
 };
 Result<SubjectHead> ResolveSubjectHead(const SubjectHeadRequest& request);
 
+// Ok when a COLMAP model's strands have a head to go on (`head_file` a file
+// or kFittedHead); else InvalidArgument saying which --head to give.
+Status CheckColmapHead(const std::string& head_file);
+
 }  // namespace hairrig
