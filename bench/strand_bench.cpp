@@ -31,7 +31,9 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
-                 "[--volume-bound B] [--out-suffix S] [--score yes|no]\n",
+                 "[--volume-bound B] [--distance-weight W] [--share-link-ends yes|no] "
+                 "[--overlap-stride K] [--out-suffix S] "
+                 "[--score yes|no]\n",
                  argv[0]);
     return 2;
   }
@@ -51,6 +53,12 @@ int main(int argc, char** argv) {
       head_file = argv[i + 1];
     } else if (std::strcmp(argv[i], "--volume-bound") == 0) {
       options.growth.volume_bound = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--distance-weight") == 0) {
+      options.growth.distance_weight = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--overlap-stride") == 0) {
+      options.direction.overlap_stride = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {
+      options.direction.share_link_ends = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--out-suffix") == 0) {
       out_suffix = argv[i + 1];
     } else if (std::strcmp(argv[i], "--score") == 0) {

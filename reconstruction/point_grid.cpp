@@ -25,6 +25,8 @@ PointGrid::PointGrid(const std::vector<Eigen::Vector3f>& positions, double cell_
   std::iota(order_.begin(), order_.end(), 0u);
   std::sort(order_.begin(), order_.end(),
             [&](uint32_t a, uint32_t b) { return keys[a] < keys[b]; });
+  sorted_.reserve(order_.size());
+  for (const uint32_t i : order_) sorted_.push_back(positions[i]);
   for (uint32_t k = 0; k < order_.size();) {
     uint32_t end = k;
     while (end < order_.size() && keys[order_[end]] == keys[order_[k]]) ++end;

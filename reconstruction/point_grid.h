@@ -1,6 +1,7 @@
-// A uniform grid over a point set for radius queries (mm, any frame): points
-// sorted by cell, a hash from cell to its run. Built once (O(n log n)), then
-// read by any number of threads.
+// A uniform grid over a point set for radius queries (mm, any frame): a copy
+// of the points sorted by cell (a query reads each cell's run contiguously),
+// a hash from cell to its run. Built once (O(n log n)), then read by any
+// number of threads.
 #pragma once
 
 #include <Eigen/Core>
@@ -34,9 +35,8 @@ class PointGrid {
           const auto cell = cells_.find(Key(cx + dx, cy + dy, cz + dz));
           if (cell == cells_.end()) continue;
           for (uint32_t k = cell->second.first; k < cell->second.second; ++k) {
-            const uint32_t i = order_[k];
-            const double d2 = (positions_[i] - q).cast<double>().squaredNorm();
-            if (d2 <= radius2) visit(i, d2);
+            const double d2 = (sorted_[k] - q).cast<double>().squaredNorm();
+            if (d2 <= radius2) visit(order_[k], d2);
           }
         }
   }
@@ -53,9 +53,8 @@ class PointGrid {
       const auto cell = cells_.find(Key(x, y, z));
       if (cell == cells_.end()) return false;
       for (uint32_t k = cell->second.first; k < cell->second.second; ++k) {
-        const uint32_t i = order_[k];
-        const double d2 = (positions_[i] - q).cast<double>().squaredNorm();
-        if (d2 <= radius2 && accept(i, d2)) return true;
+        const double d2 = (sorted_[k] - q).cast<double>().squaredNorm();
+        if (d2 <= radius2 && accept(order_[k], d2)) return true;
       }
       return false;
     };
@@ -78,7 +77,8 @@ class PointGrid {
 
   const std::vector<Eigen::Vector3f>& positions_;
   double cell_mm_;
-  std::vector<uint32_t> order_;  // point indices sorted by cell
+  std::vector<uint32_t> order_;          // point indices sorted by cell
+  std::vector<Eigen::Vector3f> sorted_;  // positions_[order_[k]]
   std::unordered_map<int64_t, std::pair<uint32_t, uint32_t>>
       cells_;  // cell -> [begin, end) in order_
 };

@@ -68,6 +68,8 @@ void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOpti
 }
 
 // E_link (Eq. 6): a segment's end continues into another's end across a small gap.
+// With share_link_ends, an end's links share alpha_link: each weighs
+// alpha_link / (the larger number of links at either of its two ends).
 void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
               PairWeights* pairs, int64_t* count) {
   std::vector<Eigen::Vector3f> ends;
@@ -79,6 +81,12 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
     ends.push_back(p.back());
     outward.push_back(PolylineTangent(p, p.size() - 1));
   }
+  struct Link {
+    uint32_t e, f;
+    bool aligned;
+  };
+  std::vector<Link> links;
+  std::vector<int> degree(ends.size(), 0);
   const PointGrid grid(ends, o.link_gap_mm);
   for (uint32_t e = 0; e < ends.size(); ++e) {
     grid.ForEachWithin(ends[e], o.link_gap_mm, [&](uint32_t f, double d2) {
@@ -89,11 +97,15 @@ void AddLinks(const std::vector<StrandSegment>& segments, const DirectionOptions
         if (outward[e].dot(gap) < o.link_cos || outward[f].dot(-gap) < o.link_cos) return;
       }
       // A last end meeting a first end keeps both orders; two firsts or two lasts oppose them.
-      const bool aligned = (e % 2) != (f % 2);
-      pairs->push_back({{e / 2, f / 2}, (aligned ? 1 : -1) * o.alpha_link});
-      ++*count;
+      links.push_back({e, f, (e % 2) != (f % 2)});
+      ++degree[e], ++degree[f];
     });
   }
+  for (const Link& link : links) {
+    const double share = o.share_link_ends ? 1.0 / std::max(degree[link.e], degree[link.f]) : 1.0;
+    pairs->push_back({{link.e / 2, link.f / 2}, (link.aligned ? 1 : -1) * o.alpha_link * share});
+  }
+  *count += static_cast<int64_t>(links.size());
 }
 
 }  // namespace

@@ -8,8 +8,10 @@
 //     H the height along `down`, zeta the distance to the scalp: hair falls
 //     and leaves the scalp;
 //   E_link (Eq. 6): end-to-end links between segments whose ends meet (gap
-//     within link_gap_mm, tangents and gap aligned within link_cos), weighted
-//     by their alignment; an incompatible link costs alpha_link;
+//     within link_gap_mm, tangents and gap aligned within link_cos); an
+//     incompatible link costs alpha_link, shared among the links at its
+//     ends (share_link_ends), as Eq. 6's normalised strength keeps one
+//     connection's weight at most 1;
 //   E_close (Eq. 7): segments that run side by side (vertices within
 //     overlap_mm) with incompatible directions cost alpha_close times the
 //     share of overlapped vertices.
@@ -38,10 +40,16 @@ struct DirectionOptions {
   double alpha_close = 1.0;
   double link_gap_mm = 10;  // ends this close may link
   double link_cos = 0.8;    // |tangent . tangent'| and the gap's alignment for a link
+  // An end's links share alpha_link (each weighs alpha_link over the larger
+  // number of links at its two ends) instead of alpha_link each. Where many
+  // segments radiate from one spot (a crown whorl, a parting: roots that meet,
+  // not a strand that continues), each of their links then weighs little.
+  bool share_link_ends = true;
   double overlap_mm = 3.0;  // vertices this close overlap
   // Overlaps are looked for from every overlap_stride-th vertex of each
-  // segment (1: every vertex, as Eq. 7 counts them).
-  int overlap_stride = 1;
+  // segment (1: every vertex, as Eq. 7 counts them; 2 halves the queries,
+  // the stage's largest cost, and directs the scenes' segments as well).
+  int overlap_stride = 2;
   Eigen::Vector3f down{0, 0, -1};  // H's direction (unit)
   int threads = 2;
 

@@ -107,5 +107,40 @@ TEST(StrandDirection, TheScalpDistanceDirectsHairThatLeavesTheHeadSideways) {
   }
 }
 
+TEST(StrandDirection, RootsThatMeetAtAWhorlDoNotPullEachOtherRound) {
+  // Two bundles of 10 strands leave a whorl at (0, 0, 100) level and in
+  // opposite directions, then fall 140 mm: their roots meet 4 mm apart, end
+  // facing end, as if each strand ran on into the other side. Every root end
+  // links to the 10 across the whorl; those 100 links all say "reverse one
+  // bundle". Shared among an end's links they weigh as 10 links, less than
+  // the 14 that reversing a bundle costs in E_ribb; counted whole they weigh
+  // 100 and reverse it.
+  std::vector<StrandSegment> segments;
+  for (float side : {1.0f, -1.0f}) {
+    for (int k = 0; k < 10; ++k) {
+      const float x = 0.2f * static_cast<float>(k);
+      std::vector<Eigen::Vector3f> level = Line({x, 2 * side, 100}, {x, 30 * side, 100});
+      const std::vector<Eigen::Vector3f> fall = Line({x, 32 * side, 98}, {x, 60 * side, -40});
+      level.insert(level.end(), fall.begin(), fall.end());
+      segments.push_back({level});
+    }
+  }
+  const std::vector<StrandSegment> expected = segments;
+  ShuffleOrders(&segments, 7);
+  std::vector<StrandSegment> unshared = segments;
+  const DirectionSummary summary = DirectSegments(&segments, nullptr, DirectionOptions{});
+  EXPECT_EQ(summary.links, 100);
+  for (size_t i = 0; i < segments.size(); ++i) {
+    EXPECT_EQ(segments[i].points_mm.front(), expected[i].points_mm.front()) << "segment " << i;
+  }
+  DirectionOptions whole_links;
+  whole_links.share_link_ends = false;
+  DirectSegments(&unshared, nullptr, whole_links);
+  int reversed = 0;
+  for (size_t i = 0; i < unshared.size(); ++i)
+    reversed += unshared[i].points_mm.front() != expected[i].points_mm.front();
+  EXPECT_EQ(reversed, 10) << "counted whole, the links reverse one bundle";
+}
+
 }  // namespace
 }  // namespace hairrig
