@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
-                 "[--volume-bound B] [--distance-weight W] [--share-link-ends yes|no] "
+                 "[--volume-bound B] [--share-link-ends yes|no] "
                  "[--overlap-stride K] [--out-suffix S] "
                  "[--score yes|no]\n",
                  argv[0]);
@@ -53,8 +53,6 @@ int main(int argc, char** argv) {
       head_file = argv[i + 1];
     } else if (std::strcmp(argv[i], "--volume-bound") == 0) {
       options.growth.volume_bound = std::atof(argv[i + 1]);
-    } else if (std::strcmp(argv[i], "--distance-weight") == 0) {
-      options.growth.distance_weight = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--overlap-stride") == 0) {
       options.direction.overlap_stride = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {

@@ -79,8 +79,6 @@ Status StrandGrowthOptions::Check() const {
   if (!(surface_threshold_mm >= 0))
     return InvalidArgument("strand surface_threshold_mm must be non-negative");
   if (!(volume_bound > 0)) return InvalidArgument("strand volume_bound must be positive");
-  if (!(distance_weight >= 0))
-    return InvalidArgument("strand distance_weight must be non-negative");
   if (!(head_clearance_mm >= 0))
     return InvalidArgument("strand head_clearance_mm must be non-negative");
   return Status::Ok();
@@ -96,7 +94,7 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
       const double d_s = field.RibbonDistance(p);
       double a_s = 0, a_i = 100 * d_s;
       if (d_s < o.surface_threshold_mm) a_s = 100 - d_s, a_i = 0.1;
-      const double a_d = o.distance_weight * a_i, a_g = 10;
+      const double a_d = 0.1 * a_i, a_g = 10;
       Eigen::Vector3f h = static_cast<float>(a_i) * field.Interior(p, previous) -
                           static_cast<float>(a_d) * field.DistanceGradient(p) +
                           static_cast<float>(a_g) * previous;

@@ -37,7 +37,6 @@ struct StrandGrowthOptions {
   double max_length_mm = 400;
   double surface_threshold_mm = 0.1;  // T_s
   double volume_bound = 3.0;          // I_bound (I_d's units: mm at the grid's faces)
-  double distance_weight = 0.1;       // a_d / a_i (the paper's 0.1)
   double head_clearance_mm = 0.5;     // vertices are kept this far outside the head
   int threads = 2;
 
