@@ -15,7 +15,8 @@ namespace hairrig {
 
 class PointGrid {
  public:
-  // `positions` must outlive the grid. cell_mm > 0; queries are cheapest
+  // `positions` must outlive the grid and not change (queries read the
+  // grid's sorted copy, positions() the caller's). cell_mm > 0; queries are cheapest
   // with radius <= cell_mm (27 cells visited).
   PointGrid(const std::vector<Eigen::Vector3f>& positions, double cell_mm);
 
@@ -80,7 +81,7 @@ class PointGrid {
   std::vector<uint32_t> order_;          // point indices sorted by cell
   std::vector<Eigen::Vector3f> sorted_;  // positions_[order_[k]]
   std::unordered_map<int64_t, std::pair<uint32_t, uint32_t>>
-      cells_;  // cell -> [begin, end) in order_
+      cells_;  // cell -> [begin, end) in order_ and sorted_
 };
 
 }  // namespace hairrig

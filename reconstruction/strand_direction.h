@@ -10,8 +10,9 @@
 //   E_link (Eq. 6): end-to-end links between segments whose ends meet (gap
 //     within link_gap_mm, tangents and gap aligned within link_cos); an
 //     incompatible link costs alpha_link, shared among the links at its
-//     ends (share_link_ends), as Eq. 6's normalised strength keeps one
-//     connection's weight at most 1;
+//     ends (share_link_ends: a departure from the paper, whose Eq. 6
+//     normalises per pair of ribbons; one strand continues into at most one
+//     other, so an end's links are not independent evidence);
 //   E_close (Eq. 7): segments that run side by side (vertices within
 //     overlap_mm) with incompatible directions cost alpha_close times the
 //     share of overlapped vertices.
@@ -43,12 +44,15 @@ struct DirectionOptions {
   // An end's links share alpha_link (each weighs alpha_link over the larger
   // number of links at its two ends) instead of alpha_link each. Where many
   // segments radiate from one spot (a crown whorl, a parting: roots that meet,
-  // not a strand that continues), each of their links then weighs little.
+  // not a strand that continues), each of their links then weighs little;
+  // their pull on a segment is at most one link's, so a whorl whose segments
+  // fall less than h (E_ribb under alpha_link) can still be reversed.
   bool share_link_ends = true;
   double overlap_mm = 3.0;  // vertices this close overlap
   // Overlaps are looked for from every overlap_stride-th vertex of each
   // segment (1: every vertex, as Eq. 7 counts them; 2 halves the queries,
-  // the stage's largest cost, and directs the scenes' segments as well).
+  // the stage's largest cost: on the simulated scenes the share of vertices
+  // directed right moves by under 0.4 %, bao-qi's precision by up to 0.02).
   int overlap_stride = 2;
   Eigen::Vector3f down{0, 0, -1};  // H's direction (unit)
   int threads = 2;

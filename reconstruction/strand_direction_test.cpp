@@ -27,6 +27,24 @@ void ShuffleOrders(std::vector<StrandSegment>* segments, uint32_t seed) {
   }
 }
 
+// One strand in the plane y = const, root first: it falls from z = 100 to 0,
+// turns through a half circle (ending a little lower than it began) and rises
+// again to z = 40, in three segments with 3 mm gaps.
+std::vector<StrandSegment> CurlThatRises(float y) {
+  std::vector<StrandSegment> segments;
+  segments.push_back({Line({0, y, 100}, {0, y, 0})});
+  StrandSegment turn;
+  for (int k = 0; k <= 16; ++k) {
+    const float a = static_cast<float>(M_PI) * static_cast<float>(k) /
+                    16.0f;  // from straight down to straight up
+    turn.points_mm.emplace_back(10.0f - 10.0f * std::cos(a), y,
+                                -3.0f - 10.0f * std::sin(a) - 0.05f * static_cast<float>(k));
+  }
+  segments.push_back(turn);
+  segments.push_back({Line({20, y, -1}, {20, y, 40})});
+  return segments;
+}
+
 TEST(StrandDirection, HangingStrandsRunRootToTipWhateverOrderTheyArriveIn) {
   // 20 strands side by side (1.5 mm apart), each cut in 4 pieces with 3 mm gaps, hanging
   // from z = 100 down a slight slope; their roots are the top ends.
@@ -50,23 +68,10 @@ TEST(StrandDirection, HangingStrandsRunRootToTipWhateverOrderTheyArriveIn) {
 }
 
 TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
-  // One strand falls from z = 100 to 0, turns through a half circle (ending a
-  // little lower than it began) and rises
-  // again to z = 40: three segments with 3 mm gaps. The rising piece on its
-  // own looks like a strand falling from z = 40 (its E_ribb says reverse);
-  // its links through the turn must overrule that.
-  std::vector<StrandSegment> segments;
-  segments.push_back({Line({0, 0, 100}, {0, 0, 0})});
-  StrandSegment turn;
-  for (int k = 0; k <= 16; ++k) {
-    const float a = static_cast<float>(M_PI) * static_cast<float>(k) /
-                    16.0f;  // from straight down to straight up
-    turn.points_mm.emplace_back(10.0f - 10.0f * std::cos(a), 0.0f,
-                                -3.0f - 10.0f * std::sin(a) - 0.05f * static_cast<float>(k));
-  }
-  segments.push_back(turn);
-  segments.push_back({Line({20, 0, -1}, {20, 0, 40})});
-  std::vector<StrandSegment> expected = segments;
+  // The rising piece of CurlThatRises on its own looks like a strand falling
+  // from z = 40 (its E_ribb says reverse); its links through the turn must
+  // overrule that.
+  std::vector<StrandSegment> expected = CurlThatRises(0);
   for (uint32_t seed = 0; seed < 8; ++seed) {
     std::vector<StrandSegment> shuffled = expected;
     ShuffleOrders(&shuffled, seed);
@@ -85,6 +90,27 @@ TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
   std::vector<StrandSegment> alone = expected;
   DirectSegments(&alone, nullptr, unlinked);
   EXPECT_EQ(alone[2].points_mm.front(), expected[2].points_mm.back());
+}
+
+TEST(StrandDirection, LinksCarryTheSignThroughABundleOfCurlsThatRise) {
+  // Five such curls side by side, 1 mm apart: each end now links to several
+  // across each gap, and those links share one link's weight. Together with
+  // the overlaps along the bundle they still overrule the rising pieces' E_ribb.
+  std::vector<StrandSegment> expected;
+  for (int strand = 0; strand < 5; ++strand) {
+    const std::vector<StrandSegment> curl = CurlThatRises(static_cast<float>(strand));
+    expected.insert(expected.end(), curl.begin(), curl.end());
+  }
+  for (uint32_t seed = 0; seed < 4; ++seed) {
+    std::vector<StrandSegment> shuffled = expected;
+    ShuffleOrders(&shuffled, seed);
+    const DirectionSummary summary = DirectSegments(&shuffled, nullptr, DirectionOptions{});
+    EXPECT_GT(summary.links, 10) << "seed " << seed;
+    for (size_t i = 0; i < expected.size(); ++i) {
+      EXPECT_EQ(shuffled[i].points_mm.front(), expected[i].points_mm.front())
+          << "segment " << i << " seed " << seed;
+    }
+  }
 }
 
 TEST(StrandDirection, TheScalpDistanceDirectsHairThatLeavesTheHeadSideways) {
