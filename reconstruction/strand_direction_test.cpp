@@ -93,7 +93,7 @@ TEST(StrandDirection, LinksCarryTheRootToTipSignThroughACurlThatRises) {
 }
 
 TEST(StrandDirection, LinksCarryTheSignThroughABundleOfCurlsThatRise) {
-  // Five such curls side by side, 1 mm apart: each end now links to several
+  // Five such curls side by side, 1 mm apart: each end links to several
   // across each gap, and those links share one link's weight. Together with
   // the overlaps along the bundle they still overrule the rising pieces' E_ribb.
   std::vector<StrandSegment> expected;
