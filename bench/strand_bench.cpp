@@ -2,7 +2,9 @@
 // (`hairrig reconstruct CAPTURE --stage points`): each strand method's steps
 // timed, side by side. Run from the repository root:
 //   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N]
-//       [--head FILE|fit] [--volume-bound B] [--out-suffix S] [--score yes|no]
+//       [--head FILE|fit] [--volume-bound B] [--root-elevation DEG] [--alpha-link W]
+//       [--alpha-close W] [--share-link-ends yes|no] [--share-overlaps yes|no]
+//       [--overlap-stride K] [--out-suffix S] [--score yes|no]
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
@@ -31,7 +33,8 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
-                 "[--volume-bound B] [--share-link-ends yes|no] "
+                 "[--volume-bound B] [--root-elevation DEG] [--alpha-link W] [--alpha-close W] "
+                 "[--share-link-ends yes|no] [--share-overlaps yes|no] "
                  "[--overlap-stride K] [--out-suffix S] "
                  "[--score yes|no]\n",
                  argv[0]);
@@ -53,8 +56,16 @@ int main(int argc, char** argv) {
       head_file = argv[i + 1];
     } else if (std::strcmp(argv[i], "--volume-bound") == 0) {
       options.growth.volume_bound = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--root-elevation") == 0) {
+      options.root_elevation_deg = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--overlap-stride") == 0) {
       options.direction.overlap_stride = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--alpha-link") == 0) {
+      options.direction.alpha_link = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--alpha-close") == 0) {
+      options.direction.alpha_close = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--share-overlaps") == 0) {
+      options.direction.share_overlaps = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {
       options.direction.share_link_ends = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--out-suffix") == 0) {

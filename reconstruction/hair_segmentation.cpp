@@ -68,54 +68,87 @@ cv::Mat1f BackdropDistance(const cv::Mat3b& bgr, const BackdropModel& model) {
   return distance;
 }
 
+// A Gaussian blur of `values` over the pixels in `weights` only (normalised
+// convolution): pixels outside take no part, so no step at the foreground's
+// outline enters the result.
+cv::Mat1f BlurWithin(const cv::Mat1f& values, const cv::Mat1f& weights, double sigma) {
+  cv::Mat1f product, weighted, norm, blurred;
+  cv::multiply(values, weights, product);
+  cv::GaussianBlur(product, weighted, cv::Size(), sigma);
+  cv::GaussianBlur(weights, norm, cv::Size(), sigma);
+  cv::max(norm, 1e-3, norm);
+  cv::divide(weighted, norm, blurred);
+  return blurred;
+}
+
 // Fine-scale texture: a band-pass of the grey image, its energy averaged over
-// a window. Fibres give a high value, skin little more than the sensor noise.
-cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, double sigma) {
-  cv::Mat1f grey, fine, coarse;
+// a window, all within the foreground (`within`), so that the step from the
+// subject to the backdrop does not count as texture. Fibres give a high value,
+// skin little more than the sensor noise.
+cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
+  cv::Mat1f grey, weights;
   cv::Mat grey8;
   cv::cvtColor(bgr, grey8, cv::COLOR_BGR2GRAY);
   grey8.convertTo(grey, CV_32F);
-  cv::GaussianBlur(grey, fine, cv::Size(), 1.5);
-  cv::GaussianBlur(grey, coarse, cv::Size(), 4.0);
-  cv::Mat1f band, energy;
+  within.convertTo(weights, CV_32F, 1.0 / 255.0);
+  const cv::Mat1f fine = BlurWithin(grey, weights, 1.5), coarse = BlurWithin(grey, weights, 4.0);
+  cv::Mat1f band, band_squared;
   cv::subtract(fine, coarse, band);
-  cv::multiply(band, band, energy);
-  cv::GaussianBlur(energy, energy, cv::Size(), sigma);
+  cv::multiply(band, band, band_squared);
+  cv::Mat1f energy = BlurWithin(band_squared, weights, sigma);
   cv::sqrt(energy, energy);
   // Relative to the local brightness, so that hair in shadow stays textured.
-  cv::Mat1f brightness;
-  cv::GaussianBlur(coarse, brightness, cv::Size(), sigma);
+  const cv::Mat1f brightness = BlurWithin(coarse, weights, sigma);
   cv::divide(energy, brightness + 8.0, energy);
   return energy;
 }
 
-// Colour samples (BGR as float rows) of the pixels in `where`, at most `limit`, evenly spread.
-cv::Mat1f ColourSamples(const cv::Mat3b& bgr, const cv::Mat1b& where, int limit) {
+// A pixel's features in the material model: its colour (BGR) and, when the
+// model uses texture, kTextureScale log(energy + kTextureFloor). On that scale
+// a doubling of the energy moves the feature by 14, about a colour channel's
+// spread within one material, and the floor sits near the sensor noise's energy.
+constexpr double kTextureScale = 20.0, kTextureFloor = 0.005;
+
+// B, G, R, texture (0 without texture).
+cv::Vec4d Features(const cv::Vec3b& p, float energy, bool texture) {
+  const double t = texture ? kTextureScale * std::log(double(energy) + kTextureFloor) : 0.0;
+  return cv::Vec4d(p[0], p[1], p[2], t);
+}
+
+// Feature rows (3 or 4 floats) of the pixels in `where`, at most `limit`, evenly spread.
+cv::Mat1f FeatureSamples(const cv::Mat3b& bgr, const cv::Mat1f& energy, const cv::Mat1b& where,
+                         bool texture, int limit) {
   const int count = cv::countNonZero(where);
   const int step = std::max(1, count / std::max(1, limit));
-  cv::Mat1f samples(0, 3);
+  const int dims = texture ? 4 : 3;
+  cv::Mat1f samples(0, dims);
   int seen = 0;
   for (int y = 0; y < bgr.rows; ++y) {
     for (int x = 0; x < bgr.cols; ++x) {
       if (!where(y, x) || seen++ % step != 0) continue;
-      const cv::Vec3b& p = bgr(y, x);
-      samples.push_back(
-          cv::Mat1f(1, 3, std::array<float, 3>{float(p[0]), float(p[1]), float(p[2])}.data()));
+      const cv::Vec4d f = Features(bgr(y, x), energy(y, x), texture);
+      cv::Mat1f row(1, dims);
+      for (int c = 0; c < dims; ++c) row(0, c) = static_cast<float>(f[c]);
+      samples.push_back(row);
     }
   }
   return samples;
 }
 
-// Colours of the foreground as a Gaussian mixture (EM, OpenCV's ml::EM), each
-// component then called hair or skin by the texture of its pixels: skin is
-// smooth, fibres are not, and a component's colour is one material's.
+// The foreground's colours, and with SegmentationOptions::texture_feature
+// their fine texture, as a Gaussian mixture (EM, OpenCV's ml::EM); each
+// component is then called hair or skin by the texture of its pixels: skin is
+// smooth, fibres are not. With texture in the mixture, smooth skin in shadow
+// gets components of its own instead of sharing dark hair's.
 // Evaluated here (not by ml::EM::predict2) so that pixels are scored in parallel.
 class MaterialModel {
  public:
   static Result<MaterialModel> Fit(const cv::Mat3b& bgr, const cv::Mat1b& where,
                                    const cv::Mat1f& energy, const SegmentationOptions& options) {
     const int components = options.colour_components;
-    const cv::Mat1f samples = ColourSamples(bgr, where, 8000);
+    MaterialModel model;
+    model.texture_ = options.texture_feature;
+    const cv::Mat1f samples = FeatureSamples(bgr, energy, where, model.texture_, 8000);
     if (samples.rows < 20 * components)
       return FailedPrecondition("too few foreground pixels for a colour model");
     cv::Ptr<cv::ml::EM> em = cv::ml::EM::create();
@@ -127,47 +160,39 @@ class MaterialModel {
     // seeded here so that a view segments the same on any thread, in any order.
     cv::theRNG() = cv::RNG(0x5eed5eedULL);
     if (!em->trainEM(samples)) return FailedPrecondition("the colour model did not converge");
-    MaterialModel model;
     std::vector<cv::Mat> covariances;
     em->getCovs(covariances);
     const cv::Mat means = em->getMeans();
     const cv::Mat weights = em->getWeights();
     for (int k = 0; k < components; ++k) {
       Gaussian g;
-      for (int c = 0; c < 3; ++c) g.mean[c] = means.at<double>(k, c);
-      cv::Matx33d cov;
-      covariances[static_cast<size_t>(k)].convertTo(cv::Mat(cov, false), CV_64F);
-      cov += cv::Matx33d::eye() * 1.0;  // a grey level of floor: sensor noise
+      // Without texture the fourth dimension is a unit variance every
+      // component shares: it adds the same constant to every term.
+      cv::Matx44d cov = cv::Matx44d::eye();
+      for (int r = 0; r < samples.cols; ++r) {
+        g.mean[r] = means.at<double>(k, r);
+        for (int c = 0; c < samples.cols; ++c)
+          cov(r, c) = covariances[static_cast<size_t>(k)].at<double>(r, c);
+      }
+      cov += cv::Matx44d::eye() * 1.0;  // a grey level of floor: sensor noise
       g.inverse = cov.inv();
       g.log_norm = std::log(std::max(1e-12, weights.at<double>(0, k))) -
                    0.5 * std::log(cv::determinant(cov));
       model.gaussians_.push_back(g);
     }
-    // Each component's median texture energy, over the pixels it wins.
-    std::vector<std::vector<float>> energies(static_cast<size_t>(components));
-    std::vector<float> all;
-    for (int y = 0; y < bgr.rows; y += 2) {
-      for (int x = 0; x < bgr.cols; x += 2) {
-        if (!where(y, x)) continue;
-        energies[static_cast<size_t>(model.Best(Colour(bgr(y, x))))].push_back(energy(y, x));
-        all.push_back(energy(y, x));
-      }
-    }
-    const float overall = static_cast<float>(Quantile(all, 0.5));
-    for (size_t k = 0; k < energies.size(); ++k) {
-      model.gaussians_[k].hair =
-          energies[k].empty() || Quantile(energies[k], 0.5) > options.skin_texture_ratio * overall;
-    }
+    model.NameComponentsByTexture(bgr, where, energy, options.skin_texture_ratio);
     return model;
   }
 
-  static cv::Vec3d Colour(const cv::Vec3b& p) { return cv::Vec3d(p[0], p[1], p[2]); }
+  cv::Vec4d At(const cv::Mat3b& bgr, const cv::Mat1f& energy, int y, int x) const {
+    return Features(bgr(y, x), energy(y, x), texture_);
+  }
 
-  // log p(colour, hair) - log p(colour, skin), clamped to +-20.
-  double HairLogRatio(const cv::Vec3d& colour) const {
+  // log p(features, hair) - log p(features, skin), clamped to +-20.
+  double HairLogRatio(const cv::Vec4d& f) const {
     double hair = -1e300, skin = -1e300;
     for (const Gaussian& g : gaussians_) {
-      const double t = Term(g, colour);
+      const double t = Term(g, f);
       (g.hair ? hair : skin) = LogAdd(g.hair ? hair : skin, t);
     }
     return std::clamp(hair - skin, -20.0, 20.0);
@@ -175,28 +200,50 @@ class MaterialModel {
 
  private:
   struct Gaussian {
-    cv::Vec3d mean;
-    cv::Matx33d inverse;
+    cv::Vec4d mean;
+    cv::Matx44d inverse;
     double log_norm = 0;
     bool hair = true;
   };
-  static double Term(const Gaussian& g, const cv::Vec3d& colour) {
-    const cv::Vec3d d = colour - g.mean;
+
+  // A component is hair when the median texture energy of the pixels it wins
+  // exceeds `ratio` times the foreground's 75th percentile, which is hair's
+  // whenever hair covers a quarter of the foreground (the median would be
+  // skin's on a face-on view and hair's own on a back view).
+  void NameComponentsByTexture(const cv::Mat3b& bgr, const cv::Mat1b& where,
+                               const cv::Mat1f& energy, double ratio) {
+    std::vector<std::vector<float>> energies(gaussians_.size());
+    std::vector<float> all;
+    for (int y = 0; y < bgr.rows; y += 2) {
+      for (int x = 0; x < bgr.cols; x += 2) {
+        if (!where(y, x)) continue;
+        energies[static_cast<size_t>(Best(At(bgr, energy, y, x)))].push_back(energy(y, x));
+        all.push_back(energy(y, x));
+      }
+    }
+    const float hair_level = static_cast<float>(Quantile(all, 0.75));
+    for (size_t k = 0; k < energies.size(); ++k) {
+      gaussians_[k].hair = energies[k].empty() || Quantile(energies[k], 0.5) > ratio * hair_level;
+    }
+  }
+  static double Term(const Gaussian& g, const cv::Vec4d& f) {
+    const cv::Vec4d d = f - g.mean;
     return g.log_norm - 0.5 * (d.t() * g.inverse * d)(0);
   }
   static double LogAdd(double a, double b) {
     if (a < b) std::swap(a, b);
     return b < -1e299 ? a : a + std::log1p(std::exp(b - a));
   }
-  int Best(const cv::Vec3d& colour) const {
+  int Best(const cv::Vec4d& f) const {
     int best = 0;
     for (size_t k = 1; k < gaussians_.size(); ++k) {
-      if (Term(gaussians_[k], colour) > Term(gaussians_[static_cast<size_t>(best)], colour))
+      if (Term(gaussians_[k], f) > Term(gaussians_[static_cast<size_t>(best)], f))
         best = static_cast<int>(k);
     }
     return best;
   }
   std::vector<Gaussian> gaussians_;
+  bool texture_ = true;
 };
 
 // Hair against skin on the foreground (non-zero in `candidates`): the
@@ -209,7 +256,7 @@ Result<cv::Mat1b> HairBySkinContrast(const cv::Mat3b& bgr, const cv::Mat1b& cand
   cv::Mat1f ratio(bgr.size(), 0.f);
   ratio.forEach([&](float& r, const int* pos) {
     if (candidates(pos[0], pos[1]))
-      r = static_cast<float>(model.HairLogRatio(MaterialModel::Colour(bgr(pos[0], pos[1]))));
+      r = static_cast<float>(model.HairLogRatio(model.At(bgr, energy, pos[0], pos[1])));
   });
   cv::GaussianBlur(ratio, ratio, cv::Size(), options.texture_sigma_px * options.work_scale);
   return Mask(candidates & (ratio > 0));
@@ -312,8 +359,8 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   cv::resize(bgr, small_bgr, cv::Size(), s, s, cv::INTER_AREA);
   cv::resize(candidates, small_candidates, small_bgr.size(), 0, 0, cv::INTER_AREA);
   small_candidates = Mask(small_candidates >= 128);
-  cv::resize(TextureEnergy(bgr, options.texture_sigma_px), small_energy, small_bgr.size(), 0, 0,
-             cv::INTER_AREA);
+  cv::resize(TextureEnergy(bgr, candidates, options.texture_sigma_px), small_energy,
+             small_bgr.size(), 0, 0, cv::INTER_AREA);
   HR_ASSIGN_OR_RETURN(const cv::Mat1b small_hair,
                       HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
   cv::Mat1b hair_side;

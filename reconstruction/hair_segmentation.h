@@ -9,10 +9,14 @@
 //     (alpha = distance / the distance of the hair's own colour);
 //  2. box: the polygons the caller knows hold no hair (the calibration box's
 //     projected outline) are box wherever they are not backdrop;
-//  3. hair against skin: the foreground's colours as a Gaussian mixture (EM);
-//     fibres make a fine texture that skin lacks, so each component is hair or
-//     skin by the texture of the pixels it explains; the likelihood ratio of
-//     the two, smoothed over a few pixels, labels every pixel.
+//  3. hair against skin: the foreground's colours and fine texture (a
+//     band-pass energy) as a Gaussian mixture (EM); fibres make a fine
+//     texture that skin lacks, so each component is hair or skin by the
+//     texture of the pixels it explains; the likelihood ratio of the two,
+//     smoothed over a few pixels, labels every pixel. Texture in the mixture
+//     keeps smooth skin in shadow out of dark hair's components; without it
+//     (`texture_feature` false) the mixture is over colour alone, as Bao &
+//     Qi's.
 // Labels use the simulated ground truth's numbering (core/truth_maps.h) so that
 // they compare directly.
 #pragma once
@@ -34,9 +38,11 @@ struct SegmentationOptions {
   double backdrop_distance =
       6.0;  // Mahalanobis distance to the backdrop colour under which a pixel is backdrop
   double texture_sigma_px = 4.0;  // window over which the fine-scale energy is averaged
-  int colour_components = 6;      // Gaussians in the foreground's colour model
-  double skin_texture_ratio =
-      0.75;  // a component is skin when its texture is below this share of the foreground's
+  int colour_components = 6;      // Gaussians in the foreground's colour (and texture) model
+  bool texture_feature = true;    // the mixture models texture beside colour
+  // A component is skin when its pixels' median texture is below this share
+  // of the foreground's 75th percentile.
+  double skin_texture_ratio = 0.35;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.

@@ -189,7 +189,7 @@ Result<HybridOrientationField> HybridOrientationField::Build(
   }
   for (const DirectedRoot& r : roots) {
     const int64_t i = voxel_of(r.position_mm);
-    store(&f.interior_, i, r.normal);
+    store(&f.interior_, i, r.direction);
     interior_fixed[i] = 1;
   }
   SolveLaplace(f.size_, channels, interior_fixed, &f.interior_, o.sweeps_per_level);

@@ -2,7 +2,7 @@
 // grid (2 mm by default) over the hair's bounding box, in the points' frame
 // (mm):
 //   V_i  interior orientation field: the directions of the directed strand
-//        segments and of the roots (the scalp's normal) fixed in the voxels
+//        segments and of the roots (their first direction) fixed in the voxels
 //        they occupy (Dirichlet), the rest by a Laplace solve;
 //   S_s  surface-structure field: the same from the directed ribbons only;
 //   I_d  interior distance field: 0 in voxels a segment or the head occupies,
@@ -40,7 +40,7 @@ struct HybridFieldOptions {
 
 struct DirectedRoot {
   Eigen::Vector3f position_mm;
-  Eigen::Vector3f normal;  // unit, out of the scalp
+  Eigen::Vector3f direction;  // unit, out of the scalp: the strand's first direction
 };
 
 class HybridOrientationField {

@@ -52,19 +52,31 @@ std::vector<double> KeepEnergies(const std::vector<StrandSegment>& segments, con
 }
 
 // E_close (Eq. 7): side-by-side segments, weighted by their overlap share
-// (of the vertices queried: every overlap_stride-th).
+// (of the vertices queried: every overlap_stride-th). With share_overlaps,
+// each is divided by the larger of its two segments' summed shares (when
+// over 1).
 void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
                  PairWeights* pairs, int64_t* count) {
   std::vector<const std::vector<Eigen::Vector3f>*> polylines;
   for (const StrandSegment& s : segments) polylines.push_back(&s.points_mm);
   const PolylineVertexTable table = TabulatePolylines(polylines);
-  for (const OwnerOverlap& overlap :
-       FindOwnerOverlaps(table, o.overlap_mm, o.overlap_stride, o.threads)) {
-    if (overlap.votes == 0) continue;
-    pairs->push_back(
-        {{overlap.a, overlap.b}, (overlap.votes > 0 ? 1 : -1) * o.alpha_close * overlap.share});
-    ++*count;
+  std::vector<OwnerOverlap> overlaps =
+      FindOwnerOverlaps(table, o.overlap_mm, o.overlap_stride, o.threads);
+  overlaps.erase(std::remove_if(overlaps.begin(), overlaps.end(),
+                                [](const OwnerOverlap& v) { return v.votes == 0; }),
+                 overlaps.end());
+  std::vector<double> total(segments.size(), 0.0);
+  for (const OwnerOverlap& overlap : overlaps) {
+    total[overlap.a] += overlap.share;
+    total[overlap.b] += overlap.share;
   }
+  for (const OwnerOverlap& overlap : overlaps) {
+    const double norm =
+        o.share_overlaps ? 1.0 / std::max({1.0, total[overlap.a], total[overlap.b]}) : 1.0;
+    pairs->push_back({{overlap.a, overlap.b},
+                      (overlap.votes > 0 ? 1 : -1) * o.alpha_close * overlap.share * norm});
+  }
+  *count += static_cast<int64_t>(overlaps.size());
 }
 
 // E_link (Eq. 6): a segment's end continues into another's end across a small gap.

@@ -168,5 +168,39 @@ TEST(StrandDirection, RootsThatMeetAtAWhorlDoNotPullEachOtherRound) {
   EXPECT_EQ(reversed, 10) << "counted whole, the links reverse one bundle";
 }
 
+TEST(StrandDirection, ALayerOfHairDoesNotOutvoteAStrandThatCrossesIt) {
+  // A layer of 100 parallel segments falling down-left (1 mm apart, each
+  // overlapping its 6 nearest) and, 1 mm in front of it, one long strand
+  // falling down-right across the layer. At 106 deg to the layer its tangent
+  // opposes every segment it crosses, so each of those 60 overlaps says
+  // "reverse one of the two". Counted whole they outweigh the strand's E_ribb
+  // (it falls 180 mm) and reverse it; shared, the crossing overlaps weigh
+  // about a sixth as much (each layer segment's summed share is about 6) and
+  // the strand keeps its root first.
+  const Eigen::Vector3f centre(0, 0, 500);
+  const Eigen::Vector3f layer_down(-0.8f, 0, -0.6f), across_layer(0.6f, 0, -0.8f);
+  const Eigen::Vector3f strand_down(0.8f, 0, -0.6f), in_front(0, 1, 0);
+  std::vector<StrandSegment> segments;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::Vector3f middle = centre + (static_cast<float>(k) - 50.0f) * across_layer;
+    segments.push_back({Line(middle - 50.0f * layer_down, middle + 50.0f * layer_down)});
+  }
+  segments.push_back(
+      {Line(centre + in_front - 150.0f * strand_down, centre + in_front + 150.0f * strand_down)});
+  const std::vector<StrandSegment> expected = segments;
+  ShuffleOrders(&segments, 11);
+  std::vector<StrandSegment> unshared = segments;
+  const DirectionSummary summary = DirectSegments(&segments, nullptr, DirectionOptions{});
+  EXPECT_EQ(summary.overlaps, 354) << "294 within the layer, 60 where the strand crosses it";
+  for (size_t i = 0; i < segments.size(); ++i) {
+    EXPECT_EQ(segments[i].points_mm.front(), expected[i].points_mm.front()) << "segment " << i;
+  }
+  DirectionOptions whole_overlaps;
+  whole_overlaps.share_overlaps = false;
+  DirectSegments(&unshared, nullptr, whole_overlaps);
+  EXPECT_NE(unshared.back().points_mm.front(), expected.back().points_mm.front())
+      << "counted whole, the layer's overlaps reverse the strand that crosses it";
+}
+
 }  // namespace
 }  // namespace hairrig

@@ -24,7 +24,7 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
     return [&](size_t r) {
       auto step = make_step();  // per strand: a step may keep state along its strand
       std::vector<Eigen::Vector3f>& strand = strands[r];
-      Eigen::Vector3f p = roots[r].position_mm, direction = roots[r].normal;
+      Eigen::Vector3f p = roots[r].position_mm, direction = roots[r].direction;
       strand.push_back(p);
       for (int i = 0; i < max_steps; ++i) {
         Eigen::Vector3f next = direction;
@@ -61,13 +61,21 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
 
 }  // namespace
 
-std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed) {
+Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, double elevation_deg) {
+  const double elevation = elevation_deg * M_PI / 180.0;
+  const Eigen::Vector3d down = -Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d down_along_scalp = down - down.dot(normal) * normal;
+  return (std::sin(elevation) * normal + std::cos(elevation) * down_along_scalp).normalized();
+}
+
+std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed,
+                                           double elevation_deg) {
   std::mt19937_64 rng(seed);
   std::vector<DirectedRoot> roots(static_cast<size_t>(std::max(count, 0)));
   for (DirectedRoot& root : roots) {
     Eigen::Vector3d normal;
     root.position_mm = head.SampleScalp(rng, &normal).cast<float>();
-    root.normal = normal.cast<float>();
+    root.direction = RootDirection(normal, elevation_deg).cast<float>();
   }
   return roots;
 }

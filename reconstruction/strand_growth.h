@@ -28,9 +28,22 @@
 
 namespace hairrig {
 
-// `count` roots uniform by area on the head's scalp, with the scalp normal;
-// deterministic for a seed.
-std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed);
+// The direction a strand leaves the scalp in, at a scalp point with outward
+// unit `normal` (turntable frame, +z up): the normal tilted towards "down"
+// along the scalp, sin(e) n + cos(e) g normalised, with g the part of -z
+// tangent to the scalp (|g| = 1 where the scalp is vertical, 0 at the crown).
+// `elevation_deg` e is then the angle above the scalp where it is vertical; it
+// rises towards the crown, where the direction is the normal. 90 gives the
+// normal everywhere (Bao & Qi 2017 Sec. IV-A, Table 1: "hair roots normal").
+// The root's direction is both the strand's first step and the interior
+// field's Dirichlet value at the root (hybrid_field.h), so it bends the field
+// near the scalp towards the way hair falls.
+Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, double elevation_deg);
+
+// `count` roots uniform by area on the head's scalp, each with RootDirection
+// at its normal; deterministic for a seed.
+std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed,
+                                           double elevation_deg = 90);
 
 struct StrandGrowthOptions {
   double step_mm = 1.0;  // delta of Eq. 2

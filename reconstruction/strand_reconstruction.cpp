@@ -226,6 +226,8 @@ Result<StrandMethod> ParseStrandMethod(const std::string& name) {
 Status StrandReconstructionOptions::Check() const {
   if (strands < 1 || strands > 2000000) return InvalidArgument("strands must lie in 1..2000000");
   if (threads < 1) return InvalidArgument("threads must be at least 1");
+  if (!(root_elevation_deg > 0 && root_elevation_deg <= 90))
+    return InvalidArgument("root_elevation_deg must lie in (0, 90]");
   HR_RETURN_IF_ERROR(segments.Check());
   HR_RETURN_IF_ERROR(direction.Check());
   HR_RETURN_IF_ERROR(field.Check());
@@ -334,15 +336,18 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
 
   StrandModel model;
   if (o.method == StrandMethod::kNaive) {
-    model = RunNaive(points, *head, SampleScalpRoots(*head, o.strands, o.seed), o, &summary);
+    model = RunNaive(points, *head,
+                     SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg), o, &summary);
   } else {
     HR_ASSIGN_OR_RETURN(std::vector<StrandSegment> segments,
                         GrowSegments(points, points_file, o, &summary));
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
-      HR_ASSIGN_OR_RETURN(model, RunBaoQi(std::move(segments), *head,
-                                          SampleScalpRoots(*head, o.strands, o.seed), o, &summary));
+      HR_ASSIGN_OR_RETURN(
+          model,
+          RunBaoQi(std::move(segments), *head,
+                   SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg), o, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);

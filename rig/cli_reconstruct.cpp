@@ -23,6 +23,7 @@ struct ReconstructArgs {
   std::string method = "bao-qi";
   std::string head;
   int strands = StrandReconstructionOptions{}.strands;
+  double root_elevation_deg = StrandReconstructionOptions{}.root_elevation_deg;
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -80,6 +81,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
                                                       : MvsCost::kBoth;
   HR_ASSIGN_OR_RETURN(options.strands.method, ParseStrandMethod(a.method));
   options.strands.strands = a.strands;
+  options.strands.root_elevation_deg = a.root_elevation_deg;
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -112,6 +114,12 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
       ->check(CLI::ExistingFile | CLI::IsMember(std::vector<std::string>{kFittedHead}));
   cmd->add_option("--strands", args->strands, "how many strands to grow (roots on the scalp)")
       ->check(CLI::Range(1, 2000000))
+      ->capture_default_str();
+  cmd->add_option("--root-elevation", args->root_elevation_deg,
+                  "bao-qi, naive: the angle (deg) above the scalp at which strands leave it where "
+                  "the scalp is vertical, rising to the normal at the crown (90: the normal "
+                  "everywhere, as Bao and Qi)")
+      ->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,
                   "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")

@@ -1,0 +1,143 @@
+// The hair segmentation (reconstruction/hair_segmentation.h) on every view of
+// a simulated capture, against the renderer's labels. Run from the repository
+// root:
+//   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
+//       [--texture-feature yes|no] [--views 0,1,...] [--threads T] [--pictures DIR]
+// CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
+// each view's hair IoU and which true labels the errors fall on (skin taken
+// for hair, hair taken for backdrop or skin), the median and worst IoU, and
+// the time per view. --pictures writes each view with its errors painted:
+// red where skin or backdrop is taken for hair, blue where hair is missed.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+#include <numeric>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/image_file.h"
+#include "core/parallel.h"
+#include "core/truth_maps.h"
+#include "reconstruction/evaluation.h"
+#include "reconstruction/hair_segmentation.h"
+#include "rig/reconstruction_input.h"
+
+namespace {
+
+using namespace hairrig;
+
+struct ViewRow {
+  std::string name;
+  double iou = 0;
+  int skin_as_hair = 0, backdrop_as_hair = 0, hair_as_skin = 0, hair_as_backdrop = 0;
+};
+
+Result<ViewRow> ScoreView(const ReconstructionView& view, const CaptureTruth& truth,
+                          const SegmentationOptions& options, const std::string& pictures) {
+  HR_ASSIGN_OR_RETURN(const cv::Mat image, ReadImageFile(view.image_path, cv::IMREAD_COLOR));
+  HR_ASSIGN_OR_RETURN(const HairSegmentation seg, SegmentHair(image, view.not_hair_px, options));
+  HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps, ReadViewTruthMaps(truth.views_dir, view.id));
+  const cv::Mat hair = seg.label == kSegHair, true_hair = maps.label == ViewTruthMaps::kHair;
+  ViewRow row;
+  row.name = view.name;
+  HR_ASSIGN_OR_RETURN(row.iou, MaskIoU(hair, true_hair));
+  row.skin_as_hair = cv::countNonZero(hair & (maps.label == ViewTruthMaps::kHead));
+  row.backdrop_as_hair = cv::countNonZero(hair & (maps.label == ViewTruthMaps::kBackdrop));
+  row.hair_as_skin = cv::countNonZero(true_hair & (seg.label == kSegHead));
+  row.hair_as_backdrop = cv::countNonZero(true_hair & (seg.label == kSegBackdrop));
+  if (!pictures.empty()) {
+    cv::Mat painted = image.clone();
+    painted.setTo(cv::Scalar(0, 0, 255), hair & ~true_hair);
+    painted.setTo(cv::Scalar(255, 0, 0), true_hair & ~hair);
+    HR_RETURN_IF_ERROR(WriteImageAtomic(pictures + "/" + view.name + "_errors.jpg", painted));
+  }
+  return row;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr,
+                 "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
+                 "[--views 0,1,...] [--threads T] [--pictures DIR]\n",
+                 argv[0]);
+    return 2;
+  }
+  const std::string capture = argv[1];
+  SegmentationOptions options;
+  int threads = 2;
+  std::string pictures;
+  std::vector<int> views;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--colour-components") == 0) {
+      options.colour_components = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--texture-feature") == 0) {
+      options.texture_feature = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--views") == 0) {
+      std::stringstream list(argv[i + 1]);
+      for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));
+    } else if (std::strcmp(argv[i], "--pictures") == 0) {
+      pictures = argv[i + 1];
+      std::filesystem::create_directories(pictures);
+    } else if (std::strcmp(argv[i], "--threads") == 0) {
+      threads = std::atoi(argv[i + 1]);
+    } else {
+      std::fprintf(stderr, "unknown option %s\n", argv[i]);
+      return 2;
+    }
+  }
+  auto input = LoadCaptureReconstructionInput(capture);
+  auto truth = ReadCaptureTruth(capture);
+  if (!input.ok() || !truth.ok()) {
+    std::fprintf(stderr, "%s\n",
+                 (!input.ok() ? input.status() : truth.status()).ToString().c_str());
+    return 1;
+  }
+  if (const Status selected = SelectViews(views, &*input); !selected.ok()) {
+    std::fprintf(stderr, "%s\n", selected.ToString().c_str());
+    return 2;
+  }
+  std::vector<ViewRow> rows(input->views.size());
+  std::vector<std::string> errors;
+  std::mutex mutex;
+  const auto start = std::chrono::steady_clock::now();
+  ParallelFor(rows.size(), threads, [&] {
+    return [&](size_t k) {
+      auto row = ScoreView(input->views[k], *truth, options, pictures);
+      if (row.ok()) {
+        rows[k] = *row;
+      } else {
+        const std::lock_guard<std::mutex> lock(mutex);
+        errors.push_back(input->views[k].name + ": " + row.status().ToString());
+      }
+    };
+  });
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const std::string& e : errors) std::fprintf(stderr, "%s\n", e.c_str());
+  if (!errors.empty()) return 1;
+  std::printf("%-22s %6s %12s %14s %12s %14s\n", "view", "IoU", "skin->hair", "backdrop->hair",
+              "hair->skin", "hair->backdrop");
+  std::vector<double> ious;
+  for (const ViewRow& r : rows) {
+    std::printf("%-22s %6.3f %12d %14d %12d %14d\n", r.name.c_str(), r.iou, r.skin_as_hair,
+                r.backdrop_as_hair, r.hair_as_skin, r.hair_as_backdrop);
+    ious.push_back(r.iou);
+  }
+  std::sort(ious.begin(), ious.end());
+  std::printf(
+      "hair IoU over %zu views: median %.3f, worst %.3f, mean %.3f; %.2f s per view on %d "
+      "threads\n",
+      ious.size(), ious[ious.size() / 2], ious.front(),
+      std::accumulate(ious.begin(), ious.end(), 0.0) / static_cast<double>(ious.size()),
+      seconds / static_cast<double>(ious.size()), threads);
+  return 0;
+}
