@@ -76,11 +76,19 @@ int main(int argc, char** argv) {
   int threads = 2;
   std::string pictures;
   std::vector<int> views;
+  if (argc % 2 != 0) {
+    std::fprintf(stderr, "%s: every option takes a value\n", argv[argc - 1]);
+    return 2;
+  }
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--colour-components") == 0) {
       options.colour_components = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--texture-feature") == 0) {
-      options.texture_feature = std::strcmp(argv[i + 1], "no") != 0;
+      if (std::strcmp(argv[i + 1], "yes") != 0 && std::strcmp(argv[i + 1], "no") != 0) {
+        std::fprintf(stderr, "--texture-feature takes yes or no\n");
+        return 2;
+      }
+      options.texture_feature = std::strcmp(argv[i + 1], "yes") == 0;
     } else if (std::strcmp(argv[i], "--views") == 0) {
       std::stringstream list(argv[i + 1]);
       for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));
@@ -104,6 +112,10 @@ int main(int argc, char** argv) {
   if (const Status selected = SelectViews(views, &*input); !selected.ok()) {
     std::fprintf(stderr, "%s\n", selected.ToString().c_str());
     return 2;
+  }
+  if (input->views.empty()) {
+    std::fprintf(stderr, "%s: no view to segment\n", capture.c_str());
+    return 1;
   }
   std::vector<ViewRow> rows(input->views.size());
   std::vector<std::string> errors;

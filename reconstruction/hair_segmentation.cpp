@@ -166,15 +166,17 @@ class MaterialModel {
     const cv::Mat weights = em->getWeights();
     for (int k = 0; k < components; ++k) {
       Gaussian g;
-      // Without texture the fourth dimension is a unit variance every
-      // component shares: it adds the same constant to every term.
+      // Without texture the fourth dimension is a constant feature with the
+      // same variance in every component: it adds the same constant to every term.
       cv::Matx44d cov = cv::Matx44d::eye();
       for (int r = 0; r < samples.cols; ++r) {
         g.mean[r] = means.at<double>(k, r);
         for (int c = 0; c < samples.cols; ++c)
           cov(r, c) = covariances[static_cast<size_t>(k)].at<double>(r, c);
       }
-      cov += cv::Matx44d::eye() * 1.0;  // a grey level of floor: sensor noise
+      // A floor of 1 on every dimension: a grey level of sensor noise on the
+      // colours, a 5 % change of energy on the texture.
+      cov += cv::Matx44d::eye() * 1.0;
       g.inverse = cov.inv();
       g.log_norm = std::log(std::max(1e-12, weights.at<double>(0, k))) -
                    0.5 * std::log(cv::determinant(cov));
@@ -209,7 +211,9 @@ class MaterialModel {
   // A component is hair when the median texture energy of the pixels it wins
   // exceeds `ratio` times the foreground's 75th percentile, which is hair's
   // whenever hair covers a quarter of the foreground (the median would be
-  // skin's on a face-on view and hair's own on a back view).
+  // skin's on a face-on view and hair's own on a back view). Where hair
+  // covers less, the reference is skin's texture and textured skin may be
+  // named hair.
   void NameComponentsByTexture(const cv::Mat3b& bgr, const cv::Mat1b& where,
                                const cv::Mat1f& energy, double ratio) {
     std::vector<std::vector<float>> energies(gaussians_.size());
@@ -221,9 +225,15 @@ class MaterialModel {
         all.push_back(energy(y, x));
       }
     }
-    const float hair_level = static_cast<float>(Quantile(all, 0.75));
+    if (all.empty()) return;  // every component stays hair
+    const double threshold = ratio * Quantile(all, 0.75);
     for (size_t k = 0; k < energies.size(); ++k) {
-      gaussians_[k].hair = energies[k].empty() || Quantile(energies[k], 0.5) > ratio * hair_level;
+      // A component that wins no sampled pixel is named by its mean texture
+      // (with texture in the model), else it stays hair.
+      gaussians_[k].hair =
+          energies[k].empty() ? !texture_ || gaussians_[k].mean[3] >
+                                                 kTextureScale * std::log(threshold + kTextureFloor)
+                              : Quantile(energies[k], 0.5) > threshold;
     }
   }
   static double Term(const Gaussian& g, const cv::Vec4d& f) {

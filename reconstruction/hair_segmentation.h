@@ -41,7 +41,9 @@ struct SegmentationOptions {
   int colour_components = 6;      // Gaussians in the foreground's colour (and texture) model
   bool texture_feature = true;    // the mixture models texture beside colour
   // A component is skin when its pixels' median texture is below this share
-  // of the foreground's 75th percentile.
+  // of the foreground's 75th percentile (hair's texture when hair covers at
+  // least a quarter of the foreground; on a view with less hair than that,
+  // textured skin may be taken for hair).
   double skin_texture_ratio = 0.35;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,

@@ -15,7 +15,8 @@
 //     other, so an end's links are not independent evidence);
 //   E_close (Eq. 7): segments that run side by side (vertices within
 //     overlap_mm) with incompatible directions cost alpha_close times the
-//     share of overlapped vertices.
+//     share of overlapped vertices, shared among a segment's overlaps
+//     (share_overlaps: a departure from the paper, whose ribbons are few).
 // The pairwise terms are made submodular by orienting the segments along a
 // maximum spanning tree of the pair graph first; the few that stay
 // non-submodular are truncated (Rother et al. 2005's truncation), so the cut
@@ -49,14 +50,14 @@ struct DirectionOptions {
   // fall less than h (E_ribb under alpha_link) can still be reversed.
   bool share_link_ends = true;
   double overlap_mm = 3.0;  // vertices this close overlap
-  // A segment's overlaps share alpha_close (each weighs its share over the
-  // larger summed share of its two segments, when that exceeds 1) instead of
-  // alpha_close each. Where the points cover the hair densely every segment
-  // overlaps hundreds of others (on the bangs scene a median summed weight of
-  // 108 against Eq. 5's median 0.32): the pairwise terms then drown Eq. 5 and
-  // the few percent of overlaps that are wrong (segments crossing between
-  // layers) reverse whole regions. A departure from the paper, whose ribbons
-  // are few; `false` counts every overlap whole, as Eq. 7.
+  // A segment's overlaps share alpha_close: each weighs alpha_close times its
+  // share divided by the larger summed share of its two segments (when that
+  // exceeds 1), instead of alpha_close times its share. Where the points cover
+  // the hair densely every segment overlaps hundreds of others, the pairwise
+  // terms drown Eq. 5, and the few overlaps that are wrong (segments crossing
+  // between layers) can reverse whole regions (README, "Strands"). A
+  // departure from the paper, whose ribbons are few; `false` weighs every
+  // overlap as Eq. 7.
   bool share_overlaps = true;
   // Overlaps are looked for from every overlap_stride-th vertex of each
   // segment (1: every vertex, as Eq. 7 counts them; 2 halves the queries,

@@ -61,21 +61,23 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
 
 }  // namespace
 
-Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, double elevation_deg) {
+Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, const Eigen::Vector3d& down,
+                              double elevation_deg) {
+  if (!(elevation_deg > 0 && elevation_deg <= 90)) return normal;
   const double elevation = elevation_deg * M_PI / 180.0;
-  const Eigen::Vector3d down = -Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d down_along_scalp = down - down.dot(normal) * normal;
-  return (std::sin(elevation) * normal + std::cos(elevation) * down_along_scalp).normalized();
+  const Eigen::Vector3d d = std::sin(elevation) * normal + std::cos(elevation) * down_along_scalp;
+  return d.norm() > 1e-9 ? d.normalized() : normal;
 }
 
 std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed,
-                                           double elevation_deg) {
+                                           double elevation_deg, const Eigen::Vector3d& down) {
   std::mt19937_64 rng(seed);
   std::vector<DirectedRoot> roots(static_cast<size_t>(std::max(count, 0)));
   for (DirectedRoot& root : roots) {
     Eigen::Vector3d normal;
     root.position_mm = head.SampleScalp(rng, &normal).cast<float>();
-    root.direction = RootDirection(normal, elevation_deg).cast<float>();
+    root.direction = RootDirection(normal, down, elevation_deg).cast<float>();
   }
   return roots;
 }

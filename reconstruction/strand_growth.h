@@ -29,21 +29,24 @@
 namespace hairrig {
 
 // The direction a strand leaves the scalp in, at a scalp point with outward
-// unit `normal` (turntable frame, +z up): the normal tilted towards "down"
-// along the scalp, sin(e) n + cos(e) g normalised, with g the part of -z
-// tangent to the scalp (|g| = 1 where the scalp is vertical, 0 at the crown).
-// `elevation_deg` e is then the angle above the scalp where it is vertical; it
-// rises towards the crown, where the direction is the normal. 90 gives the
-// normal everywhere (Bao & Qi 2017 Sec. IV-A, Table 1: "hair roots normal").
+// unit `normal`: the normal tilted towards `down` (unit; the points' frame's
+// down, -z in the turntable frame, DirectionOptions::down) along the scalp,
+// sin(e) n + cos(e) g normalised, with g the part of `down` tangent to the
+// scalp (|g| = 1 where the scalp is vertical, 0 at the crown and under the
+// chin). `elevation_deg` e in (0, 90] is then the angle above the scalp where
+// it is vertical; it rises towards the crown, where the direction is the
+// normal. 90 gives the normal everywhere (Bao & Qi 2017 Sec. IV-A, Table 1:
+// "hair roots normal"). An elevation outside (0, 90] gives the normal.
 // The root's direction is both the strand's first step and the interior
 // field's Dirichlet value at the root (hybrid_field.h), so it bends the field
 // near the scalp towards the way hair falls.
-Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, double elevation_deg);
+Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, const Eigen::Vector3d& down,
+                              double elevation_deg);
 
 // `count` roots uniform by area on the head's scalp, each with RootDirection
 // at its normal; deterministic for a seed.
 std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed,
-                                           double elevation_deg = 90);
+                                           double elevation_deg, const Eigen::Vector3d& down);
 
 struct StrandGrowthOptions {
   double step_mm = 1.0;  // delta of Eq. 2

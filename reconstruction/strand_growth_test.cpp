@@ -13,6 +13,8 @@
 namespace hairrig {
 namespace {
 
+const Eigen::Vector3d kDown(0, 0, -1);
+
 double DegreesAboveTangentPlane(const Eigen::Vector3d& direction, const Eigen::Vector3d& normal) {
   return std::asin(std::clamp(direction.dot(normal), -1.0, 1.0)) * 180.0 / M_PI;
 }
@@ -21,14 +23,14 @@ TEST(RootDirection, NinetyDegreesIsTheNormal) {
   for (const Eigen::Vector3d& normal :
        {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.6, 0, 0.8),
         Eigen::Vector3d(0, -0.8, -0.6)}) {
-    EXPECT_LT((RootDirection(normal, 90) - normal).norm(), 1e-12) << normal.transpose();
+    EXPECT_LT((RootDirection(normal, kDown, 90) - normal).norm(), 1e-12) << normal.transpose();
   }
 }
 
 TEST(RootDirection, OnAVerticalScalpItLeavesAtTheElevationPointingDown) {
   const Eigen::Vector3d normal(0, 1, 0);
   for (const double elevation : {15.0, 30.0, 45.0, 60.0}) {
-    const Eigen::Vector3d d = RootDirection(normal, elevation);
+    const Eigen::Vector3d d = RootDirection(normal, kDown, elevation);
     EXPECT_NEAR(d.norm(), 1.0, 1e-12);
     EXPECT_NEAR(DegreesAboveTangentPlane(d, normal), elevation, 1e-9);
     EXPECT_NEAR(d.x(), 0.0, 1e-12);
@@ -37,7 +39,25 @@ TEST(RootDirection, OnAVerticalScalpItLeavesAtTheElevationPointingDown) {
 }
 
 TEST(RootDirection, AtTheCrownItIsTheNormal) {
-  EXPECT_LT((RootDirection(Eigen::Vector3d::UnitZ(), 30) - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  EXPECT_LT((RootDirection(Eigen::Vector3d::UnitZ(), kDown, 30) - Eigen::Vector3d::UnitZ()).norm(),
+            1e-12);
+}
+
+TEST(RootDirection, UnderTheChinAndOutsideItsRangeItIsTheNormal) {
+  const Eigen::Vector3d under(0, 0, -1);
+  EXPECT_LT((RootDirection(under, kDown, 45) - under).norm(), 1e-12);
+  const Eigen::Vector3d side(1, 0, 0);
+  for (const double elevation : {0.0, -30.0, 120.0, std::nan("")})
+    EXPECT_LT((RootDirection(side, kDown, elevation) - side).norm(), 1e-12) << elevation;
+}
+
+TEST(RootDirection, TiltsTowardsTheFramesOwnDown) {
+  // A frame whose down is +x (a COLMAP model lying on its side).
+  const Eigen::Vector3d down(1, 0, 0), normal(0, 1, 0);
+  const Eigen::Vector3d d = RootDirection(normal, down, 45);
+  EXPECT_NEAR(d.x(), std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(d.y(), std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(d.z(), 0.0, 1e-12);
 }
 
 TEST(RootDirection, RisesFromTheElevationTowardsTheCrown) {
@@ -46,7 +66,7 @@ TEST(RootDirection, RisesFromTheElevationTowardsTheCrown) {
   for (const double tilt : {0.0, 20.0, 40.0, 60.0, 80.0}) {
     const double t = tilt * M_PI / 180.0;
     const Eigen::Vector3d normal(std::cos(t), 0, std::sin(t));
-    const Eigen::Vector3d d = RootDirection(normal, 45);
+    const Eigen::Vector3d d = RootDirection(normal, kDown, 45);
     const double above = DegreesAboveTangentPlane(d, normal);
     EXPECT_GE(above, 45.0 - 1e-9) << "scalp tilted " << tilt;
     EXPECT_GT(above, previous) << "scalp tilted " << tilt;
@@ -61,8 +81,8 @@ TEST(SampleScalpRoots, DirectionsFollowTheScalpNormalTiltedByTheElevation) {
   spec.scalp.defined = true;
   auto head = HeadModel::Build(spec);
   ASSERT_TRUE(head.ok()) << head.status().ToString();
-  const auto normal_roots = SampleScalpRoots(**head, 500, 7, 90);
-  const auto tilted_roots = SampleScalpRoots(**head, 500, 7, 40);
+  const auto normal_roots = SampleScalpRoots(**head, 500, 7, 90, kDown);
+  const auto tilted_roots = SampleScalpRoots(**head, 500, 7, 40, kDown);
   ASSERT_EQ(normal_roots.size(), 500u);
   ASSERT_EQ(tilted_roots.size(), 500u);
   for (size_t k = 0; k < normal_roots.size(); ++k) {

@@ -337,17 +337,20 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
   StrandModel model;
   if (o.method == StrandMethod::kNaive) {
     model = RunNaive(points, *head,
-                     SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg), o, &summary);
+                     SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg,
+                                      o.direction.down.cast<double>()),
+                     o, &summary);
   } else {
     HR_ASSIGN_OR_RETURN(std::vector<StrandSegment> segments,
                         GrowSegments(points, points_file, o, &summary));
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
-      HR_ASSIGN_OR_RETURN(
-          model,
-          RunBaoQi(std::move(segments), *head,
-                   SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg), o, &summary));
+      HR_ASSIGN_OR_RETURN(model,
+                          RunBaoQi(std::move(segments), *head,
+                                   SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg,
+                                                    o.direction.down.cast<double>()),
+                                   o, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);

@@ -51,10 +51,9 @@ struct StrandReconstructionOptions {
   StrandMethod method = StrandMethod::kBaoQi;
   int strands = 20000;  // roots on the scalp (luo: strands synthesised)
   uint64_t seed = 1;    // root sampling (luo: synthesis)
-  // Angle (deg) above the scalp at which roots leave it where the scalp is
-  // vertical (bao-qi, naive; RootDirection in strand_growth.h). 90 is Bao &
-  // Qi's scalp normal; 45 raised both F1 aims' figures on every simulated
-  // scene (README, "Strands").
+  // Angle (deg, in (0, 90]) above the scalp at which roots leave it where the
+  // scalp is vertical, tilted towards direction.down (bao-qi, naive;
+  // RootDirection in strand_growth.h). 90 is Bao & Qi's scalp normal.
   double root_elevation_deg = 45;
   SegmentGrowthOptions segments;
   DirectionOptions direction;               // bao-qi

@@ -119,7 +119,7 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "bao-qi, naive: the angle (deg) above the scalp at which strands leave it where "
                   "the scalp is vertical, rising to the normal at the crown (90: the normal "
                   "everywhere, as Bao and Qi)")
-      ->check(CLI::Range(1.0, 90.0))
+      ->check(CLI::Range(0.0, 90.0))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,
                   "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")
