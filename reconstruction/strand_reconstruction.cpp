@@ -152,6 +152,13 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   return model;
 }
 
+// The roots bao-qi and naive grow from: o.strands on the scalp, leaving it
+// at o.root_elevation_deg towards the direction MRF's down.
+std::vector<DirectedRoot> ScalpRoots(const HeadModel& head, const StrandReconstructionOptions& o) {
+  return SampleScalpRoots(head, o.strands, o.seed, o.root_elevation_deg,
+                          o.direction.down.cast<double>());
+}
+
 // The baseline: no structure.
 StrandModel RunNaive(const std::vector<OrientedPoint>& points, const HeadModel& head,
                      const std::vector<DirectedRoot>& roots, const StrandReconstructionOptions& o,
@@ -336,10 +343,7 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
 
   StrandModel model;
   if (o.method == StrandMethod::kNaive) {
-    model = RunNaive(points, *head,
-                     SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg,
-                                      o.direction.down.cast<double>()),
-                     o, &summary);
+    model = RunNaive(points, *head, ScalpRoots(*head, o), o, &summary);
   } else {
     HR_ASSIGN_OR_RETURN(std::vector<StrandSegment> segments,
                         GrowSegments(points, points_file, o, &summary));
@@ -347,10 +351,7 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
       HR_ASSIGN_OR_RETURN(model,
-                          RunBaoQi(std::move(segments), *head,
-                                   SampleScalpRoots(*head, o.strands, o.seed, o.root_elevation_deg,
-                                                    o.direction.down.cast<double>()),
-                                   o, &summary));
+                          RunBaoQi(std::move(segments), *head, ScalpRoots(*head, o), o, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);
