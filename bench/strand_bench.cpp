@@ -4,6 +4,7 @@
 //   build/bench/hairrig_strand_bench CAPTURE [--methods bao-qi,luo,naive] [--strands N]
 //       [--head FILE|fit] [--volume-bound B] [--root-elevation DEG] [--alpha-link W]
 //       [--alpha-close W] [--share-link-ends yes|no] [--share-overlaps yes|no]
+//       [--whole-head-in-volume yes|no] [--max-off-hair MM] [--off-hair MM]
 //       [--overlap-stride K] [--out-suffix S] [--score yes|no]
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
@@ -31,13 +32,15 @@ int main(int argc, char** argv) {
   using namespace hairrig;
   namespace fs = std::filesystem;
   if (argc < 2) {
-    std::fprintf(stderr,
-                 "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
-                 "[--volume-bound B] [--root-elevation DEG] [--alpha-link W] [--alpha-close W] "
-                 "[--share-link-ends yes|no] [--share-overlaps yes|no] "
-                 "[--overlap-stride K] [--out-suffix S] "
-                 "[--score yes|no]\n",
-                 argv[0]);
+    std::fprintf(
+        stderr,
+        "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
+        "[--volume-bound B] [--root-elevation DEG] [--alpha-link W] [--alpha-close W] "
+        "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
+        "[--max-off-hair MM] [--off-hair MM] "
+        "[--overlap-stride K] [--out-suffix S] "
+        "[--score yes|no]\n",
+        argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
@@ -66,6 +69,12 @@ int main(int argc, char** argv) {
       options.direction.alpha_close = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--share-overlaps") == 0) {
       options.direction.share_overlaps = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--max-off-hair") == 0) {
+      options.growth.max_off_hair_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--off-hair") == 0) {
+      options.growth.off_hair_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--whole-head-in-volume") == 0) {
+      options.field.whole_head_in_volume = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {
       options.direction.share_link_ends = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--out-suffix") == 0) {

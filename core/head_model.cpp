@@ -213,13 +213,18 @@ int HeadModel::ScalpSide(const Eigen::Vector3d& p) const {
   return (p - s.center_turntable_mm).dot(normal) >= 0 ? 1 : -1;
 }
 
-bool HeadModel::OnScalp(const Eigen::Vector3d& p) const {
+bool HeadModel::AboveHairline(const Eigen::Vector3d& p) const {
   const ScalpSpec& s = head_.scalp;
-  if (!s.defined) return true;
+  if (!s.defined || (p - s.center_turntable_mm).squaredNorm() < 1e-12) return true;
   double elevation, azimuth;
   ScalpAngles(p, &elevation, &azimuth);
-  if (elevation < HairlineElevationDeg(s, azimuth)) return false;
-  if (!s.parting) return true;
+  return elevation >= HairlineElevationDeg(s, azimuth);
+}
+
+bool HeadModel::OnScalp(const Eigen::Vector3d& p) const {
+  const ScalpSpec& s = head_.scalp;
+  if (!AboveHairline(p)) return false;
+  if (!s.defined || !s.parting) return true;
   // The parting's bare line runs from the face over the crown to parting_back_deg past it.
   const Eigen::Vector3d rel = p - s.center_turntable_mm;
   const double over_top_deg = RadToDeg(std::atan2(rel.z(), rel.dot(s.face_dir)));

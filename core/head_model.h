@@ -58,6 +58,10 @@ class HeadModel {
   // (-1, +1, or 0 without a parting).
   Eigen::Vector3d SampleScalp(std::mt19937_64& rng, Eigen::Vector3d* normal) const;
   bool OnScalp(const Eigen::Vector3d& p) const;
+  // Seen from the scalp centre, p lies above the hairline (the parting
+  // counts as above): the skull hair grows from or covers, not the face, the
+  // ears or the neck. True everywhere for a head without a scalp region.
+  bool AboveHairline(const Eigen::Vector3d& p) const;
   int ScalpSide(const Eigen::Vector3d& p) const;
   // The scalp's frame: up (+z), face direction and the side axis (up x face),
   // and the centre directions are measured from.

@@ -70,6 +70,27 @@ TEST(HeadModel, ScalpSamplesLieOnTheHeadAboveTheHairline) {
   EXPECT_GT(right, 300);
 }
 
+// Above the hairline: the skull, the parting included; not the face or the neck.
+TEST(HeadModel, AboveTheHairlineIsTheSkullWithItsPartingButNotTheFaceOrNeck) {
+  HeadSpec spec;  // the default ellipsoid, scalp centre (0, 0, 330), face towards -y
+  spec.scalp.defined = true;
+  auto head = HeadModel::Build(spec);
+  ASSERT_TRUE(head.ok()) << head.status().ToString();
+  const HeadModel& h = **head;
+  const Eigen::Vector3d crown(0, 0, 365), parting(0, -30, 362), back(0, 95, 300);
+  EXPECT_TRUE(h.AboveHairline(crown));
+  EXPECT_TRUE(h.AboveHairline(parting));
+  EXPECT_FALSE(h.OnScalp(parting)) << "the parting is bare";
+  EXPECT_TRUE(h.AboveHairline(back)) << "the nape's hairline is 28 deg below the centre";
+  EXPECT_FALSE(h.AboveHairline(Eigen::Vector3d(0, -95, 300))) << "the face";
+  EXPECT_FALSE(h.AboveHairline(Eigen::Vector3d(0, 0, 150))) << "the neck";
+  EXPECT_TRUE(h.AboveHairline(h.ScalpCenter())) << "the centre itself";
+  HeadSpec bare;  // no scalp region: the whole head
+  auto no_scalp = HeadModel::Build(bare);
+  ASSERT_TRUE(no_scalp.ok());
+  EXPECT_TRUE((*no_scalp)->AboveHairline(Eigen::Vector3d(0, 0, 150)));
+}
+
 TEST(HeadModel, AMissingMeshNamesTheField) {
   HeadSpec h;
   h.mesh_file = "/nonexistent/head.ply";

@@ -192,10 +192,13 @@ Result<HybridOrientationField> HybridOrientationField::Build(
     store(&f.interior_, i, r.direction);
     interior_fixed[i] = 1;
   }
+  f.segment_distance_ = ChamferDistance(g, hair_boundary);  // segments only, before the head joins
+  for (float& d : f.segment_distance_) d *= static_cast<float>(o.voxel_mm);
   SolveLaplace(f.size_, channels, interior_fixed, &f.interior_, o.sweeps_per_level);
   SolveLaplace(f.size_, channels, surface_fixed, &f.surface_, o.sweeps_per_level);
 
-  // I_d: zero on the hair and in the head, the distance to them on the box's faces.
+  // I_d: zero on the hair and in the head (above its hairline unless
+  // whole_head_in_volume), the distance to them on the box's faces.
   if (head != nullptr) {
     for (int z = 0; z < g.size.z(); ++z)
       for (int y = 0; y < g.size.y(); ++y)
@@ -203,7 +206,8 @@ Result<HybridOrientationField> HybridOrientationField::Build(
           const Eigen::Vector3d p =
               (f.origin_ + Eigen::Vector3i(x, y, z).cast<float>() * static_cast<float>(o.voxel_mm))
                   .cast<double>();
-          if (head->SignedDistance(p, nullptr) < 0.5 * o.voxel_mm)
+          if (head->SignedDistance(p, nullptr) < 0.5 * o.voxel_mm &&
+              (o.whole_head_in_volume || head->AboveHairline(p)))
             hair_boundary[g.Index(x, y, z)] = 1;
         }
   }
@@ -290,6 +294,12 @@ Eigen::Vector3f HybridOrientationField::DistanceGradient(const Eigen::Vector3f& 
 double HybridOrientationField::RibbonDistance(const Eigen::Vector3f& p) const {
   float d;
   Sample(ribbon_distance_, 1, p, &d);
+  return d;
+}
+
+double HybridOrientationField::SegmentDistance(const Eigen::Vector3f& p) const {
+  float d;
+  Sample(segment_distance_, 1, p, &d);
   return d;
 }
 

@@ -7,7 +7,10 @@
 //   S_s  surface-structure field: the same from the directed ribbons only;
 //   I_d  interior distance field: 0 in voxels a segment or the head occupies,
 //        the Euclidean distance to them on the box's faces, a Laplace solve
-//        between;
+//        between. By default only the head above its hairline
+//        (HeadModel::AboveHairline) counts: the paper's whole head keeps I_d
+//        near 0 along the face and the neck, so a strand that has passed the
+//        hair's end slides down the skin to its maximum length;
 //   d_s  the distance to the nearest ribbon vertex (the weights of Eq. 1).
 // O_g, the growing direction, belongs to each growing strand
 // (strand_growth.h).
@@ -35,6 +38,8 @@ struct HybridFieldOptions {
   int sweeps_per_level = 40;  // Gauss-Seidel (SOR) sweeps at each level of the coarse-to-fine solve
   double ribbon_min_length_mm =
       20;  // segments at least this long stand for the directed ribbons of S_s
+  bool whole_head_in_volume =
+      false;  // I_d is 0 in the whole head (the paper), not above the hairline only
   Status Check() const;
 };
 
@@ -61,6 +66,9 @@ class HybridOrientationField {
   Eigen::Vector3f DistanceGradient(
       const Eigen::Vector3f& p) const;                    // grad I_d (central differences)
   double RibbonDistance(const Eigen::Vector3f& p) const;  // d_s (mm)
+  // To the nearest voxel a segment occupies (mm; chamfer distance between
+  // voxel centres, trilinear between them).
+  double SegmentDistance(const Eigen::Vector3f& p) const;
   bool Contains(const Eigen::Vector3f& p) const;
 
   Eigen::Vector3i size() const { return size_; }
@@ -78,7 +86,7 @@ class HybridOrientationField {
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
   double voxel_mm_ = 2;
   bool directed_ = true;
-  std::vector<float> interior_, surface_, distance_, ribbon_distance_;
+  std::vector<float> interior_, surface_, distance_, ribbon_distance_, segment_distance_;
 };
 
 // The Laplace solve behind the fields: values in `fixed` voxels stay, the

@@ -10,10 +10,16 @@ namespace hairrig {
 
 namespace {
 
-enum class End { kVolume, kLength };
+enum class End { kVolume, kLength, kOffHair };
+
+// What a step decided besides the next direction.
+struct StepStop {
+  End end = End::kLength;  // why the strand stops (a step that returns false)
+  int drop_last = 0;       // vertices at the strand's end to drop when it stops
+};
 
 // Grows every root's strand with `step(previous vertex, previous direction,
-// &next direction) -> false to stop (volume)`, in parallel, in root order.
+// &next direction, &stop) -> false to stop`, in parallel, in root order.
 template <typename MakeStep>
 StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
                   const StrandGrowthOptions& o, MakeStep make_step, StrandGrowthSummary* summary) {
@@ -28,8 +34,10 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
       strand.push_back(p);
       for (int i = 0; i < max_steps; ++i) {
         Eigen::Vector3f next = direction;
-        if (!step(p, direction, &next)) {
-          ends[r] = End::kVolume;
+        StepStop stop;
+        if (!step(p, direction, &next, &stop)) {
+          ends[r] = stop.end;
+          strand.resize(strand.size() - std::min<size_t>(strand.size() - 1, stop.drop_last));
           break;
         }
         p += next * static_cast<float>(o.step_mm);
@@ -48,7 +56,9 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
       ++s.dropped_short;
       continue;
     }
-    ++(ends[r] == End::kVolume ? s.stopped_volume : s.stopped_length);
+    ++(ends[r] == End::kVolume    ? s.stopped_volume
+       : ends[r] == End::kOffHair ? s.stopped_off_hair
+                                  : s.stopped_length);
     set.AddStrand(strands[r]);
     s.vertices += static_cast<int64_t>(strands[r].size());
     length += static_cast<double>(strands[r].size() - 1) * o.step_mm;
@@ -58,6 +68,36 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
   if (summary != nullptr) *summary = s;
   return set;
 }
+
+// StrandGrowthOptions::max_off_hair_mm along one strand, a vertex (one
+// step) at a time.
+class OffHairRun {
+ public:
+  explicit OffHairRun(const StrandGrowthOptions& o)
+      : step_mm_(o.step_mm), off_hair_mm_(o.off_hair_mm), max_off_hair_mm_(o.max_off_hair_mm) {}
+
+  // True when the strand ends at its last vertex, `segment_distance_mm` from
+  // the nearest segment; then *drop_last is the count of its vertices grown
+  // off the hair, that one included.
+  bool Ended(double segment_distance_mm, int* drop_last) {
+    if (max_off_hair_mm_ <= 0) return false;
+    if (segment_distance_mm < off_hair_mm_) {
+      reached_ = true;
+      off_vertices_ = 0;
+      return false;
+    }
+    if (!reached_) return false;
+    ++off_vertices_;
+    if (off_vertices_ * step_mm_ <= max_off_hair_mm_) return false;
+    *drop_last = off_vertices_;
+    return true;
+  }
+
+ private:
+  double step_mm_, off_hair_mm_, max_off_hair_mm_;
+  bool reached_ = false;
+  int off_vertices_ = 0;
+};
 
 }  // namespace
 
@@ -91,6 +131,9 @@ Status StrandGrowthOptions::Check() const {
   if (!(volume_bound > 0)) return InvalidArgument("strand volume_bound must be positive");
   if (!(head_clearance_mm >= 0))
     return InvalidArgument("strand head_clearance_mm must be non-negative");
+  if (!(max_off_hair_mm >= 0))
+    return InvalidArgument("strand max_off_hair_mm must be non-negative (0 turns it off)");
+  if (!(off_hair_mm > 0)) return InvalidArgument("strand off_hair_mm must be positive");
   return Status::Ok();
 }
 
@@ -98,8 +141,16 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
                              const std::vector<DirectedRoot>& roots, const HeadModel* head,
                              const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
   const auto make_step = [&] {
-    return [&](const Eigen::Vector3f& p, const Eigen::Vector3f& previous, Eigen::Vector3f* next) {
-      if (!field.Contains(p) || field.Distance(p) > o.volume_bound) return false;
+    return [&, off_hair = OffHairRun(o)](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
+                                         Eigen::Vector3f* next, StepStop* stop) mutable {
+      if (!field.Contains(p) || field.Distance(p) > o.volume_bound) {
+        stop->end = End::kVolume;
+        return false;
+      }
+      if (off_hair.Ended(field.SegmentDistance(p), &stop->drop_last)) {
+        stop->end = End::kOffHair;
+        return false;
+      }
       // Eq. 1 with the paper's dynamic weights (Sec. IV-B).
       const double d_s = field.RibbonDistance(p);
       double a_s = 0, a_i = 100 * d_s;
@@ -122,9 +173,10 @@ StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,
                                  const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
   const auto make_step = [&] {
     return [&, reached = false](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
-                                Eigen::Vector3f* next) mutable {
+                                Eigen::Vector3f* next, StepStop* stop) mutable {
       Eigen::Vector3f orientation;
       const bool near = points.At(p, previous, 0.0, 1, &orientation);
+      stop->end = End::kVolume;
       if (!near) return !reached;  // straight on until the points are reached; stop on leaving them
       reached = true;
       *next = orientation;

@@ -8,7 +8,10 @@
 //     which would make the step length arbitrary), and the distance term
 //     descends I_d (-grad I_d), which keeps strands in the hair volume (the
 //     paper's sign would push them out of it). Growth stops where I_d exceeds
-//     I_bound or at the maximum length.
+//     I_bound or at the maximum length, and (StrandGrowthOptions::
+//     max_off_hair_mm) where the hair the cameras saw ends: I_d's Laplace
+//     solve stays low over a head covered in hair, so a strand that has run
+//     past the end of short hair would go on along its surface.
 //   - the naive baseline: the direction of the nearest points (Luo Eq. 2
 //     over the oriented points within 2 sigma of the field, signed to
 //     continue the strand), no structure
@@ -54,6 +57,14 @@ struct StrandGrowthOptions {
   double surface_threshold_mm = 0.1;  // T_s
   double volume_bound = 3.0;          // I_bound (I_d's units: mm at the grid's faces)
   double head_clearance_mm = 0.5;     // vertices are kept this far outside the head
+  // Bao & Qi growth only: a strand that has come within off_hair_mm of a
+  // segment stops once it has then run max_off_hair_mm (arc length) further
+  // than off_hair_mm from every segment, and that stretch is dropped. 0 (the
+  // default, as the paper: I_d and the length only) turns the rule off; it
+  // suits short hair and cuts long hair's strands where they pass under its
+  // seen surface (README, "Strands").
+  double max_off_hair_mm = 0;
+  double off_hair_mm = 4;
   int threads = 2;
 
   Status Check() const;
@@ -61,7 +72,7 @@ struct StrandGrowthOptions {
 
 struct StrandGrowthSummary {
   int64_t strands = 0, vertices = 0;
-  int64_t stopped_volume = 0, stopped_length = 0, dropped_short = 0;
+  int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, dropped_short = 0;
   double mean_length_mm = 0;
 };
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -137,6 +138,124 @@ TEST(GrowStrandsInField, StrandsFollowACurtainOfDirectedSegmentsAndStopAtItsEnd)
     // The curtain ends at z = 100 (measured: every strand's last vertex at 99).
     EXPECT_NEAR(strand.back().z(), 100.0, 4.0) << "strand " << s;
   }
+}
+
+// Short hair lying on the side of the default ellipsoid head (scalp centre
+// z = 330, hairline 8 deg above it over the ear, so near z = 338 there):
+// segments 1 mm outside the head in the plane x > 0 from z = 360 down to
+// z = 345; and, lower on the head at z = 200, a band of segments running
+// around it (as a mis-segmented edge of a mannequin's neck gives).
+std::vector<StrandSegment> ShortHairOverTheEarAndABandBelow(const HeadModel& head) {
+  const auto on_head = [&](double y, double z) {
+    const double x = 78 * std::sqrt(std::max(0.0, 1 - std::pow((z - 250) / 115, 2)));
+    const Eigen::Vector3d on_surface(x, y, z);
+    const Eigen::Vector3d outside = head.KeepOutside(on_surface, 1);
+    return Eigen::Vector3f(outside.cast<float>());
+  };
+  std::vector<StrandSegment> segments;
+  for (double y = -15; y <= 15; y += 3) {
+    StrandSegment s;
+    for (double z = 360; z >= 345; z -= 1.5) s.points_mm.push_back(on_head(y, z));
+    segments.push_back(std::move(s));
+  }
+  StrandSegment band;
+  for (double y = -20; y <= 20; y += 1.5) band.points_mm.push_back(on_head(y, 200));
+  segments.push_back(std::move(band));
+  return segments;
+}
+
+struct ShortHairScene {
+  std::unique_ptr<HeadModel> head;
+  std::vector<StrandSegment> hair;
+  std::vector<DirectedRoot> roots;  // at the top of each strand of the short hair
+  HybridOrientationField field;
+};
+
+ShortHairScene BuildShortHairScene(bool whole_head_in_volume) {
+  HeadSpec spec;
+  spec.scalp.defined = true;
+  ShortHairScene scene;
+  scene.head = HeadModel::Build(spec).value();
+  scene.hair = ShortHairOverTheEarAndABandBelow(*scene.head);
+  for (size_t k = 0; k + 1 < scene.hair.size(); ++k) {
+    const std::vector<Eigen::Vector3f>& p = scene.hair[k].points_mm;
+    scene.roots.push_back({p[0], (p[1] - p[0]).normalized()});
+  }
+  HybridFieldOptions options;
+  options.whole_head_in_volume = whole_head_in_volume;
+  scene.field =
+      HybridOrientationField::Build(scene.hair, scene.roots, scene.head.get(), options).value();
+  return scene;
+}
+
+// A point 1 mm outside the default ellipsoid head at height z, on its side (x > 0, y = 0).
+Eigen::Vector3f OnTheSkin(const HeadModel& head, double z) {
+  const double x = 78 * std::sqrt(std::max(0.0, 1 - std::pow((z - 250) / 115, 2)));
+  const Eigen::Vector3d on_surface(x, 0, z);
+  const Eigen::Vector3d outside = head.KeepOutside(on_surface, 1);
+  return Eigen::Vector3f(outside.cast<float>());
+}
+
+TEST(HybridOrientationField, SkinBelowTheHairlineIsOutsideTheHairVolume) {
+  const double bound = StrandGrowthOptions{}.volume_bound;
+  const ShortHairScene above_hairline = BuildShortHairScene(false);
+  const ShortHairScene whole_head = BuildShortHairScene(true);
+  for (const double z : {320.0, 300.0, 280.0, 260.0, 240.0, 220.0}) {
+    // Measured: I_d 23-65 above the hairline only, 0.3-1.4 with the whole head.
+    EXPECT_GT(above_hairline.field.Distance(OnTheSkin(*above_hairline.head, z)), 3 * bound)
+        << "z " << z;
+    EXPECT_LT(whole_head.field.Distance(OnTheSkin(*whole_head.head, z)), 0.6 * bound) << "z " << z;
+  }
+  for (const double z : {355.0, 350.0})
+    EXPECT_LT(above_hairline.field.Distance(OnTheSkin(*above_hairline.head, z)), 0.5 * bound)
+        << "under the hair, z " << z;
+}
+
+TEST(GrowStrandsInField, StrandsGrowingPastShortHairStopNearTheHairline) {
+  const ShortHairScene scene = BuildShortHairScene(false);
+  StrandGrowthSummary summary;
+  const StrandSet strands = GrowStrandsInField(scene.field, scene.roots, scene.head.get(),
+                                               StrandGrowthOptions{}, &summary);
+  ASSERT_EQ(strands.num_strands(), scene.roots.size());
+  EXPECT_EQ(summary.stopped_volume, static_cast<int64_t>(scene.roots.size()));
+  double lowest = 1e9;
+  for (const Eigen::Vector3f& p : strands.points_mm) lowest = std::min(lowest, double{p.z()});
+  // The hair ends at z = 345 and the hairline lies near z = 338.
+  EXPECT_GT(lowest, 330) << "a strand slid on down the skin";
+}
+
+TEST(GrowStrandsInField, WithMaxOffHairStrandsStopWhereTheSegmentsEnd) {
+  // The whole head in I_d and no volume bound: only the rule can stop them.
+  const ShortHairScene scene = BuildShortHairScene(true);
+  StrandGrowthOptions options;
+  options.volume_bound = 1e6;
+  options.max_length_mm = 150;
+  const auto lowest_end = [&](double max_off_hair_mm, StrandGrowthSummary* summary) {
+    options.max_off_hair_mm = max_off_hair_mm;
+    const StrandSet strands =
+        GrowStrandsInField(scene.field, scene.roots, scene.head.get(), options, summary);
+    EXPECT_EQ(strands.num_strands(), scene.roots.size());
+    double lowest = 1e9;
+    const std::vector<size_t> offsets = strands.Offsets();
+    for (size_t s = 0; s + 1 < offsets.size(); ++s) {
+      const Eigen::Vector3f& end = strands.points_mm[offsets[s + 1] - 1];
+      lowest = std::min(lowest, double{end.z()});
+      if (max_off_hair_mm > 0) {
+        EXPECT_LT(scene.field.SegmentDistance(end), options.off_hair_mm)
+            << "strand " << s << " keeps its stretch off the hair";
+      }
+    }
+    return lowest;
+  };
+  StrandGrowthSummary with_rule, without_rule;
+  const double stopped = lowest_end(10, &with_rule);
+  const double run_on = lowest_end(0, &without_rule);
+  EXPECT_EQ(with_rule.stopped_off_hair, static_cast<int64_t>(scene.roots.size()));
+  EXPECT_EQ(without_rule.stopped_off_hair, 0);
+  // The hair ends at z = 345, 1 mm off the head (measured: the lowest end
+  // 342 with the rule, 294 without).
+  EXPECT_GT(stopped, 335) << "ends within off_hair_mm of the hair's end";
+  EXPECT_LT(run_on, stopped - 20) << "without the rule the strands run on";
 }
 
 TEST(StrandReconstructionOptions, RootElevationOutsideItsRangeIsRefused) {

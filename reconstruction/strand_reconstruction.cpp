@@ -276,6 +276,7 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"mean_length_mm", growth.mean_length_mm},
                         {"stopped_at_volume", growth.stopped_volume},
                         {"stopped_at_max_length", growth.stopped_length},
+                        {"stopped_where_hair_ends", growth.stopped_off_hair},
                         {"dropped_short", growth.dropped_short}}},
                       {"seconds",
                        {{"segments", seconds_segments},

@@ -24,6 +24,7 @@ struct ReconstructArgs {
   std::string head;
   int strands = StrandReconstructionOptions{}.strands;
   double root_elevation_deg = StrandReconstructionOptions{}.root_elevation_deg;
+  double max_off_hair_mm = StrandGrowthOptions{}.max_off_hair_mm;
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -82,6 +83,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   HR_ASSIGN_OR_RETURN(options.strands.method, ParseStrandMethod(a.method));
   options.strands.strands = a.strands;
   options.strands.root_elevation_deg = a.root_elevation_deg;
+  options.strands.growth.max_off_hair_mm = a.max_off_hair_mm;
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -120,6 +122,11 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "the scalp is vertical, rising to the normal at the crown (90: the normal "
                   "everywhere, as Bao and Qi)")
       ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+  cmd->add_option("--max-off-hair", args->max_off_hair_mm,
+                  "bao-qi: stop a strand once it has run this far (mm) off the seen hair, for "
+                  "short hair (0: off, as Bao and Qi)")
+      ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,
                   "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")
