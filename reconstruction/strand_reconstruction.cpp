@@ -146,7 +146,10 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   StrandGrowthOptions growth = o.growth;
   growth.threads = o.threads;
   StrandModel model;
-  model.strands = GrowStrandsInField(field, roots, &head, growth, &summary->growth);
+  model.strands =
+      EndMergedStrands(GrowStrandsInField(field, roots, &head, growth, &summary->growth), o.merging,
+                       &summary->merging);
+  SummariseStrands(model.strands, &summary->growth);
   summary->seconds_growth = SecondsSince(t);
   model.segments = SegmentsAsStrands(segments);
   return model;
@@ -239,6 +242,7 @@ Status StrandReconstructionOptions::Check() const {
   HR_RETURN_IF_ERROR(direction.Check());
   HR_RETURN_IF_ERROR(field.Check());
   HR_RETURN_IF_ERROR(growth.Check());
+  HR_RETURN_IF_ERROR(merging.Check());
   HR_RETURN_IF_ERROR(ribbons.Check());
   HR_RETURN_IF_ERROR(connections.Check());
   HR_RETURN_IF_ERROR(ribbon_direction.Check());
@@ -277,6 +281,8 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"stopped_at_volume", growth.stopped_volume},
                         {"stopped_at_max_length", growth.stopped_length},
                         {"stopped_where_hair_ends", growth.stopped_off_hair},
+                        {"ended_where_merged", merging.strands_ended},
+                        {"dropped_merged_from_root", merging.strands_dropped},
                         {"dropped_short", growth.dropped_short}}},
                       {"seconds",
                        {{"segments", seconds_segments},

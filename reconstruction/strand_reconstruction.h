@@ -37,6 +37,7 @@
 #include "reconstruction/ribbons.h"
 #include "reconstruction/strand_direction.h"
 #include "reconstruction/strand_growth.h"
+#include "reconstruction/strand_merging.h"
 #include "reconstruction/strand_segments.h"
 #include "reconstruction/wisps.h"
 
@@ -59,6 +60,7 @@ struct StrandReconstructionOptions {
   DirectionOptions direction;               // bao-qi
   HybridFieldOptions field;                 // bao-qi
   StrandGrowthOptions growth;               // bao-qi, naive
+  StrandMergeOptions merging;               // bao-qi
   RibbonOptions ribbons;                    // luo
   ConnectionOptions connections;            // luo
   RibbonDirectionOptions ribbon_direction;  // luo
@@ -78,6 +80,7 @@ struct StrandReconstructionSummary {
   SegmentGrowthSummary segments;
   DirectionSummary direction;
   StrandGrowthSummary growth;  // luo: the synthesised strands' count, vertices and mean length
+  StrandMergeSummary merging;  // bao-qi
   RibbonSummary ribbons;
   ConnectionSummary connections;
   RibbonDirectionSummary ribbon_direction;
