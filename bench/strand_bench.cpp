@@ -5,7 +5,8 @@
 //       [--head FILE|fit] [--volume-bound B] [--root-elevation DEG] [--alpha-link W]
 //       [--alpha-close W] [--share-link-ends yes|no] [--share-overlaps yes|no]
 //       [--whole-head-in-volume yes|no] [--max-off-hair MM] [--off-hair MM]
-//       [--merge-run MM] [--merge-distance MM] [--voxel MM]
+//       [--merge-run MM] [--merge-distance MM] [--voxel MM] [--follow-radius MM]
+//       [--follow-weight W]
 //       [--overlap-stride K] [--out-suffix S] [--score yes|no]
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
@@ -38,8 +39,9 @@ int main(int argc, char** argv) {
         "usage: %s CAPTURE [--methods bao-qi,luo,naive] [--strands N] [--head FILE|fit] "
         "[--volume-bound B] [--root-elevation DEG] [--alpha-link W] [--alpha-close W] "
         "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
-        "[--max-off-hair MM] [--off-hair MM] "
-        "[--overlap-stride K] [--out-suffix S] "
+        "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
+        "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--overlap-stride K] [--out-suffix "
+        "S] "
         "[--score yes|no]\n",
         argv[0]);
     return 2;
@@ -70,6 +72,10 @@ int main(int argc, char** argv) {
       options.direction.alpha_close = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--share-overlaps") == 0) {
       options.direction.share_overlaps = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--follow-radius") == 0) {
+      options.growth.follow_radius_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--follow-weight") == 0) {
+      options.growth.follow_weight = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--voxel") == 0) {
       options.field.voxel_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--merge-run") == 0) {

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "reconstruction/central_gradient.h"
+#include "reconstruction/point_grid.h"
 
 namespace hairrig {
 
@@ -133,6 +134,40 @@ Status HybridFieldOptions::Check() const {
   return Status::Ok();
 }
 
+struct HybridOrientationField::SegmentIndex {
+  std::vector<Eigen::Vector3f> positions, tangents;
+  std::unique_ptr<PointGrid> grid;  // over `positions`, which stay put
+};
+
+std::shared_ptr<const HybridOrientationField::SegmentIndex> HybridOrientationField::IndexSegments(
+    const std::vector<StrandSegment>& segments) {
+  auto index = std::make_shared<SegmentIndex>();
+  for (const StrandSegment& s : segments) {
+    for (size_t k = 0; k < s.points_mm.size(); ++k) {
+      const size_t a = k == 0 ? 0 : k - 1, b = std::min(k + 1, s.points_mm.size() - 1);
+      const Eigen::Vector3f t = s.points_mm[b] - s.points_mm[a];
+      if (!(t.norm() > 0)) continue;
+      index->positions.push_back(s.points_mm[k]);
+      index->tangents.push_back(t.normalized());
+    }
+  }
+  index->grid = std::make_unique<PointGrid>(index->positions, 1.0);
+  return index;
+}
+
+bool HybridOrientationField::NearestSegmentTangent(const Eigen::Vector3f& p, double radius_mm,
+                                                   Eigen::Vector3f* tangent) const {
+  if (!segment_index_) return false;
+  double best = 1e30;
+  int64_t found = -1;
+  segment_index_->grid->ForEachWithin(p, radius_mm, [&](uint32_t i, double d2) {
+    if (d2 < best) best = d2, found = i;
+  });
+  if (found < 0) return false;
+  *tangent = segment_index_->tangents[static_cast<size_t>(found)];
+  return true;
+}
+
 Result<HybridOrientationField> HybridOrientationField::Build(
     const std::vector<StrandSegment>& segments, const std::vector<DirectedRoot>& roots,
     const HeadModel* head, const HybridFieldOptions& o) {
@@ -187,6 +222,7 @@ Result<HybridOrientationField> HybridOrientationField::Build(
       if (is_ribbon) store(&f.surface_, i, t), surface_fixed[i] = ribbon[i] = 1;
     }
   }
+  f.segment_index_ = IndexSegments(segments);
   for (const DirectedRoot& r : roots) {
     const int64_t i = voxel_of(r.position_mm);
     store(&f.interior_, i, r.direction);

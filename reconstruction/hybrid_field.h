@@ -12,6 +12,8 @@
 //        near 0 along the face and the neck, so a strand that has passed the
 //        hair's end slides down the skin to its maximum length;
 //   d_s  the distance to the nearest ribbon vertex (the weights of Eq. 1).
+// Beside the grids it keeps the segments' vertices and tangents for
+// NearestSegmentTangent, which strand growth follows (strand_growth.h).
 // O_g, the growing direction, belongs to each growing strand
 // (strand_growth.h).
 //
@@ -23,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/head_model.h"
@@ -69,6 +72,10 @@ class HybridOrientationField {
   // To the nearest voxel a segment occupies (mm; chamfer distance between
   // voxel centres, trilinear between them).
   double SegmentDistance(const Eigen::Vector3f& p) const;
+  // The root-to-tip unit tangent of the segment vertex nearest p within
+  // `radius_mm` (the segments themselves, not the grid); false when none.
+  bool NearestSegmentTangent(const Eigen::Vector3f& p, double radius_mm,
+                             Eigen::Vector3f* tangent) const;
   bool Contains(const Eigen::Vector3f& p) const;
 
   Eigen::Vector3i size() const { return size_; }
@@ -76,6 +83,9 @@ class HybridOrientationField {
   double voxel_mm() const { return voxel_mm_; }
 
  private:
+  struct SegmentIndex;
+  static std::shared_ptr<const SegmentIndex> IndexSegments(
+      const std::vector<StrandSegment>& segments);
   // channels: 3 (vectors) or 6 (tensor xx yy zz xy xz yz), voxel-major.
   Eigen::Vector3f Direction(const std::vector<float>& field, const Eigen::Vector3f& p,
                             const Eigen::Vector3f& previous) const;
@@ -87,6 +97,7 @@ class HybridOrientationField {
   double voxel_mm_ = 2;
   bool directed_ = true;
   std::vector<float> interior_, surface_, distance_, ribbon_distance_, segment_distance_;
+  std::shared_ptr<const SegmentIndex> segment_index_;  // the segments' vertices and tangents
 };
 
 // The Laplace solve behind the fields: values in `fixed` voxels stay, the

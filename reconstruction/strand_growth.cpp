@@ -134,6 +134,9 @@ Status StrandGrowthOptions::Check() const {
   if (!(max_off_hair_mm >= 0))
     return InvalidArgument("strand max_off_hair_mm must be non-negative (0 turns it off)");
   if (!(off_hair_mm > 0)) return InvalidArgument("strand off_hair_mm must be positive");
+  if (!(follow_radius_mm >= 0 && follow_radius_mm <= 10))
+    return InvalidArgument("strand follow_radius_mm must lie in [0, 10] (0 turns it off)");
+  if (!(follow_weight >= 0)) return InvalidArgument("strand follow_weight must be non-negative");
   return Status::Ok();
 }
 
@@ -160,6 +163,12 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
                           static_cast<float>(a_d) * field.DistanceGradient(p) +
                           static_cast<float>(a_g) * previous;
       if (a_s > 0) h += static_cast<float>(a_s) * field.Surface(p, previous);
+      // The seen strand at p itself, where one runs within follow_radius_mm
+      // in about the strand's direction (StrandGrowthOptions).
+      Eigen::Vector3f seen;
+      if (o.follow_radius_mm > 0 && field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
+          seen.dot(previous) > 0.5f)
+        h += static_cast<float>(o.follow_weight) * seen;
       if (h.norm() < 1e-6f) return true;  // keeps the previous direction
       *next = h.normalized();
       return true;

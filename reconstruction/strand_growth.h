@@ -11,7 +11,8 @@
 //     I_bound or at the maximum length, and (StrandGrowthOptions::
 //     max_off_hair_mm) where the hair the cameras saw ends: I_d's Laplace
 //     solve stays low over a head covered in hair, so a strand that has run
-//     past the end of short hair would go on along its surface.
+//     past the end of short hair would go on along its surface. Beside Eq. 1's
+//     terms, H follows the nearest seen strand (follow_radius_mm).
 //   - the naive baseline: the direction of the nearest points (Luo Eq. 2
 //     over the oriented points within 2 sigma of the field, signed to
 //     continue the strand), no structure
@@ -58,13 +59,21 @@ struct StrandGrowthOptions {
   double volume_bound = 3.0;          // I_bound (I_d's units: mm at the grid's faces)
   double head_clearance_mm = 0.5;     // vertices are kept this far outside the head
   // Bao & Qi growth only: a strand that has come within off_hair_mm of a
-  // segment stops once it has then run max_off_hair_mm (arc length) further
-  // than off_hair_mm from every segment, and that stretch is dropped. 0 (the
+  // segment stops once it has then run max_off_hair_mm (steps of step_mm)
+  // further than off_hair_mm from every segment, and that stretch is dropped
+  // (a strand left with its root alone counts as dropped_short). 0 (the
   // default, as the paper: I_d and the length only) turns the rule off; it
   // suits short hair and cuts long hair's strands where they pass under its
   // seen surface (README, "Strands").
   double max_off_hair_mm = 0;
   double off_hair_mm = 4;
+  // Bao & Qi growth only: where a directed segment's vertex lies within
+  // follow_radius_mm of the strand and its tangent is within 60 deg of the
+  // strand's direction, H gains follow_weight times that tangent: the strand
+  // follows the seen strand at its own resolution, where S_s and V_i blur it
+  // over 2 mm voxels. 0 turns it off (the paper's Eq. 1).
+  double follow_radius_mm = 1.0;
+  double follow_weight = 100;
   int threads = 2;
 
   Status Check() const;

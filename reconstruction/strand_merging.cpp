@@ -1,6 +1,8 @@
 #include "reconstruction/strand_merging.h"
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -8,47 +10,60 @@ namespace hairrig {
 
 namespace {
 
-// The kept vertices of the strands processed so far, in cells of twice the
-// merge distance: a point's neighbours within the distance lie in the 2 x 2 x 2
-// cells around it. Open addressing; each cell heads a list of vertices.
-class VertexGrid {
+// The distance from p to the segment [a, b].
+float PointSegmentDistance(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                           const Eigen::Vector3f& b) {
+  const Eigen::Vector3f ab = b - a;
+  const float length2 = ab.squaredNorm();
+  const float t = length2 > 0 ? std::clamp((p - a).dot(ab) / length2, 0.0f, 1.0f) : 0.0f;
+  return (a + t * ab - p).norm();
+}
+
+// The kept pieces (segments between consecutive vertices) of the strands
+// processed so far, filed under the cell of their midpoint. Cells are
+// 2 (distance + longest half piece) wide, so a piece within the distance of
+// p has its midpoint in the 2 x 2 x 2 cells around p. Open addressing; each
+// cell heads a list of pieces.
+class PieceGrid {
  public:
-  VertexGrid(size_t vertices, double distance_mm)
-      : cell_mm_(2 * distance_mm), distance2_(distance_mm * distance_mm) {
+  PieceGrid(size_t pieces, double distance_mm, double longest_piece_mm)
+      : cell_mm_(2 * (distance_mm + 0.5 * longest_piece_mm)),
+        distance_mm_(static_cast<float>(distance_mm)) {
     size_t capacity = 1024;
-    while (capacity < 2 * vertices) capacity *= 2;
+    int bits = 10;
+    while (capacity < 2 * pieces) capacity *= 2, ++bits;
+    shift_ = 64 - bits;
     keys_.assign(capacity, kEmpty);
     heads_.assign(capacity, kNone);
-    next_.reserve(vertices);
-    points_.reserve(vertices);
+    next_.reserve(pieces);
+    ends_.reserve(pieces);
   }
 
-  void Insert(const Eigen::Vector3f& p) {
-    const uint32_t id = static_cast<uint32_t>(points_.size());
-    points_.push_back(p);
-    const size_t slot = Slot(Key(Cell(p, 0, 0, 0)));
+  void Insert(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    const size_t id = ends_.size();
+    ends_.push_back({a, b});
+    const size_t slot = Slot(Key(Cell(0.5f * (a + b), 0, 0, 0)));
     next_.push_back(heads_[slot]);
     heads_[slot] = id;
   }
 
   bool AnyWithin(const Eigen::Vector3f& p) const {
-    // The lower corner of the 2 x 2 x 2 block: the cell of p - distance.
+    // The lower corner of the 2 x 2 x 2 block: the cell of p - half a cell.
     const Eigen::Vector3f corner = p.array() - static_cast<float>(0.5 * cell_mm_);
     for (int dz = 0; dz < 2; ++dz)
       for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
-          const int64_t key = Key(Cell(corner, dx, dy, dz));
-          const size_t slot = Find(key);
+          const size_t slot = Find(Key(Cell(corner, dx, dy, dz)));
           if (slot == kNoSlot) continue;
-          for (uint32_t v = heads_[slot]; v != kNone; v = next_[v])
-            if ((points_[v] - p).squaredNorm() < distance2_) return true;
+          for (size_t v = heads_[slot]; v != kNone; v = next_[v])
+            if (PointSegmentDistance(p, ends_[v][0], ends_[v][1]) < distance_mm_) return true;
         }
     return false;
   }
 
  private:
   static constexpr int64_t kEmpty = INT64_MIN;
-  static constexpr uint32_t kNone = UINT32_MAX;
+  static constexpr size_t kNone = SIZE_MAX;
   static constexpr size_t kNoSlot = SIZE_MAX;
 
   Eigen::Vector3i Cell(const Eigen::Vector3f& p, int dx, int dy, int dz) const {
@@ -57,13 +72,13 @@ class VertexGrid {
                            static_cast<int>(std::floor(p.z() / cell_mm_)) + dz);
   }
   static int64_t Key(const Eigen::Vector3i& c) {
-    // 21 bits per axis: +-1 million cells, +-200 m at 0.2 mm.
+    // 21 bits per axis (cells further apart share keys; distances are checked).
     const auto part = [](int v) { return static_cast<int64_t>(v & 0x1fffff); };
     return part(c.x()) | (part(c.y()) << 21) | (part(c.z()) << 42);
   }
+  // Fibonacci hashing: the product's top bits depend on every bit of the key.
   size_t Hash(int64_t key) const {
-    return static_cast<size_t>((static_cast<uint64_t>(key) * 0x9e3779b97f4a7c15ULL) >> 7) &
-           (keys_.size() - 1);
+    return static_cast<size_t>((static_cast<uint64_t>(key) * 0x9e3779b97f4a7c15ULL) >> shift_);
   }
   // The slot holding `key`, claimed if new.
   size_t Slot(int64_t key) {
@@ -79,15 +94,17 @@ class VertexGrid {
     }
   }
 
-  double cell_mm_, distance2_;
+  double cell_mm_;
+  float distance_mm_;
+  int shift_ = 54;
   std::vector<int64_t> keys_;
-  std::vector<uint32_t> heads_, next_;
-  std::vector<Eigen::Vector3f> points_;
+  std::vector<size_t> heads_, next_;
+  std::vector<std::array<Eigen::Vector3f, 2>> ends_;
 };
 
 // How many leading vertices of `strand` to keep: up to the start of the first
-// run of at least run_mm on earlier strands.
-size_t KeptVertices(const Eigen::Vector3f* strand, size_t count, const VertexGrid& grid,
+// run of at least run_mm (arc length) on earlier strands.
+size_t KeptVertices(const Eigen::Vector3f* strand, size_t count, const PieceGrid& grid,
                     double run_mm) {
   bool in_run = false;
   double run = 0;
@@ -109,10 +126,19 @@ size_t KeptVertices(const Eigen::Vector3f* strand, size_t count, const VertexGri
   return count;
 }
 
+double LongestPiece(const StrandSet& strands, const std::vector<size_t>& offsets) {
+  double longest = 0;
+  for (size_t k = 0; k + 1 < offsets.size(); ++k)
+    for (size_t i = offsets[k] + 1; i < offsets[k + 1]; ++i)
+      longest = std::max(longest, double((strands.points_mm[i] - strands.points_mm[i - 1]).norm()));
+  return longest;
+}
+
 }  // namespace
 
 Status StrandMergeOptions::Check() const {
-  if (!(distance_mm > 0)) return InvalidArgument("strand merge distance_mm must be positive");
+  if (!(distance_mm >= 0.01 && distance_mm <= 10))
+    return InvalidArgument("strand merge distance_mm must lie in [0.01, 10]");
   if (!(run_mm >= 0)) return InvalidArgument("strand merge run_mm must be non-negative (0 = off)");
   return Status::Ok();
 }
@@ -124,19 +150,22 @@ StrandSet EndMergedStrands(const StrandSet& strands, const StrandMergeOptions& o
     if (summary != nullptr) *summary = s;
     return strands;
   }
-  VertexGrid grid(strands.num_points(), options.distance_mm);
   const std::vector<size_t> offsets = strands.Offsets();
+  PieceGrid grid(strands.num_points(), options.distance_mm, LongestPiece(strands, offsets));
   StrandSet out;
   for (size_t k = 0; k < strands.num_strands(); ++k) {
     const Eigen::Vector3f* first = strands.points_mm.data() + offsets[k];
     const size_t count = offsets[k + 1] - offsets[k];
     const size_t kept = KeptVertices(first, count, grid, options.run_mm);
+    if (kept < 2) {
+      ++s.strands_dropped;
+      s.vertices_removed += static_cast<int64_t>(count);
+      continue;
+    }
+    if (kept < count) ++s.strands_ended;
     s.vertices_removed += static_cast<int64_t>(count - kept);
-    if (kept < count) ++(kept < 2 ? s.strands_dropped : s.strands_ended);
-    if (kept < 2) continue;
-    std::vector<Eigen::Vector3f> strand(first, first + kept);
-    for (const Eigen::Vector3f& p : strand) grid.Insert(p);
-    out.AddStrand(strand);
+    for (size_t i = 1; i < kept; ++i) grid.Insert(first[i - 1], first[i]);
+    out.AddStrand(std::vector<Eigen::Vector3f>(first, first + kept));
   }
   if (summary != nullptr) *summary = s;
   return out;

@@ -7,9 +7,9 @@
 //
 // EndMergedStrands ends each strand where it has merged into an earlier one
 // (in the set's order): where its vertices have run within `distance_mm` of
-// the kept vertices of earlier strands for `run_mm` of arc length, it is cut
+// the kept polylines of earlier strands for `run_mm` of arc length, it is cut
 // at the start of that run. Deterministic; single-threaded (the order
-// matters), about 1 s for 5 million vertices. Units mm, any frame.
+// matters), a few seconds for 5 million vertices. Units mm, any frame.
 #pragma once
 
 #include <cstdint>
@@ -20,7 +20,7 @@
 namespace hairrig {
 
 struct StrandMergeOptions {
-  double distance_mm = 0.1;  // closer than this, a vertex lies on an earlier strand
+  double distance_mm = 0.1;  // closer than this (in [0.01, 10]), a vertex lies on an earlier strand
   // ... for this long (arc length), the strand has merged. 0 (the default)
   // turns it off: on the demo capture it cut half the strands and brought the
   // median length to the truth's, but left consistency where it was and cost
@@ -31,9 +31,9 @@ struct StrandMergeOptions {
 };
 
 struct StrandMergeSummary {
-  int64_t strands_ended = 0;    // cut where they merged
-  int64_t strands_dropped = 0;  // merged from their root: fewer than 2 vertices left
-  int64_t vertices_removed = 0;
+  int64_t strands_ended = 0;     // cut where they merged
+  int64_t strands_dropped = 0;   // merged from their root: fewer than 2 vertices left
+  int64_t vertices_removed = 0;  // those of the dropped strands included
 };
 
 // `strands` with every merged strand cut (strands left with fewer than 2

@@ -146,11 +146,13 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   StrandGrowthOptions growth = o.growth;
   growth.threads = o.threads;
   StrandModel model;
-  model.strands =
-      EndMergedStrands(GrowStrandsInField(field, roots, &head, growth, &summary->growth), o.merging,
-                       &summary->merging);
-  SummariseStrands(model.strands, &summary->growth);
+  model.strands = GrowStrandsInField(field, roots, &head, growth, &summary->growth);
   summary->seconds_growth = SecondsSince(t);
+  if (o.merging.run_mm > 0) {
+    t = SteadyNowNs();
+    model.strands = EndMergedStrands(model.strands, o.merging, &summary->merging);
+    summary->seconds_merging = SecondsSince(t);
+  }
   model.segments = SegmentsAsStrands(segments);
   return model;
 }
@@ -281,14 +283,18 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"stopped_at_volume", growth.stopped_volume},
                         {"stopped_at_max_length", growth.stopped_length},
                         {"stopped_where_hair_ends", growth.stopped_off_hair},
-                        {"ended_where_merged", merging.strands_ended},
-                        {"dropped_merged_from_root", merging.strands_dropped},
                         {"dropped_short", growth.dropped_short}}},
+                      // EndMergedStrands after growth: "strands" counts what was grown.
+                      {"merging",
+                       {{"ended_where_merged", merging.strands_ended},
+                        {"dropped_merged_from_root", merging.strands_dropped},
+                        {"vertices_removed", merging.vertices_removed}}},
                       {"seconds",
                        {{"segments", seconds_segments},
                         {"direction", seconds_direction},
                         {"field", seconds_field},
                         {"growth", seconds_growth},
+                        {"merging", seconds_merging},
                         {"ribbons", seconds_ribbons},
                         {"connections", seconds_connections},
                         {"wisps", seconds_wisps},
@@ -322,9 +328,15 @@ std::string StrandReconstructionSummary::BriefReport() const {
     return s.str();
   }
   s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
+  if (merging.strands_ended + merging.strands_dropped > 0) {
+    s << "  merged: " << merging.strands_ended
+      << " strands ended where they joined an earlier one, " << merging.strands_dropped
+      << " dropped (joined from the root), " << merging.vertices_removed << " vertices removed\n";
+  }
   s << "  time: segments " << seconds_segments << " s, direction " << seconds_direction
-    << " s, field " << seconds_field << " s, growth " << seconds_growth << " s, total "
-    << seconds_total << " s\n";
+    << " s, field " << seconds_field << " s, growth " << seconds_growth << " s, ";
+  if (seconds_merging > 0) s << "merging " << seconds_merging << " s, ";
+  s << "total " << seconds_total << " s\n";
   s << "  written: " << output_dir << "/strands.{ply,hair,data}, segments.ply, summary.json\n";
   return s.str();
 }

@@ -80,7 +80,7 @@ struct StrandReconstructionSummary {
   SegmentGrowthSummary segments;
   DirectionSummary direction;
   StrandGrowthSummary growth;  // luo: the synthesised strands' count, vertices and mean length
-  StrandMergeSummary merging;  // bao-qi
+  StrandMergeSummary merging;  // bao-qi, after growth (growth counts the strands grown)
   RibbonSummary ribbons;
   ConnectionSummary connections;
   RibbonDirectionSummary ribbon_direction;
@@ -88,7 +88,7 @@ struct StrandReconstructionSummary {
   // seconds_direction: the segments' MRF (bao-qi) or the ribbons' (luo);
   // seconds_growth: growing (bao-qi, naive) or synthesising (luo) the strands.
   double seconds_segments = 0, seconds_direction = 0, seconds_field = 0, seconds_growth = 0,
-         seconds_total = 0;
+         seconds_merging = 0, seconds_total = 0;
   double seconds_ribbons = 0, seconds_connections = 0, seconds_wisps = 0;
 
   nlohmann::json ToJson() const;
