@@ -6,18 +6,11 @@
 #include <cmath>
 #include <vector>
 
+#include "reconstruction/point_segment_distance.h"
+
 namespace hairrig {
 
 namespace {
-
-// The distance from p to the segment [a, b].
-float PointSegmentDistance(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
-                           const Eigen::Vector3f& b) {
-  const Eigen::Vector3f ab = b - a;
-  const float length2 = ab.squaredNorm();
-  const float t = length2 > 0 ? std::clamp((p - a).dot(ab) / length2, 0.0f, 1.0f) : 0.0f;
-  return (a + t * ab - p).norm();
-}
 
 // The kept pieces (segments between consecutive vertices) of the strands
 // processed so far, filed under the cell of their midpoint. Cells are
@@ -28,7 +21,7 @@ class PieceGrid {
  public:
   PieceGrid(size_t pieces, double distance_mm, double longest_piece_mm)
       : cell_mm_(2 * (distance_mm + 0.5 * longest_piece_mm)),
-        distance_mm_(static_cast<float>(distance_mm)) {
+        distance2_(static_cast<float>(distance_mm * distance_mm)) {
     size_t capacity = 1024;
     int bits = 10;
     while (capacity < 2 * pieces) capacity *= 2, ++bits;
@@ -56,7 +49,7 @@ class PieceGrid {
           const size_t slot = Find(Key(Cell(corner, dx, dy, dz)));
           if (slot == kNoSlot) continue;
           for (size_t v = heads_[slot]; v != kNone; v = next_[v])
-            if (PointSegmentDistance(p, ends_[v][0], ends_[v][1]) < distance_mm_) return true;
+            if (PointSegmentDistance2(p, ends_[v][0], ends_[v][1]) < distance2_) return true;
         }
     return false;
   }
@@ -95,7 +88,7 @@ class PieceGrid {
   }
 
   double cell_mm_;
-  float distance_mm_;
+  float distance2_;
   int shift_ = 54;
   std::vector<int64_t> keys_;
   std::vector<size_t> heads_, next_;

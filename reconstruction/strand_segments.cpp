@@ -5,17 +5,11 @@
 #include <cmath>
 #include <numeric>
 
+#include "reconstruction/point_segment_distance.h"
+
 namespace hairrig {
 
 namespace {
-
-double PointSegmentDistance2(const Eigen::Vector3f& q, const Eigen::Vector3f& a,
-                             const Eigen::Vector3f& b) {
-  const Eigen::Vector3f ab = b - a;
-  const float len2 = ab.squaredNorm();
-  const float t = len2 > 0 ? std::clamp((q - a).dot(ab) / len2, 0.0f, 1.0f) : 0.0f;
-  return (a + t * ab - q).squaredNorm();
-}
 
 enum class Stop { kTurn, kHole, kMls, kLength };
 
