@@ -67,9 +67,9 @@ struct StrandGrowthOptions {
   // seen surface (README, "Strands").
   double max_off_hair_mm = 0;
   double off_hair_mm = 4;
-  // Bao & Qi growth only: where a directed segment's vertex lies within
-  // follow_radius_mm of the strand and its tangent is within 60 deg of the
-  // strand's direction, H gains follow_weight times that tangent: the strand
+  // Bao & Qi growth only: where the directed segment vertex nearest the
+  // strand lies within follow_radius_mm and its tangent is within 60 deg of
+  // the strand's direction, H gains follow_weight times that tangent: the strand
   // follows the seen strand at its own resolution, where S_s and V_i blur it
   // over 2 mm voxels. 0 turns it off (the paper's Eq. 1).
   double follow_radius_mm = 1.0;
