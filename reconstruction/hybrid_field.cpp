@@ -8,6 +8,7 @@
 
 #include "reconstruction/central_gradient.h"
 #include "reconstruction/point_grid.h"
+#include "reconstruction/polyline_overlap.h"
 
 namespace hairrig {
 
@@ -144,11 +145,10 @@ std::shared_ptr<const HybridOrientationField::SegmentIndex> HybridOrientationFie
   auto index = std::make_shared<SegmentIndex>();
   for (const StrandSegment& s : segments) {
     for (size_t k = 0; k < s.points_mm.size(); ++k) {
-      const size_t a = k == 0 ? 0 : k - 1, b = std::min(k + 1, s.points_mm.size() - 1);
-      const Eigen::Vector3f t = s.points_mm[b] - s.points_mm[a];
-      if (!(t.norm() > 0)) continue;
+      const Eigen::Vector3f t = PolylineTangent(s.points_mm, k);
+      if (t.isZero()) continue;
       index->positions.push_back(s.points_mm[k]);
-      index->tangents.push_back(t.normalized());
+      index->tangents.push_back(t);
     }
   }
   index->grid = std::make_unique<PointGrid>(index->positions, 1.0);

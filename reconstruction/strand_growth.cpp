@@ -69,8 +69,8 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
   return set;
 }
 
-// StrandGrowthOptions::max_off_hair_mm along one strand, a vertex (one
-// step) at a time.
+// StrandGrowthOptions::max_off_hair_mm (when positive) along one strand, a
+// vertex (one step) at a time.
 class OffHairRun {
  public:
   explicit OffHairRun(const StrandGrowthOptions& o)
@@ -80,7 +80,6 @@ class OffHairRun {
   // the nearest segment; then *drop_last is the count of its vertices grown
   // off the hair, that one included.
   bool Ended(double segment_distance_mm, int* drop_last) {
-    if (max_off_hair_mm_ <= 0) return false;
     if (segment_distance_mm < off_hair_mm_) {
       reached_ = true;
       off_vertices_ = 0;
@@ -150,7 +149,7 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
         stop->end = End::kVolume;
         return false;
       }
-      if (off_hair.Ended(field.SegmentDistance(p), &stop->drop_last)) {
+      if (o.max_off_hair_mm > 0 && off_hair.Ended(field.SegmentDistance(p), &stop->drop_last)) {
         stop->end = End::kOffHair;
         return false;
       }
