@@ -7,7 +7,8 @@
 //       [--whole-head-in-volume yes|no] [--max-off-hair MM] [--off-hair MM]
 //       [--merge-run MM] [--merge-distance MM] [--voxel MM] [--follow-radius MM]
 //       [--follow-weight W]
-//       [--overlap-stride K] [--out-suffix S] [--score yes|no]
+//       [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM] [--out-suffix S]
+//       [--score yes|no]
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
@@ -40,7 +41,8 @@ int main(int argc, char** argv) {
         "[--volume-bound B] [--root-elevation DEG] [--alpha-link W] [--alpha-close W] "
         "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
-        "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--overlap-stride K] [--out-suffix "
+        "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--overlap-stride K] "
+        "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
         "[--score yes|no]\n",
         argv[0]);
@@ -66,6 +68,10 @@ int main(int argc, char** argv) {
       options.root_elevation_deg = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--overlap-stride") == 0) {
       options.direction.overlap_stride = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--overlap-mm") == 0) {
+      options.direction.overlap_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--max-overlaps") == 0) {
+      options.direction.max_overlaps = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--alpha-link") == 0) {
       options.direction.alpha_link = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--alpha-close") == 0) {

@@ -22,10 +22,11 @@ struct OverlapTally {
 // which tally last saw that owner) make every lookup O(1); one per thread.
 class OverlapTallier {
  public:
-  OverlapTallier(const PolylineVertexTable& table, const PointGrid& grid, double overlap_mm,
-                 int stride)
+  OverlapTallier(const PolylineVertexTable& table, const PointGrid& grid,
+                 const std::vector<uint32_t>& owner_by_slot, double overlap_mm, int stride)
       : table_(table),
         grid_(grid),
+        owner_by_slot_(owner_by_slot),
         overlap_mm_(overlap_mm),
         stride_(static_cast<uint32_t>(stride)) {
     const size_t n = table.owners();
@@ -62,26 +63,29 @@ class OverlapTallier {
     double d2;
   };
 
-  // nearest_: per other owner within reach of vertex v, its nearest vertex.
+  // nearest_: per other owner within reach of vertex v, its nearest vertex
+  // (while visiting, its grid slot).
   void NearestOthers(uint32_t s, uint32_t v) {
     nearest_.clear();
     ++query_id_;
-    grid_.ForEachWithin(table_.positions[v], overlap_mm_, [&](uint32_t u, double d2) {
-      const uint32_t other = table_.owner[u];
+    grid_.ForEachSlotWithin(table_.positions[v], overlap_mm_, [&](uint32_t slot, double d2) {
+      const uint32_t other = owner_by_slot_[slot];
       if (other == s) return;
       if (query_mark_[other] != query_id_) {
         query_mark_[other] = query_id_;
         query_slot_[other] = static_cast<uint32_t>(nearest_.size());
-        nearest_.push_back({other, u, d2});
+        nearest_.push_back({other, slot, d2});
       } else if (d2 < nearest_[query_slot_[other]].d2) {
-        nearest_[query_slot_[other]].vertex = u;
+        nearest_[query_slot_[other]].vertex = slot;
         nearest_[query_slot_[other]].d2 = d2;
       }
     });
+    for (Near& n : nearest_) n.vertex = grid_.order()[n.vertex];
   }
 
   const PolylineVertexTable& table_;
   const PointGrid& grid_;
+  const std::vector<uint32_t>& owner_by_slot_;  // table_.owner in the grid's slot order
   double overlap_mm_;
   uint32_t stride_;
   std::vector<uint32_t> query_mark_, query_slot_, tally_mark_, tally_slot_;
@@ -122,8 +126,10 @@ std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, do
   const size_t n = table.owners();
   const PointGrid grid(table.positions, overlap_mm);
   std::vector<std::vector<OverlapTally>> seen(n);
+  std::vector<uint32_t> owner_by_slot(grid.order().size());
+  for (size_t k = 0; k < owner_by_slot.size(); ++k) owner_by_slot[k] = table.owner[grid.order()[k]];
   ParallelFor(n, threads, [&] {
-    auto tallier = std::make_shared<OverlapTallier>(table, grid, overlap_mm, stride);
+    auto tallier = std::make_shared<OverlapTallier>(table, grid, owner_by_slot, overlap_mm, stride);
     return [&seen, tallier](size_t s) { seen[s] = tallier->Tally(static_cast<uint32_t>(s)); };
   });
   const auto queried = [&](uint32_t s) {

@@ -51,12 +51,43 @@ std::vector<double> KeepEnergies(const std::vector<StrandSegment>& segments, con
   return keep;
 }
 
+// Keeps the overlaps that are among the `keep` largest shares of either of
+// their segments (ties broken by the order of `overlaps`); order preserved.
+void KeepStrongestOverlaps(size_t segment_count, int keep, std::vector<OwnerOverlap>* overlaps) {
+  // Each segment's overlaps, as indices into *overlaps, in compressed rows.
+  std::vector<uint32_t> row(segment_count + 1, 0);
+  for (const OwnerOverlap& v : *overlaps) ++row[v.a + 1], ++row[v.b + 1];
+  for (size_t s = 0; s < segment_count; ++s) row[s + 1] += row[s];
+  std::vector<uint32_t> index(row.back());
+  std::vector<uint32_t> fill(row.begin(), row.end() - 1);
+  for (uint32_t i = 0; i < overlaps->size(); ++i) {
+    index[fill[(*overlaps)[i].a]++] = i;
+    index[fill[(*overlaps)[i].b]++] = i;
+  }
+  std::vector<uint8_t> kept(overlaps->size(), 0);
+  const auto stronger = [&](uint32_t x, uint32_t y) {
+    const double sx = (*overlaps)[x].share, sy = (*overlaps)[y].share;
+    return sx != sy ? sx > sy : x < y;
+  };
+  for (size_t s = 0; s < segment_count; ++s) {
+    const auto begin = index.begin() + row[s], end = index.begin() + row[s + 1];
+    const auto last = end - begin > keep ? begin + keep : end;
+    if (last != end) std::nth_element(begin, last, end, stronger);
+    for (auto it = begin; it != last; ++it) kept[*it] = 1;
+  }
+  size_t out = 0;
+  for (size_t i = 0; i < overlaps->size(); ++i) {
+    if (kept[i]) (*overlaps)[out++] = (*overlaps)[i];
+  }
+  overlaps->resize(out);
+}
+
 // E_close (Eq. 7): side-by-side segments, weighted by their overlap share
 // (of the vertices queried: every overlap_stride-th). With share_overlaps,
 // each is divided by the larger of its two segments' summed shares (when
 // over 1).
 void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
-                 PairWeights* pairs, int64_t* count) {
+                 PairWeights* pairs, int64_t* found, int64_t* count) {
   std::vector<const std::vector<Eigen::Vector3f>*> polylines;
   for (const StrandSegment& s : segments) polylines.push_back(&s.points_mm);
   const PolylineVertexTable table = TabulatePolylines(polylines);
@@ -65,6 +96,8 @@ void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOpti
   overlaps.erase(std::remove_if(overlaps.begin(), overlaps.end(),
                                 [](const OwnerOverlap& v) { return v.votes == 0; }),
                  overlaps.end());
+  *found += static_cast<int64_t>(overlaps.size());
+  if (o.max_overlaps > 0) KeepStrongestOverlaps(segments.size(), o.max_overlaps, &overlaps);
   std::vector<double> total(segments.size(), 0.0);
   for (const OwnerOverlap& overlap : overlaps) {
     total[overlap.a] += overlap.share;
@@ -127,6 +160,7 @@ Status DirectionOptions::Check() const {
   if (!(alpha_link >= 0) || !(alpha_close >= 0))
     return InvalidArgument("direction weights must be non-negative");
   if (overlap_stride < 1) return InvalidArgument("direction overlap_stride must be at least 1");
+  if (max_overlaps < 0) return InvalidArgument("direction max_overlaps must be 0 (all) or more");
   if (!(link_gap_mm > 0) || !(overlap_mm > 0))
     return InvalidArgument("direction link_gap_mm and overlap_mm must be positive");
   if (!(link_cos >= 0 && link_cos <= 1))
@@ -144,7 +178,7 @@ DirectionSummary DirectSegments(std::vector<StrandSegment>* segments, const Head
   if (n == 0) return summary;
   const std::vector<double> keep = KeepEnergies(*segments, head, o);
   PairWeights pairs;
-  AddOverlaps(*segments, o, &pairs, &summary.overlaps);
+  AddOverlaps(*segments, o, &pairs, &summary.overlaps_found, &summary.overlaps);
   AddLinks(*segments, o, &pairs, &summary.links);
   MergePairs(&pairs);
 

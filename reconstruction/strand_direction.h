@@ -59,6 +59,12 @@ struct DirectionOptions {
   // departure from the paper, whose ribbons are few; `false` weighs every
   // overlap as Eq. 7.
   bool share_overlaps = true;
+  // Each segment keeps only its max_overlaps strongest overlaps (largest
+  // share; a pair stays when either of its segments keeps it), 0 keeps all.
+  // Where the hair is dense a segment overlaps hundreds of others; the
+  // strongest few carry its neighbourhood's direction, and the minimum cut
+  // over all of them is the stage's largest cost (README, "Strands").
+  int max_overlaps = 32;
   // Overlaps are looked for from every overlap_stride-th vertex of each
   // segment (1: every vertex, as Eq. 7 counts them; 2 halves the queries,
   // the stage's largest cost: on the simulated scenes the share of vertices
@@ -71,10 +77,11 @@ struct DirectionOptions {
 };
 
 struct DirectionSummary {
-  int64_t segments = 0, links = 0, overlaps = 0;
-  int64_t reversed = 0;             // segments whose vertex order was flipped
-  int64_t truncated_pairs = 0;      // non-submodular pairs truncated
-  int64_t unary_disagreements = 0;  // segments whose label goes against their own E_ribb
+  int64_t segments = 0, links = 0;
+  int64_t overlaps_found = 0, overlaps = 0;  // all overlapping pairs; those kept (max_overlaps)
+  int64_t reversed = 0;                      // segments whose vertex order was flipped
+  int64_t truncated_pairs = 0;               // non-submodular pairs truncated
+  int64_t unary_disagreements = 0;           // segments whose label goes against their own E_ribb
   // Eq. 4's truncated energy at the solution less its floor (the minimum cut;
   // BinaryMrfSolution::cut).
   double energy = 0;

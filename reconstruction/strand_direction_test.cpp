@@ -202,5 +202,38 @@ TEST(StrandDirection, ALayerOfHairDoesNotOutvoteAStrandThatCrossesIt) {
       << "counted whole, the layer's overlaps reverse the strand that crosses it";
 }
 
+TEST(StrandDirection, EachSegmentKeepsItsStrongestOverlaps) {
+  // 60 hanging segments 0.05 mm apart: every one overlaps every other
+  // (1770 pairs). Kept to 4 each, at most 60 x 4 pairs stay, at least
+  // 60 x 4 / 2, and they still direct the sheet.
+  std::vector<StrandSegment> segments;
+  for (int k = 0; k < 60; ++k) {
+    const float x = 0.05f * static_cast<float>(k);
+    segments.push_back({Line({x, 0, 100}, {x, 10, 20})});
+  }
+  const std::vector<StrandSegment> expected = segments;
+  ShuffleOrders(&segments, 3);
+  std::vector<StrandSegment> all = segments;
+  DirectionOptions strongest;
+  strongest.max_overlaps = 4;
+  const DirectionSummary kept = DirectSegments(&segments, nullptr, strongest);
+  EXPECT_EQ(kept.overlaps_found, 1770);
+  EXPECT_LE(kept.overlaps, 240);
+  EXPECT_GE(kept.overlaps, 120);
+  for (size_t i = 0; i < segments.size(); ++i)
+    EXPECT_EQ(segments[i].points_mm.front(), expected[i].points_mm.front()) << "segment " << i;
+  DirectionOptions every;
+  every.max_overlaps = 0;
+  const DirectionSummary whole = DirectSegments(&all, nullptr, every);
+  EXPECT_EQ(whole.overlaps, 1770);
+  EXPECT_EQ(whole.overlaps_found, 1770);
+}
+
+TEST(StrandDirection, OptionsRefuseANegativeOverlapLimit) {
+  DirectionOptions options;
+  options.max_overlaps = -1;
+  EXPECT_FALSE(options.Check().ok());
+}
+
 }  // namespace
 }  // namespace hairrig

@@ -83,7 +83,10 @@ Result<std::vector<StrandSegment>> GrowSegments(const std::vector<OrientedPoint>
                                                 const StrandReconstructionOptions& o,
                                                 StrandReconstructionSummary* summary) {
   const int64_t t = SteadyNowNs();
-  std::vector<StrandSegment> segments = GrowStrandSegments(points, o.segments, &summary->segments);
+  SegmentGrowthOptions segment_options = o.segments;
+  segment_options.threads = o.threads;
+  std::vector<StrandSegment> segments =
+      GrowStrandSegments(points, segment_options, &summary->segments);
   summary->seconds_segments = SecondsSince(t);
   if (segments.empty()) {
     return InvalidArgument(points_file +
@@ -271,6 +274,7 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                           {"length", segments.stops_length}}}}},
                       {"direction",
                        {{"links", direction.links},
+                        {"overlaps_found", direction.overlaps_found},
                         {"overlaps", direction.overlaps},
                         {"reversed", direction.reversed},
                         {"truncated_pairs", direction.truncated_pairs},

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/parallel.h"
 #include "reconstruction/point_segment_distance.h"
 
 namespace hairrig {
@@ -291,6 +292,33 @@ std::vector<std::vector<Eigen::Vector3f>> SplitImplausible(
   return pieces;
 }
 
+namespace {
+
+// One seed's segment before covering: both ways grown, joined and smoothed
+// (empty where the seed has no orientation).
+struct GrownFromSeed {
+  std::vector<Eigen::Vector3f> smooth;
+  Stop why_back = Stop::kLength, why_forward = Stop::kLength;
+};
+
+GrownFromSeed GrowFromSeed(const PointOrientationField& field, const PointSetSurface& surface,
+                           const Eigen::Vector3f& seed, const SegmentGrowthOptions& o) {
+  GrownFromSeed grown;
+  Eigen::Vector3f start = seed, projected, normal, t;
+  if (surface.Project(start, &projected, &normal, o.min_neighbours)) start = projected;
+  if (!field.At(start, Eigen::Vector3f::Zero(), 0, o.min_neighbours, &t)) return grown;
+  std::vector<Eigen::Vector3f> back = GrowOneWay(field, surface, start, -t, o, &grown.why_back);
+  const std::vector<Eigen::Vector3f> forward =
+      GrowOneWay(field, surface, start, t, o, &grown.why_forward);
+  std::reverse(back.begin(), back.end());
+  back.push_back(start);
+  back.insert(back.end(), forward.begin(), forward.end());
+  grown.smooth = SmoothPolyline(back, o.smooth_position, o.smooth_orientation, o.smooth_curvature);
+  return grown;
+}
+
+}  // namespace
+
 std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& points,
                                               const SegmentGrowthOptions& o,
                                               SegmentGrowthSummary* summary) {
@@ -307,38 +335,46 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
   std::vector<uint8_t> covered(points.size(), 0);
   std::vector<StrandSegment> segments;
   double total_length = 0;
-  for (uint32_t seed : seeds) {
-    if (covered[seed]) continue;
-    covered[seed] = 1;
-    ++s.seeds_grown;
-    Eigen::Vector3f start = points[seed].position_mm, normal;
-    Eigen::Vector3f projected;
-    if (surface.Project(start, &projected, &normal, o.min_neighbours)) start = projected;
-    Eigen::Vector3f t;
-    if (!field.At(start, Eigen::Vector3f::Zero(), 0, o.min_neighbours, &t)) continue;
-    Stop why_back, why_forward;
-    std::vector<Eigen::Vector3f> back = GrowOneWay(field, surface, start, -t, o, &why_back);
-    const std::vector<Eigen::Vector3f> forward =
-        GrowOneWay(field, surface, start, t, o, &why_forward);
-    for (Stop why : {why_back, why_forward}) {
-      ++(why == Stop::kTurn   ? s.stops_turn
-         : why == Stop::kHole ? s.stops_hole
-         : why == Stop::kMls  ? s.stops_mls
-                              : s.stops_length);
+  // Growing from a seed does not depend on what is covered, so the next
+  // batch of uncovered seeds grows in parallel; their segments are then
+  // taken in seed order, each only if no earlier one covered its seed: the
+  // sequential algorithm's result, whatever the thread count.
+  const size_t batch_size = 64 * static_cast<size_t>(ResolveThreads(o.threads));
+  std::vector<uint32_t> batch;
+  std::vector<GrownFromSeed> grown;
+  size_t next_seed = 0;
+  while (true) {
+    batch.clear();
+    for (; next_seed < seeds.size() && batch.size() < batch_size; ++next_seed) {
+      if (!covered[seeds[next_seed]]) batch.push_back(seeds[next_seed]);
     }
-    std::reverse(back.begin(), back.end());
-    back.push_back(start);
-    back.insert(back.end(), forward.begin(), forward.end());
-    const std::vector<Eigen::Vector3f> smooth =
-        SmoothPolyline(back, o.smooth_position, o.smooth_orientation, o.smooth_curvature);
-    Cover(field.grid(), smooth, o.cover_mm, &covered);
-    const auto pieces = SplitImplausible(smooth, o.down, o.split_height_mm);
-    s.splits += static_cast<int64_t>(pieces.size()) - 1;
-    for (const auto& piece : pieces) {
-      if (static_cast<int>(piece.size()) < o.min_vertices) continue;
-      segments.push_back({piece});
-      s.vertices += static_cast<int64_t>(piece.size());
-      total_length += segments.back().Length();
+    if (batch.empty()) break;
+    grown.assign(batch.size(), GrownFromSeed{});
+    ParallelFor(batch.size(), o.threads, [&] {
+      return [&](size_t i) {
+        grown[i] = GrowFromSeed(field, surface, points[batch[i]].position_mm, o);
+      };
+    });
+    for (size_t i = 0; i < batch.size(); ++i) {
+      if (covered[batch[i]]) continue;
+      covered[batch[i]] = 1;
+      ++s.seeds_grown;
+      if (grown[i].smooth.empty()) continue;
+      for (Stop why : {grown[i].why_back, grown[i].why_forward}) {
+        ++(why == Stop::kTurn   ? s.stops_turn
+           : why == Stop::kHole ? s.stops_hole
+           : why == Stop::kMls  ? s.stops_mls
+                                : s.stops_length);
+      }
+      Cover(field.grid(), grown[i].smooth, o.cover_mm, &covered);
+      const auto pieces = SplitImplausible(grown[i].smooth, o.down, o.split_height_mm);
+      s.splits += static_cast<int64_t>(pieces.size()) - 1;
+      for (const auto& piece : pieces) {
+        if (static_cast<int>(piece.size()) < o.min_vertices) continue;
+        segments.push_back({piece});
+        s.vertices += static_cast<int64_t>(piece.size());
+        total_length += segments.back().Length();
+      }
     }
   }
   s.segments = static_cast<int64_t>(segments.size());

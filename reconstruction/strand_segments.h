@@ -39,6 +39,7 @@ struct SegmentGrowthOptions {
                        -1};  // d_down (unit): the reference down direction (the turntable's -z)
   int max_steps = 400;       // per growing direction
   int min_vertices = 3;      // shorter segments are dropped (their seeds stay covered)
+  int threads = 2;           // segments grown at once; the result does not depend on it
 
   // InvalidArgument naming the field for a value out of range.
   Status Check() const;
@@ -61,8 +62,8 @@ struct SegmentGrowthSummary {
 // uncovered seed a segment is grown both ways (Euler steps along Eq. 2's
 // orientation, MLS-projected onto the point set surface, ended by rules
 // 1-3), smoothed by Eq. 3, split where the plausibility check finds a
-// U-turn, and the seeds within cover_mm of it are covered. Deterministic
-// (single-threaded; the covering makes it sequential).
+// U-turn, and the seeds within cover_mm of it are covered. Deterministic:
+// the seeds are taken in order, whatever options.threads.
 std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& points,
                                               const SegmentGrowthOptions& options,
                                               SegmentGrowthSummary* summary = nullptr);

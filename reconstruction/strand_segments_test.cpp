@@ -40,6 +40,38 @@ double Energy(const std::vector<Eigen::Vector3f>& p, const std::vector<Eigen::Ve
   return energy;
 }
 
+TEST(StrandSegments, TheSegmentsDoNotDependOnTheThreadCount) {
+  // A wavy sheet of oriented points with jittered positions and confidences:
+  // many seeds, each covering others, so a batch's later seeds are often
+  // covered by its earlier ones.
+  std::mt19937 rng(7);
+  std::normal_distribution<float> jitter(0.0f, 0.1f);
+  std::uniform_real_distribution<float> confidence(0.1f, 1.0f);
+  std::vector<OrientedPoint> points;
+  for (float a = 0; a <= 30; a += 0.5f) {
+    for (float l = 0; l <= 80; l += 0.5f) {
+      OrientedPoint p;
+      p.position_mm = {a + jitter(rng), l + jitter(rng), 3.0f * std::sin(l / 10.0f)};
+      p.direction = Eigen::Vector3f(0, 1, 0.3f * std::cos(l / 10.0f)).normalized();
+      p.confidence = confidence(rng);
+      points.push_back(p);
+    }
+  }
+  SegmentGrowthOptions one, three;
+  one.threads = 1;
+  three.threads = 3;
+  SegmentGrowthSummary summary_one, summary_three;
+  const std::vector<StrandSegment> a = GrowStrandSegments(points, one, &summary_one);
+  const std::vector<StrandSegment> b = GrowStrandSegments(points, three, &summary_three);
+  ASSERT_GT(a.size(), 10u);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i)
+    EXPECT_EQ(a[i].points_mm, b[i].points_mm) << "segment " << i;
+  EXPECT_EQ(summary_one.seeds_grown, summary_three.seeds_grown);
+  EXPECT_EQ(summary_one.stops_hole + summary_one.stops_turn + summary_one.stops_mls,
+            summary_three.stops_hole + summary_three.stops_turn + summary_three.stops_mls);
+}
+
 TEST(PolylineSmoothing, Eq3MatchesADenseSolveOfItsNormalEquations) {
   const std::vector<Eigen::Vector3f> points = NoisyArc(3);
   const PolylineSmoothing o;
