@@ -108,7 +108,7 @@ void LiveView::Grab(Camera* camera) {
       LogWarning("live view stopped for " + camera->Describe() + ": " + frame.status().ToString());
       break;
     }
-    const double spent_s = static_cast<double>(SteadyNowNs() - start_ns) * 1e-9;
+    const double spent_s = SecondsSince(start_ns);
     if (!Sleep(1.0 / options_.fps - spent_s)) break;
   }
   (void)camera->Disarm();

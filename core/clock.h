@@ -13,4 +13,9 @@ inline int64_t SteadyNowNs() {
       .count();
 }
 
+// Seconds from a SteadyNowNs() reading to now.
+inline double SecondsSince(int64_t start_ns) {
+  return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9;
+}
+
 }  // namespace hairrig

@@ -21,10 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double SecondsSince(int64_t start_ns) {
-  return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9;
-}
-
 // A view after segmentation and orientation: what the stereo and the report need.
 struct PreparedView {
   std::string why_not;       // non-empty: left out

@@ -16,10 +16,6 @@ namespace hairrig {
 
 namespace {
 
-double SecondsSince(int64_t start_ns) {
-  return static_cast<double>(SteadyNowNs() - start_ns) * 1e-9;
-}
-
 StrandSet SegmentsAsStrands(const std::vector<StrandSegment>& segments) {
   StrandSet set;
   for (const StrandSegment& s : segments) set.AddStrand(s.points_mm);
