@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/parallel.h"
 #include "reconstruction/central_gradient.h"
 #include "reconstruction/point_grid.h"
 #include "reconstruction/polyline_overlap.h"
@@ -235,8 +236,12 @@ Result<HybridOrientationField> HybridOrientationField::Build(
   }
   f.segment_distance_ = ChamferDistance(g, hair_boundary);  // segments only, before the head joins
   for (float& d : f.segment_distance_) d *= static_cast<float>(o.voxel_mm);
-  SolveLaplace(f.size_, channels, interior_fixed, &f.interior_, o.sweeps_per_level);
-  SolveLaplace(f.size_, channels, surface_fixed, &f.surface_, o.sweeps_per_level);
+  ParallelFor(2, o.threads, [&] {
+    return [&](size_t k) {
+      if (k == 0) SolveLaplace(f.size_, channels, interior_fixed, &f.interior_, o.sweeps_per_level);
+      if (k == 1) SolveLaplace(f.size_, channels, surface_fixed, &f.surface_, o.sweeps_per_level);
+    };
+  });
 
   // I_d: zero on the hair and in the head (above its hairline unless
   // whole_head_in_volume), the distance to them on the box's faces.

@@ -43,6 +43,9 @@ struct HybridFieldOptions {
       20;  // segments at least this long stand for the directed ribbons of S_s
   bool whole_head_in_volume =
       false;  // I_d is 0 in the whole head (the paper), not above the hairline only
+  // The interior and surface solves run side by side on 2 threads; the
+  // result does not depend on it.
+  int threads = 2;
   Status Check() const;
 };
 

@@ -1,6 +1,7 @@
 #include "reconstruction/point_grid.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace hairrig {
@@ -29,11 +30,13 @@ PointGrid::PointGrid(const std::vector<Eigen::Vector3f>& positions, double cell_
     }
   }
   // A dense array of cells costs 4 bytes a cell: used while that stays
-  // within a few times the points' own storage.
-  const double cells = static_cast<double>(high[0] - low[0] + 1) *
-                       static_cast<double>(high[1] - low[1] + 1) *
-                       static_cast<double>(high[2] - low[2] + 1);
-  if (n > 0 && cells <= std::max(65536.0, 4.0 * static_cast<double>(n)) && cells < 2e9) {
+  // within a few times the points' own storage (spans in double: a far
+  // point must not overflow them).
+  double cells = 1;
+  for (int a = 0; a < 3; ++a)
+    cells *= static_cast<double>(high[a]) - static_cast<double>(low[a]) + 1;
+  if (n > 0 && std::isfinite(cells) && cells <= std::max(65536.0, 4.0 * static_cast<double>(n)) &&
+      cells < 2e9) {
     for (int a = 0; a < 3; ++a) low_[a] = low[a], size_[a] = high[a] - low[a] + 1;
     BuildDense(cell_x, cell_y, cell_z);
   } else {

@@ -1,7 +1,8 @@
 // A uniform grid over a point set for radius queries (mm, any frame): a copy
-// of the points sorted by cell (a query reads each cell's run contiguously),
-// a hash from cell to its run. Built once (O(n log n)), then read by any
-// number of threads.
+// of the points sorted by cell (a query reads each cell's run contiguously)
+// and, per cell, its run: an array over the points' box of cells where that
+// box is small (a few cells per point; O(n) to build), else a hash
+// (O(n log n)). Built once, then read by any number of threads.
 #pragma once
 
 #include <Eigen/Core>
@@ -37,6 +38,7 @@ class PointGrid {
   template <typename Visit>
   void ForEachSlotWithin(const Eigen::Vector3f& q, double radius_mm, Visit&& visit) const {
     const double radius2 = radius_mm * radius_mm;
+    const double cull2 = radius2 * (1 + 1e-6);  // rounding slack: never cull a point within reach
     const int64_t reach = static_cast<int64_t>(std::ceil(radius_mm / cell_mm_));
     const int64_t cx = CellOf(q.x()), cy = CellOf(q.y()), cz = CellOf(q.z());
     const auto visit_range = [&](std::pair<uint32_t, uint32_t> range) {
@@ -48,9 +50,9 @@ class PointGrid {
     // Rows of cells along x whose box lies wholly beyond the radius are skipped.
     for (int64_t dz = -reach; dz <= reach; ++dz) {
       const double gz2 = Gap2(q.z(), cz, dz);
-      if (gz2 > radius2) continue;
+      if (gz2 > cull2) continue;
       for (int64_t dy = -reach; dy <= reach; ++dy) {
-        if (gz2 + Gap2(q.y(), cy, dy) > radius2) continue;
+        if (gz2 + Gap2(q.y(), cy, dy) > cull2) continue;
         if (dense()) {
           visit_range(RowRange(cx - reach, cx + reach, cy + dy, cz + dz));
         } else {

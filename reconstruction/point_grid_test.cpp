@@ -86,6 +86,14 @@ TEST(PointGrid, ScatteredCloudQueriesMatchBruteForce) {
   ExpectQueriesMatchBruteForce(points, 2.0, Queries(points));
 }
 
+TEST(PointGrid, AFarPointDoesNotStopTheGrid) {
+  // One point 10^12 mm away: the box of cells spans 10^12 cells, which the
+  // grid must neither allocate nor overflow on.
+  std::vector<Eigen::Vector3f> points = Clusters({{0, 0, 0}}, 500, 3);
+  points.emplace_back(1e12f, -1e12f, 5);
+  ExpectQueriesMatchBruteForce(points, 1.0, Queries(points));
+}
+
 TEST(PointGrid, AnEmptyGridFindsNothing) {
   const std::vector<Eigen::Vector3f> none;
   const PointGrid grid(none, 1.0);

@@ -155,4 +155,33 @@ std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, do
   return overlaps;
 }
 
+void KeepStrongestOverlaps(size_t owners, int keep, std::vector<OwnerOverlap>* overlaps) {
+  // Each owner's overlaps, as indices into *overlaps, in compressed rows.
+  std::vector<uint32_t> row(owners + 1, 0);
+  for (const OwnerOverlap& v : *overlaps) ++row[v.a + 1], ++row[v.b + 1];
+  for (size_t s = 0; s < owners; ++s) row[s + 1] += row[s];
+  std::vector<uint32_t> index(row.back());
+  std::vector<uint32_t> fill(row.begin(), row.end() - 1);
+  for (uint32_t i = 0; i < overlaps->size(); ++i) {
+    index[fill[(*overlaps)[i].a]++] = i;
+    index[fill[(*overlaps)[i].b]++] = i;
+  }
+  std::vector<uint8_t> kept(overlaps->size(), 0);
+  const auto stronger = [&](uint32_t x, uint32_t y) {
+    const double sx = (*overlaps)[x].share, sy = (*overlaps)[y].share;
+    return sx != sy ? sx > sy : x < y;
+  };
+  for (size_t s = 0; s < owners; ++s) {
+    const auto begin = index.begin() + row[s], end = index.begin() + row[s + 1];
+    const auto last = end - begin > keep ? begin + keep : end;
+    if (last != end) std::nth_element(begin, last, end, stronger);
+    for (auto it = begin; it != last; ++it) kept[*it] = 1;
+  }
+  size_t out = 0;
+  for (size_t i = 0; i < overlaps->size(); ++i) {
+    if (kept[i]) (*overlaps)[out++] = (*overlaps)[i];
+  }
+  overlaps->resize(out);
+}
+
 }  // namespace hairrig

@@ -50,4 +50,9 @@ struct OwnerOverlap {
 std::vector<OwnerOverlap> FindOwnerOverlaps(const PolylineVertexTable& table, double overlap_mm,
                                             int stride, int threads);
 
+// Keeps the overlaps among the `keep` largest shares of either of their
+// owners (a pair stays when one of its two keeps it; equal shares are ranked
+// by their order in *overlaps), in their order. `owners` bounds every a and b.
+void KeepStrongestOverlaps(size_t owners, int keep, std::vector<OwnerOverlap>* overlaps);
+
 }  // namespace hairrig

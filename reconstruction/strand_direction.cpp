@@ -51,41 +51,10 @@ std::vector<double> KeepEnergies(const std::vector<StrandSegment>& segments, con
   return keep;
 }
 
-// Keeps the overlaps that are among the `keep` largest shares of either of
-// their segments (ties broken by the order of `overlaps`); order preserved.
-void KeepStrongestOverlaps(size_t segment_count, int keep, std::vector<OwnerOverlap>* overlaps) {
-  // Each segment's overlaps, as indices into *overlaps, in compressed rows.
-  std::vector<uint32_t> row(segment_count + 1, 0);
-  for (const OwnerOverlap& v : *overlaps) ++row[v.a + 1], ++row[v.b + 1];
-  for (size_t s = 0; s < segment_count; ++s) row[s + 1] += row[s];
-  std::vector<uint32_t> index(row.back());
-  std::vector<uint32_t> fill(row.begin(), row.end() - 1);
-  for (uint32_t i = 0; i < overlaps->size(); ++i) {
-    index[fill[(*overlaps)[i].a]++] = i;
-    index[fill[(*overlaps)[i].b]++] = i;
-  }
-  std::vector<uint8_t> kept(overlaps->size(), 0);
-  const auto stronger = [&](uint32_t x, uint32_t y) {
-    const double sx = (*overlaps)[x].share, sy = (*overlaps)[y].share;
-    return sx != sy ? sx > sy : x < y;
-  };
-  for (size_t s = 0; s < segment_count; ++s) {
-    const auto begin = index.begin() + row[s], end = index.begin() + row[s + 1];
-    const auto last = end - begin > keep ? begin + keep : end;
-    if (last != end) std::nth_element(begin, last, end, stronger);
-    for (auto it = begin; it != last; ++it) kept[*it] = 1;
-  }
-  size_t out = 0;
-  for (size_t i = 0; i < overlaps->size(); ++i) {
-    if (kept[i]) (*overlaps)[out++] = (*overlaps)[i];
-  }
-  overlaps->resize(out);
-}
-
 // E_close (Eq. 7): side-by-side segments, weighted by their overlap share
-// (of the vertices queried: every overlap_stride-th). With share_overlaps,
-// each is divided by the larger of its two segments' summed shares (when
-// over 1).
+// (of the vertices queried: every overlap_stride-th), each segment's
+// max_overlaps strongest kept. With share_overlaps, each kept overlap is
+// divided by the larger of its two segments' summed kept shares (when over 1).
 void AddOverlaps(const std::vector<StrandSegment>& segments, const DirectionOptions& o,
                  PairWeights* pairs, int64_t* found, int64_t* count) {
   std::vector<const std::vector<Eigen::Vector3f>*> polylines;

@@ -78,10 +78,12 @@ struct DirectionOptions {
 
 struct DirectionSummary {
   int64_t segments = 0, links = 0;
-  int64_t overlaps_found = 0, overlaps = 0;  // all overlapping pairs; those kept (max_overlaps)
-  int64_t reversed = 0;                      // segments whose vertex order was flipped
-  int64_t truncated_pairs = 0;               // non-submodular pairs truncated
-  int64_t unary_disagreements = 0;           // segments whose label goes against their own E_ribb
+  // Overlapping pairs whose tangents vote one way (votes != 0); those kept
+  // (max_overlaps), over which share_overlaps normalises.
+  int64_t overlaps_found = 0, overlaps = 0;
+  int64_t reversed = 0;             // segments whose vertex order was flipped
+  int64_t truncated_pairs = 0;      // non-submodular pairs truncated
+  int64_t unary_disagreements = 0;  // segments whose label goes against their own E_ribb
   // Eq. 4's truncated energy at the solution less its floor (the minimum cut;
   // BinaryMrfSolution::cut).
   double energy = 0;

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "core/head_spec.h"
+#include "reconstruction/polyline_overlap.h"
 #include "tests/support/ellipsoid_head.h"
 
 namespace hairrig {
@@ -227,6 +228,25 @@ TEST(StrandDirection, EachSegmentKeepsItsStrongestOverlaps) {
   const DirectionSummary whole = DirectSegments(&all, nullptr, every);
   EXPECT_EQ(whole.overlaps, 1770);
   EXPECT_EQ(whole.overlaps_found, 1770);
+}
+
+TEST(KeepStrongestOverlaps, EachOwnerKeepsItsLargestSharesAndAPairStaysIfEitherKeepsIt) {
+  // Owner 0 overlaps 1..5 with shares 0.1..0.5; owner 1 also overlaps 2 and
+  // 3 more strongly than it does 0. Keeping 2 each: 0 keeps (0,5) and (0,4);
+  // 1 keeps (1,2) and (1,3); 2 to 5 keep everything they have (at most 2).
+  std::vector<OwnerOverlap> overlaps;
+  for (uint32_t k = 1; k <= 5; ++k) overlaps.push_back({0, k, 1, 1, 0.1 * k});
+  overlaps.push_back({1, 2, 1, 1, 0.8});
+  overlaps.push_back({1, 3, 1, 1, 0.7});
+  overlaps.push_back({4, 5, 1, 1, 0.05});
+  KeepStrongestOverlaps(6, 2, &overlaps);
+  std::vector<std::pair<uint32_t, uint32_t>> kept;
+  for (const OwnerOverlap& o : overlaps) kept.emplace_back(o.a, o.b);
+  // (0,1) goes: neither 0 (0.1 is its weakest) nor 1 (0.8, 0.7 beat it)
+  // keeps it. (0,2), (0,3) stay through 2 and 3, (4,5) through both.
+  const std::vector<std::pair<uint32_t, uint32_t>> expected = {{0, 2}, {0, 3}, {0, 4}, {0, 5},
+                                                               {1, 2}, {1, 3}, {4, 5}};
+  EXPECT_EQ(kept, expected);
 }
 
 TEST(StrandDirection, OptionsRefuseANegativeOverlapLimit) {

@@ -190,6 +190,24 @@ ShortHairScene BuildShortHairScene(bool whole_head_in_volume) {
   return scene;
 }
 
+TEST(HybridOrientationField, TheFieldDoesNotDependOnTheThreadCount) {
+  const std::vector<StrandSegment> curtain = HangingCurtain();
+  const std::vector<DirectedRoot> roots = {{{0, 0, 200}, {0, 0, -1}}};
+  HybridFieldOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const auto a = HybridOrientationField::Build(curtain, roots, nullptr, one);
+  const auto b = HybridOrientationField::Build(curtain, roots, nullptr, two);
+  ASSERT_TRUE(a.ok() && b.ok());
+  for (float z = 90; z <= 210; z += 7.5f) {
+    for (float y = -25; y <= 25; y += 5) {
+      const Eigen::Vector3f p(1.5f, y, z), previous(0, 0, -1);
+      EXPECT_EQ(a->Interior(p, previous), b->Interior(p, previous));
+      EXPECT_EQ(a->Surface(p, previous), b->Surface(p, previous));
+    }
+  }
+}
+
 TEST(HybridOrientationField, SkinBelowTheHairlineIsOutsideTheHairVolume) {
   const double bound = StrandGrowthOptions{}.volume_bound;
   const ShortHairScene above_hairline = BuildShortHairScene(false);

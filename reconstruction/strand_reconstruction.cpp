@@ -138,8 +138,10 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   summary->direction = DirectSegments(&segments, &head, direction);
   summary->seconds_direction = SecondsSince(t);
   t = SteadyNowNs();
+  HybridFieldOptions field_options = o.field;
+  field_options.threads = o.threads;
   HR_ASSIGN_OR_RETURN(const HybridOrientationField field,
-                      HybridOrientationField::Build(segments, roots, &head, o.field));
+                      HybridOrientationField::Build(segments, roots, &head, field_options));
   summary->seconds_field = SecondsSince(t);
   t = SteadyNowNs();
   StrandGrowthOptions growth = o.growth;

@@ -339,7 +339,8 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
   // batch of uncovered seeds grows in parallel; their segments are then
   // taken in seed order, each only if no earlier one covered its seed: the
   // sequential algorithm's result, whatever the thread count.
-  const size_t batch_size = 64 * static_cast<size_t>(ResolveThreads(o.threads));
+  const int threads = ResolveThreads(o.threads);
+  const size_t batch_size = 64 * static_cast<size_t>(threads);
   std::vector<uint32_t> batch;
   std::vector<GrownFromSeed> grown;
   size_t next_seed = 0;
@@ -350,7 +351,7 @@ std::vector<StrandSegment> GrowStrandSegments(const std::vector<OrientedPoint>& 
     }
     if (batch.empty()) break;
     grown.assign(batch.size(), GrownFromSeed{});
-    ParallelFor(batch.size(), o.threads, [&] {
+    ParallelFor(batch.size(), threads, [&] {
       return [&](size_t i) {
         grown[i] = GrowFromSeed(field, surface, points[batch[i]].position_mm, o);
       };
