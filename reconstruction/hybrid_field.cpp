@@ -164,11 +164,7 @@ bool HybridOrientationField::NearestSegmentTangent(const Eigen::Vector3f& p, dou
   // (within a few % of the Euclidean) stays under this bound there, and is
   // cheaper to read than the point grid.
   if (SegmentDistance(p) > radius_mm + 3 * voxel_mm_) return false;
-  double best = 1e30;
-  int64_t found = -1;
-  segment_index_->grid->ForEachWithin(p, radius_mm, [&](uint32_t i, double d2) {
-    if (d2 < best) best = d2, found = i;
-  });
+  const int64_t found = segment_index_->grid->Nearest(p, radius_mm);
   if (found < 0) return false;
   *tangent = segment_index_->tangents[static_cast<size_t>(found)];
   return true;
