@@ -165,10 +165,27 @@ class ReferenceSolver {
     }
   }
 
-  void TryHypothesis(size_t i, float depth, float tilt) {
+  // The hypotheses already scored during one cell's visit: a cost is a pure
+  // function of (cell, depth, tilt), so a repeat would only recompute it.
+  struct Tried {
+    std::array<std::pair<float, float>, 12> seen;
+    int count = 0;
+    bool Contains(float depth, float tilt) const {
+      for (int k = 0; k < count; ++k)
+        if (seen[static_cast<size_t>(k)] == std::make_pair(depth, tilt)) return true;
+      return false;
+    }
+    void Add(float depth, float tilt) {
+      if (count < static_cast<int>(seen.size())) seen[static_cast<size_t>(count++)] = {depth, tilt};
+    }
+  };
+
+  void TryHypothesis(size_t i, float depth, float tilt, Tried* tried) {
     const double max_tilt = DegToRad(options_.max_tilt_deg);
     if (!std::isfinite(depth) || std::abs(tilt) > max_tilt) return;
     depth = cells_[i].range.Clamp(depth);
+    if (tried->Contains(depth, tilt)) return;
+    tried->Add(depth, tilt);
     const float cost = Cost(cells_[i], depth, tilt);
     if (cost < best_[i].cost) best_[i] = {depth, tilt, cost};
   }
@@ -184,6 +201,8 @@ class ReferenceSolver {
     for (int k = reverse ? n - 1 : 0; k >= 0 && k < n; k += step) {
       const size_t i = static_cast<size_t>(k);
       const Cell& c = cells_[i];
+      Tried tried;
+      tried.Add(best_[i].depth, best_[i].tilt);
       const int dx[2] = {-step, 0}, dy[2] = {0, -step};
       for (int d = 0; d < 2; ++d) {
         for (int reach : {1, 3}) {
@@ -192,28 +211,31 @@ class ReferenceSolver {
           const int j = index_(y, x);
           if (j < 0) continue;
           const Hypothesis& hj = best_[static_cast<size_t>(j)];
-          TryHypothesis(i, hj.depth, hj.tilt);
+          TryHypothesis(i, hj.depth, hj.tilt, &tried);
           const float prior_j = cells_[static_cast<size_t>(j)].prior_mm;
           if (c.prior_mm > 0 && prior_j > 0)
-            TryHypothesis(i, c.prior_mm + (hj.depth - prior_j), hj.tilt);
+            TryHypothesis(i, c.prior_mm + (hj.depth - prior_j), hj.tilt, &tried);
         }
       }
       const Hypothesis h = best_[i];
       const double depth_range = depth_fraction * (c.range.hi - c.range.lo);
-      TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range), h.tilt);
-      TryHypothesis(i, h.depth, static_cast<float>(h.tilt + unit(*rng) * tilt_range));
+      TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range), h.tilt, &tried);
+      TryHypothesis(i, h.depth, static_cast<float>(h.tilt + unit(*rng) * tilt_range), &tried);
       TryHypothesis(i, static_cast<float>(h.depth + unit(*rng) * depth_range),
-                    static_cast<float>(h.tilt + unit(*rng) * tilt_range));
+                    static_cast<float>(h.tilt + unit(*rng) * tilt_range), &tried);
     }
   }
 
   // The segment's samples, computed once per hypothesis and shared by the
-  // neighbours: points along it (and a quarter step further, for the
-  // projected direction) and, for the photometric cost, a strip of three
-  // lines with the reference view's grey values.
+  // neighbours: points along it (and, for a single sample, a point a quarter
+  // step further that gives the projected direction) and, for the
+  // photometric cost, a strip of three lines (sample k's are strip points
+  // 3k .. 3k + 2, the middle one on the line) with the reference view's grey
+  // values.
   struct Samples {
     int along = 0, strip = 0;
-    std::array<Eigen::Vector3d, 31> on_line, ahead;
+    std::array<Eigen::Vector3d, 31> on_line;
+    Eigen::Vector3d ahead;
     std::array<Eigen::Vector3d, 93> strip_points;
     std::array<float, 93> ref_grey{};
     bool strip_ok = true;
@@ -226,8 +248,8 @@ class ReferenceSolver {
     for (int k = -half; k <= half; ++k) {
       const Eigen::Vector3d p = centre + (k * step_mm) * t;
       s->on_line[static_cast<size_t>(k + half)] = p;
-      s->ahead[static_cast<size_t>(k + half)] = p + 0.25 * step_mm * t;
     }
+    s->ahead = centre + 0.25 * step_mm * t;
     s->strip = 0;
     s->strip_ok = true;
     if (options_.cost == MvsCost::kOrientation) return;
@@ -258,11 +280,14 @@ class ReferenceSolver {
     Samples samples;
     MakeSamples(c, centre, t, step_mm, &samples);
     std::array<float, 16> view_costs{};
+    ProjectedLine line;
     for (size_t v = 0; v < neighbours_.size(); ++v) {
       const Neighbour& nb = neighbours_[v];
+      ProjectLine(nb, samples, &line);
       float orientation_cost = 0, photometric_cost = 0;
-      if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, samples);
-      if (options_.cost != MvsCost::kOrientation) photometric_cost = PhotometricCost(nb, samples);
+      if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, line);
+      if (options_.cost != MvsCost::kOrientation)
+        photometric_cost = PhotometricCost(nb, samples, line);
       view_costs[v] = options_.cost == MvsCost::kOrientation ? orientation_cost
                       : options_.cost == MvsCost::kPhotometric
                           ? photometric_cost
@@ -283,16 +308,52 @@ class ReferenceSolver {
     return true;
   }
 
-  float OrientationCost(const Neighbour& nb, const Samples& s) const {
+  // The segment's samples as a neighbour sees them, and the direction of
+  // their line there, in degrees in [0, 180) (NaN when it cannot be told).
+  // The projection of a straight segment is straight up to the lens
+  // distortion, which turns it by a negligible angle over a few pixels, so
+  // one direction serves every sample.
+  struct ProjectedLine {
+    std::array<Eigen::Vector2d, 31> uv;
+    std::array<bool, 31> ok{};
+    double direction_deg = 0;
+  };
+
+  void ProjectLine(const Neighbour& nb, const Samples& s, ProjectedLine* line) const {
+    for (int k = 0; k < s.along; ++k) {
+      const size_t i = static_cast<size_t>(k);
+      line->ok[i] = ProjectInto(nb, s.on_line[i], &line->uv[i]);
+    }
+    Eigen::Vector2d from, to;
+    bool ok = false;
+    if (s.along > 1) {
+      const size_t last = static_cast<size_t>(s.along - 1);
+      ok = line->ok[0] && line->ok[last];
+      from = line->uv[0];
+      to = line->uv[last];
+    } else {
+      from = line->uv[0];
+      ok = line->ok[0] && ProjectInto(nb, s.ahead, &to);
+    }
+    line->direction_deg = std::numeric_limits<double>::quiet_NaN();
+    if (!ok) return;
+    const Eigen::Vector2d d = to - from;
+    double angle = RadToDeg(std::atan2(d.y(), d.x()));
+    if (angle < 0) angle += 180;
+    line->direction_deg = angle;
+  }
+
+  float OrientationCost(const Neighbour& nb, const ProjectedLine& line) const {
+    const int along = options_.samples;
+    if (!std::isfinite(line.direction_deg)) return 1.0f;
     float sum = 0;
     const double truncation = options_.orientation_truncation_deg;
-    for (int k = 0; k < s.along; ++k) {
-      Eigen::Vector2d a, b;
-      if (!ProjectInto(nb, s.on_line[static_cast<size_t>(k)], &a) ||
-          !ProjectInto(nb, s.ahead[static_cast<size_t>(k)], &b)) {
+    for (int k = 0; k < along; ++k) {
+      if (!line.ok[static_cast<size_t>(k)]) {
         sum += 1;
         continue;
       }
+      const Eigen::Vector2d& a = line.uv[static_cast<size_t>(k)];
       const int x = static_cast<int>(std::lround(a.x())), y = static_cast<int>(std::lround(a.y()));
       if (x < 0 || y < 0 || x >= nb.view->hair.cols || y >= nb.view->hair.rows ||
           !nb.view->hair(y, x)) {
@@ -304,23 +365,24 @@ class ReferenceSolver {
         sum += 1;
         continue;
       }
-      const Eigen::Vector2d d = b - a;
-      double projected = RadToDeg(std::atan2(d.y(), d.x()));
-      if (projected < 0) projected += 180;
-      const double diff = OrientationDifferenceDeg(projected, seen);
+      const double diff = OrientationDifferenceDeg(line.direction_deg, seen);
       sum += static_cast<float>(std::min(diff, truncation) / truncation);
     }
-    return sum / static_cast<float>(s.along);
+    return sum / static_cast<float>(along);
   }
 
-  float PhotometricCost(const Neighbour& nb, const Samples& s) const {
+  float PhotometricCost(const Neighbour& nb, const Samples& s, const ProjectedLine& line) const {
     if (!s.strip_ok || s.strip == 0) return kNoCost;
     double sr = 0, sn = 0, srr = 0, snn = 0, srn = 0;
     for (int i = 0; i < s.strip; ++i) {
       Eigen::Vector2d in_n;
       float b;
-      if (!ProjectInto(nb, s.strip_points[static_cast<size_t>(i)], &in_n) ||
-          !Sample(nb.view->grey, in_n.x(), in_n.y(), &b)) {
+      const bool on_line = i % 3 == 1;
+      const bool projected = on_line
+                                 ? line.ok[static_cast<size_t>(i / 3)]
+                                 : ProjectInto(nb, s.strip_points[static_cast<size_t>(i)], &in_n);
+      if (on_line) in_n = line.uv[static_cast<size_t>(i / 3)];
+      if (!projected || !Sample(nb.view->grey, in_n.x(), in_n.y(), &b)) {
         return kNoCost;
       }
       const double a = s.ref_grey[static_cast<size_t>(i)];
