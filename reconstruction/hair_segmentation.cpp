@@ -5,10 +5,10 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/ml.hpp>
 #include <vector>
 
 #include "core/statistics.h"
+#include "reconstruction/gaussian_mixture.h"
 
 namespace hairrig {
 namespace {
@@ -136,11 +136,10 @@ cv::Mat1f FeatureSamples(const cv::Mat3b& bgr, const cv::Mat1f& energy, const cv
 }
 
 // The foreground's colours, and with SegmentationOptions::texture_feature
-// their fine texture, as a Gaussian mixture (EM, OpenCV's ml::EM); each
+// their fine texture, as a Gaussian mixture (reconstruction/gaussian_mixture.h); each
 // component is then called hair or skin by the texture of its pixels: skin is
 // smooth, fibres are not. With texture in the mixture, smooth skin in shadow
 // gets components of its own instead of sharing dark hair's.
-// Evaluated here (not by ml::EM::predict2) so that pixels are scored in parallel.
 class MaterialModel {
  public:
   static Result<MaterialModel> Fit(const cv::Mat3b& bgr, const cv::Mat1b& where,
@@ -151,35 +150,25 @@ class MaterialModel {
     const cv::Mat1f samples = FeatureSamples(bgr, energy, where, model.texture_, 8000);
     if (samples.rows < 20 * components)
       return FailedPrecondition("too few foreground pixels for a colour model");
-    cv::Ptr<cv::ml::EM> em = cv::ml::EM::create();
-    em->setClustersNumber(components);
-    em->setCovarianceMatrixType(cv::ml::EM::COV_MAT_GENERIC);
-    em->setTermCriteria(
-        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 60, 1e-3));
-    // EM starts from k-means, which draws from this thread's cv::theRNG():
-    // seeded here so that a view segments the same on any thread, in any order.
-    cv::theRNG() = cv::RNG(0x5eed5eedULL);
-    if (!em->trainEM(samples)) return FailedPrecondition("the colour model did not converge");
-    std::vector<cv::Mat> covariances;
-    em->getCovs(covariances);
-    const cv::Mat means = em->getMeans();
-    const cv::Mat weights = em->getWeights();
-    for (int k = 0; k < components; ++k) {
+    MixtureFitOptions fit;
+    fit.components = components;
+    // Seeded, so that a view segments the same on any thread, in any order.
+    HR_ASSIGN_OR_RETURN(const GaussianMixture mixture, FitGaussianMixture(samples, fit));
+    for (const MixtureComponent& component : mixture.components) {
       Gaussian g;
       // Without texture the fourth dimension is a constant feature with the
       // same variance in every component: it adds the same constant to every term.
       cv::Matx44d cov = cv::Matx44d::eye();
       for (int r = 0; r < samples.cols; ++r) {
-        g.mean[r] = means.at<double>(k, r);
-        for (int c = 0; c < samples.cols; ++c)
-          cov(r, c) = covariances[static_cast<size_t>(k)].at<double>(r, c);
+        g.mean[r] = component.mean[r];
+        for (int c = 0; c < samples.cols; ++c) cov(r, c) = component.covariance(r, c);
       }
       // A floor of 1 on every dimension: a grey level of sensor noise on the
       // colours, a 5 % change of energy on the texture.
       cov += cv::Matx44d::eye() * 1.0;
       g.inverse = cov.inv();
-      g.log_norm = std::log(std::max(1e-12, weights.at<double>(0, k))) -
-                   0.5 * std::log(cv::determinant(cov));
+      g.log_norm =
+          std::log(std::max(1e-12, component.weight)) - 0.5 * std::log(cv::determinant(cov));
       model.gaussians_.push_back(g);
     }
     model.NameComponentsByTexture(bgr, where, energy, options.skin_texture_ratio);
