@@ -12,6 +12,7 @@
 #include "core/head_model.h"
 #include "core/image_file.h"
 #include "core/log.h"
+#include "core/statistics.h"
 #include "core/strand_io.h"
 #include "core/string_format.h"
 #include "rig/rig_config.h"
@@ -102,6 +103,7 @@ struct SimulateSetup {
   std::vector<std::vector<Eigen::Vector3d>> guides_rest;
   size_t full_strands = 0;
   std::unique_ptr<GuideInterpolation> interpolation;  // null: the guides are written
+  std::vector<double> rest_lengths_mm;                // per written strand, at rest
   std::unique_ptr<StrandPreviewer> previewer;         // null: no previews
 };
 
@@ -119,6 +121,9 @@ Result<SimulateSetup> Setup(const SimulateRunOptions& o) {
     HR_ASSIGN_OR_RETURN(GuideInterpolation built,
                         GuideInterpolation::Build(full, setup.guides_rest, {}));
     setup.interpolation = std::make_unique<GuideInterpolation>(std::move(built));
+    setup.rest_lengths_mm = full.StrandLengths();
+  } else {
+    setup.rest_lengths_mm = ToStrandSet(setup.guides_rest).StrandLengths();
   }
   if (o.preview_every > 0) {
     HR_ASSIGN_OR_RETURN(setup.previewer, MakeStrandPreviewer(scene_path, head));
@@ -126,15 +131,31 @@ Result<SimulateSetup> Setup(const SimulateRunOptions& o) {
   return setup;
 }
 
+// The written strands' lengths over their rest lengths: its 99th percentile
+// and largest value raise the summary's.
+void TrackStretch(const std::vector<double>& rest_lengths_mm, const StrandSet& strands,
+                  SimulateRunSummary* s) {
+  const std::vector<double> lengths = strands.StrandLengths();
+  std::vector<double> ratios;
+  for (size_t i = 0; i < lengths.size() && i < rest_lengths_mm.size(); ++i)
+    if (rest_lengths_mm[i] > 0) ratios.push_back(lengths[i] / rest_lengths_mm[i]);
+  if (ratios.empty()) return;
+  s->strand_stretch_p99 = std::max(s->strand_stretch_p99, Quantile(ratios, 0.99));
+  s->strand_stretch_max =
+      std::max(s->strand_stretch_max, *std::max_element(ratios.begin(), ratios.end()));
+}
+
 // Frame f's strand file and, every preview_every frames, its preview.
 Status WriteFrame(const SimulateRunOptions& o, SimulateSetup& setup,
-                  const std::vector<std::vector<Eigen::Vector3d>>& guides, int f) {
+                  const std::vector<std::vector<Eigen::Vector3d>>& guides, int f,
+                  SimulateRunSummary* s) {
   StrandSet strands;
   if (setup.interpolation) {
     HR_ASSIGN_OR_RETURN(strands, setup.interpolation->Apply(guides));
   } else {
     strands = ToStrandSet(guides);
   }
+  TrackStretch(setup.rest_lengths_mm, strands, s);
   const std::string name = StringPrintf("frame_%04d", f);
   HR_RETURN_IF_ERROR(WriteStrands(o.out_dir + "/frames/" + name + ".hair", strands));
   if (setup.previewer && f % o.preview_every == 0) {
@@ -182,6 +203,8 @@ nlohmann::json SimulateRunSummary::ToJson() const {
           {"mean_solver_iterations", stats.mean_solver_iterations},
           {"contact_samples", stats.contact_samples},
           {"max_tip_move_mm", max_tip_move_mm},
+          {"strand_stretch_p99", strand_stretch_p99},
+          {"strand_stretch_max", strand_stretch_max},
           {"max_inverse_statics_change_per_m", stats.max_inverse_statics_change}};
 }
 
@@ -192,9 +215,11 @@ std::string SimulateRunSummary::BriefReport() const {
                       out_dir.c_str(), ScenarioName(scenario), seconds, fps, frames, strands,
                       guides) +
          StringPrintf(
-             "  %lld steps of %.4f s, %.0f steps/s; tips moved up to %.1f mm; frames/ and "
-             "previews/ beside summary.json\n",
-             stats.steps, time_step_s, steps_per_s, max_tip_move_mm);
+             "  %lld steps of %.4f s, %.0f steps/s; tips moved up to %.1f mm; strands' length "
+             "over rest %.3f (99th percentile), %.3f (largest); frames/ and previews/ beside "
+             "summary.json\n",
+             stats.steps, time_step_s, steps_per_s, max_tip_move_mm, strand_stretch_p99,
+             strand_stretch_max);
 }
 
 Result<SimulateRunSummary> SimulateRun(const SimulateRunOptions& o) {
@@ -218,7 +243,7 @@ Result<SimulateRunSummary> SimulateRun(const SimulateRunOptions& o) {
     for (size_t g = 0; g < guides.size(); ++g)
       s.max_tip_move_mm =
           std::max(s.max_tip_move_mm, (guides[g].back() - setup.guides_rest[g].back()).norm());
-    HR_RETURN_IF_ERROR(WriteFrame(o, setup, guides, f));
+    HR_RETURN_IF_ERROR(WriteFrame(o, setup, guides, f, &s));
     if (f % 10 == 0)
       LogInfo("simulate: frame " + std::to_string(f) + " of " + std::to_string(s.frames));
   }

@@ -10,35 +10,33 @@ namespace hairrig {
 
 namespace {
 
-// Arc-length fraction of every point of a curve (0 at the root, 1 at the tip).
+// Arc length (mm) from the root of every point of a curve.
 template <typename Point>
-std::vector<double> ArcFractions(const Point* points, size_t count) {
-  std::vector<double> f(count, 0.0);
+std::vector<double> ArcLengths(const Point* points, size_t count) {
+  std::vector<double> s(count, 0.0);
   for (size_t i = 1; i < count; ++i)
-    f[i] = f[i - 1] + (points[i] - points[i - 1]).template cast<double>().norm();
-  const double total = count > 1 ? f.back() : 0.0;
-  for (double& x : f) x = total > 0 ? x / total : 0.0;
-  return f;
+    s[i] = s[i - 1] + (points[i] - points[i - 1]).template cast<double>().norm();
+  return s;
 }
 
-// Where arc-length fraction u falls on a curve: between points index - 1 and
-// index, `blend` of the way (index 0: the root itself).
-void Locate(const std::vector<double>& fractions, double u, int* index, double* blend) {
-  const auto it = std::upper_bound(fractions.begin(), fractions.end(), u);
-  if (it == fractions.begin()) {
+// Where arc length s falls on a curve (clamped to its ends): between points
+// index - 1 and index, `blend` of the way.
+void Locate(const std::vector<double>& lengths, double s, int* index, double* blend) {
+  const auto it = std::upper_bound(lengths.begin(), lengths.end(), s);
+  if (it == lengths.begin()) {
     *index = 1;
     *blend = 0;
     return;
   }
-  if (it == fractions.end()) {
-    *index = static_cast<int>(fractions.size()) - 1;
+  if (it == lengths.end()) {
+    *index = static_cast<int>(lengths.size()) - 1;
     *blend = 1;
     return;
   }
-  const size_t i = static_cast<size_t>(it - fractions.begin());
-  const double span = fractions[i] - fractions[i - 1];
+  const size_t i = static_cast<size_t>(it - lengths.begin());
+  const double span = lengths[i] - lengths[i - 1];
   *index = static_cast<int>(i);
-  *blend = span > 0 ? (u - fractions[i - 1]) / span : 0.0;
+  *blend = span > 0 ? (s - lengths[i - 1]) / span : 0.0;
 }
 
 Eigen::Vector3d Blend(const std::vector<Eigen::Vector3d>& curve, int index, double blend) {
@@ -79,7 +77,7 @@ Result<GuideInterpolation> GuideInterpolation::Build(
   GuideInterpolation out;
   out.rest_ = full_rest;
   out.guides_rest_ = guides_rest;
-  std::vector<std::vector<double>> guide_fractions;
+  std::vector<std::vector<double>> guide_lengths;
   for (size_t g = 0; g < guides_rest.size(); ++g) {
     const auto& curve = guides_rest[g];
     if (curve.size() < 2)
@@ -89,7 +87,7 @@ Result<GuideInterpolation> GuideInterpolation::Build(
         return InvalidArgument("guide interpolation: guide " + std::to_string(g) +
                                " is not finite");
     }
-    guide_fractions.push_back(ArcFractions(curve.data(), curve.size()));
+    guide_lengths.push_back(ArcLengths(curve.data(), curve.size()));
   }
   const int k = std::min<int>(options.guides_per_strand, static_cast<int>(guides_rest.size()));
   out.per_particle_ = k;
@@ -104,16 +102,15 @@ Result<GuideInterpolation> GuideInterpolation::Build(
       return (guides_rest[static_cast<size_t>(a)][0] - root).squaredNorm() <
              (guides_rest[static_cast<size_t>(b)][0] - root).squaredNorm();
     });
-    const std::vector<double> fractions =
-        ArcFractions(&full_rest.points_mm[offsets[s]], offsets[s + 1] - offsets[s]);
+    const std::vector<double> lengths =
+        ArcLengths(&full_rest.points_mm[offsets[s]], offsets[s + 1] - offsets[s]);
     for (size_t i = offsets[s]; i < offsets[s + 1]; ++i) {
       Particle& particle = out.particles_[i];
       std::vector<Eigen::Vector3d> candidates;
       for (int j = 0; j < k; ++j) {
         const size_t g = static_cast<size_t>(order[static_cast<size_t>(j)]);
         particle.guides[j] = static_cast<int>(g);
-        Locate(guide_fractions[g], fractions[i - offsets[s]], &particle.segment[j],
-               &particle.blend[j]);
+        Locate(guide_lengths[g], lengths[i - offsets[s]], &particle.segment[j], &particle.blend[j]);
         candidates.push_back(Blend(guides_rest[g], particle.segment[j], particle.blend[j]));
       }
       const Eigen::Vector3d p = full_rest.points_mm[i].cast<double>();

@@ -3,9 +3,13 @@
 // a few particles of nearby guides, with weights from a linearly constrained
 // least-squares fit at rest. Millimetres, world frame.
 //
-// For particle p at arc-length fraction u of its strand, the candidates are
-// the particles g_k at the same fraction u on the K guides whose roots are
-// nearest the strand's root. Its weights minimise
+// For particle p at arc length s (mm from the root) on its strand, the
+// candidates are the particles g_k at the same arc length on the K guides
+// whose roots are nearest the strand's root (a guide's tip where it is
+// shorter). The paper does not say which guide particles are used; matched
+// by the share of the strand's length instead, a strand much shorter than its
+// guides (a reconstruction's short strands at a parting) would move with the
+// guides' tips and stretch many times over. Its weights minimise
 //   |sum_k w_k g_k - p|^2 + beta sum_k d_k^2 w_k^2   subject to  sum_k w_k = 1
 // (d_k: distance from p to g_k at rest; the second term keeps the weights with
 // the near guides where the fit alone is ambiguous), solved in

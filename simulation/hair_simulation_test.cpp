@@ -218,5 +218,40 @@ TEST(GuideInterpolation, RestIsExactAndMotionFollowsGuides) {
   EXPECT_FALSE(interp->Apply(moved).ok());
 }
 
+// A strand 12 mm long beside guides 120 mm long: when the guides swing
+// their tips 100 mm and barely move their first 12 mm, the short strand stays
+// near its rest place and keeps its length.
+TEST(GuideInterpolation, AShortStrandMovesWithItsGuidesRootsNotTheirTips) {
+  std::vector<std::vector<Eigen::Vector3d>> guides;
+  for (int g = 0; g < 3; ++g) {
+    std::vector<Eigen::Vector3d> curve;
+    for (int i = 0; i <= 24; ++i) curve.push_back(Eigen::Vector3d(10.0 * g, 0, -5.0 * i));
+    guides.push_back(curve);
+  }
+  StrandSet full;
+  std::vector<Eigen::Vector3f> stub;
+  for (int i = 0; i <= 6; ++i) stub.push_back(Eigen::Vector3f(4, 1, -2.0f * static_cast<float>(i)));
+  full.AddStrand(stub);
+  auto interp = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
+  ASSERT_TRUE(interp.ok()) << interp.status().ToString();
+  // Swing each guide about its root: displacement grows with the square of
+  // the arc length, 100 mm at the tip, 1 mm at 12 mm.
+  auto swung = guides;
+  for (auto& curve : swung) {
+    for (size_t i = 0; i < curve.size(); ++i) {
+      const double s = 5.0 * static_cast<double>(i);
+      curve[i].y() += 100.0 * (s / 120.0) * (s / 120.0);
+    }
+  }
+  auto moved = interp->Apply(swung);
+  ASSERT_TRUE(moved.ok());
+  double length = 0;
+  for (size_t i = 0; i < stub.size(); ++i) {
+    EXPECT_LT((moved->points_mm[i] - stub[i]).norm(), 1.5) << "vertex " << i;
+    if (i > 0) length += (moved->points_mm[i] - moved->points_mm[i - 1]).norm();
+  }
+  EXPECT_NEAR(length, 12.0, 0.5);
+}
+
 }  // namespace
 }  // namespace hairrig
