@@ -67,6 +67,9 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
       ->capture_default_str();
   cmd->add_flag("--guides-only", o.guides_only,
                 "write the guides, not the interpolated full hairstyle");
+  cmd->add_flag("--keep-lengths,!--plain-blend", o.keep_lengths,
+                "interpolated strands keep their rest segment lengths (default; "
+                "--plain-blend: the guides' blend alone)");
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     DispatchSummary(dispatch, [args]() -> Result<SimulateRunSummary> {

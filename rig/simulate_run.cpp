@@ -118,8 +118,10 @@ Result<SimulateSetup> Setup(const SimulateRunOptions& o) {
   const StrandSet full = o.guides_only ? StrandSet{} : ReadSourceStrands(model, o.model_file);
   setup.full_strands = full.num_strands();
   if (full.num_strands() > 0) {
+    GuideInterpolationOptions blend;
+    blend.keep_lengths = o.keep_lengths;
     HR_ASSIGN_OR_RETURN(GuideInterpolation built,
-                        GuideInterpolation::Build(full, setup.guides_rest, {}));
+                        GuideInterpolation::Build(full, setup.guides_rest, blend));
     setup.interpolation = std::make_unique<GuideInterpolation>(std::move(built));
     setup.rest_lengths_mm = full.StrandLengths();
   } else {

@@ -42,6 +42,9 @@ struct SimulateRunOptions {
   // strands (read from where `fit` recorded them or beside the model; the
   // guides are written when they cannot be read, with a warning).
   bool guides_only = false;
+  // The interpolated strands keep their segments' rest lengths
+  // (GuideInterpolationOptions::keep_lengths); false: the plain blend.
+  bool keep_lengths = true;
 
   // InvalidArgument naming the field and its range.
   Status Validate() const;

@@ -61,6 +61,21 @@ Eigen::VectorXd ConstrainedWeights(const std::vector<Eigen::Vector3d>& candidate
   return kkt.colPivHouseholderQr().solve(rhs).head(k);
 }
 
+// Walks each strand of `moved` from its root: every segment keeps its
+// direction and takes its length in `rest`.
+void RestoreSegmentLengths(const StrandSet& rest, StrandSet* moved) {
+  const std::vector<size_t> offsets = rest.Offsets();
+  for (size_t s = 0; s + 1 < offsets.size(); ++s) {
+    for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
+      const float rest_length = (rest.points_mm[i] - rest.points_mm[i - 1]).norm();
+      const Eigen::Vector3f step = moved->points_mm[i] - moved->points_mm[i - 1];
+      const float length = step.norm();
+      if (length > 0 && length != rest_length)
+        moved->points_mm[i] = moved->points_mm[i - 1] + step * (rest_length / length);
+    }
+  }
+}
+
 }  // namespace
 
 Result<GuideInterpolation> GuideInterpolation::Build(
@@ -91,6 +106,7 @@ Result<GuideInterpolation> GuideInterpolation::Build(
   }
   const int k = std::min<int>(options.guides_per_strand, static_cast<int>(guides_rest.size()));
   out.per_particle_ = k;
+  out.keep_lengths_ = options.keep_lengths;
   const std::vector<size_t> offsets = full_rest.Offsets();
   out.particles_.resize(full_rest.num_points());
   std::vector<int> order(guides_rest.size());
@@ -152,6 +168,7 @@ Result<StrandSet> GuideInterpolation::Apply(
     }
     out.points_mm[i] += displacement.cast<float>();
   }
+  if (keep_lengths_) RestoreSegmentLengths(rest_, &out);
   return out;
 }
 

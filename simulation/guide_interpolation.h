@@ -16,6 +16,9 @@
 // closed form from its KKT system. The particle then follows the guides'
 // displacements: p(t) = p_rest + sum_k w_k (g_k(t) - g_k(rest)), so the rest
 // shape is reproduced exactly (ours: ref. [40] interpolates positions).
+// Blending guides that move apart lengthens a strand; with keep_lengths each
+// strand is then walked from its root, every segment keeping its new
+// direction and its rest length (ours; off, the plain blend).
 #pragma once
 
 #include <Eigen/Core>
@@ -29,6 +32,7 @@ namespace hairrig {
 struct GuideInterpolationOptions {
   int guides_per_strand = 4;    // K
   double regularisation = 0.1;  // beta
+  bool keep_lengths = true;     // restore each segment's rest length after the blend
 };
 
 class GuideInterpolation {
@@ -58,6 +62,7 @@ class GuideInterpolation {
   StrandSet rest_;
   std::vector<std::vector<Eigen::Vector3d>> guides_rest_;
   std::vector<Particle> particles_;  // one per point of rest_
+  bool keep_lengths_ = true;
   int per_particle_ = 0;
   double rest_fit_rms_mm_ = 0;
 };

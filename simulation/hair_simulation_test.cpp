@@ -205,14 +205,27 @@ TEST(GuideInterpolation, RestIsExactAndMotionFollowsGuides) {
   for (size_t i = 0; i < full.num_points(); ++i) {
     EXPECT_LT((shifted->points_mm[i] - full.points_mm[i] - Eigen::Vector3f(3, -2, 1)).norm(), 1e-4);
   }
-  // Bend one guide: the strand that is that guide follows it exactly.
+  // Bend one guide (and stretch it): with the plain blend the strand that is
+  // that guide follows it exactly; by default it follows its direction and
+  // keeps every segment's rest length.
   moved = guides;
   for (auto& p : moved[2]) p += Eigen::Vector3d(0, 0, -0.1 * (p - moved[2][0]).norm());
-  auto bent = interp->Apply(moved);
+  GuideInterpolationOptions plain_blend;
+  plain_blend.keep_lengths = false;
+  auto plain = GuideInterpolation::Build(full, guides, plain_blend);
+  ASSERT_TRUE(plain.ok());
+  auto bent = plain->Apply(moved);
+  auto bent_kept = interp->Apply(moved);
   ASSERT_TRUE(bent.ok());
+  ASSERT_TRUE(bent_kept.ok());
   const auto offsets = full.Offsets();
   for (size_t i = offsets[4]; i < offsets[5]; ++i) {
     EXPECT_LT((bent->points_mm[i].cast<double>() - moved[2][i - offsets[4]]).norm(), 1e-3);
+    if (i == offsets[4]) continue;
+    const Eigen::Vector3f step = bent_kept->points_mm[i] - bent_kept->points_mm[i - 1];
+    const Eigen::Vector3d guide_step = moved[2][i - offsets[4]] - moved[2][i - offsets[4] - 1];
+    EXPECT_NEAR(step.norm(), (full.points_mm[i] - full.points_mm[i - 1]).norm(), 1e-4);
+    EXPECT_GT(step.cast<double>().normalized().dot(guide_step.normalized()), 0.999);  // 2.6 deg
   }
   moved.pop_back();
   EXPECT_FALSE(interp->Apply(moved).ok());
