@@ -12,9 +12,9 @@
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
-// reconstruction is left alone, but for the head.yaml a fitted head writes); preview_truth.jpg
-// beside them shows the model over the ground truth's strands, and each method's strands are scored
-// by the strand protocol of `hairrig eval reconstruction` (unless --score no),
+// reconstruction is left alone, but for the head.yaml a fitted head writes), and each method's
+// strands are scored by the strand protocol of `hairrig eval reconstruction` (unless --score no),
+// which writes preview_truth.jpg beside them (the model above the ground truth's strands),
 // then the consistency the truth's own strands score at the same count.
 #include <cstdio>
 #include <cstring>
@@ -23,11 +23,9 @@
 #include <string>
 #include <vector>
 
-#include "core/image_file.h"
 #include "core/strand_io.h"
 #include "reconstruction/reconstruction_evaluation.h"
 #include "reconstruction/strand_evaluation.h"
-#include "reconstruction/strand_preview.h"
 #include "reconstruction/strand_reconstruction.h"
 #include "rig/reconstruction_input.h"
 
@@ -136,11 +134,6 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::printf("%s", summary->BriefReport().c_str());
-    auto strands = ReadStrands(dir + "/strands/strands.ply");
-    if (!strands.ok()) return 1;
-    const cv::Mat preview =
-        RenderStrandPreview({&*strands, &*truth}, {name, "ground truth"}, StrandPreviewOptions{});
-    if (!WriteImageAtomic(dir + "/strands/preview_truth.jpg", preview).ok()) return 1;
     if (!score) continue;
     ReconstructionEvalOptions eval;
     eval.strands_dir = dir;

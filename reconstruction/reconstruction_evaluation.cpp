@@ -19,6 +19,7 @@
 #include "core/strand_io.h"
 #include "core/truth_maps.h"
 #include "reconstruction/point_cloud.h"
+#include "reconstruction/strand_preview.h"
 
 namespace hairrig {
 namespace {
@@ -182,13 +183,14 @@ StrandSet TransformedStrands(const StrandSet& strands, const Rigid3d& to_from_st
   return out;
 }
 
-// The reconstruction's strands against the true ones, if it has any.
+// The reconstruction's strands against the true ones, if it has any, and
+// their turntable preview beside the truth's written to *preview_path.
 Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
     const std::string& dir, const std::string& capture_dir, const CaptureTruth& truth,
     const Rigid3d& truth_from_estimate, const StrandSet& true_strands,
     const std::vector<OrientedSample>& truth_samples,
     const std::vector<uint32_t>& truth_sample_strand, const std::vector<uint8_t>& visible,
-    const ReconstructionEvalOptions& options) {
+    const ReconstructionEvalOptions& options, std::string* preview_path) {
   const std::string path = (fs::path(dir) / "strands" / "strands.ply").string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::optional<StrandEvaluation>();
@@ -202,10 +204,14 @@ Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
   StrandEvalOptions strand_options;
   strand_options.sample_step_mm = options.truth_step_mm;
   strand_options.threads = options.threads;
-  auto evaluation =
-      EvaluateStrands(TransformedStrands(strands, truth_from_estimate), true_strands, truth_samples,
-                      truth_sample_strand, visible, head.get(), strand_options);
+  const StrandSet in_truth_frame = TransformedStrands(strands, truth_from_estimate);
+  auto evaluation = EvaluateStrands(in_truth_frame, true_strands, truth_samples,
+                                    truth_sample_strand, visible, head.get(), strand_options);
   if (!evaluation.ok()) return evaluation.status().WithContext(path);
+  const cv::Mat preview =
+      RenderStrandPreview({&in_truth_frame, &true_strands}, {"reconstruction", "ground truth"}, {});
+  *preview_path = (fs::path(dir) / "strands" / "preview_truth.jpg").string();
+  HR_RETURN_IF_ERROR(WriteImageAtomic(*preview_path, preview));
   return std::optional<StrandEvaluation>(std::move(evaluation).value());
 }
 
@@ -284,10 +290,11 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   out.visible_truth_samples = scores.subset_size;
   out.all = std::move(scores.all);
   out.visible = std::move(scores.subset);
-  HR_ASSIGN_OR_RETURN(out.strands,
-                      EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir,
-                                          capture_dir, truth, truth_from_estimate, true_strands,
-                                          all_truth, truth_sample_strand, visible, options));
+  HR_ASSIGN_OR_RETURN(
+      out.strands,
+      EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir, capture_dir,
+                          truth, truth_from_estimate, true_strands, all_truth, truth_sample_strand,
+                          visible, options, &out.strands_preview));
   return out;
 }
 
@@ -318,7 +325,10 @@ nlohmann::json ReconstructionEvaluation::ToJson() const {
                         {"visible_surface", ScoresToJson(visible)},
                         {"all_strands", ScoresToJson(all)}}},
                       {"views", views_json}};
-  if (strands) j["strands"] = strands->ToJson();
+  if (strands) {
+    j["strands"] = strands->ToJson();
+    j["strands"]["preview"] = strands_preview;
+  }
   return j;
 }
 
@@ -343,7 +353,7 @@ std::string ReconstructionEvaluation::BriefReport() const {
       << visible[k].recall << " (F1 " << visible[k].f1 << "), all-strands recall " << all[k].recall
       << "\n";
   }
-  if (strands) s << strands->BriefReport();
+  if (strands) s << strands->BriefReport() << "wrote: " << strands_preview << "\n";
   return s.str();
 }
 

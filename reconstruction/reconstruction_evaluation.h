@@ -10,7 +10,9 @@
 //   strands      when <reconstruction>/strands/strands.ply exists: the strand
 //                protocol (strand_evaluation.h) with the same true samples and
 //                visible surface as the points, and the true head where the
-//                ground truth records one (not in captures made before it did)
+//                ground truth records one (not in captures made before it did);
+//                writes strands/preview_truth.jpg, the strands above the truth
+//                from four sides
 // The reconstruction's object frame (points and strands) is mapped into the
 // true turntable frame through the box, which both frames are fixed to:
 //   truth_from_estimate = true turntable_from_box * (summary.json's object_from_box)^-1.
@@ -64,6 +66,9 @@ struct ReconstructionEvaluation {
   // The strands' scores (true samples every truth_step_mm, as for the points);
   // nullopt when the reconstruction has no strands/strands.ply.
   std::optional<StrandEvaluation> strands;
+  // With strands: the turntable preview of the reconstruction (in the true
+  // frame) above the truth's, <strands dir>/strands/preview_truth.jpg.
+  std::string strands_preview;
 
   // The strands under "strands" when there are any.
   nlohmann::json ToJson() const;
@@ -72,6 +77,7 @@ struct ReconstructionEvaluation {
 
 // NotFound when the capture has no ground truth or no reconstruction;
 // CorruptData naming the file for a damaged one (a strands file included);
+// the write's error when the preview cannot be written;
 // the true head's error (e.g. its mesh unreadable) when it cannot be built.
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options);

@@ -116,6 +116,11 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
     ASSERT_TRUE(scored->strands.has_value());
     std::printf("%s:\n%s", StrandMethodName(method), scored->strands->BriefReport().c_str());
     by_method[StrandMethodName(method)] = *scored->strands;
+    // The model above the truth, from four sides: two rows of four views.
+    EXPECT_EQ(scored->strands_preview, dir + "/reconstruction/strands/preview_truth.jpg");
+    const cv::Mat preview = cv::imread(scored->strands_preview);
+    ASSERT_FALSE(preview.empty()) << scored->strands_preview;
+    EXPECT_EQ(preview.cols, 2 * preview.rows);
   }
   // Measured here (directed, (3 mm, 30 deg)): bao-qi precision 0.91, all-strands
   // recall 0.47, roots on the scalp 99.3 %; luo 0.73, 0.51 and 99.6 %; the
