@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 
 namespace hairrig {
@@ -30,13 +31,23 @@ void WeightedMoments(const Eigen::MatrixXd& x, const Eigen::VectorXd& w, double 
   c->covariance.diagonal().array() += floor;
 }
 
+void NormaliseWeights(GaussianMixture* m) {
+  double total = 0;
+  for (const MixtureComponent& c : m->components) total += c.weight;
+  for (MixtureComponent& c : m->components) c.weight /= total;
+}
+
 // Components from k-means++ clusters: their members' moments and shares.
 GaussianMixture Initialise(const cv::Mat1f& samples, const Eigen::MatrixXd& x,
                            const MixtureFitOptions& o) {
+  // k-means draws from this thread's cv::theRNG(): seeded for the fit, then
+  // given back as it was.
+  const cv::RNG callers = cv::theRNG();
   cv::theRNG() = cv::RNG(o.seed);
   cv::Mat labels, centres;
   cv::kmeans(samples, o.components, labels, cv::TermCriteria(cv::TermCriteria::COUNT, 10, 0.5),
              o.kmeans_attempts, cv::KMEANS_PP_CENTERS, centres);
+  cv::theRNG() = callers;
   const Eigen::Index n = x.rows();
   const Eigen::VectorXd ones = Eigen::VectorXd::Ones(n);
   GaussianMixture mixture;
@@ -51,10 +62,12 @@ GaussianMixture Initialise(const cv::Mat1f& samples, const Eigen::MatrixXd& x,
     c.weight = std::max(count, 1.0) / static_cast<double>(n);
     mixture.components.push_back(c);
   }
+  NormaliseWeights(&mixture);
   return mixture;
 }
 
-// E-step: each sample's responsibilities (n x K) and the mean log-likelihood.
+// E-step: each sample's responsibilities (n x K) and the mean log-likelihood
+// (NaN when a covariance is not positive definite).
 double Responsibilities(const Eigen::MatrixXd& x, const GaussianMixture& m, Eigen::MatrixXd* resp) {
   const Eigen::Index n = x.rows(), dims = x.cols();
   const Eigen::Index k_count = static_cast<Eigen::Index>(m.components.size());
@@ -62,6 +75,7 @@ double Responsibilities(const Eigen::MatrixXd& x, const GaussianMixture& m, Eige
   for (Eigen::Index k = 0; k < k_count; ++k) {
     const MixtureComponent& c = m.components[static_cast<size_t>(k)];
     const Eigen::LLT<Eigen::MatrixXd> llt(c.covariance);
+    if (llt.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
     const Eigen::MatrixXd l = llt.matrixL();
     const double log_det = 2.0 * l.diagonal().array().log().sum();
     const double log_norm = std::log(std::max(c.weight, 1e-300)) -
@@ -95,6 +109,7 @@ void Maximise(const Eigen::MatrixXd& x, const Eigen::MatrixXd& resp, double floo
     WeightedMoments(x, resp.col(k), support, floor, &c);
     c.weight = support / n;
   }
+  NormaliseWeights(m);
 }
 
 }  // namespace
@@ -116,18 +131,22 @@ Result<GaussianMixture> FitGaussianMixture(const cv::Mat1f& samples,
   GaussianMixture mixture = Initialise(samples, x, options);
   Eigen::MatrixXd resp;
   double previous = 0;
-  for (int it = 0; it < options.max_iterations; ++it) {
+  // Each pass scores the current parameters (E-step), then stops once the
+  // likelihood has settled or the M-steps are used up, else refits (M-step):
+  // the reported likelihood is always the returned parameters'.
+  for (int it = 0;; ++it) {
     const double likelihood = Responsibilities(x, mixture, &resp);
-    if (!std::isfinite(likelihood))
-      return FailedPrecondition("the mixture's likelihood became non-finite");
+    if (!std::isfinite(likelihood)) {
+      return FailedPrecondition(
+          "the mixture's likelihood became non-finite (a covariance is not positive definite)");
+    }
     mixture.mean_log_likelihood = likelihood;
     mixture.iterations = it;
-    if (it > 0 &&
-        std::abs(likelihood - previous) < options.relative_tolerance * std::abs(likelihood))
-      break;
+    const bool settled = it > 0 && std::abs(likelihood - previous) <
+                                       options.relative_tolerance * std::abs(likelihood);
+    if (settled || it == options.max_iterations) break;
     previous = likelihood;
     Maximise(x, resp, options.variance_floor, &mixture);
-    mixture.iterations = it + 1;
   }
   return mixture;
 }

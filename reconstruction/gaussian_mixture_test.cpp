@@ -6,7 +6,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <random>
+#include <thread>
 
 namespace hairrig {
 namespace {
@@ -65,8 +67,14 @@ TEST(GaussianMixture, RecoversThreeClustersWeightsMeansAndCovariances) {
   EXPECT_NEAR(std::sqrt(eig.eigenvalues()[2]), 8.0, 0.4);
   const Eigen::Vector3d axis = eig.eigenvectors().col(2);
   EXPECT_GT(std::abs(axis.dot(Eigen::Vector3d(std::cos(0.6), std::sin(0.6), 0))), 0.99);
-  EXPECT_GT(fit->iterations, 0);
-  EXPECT_TRUE(std::isfinite(fit->mean_log_likelihood));
+  EXPECT_LT(fit->iterations, options.max_iterations) << "it settles before the cap";
+  double weights_sum = 0;
+  for (const MixtureComponent& component : fit->components) weights_sum += component.weight;
+  EXPECT_NEAR(weights_sum, 1.0, 1e-12);
+  // Well separated, each sample's log-likelihood is its own cluster's log
+  // weight plus log-density: -1.5 log(2 pi) - 1.5 - log(sx sy sz) on average,
+  // -9.51, -10.18 and -9.63 for the three, -9.76 weighted.
+  EXPECT_NEAR(fit->mean_log_likelihood, -9.76, 0.1);
 }
 
 TEST(GaussianMixture, AConstantFeatureStaysInvertibleAndTheFitRepeats) {
@@ -78,14 +86,45 @@ TEST(GaussianMixture, AConstantFeatureStaysInvertibleAndTheFitRepeats) {
   MixtureFitOptions options;
   options.components = 2;
   const Result<GaussianMixture> first = FitGaussianMixture(samples, options);
-  const Result<GaussianMixture> second = FitGaussianMixture(samples, options);
   ASSERT_TRUE(first.ok()) << first.status().ToString();
+  // Another thread, whose OpenCV generator has drawn before: the same fit.
+  cv::theRNG().next();
+  Result<GaussianMixture> second = InvalidArgument("not run");
+  std::thread other([&] {
+    cv::theRNG() = cv::RNG(12345);
+    second = FitGaussianMixture(samples, options);
+  });
+  other.join();
   ASSERT_TRUE(second.ok());
   for (size_t k = 0; k < 2; ++k) {
     EXPECT_TRUE(first->components[k].covariance.allFinite());
-    EXPECT_GT(first->components[k].covariance(3, 3), 0.0);
+    EXPECT_NEAR(first->components[k].covariance(3, 3), options.variance_floor, 1e-12);
     EXPECT_EQ(first->components[k].mean, second->components[k].mean) << "same seed, same fit";
   }
+  // The caller's generator is given back as it was.
+  const cv::RNG before = cv::theRNG();
+  ASSERT_TRUE(FitGaussianMixture(samples, options).ok());
+  EXPECT_EQ(cv::theRNG().state, before.state);
+}
+
+// Four distinct colours in 400 samples and six components: clusters are
+// left empty or collapse onto one colour; the fit still ends with finite
+// parameters whose weights sum to 1.
+TEST(GaussianMixture, FewerDistinctSamplesThanComponentsStillFit) {
+  cv::Mat1f samples(400, 3);
+  for (int i = 0; i < samples.rows; ++i)
+    for (int j = 0; j < 3; ++j) samples(i, j) = static_cast<float>(40 * (i % 4) + 10 * j);
+  MixtureFitOptions options;
+  options.components = 6;
+  const Result<GaussianMixture> fit = FitGaussianMixture(samples, options);
+  ASSERT_TRUE(fit.ok()) << fit.status().ToString();
+  double weights_sum = 0;
+  for (const MixtureComponent& c : fit->components) {
+    EXPECT_TRUE(c.mean.allFinite() && c.covariance.allFinite());
+    weights_sum += c.weight;
+  }
+  EXPECT_NEAR(weights_sum, 1.0, 1e-12);
+  EXPECT_TRUE(std::isfinite(fit->mean_log_likelihood));
 }
 
 TEST(GaussianMixture, RefusesTooFewSamplesNaNsAndBadOptions) {

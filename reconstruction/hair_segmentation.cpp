@@ -152,7 +152,7 @@ class MaterialModel {
       return FailedPrecondition("too few foreground pixels for a colour model");
     MixtureFitOptions fit;
     fit.components = components;
-    // Seeded, so that a view segments the same on any thread, in any order.
+    fit.seed = 0x5eed5eedULL;  // so that a view segments the same on any thread, in any order
     HR_ASSIGN_OR_RETURN(const GaussianMixture mixture, FitGaussianMixture(samples, fit));
     for (const MixtureComponent& component : mixture.components) {
       Gaussian g;

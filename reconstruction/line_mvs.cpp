@@ -316,10 +316,12 @@ class ReferenceSolver {
   struct ProjectedLine {
     std::array<Eigen::Vector2d, 31> uv;
     std::array<bool, 31> ok{};
+    int along = 0;
     double direction_deg = 0;
   };
 
   void ProjectLine(const Neighbour& nb, const Samples& s, ProjectedLine* line) const {
+    line->along = s.along;
     for (int k = 0; k < s.along; ++k) {
       const size_t i = static_cast<size_t>(k);
       line->ok[i] = ProjectInto(nb, s.on_line[i], &line->uv[i]);
@@ -344,7 +346,7 @@ class ReferenceSolver {
   }
 
   float OrientationCost(const Neighbour& nb, const ProjectedLine& line) const {
-    const int along = options_.samples;
+    const int along = line.along;
     if (!std::isfinite(line.direction_deg)) return 1.0f;
     float sum = 0;
     const double truncation = options_.orientation_truncation_deg;
@@ -381,7 +383,7 @@ class ReferenceSolver {
       const bool projected = on_line
                                  ? line.ok[static_cast<size_t>(i / 3)]
                                  : ProjectInto(nb, s.strip_points[static_cast<size_t>(i)], &in_n);
-      if (on_line) in_n = line.uv[static_cast<size_t>(i / 3)];
+      if (on_line && projected) in_n = line.uv[static_cast<size_t>(i / 3)];
       if (!projected || !Sample(nb.view->grey, in_n.x(), in_n.y(), &b)) {
         return kNoCost;
       }

@@ -14,6 +14,7 @@
 #include "core/head_model.h"
 #include "core/image_file.h"
 #include "core/json_file.h"
+#include "core/log.h"
 #include "core/parallel.h"
 #include "core/statistics.h"
 #include "core/strand_io.h"
@@ -210,8 +211,14 @@ Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
   if (!evaluation.ok()) return evaluation.status().WithContext(path);
   const cv::Mat preview =
       RenderStrandPreview({&in_truth_frame, &true_strands}, {"reconstruction", "ground truth"}, {});
-  *preview_path = (fs::path(dir) / "strands" / "preview_truth.jpg").string();
-  HR_RETURN_IF_ERROR(WriteImageAtomic(*preview_path, preview));
+  // A capture that cannot be written to (an archive) is still scored.
+  const std::string preview_file = (fs::path(dir) / "strands" / "preview_truth.jpg").string();
+  const Status written = WriteImageAtomic(preview_file, preview);
+  if (written.ok()) {
+    *preview_path = preview_file;
+  } else {
+    LogWarning("eval reconstruction: no preview beside the truth: " + written.ToString());
+  }
   return std::optional<StrandEvaluation>(std::move(evaluation).value());
 }
 
@@ -353,7 +360,8 @@ std::string ReconstructionEvaluation::BriefReport() const {
       << visible[k].recall << " (F1 " << visible[k].f1 << "), all-strands recall " << all[k].recall
       << "\n";
   }
-  if (strands) s << strands->BriefReport() << "wrote: " << strands_preview << "\n";
+  if (strands) s << strands->BriefReport();
+  if (!strands_preview.empty()) s << "wrote: " << strands_preview << "\n";
   return s.str();
 }
 

@@ -67,7 +67,8 @@ struct ReconstructionEvaluation {
   // nullopt when the reconstruction has no strands/strands.ply.
   std::optional<StrandEvaluation> strands;
   // With strands: the turntable preview of the reconstruction (in the true
-  // frame) above the truth's, <strands dir>/strands/preview_truth.jpg.
+  // frame) above the truth's, <strands dir>/strands/preview_truth.jpg; empty
+  // when it could not be written (a warning is logged, the scores stand).
   std::string strands_preview;
 
   // The strands under "strands" when there are any.
@@ -77,7 +78,6 @@ struct ReconstructionEvaluation {
 
 // NotFound when the capture has no ground truth or no reconstruction;
 // CorruptData naming the file for a damaged one (a strands file included);
-// the write's error when the preview cannot be written;
 // the true head's error (e.g. its mesh unreadable) when it cannot be built.
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options);

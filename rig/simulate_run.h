@@ -66,8 +66,9 @@ struct SimulateRunSummary {
   double dynamics_wall_s = 0;  // stepping the dynamics only
   double max_tip_move_mm = 0;  // largest distance of a guide's tip from its rest position
   // The written strands' length over their rest length, over every frame:
-  // the largest per-frame 99th percentile, and the largest (1 = none
-  // stretched; the guides are inextensible, interpolated strands may not be).
+  // the largest per-frame 99th percentile, and the largest. 1 up to rounding
+  // for the guides (inextensible) and for strands interpolated with
+  // keep_lengths; above 1 where the plain blend stretches them.
   double strand_stretch_p99 = 0, strand_stretch_max = 0;
 
   nlohmann::json ToJson() const;

@@ -19,6 +19,15 @@ std::vector<double> ArcLengths(const Point* points, size_t count) {
   return s;
 }
 
+// The arc length on a guide matched with point i of a strand: the same arc
+// length where the strand is no longer than the guide, the same share of the
+// length where it is longer (so its tail bends with the whole guide).
+double MatchedArcLength(const std::vector<double>& strand_lengths,
+                        const std::vector<double>& guide_lengths, size_t i) {
+  const double strand = strand_lengths.back(), guide = guide_lengths.back();
+  return strand > guide ? strand_lengths[i] * (guide / strand) : strand_lengths[i];
+}
+
 // Where arc length s falls on a curve (clamped to its ends): between points
 // index - 1 and index, `blend` of the way.
 void Locate(const std::vector<double>& lengths, double s, int* index, double* blend) {
@@ -61,17 +70,23 @@ Eigen::VectorXd ConstrainedWeights(const std::vector<Eigen::Vector3d>& candidate
   return kkt.colPivHouseholderQr().solve(rhs).head(k);
 }
 
-// Walks each strand of `moved` from its root: every segment keeps its
-// direction and takes its length in `rest`.
-void RestoreSegmentLengths(const StrandSet& rest, StrandSet* moved) {
+// Rebuilds each strand of `blended` from its root: every segment keeps its
+// direction in `blended` and takes its length in `rest` (a segment the blend
+// shrank to nothing keeps its rest direction).
+void RestoreSegmentLengths(const StrandSet& rest, StrandSet* blended) {
   const std::vector<size_t> offsets = rest.Offsets();
   for (size_t s = 0; s + 1 < offsets.size(); ++s) {
+    Eigen::Vector3f previous = blended->points_mm[offsets[s]];  // as blended
+    bool rebuilt = false;  // whether a point before i moved off its blended place
     for (size_t i = offsets[s] + 1; i < offsets[s + 1]; ++i) {
-      const float rest_length = (rest.points_mm[i] - rest.points_mm[i - 1]).norm();
-      const Eigen::Vector3f step = moved->points_mm[i] - moved->points_mm[i - 1];
-      const float length = step.norm();
-      if (length > 0 && length != rest_length)
-        moved->points_mm[i] = moved->points_mm[i - 1] + step * (rest_length / length);
+      const Eigen::Vector3f rest_step = rest.points_mm[i] - rest.points_mm[i - 1];
+      const Eigen::Vector3f step = blended->points_mm[i] - previous;
+      previous = blended->points_mm[i];
+      const float length = step.norm(), rest_length = rest_step.norm();
+      if (!rebuilt && length == rest_length) continue;  // the rest shape stays exact
+      rebuilt = true;
+      blended->points_mm[i] =
+          blended->points_mm[i - 1] + (length > 0 ? step * (rest_length / length) : rest_step);
     }
   }
 }
@@ -126,7 +141,8 @@ Result<GuideInterpolation> GuideInterpolation::Build(
       for (int j = 0; j < k; ++j) {
         const size_t g = static_cast<size_t>(order[static_cast<size_t>(j)]);
         particle.guides[j] = static_cast<int>(g);
-        Locate(guide_lengths[g], lengths[i - offsets[s]], &particle.segment[j], &particle.blend[j]);
+        Locate(guide_lengths[g], MatchedArcLength(lengths, guide_lengths[g], i - offsets[s]),
+               &particle.segment[j], &particle.blend[j]);
         candidates.push_back(Blend(guides_rest[g], particle.segment[j], particle.blend[j]));
       }
       const Eigen::Vector3d p = full_rest.points_mm[i].cast<double>();

@@ -4,12 +4,13 @@
 // least-squares fit at rest. Millimetres, world frame.
 //
 // For particle p at arc length s (mm from the root) on its strand, the
-// candidates are the particles g_k at the same arc length on the K guides
-// whose roots are nearest the strand's root (a guide's tip where it is
-// shorter). The paper does not say which guide particles are used; matched
-// by the share of the strand's length instead, a strand much shorter than its
-// guides (a reconstruction's short strands at a parting) would move with the
-// guides' tips and stretch many times over. Its weights minimise
+// candidates are the particles g_k on the K guides whose roots are nearest
+// the strand's root, at the same arc length s on a guide at least as long as
+// the strand and at the same share of the length on a shorter one. The paper
+// does not say which guide particles are used; matched by the share of the
+// length everywhere, a strand much shorter than its guides (a
+// reconstruction's short strands at a parting) would move with the guides'
+// tips and stretch many times over. Its weights minimise
 //   |sum_k w_k g_k - p|^2 + beta sum_k d_k^2 w_k^2   subject to  sum_k w_k = 1
 // (d_k: distance from p to g_k at rest; the second term keeps the weights with
 // the near guides where the fit alone is ambiguous), solved in
@@ -17,7 +18,7 @@
 // displacements: p(t) = p_rest + sum_k w_k (g_k(t) - g_k(rest)), so the rest
 // shape is reproduced exactly (ours: ref. [40] interpolates positions).
 // Blending guides that move apart lengthens a strand; with keep_lengths each
-// strand is then walked from its root, every segment keeping its new
+// strand is then rebuilt from its root, every segment keeping its blended
 // direction and its rest length (ours; off, the plain blend).
 #pragma once
 

@@ -225,22 +225,37 @@ TEST(GuideInterpolation, RestIsExactAndMotionFollowsGuides) {
     const Eigen::Vector3f step = bent_kept->points_mm[i] - bent_kept->points_mm[i - 1];
     const Eigen::Vector3d guide_step = moved[2][i - offsets[4]] - moved[2][i - offsets[4] - 1];
     EXPECT_NEAR(step.norm(), (full.points_mm[i] - full.points_mm[i - 1]).norm(), 1e-4);
-    EXPECT_GT(step.cast<double>().normalized().dot(guide_step.normalized()), 0.999);  // 2.6 deg
+    EXPECT_GT(step.cast<double>().normalized().dot(guide_step.normalized()), 0.9999);
   }
   moved.pop_back();
   EXPECT_FALSE(interp->Apply(moved).ok());
 }
 
-// A strand 12 mm long beside guides 120 mm long: when the guides swing
-// their tips 100 mm and barely move their first 12 mm, the short strand stays
-// near its rest place and keeps its length.
-TEST(GuideInterpolation, AShortStrandMovesWithItsGuidesRootsNotTheirTips) {
+// Straight guides 120 mm long hanging from z = 0, beside one another.
+std::vector<std::vector<Eigen::Vector3d>> HangingGuides() {
   std::vector<std::vector<Eigen::Vector3d>> guides;
   for (int g = 0; g < 3; ++g) {
     std::vector<Eigen::Vector3d> curve;
     for (int i = 0; i <= 24; ++i) curve.push_back(Eigen::Vector3d(10.0 * g, 0, -5.0 * i));
     guides.push_back(curve);
   }
+  return guides;
+}
+
+StrandSet StraightStrand(int points, float spacing_mm) {
+  StrandSet full;
+  std::vector<Eigen::Vector3f> line;
+  for (int i = 0; i < points; ++i)
+    line.push_back(Eigen::Vector3f(4, 1, -spacing_mm * static_cast<float>(i)));
+  full.AddStrand(line);
+  return full;
+}
+
+// A strand 12 mm long beside guides 120 mm long: when the guides swing
+// their tips 100 mm and barely move their first 12 mm, the short strand stays
+// near its rest place and keeps its length.
+TEST(GuideInterpolation, AShortStrandMovesWithItsGuidesRootsNotTheirTips) {
+  const auto guides = HangingGuides();
   StrandSet full;
   std::vector<Eigen::Vector3f> stub;
   for (int i = 0; i <= 6; ++i) stub.push_back(Eigen::Vector3f(4, 1, -2.0f * static_cast<float>(i)));
@@ -264,6 +279,56 @@ TEST(GuideInterpolation, AShortStrandMovesWithItsGuidesRootsNotTheirTips) {
     if (i > 0) length += (moved->points_mm[i] - moved->points_mm[i - 1]).norm();
   }
   EXPECT_NEAR(length, 12.0, 0.5);
+}
+
+// Guides pushed up towards their roots to 40 % of their length: the plain
+// blend squashes a strand beside them, the default keeps its segments' rest
+// lengths along the squashed direction (straight down, no folding back).
+TEST(GuideInterpolation, AStrandSquashedByTheBlendKeepsItsLengthsWithoutFolding) {
+  const auto guides = HangingGuides();
+  const StrandSet full = StraightStrand(25, 5.0f);
+  auto squashed = guides;
+  for (auto& curve : squashed)
+    for (auto& p : curve) p.z() *= 0.4;
+  GuideInterpolationOptions plain_blend;
+  plain_blend.keep_lengths = false;
+  auto plain = GuideInterpolation::Build(full, guides, plain_blend);
+  auto kept = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
+  ASSERT_TRUE(plain.ok() && kept.ok());
+  auto plain_out = plain->Apply(squashed);
+  auto kept_out = kept->Apply(squashed);
+  ASSERT_TRUE(plain_out.ok() && kept_out.ok());
+  EXPECT_NEAR(plain_out->StrandLengths()[0], 48.0, 1.0);
+  for (size_t i = 1; i < full.points_mm.size(); ++i) {
+    const Eigen::Vector3f step = kept_out->points_mm[i] - kept_out->points_mm[i - 1];
+    EXPECT_NEAR(step.norm(), 5.0f, 1e-3f) << i;
+    EXPECT_GT(step.normalized().dot(Eigen::Vector3f(0, 0, -1)), 0.999f) << i;
+  }
+}
+
+// A strand twice as long as its guides follows them along its whole length:
+// when the guides swing, its tail bends with them instead of translating.
+TEST(GuideInterpolation, AStrandLongerThanItsGuidesBendsWithThemAllAlong) {
+  const auto guides = HangingGuides();
+  const StrandSet full = StraightStrand(49, 5.0f);  // 240 mm
+  auto interp = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
+  ASSERT_TRUE(interp.ok()) << interp.status().ToString();
+  auto swung = guides;
+  for (auto& curve : swung) {
+    for (size_t i = 0; i < curve.size(); ++i) {
+      const double s = 5.0 * static_cast<double>(i);
+      curve[i].y() += 100.0 * (s / 120.0) * (s / 120.0);
+    }
+  }
+  auto moved = interp->Apply(swung);
+  ASSERT_TRUE(moved.ok());
+  const auto& p = moved->points_mm;
+  const Eigen::Vector3f tail_start = (p[26] - p[25]).normalized(),
+                        tail_end = (p[48] - p[47]).normalized();
+  // The guides' last half turns by 17 deg (a rigid tail would not turn at all).
+  EXPECT_LT(tail_start.dot(tail_end), std::cos(0.17f)) << "the tail turns by more than 10 deg";
+  EXPECT_GT(p[48].y() - 1.0f, 50.0f) << "the tip swings with the guides' tips";
+  EXPECT_NEAR(moved->StrandLengths()[0], 240.0, 0.01);
 }
 
 }  // namespace
