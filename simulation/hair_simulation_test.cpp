@@ -242,6 +242,18 @@ std::vector<std::vector<Eigen::Vector3d>> HangingGuides() {
   return guides;
 }
 
+// Each guide swung about its root along +y: the displacement grows with the
+// square of the arc length, 100 mm at the tip, 1 mm at 12 mm.
+std::vector<std::vector<Eigen::Vector3d>> Swung(std::vector<std::vector<Eigen::Vector3d>> guides) {
+  for (auto& curve : guides) {
+    for (size_t i = 0; i < curve.size(); ++i) {
+      const double s = 5.0 * static_cast<double>(i);
+      curve[i].y() += 100.0 * (s / 120.0) * (s / 120.0);
+    }
+  }
+  return guides;
+}
+
 StrandSet StraightStrand(int points, float spacing_mm) {
   StrandSet full;
   std::vector<Eigen::Vector3f> line;
@@ -256,21 +268,11 @@ StrandSet StraightStrand(int points, float spacing_mm) {
 // near its rest place and keeps its length.
 TEST(GuideInterpolation, AShortStrandMovesWithItsGuidesRootsNotTheirTips) {
   const auto guides = HangingGuides();
-  StrandSet full;
-  std::vector<Eigen::Vector3f> stub;
-  for (int i = 0; i <= 6; ++i) stub.push_back(Eigen::Vector3f(4, 1, -2.0f * static_cast<float>(i)));
-  full.AddStrand(stub);
+  const StrandSet full = StraightStrand(7, 2.0f);
+  const std::vector<Eigen::Vector3f>& stub = full.points_mm;
   auto interp = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
   ASSERT_TRUE(interp.ok()) << interp.status().ToString();
-  // Swing each guide about its root: displacement grows with the square of
-  // the arc length, 100 mm at the tip, 1 mm at 12 mm.
-  auto swung = guides;
-  for (auto& curve : swung) {
-    for (size_t i = 0; i < curve.size(); ++i) {
-      const double s = 5.0 * static_cast<double>(i);
-      curve[i].y() += 100.0 * (s / 120.0) * (s / 120.0);
-    }
-  }
+  const auto swung = Swung(guides);
   auto moved = interp->Apply(swung);
   ASSERT_TRUE(moved.ok());
   double length = 0;
@@ -313,13 +315,7 @@ TEST(GuideInterpolation, AStrandLongerThanItsGuidesBendsWithThemAllAlong) {
   const StrandSet full = StraightStrand(49, 5.0f);  // 240 mm
   auto interp = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
   ASSERT_TRUE(interp.ok()) << interp.status().ToString();
-  auto swung = guides;
-  for (auto& curve : swung) {
-    for (size_t i = 0; i < curve.size(); ++i) {
-      const double s = 5.0 * static_cast<double>(i);
-      curve[i].y() += 100.0 * (s / 120.0) * (s / 120.0);
-    }
-  }
+  const auto swung = Swung(guides);
   auto moved = interp->Apply(swung);
   ASSERT_TRUE(moved.ok());
   const auto& p = moved->points_mm;
