@@ -269,15 +269,15 @@ StrandSet StraightStrand(int points, float spacing_mm) {
 TEST(GuideInterpolation, AShortStrandMovesWithItsGuidesRootsNotTheirTips) {
   const auto guides = HangingGuides();
   const StrandSet full = StraightStrand(7, 2.0f);
-  const std::vector<Eigen::Vector3f>& stub = full.points_mm;
+  const std::vector<Eigen::Vector3f>& short_strand = full.points_mm;
   auto interp = GuideInterpolation::Build(full, guides, GuideInterpolationOptions{});
   ASSERT_TRUE(interp.ok()) << interp.status().ToString();
   const auto swung = Swung(guides);
   auto moved = interp->Apply(swung);
   ASSERT_TRUE(moved.ok());
   double length = 0;
-  for (size_t i = 0; i < stub.size(); ++i) {
-    EXPECT_LT((moved->points_mm[i] - stub[i]).norm(), 1.5) << "vertex " << i;
+  for (size_t i = 0; i < short_strand.size(); ++i) {
+    EXPECT_LT((moved->points_mm[i] - short_strand[i]).norm(), 1.5) << "vertex " << i;
     if (i > 0) length += (moved->points_mm[i] - moved->points_mm[i - 1]).norm();
   }
   EXPECT_NEAR(length, 12.0, 0.5);
