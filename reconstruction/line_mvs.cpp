@@ -167,6 +167,8 @@ class ReferenceSolver {
 
   // The hypotheses already scored during one cell's visit: a cost is a pure
   // function of (cell, depth, tilt), so a repeat would only recompute it.
+  // A visit scores at most 12: the current best, 2 propagations from each of
+  // 4 neighbours (Sweep) and 3 random refinements.
   struct Tried {
     std::array<std::pair<float, float>, 12> seen;
     int count = 0;

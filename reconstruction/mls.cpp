@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/parallel.h"
+#include "reconstruction/symmetric_outer_sum.h"
 
 namespace hairrig {
 
@@ -21,8 +22,7 @@ bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* project
   const double inv_sigma2 = 1.0 / (sigma_mm_ * sigma_mm_);
   double weight = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  // The second moments' lower triangle (all the eigensolver reads), summed per entry.
-  double xx = 0, yx = 0, zx = 0, yy = 0, zy = 0, zz = 0;
+  SymmetricOuterSum outer;  // the second moments
   int count = 0;
   const Eigen::Vector3d origin = q.cast<double>();
   grid_.ForEachWithin(q, 2 * sigma_mm_, [&](uint32_t i, double d2) {
@@ -31,15 +31,12 @@ bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* project
     weight += w;
     const Eigen::Vector3d wd = w * d;
     sum += wd;
-    xx += wd.x() * d.x(), yx += wd.y() * d.x(), zx += wd.z() * d.x();
-    yy += wd.y() * d.y(), zy += wd.z() * d.y(), zz += wd.z() * d.z();
+    outer.Add(wd, d);
     ++count;
   });
   if (count < min_neighbours || weight <= 0) return false;
-  Eigen::Matrix3d outer;
-  outer << xx, yx, zx, yx, yy, zy, zx, zy, zz;
   const Eigen::Vector3d mean = sum / weight;
-  const Eigen::Matrix3d covariance = outer / weight - mean * mean.transpose();
+  const Eigen::Matrix3d covariance = outer.Matrix() / weight - mean * mean.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
   const Eigen::Vector3d n = eigen.eigenvectors().col(0);  // the smallest eigenvalue's
   // q is at 0 in these coordinates: move it along n onto the plane through mean.

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/parallel.h"
+#include "reconstruction/symmetric_outer_sum.h"
 
 namespace hairrig {
 namespace {
@@ -29,23 +30,19 @@ bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& 
                                int* neighbours) const {
   const bool filter = reference.squaredNorm() > 0;
   const double inv_two_sigma2 = 1.0 / (2 * sigma_mm_ * sigma_mm_);
-  // The tensor's lower triangle (all the eigensolver reads), summed per entry.
-  double xx = 0, yx = 0, zx = 0, yy = 0, zy = 0, zz = 0;
+  SymmetricOuterSum tensor;
   int count = 0;
   grid_.ForEachWithin(p, 2 * sigma_mm_, [&](uint32_t i, double d2) {
     const Eigen::Vector3f& o = points_[i].direction;
     if (filter && std::abs(o.dot(reference)) <= min_abs_cos) return;
     const double w = std::exp(-d2 * inv_two_sigma2) * std::max(points_[i].confidence, 1e-3f);
-    const double ox = o.x(), oy = o.y(), oz = o.z();
-    const double wx = w * ox, wy = w * oy, wz = w * oz;
-    xx += wx * ox, yx += wy * ox, zx += wz * ox, yy += wy * oy, zy += wz * oy, zz += wz * oz;
+    const Eigen::Vector3d od = o.cast<double>();
+    tensor.Add(w * od, od);
     ++count;
   });
   if (neighbours != nullptr) *neighbours = count;
   if (count < min_neighbours || count == 0) return false;
-  Eigen::Matrix3d tensor;
-  tensor << xx, yx, zx, yx, yy, zy, zx, zy, zz;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(tensor);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(tensor.Matrix());
   Eigen::Vector3f o = eigen.eigenvectors().col(2).cast<float>();  // the largest eigenvalue's
   if (filter && o.dot(reference) < 0) o = -o;
   *orientation = o.normalized();
