@@ -1,8 +1,8 @@
 #include "console/console_server.h"
 
 #include <arpa/inet.h>
-#include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -10,6 +10,7 @@
 
 #include "console/control_lease.h"
 #include "console/event_hub.h"
+#include "console/http_server.h"
 #include "console/web_assets.h"
 #include "core/file_util.h"
 #include "core/json_file.h"
@@ -20,8 +21,8 @@ namespace hairrig {
 
 namespace {
 
-using httplib::Request;
-using httplib::Response;
+using Request = HttpRequest;
+using Response = HttpResponse;
 
 constexpr const char* kLeaseHeader = "X-Hairrig-Lease";
 
@@ -66,8 +67,8 @@ std::string JsonText(const nlohmann::json& j) {
 
 void SendJson(Response& res, int status, const nlohmann::json& body) {
   res.status = status;
-  res.set_header("Cache-Control", "no-store");
-  res.set_content(JsonText(body), "application/json");
+  res.SetHeader("Cache-Control", "no-store");
+  res.SetContent(JsonText(body), "application/json");
 }
 
 void SendError(Response& res, const Status& s) {
@@ -97,6 +98,13 @@ std::string HostOfHeader(const std::string& host_header) {
     return end == std::string::npos ? host_header : host_header.substr(1, end - 1);
   }
   return host_header.substr(0, host_header.find(':'));
+}
+
+// The server's options with room for the event streams and the page's own requests.
+HttpServerOptions HttpOptions(const ConsoleOptions& options) {
+  HttpServerOptions http = options.http;
+  http.max_streams = std::max(http.max_streams, options.max_event_streams);
+  return http;
 }
 
 std::string SseMessage(const ConsoleEvent& e) {
@@ -138,20 +146,24 @@ Status ConsoleOptions::Validate() const {
                            "HAIRRIG_CONSOLE_TOKEN environment variable)");
   if (!token.empty() && token.size() < 16) return InvalidArgument("token: at least 16 characters");
   if (max_event_streams < 1) return InvalidArgument("max_event_streams must be at least 1");
-  return Status::Ok();
+  return http.Check();
 }
 
 class ConsoleServer::Impl {
  public:
   explicit Impl(ConsoleOptions options)
-      : options_(std::move(options)), rig_(options_.rig, events_), lease_(options_.lease_ttl) {}
+      : options_(std::move(options)),
+        rig_(options_.rig, events_),
+        lease_(options_.lease_ttl),
+        http_(HttpOptions(options_)) {}
 
   // Parses options.listen into *host and *port (the port bound when 0 was asked).
   Status Start(std::string* host, int* port);
   void Stop();
 
  private:
-  httplib::Server::HandlerResponse Screen(const Request& req, Response& res) const;
+  // True when it has answered (refused) the request itself.
+  bool Screen(const Request& req, Response& res) const;
   bool HoldsControl(const Request& req, Response& res);
   std::string WhoAsks(const Request& req, const nlohmann::json& body) const;
   nlohmann::json StateWithControl();
@@ -171,39 +183,36 @@ class ConsoleServer::Impl {
   EventHub events_;
   ConsoleRig rig_;
   ControlLease lease_;
-  httplib::Server http_;
-  std::thread thread_;
+  HttpServer http_;
   std::atomic<int> streams_{0};
   bool loopback_ = true;
   bool started_ = false;
 };
 
-httplib::Server::HandlerResponse ConsoleServer::Impl::Screen(const Request& req,
-                                                             Response& res) const {
-  using Handled = httplib::Server::HandlerResponse;
-  if (loopback_ && !IsLoopbackHost(HostOfHeader(req.get_header_value("Host")))) {
+bool ConsoleServer::Impl::Screen(const Request& req, Response& res) const {
+  if (loopback_ && !IsLoopbackHost(HostOfHeader(req.Header("Host")))) {
     SendJson(res, 403, {{"error", "this console answers only to a loopback Host"}});
-    return Handled::Handled;
+    return true;
   }
   if (!options_.token.empty() && req.path.starts_with("/api/")) {
-    std::string given = req.get_param_value("token");
-    const std::string auth = req.get_header_value("Authorization");
+    std::string given = req.Param("token");
+    const std::string auth = req.Header("Authorization");
     if (auth.starts_with("Bearer ")) given = auth.substr(7);
     if (!SecretsEqual(given, options_.token)) {
       SendJson(res, 401, {{"error", "a valid token is required (Authorization: Bearer ...)"}});
-      return Handled::Handled;
+      return true;
     }
   }
   if ((req.method == "POST" || req.method == "DELETE") &&
-      !req.get_header_value("Content-Type").starts_with("application/json")) {
+      !req.Header("Content-Type").starts_with("application/json")) {
     SendJson(res, 415, {{"error", "send the request with Content-Type: application/json"}});
-    return Handled::Handled;
+    return true;
   }
-  return Handled::Unhandled;
+  return false;
 }
 
 bool ConsoleServer::Impl::HoldsControl(const Request& req, Response& res) {
-  if (lease_.Check(req.get_header_value(kLeaseHeader))) return true;
+  if (lease_.Check(req.Header(kLeaseHeader))) return true;
   const std::optional<std::string> holder = lease_.Holder();
   SendJson(res, 403,
            {{"error", holder ? "read-only: " + *holder + " holds control"
@@ -234,7 +243,7 @@ nlohmann::json ConsoleServer::Impl::StateWithControl() {
 void ConsoleServer::Impl::ControlledPost(
     const std::string& pattern,
     std::function<void(const Request&, Response&, const nlohmann::json&)> act) {
-  http_.Post(pattern, [this, act](const Request& req, Response& res) {
+  http_.Route("POST", pattern, [this, act](const Request& req, Response& res) {
     Result<nlohmann::json> body = BodyObject(req);
     if (!body.ok()) return SendError(res, body.status());
     if (!HoldsControl(req, res)) return;
@@ -246,36 +255,37 @@ void ConsoleServer::Impl::StaticRoutes() {
   auto serve = [](const std::string& path, Response& res) {
     const EmbeddedFile* f = FindAsset(path);
     if (!f) return SendJson(res, 404, {{"error", "no such page"}});
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(reinterpret_cast<const char*>(f->data), f->size, AssetContentType(path));
+    res.SetHeader("Cache-Control", "no-cache");
+    res.SetContent(reinterpret_cast<const char*>(f->data), f->size, AssetContentType(path));
   };
-  http_.Get("/", [serve](const Request&, Response& res) { serve("index.html", res); });
-  http_.Get(R"(/([a-z]+\.(html|js|css)))",
-            [serve](const Request& req, Response& res) { serve(req.matches[1].str(), res); });
+  http_.Route("GET", "/", [serve](const Request&, Response& res) { serve("index.html", res); });
+  http_.Route("GET", R"(/([a-z]+\.(html|js|css)))",
+              [serve](const Request& req, Response& res) { serve(req.matches[1], res); });
 }
 
 void ConsoleServer::Impl::RigRoutes() {
-  http_.Get("/api/state",
-            [this](const Request&, Response& res) { SendJson(res, 200, StateWithControl()); });
-  http_.Get("/api/devices",
-            [this](const Request&, Response& res) { SendJson(res, 200, rig_.Devices()); });
+  http_.Route("GET", "/api/state",
+              [this](const Request&, Response& res) { SendJson(res, 200, StateWithControl()); });
+  http_.Route("GET", "/api/devices",
+              [this](const Request&, Response& res) { SendJson(res, 200, rig_.Devices()); });
   ControlledPost(R"(/api/devices/([^/]+)/reconnect)",
                  [this](const Request& req, Response& res, const nlohmann::json&) {
-                   SendResult(res, rig_.Reconnect(req.matches[1].str()));
+                   SendResult(res, rig_.Reconnect(req.matches[1]));
                  });
-  http_.Get("/api/cameras",
-            [this](const Request&, Response& res) { SendJson(res, 200, rig_.Cameras()); });
-  http_.Get(R"(/api/cameras/([^/]+)/preview\.jpg)", [this](const Request& req, Response& res) {
-    const std::string name = req.matches[1].str();
-    if (!rig_.HasCamera(name))
-      return SendJson(res, 404, {{"error", "no camera named '" + name.substr(0, 64) + "'"}});
-    const std::optional<LivePreview> preview = rig_.Preview(name);
-    if (!preview) return SendJson(res, 404, {{"error", "no frame from " + name + " yet"}});
-    res.set_header("Cache-Control", "no-store");
-    res.set_header("X-Hairrig-Seq", std::to_string(preview->seq));
-    res.set_content(reinterpret_cast<const char*>(preview->jpeg.data()), preview->jpeg.size(),
-                    "image/jpeg");
-  });
+  http_.Route("GET", "/api/cameras",
+              [this](const Request&, Response& res) { SendJson(res, 200, rig_.Cameras()); });
+  http_.Route(
+      "GET", R"(/api/cameras/([^/]+)/preview\.jpg)", [this](const Request& req, Response& res) {
+        const std::string name = req.matches[1];
+        if (!rig_.HasCamera(name))
+          return SendJson(res, 404, {{"error", "no camera named '" + name.substr(0, 64) + "'"}});
+        const std::optional<LivePreview> preview = rig_.Preview(name);
+        if (!preview) return SendJson(res, 404, {{"error", "no frame from " + name + " yet"}});
+        res.SetHeader("Cache-Control", "no-store");
+        res.SetHeader("X-Hairrig-Seq", std::to_string(preview->seq));
+        res.SetContent(reinterpret_cast<const char*>(preview->jpeg.data()), preview->jpeg.size(),
+                       "image/jpeg");
+      });
   ControlledPost(R"(/api/cameras/([^/]+)/settings)",
                  [this](const Request& req, Response& res, const nlohmann::json& body) {
                    const JsonObject b(body, "request body");
@@ -283,7 +293,7 @@ void ConsoleServer::Impl::RigRoutes() {
                    if (b.Has("exposure_s")) exposure = b.Number("exposure_s");
                    if (b.Has("gain_db")) gain = b.Number("gain_db");
                    if (!b.ok()) return SendError(res, b.status());
-                   SendResult(res, rig_.SetCameraExposure(req.matches[1].str(), exposure, gain));
+                   SendResult(res, rig_.SetCameraExposure(req.matches[1], exposure, gain));
                  });
   ControlledPost("/api/lights", [this](const Request&, Response& res, const nlohmann::json& body) {
     const JsonObject b(body, "request body");
@@ -307,8 +317,8 @@ void ConsoleServer::Impl::RigRoutes() {
                    SendResult(res, rig_.Home());
                    events_.Publish("state", rig_.State());
                  });
-  http_.Get("/api/plan",
-            [this](const Request&, Response& res) { SendJson(res, 200, rig_.Plan()); });
+  http_.Route("GET", "/api/plan",
+              [this](const Request&, Response& res) { SendJson(res, 200, rig_.Plan()); });
 }
 
 void ConsoleServer::Impl::CaptureRoutes() {
@@ -329,13 +339,13 @@ void ConsoleServer::Impl::CaptureRoutes() {
     const bool calibrate = b.BoolOr("calibrate", true);
     const bool reconstruct = b.BoolOr("reconstruct", false);
     if (!b.ok()) return SendError(res, b.status());
-    const Result<std::string> id = rig_.ResumeCapture(req.matches[1].str(), calibrate, reconstruct);
+    const Result<std::string> id = rig_.ResumeCapture(req.matches[1], calibrate, reconstruct);
     if (!id.ok()) return SendError(res, id.status());
     SendJson(res, 202, {{"id", *id}});
   });
   ControlledPost(R"(/api/captures/([^/]+)/replay)",
                  [this](const Request& req, Response& res, const nlohmann::json&) {
-                   const Result<std::string> id = rig_.ReplayCapture(req.matches[1].str());
+                   const Result<std::string> id = rig_.ReplayCapture(req.matches[1]);
                    if (!id.ok()) return SendError(res, id.status());
                    SendJson(res, 202, {{"id", *id}});
                  });
@@ -345,13 +355,17 @@ void ConsoleServer::Impl::CaptureRoutes() {
                    if (!s.ok()) return SendError(res, s);
                    SendJson(res, 200, {{"stopping", true}});
                  });
-  // The e-stop needs no lease: any client may press it.
-  http_.Post("/api/estop", [this](const Request& req, Response& res) {
-    const Result<nlohmann::json> body = BodyObject(req);
-    const nlohmann::json estop =
-        rig_.EStop(WhoAsks(req, body.ok() ? *body : nlohmann::json::object()));
-    SendJson(res, 200, {{"estop", estop}});
-  });
+  // The e-stop needs no lease: any client may press it. It has a thread of
+  // its own in the server, so no other request can delay it.
+  http_.Route(
+      "POST", "/api/estop",
+      [this](const Request& req, Response& res) {
+        const Result<nlohmann::json> body = BodyObject(req);
+        const nlohmann::json estop =
+            rig_.EStop(WhoAsks(req, body.ok() ? *body : nlohmann::json::object()));
+        SendJson(res, 200, {{"estop", estop}});
+      },
+      HttpLane::kUrgent);
   ControlledPost("/api/estop/release",
                  [this](const Request&, Response& res, const nlohmann::json&) {
                    const Status s = rig_.ReleaseEStop();
@@ -361,41 +375,42 @@ void ConsoleServer::Impl::CaptureRoutes() {
 }
 
 void ConsoleServer::Impl::ArchiveRoutes() {
-  http_.Get("/api/captures", [this](const Request&, Response& res) {
+  http_.Route("GET", "/api/captures", [this](const Request&, Response& res) {
     nlohmann::json list = nlohmann::json::array();
     for (const ArchiveEntry& e : rig_.archive().List()) list.push_back(e.ToJson());
     SendJson(res, 200, {{"captures", list}});
   });
-  http_.Get(R"(/api/captures/([^/]+))", [this](const Request& req, Response& res) {
-    SendResult(res, rig_.archive().Details(req.matches[1].str()));
+  http_.Route("GET", R"(/api/captures/([^/]+))", [this](const Request& req, Response& res) {
+    SendResult(res, rig_.archive().Details(req.matches[1]));
   });
-  http_.Get(R"(/api/captures/([^/]+)/views/(\d{1,6})/thumb\.jpg)", [this](const Request& req,
-                                                                          Response& res) {
-    const std::string id = req.matches[1].str();
-    const int view = std::stoi(req.matches[2].str());
-    std::optional<std::vector<uint8_t>> jpeg = rig_.CachedThumbnail(id, view);
-    if (!jpeg) {
-      Result<std::vector<uint8_t>> read = rig_.archive().Thumbnail(id, view, 240);
-      if (!read.ok()) return SendError(res, read.status());
-      jpeg = std::move(*read);
-    }
-    res.set_header("Cache-Control", "max-age=3600");
-    res.set_content(reinterpret_cast<const char*>(jpeg->data()), jpeg->size(), "image/jpeg");
-  });
-  http_.Get(R"(/api/captures/([^/]+)/files/(.+))", [this](const Request& req, Response& res) {
-    const Result<std::string> path =
-        rig_.archive().FilePath(req.matches[1].str(), req.matches[2].str());
-    if (!path.ok()) return SendError(res, path.status());
-    const Result<std::vector<uint8_t>> bytes = ReadFileBytes(*path, uint64_t{256} << 20);
-    if (!bytes.ok()) return SendError(res, bytes.status());
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(reinterpret_cast<const char*>(bytes->data()), bytes->size(),
-                    ContentTypeOf(*path));
-  });
+  http_.Route("GET", R"(/api/captures/([^/]+)/views/(\d{1,6})/thumb\.jpg)",
+              [this](const Request& req, Response& res) {
+                const std::string id = req.matches[1];
+                const int view = std::stoi(req.matches[2]);
+                std::optional<std::vector<uint8_t>> jpeg = rig_.CachedThumbnail(id, view);
+                if (!jpeg) {
+                  Result<std::vector<uint8_t>> read = rig_.archive().Thumbnail(id, view, 240);
+                  if (!read.ok()) return SendError(res, read.status());
+                  jpeg = std::move(*read);
+                }
+                res.SetHeader("Cache-Control", "max-age=3600");
+                res.SetContent(reinterpret_cast<const char*>(jpeg->data()), jpeg->size(),
+                               "image/jpeg");
+              });
+  http_.Route(
+      "GET", R"(/api/captures/([^/]+)/files/(.+))", [this](const Request& req, Response& res) {
+        const Result<std::string> path = rig_.archive().FilePath(req.matches[1], req.matches[2]);
+        if (!path.ok()) return SendError(res, path.status());
+        const Result<std::vector<uint8_t>> bytes = ReadFileBytes(*path, uint64_t{256} << 20);
+        if (!bytes.ok()) return SendError(res, bytes.status());
+        res.SetHeader("Cache-Control", "no-cache");
+        res.SetContent(reinterpret_cast<const char*>(bytes->data()), bytes->size(),
+                       ContentTypeOf(*path));
+      });
 }
 
 void ConsoleServer::Impl::ControlRoutes() {
-  http_.Post("/api/control", [this](const Request& req, Response& res) {
+  http_.Route("POST", "/api/control", [this](const Request& req, Response& res) {
     const Result<nlohmann::json> body = BodyObject(req);
     if (!body.ok()) return SendError(res, body.status());
     const JsonObject b(*body, "request body");
@@ -415,12 +430,12 @@ void ConsoleServer::Impl::ControlRoutes() {
               {"expires_s", std::chrono::duration<double>(lease_.ttl()).count()}});
     events_.Publish("state", StateWithControl());
   });
-  http_.Post("/api/control/heartbeat", [this](const Request& req, Response& res) {
+  http_.Route("POST", "/api/control/heartbeat", [this](const Request& req, Response& res) {
     if (!HoldsControl(req, res)) return;
     SendJson(res, 200, {{"holder", lease_.Holder().value_or("")}});
   });
-  http_.Delete("/api/control", [this](const Request& req, Response& res) {
-    if (!lease_.Release(req.get_header_value(kLeaseHeader)))
+  http_.Route("DELETE", "/api/control", [this](const Request& req, Response& res) {
+    if (!lease_.Release(req.Header(kLeaseHeader)))
       return SendJson(res, 403, {{"error", "this lease does not hold control"}});
     SendJson(res, 200, {{"released", true}});
     events_.Publish("state", StateWithControl());
@@ -428,51 +443,36 @@ void ConsoleServer::Impl::ControlRoutes() {
 }
 
 void ConsoleServer::Impl::EventRoutes() {
-  http_.Get("/api/events", [this](const Request&, Response& res) {
+  http_.Route("GET", "/api/events", [this](const Request&, Response& res) {
     if (streams_.fetch_add(1) >= options_.max_event_streams) {
       --streams_;
       return SendJson(res, 503, {{"error", "too many event streams open; close one"}});
     }
-    res.set_header("Cache-Control", "no-store");
+    res.SetHeader("Cache-Control", "no-store");
     auto state = std::make_shared<std::pair<uint64_t, bool>>(events_.last_seq(), true);
-    res.set_chunked_content_provider(
-        "text/event-stream",
-        [this, state](size_t, httplib::DataSink& sink) {
-          auto& [after, first] = *state;
-          if (first) {
-            first = false;
-            const std::string hello =
-                SseMessage({after, "state", StateWithControl()}) + "retry: 2000\n\n";
-            return sink.write(hello.data(), hello.size());
-          }
-          const std::vector<ConsoleEvent> events =
-              events_.WaitAfter(after, std::chrono::seconds(10));
-          if (events_.closed()) {
-            sink.done();
-            return true;
-          }
-          std::string text = events.empty() ? ": keep-alive\n\n" : "";
-          for (ConsoleEvent e : events) {
-            if (e.name == "state") e.data["control"] = ControlJson();
-            text += SseMessage(e);
-            after = e.seq;
-          }
-          return sink.write(text.data(), text.size());
-        },
-        [this](bool) { --streams_; });
+    res.content_type = "text/event-stream";
+    res.stream = [this, state](HttpStreamSink& sink) {
+      auto& [after, first] = *state;
+      if (first) {
+        first = false;
+        return sink.Write(SseMessage({after, "state", StateWithControl()}) + "retry: 2000\n\n");
+      }
+      const std::vector<ConsoleEvent> events = events_.WaitAfter(after, std::chrono::seconds(10));
+      if (events_.closed()) return false;
+      std::string text = events.empty() ? ": keep-alive\n\n" : "";
+      for (ConsoleEvent e : events) {
+        if (e.name == "state") e.data["control"] = ControlJson();
+        text += SseMessage(e);
+        after = e.seq;
+      }
+      return sink.Write(text);
+    };
+    res.on_stream_end = [this] { --streams_; };
   });
 }
 
 void ConsoleServer::Impl::Routes() {
-  http_.set_pre_routing_handler(
-      [this](const Request& req, Response& res) { return Screen(req, res); });
-  http_.set_exception_handler([](const Request&, Response& res, std::exception_ptr) {
-    SendJson(res, 500, {{"error", "internal error; see the console's log"}});
-  });
-  http_.set_payload_max_length(1 << 20);
-  http_.new_task_queue = [this] {
-    return new httplib::ThreadPool(static_cast<size_t>(options_.max_event_streams) + 16);
-  };
+  http_.SetScreen([this](const Request& req, Response& res) { return Screen(req, res); });
   StaticRoutes();
   RigRoutes();
   CaptureRoutes();
@@ -488,23 +488,14 @@ Status ConsoleServer::Impl::Start(std::string* host, int* port) {
   HR_RETURN_IF_ERROR(rig_.Start());
   started_ = true;
   Routes();
-  if (*port == 0) {
-    *port = http_.bind_to_any_port(*host);
-    if (*port <= 0) return Unavailable("listen: cannot bind " + *host + " to a free port");
-  } else if (!http_.bind_to_port(*host, *port)) {
-    return Unavailable("listen: cannot bind " + *host + ":" + std::to_string(*port) +
-                       " (in use? another console running?)");
-  }
-  thread_ = std::thread([this] { http_.listen_after_bind(); });
+  HR_RETURN_IF_ERROR(http_.Listen(*host, *port));
+  *port = http_.port();
   return Status::Ok();
 }
 
 void ConsoleServer::Impl::Stop() {
   events_.Close();
-  if (thread_.joinable()) {
-    http_.stop();
-    thread_.join();
-  }
+  http_.Stop();
   if (started_) rig_.Shutdown();
   started_ = false;
 }

@@ -22,6 +22,7 @@
 #include <string>
 
 #include "console/console_rig.h"
+#include "console/http_server.h"
 #include "core/status.h"
 
 namespace hairrig {
@@ -34,9 +35,12 @@ struct ConsoleOptions {
   std::chrono::milliseconds lease_ttl{
       15000};                  // control lapses this long after its holder's last word
   int max_event_streams = 16;  // concurrent GET /api/events
+  // Connection bounds and timeouts of the HTTP server (console/http_server.h).
+  HttpServerOptions http;
 
   // InvalidArgument naming the field: a malformed listen address, a
-  // non-loopback host without a token (or a short one), the rig's options.
+  // non-loopback host without a token (or a short one), the rig's or the
+  // HTTP server's options.
   Status Validate() const;
 };
 

@@ -15,8 +15,11 @@
 #include <sstream>
 #include <thread>
 
+#include "console/estop_client.h"
 #include "rig/capture_test_util.h"
 #include "rig/sim_rig.h"
+#include "tests/support/open_file_limit.h"
+#include "tests/support/raw_http.h"
 
 namespace hairrig {
 namespace {
@@ -115,6 +118,55 @@ std::string RigAtTimeScale(const std::string& dir, double time_scale) {
   std::ofstream(path) << yaml;
   return path;
 }
+
+// An attacker's load on the console: `idle` connections that send nothing and
+// `slow` ones that send a request's headers one byte a second, each opened
+// again as soon as the server closes it, until destroyed.
+class ConnectionPressure {
+ public:
+  ConnectionPressure(int port, int idle, int slow) : port_(port) {
+    idle_.resize(static_cast<size_t>(idle), -1);
+    slow_.resize(static_cast<size_t>(slow), -1);
+    thread_ = std::thread([this] { Run(); });
+  }
+  ~ConnectionPressure() {
+    stop_ = true;
+    thread_.join();
+    for (int fd : idle_) ::close(fd);
+    for (int fd : slow_) ::close(fd);
+  }
+  int reopened() const { return reopened_.load(); }
+
+ private:
+  void Refill(std::vector<int>& fds) {
+    for (int& fd : fds) {
+      if (fd >= 0 && !hairrig_test::PeerClosed(fd)) continue;
+      if (fd >= 0) {
+        ::close(fd);
+        ++reopened_;
+      }
+      fd = hairrig_test::ConnectLoopback(port_);
+    }
+  }
+  void Run() {
+    const std::string request = "POST /api/estop HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+    for (size_t tick = 0; !stop_.load(); ++tick) {
+      Refill(idle_);
+      Refill(slow_);
+      for (int fd : slow_) {
+        if (fd >= 0)
+          (void)hairrig_test::SendText(fd, std::string(1, request[tick % request.size()]));
+      }
+      for (int i = 0; i < 10 && !stop_.load(); ++i) std::this_thread::sleep_for(100ms);
+    }
+  }
+
+  int port_;
+  std::vector<int> idle_, slow_;
+  std::atomic<bool> stop_{false};
+  std::atomic<int> reopened_{0};
+  std::thread thread_;
+};
 
 class ConsoleServerTest : public ::testing::Test {
  protected:
@@ -533,6 +585,80 @@ TEST_F(ConsoleServerTest, TheEStopStopsACaptureFromAnyClientAndResumeCompletesIt
   const nlohmann::json entry = GetJson("/api/captures/" + id);
   EXPECT_EQ(entry["status"], "complete");
   EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
+}
+
+TEST_F(ConsoleServerTest, TheCommandLineEStopReachesTheConsoleOrSaysToUseTheHardwareOne) {
+  StartServer();
+  EStopRequest request;
+  request.url = server_->url();
+  request.who = "a terminal";
+  const Result<EStopSummary> pressed = PressConsoleEStop(request);
+  ASSERT_TRUE(pressed.ok()) << pressed.status().ToString();
+  EXPECT_TRUE(pressed->active);
+  EXPECT_NE(pressed->reason.find("a terminal"), std::string::npos) << pressed->reason;
+  EXPECT_TRUE(GetJson("/api/state")["estop"]["active"].get<bool>());
+
+  const int port = server_->port();
+  server_->Stop();
+  request.url = "http://127.0.0.1:" + std::to_string(port) + "/";
+  const Result<EStopSummary> unanswered = PressConsoleEStop(request);
+  ASSERT_FALSE(unanswered.ok());
+  EXPECT_EQ(unanswered.status().code(), StatusCode::kUnavailable);
+  EXPECT_NE(unanswered.status().message().find("hardware e-stop"), std::string::npos);
+  request.url = "ftp://x";
+  EXPECT_EQ(PressConsoleEStop(request).status().code(), StatusCode::kInvalidArgument);
+}
+
+// The e-stop, the state and a capture while 2,000 idle and 200 slow-header
+// connections are held open. The bounds here are liveness bounds (a starved
+// e-stop waited over a minute); bench/console_load_bench.py measures the
+// latencies.
+TEST_F(ConsoleServerTest, TheEStopIsActedOnWhileThousandsOfConnectionsAreHeld) {
+  if (!hairrig_test::AllowOpenFiles(8000))
+    GTEST_SKIP() << "the open-file limit is below 8000; raise it (ulimit -n) to run this test";
+  StartServer();
+  const std::string lease = Claim("operator");
+  const Heartbeat heartbeat(server_->port(), lease);
+  const int port = server_->port();
+  const ConnectionPressure pressure(port, 2000, 200);
+  std::this_thread::sleep_for(2s);
+  double slowest_estop_s = 0, slowest_state_s = 0;
+  for (int i = 0; i < 20; ++i) {
+    const auto estop =
+        hairrig_test::RawRequest(port, "POST", "/api/estop", "{\"client\":\"load test\"}", "", 30s);
+    ASSERT_EQ(estop.status, 200) << "try " << i << ": " << estop.head;
+    const nlohmann::json body = nlohmann::json::parse(estop.body, nullptr, false);
+    ASSERT_TRUE(body["estop"]["active"].get<bool>()) << estop.body;
+    slowest_estop_s = std::max(slowest_estop_s, estop.seconds);
+    const auto state = hairrig_test::RawRequest(port, "GET", "/api/state", "", "", 30s);
+    ASSERT_EQ(state.status, 200);
+    slowest_state_s = std::max(slowest_state_s, state.seconds);
+    const auto release = hairrig_test::RawRequest(port, "POST", "/api/estop/release", "{}",
+                                                  "X-Hairrig-Lease: " + lease + "\r\n", 30s);
+    ASSERT_EQ(release.status, 200) << release.body;
+  }
+  std::printf("under load: slowest e-stop %.2f ms, slowest state read %.2f ms\n",
+              slowest_estop_s * 1000, slowest_state_s * 1000);
+  EXPECT_LT(slowest_estop_s, 5.0);
+  EXPECT_LT(slowest_state_s, 10.0);
+
+  // A capture started under the same load completes with every frame verified.
+  const auto started = hairrig_test::RawRequest(port, "POST", "/api/captures",
+                                                "{\"subject\":\"under load\",\"calibrate\":false}",
+                                                "X-Hairrig-Lease: " + lease + "\r\n", 30s);
+  ASSERT_EQ(started.status, 202) << started.body;
+  const std::string id = nlohmann::json::parse(started.body)["id"];
+  std::string busy = "capturing";
+  for (int i = 0; i < 600 && busy != "idle"; ++i) {
+    std::this_thread::sleep_for(500ms);
+    const auto state = hairrig_test::RawRequest(port, "GET", "/api/state", "", "", 30s);
+    if (state.status == 200) busy = nlohmann::json::parse(state.body)["busy"];
+  }
+  EXPECT_EQ(busy, "idle");
+  EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
+  // The slow-header clients are dropped (5 s after their first byte).
+  for (int i = 0; i < 300 && pressure.reopened() == 0; ++i) std::this_thread::sleep_for(100ms);
+  EXPECT_GT(pressure.reopened(), 0) << "the server dropped the slow-header connections";
 }
 
 }  // namespace

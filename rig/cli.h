@@ -64,5 +64,6 @@ void AddBatchCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 // `hairrig serve`: the operator console (console/console_server.h).
 // `hairrig serve`: the operator console (console/console_server.h).
 void AddConsoleCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddEStopCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 
 }  // namespace hairrig

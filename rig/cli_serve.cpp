@@ -1,10 +1,12 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 
 #include "console/console_server.h"
+#include "console/estop_client.h"
 #include "rig/cli.h"
 
 namespace hairrig {
@@ -52,6 +54,30 @@ void AddConsoleCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
                      url.c_str());
       });
     });
+  });
+}
+
+void AddEStopCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
+  auto* cmd = app.add_subcommand(
+      "estop",
+      "Press a running console's e-stop (a software path: the rig's hardware e-stop "
+      "is the one to rely on)");
+  auto request = std::make_shared<EStopRequest>();
+  cmd->add_option("--console", request->url, "the console's URL, as `hairrig serve` prints it")
+      ->capture_default_str();
+  cmd->add_option("--token", request->token,
+                  "the console's token, beyond loopback (default: $HAIRRIG_CONSOLE_TOKEN)");
+  auto timeout_ms = std::make_shared<int>(static_cast<int>(request->timeout.count()));
+  cmd->add_option("--timeout-ms", *timeout_ms, "how long to wait for the console's answer")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_flag("--json", common.json, "print the summary as one JSON object");
+  cmd->callback([request, timeout_ms, &dispatch] {
+    if (request->token.empty()) {
+      if (const char* env = std::getenv("HAIRRIG_CONSOLE_TOKEN")) request->token = env;
+    }
+    request->timeout = std::chrono::milliseconds(*timeout_ms);
+    DispatchSummary(dispatch, [request] { return PressConsoleEStop(*request); });
   });
 }
 

@@ -35,6 +35,7 @@ int Run(int argc, char** argv) {
   AddStageCommand(app, common, dispatch);
   AddBatchCommand(app, common, dispatch);
   AddConsoleCommand(app, common, dispatch);
+  AddEStopCommand(app, common, dispatch);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
