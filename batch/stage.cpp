@@ -12,6 +12,7 @@
 
 #include "batch/simulate_stage.h"
 #include "batch/stage_record.h"
+#include "core/file_util.h"
 #include "core/head_config.h"
 #include "core/log.h"
 #include "core/sha256.h"
@@ -19,6 +20,7 @@
 #include "core/version.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_dataset.h"
+#include "rig/manifest_frames.h"
 #include "rig/reconstruct_capture.h"
 #include "rig/reconstruction_input.h"
 #include "rig/rig_config.h"
@@ -56,7 +58,10 @@ Status AddOptionFile(const std::string& key, const std::string& path, InputFiles
   return Status::Ok();
 }
 
-// The capture's own inputs: its rig config snapshot, manifest and frames.
+// The capture's own inputs: its rig config snapshot, manifest and frames. A
+// frame leading outside the capture folder is not read (the stage leaves it
+// out); a frames/ folder leading outside refuses the capture
+// (rig/manifest_frames.h CheckFramesFolder).
 Status AddCaptureFiles(const std::string& capture_dir, InputFiles* files) {
   const char* capture_made = "not a capture folder made by `hairrig capture`?";
   HR_RETURN_IF_ERROR(Require(capture_dir, "rig.yaml", capture_made, files));
@@ -65,8 +70,9 @@ Status AddCaptureFiles(const std::string& capture_dir, InputFiles* files) {
   std::error_code ec;
   if (!fs::is_directory(frames, ec))
     return FailedPrecondition(frames.string() + " is missing: " + capture_made);
+  HR_RETURN_IF_ERROR(CheckFramesFolder(capture_dir));
   for (const fs::directory_entry& entry : fs::directory_iterator(frames, ec)) {
-    if (entry.is_regular_file(ec))
+    if (entry.is_regular_file(ec) && ResolveInside(entry.path().string(), capture_dir).ok())
       (*files)["frames/" + entry.path().filename().string()] = entry.path().string();
   }
   if (ec) return IoError(frames.string() + ": cannot list (" + ec.message() + ")");

@@ -15,6 +15,10 @@
 //   fit          reconstruction/strands/strands.ply
 //   simulate     fit/model.json, reconstruction/strands/strands.ply, the head and scene files
 //
+// frames/* are the files in frames/ that stay inside the capture folder once
+// their symlinks are resolved; a frames/ folder leading outside it refuses the
+// stage (rig/manifest_frames.h).
+//
 // Files that rig.yaml names (the calibration box, a head file) count by their
 // name in rig.yaml's text, not by their contents. When the hash equals the one
 // of the last successful run (result.json status ok) the stage does not run:

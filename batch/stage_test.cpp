@@ -1,7 +1,8 @@
 // The stage contract on the fit stage of a small capture folder (strands
 // only): the result file, skipping when the inputs are unchanged, reruns when
 // an input or an option changes, hashes that do not depend on the folder's
-// place, the fault hook, missing inputs; and the stage options file.
+// place, the fault hook, missing inputs; the capture stages' input files
+// (only those inside the capture folder); and the stage options file.
 #include "batch/stage.h"
 
 #include <gtest/gtest.h>
@@ -172,6 +173,38 @@ TEST(Stage, AMissingInputFailsNamingItAndTheStageThatWritesIt) {
 
   StageOptions nowhere = FitOptionsFor(dir + "/absent");
   EXPECT_EQ(RunStage(nowhere).status().code(), StatusCode::kNotFound);
+}
+
+// A capture stage's inputs are the files inside the capture folder: a frame
+// that is a symlink leading outside is no input (not in the input hash, so a
+// file elsewhere cannot change it), and a frames/ folder leading outside
+// refuses the stage.
+TEST(Stage, FramesLeadingOutsideTheCaptureAreNoInputs) {
+  const std::string dir = ::testing::TempDir() + "/stage_test/frames_outside";
+  const std::string outside = dir + "_elsewhere";
+  fs::remove_all(dir);
+  fs::remove_all(outside);
+  fs::create_directories(dir + "/frames");
+  fs::create_directories(outside);
+  std::ofstream(dir + "/rig.yaml") << "name: frames outside\n";
+  std::ofstream(dir + "/manifest.json") << "{}\n";
+  std::ofstream(dir + "/frames/000_CAM.png") << "the frame of view 0";
+  std::ofstream(outside + "/other.png") << "a file of another folder";
+  fs::create_symlink(outside + "/other.png", dir + "/frames/001_CAM.png");
+  const auto files = StageInputFiles(Stage::kCalibrate, dir, StageSettings{});
+  ASSERT_TRUE(files.ok()) << files.status().ToString();
+  EXPECT_EQ(files->count("frames/000_CAM.png"), 1u);
+  EXPECT_EQ(files->count("frames/001_CAM.png"), 0u);
+
+  fs::rename(dir + "/frames", outside + "/frames");
+  fs::create_directory_symlink(outside + "/frames", dir + "/frames");
+  const auto refused = StageInputFiles(Stage::kCalibrate, dir, StageSettings{});
+  EXPECT_EQ(refused.status().code(), StatusCode::kFailedPrecondition)
+      << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find(dir + "/frames"), std::string::npos)
+      << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find("outside"), std::string::npos)
+      << refused.status().ToString();
 }
 
 TEST(Stage, CaptureNameIsTheFolderName) {

@@ -159,8 +159,10 @@ Status DrawResiduals(const std::string& path, const cv::Mat& image, const Camera
   return WriteImageAtomic(path, shown, {cv::IMWRITE_JPEG_QUALITY, 85});
 }
 
+// `not_drawn`: per frame, why its residual image could not be drawn, or "".
 std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibration& result,
-                       const CalibrationVerdict& verdict) {
+                       const CalibrationVerdict& verdict,
+                       const std::vector<std::string>& not_drawn) {
   std::ostringstream out;
   out << "verdict: " << verdict.name() << "\n";
   for (const std::string& reason : verdict.reasons) out << "  - " << reason << "\n";
@@ -205,6 +207,7 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
       out << "NOT SOLVED: " << frame.failure;
     for (const RejectedTag& r : frame.rejected)
       out << "; tag " << r.id << " left out: " << r.reason;
+    if (!not_drawn[f].empty()) out << "; no residual image: " << not_drawn[f];
     out << "\n";
   }
   return out.str();
@@ -230,29 +233,36 @@ Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationIn
   if (ec)
     return IoError((root / "residuals").string() + ": cannot create the folder (" + ec.message() +
                    ")");
-  HR_RETURN_IF_ERROR(
-      WriteFileAtomic((root / "report.txt").string(), ReportText(input, result, verdict)));
-  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "verdict.json").string(),
-                                     VerdictJson(input, verdict).dump(2) + "\n"));
-  HR_RETURN_IF_ERROR(
-      WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
-  // One residual image per solved view, spread over the threads (they dominate the report's time).
+  // One residual image per solved view, spread over the threads (they dominate
+  // the report's time). The workers never throw: a frame that cannot be read
+  // (ReadImageFile's Status) or drawn is a note on its view in report.txt.
   std::vector<Status> written(result.frames.size());
+  std::vector<std::string> not_drawn(result.frames.size());
   ParallelFor(result.frames.size(), threads, [&] {
     return [&](size_t f) {
       const FrameCalibration& frame = result.frames[f];
       if (!frame.solved) return;
-      const cv::Mat image = cv::imread(input.frames[f].path, cv::IMREAD_COLOR);
-      if (image.empty()) {
-        written[f] = IoError(input.frames[f].path + ": cannot be read for the residual image");
+      const Result<cv::Mat> image = ReadImageFile(input.frames[f].path, cv::IMREAD_COLOR);
+      if (!image.ok()) {
+        not_drawn[f] = image.status().message();
         return;
       }
       const std::string name = fs::path(input.frames[f].name).stem().string() + ".jpg";
-      written[f] = DrawResiduals(
-          (root / "residuals" / name).string(), image,
-          result.cameras[static_cast<size_t>(input.frames[f].camera)].intrinsics, frame);
+      try {
+        written[f] = DrawResiduals(
+            (root / "residuals" / name).string(), *image,
+            result.cameras[static_cast<size_t>(input.frames[f].camera)].intrinsics, frame);
+      } catch (const std::exception& e) {  // OpenCV's, or memory exhausted
+        not_drawn[f] = input.frames[f].path + ": " + e.what();
+      }
     };
   });
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "report.txt").string(),
+                                     ReportText(input, result, verdict, not_drawn)));
+  HR_RETURN_IF_ERROR(WriteFileAtomic((root / "verdict.json").string(),
+                                     VerdictJson(input, verdict).dump(2) + "\n"));
+  HR_RETURN_IF_ERROR(
+      WriteImageAtomic((root / "view_rms.png").string(), RmsBarChart(input, result)));
   for (const Status& s : written) HR_RETURN_IF_ERROR(s);
   return Status::Ok();
 }

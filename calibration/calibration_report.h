@@ -38,7 +38,10 @@ CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input,
                                     const CaptureCalibration& result);
 
 // Writes the files above under `dir` (created), the residual images on
-// `threads` threads. IoError names the file.
+// `threads` threads. A solved view whose frame cannot be read
+// (core/image_file.h ReadImageFile: missing, not an image, claiming more than
+// kMaxImagePixels) or drawn gets no residual image: its line in report.txt
+// says why. IoError names a file that cannot be written.
 Status WriteCalibrationReport(const std::string& dir, const CaptureCalibrationInput& input,
                               const CaptureCalibration& result, const CalibrationVerdict& verdict,
                               int threads);

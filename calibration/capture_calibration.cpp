@@ -6,6 +6,7 @@
 
 #include "calibration/intrinsics_from_views.h"
 #include "calibration/turntable_axis.h"
+#include "core/image_file.h"
 #include "core/parallel.h"
 
 namespace hairrig {
@@ -226,12 +227,12 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
         (*failures)[f] = tag_detector.status().message();
         return;
       }
-      const cv::Mat image = cv::imread(frames[f].path, cv::IMREAD_GRAYSCALE);
-      if (image.empty()) {
-        (*failures)[f] = frames[f].path + ": cannot be read as an image (missing or corrupt)";
+      const Result<cv::Mat> image = ReadImageFile(frames[f].path, cv::IMREAD_GRAYSCALE);
+      if (!image.ok()) {
+        (*failures)[f] = image.status().message();
         return;
       }
-      auto detections = (*tag_detector)->Detect(image);
+      auto detections = (*tag_detector)->Detect(*image);
       if (!detections.ok()) {
         (*failures)[f] = frames[f].path + ": " + detections.status().message();
         return;

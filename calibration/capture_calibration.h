@@ -118,9 +118,10 @@ struct CaptureCalibration {
 };
 
 // Tags of every frame, matched to the box, over `threads` threads; a frame
-// with `observations` keeps them. A frame that cannot be read gives an empty
-// observation with the reason in `failures` (same order as frames; empty
-// string for success).
+// with `observations` keeps them. A frame that cannot be read (core/image_file.h
+// ReadImageFile: missing, not an image, or claiming more than kMaxImagePixels
+// in its header) gives an empty observation with the reason, naming the file,
+// in `failures` (same order as frames; empty string for success).
 std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames,
                                            const CalibBox& box, const TagDetectorOptions& detector,
                                            int threads, std::vector<std::string>* failures);

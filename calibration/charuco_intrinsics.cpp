@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calibration/intrinsics_from_views.h"
+#include "core/image_file.h"
 #include "core/parallel.h"
 #include "core/statistics.h"
 
@@ -113,11 +114,12 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(
   ParallelFor(image_paths.size(), options.threads, [&] {
     return [&](size_t i) {
       out.images[i].path = image_paths[i];
-      const cv::Mat image = cv::imread(image_paths[i], cv::IMREAD_GRAYSCALE);
-      if (image.empty()) {
-        out.images[i].failure = "cannot be read as an image (missing or corrupt)";
+      const Result<cv::Mat> read = ReadImageFile(image_paths[i], cv::IMREAD_GRAYSCALE);
+      if (!read.ok()) {
+        out.images[i].failure = "cannot be read (" + read.status().message() + ")";
         return;
       }
+      const cv::Mat& image = *read;
       sizes[i] = image.size();
       corners[i] = DetectChArUcoCorners(image, board);
       out.images[i].detected = corners[i];

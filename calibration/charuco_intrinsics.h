@@ -62,7 +62,8 @@ struct ChArUcoCalibration {
 // InvalidArgument for no paths; FailedPrecondition when fewer than
 // `min_images` images show the board well enough (the message says how many
 // did and why the others failed, and what to record instead) or when the
-// images disagree on their size; the rest of the failures are per image.
+// images disagree on their size; the rest of the failures are per image (one
+// that cannot be read gives core/image_file.h ReadImageFile's reason).
 Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(
     const std::vector<std::string>& image_paths, const ChArUcoBoard& board,
     const ChArUcoCalibrationOptions& options = {});

@@ -1,6 +1,6 @@
 // The captures in the console's folder, addressed by id: the capture folder's
 // name, never a path a client sends. Every file served resolves, symlinks
-// included, inside its capture (rig/safe_names.h ResolveInside), and only files
+// included, inside its capture (core/file_util.h ResolveInside), and only files
 // of a fixed set of kinds are served.
 #pragma once
 

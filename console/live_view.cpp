@@ -107,6 +107,9 @@ void LiveView::Grab(Camera* camera) {
     } else if (camera->state() == DeviceState::kFaulted) {
       LogWarning("live view stopped for " + camera->Describe() + ": " + frame.status().ToString());
       break;
+    } else if (!stream && frame.status().code() == StatusCode::kCorruptData) {
+      // A camera that lost a frame refuses the next ones until it is armed again.
+      configured_version = UINT64_MAX;
     }
     const double spent_s = SecondsSince(start_ns);
     if (!Sleep(1.0 / options_.fps - spent_s)) break;

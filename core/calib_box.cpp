@@ -74,10 +74,11 @@ Result<CalibBox> LoadCalibBox(const std::string& path) {
   root.AllowOnlyKeys({"family", "size_mm", "tag_size_mm", "faces"});
   CalibBox box;
   box.family = root.Choice("family", {"tag36h11"}, "tag36h11");
-  const auto size = root.Numbers("size_mm", 3);
+  // A calibration box and its tags are well under 10 m.
+  const auto size = root.Numbers("size_mm", 3, {.min = 0, .max = 1e4});
   if (size.size() == 3) box.size_mm = {size[0], size[1], size[2]};
   if (root.ok() && box.size_mm.minCoeff() <= 0) root.Fail("size_mm", "every edge must be positive");
-  const double default_tag_size = root.Number("tag_size_mm", 0.0, {.min = 1e-3});
+  const double default_tag_size = root.Number("tag_size_mm", 0.0, {.min = 1e-3, .max = 1e4});
   box.faces = MakeBoxFaces(box.size_mm);
   std::set<int> ids;
   for (const ConfigNode& face_node : root.Items("faces")) {
@@ -91,7 +92,7 @@ Result<CalibBox> LoadCalibBox(const std::string& path) {
       BoxTag tag;
       tag.id = tag_node.Integer("id", {.min = 0, .max = 586});  // tag36h11 has ids 0-586
       tag.face = face_index;
-      tag.size_mm = tag_node.Number("size_mm", default_tag_size, {.min = 1e-3});
+      tag.size_mm = tag_node.Number("size_mm", default_tag_size, {.min = 1e-3, .max = 1e4});
       const auto c = tag_node.Numbers("center_mm", 2);
       if (!root.ok()) break;
       if (tag.size_mm <= 0) {

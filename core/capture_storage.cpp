@@ -28,4 +28,9 @@ std::shared_ptr<CaptureStorage> DefaultCaptureStorage() {
   return storage;
 }
 
+Status WriteFileWith(const FileWriter& write, const std::string& path, const void* data,
+                     size_t size) {
+  return write ? write(path, data, size) : ::hairrig::WriteFileAtomic(path, data, size);
+}
+
 }  // namespace hairrig

@@ -1,13 +1,16 @@
 // Where a capture's files are written. The capture dataset
 // (rig/capture_dataset.h) makes every write through one CaptureStorage:
 // frames, config snapshot and capture.json (WriteFileAtomic), journal records
-// (AppendDurably), the manifest (WriteFileAtomic), and asks it for the free
-// space (FreeBytes). PosixCaptureStorage is the file system itself; the
-// simulated rig plugs in a disk that fills up (sim_hw/quota_storage.h), whose
-// failures are the errors a full disk gives, with the same messages.
+// (AppendDurably), the manifest (WriteFileAtomic), the other files of the
+// folder (the contact sheet; the simulated rig's ground truth, handed a
+// FileWriter), and asks it for the free space (FreeBytes).
+// PosixCaptureStorage is the file system itself; the simulated rig plugs in a
+// disk that fills up (sim_hw/quota_storage.h), whose failures are the errors a
+// full disk gives, with the same messages.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -47,5 +50,15 @@ class PosixCaptureStorage : public CaptureStorage {
 
 // A PosixCaptureStorage shared by everyone who needs the file system.
 std::shared_ptr<CaptureStorage> DefaultCaptureStorage();
+
+// Writes `size` bytes to `path` atomically, as WriteFileAtomic in
+// core/file_util.h does. How a writer that does not know where its files
+// land (the simulated rig's ground truth) is handed a capture folder's
+// storage and its free-space check (rig/capture.h CaptureFolder): the Status
+// is the write's, or the check's refusal.
+using FileWriter = std::function<Status(const std::string& path, const void* data, size_t size)>;
+// `write`'s write, or core/file_util.h's WriteFileAtomic when `write` is empty.
+Status WriteFileWith(const FileWriter& write, const std::string& path, const void* data,
+                     size_t size);
 
 }  // namespace hairrig

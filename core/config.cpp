@@ -431,14 +431,15 @@ std::vector<std::string> ConfigNode::Strings(std::string_view key) const {
   return values;
 }
 
-Eigen::Vector3d ConfigNode::Vec3(std::string_view key) const {
-  const auto v = Numbers(key, 3);
+Eigen::Vector3d ConfigNode::Vec3(std::string_view key, NumberRange range) const {
+  const auto v = Numbers(key, 3, range);
   if (v.size() != 3) return Eigen::Vector3d::Zero();
   return {v[0], v[1], v[2]};
 }
 
-Eigen::Vector3d ConfigNode::Vec3(std::string_view key, const Eigen::Vector3d& fallback) const {
-  return Has(key) ? Vec3(key) : fallback;
+Eigen::Vector3d ConfigNode::Vec3(std::string_view key, const Eigen::Vector3d& fallback,
+                                 NumberRange range) const {
+  return Has(key) ? Vec3(key, range) : fallback;
 }
 
 ConfigNode ConfigNode::OptionalChild(std::string_view key) const {

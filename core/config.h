@@ -48,6 +48,19 @@ struct NumberRange {
   double max = std::numeric_limits<double>::infinity();
 };
 
+// Ranges the rig, scene and box files share, far beyond any real rig (a
+// value outside is a mistake, and one such as 1e300 overflows the geometry):
+inline constexpr NumberRange kPositionRangeMm{-1e5, 1e5};  // 100 m from the origin
+inline constexpr NumberRange kDirectionRange{-1e6, 1e6};   // a direction's components, any scale
+inline constexpr NumberRange kRotationRangeDeg{-360, 360};
+inline constexpr NumberRange kUnitRange{0, 1};  // albedos and fractions
+// A pixel coordinate (a principal point), 100000 px either side of the image's corner.
+inline constexpr NumberRange kPixelRange{-1e5, 1e5};
+// A turntable's speed (deg/s) and acceleration (deg/s^2): no turntable of a
+// capture rig turns ten times a second.
+inline constexpr NumberRange kTurntableSpeedRange{0.01, 3600};
+inline constexpr NumberRange kTurntableAccelRange{0.01, 36000};
+
 class ConfigNode {
  public:
   // A regular file of at most kMaxConfigBytes (core/file_util.h
@@ -85,8 +98,10 @@ class ConfigNode {
   std::vector<double> Numbers(std::string_view key, size_t expected_size = 0,
                               NumberRange range = {}) const;
   std::vector<std::string> Strings(std::string_view key) const;
-  Eigen::Vector3d Vec3(std::string_view key) const;
-  Eigen::Vector3d Vec3(std::string_view key, const Eigen::Vector3d& fallback) const;
+  // Three finite numbers, each inside `range`.
+  Eigen::Vector3d Vec3(std::string_view key, NumberRange range = {}) const;
+  Eigen::Vector3d Vec3(std::string_view key, const Eigen::Vector3d& fallback,
+                       NumberRange range = {}) const;
 
   ConfigNode Child(std::string_view key) const;               // required map
   ConfigNode OptionalChild(std::string_view key) const;       // IsMap() false when absent

@@ -165,6 +165,23 @@ TEST(Config, ListElementsAreCheckedAgainstTheRange) {
       << m;
 }
 
+// A point's coordinates have a range, as a single number does: 1e300 mm is refused.
+TEST(Config, Vec3ElementsAreCheckedAgainstTheRange) {
+  auto root = ConfigNode::LoadString("eye_mm: [900, 1e300, 700]\n", "scene.yaml");
+  ASSERT_TRUE(root.ok());
+  EXPECT_EQ(root->Vec3("eye_mm", Eigen::Vector3d::Zero(), kPositionRangeMm),
+            Eigen::Vector3d::Zero());
+  const std::string m = root->status().message();
+  EXPECT_NE(m.find("scene.yaml:1:"), std::string::npos) << m;
+  EXPECT_NE(m.find("field 'eye_mm': element 1: expected a number in [-100000, 100000], got "
+                   "'1e300'"),
+            std::string::npos)
+      << m;
+  auto fine = ConfigNode::LoadString("eye_mm: [900, 0, 700]\n", "scene.yaml");
+  EXPECT_EQ(fine->Vec3("eye_mm", kPositionRangeMm), Eigen::Vector3d(900, 0, 700));
+  EXPECT_TRUE(fine->ok());
+}
+
 TEST(Config, UnknownKeysListTheKnownOnes) {
   auto root = ConfigNode::LoadString("plan:\n  stpos: 3\n", "rig.yaml");
   root->Child("plan").AllowOnlyKeys({"stops", "angles_deg"});

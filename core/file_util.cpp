@@ -8,8 +8,14 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 
 namespace hairrig {
+
+void ScopedFd::reset(int fd) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = fd;
+}
 
 namespace {
 
@@ -27,29 +33,9 @@ Status TooLarge(const std::string& path, uint64_t max_bytes) {
                     " bytes, the most this reader accepts");
 }
 
-// A file descriptor closed when it goes out of scope.
-class Descriptor {
- public:
-  Descriptor() = default;
-  ~Descriptor() { reset(-1); }
-  Descriptor(const Descriptor&) = delete;
-  Descriptor& operator=(const Descriptor&) = delete;
-  int get() const { return fd_; }
-  // Gives up ownership without closing.
-  void release() { fd_ = -1; }
-  void reset(int fd) {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = fd;
-  }
-
- private:
-  int fd_ = -1;
-};
-
 // Opens `path` for reading if it is a regular file of at most `max_bytes`;
 // *size is its length. O_NONBLOCK: opening a FIFO with no writer returns at once.
-Status OpenRegularFile(const std::string& path, uint64_t max_bytes, Descriptor* fd,
-                       uint64_t* size) {
+Status OpenRegularFile(const std::string& path, uint64_t max_bytes, ScopedFd* fd, uint64_t* size) {
   fd->reset(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY));
   if (fd->get() < 0) {
     const std::string why = std::strerror(errno);
@@ -99,7 +85,7 @@ Result<int> OpenRegularFileForAppend(const std::string& path) {
   if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISLNK(st.st_mode))
     return InvalidArgument(path + " is " + FileKind(st.st_mode) + ", not a regular file");
   // O_NONBLOCK: should a FIFO take the checked name meanwhile, opening it fails at once.
-  Descriptor fd;
+  ScopedFd fd;
   fd.reset(::open(path.c_str(),
                   O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK | O_NOCTTY,
                   0644));
@@ -116,9 +102,18 @@ Result<int> OpenRegularFileForAppend(const std::string& path) {
   return opened;
 }
 
+Result<int> OpenRegularFileForRead(const std::string& path, uint64_t max_bytes) {
+  ScopedFd fd;
+  uint64_t size = 0;
+  HR_RETURN_IF_ERROR(OpenRegularFile(path, max_bytes, &fd, &size));
+  const int opened = fd.get();
+  fd.release();
+  return opened;
+}
+
 Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
                       const std::function<void(const uint8_t* data, size_t size)>& chunk) {
-  Descriptor fd;
+  ScopedFd fd;
   uint64_t size = 0;
   HR_RETURN_IF_ERROR(OpenRegularFile(path, max_bytes, &fd, &size));
   std::vector<uint8_t> buffer(size_t{1} << 16);
@@ -213,6 +208,26 @@ std::string FileExtension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   return ext;
+}
+
+bool PathIsInside(const std::string& path, const std::string& folder) {
+  namespace fs = std::filesystem;
+  const fs::path p = fs::absolute(path).lexically_normal();
+  const fs::path f = fs::absolute(folder).lexically_normal();
+  const fs::path rel = p.lexically_relative(f);
+  return !rel.empty() && *rel.begin() != ".." && rel.is_relative() && rel != ".";
+}
+
+Result<std::string> ResolveInside(const std::string& path, const std::string& folder) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path resolved = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  if (ec) return IoError(path + ": cannot resolve the path (" + ec.message() + ")");
+  const fs::path root = fs::weakly_canonical(fs::absolute(folder, ec), ec);
+  if (ec) return IoError(folder + ": cannot resolve the path (" + ec.message() + ")");
+  if (!PathIsInside(resolved.string(), root.string()))
+    return CorruptData(path + " leads to " + resolved.string() + ", outside " + root.string());
+  return resolved.string();
 }
 
 }  // namespace hairrig

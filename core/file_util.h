@@ -1,4 +1,4 @@
-// Small file helpers shared by every module that writes results.
+// Small file helpers shared by every module that reads inputs or writes results.
 #pragma once
 
 #include <sys/types.h>
@@ -16,6 +16,28 @@ namespace hairrig {
 // files, meshes): 2 GiB.
 inline constexpr uint64_t kMaxFileBytes = uint64_t{2} << 30;
 
+// A file descriptor closed when it goes out of scope: how a caller holds the
+// descriptor OpenRegularFileForRead or OpenRegularFileForAppend returns.
+//
+//   HR_ASSIGN_OR_RETURN(const int opened, OpenRegularFileForRead(path));
+//   const ScopedFd fd(opened);  // closed on every return below
+class ScopedFd {
+ public:
+  ScopedFd() = default;
+  explicit ScopedFd(int fd) : fd_(fd) {}
+  ~ScopedFd() { reset(-1); }
+  ScopedFd(const ScopedFd&) = delete;
+  ScopedFd& operator=(const ScopedFd&) = delete;
+  int get() const { return fd_; }
+  // Gives up ownership without closing.
+  void release() { fd_ = -1; }
+  // Closes the descriptor held (if any) and holds `fd`.
+  void reset(int fd);
+
+ private:
+  int fd_ = -1;
+};
+
 // Reads a regular file (a symlink to one is followed) in order, passing each
 // chunk of up to 64 KiB to `chunk`. Never blocks on opening and never reads
 // anything but a regular file: InvalidArgument names the file and what it is
@@ -28,6 +50,11 @@ Status ReadFileChunks(const std::string& path, uint64_t max_bytes,
 Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path,
                                            uint64_t max_bytes = kMaxFileBytes);
 Result<std::string> ReadFileText(const std::string& path, uint64_t max_bytes);
+// Opens `path` for reading with the checks of ReadFileChunks (a regular file
+// only, never blocking on opening, at most `max_bytes`) and returns the
+// descriptor, which the caller closes; for readers that need only some of the
+// file (pread at the offsets they choose).
+Result<int> OpenRegularFileForRead(const std::string& path, uint64_t max_bytes = kMaxFileBytes);
 // Opens `path` for appending (O_APPEND, created with mode 0644 when absent,
 // never through a symlink) and returns the descriptor, which the caller closes.
 // Never blocks on opening and never opens anything but a regular file:
@@ -69,5 +96,15 @@ inline Status WriteFileAtomic(const std::string& path, const std::string& text) 
 }
 // Lower-case extension without the dot ("hair", "ply"); "" if none.
 std::string FileExtension(const std::string& path);
+// True if `path` lies inside `folder` after both are made absolute and
+// lexically normalised (no "..", no absolute escape). Symlinks are not
+// followed: ResolveInside does that.
+bool PathIsInside(const std::string& path, const std::string& folder);
+// `path` with every symlink on the way resolved, if it then lies inside
+// `folder` (resolved the same way); CorruptData naming `path` and where it
+// leads otherwise, IoError when it cannot be resolved. A symlink that points
+// out of a folder (to /dev/zero, to another capture) is caught here before
+// anything reads it.
+Result<std::string> ResolveInside(const std::string& path, const std::string& folder);
 
 }  // namespace hairrig

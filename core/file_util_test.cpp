@@ -84,6 +84,52 @@ TEST(FileUtil, AppendingOpensRegularFilesOnly) {
   EXPECT_EQ(*ReadFileText(file, 10), "ab");
 }
 
+// The reader that needs only part of a file opens it with the same checks.
+TEST(FileUtil, OpeningForReadTakesRegularFilesOnly) {
+  const std::string dir = TestDir("open_read");
+  const std::string fifo = dir + "/image.png";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Result<int> refused = OpenRegularFileForRead(fifo);
+  EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.status().message().find(fifo + " is a FIFO"), std::string::npos)
+      << refused.status().ToString();
+  if (refused.ok()) ::close(*refused);
+  const std::string file = dir + "/a.txt";
+  std::ofstream(file) << "abc";
+  EXPECT_EQ(OpenRegularFileForRead(file, 2).status().code(), StatusCode::kOutOfRange);
+  const Result<int> fd = OpenRegularFileForRead(file);
+  ASSERT_TRUE(fd.ok()) << fd.status().ToString();
+  char c = 0;
+  EXPECT_EQ(::pread(*fd, &c, 1, 2), 1);
+  EXPECT_EQ(c, 'c');
+  ::close(*fd);
+}
+
+TEST(FileUtil, PathInsideFolder) {
+  EXPECT_TRUE(PathIsInside("/cap/frames/000_A.png", "/cap"));
+  EXPECT_TRUE(PathIsInside("/cap/./frames/../rig.yaml", "/cap"));
+  EXPECT_FALSE(PathIsInside("/cap/../etc/passwd", "/cap"));
+  EXPECT_FALSE(PathIsInside("/capture2/x", "/cap"));
+  EXPECT_FALSE(PathIsInside("/cap", "/cap"));
+  EXPECT_FALSE(PathIsInside("/etc/passwd", "/cap"));
+}
+
+TEST(FileUtil, ResolveInsideFollowsSymlinks) {
+  const std::string dir = TestDir("resolve");
+  fs::create_directories(dir + "/images");
+  std::ofstream(dir + "/images/a.png") << "x";
+  std::ofstream(dir + "/secret.png") << "x";
+  fs::create_symlink("a.png", dir + "/images/inside.png");
+  fs::create_symlink("../secret.png", dir + "/images/outside.png");
+  const auto inside = ResolveInside(dir + "/images/inside.png", dir + "/images");
+  ASSERT_TRUE(inside.ok()) << inside.status().ToString();
+  EXPECT_EQ(*inside, fs::canonical(dir + "/images/a.png").string());
+  const auto outside = ResolveInside(dir + "/images/outside.png", dir + "/images");
+  EXPECT_EQ(outside.status().code(), StatusCode::kCorruptData);
+  EXPECT_NE(outside.status().message().find("secret.png, outside"), std::string::npos)
+      << outside.status().ToString();
+}
+
 TEST(FileUtil, FilesAboveTheLimitAreRefusedBeforeReading) {
   const std::string path = TestDir("limit") + "/big.bin";
   std::ofstream(path) << std::string(100, 'x');

@@ -14,8 +14,8 @@ void ReadScalp(const ConfigNode& n, ScalpSpec* s) {
                    "hairline_ear_deg", "hairline_nape_deg", "parting", "parting_offset_deg",
                    "parting_width_mm", "parting_back_deg"});
   s->defined = true;
-  s->center_turntable_mm = n.Vec3("center_mm", s->center_turntable_mm);
-  Eigen::Vector3d face = n.Vec3("face_dir", s->face_dir);
+  s->center_turntable_mm = n.Vec3("center_mm", s->center_turntable_mm, kPositionRangeMm);
+  Eigen::Vector3d face = n.Vec3("face_dir", s->face_dir, kDirectionRange);
   face.z() = 0;
   if (face.norm() < 1e-9)
     n.Fail("face_dir", "must have a horizontal part (x, y): the way the face looks");
@@ -40,10 +40,11 @@ void ReadHeadMap(const ConfigNode& h, const std::string& base_file, HeadSpec* he
     head->mesh_file = ResolveBesideFile(base_file, h.String("mesh"));
     if (h.Has("mesh_pose")) head->turntable_from_mesh = ReadPoseConfig(h.Child("mesh_pose"));
   }
-  head->center_turntable_mm = h.Vec3("center_mm", head->center_turntable_mm);
-  head->radii_mm = h.Vec3("radii_mm", head->radii_mm);
+  head->center_turntable_mm = h.Vec3("center_mm", head->center_turntable_mm, kPositionRangeMm);
+  // A head (or a stand-in for one) is well within a metre.
+  head->radii_mm = h.Vec3("radii_mm", head->radii_mm, {.min = 0, .max = 1e3});
   if (h.ok() && head->radii_mm.minCoeff() <= 0) h.Fail("radii_mm", "every radius must be positive");
-  head->albedo = h.Vec3("albedo", head->albedo);
+  head->albedo = h.Vec3("albedo", head->albedo, kUnitRange);
   head->scalp.center_turntable_mm = head->center_turntable_mm;
   if (h.Has("scalp")) ReadScalp(h.Child("scalp"), &head->scalp);
 }
@@ -116,8 +117,8 @@ std::string ResolveBesideFile(const std::string& base_file, const std::string& r
 
 Rigid3d ReadPoseConfig(const ConfigNode& n) {
   n.AllowOnlyKeys({"translation_mm", "rotation_deg"});
-  const Eigen::Vector3d t = n.Vec3("translation_mm", Eigen::Vector3d::Zero());
-  const Eigen::Vector3d r = n.Vec3("rotation_deg", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d t = n.Vec3("translation_mm", Eigen::Vector3d::Zero(), kPositionRangeMm);
+  const Eigen::Vector3d r = n.Vec3("rotation_deg", Eigen::Vector3d::Zero(), kRotationRangeDeg);
   const Eigen::Quaterniond q = Eigen::AngleAxisd(DegToRad(r.z()), Eigen::Vector3d::UnitZ()) *
                                Eigen::AngleAxisd(DegToRad(r.y()), Eigen::Vector3d::UnitY()) *
                                Eigen::AngleAxisd(DegToRad(r.x()), Eigen::Vector3d::UnitX());

@@ -25,10 +25,10 @@ std::string MapPath(const std::string& dir, int view, const char* kind) {
   return dir + name;
 }
 
-Status WritePng(const std::string& path, const cv::Mat& image) {
+Status WritePng(const std::string& path, const cv::Mat& image, const FileWriter& write) {
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", image, png)) return Internal(path + ": PNG encoding failed");
-  return WriteFileAtomic(path, png.data(), png.size());
+  return WriteFileWith(write, path, png.data(), png.size());
 }
 
 Result<cv::Mat> ReadPng(const std::string& path, int type) {
@@ -41,7 +41,8 @@ Result<cv::Mat> ReadPng(const std::string& path, int type) {
 
 }  // namespace
 
-Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps& maps) {
+Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps& maps,
+                          const FileWriter& write) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return IoError(dir + ": cannot create (" + ec.message() + ")");
@@ -69,11 +70,11 @@ Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps&
       strand.at<uint16_t>(y, x) = static_cast<uint16_t>(id + 1);
     }
   }
-  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "label"), maps.label));
-  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "alpha"), alpha));
-  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "orientation"), orientation));
-  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "depth"), depth));
-  return WritePng(MapPath(dir, view, "strand"), strand);
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "label"), maps.label, write));
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "alpha"), alpha, write));
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "orientation"), orientation, write));
+  HR_RETURN_IF_ERROR(WritePng(MapPath(dir, view, "depth"), depth, write));
+  return WritePng(MapPath(dir, view, "strand"), strand, write);
 }
 
 Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view) {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/camera_model.h"
+#include "core/capture_storage.h"
 #include "core/head_spec.h"
 #include "core/status.h"
 #include "core/transform.h"
@@ -38,10 +39,14 @@ struct ViewTruthMaps {
 //   strand NNN_depth.png        16-bit: depth of the front-most surface in mm x kTruthDepthScale; 0
 //   on the backdrop NNN_strand.png       16-bit: front-most strand index + 1; 0 where no strand
 // NNN is the view number (three digits). A wig of 65,535 strands or more
-// cannot be written (OutOfRange), nor a depth past 3,276 mm.
+// cannot be written (OutOfRange), nor a depth past 3,276 mm. Each file is
+// written with `write` (core/capture_storage.h: a capture's storage and its
+// free-space check; empty: the file system), in the order above; the first
+// error ends the call.
 constexpr int kTruthMapsVersion = 1;
 constexpr double kTruthDepthScale = 20.0;  // 1/20 mm per count
-Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps& maps);
+Status WriteViewTruthMaps(const std::string& dir, int view, const ViewTruthMaps& maps,
+                          const FileWriter& write = {});
 // Reads what WriteViewTruthMaps wrote (the same units as ViewTruthMaps; the
 // depth quantised to 0.05 mm, the angle to 0.01 deg). Errors name the file.
 Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view);

@@ -7,6 +7,8 @@
 #include <chrono>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <utility>
 
 #include "core/config.h"
 #include "drivers/camera_support.h"
@@ -41,6 +43,29 @@ int WireBytesPerPixel(ArvPixelFormat f) {
   return static_cast<int>(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(f) / 8);
 }
 
+// How many frames after frame id `from` the frame with id `to` is (1: the
+// next one). GigE Vision's 16-bit block ids (and Aravis' fake's) run 1..65535
+// and wrap to 1, skipping 0; other ids count up in 64 bits.
+uint64_t FrameIdStep(uint64_t from, uint64_t to, bool skips_zero) {
+  constexpr uint64_t kShortIds = 0xFFFF;
+  if (skips_zero && from <= kShortIds && to <= kShortIds)
+    return (to + kShortIds - from) % kShortIds;
+  return to - from;
+}
+// A step past this is a frame id from before the last one, not a gap.
+constexpr uint64_t kMaxFrameIdStep = 0x8000;
+
+// "frame id B after A means N frame(s) lost, ..." or "... is out of sequence";
+// `expected`: the step from A to B that is no gap (1, plus the buffers with
+// id 0 between them).
+std::string FrameIdGapText(uint64_t last, uint64_t id, uint64_t step, uint64_t expected) {
+  std::string text = "frame id " + std::to_string(id) + " after " + std::to_string(last);
+  if (expected > 1) text += " and " + std::to_string(expected - 1) + " buffer(s) without an id";
+  if (step < expected || step > kMaxFrameIdStep) return text + " is out of sequence";
+  return text + " means " + std::to_string(step - expected) +
+         " frame(s) lost, dropped for want of a free stream buffer or on the network";
+}
+
 class AravisCamera : public Camera {
  public:
   AravisCamera(DeviceInfo info, AravisCameraOptions options)
@@ -67,6 +92,9 @@ class AravisCamera : public Camera {
     HR_ASSIGN_OR_RETURN(ArvCamera * camera, Connect());
     camera_.reset(camera);
     gone_ = false;
+    ids_skip_zero_ =
+        arv_camera_is_gv_device(camera) || ARV_IS_FAKE_DEVICE(arv_camera_get_device(camera));
+    frame_ids_ = AravisFrameIds(ids_skip_zero_, ids_skip_zero_ || arv_camera_is_uv_device(camera));
     control_lost_handler_ = g_signal_connect(arv_camera_get_device(camera), "control-lost",
                                              G_CALLBACK(&AravisCamera::OnControlLost), this);
     GError* error = nullptr;
@@ -160,13 +188,17 @@ class AravisCamera : public Camera {
     payload = std::max(payload, computed);
     for (int i = 0; i < options_.buffers; ++i)
       arv_stream_push_buffer(stream_.get(), arv_buffer_new(payload, nullptr));
+    // The stream's thread runs from its creation: what it counted before the
+    // pool was full is no frame (Aravis' in-process fake counts an underrun
+    // each time it polls an empty pool).
+    underruns_at_arm_ = StreamUnderrunsLocked();
     arv_camera_start_acquisition(camera, &error);
     if (error) {
       stream_.reset();
       return Fault(IoError("starting acquisition: " + TakeError(error)));
     }
     sequence_ = 0;
-    underruns_seen_ = 0;
+    frame_ids_.Reset();
     triggers_.Clear();
     SetState(DeviceState::kBusy);
     return Status::Ok();
@@ -202,6 +234,7 @@ class AravisCamera : public Camera {
     ArvStream* stream = nullptr;
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      if (!frame_ids_.gap().ok()) return frame_ids_.gap();  // no frame pairs with its trigger now
       stream = stream_.get();
     }
     ArvBuffer* buffer =
@@ -212,11 +245,11 @@ class AravisCamera : public Camera {
       return Fault(Unavailable("lost its control channel (unplugged or powered off?); reopen it"));
     }
     if (buffer == nullptr) {
-      return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms");
+      return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms" +
+                     UnderrunNoteLocked());
     }
     Result<Frame> frame = ToFrameLocked(buffer);
     arv_stream_push_buffer(stream, buffer);
-    HR_RETURN_IF_ERROR(CheckNoFrameLostLocked());
     return frame;
   }
 
@@ -312,29 +345,38 @@ class AravisCamera : public Camera {
     return w;
   }
 
-  // A frame that arrived with no free buffer is dropped by the stream unseen:
-  // its trigger cannot be told from the next one's, so the pairing of frames
-  // and triggers is lost until the camera is armed again.
-  Status CheckNoFrameLostLocked() {
-    if (!stream_) return Status::Ok();  // disarmed meanwhile: the next Arm starts afresh
+  guint64 StreamUnderrunsLocked() const {
     guint64 completed = 0, failures = 0, underruns = 0;
-    arv_stream_get_statistics(stream_.get(), &completed, &failures, &underruns);
-    if (underruns == underruns_seen_) return Status::Ok();
-    const guint64 lost = underruns - underruns_seen_;
-    underruns_seen_ = underruns;
-    return CorruptData(
-        Describe() + ": " + std::to_string(lost) +
-        " frame(s) lost for want of a free stream buffer, so later frames cannot be paired with "
-        "their triggers; the camera must be armed again (raise `buffers` if this recurs)");
+    if (stream_) arv_stream_get_statistics(stream_.get(), &completed, &failures, &underruns);
+    return underruns;
   }
 
+  // "; the stream found no free buffer N time(s) since arming, ..." or "".
+  std::string UnderrunNoteLocked() const {
+    const guint64 underruns = StreamUnderrunsLocked();
+    if (underruns <= underruns_at_arm_) return "";
+    return "; the stream found no free buffer " + std::to_string(underruns - underruns_at_arm_) +
+           " time(s) since arming, and drops a frame arriving then (raise `buffers`, or take "
+           "the frames sooner)";
+  }
+
+  // Every buffer answers one trigger, with an image or without: its trigger
+  // is used up and its frame id checked before anything else.
   Result<Frame> ToFrameLocked(ArvBuffer* buffer) {
+    const int64_t received_ns = SteadyNowNs();
+    const int64_t trigger_ns =
+        triggers_.ForFrame(received_ns, options_.nominal.LatencyWallS(settings_.exposure_s));
+    const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
+    HR_RETURN_IF_ERROR(frame_ids_.Next(frame_id, Describe(), UnderrunNoteLocked()));
     const ArvBufferStatus status = arv_buffer_get_status(buffer);
     if (status != ARV_BUFFER_STATUS_SUCCESS) {
-      // The camera answered a trigger, though the frame is lost.
-      (void)triggers_.ForFrame(SteadyNowNs(), 0);
       return CorruptData(Describe() + ": frame arrived incomplete (Aravis buffer status " +
                          std::to_string(static_cast<int>(status)) + "); see the stream statistics");
+    }
+    if (ids_skip_zero_ && frame_id == 0) {
+      return CorruptData(Describe() +
+                         ": frame carries frame id 0, which GigE Vision reserves: the camera "
+                         "sent no image for this trigger");
     }
     const int w = arv_buffer_get_image_width(buffer);
     const int h = arv_buffer_get_image_height(buffer);
@@ -355,9 +397,8 @@ class AravisCamera : public Camera {
     frame.format = settings_.format;
     frame.exposure_s = settings_.exposure_s;
     frame.gain_db = settings_.gain_db;
-    frame.received_time_ns = SteadyNowNs();
-    frame.trigger_time_ns = triggers_.ForFrame(frame.received_time_ns,
-                                               options_.nominal.LatencyWallS(settings_.exposure_s));
+    frame.received_time_ns = received_ns;
+    frame.trigger_time_ns = trigger_ns;
     const cv::Mat wire(h, w, WireBytesPerPixel(f) == 3 ? CV_8UC3 : CV_8UC1,
                        const_cast<uint8_t*>(data));
     cv::Mat out;
@@ -405,7 +446,9 @@ class AravisCamera : public Camera {
   double max_exposure_s_ = 0;
   uint64_t sequence_ = 0;
   TriggerTimes triggers_;
-  guint64 underruns_seen_ = 0;  // stream underruns already reported, since Arm
+  bool ids_skip_zero_ = false;    // GigE Vision or Aravis' fake: frame id 0 is no image
+  AravisFrameIds frame_ids_;      // of the buffers delivered since Arm
+  guint64 underruns_at_arm_ = 0;  // the stream's underruns once its pool was full
   AravisStreamStats last_stats_;
 };
 
@@ -427,6 +470,29 @@ Result<AravisCameraOptions> ParseAravisCameraOptions(const ConfigNode& device) {
 
 std::unique_ptr<Camera> MakeAravisCamera(const DeviceInfo& info, AravisCameraOptions options) {
   return std::make_unique<AravisCamera>(info, std::move(options));
+}
+
+void AravisFrameIds::Reset() {
+  last_.reset();
+  unnumbered_ = 0;
+  gap_ = Status::Ok();
+}
+
+Status AravisFrameIds::Next(uint64_t id, const std::string& camera, const std::string& note) {
+  if (!gap_.ok()) return gap_;
+  if (id == 0) {
+    if (last_) ++unnumbered_;
+    return Status::Ok();
+  }
+  const std::optional<uint64_t> last = std::exchange(last_, id);
+  const uint64_t expected = 1 + std::exchange(unnumbered_, 0);
+  if (!last || !counts_frames_) return Status::Ok();
+  const uint64_t step = FrameIdStep(*last, id, skips_zero_);
+  if (step == expected) return Status::Ok();
+  gap_ = CorruptData(camera + ": " + FrameIdGapText(*last, id, step, expected) + note +
+                     "; the frames after it cannot be paired with their triggers, so none is "
+                     "delivered until the camera is armed again: re-arm the camera");
+  return gap_;
 }
 
 AravisStreamStats AravisCameraStreamStats(const Camera& camera) {

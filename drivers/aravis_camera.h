@@ -9,8 +9,8 @@
 //   width_px, height_px: the region of interest, from the sensor's top left
 //              (default: the whole sensor)
 //   buffers:   stream buffers in the pool (default 8): frames not yet taken
-//              by WaitFrame wait there; when all are full, the camera's
-//              frames are dropped and counted as underruns
+//              by WaitFrame wait there; a frame that arrives while all are
+//              full is dropped by the stream (its misses count as underruns)
 //   packet_size: GigE packet size in bytes (default: negotiated)
 //   trigger_line: as for every camera; the camera is set to TriggerSource
 //              Line0 (or `trigger_source`) with TriggerMode On
@@ -20,18 +20,31 @@
 // BayerRG8 camera asked for rgb8/bgr8 is debayered with OpenCV. Mono16 is not
 // offered (hairrig's frames are 8-bit).
 //
-// Capture: Arm() starts acquisition in trigger mode with the buffer pool;
-// SoftwareTrigger() sends TriggerSoftware; WaitFrame() pops the next complete
-// buffer. A buffer that arrives incomplete (missing packets) is reported as
-// CorruptData and counted; the camera stays usable. Timeout when no buffer
-// arrives in time; Unavailable (and faulted) when the camera is gone.
-// Statistics (completed, failed, underruns; for GigE resent and missing
-// packets) are read with AravisCameraStreamStats.
+// Capture: Arm() fills the buffer pool, then starts acquisition in trigger
+// mode; SoftwareTrigger() sends TriggerSoftware; WaitFrame() pops the next
+// complete buffer. Every buffer the stream delivers answers one trigger, and
+// its frame id is checked (AravisFrameIds, below), whether it brings an image
+// or not. Failures, each CorruptData:
+//   - a buffer that arrives incomplete (missing packets);
+//   - a frame with frame id 0 from a GigE Vision camera (or Aravis' fake),
+//     which reserves that id: the camera sent no image for that trigger;
+//   - a gap in the frame ids (GigE and USB3 Vision cameras number every frame
+//     they send): frames the stream dropped for want of a free buffer or lost
+//     on the network. The frames after it cannot be paired with their
+//     triggers: every WaitFrame returns that same CorruptData (it says to
+//     re-arm the camera) until the camera is armed again.
+// After the first two the camera stays usable; after a gap it must be armed
+// again (Disarm, Arm).
+// Timeout when no buffer arrives in time (the message says how often the
+// stream found no free buffer since Arm); Unavailable (and faulted) when the
+// camera is gone. Statistics (completed, failed, underruns; for GigE resent
+// and missing packets) are read with AravisCameraStreamStats.
 #pragma once
 
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "drivers/camera.h"
@@ -63,13 +76,46 @@ std::unique_ptr<Camera> MakeAravisCamera(const DeviceInfo& info, AravisCameraOpt
 struct AravisStreamStats {
   uint64_t completed = 0;
   uint64_t failures = 0;         // buffers that arrived incomplete or late
-  uint64_t underruns = 0;        // frames dropped for want of a free buffer
+  uint64_t underruns = 0;        // times the stream found no free buffer for arriving data
   uint64_t resent_packets = 0;   // GigE only
   uint64_t missing_packets = 0;  // GigE only
 };
 // The statistics of the camera's current (or last) stream; zeros for a
 // camera of another backend.
 AravisStreamStats AravisCameraStreamStats(const Camera& camera);
+
+// The frame-id check the backend runs on every buffer its stream delivers
+// (declared here for tests). GigE Vision and USB3 Vision cameras, and Aravis'
+// fake, number the frames they send one by one; GigE Vision's 16-bit ids run
+// 1..65535 and wrap to 1 (0 is reserved). A buffer that brings no image
+// counts as well: by its id, or, when it carries id 0, as the frame after the
+// last one (it answered a trigger). A gap means frames dropped by the stream
+// or lost on the network, and the frames after it cannot be paired with their
+// triggers.
+class AravisFrameIds {
+ public:
+  // `skips_zero`: 16-bit ids with 0 reserved (GigE Vision, Aravis' fake);
+  // `counts_frames`: ids go up by one per frame (those and USB3 Vision);
+  // without it no id is checked.
+  explicit AravisFrameIds(bool skips_zero = false, bool counts_frames = false)
+      : skips_zero_(skips_zero), counts_frames_(counts_frames) {}
+  // A new stream (Arm): the next id starts the count, and a gap is forgotten.
+  void Reset();
+  // The id of the next buffer delivered (0: none). Ok when it follows the
+  // last one; at a gap, or an id that does not go forward, CorruptData
+  // "`camera`: frame id B after A means N frame(s) lost ...`note`; ... re-arm
+  // the camera", and that same status for every buffer after it until Reset.
+  Status Next(uint64_t id, const std::string& camera, const std::string& note = "");
+  // The gap found since Reset (Ok: none).
+  const Status& gap() const { return gap_; }
+
+ private:
+  bool skips_zero_ = false;
+  bool counts_frames_ = false;
+  std::optional<uint64_t> last_;  // the last buffer's id that was not 0, since Reset
+  uint64_t unnumbered_ = 0;       // buffers with id 0 since that one
+  Status gap_;
+};
 
 // A camera Aravis finds on its interfaces.
 struct AravisDetected {

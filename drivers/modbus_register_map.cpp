@@ -74,10 +74,12 @@ void ReadStatusBits(const ConfigNode& node, ModbusRegisterMap* m) {
   }
 }
 
+// The controller's limits, in the ranges the capture plan's motion takes
+// (core/config.h kTurntableSpeedRange, kTurntableAccelRange).
 void ReadLimits(const ConfigNode& node, ModbusRegisterMap* m) {
   node.AllowOnlyKeys({"max_speed_deg_s", "max_accel_deg_s2", "settle_s"});
-  m->max_speed_deg_s = node.Number("max_speed_deg_s", m->max_speed_deg_s, {.min = 1e-6});
-  m->max_accel_deg_s2 = node.Number("max_accel_deg_s2", m->max_accel_deg_s2, {.min = 1e-6});
+  m->max_speed_deg_s = node.Number("max_speed_deg_s", m->max_speed_deg_s, kTurntableSpeedRange);
+  m->max_accel_deg_s2 = node.Number("max_accel_deg_s2", m->max_accel_deg_s2, kTurntableAccelRange);
   m->settle_s = node.Number("settle_s", m->settle_s, {.min = 0, .max = 60});
 }
 

@@ -82,5 +82,32 @@ TEST(ModbusRegisterMap, ErrorsNameTheField) {
       << far.status().ToString();
 }
 
+// No turntable turns ten times a second: such limits are a mistake.
+TEST(ModbusRegisterMap, LimitsBeyondAnyTurntableAreRefused) {
+  for (const std::string field : {"max_speed_deg_s", "max_accel_deg_s2"}) {
+    auto map = Parse("limits: {" + field + ": 1e300}\n");
+    ASSERT_FALSE(map.ok()) << field;
+    EXPECT_NE(map.status().message().find("rig.yaml:1:"), std::string::npos)
+        << map.status().ToString();
+    EXPECT_NE(map.status().message().find("field 'limits." + field + "'"), std::string::npos)
+        << map.status().ToString();
+  }
+}
+
+// The controller's limits take the ranges of the capture plan's motion
+// (core/config.h), so any plan speed or acceleration has a limit to match.
+TEST(ModbusRegisterMap, LimitsTakeTheRangesOfThePlansMotion) {
+  const std::vector<std::pair<std::string, NumberRange>> fields = {
+      {"max_speed_deg_s", kTurntableSpeedRange}, {"max_accel_deg_s2", kTurntableAccelRange}};
+  for (const auto& [field, range] : fields) {
+    for (const double inside : {range.min, range.max}) {
+      const auto map = Parse("limits: {" + field + ": " + std::to_string(inside) + "}\n");
+      EXPECT_TRUE(map.ok()) << field << " " << inside << ": " << map.status().ToString();
+    }
+    const auto slower = Parse("limits: {" + field + ": " + std::to_string(range.min / 10) + "}\n");
+    EXPECT_FALSE(slower.ok()) << field << " " << range.min / 10;
+  }
+}
+
 }  // namespace
 }  // namespace hairrig

@@ -23,6 +23,19 @@ struct ColmapReadOptions {
       masks_dir;  // optional: <masks_dir>/<NAME>.png (COLMAP's own convention) or <stem>.png
 };
 
+// Nothing outside `images_dir` (and `masks_dir`) is read: a NAME that is
+// absolute, has a '..' component or leads out through a symlink is refused,
+// as is an image file that is not a regular file (a FIFO, a device), not an
+// image (core/image_file.h: PNG, JPEG, TIFF, BMP, PNM, WebP) or claims more
+// than kMaxImagePixels; the error names images.txt, the line and the NAME.
+// Only headers are read here; the views' images are decoded later, from
+// their image_path and mask_path: the files' paths with symlinks resolved.
+// A repeated CAMERA_ID in cameras.txt, a repeated IMAGE_ID or NAME in
+// images.txt, or two NAMEs with the same view name (the file name without its
+// extension, which names the files written for the view) is CorruptData naming
+// the line and the one it repeats. Both files are read only if they are regular
+// files of at most kMaxFileBytes (core/file_util.h).
+//
 // CorruptData naming the file and line for a malformed line, an unknown
 // camera model, a non-finite or out-of-range number, or an image whose camera
 // is not listed; NotFound for a missing file. An image whose file is missing is

@@ -68,11 +68,12 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
                          const std::string& out_dir) {
   PreparedView p;
   p.summary.name = view.name;
-  p.image = cv::imread(view.image_path, cv::IMREAD_COLOR);
-  if (p.image.empty()) {
-    p.why_not = view.image_path + ": cannot be read as an image";
+  Result<cv::Mat> image = ReadImageFile(view.image_path, cv::IMREAD_COLOR);
+  if (!image.ok()) {
+    p.why_not = image.status().message();
     return p;
   }
+  p.image = *std::move(image);
   if (p.image.cols != view.camera.width_px || p.image.rows != view.camera.height_px) {
     p.why_not = view.image_path + ": " + std::to_string(p.image.cols) + "x" +
                 std::to_string(p.image.rows) + " px, its camera is " +
@@ -85,13 +86,13 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
     return p;
   }
   if (!view.mask_path.empty()) {
-    const cv::Mat given = cv::imread(view.mask_path, cv::IMREAD_GRAYSCALE);
-    if (given.size() != p.image.size()) {
-      p.why_not = view.mask_path + ": missing, unreadable or not the image's size";
+    const Result<cv::Mat> given = ReadImageFile(view.mask_path, cv::IMREAD_GRAYSCALE);
+    if (!given.ok() || given->size() != p.image.size()) {
+      p.why_not = given.ok() ? view.mask_path + ": not the image's size" : given.status().message();
       return p;
     }
-    seg->label.setTo(kSegHead, (seg->label == kSegHair) & (given == 0));
-    seg->label.setTo(kSegHair, given != 0);
+    seg->label.setTo(kSegHead, (seg->label == kSegHair) & (*given == 0));
+    seg->label.setTo(kSegHair, *given != 0);
   }
   const cv::Mat1b hair(seg->label == kSegHair);
   p.summary.hair_pixels = cv::countNonZero(hair);
@@ -281,7 +282,11 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   std::atomic<int> done{0};
   ParallelFor(input.views.size(), options.threads, [&] {
     return [&](size_t v) {
-      prepared[v] = PrepareView(input.views[v], options, out_dir);
+      try {
+        prepared[v] = PrepareView(input.views[v], options, out_dir);
+      } catch (const std::exception& e) {  // OpenCV's on memory exhaustion, in a worker thread
+        prepared[v].why_not = input.views[v].image_path + ": " + e.what();
+      }
       prepared[v].input_index = static_cast<uint16_t>(v);
       if (progress) progress("segmentation", ++done, static_cast<int>(input.views.size()));
     };
@@ -296,9 +301,10 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
     }
   }
   prepared.clear();
-  if (used.size() < 2)
+  if (used.size() < kMinStereoViews)
     return FailedPrecondition("only " + std::to_string(used.size()) +
-                              " view(s) can be used; the stereo needs two");
+                              " view(s) can be used; the stereo needs " +
+                              std::to_string(kMinStereoViews));
   summary.segmentation_s = SecondsSince(start);
 
   // The hull, then each view's depth prior on its stereo pixels.

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/camera_model.h"
+#include "core/image_file.h"
 
 namespace hairrig {
 
@@ -115,9 +116,9 @@ cv::Rect StrandRegion(const std::vector<cv::Point2f>& drawn, const cv::Size& ima
 // scaled to `view_px` wide.
 Result<cv::Mat3b> OverlayOneView(const ReconstructionView& view, const StrandSet& strands,
                                  const StrandOverlayOptions& o) {
-  const cv::Mat3b image = cv::imread(view.image_path, cv::IMREAD_COLOR);
-  if (image.empty())
-    return NotFound(view.image_path + ": cannot read the image of view " + view.name);
+  Result<cv::Mat> read = ReadImageFile(view.image_path, cv::IMREAD_COLOR);
+  if (!read.ok()) return read.status().WithContext("the image of view " + view.name);
+  const cv::Mat3b image = *read;
   cv::Mat3b lines = image.clone();
   const std::vector<size_t> offsets = strands.Offsets();
   const auto pixel = [&](const Eigen::Vector3f& p, cv::Point2f* uv) {

@@ -8,6 +8,7 @@
 // Conrady, core/camera_model.h) maps every 3D point to its distorted pixel.
 #pragma once
 
+#include <cstddef>
 #include <opencv2/core/types.hpp>
 #include <optional>
 #include <string>
@@ -17,6 +18,9 @@
 #include "core/transform.h"
 
 namespace hairrig {
+
+// The fewest usable views a reconstruction runs on: the line stereo needs two.
+inline constexpr size_t kMinStereoViews = 2;
 
 struct ReconstructionView {
   int id = 0;              // the capture's view number, or COLMAP's IMAGE_ID

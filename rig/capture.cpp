@@ -15,6 +15,7 @@
 
 #include "core/contact_sheet.h"
 #include "core/file_util.h"
+#include "core/image_file.h"
 #include "core/log.h"
 #include "drivers/camera_support.h"
 #include "rig/capture_calibration_input.h"
@@ -88,7 +89,26 @@ class Sequencer {
 
   ~Sequencer() { StopCollectors(); }
 
-  CaptureSummary Run();
+  // Shoots the views still missing, unless the session already stopped;
+  // tells the frame sink the capture finished.
+  void Run();
+  // The session so far (status from how it ended, or would end now).
+  CaptureSummary Summary();
+  // Journals session_end and writes the manifest with `summary`'s status; a
+  // storage failure of either stops the session (`summary` says so; --resume
+  // writes both again).
+  void EndSession(CaptureSummary* summary);
+  // Stops the run for a storage failure (a write's IoError, a file refused by
+  // storage.min_free_mb): journals it, and the summary says to free space,
+  // then --resume. The first such failure only.
+  void StopForStorage(const Status& status, const Device* device = nullptr, int view = -1);
+  bool Stopping() const { return stop_run_.load() || estop_.load(); }
+  // A storage failure stopped the session: nothing more is written.
+  bool StorageFailed() const { return storage_failed_.load(); }
+  // CaptureFolder::write for the capture observers: the dataset's WriteFile.
+  // Its first storage failure stops the run at the next stop (from the
+  // sequencer's thread: the writer runs on the simulated cameras' threads).
+  FileWriter ObserverWriter();
 
  private:
   // --- setup and teardown --------------------------------------------------
@@ -118,8 +138,7 @@ class Sequencer {
   void RecordFault(const Device* device, const Status& status, const std::string& action,
                    int view = -1);
   void StopRun(const std::string& why);
-  void StopForStorage(const Status& status, const Device* device, int view = -1);
-  bool Stopping() const { return stop_run_.load() || estop_.load(); }
+  Status ObserverFailure();
   std::vector<int> MissingViews() const;
   void Progress(const std::string& step, int stop);
   void PlanEta(const std::map<int, std::vector<int>>& views_by_stop);
@@ -143,6 +162,10 @@ class Sequencer {
   std::atomic<bool> estop_{false};
   std::atomic<bool> storage_failed_{false};  // nothing more is written
   std::string stop_reason_;                  // guarded by mutex_
+  std::mutex observer_mutex_;
+  Status observer_failure_;  // guarded by observer_mutex_: the observers' first storage failure
+  int views_kept_ = 0;       // verified before this session
+  double setup_s_ = 0;
   std::atomic<int> faults_{0};
   std::atomic<int> frames_{0};
   std::atomic<uint64_t> bytes_{0};
@@ -187,11 +210,27 @@ void Sequencer::StopRun(const std::string& why) {
 // The run stops before the fault is journalled, so that no position_reached
 // record follows it (ShootStop journals those under mutex_ unless stopping).
 void Sequencer::StopForStorage(const Status& status, const Device* device, int view) {
-  storage_failed_ = true;
+  if (storage_failed_.exchange(true)) return;
   StopRun("storage: " + status.ToString() +
           ". The frames stored so far are kept; free space on the disk of " + dataset_.dir() +
           ", then continue with --resume");
   RecordFault(device, status, "stop the run", view);
+}
+
+FileWriter Sequencer::ObserverWriter() {
+  return [this](const std::string& path, const void* data, size_t size) {
+    const Status s = dataset_.WriteFile(path, data, size);
+    if (s.code() == StatusCode::kIoError) {
+      std::lock_guard<std::mutex> lock(observer_mutex_);
+      if (observer_failure_.ok()) observer_failure_ = s;
+    }
+    return s;
+  };
+}
+
+Status Sequencer::ObserverFailure() {
+  std::lock_guard<std::mutex> lock(observer_mutex_);
+  return observer_failure_;
 }
 
 double Sequencer::ExpectedFrameWallS(const Camera& camera) const {
@@ -415,8 +454,10 @@ Status Sequencer::EnsureCameraReady(CameraSlot& slot) {
 // Shoots the views of one stop; false when the run must end.
 bool Sequencer::ShootStop(const PlannedStop& stop, const std::vector<int>& views) {
   if (Stopping()) return false;
-  if (const Status s = dataset_.CheckFreeSpace(0); !s.ok()) {
-    StopForStorage(s, nullptr);
+  Status space = ObserverFailure();
+  if (space.ok()) space = dataset_.CheckFreeSpace(0);
+  if (!space.ok()) {
+    StopForStorage(space, nullptr);
     return false;
   }
   std::vector<CameraSlot*> shooting;
@@ -695,17 +736,16 @@ void Sequencer::RunPass(const std::vector<int>& views, int pass) {
   WaitCollectorsIdle();
 }
 
-CaptureSummary Sequencer::Run() {
-  CaptureSummary summary;
-  summary.views_planned = static_cast<int>(plan_.views.size());
-  summary.views_kept = dataset_.VerifiedFrameCount();
+void Sequencer::Run() {
+  views_kept_ = dataset_.VerifiedFrameCount();
   const auto t0 = Clock::now();
   if (options_.control) {
     options_.control->Attach(
         [this](CaptureControl::Kind kind, const std::string& why) { OnControl(kind, why); });
   }
-  Status setup = Setup();
-  summary.setup_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  // A session that stopped before it began (its start not journalled) opens no device.
+  Status setup = Stopping() ? Status::Ok() : Setup();
+  setup_s_ = std::chrono::duration<double>(Clock::now() - t0).count();
   if (!setup.ok()) {
     RecordFault(nullptr, setup, "stop the run");
     StopRun(setup.ToString());
@@ -722,7 +762,15 @@ CaptureSummary Sequencer::Run() {
   for (const auto& c : rig_.devices.cameras) (void)c->Disarm();
   for (const auto& l : rig_.devices.input_lines) l->OnChange(nullptr);
   if (options_.control) options_.control->Detach();
+  if (options_.sink) options_.sink->OnCaptureFinished();
+}
 
+CaptureSummary Sequencer::Summary() {
+  CaptureSummary summary;
+  summary.dir = dataset_.dir();
+  summary.views_planned = static_cast<int>(plan_.views.size());
+  summary.views_kept = views_kept_;
+  summary.setup_s = setup_s_;
   summary.missing_views = MissingViews();
   summary.views_completed = summary.views_planned - static_cast<int>(summary.missing_views.size());
   summary.frames = frames_.load();
@@ -748,26 +796,34 @@ CaptureSummary Sequencer::Run() {
   } else {
     summary.status = "complete";
   }
-  (void)dataset_.Append({{"event", "session_end"},
-                         {"status", summary.status},
-                         {"message", summary.message},
-                         {"views_completed", summary.views_completed},
-                         {"frames", summary.frames},
-                         {"faults", summary.faults}});
-  (void)dataset_.WriteManifest(summary.status);
-  if (options_.sink) options_.sink->OnCaptureFinished();
   return summary;
 }
 
+void Sequencer::EndSession(CaptureSummary* summary) {
+  const Status journalled = dataset_.Append({{"event", "session_end"},
+                                             {"status", summary->status},
+                                             {"message", summary->message},
+                                             {"views_completed", summary->views_completed},
+                                             {"frames", summary->frames},
+                                             {"faults", summary->faults}});
+  const Status written = dataset_.WriteManifest(journalled.ok() ? summary->status : "stopped");
+  const Status failed = journalled.ok() ? written : journalled;
+  if (failed.ok()) return;
+  storage_failed_ = true;  // the fault cannot be journalled after session_end
+  StopRun("storage: " + failed.ToString() + ". Free space on the disk of " + dataset_.dir() +
+          ", then continue with --resume");
+  *summary = Summary();
+}
+
 // <capture>/contact_sheet.png from the verified frames, in plan order, unless
-// it would leave less than storage.min_free_mb free.
-Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan) {
+// it would leave less than storage.min_free_mb free (IoError, as a failed write).
+Status WriteContactSheet(CaptureDataset& dataset, const CapturePlan& plan) {
   std::vector<cv::Mat> thumbs;
   std::vector<std::string> labels;
   for (const FrameRecord& r : dataset.VerifiedFrames()) {
-    cv::Mat image = cv::imread(dataset.dir() + "/" + r.file, cv::IMREAD_REDUCED_COLOR_4);
-    if (image.empty()) continue;
-    thumbs.push_back(image);
+    Result<cv::Mat> image = ReadImageFile(dataset.dir() + "/" + r.file, cv::IMREAD_REDUCED_COLOR_4);
+    if (!image.ok()) continue;
+    thumbs.push_back(std::move(image).value());
     labels.push_back(std::filesystem::path(r.file).filename().string());
   }
   if (thumbs.empty()) return Status::Ok();
@@ -776,9 +832,7 @@ Status WriteContactSheet(const CaptureDataset& dataset, const CapturePlan& plan)
   const cv::Mat sheet = MakeContactSheet(thumbs, labels, columns, 240);
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", sheet, png)) return Internal("contact sheet: PNG encoding failed");
-  HR_RETURN_IF_ERROR(dataset.CheckFreeSpace(png.size()).WithContext("contact sheet not written"));
-  return dataset.storage().WriteFileAtomic(dataset.dir() + "/contact_sheet.png", png.data(),
-                                           png.size(), {});
+  return dataset.WriteFile(dataset.dir() + "/contact_sheet.png", png.data(), png.size());
 }
 
 std::string ReadText(const std::string& path) {
@@ -846,7 +900,40 @@ Status CheckSpaceToFinish(const CaptureStorage& storage, const std::string& out_
       (resumed ? "free space, then run --resume again" : "free space or choose another --out"));
 }
 
+// Journals the session's start (and a new capture's plan) and writes the
+// manifest; the first error.
+Status StartSession(CaptureDataset& dataset, const CaptureOptions& options,
+                    const std::string& subject, const RigConfig& config, const CapturePlan& plan,
+                    const std::vector<PlannedViewRecord>& planned_views,
+                    const ResumeReport& report) {
+  HR_RETURN_IF_ERROR(dataset.Append({{"event", "session_start"},
+                                     {"resume", options.resume},
+                                     {"subject", subject},
+                                     {"rig", config.name},
+                                     {"config_dir", config.relative_to},
+                                     {"views_planned", plan.views.size()},
+                                     {"frames_verified", report.frames_verified},
+                                     {"quarantined", report.quarantined},
+                                     {"partial_removed", report.partial_removed.size()}}));
+  if (!options.resume) HR_RETURN_IF_ERROR(dataset.JournalPlan(planned_views));
+  return dataset.WriteManifest("in_progress");
+}
+
+// A storage failure (IoError) stops the session (Sequencer::StopForStorage)
+// and is Ok here; any other error is returned.
+Status StopIfStorage(Sequencer& sequencer, const Status& status) {
+  if (status.code() != StatusCode::kIoError) return status;
+  sequencer.StopForStorage(status);
+  return Status::Ok();
+}
+
 }  // namespace
+
+std::shared_ptr<CaptureStorage> CaptureStorageFor(const CaptureOptions& options, const Rig* rig) {
+  if (options.storage) return options.storage;
+  if (rig && rig->capture_storage) return rig->capture_storage;
+  return DefaultCaptureStorage();
+}
 
 Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   if (options.out_dir.empty())
@@ -861,9 +948,7 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   HR_ASSIGN_OR_RETURN(CapturePlan plan, ReadCapturePlan(config.root, rig->devices));
   HR_ASSIGN_OR_RETURN(CapturePolicies policies, ReadCapturePolicies(config.root));
   HR_RETURN_IF_ERROR(CheckCalibrationSection(config));
-  const std::shared_ptr<CaptureStorage> storage = options.storage        ? options.storage
-                                                  : rig->capture_storage ? rig->capture_storage
-                                                                         : DefaultCaptureStorage();
+  const std::shared_ptr<CaptureStorage> storage = CaptureStorageFor(options, rig);
   DatasetOptions dataset_options;
   dataset_options.png_compression = policies.png_compression;
   dataset_options.min_free_bytes = policies.MinFreeBytes();
@@ -888,31 +973,34 @@ Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
   }
   const std::string subject = options.resume ? dataset->metadata().subject : options.subject;
   dataset->SetPlanSummary(static_cast<int>(plan.views.size()), subject, config.name);
-  HR_RETURN_IF_ERROR(dataset->Append({{"event", "session_start"},
-                                      {"resume", options.resume},
-                                      {"subject", subject},
-                                      {"rig", config.name},
-                                      {"config_dir", config.relative_to},
-                                      {"views_planned", plan.views.size()},
-                                      {"frames_verified", report.frames_verified},
-                                      {"quarantined", report.quarantined},
-                                      {"partial_removed", report.partial_removed.size()}}));
-  if (!options.resume) HR_RETURN_IF_ERROR(dataset->JournalPlan(planned_views));
-  HR_RETURN_IF_ERROR(dataset->WriteManifest("in_progress"));
-  for (const auto& observer : rig->capture_observers) {
-    HR_RETURN_IF_ERROR(observer->OnCaptureBegin(plan, dataset->dir()));
-  }
   Sequencer sequencer(*rig, plan, policies, *dataset, options);
-  CaptureSummary summary = sequencer.Run();
+  // From here on a storage failure stops the session, resumable, and the call returns a summary.
+  HR_RETURN_IF_ERROR(StopIfStorage(
+      sequencer, StartSession(*dataset, options, subject, config, plan, planned_views, report)));
+  const CaptureFolder folder{dataset->dir(), sequencer.ObserverWriter()};
+  Status begun = Status::Ok();
+  for (const auto& observer : rig->capture_observers) {
+    if (!begun.ok() || sequencer.Stopping()) break;
+    begun = StopIfStorage(sequencer, observer->OnCaptureBegin(plan, folder));
+  }
+  if (begun.ok()) sequencer.Run();
   rig->devices.CloseAll();
-  summary.dir = dataset->dir();
+  const CaptureSummary shot = sequencer.Summary();
+  // Every observer is told, so that none writes through `folder` after this
+  // call. A storage failure stops the session; the first other error is returned.
   Status ended = Status::Ok();
   for (const auto& observer : rig->capture_observers) {
-    const Status s = observer->OnCaptureEnd(summary);
+    const Status s = StopIfStorage(sequencer, observer->OnCaptureEnd(shot));
     if (ended.ok()) ended = s;
   }
+  HR_RETURN_IF_ERROR(begun);
+  if (ended.ok() && !sequencer.StorageFailed()) {
+    const Status sheet = WriteContactSheet(*dataset, plan);
+    if (!StopIfStorage(sequencer, sheet).ok()) LogWarning(sheet.ToString());
+  }
+  CaptureSummary summary = sequencer.Summary();
+  sequencer.EndSession(&summary);
   HR_RETURN_IF_ERROR(ended);
-  if (const Status s = WriteContactSheet(*dataset, plan); !s.ok()) LogWarning(s.ToString());
   return summary;
 }
 

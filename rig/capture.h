@@ -17,9 +17,27 @@
 // shot after it and frames still waiting to be stored are dropped. Every fault
 // is journalled; the dataset stays consistent and `--resume` continues it.
 //
-// Before anything is written, the capture's disk must have room for the views
-// left to shoot (BytesNeededToFinish in rig/capture_plan.h: all of them, or on
-// a resume those without a verified frame); else RunCapture returns IoError.
+// Every file of the session honours storage.min_free_mb and ends the session
+// the same way on a storage failure: the session's journal records and the
+// manifest (the check before each frame keeps room for them), the capture
+// observers' files (the simulated rig's ground truth, written through
+// CaptureFolder::write) and the contact sheet. A storage failure once the
+// session has started, from journalling its start on (a frame, a journal
+// record, the manifest, an observer's file, the contact sheet), gives the
+// summary `stopped` (the command line's exit code 3), never an error; the
+// contact sheet is then not written, and `--resume` writes what is missing.
+//
+// Storage failures before the session starts are RunCapture's IoError (the
+// command line's exit code 1), with nothing shot; the same command runs again
+// once there is room:
+//  - creating a new capture folder (CaptureDataset::Create removes what it made);
+//  - on a resume, repairing the folder (CaptureDataset::OpenForResume: cutting
+//    a record left half-written, journalling journal_repaired, partial_removed
+//    and file_quarantined) and journalling the views an interrupted start left
+//    unplanned (CaptureDataset::JournalPlan);
+//  - too little room for the views left to shoot (BytesNeededToFinish in
+//    rig/capture_plan.h: all of them, or on a resume those without a verified
+//    frame), checked before the session.
 #pragma once
 
 #include <functional>
@@ -95,24 +113,48 @@ struct CaptureSummary {
   nlohmann::json ToJson() const;
 };
 
+// The capture folder as capture observers write to it.
+struct CaptureFolder {
+  std::string dir;  // absolute
+  // Writes a file of the folder atomically through the capture's storage once
+  // the free-space check the frames pass allows it (storage.min_free_mb):
+  // IoError naming the file and the limit when it would leave less free, or
+  // the write's IoError (ENOSPC). Callable from any thread until
+  // OnCaptureEnd returns; a storage failure stops the run at its next stop.
+  FileWriter write;
+};
+
 // Told when a capture begins and ends. The rig's extensions add theirs to the
 // Rig they build (Rig::capture_observers): the simulated rig's writes the
 // capture's ground truth. RunCapture calls them from its own thread.
+// A storage failure (IoError, from `folder.write` or not) ends the session as
+// a full disk does: the summary is `stopped`, resumable. Another error is
+// RunCapture's, also when another observer's storage failed.
 class CaptureObserver {
  public:
   virtual ~CaptureObserver() = default;
-  // Once the capture folder `capture_dir` holds the journalled `plan`, before
-  // anything moves; on a resume too. An error ends RunCapture with it.
-  virtual Status OnCaptureBegin(const CapturePlan& plan, const std::string& capture_dir) = 0;
+  // Once the capture folder holds the journalled `plan`, before anything
+  // moves; on a resume too. Not called once the session has stopped (its
+  // start could not be journalled, an earlier observer's storage failed);
+  // OnCaptureEnd is called either way.
+  virtual Status OnCaptureBegin(const CapturePlan& plan, const CaptureFolder& folder) = 0;
   // After the session's last frame, with the devices closed, whether the run
-  // completed or not. An error is RunCapture's (each observer is still told).
+  // completed or not (each observer is told, whatever the others return).
   virtual Status OnCaptureEnd(const CaptureSummary& summary) = 0;
 };
 
 // Runs (or resumes) a capture. An error Status means nothing was captured
-// (bad config, unusable folder, devices that cannot be opened) or a capture
-// observer failed; a run that starts returns a summary, also when a fault
-// stopped it.
+// (bad config, unusable folder, a storage failure before the session starts
+// (above), devices that cannot be opened) or a capture observer failed other
+// than by its storage (the first such error, whatever the others returned); a
+// run that starts returns a summary, also when a fault (a storage failure
+// included) stopped it.
 Result<CaptureSummary> RunCapture(const CaptureOptions& options);
+
+// Where a capture's files are written: options.storage, else the rig's own
+// (Rig::capture_storage: the simulated rig's disk; `rig` may be null), else
+// the file system (DefaultCaptureStorage). RunCapture writes there, and the
+// stages run after it in the same command check their room there.
+std::shared_ptr<CaptureStorage> CaptureStorageFor(const CaptureOptions& options, const Rig* rig);
 
 }  // namespace hairrig

@@ -6,9 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include "calibration/tag_detection_sink.h"
+#include "core/capture_storage.h"
 #include "core/clock.h"
 #include "core/log.h"
 #include "core/string_format.h"
+#include "rig/capture_dataset.h"
+#include "rig/capture_plan.h"
 #include "rig/rig_config.h"
 #include "rig/safe_names.h"
 
@@ -38,6 +41,32 @@ Result<CalibrationAfterCapture> CalibrateAfterCapture(const std::string& dir,
   after.calibration_after_last_frame_s = SecondsSince(sink.last_frame_ns(), written_ns);
   after.delay_after_last_frame_s = SecondsSince(sink.last_frame_ns(), SteadyNowNs());
   return after;
+}
+
+// Bytes the calibration writes into a capture folder at most: calibration.json,
+// the exports and the report, whose half-size residual JPEG per frame takes
+// less than an eighth of the frame's file; 1 MB for the rest.
+uint64_t CalibrationBytesBound(const std::string& capture_dir) {
+  uint64_t frames = 0;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(capture_dir + "/frames", ec)) {
+    if (entry.is_regular_file(ec)) frames += entry.file_size(ec);
+  }
+  return frames / 8 + 1'000'000;
+}
+
+// Ok when the calibration's files (CalibrationBytesBound) leave the capture's
+// storage.min_free_mb free on its disk: the check every file of the capture
+// passed (CheckRoomOnDisk). IoError naming the folder and the limit otherwise.
+Status CheckRoomForCalibration(const std::string& capture_dir, const CaptureStorage& storage) {
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
+  HR_ASSIGN_OR_RETURN(const CapturePolicies policies, ReadCapturePolicies(config.root));
+  HR_ASSIGN_OR_RETURN(const uint64_t free, storage.FreeBytes(capture_dir));
+  const uint64_t bytes = CalibrationBytesBound(capture_dir);
+  return CheckRoomOnDisk(
+      capture_dir, free, 0, bytes,
+      StringPrintf("the calibration's files (up to %.1f MB)", static_cast<double>(bytes) / 1e6),
+      policies.MinFreeBytes(), 0);
 }
 
 // The capture folder, and the capture's settings for RunCapture.
@@ -111,6 +140,10 @@ nlohmann::json CaptureAndProcessSummary::ToJson() const {
     c["calibration_after_last_frame_s"] = calibration->calibration_after_last_frame_s;
     c["delay_after_last_frame_s"] = calibration->delay_after_last_frame_s;
   }
+  if (calibration_skipped) {
+    out["calibration_skipped"] = {{"reason", calibration_skipped->reason},
+                                  {"action", calibration_skipped->action}};
+  }
   if (reconstruction) out["reconstruction"] = reconstruction->ToJson();
   return out;
 }
@@ -126,6 +159,10 @@ std::string CaptureAndProcessSummary::BriefReport() const {
         "the capture)\n",
         c.detection_backlog_s, c.capture_closed_s, c.calibration_after_last_frame_s,
         c.delay_after_last_frame_s, c.frames_detected_during_capture);
+  }
+  if (calibration_skipped) {
+    text += "calibration not run: " + calibration_skipped->reason + "\n  " +
+            calibration_skipped->action + "\n";
   }
   if (reconstruction) text += reconstruction->BriefReport();
   return text;
@@ -147,6 +184,20 @@ Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOption
   HR_ASSIGN_OR_RETURN(summary.capture, RunCapture(capture));
   if (options.on_captured) options.on_captured(summary.capture);
   if (!sink || summary.capture.status != "complete") return summary;
+  // The calibration's files honour storage.min_free_mb as the capture's did:
+  // without room, the complete capture is kept as it is and the calibration
+  // is reported as skipped.
+  const Status room =
+      CheckRoomForCalibration(capture.out_dir, *CaptureStorageFor(capture, options.rig));
+  if (room.code() == StatusCode::kIoError) {
+    const std::string action =
+        "The capture is complete; free space on its disk, then run "
+        "`hairrig calibrate " +
+        summary.capture.dir + "` (or this command again with --resume)";
+    summary.calibration_skipped = SkippedCalibration{room.ToString(), action};
+    return summary;
+  }
+  HR_RETURN_IF_ERROR(room);
   HR_ASSIGN_OR_RETURN(
       summary.calibration,
       CalibrateAfterCapture(capture.out_dir, options.intrinsics_files, options.threads, *sink));

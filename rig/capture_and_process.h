@@ -60,14 +60,23 @@ struct CalibrationAfterCapture {
   double delay_after_last_frame_s = 0;        // until the report was written
 };
 
+// A calibration asked for (`calibrate`) and not run although the capture
+// completed: its disk has no room for the calibration's files.
+struct SkippedCalibration {
+  std::string reason;  // the free-space check's IoError, naming the folder and storage.min_free_mb
+  std::string action;  // what to do: free space, then `hairrig calibrate <capture>`
+};
+
 struct CaptureAndProcessSummary {
   CaptureSummary capture;
-  std::optional<CalibrationAfterCapture> calibration;  // calibrate, and the capture complete
+  std::optional<CalibrationAfterCapture> calibration;     // calibrate, and the capture complete
+  std::optional<SkippedCalibration> calibration_skipped;  // calibrate, not run for lack of room
   std::optional<ReconstructCaptureSummary>
       reconstruction;  // reconstruct, and the calibration not failed
 
   // The capture's summary with "calibration" (the calibration's summary and
-  // the delays) and "reconstruction" when they ran.
+  // the delays) and "reconstruction" when they ran, "calibration_skipped"
+  // ({"reason", "action"}) when the calibration was not run for lack of room.
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };
@@ -75,7 +84,12 @@ struct CaptureAndProcessSummary {
 // Errors as RunCapture's (nothing captured), an unsafe subject name, a rig
 // config without a usable calibration section (with calibrate), and the
 // calibration's and reconstruction's errors; a capture that ends incomplete
-// or stopped is a summary, not an error.
+// or stopped is a summary, not an error. So is a complete capture whose disk
+// (rig/capture.h CaptureStorageFor) has no room for the calibration's files
+// above its storage.min_free_mb (checked before calibrating, as before each
+// frame): the calibration is not run, the capture keeps its status
+// (`complete`, as manifest.json says) and `calibration_skipped` says why and
+// what to run once there is room; the command line exits 3 for it.
 Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOptions& options);
 
 }  // namespace hairrig

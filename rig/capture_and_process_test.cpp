@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "rig/capture_test_util.h"
 #include "rig/sim_rig.h"
+#include "sim_hw/quota_storage.h"
 
 namespace hairrig {
 namespace {
@@ -56,6 +58,54 @@ TEST(CaptureAndProcess, RefusesBeforeCapturing) {
   options.calibrate = true;  // the small rig has no calibration section
   EXPECT_FALSE(CaptureAndProcess(options).ok());
   EXPECT_FALSE(fs::exists(options.out_dir));
+}
+
+// The calibration's files honour storage.min_free_mb as the capture's do: on
+// a disk that another program filled once the capture completed, the
+// calibration is not run. The capture stays complete, as its manifest.json
+// says; the summary's calibration_skipped (exit code 3) says why and how to
+// calibrate once there is room.
+TEST(CaptureAndProcess, NoRoomForTheCalibrationAboveMinFreeSkipsItAndKeepsTheCapture) {
+  const std::string dir = FreshDir("capture_and_process_no_room");
+  CaptureAndProcessOptions options;
+  options.config_path = WriteSmallRig(
+      dir, {{"calibration", "calibration:\n  box: " + fs::absolute("etc/calib-box.yaml").string() +
+                                "\n  box_height_mm: 600\n  box_yaw_deg: 10\n"}});
+  auto config = LoadRigConfig(options.config_path);
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  auto rig = BuildRig(*config);
+  ASSERT_TRUE(rig.ok()) << rig.status().ToString();
+  auto disk = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = 1'000'000'000});
+  (*rig)->capture_storage = disk;
+  options.rig = rig->get();
+  options.out_dir = dir + "/c";
+  options.calibrate = true;
+  const uint64_t min_free = 10'000'000;  // the small rig's storage.min_free_mb
+  options.on_captured = [&](const CaptureSummary& s) {
+    ASSERT_EQ(s.status, "complete") << s.message;
+    const auto free = disk->FreeBytes(s.dir);
+    ASSERT_TRUE(free.ok());
+    disk->Consume(*free - (min_free + 100'000));
+  };
+  const auto summary = CaptureAndProcess(options);
+  ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+  EXPECT_EQ(summary->capture.status, "complete") << summary->capture.message;
+  const nlohmann::json j = summary->ToJson();
+  EXPECT_EQ(j["status"], "complete");
+  std::ifstream manifest(summary->capture.dir + "/manifest.json");
+  EXPECT_EQ(nlohmann::json::parse(manifest)["status"], "complete");
+  ASSERT_TRUE(summary->calibration_skipped.has_value());
+  const std::string& reason = summary->calibration_skipped->reason;
+  EXPECT_NE(reason.find("storage.min_free_mb"), std::string::npos) << reason;
+  const std::string& action = summary->calibration_skipped->action;
+  EXPECT_NE(action.find("free space"), std::string::npos) << action;
+  EXPECT_NE(action.find("hairrig calibrate " + summary->capture.dir), std::string::npos) << action;
+  EXPECT_EQ(j["calibration_skipped"]["reason"], reason);
+  EXPECT_EQ(j["calibration_skipped"]["action"], action);
+  EXPECT_NE(summary->BriefReport().find("calibration not run: "), std::string::npos)
+      << summary->BriefReport();
+  EXPECT_FALSE(summary->calibration.has_value());
+  EXPECT_FALSE(fs::exists(summary->capture.dir + "/calibration"));
 }
 
 TEST(CaptureAndProcess, OptionsThatNeedCalibrateAreNamed) {

@@ -4,17 +4,15 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <set>
 
 #include "calibration/calibration_io.h"
 #include "calibration/prior_check.h"
 #include "calibration/tag_detection_sink.h"
-#include "core/json_file.h"
+#include "core/image_file.h"
 #include "core/string_format.h"
 #include "core/truth_maps.h"
 #include "rig/capture_dataset.h"
-#include "rig/journal_records.h"
+#include "rig/manifest_frames.h"
 #include "rig/rig_config.h"
 
 namespace hairrig {
@@ -26,13 +24,12 @@ namespace {
 // The rig config's nominal intrinsics of one camera (calibration.cameras.<name>).
 CameraIntrinsics ReadNominalIntrinsics(const ConfigNode& k) {
   k.AllowOnlyKeys({"fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "p1", "p2", "k3"});
-  const NumberRange pixels{-1e5, 1e5};
   const NumberRange coefficient{-1e3, 1e3};
   CameraIntrinsics intrinsics;
   intrinsics.fx_px = k.Number("fx_px", {.min = 1, .max = 1e6});
   intrinsics.fy_px = k.Number("fy_px", {.min = 1, .max = 1e6});
-  intrinsics.cx_px = k.Number("cx_px", pixels);
-  intrinsics.cy_px = k.Number("cy_px", pixels);
+  intrinsics.cx_px = k.Number("cx_px", kPixelRange);
+  intrinsics.cy_px = k.Number("cy_px", kPixelRange);
   intrinsics.k1 = k.Number("k1", 0.0, coefficient);
   intrinsics.k2 = k.Number("k2", 0.0, coefficient);
   intrinsics.p1 = k.Number("p1", 0.0, coefficient);
@@ -66,60 +63,46 @@ Status AddCameras(const RigConfig& config, CaptureCalibrationInput* input,
   return config.root.status();
 }
 
-// The manifest's frames; one whose file does not verify against the manifest
-// (VerifyFrameFile) is marked unusable and named in the calibration's report.
-Status AddFrames(const std::string& capture_dir, const nlohmann::json& manifest,
-                 const std::string& manifest_path, const std::map<std::string, int>& by_serial,
-                 CaptureCalibrationInput* input) {
-  const JsonObject root(manifest, manifest_path);
-  std::set<int> views_seen;
-  for (const JsonObject& f : root.Objects("frames")) {
-    CalibrationFrame frame;
-    frame.view = static_cast<int>(f.Integer("view", {.min = 0, .max = kMaxViewIndex}));
-    if (f.ok() && !views_seen.insert(frame.view).second) {
-      // Checked before any file is read: a list repeated thousands of times is refused at once.
-      f.Fail("view", "view " + std::to_string(frame.view) +
-                         " is listed twice; the manifest was altered: rewrite it with `hairrig "
-                         "capture --resume`");
-      break;
-    }
-    frame.stop = static_cast<int>(f.Integer("stop", {.min = 0, .max = kMaxViewIndex}));
-    frame.turntable_deg = f.Number("angle_measured_deg");
-    frame.name = f.String("file");
-    const std::string serial = f.String("serial");
-    const uint64_t bytes = static_cast<uint64_t>(f.Integer("bytes", {.min = 0}));
-    const std::string sha256 = f.String("sha256");
-    if (!f.ok()) break;
-    if (!IsFrameFileName(frame.name, frame.view, serial)) {
-      f.Fail("file", frame.name + " is not the file of view " + std::to_string(frame.view) +
-                         " from camera " + serial);
-      break;
-    }
-    const auto camera = by_serial.find(serial);
-    if (camera == by_serial.end()) {
-      f.Fail("serial", "camera " + serial + " is not in rig.yaml");
-      break;
-    }
-    if (const Status verified = VerifyFrameFile(capture_dir, frame.name, bytes, sha256);
-        !verified.ok())
-      frame.unusable = verified.message() + " (`hairrig capture --resume` re-shoots it)";
-    frame.path = (fs::path(capture_dir) / frame.name).lexically_normal().string();
-    frame.camera = camera->second;
-    input->frames.push_back(frame);
+// The manifest's frames, read by ReadManifestFrames: every camera checked
+// against rig.yaml before VerifyManifestFrames reads a file; a frame whose file
+// does not verify is marked unusable and named in the calibration's report.
+Status AddFrames(const std::string& capture_dir, std::vector<ManifestFrame> stored,
+                 const std::map<std::string, int>& by_serial, CaptureCalibrationInput* input) {
+  const std::string config = (fs::path(capture_dir) / "rig.yaml").string();
+  for (const ManifestFrame& f : stored) {
+    if (by_serial.count(f.serial) == 0)
+      return CorruptData(f.serial_field + ": camera " + f.serial + " is not among the cameras of " +
+                         config + "; add the camera to rig.yaml or restore the capture's rig.yaml");
   }
-  return root.status();
+  HR_RETURN_IF_ERROR(VerifyManifestFrames(capture_dir, &stored));
+  for (const ManifestFrame& f : stored) {
+    CalibrationFrame frame;
+    frame.view = f.view;
+    frame.stop = f.stop;
+    frame.turntable_deg = f.angle_measured_deg;
+    frame.name = f.file;
+    frame.path = f.path;
+    frame.camera = by_serial.at(f.serial);
+    frame.unusable = f.unusable;
+    input->frames.push_back(std::move(frame));
+  }
+  return Status::Ok();
 }
 
-// Image sizes from each camera's first frame (header only would do; one read per camera).
+// Image sizes from each camera's first usable frame whose header
+// (core/image_file.h, read without decoding) gives a size within
+// kMaxImagePixels. A frame skipped here is left to the calibration, which
+// reads it through ReadImageFile and names it with the reason.
 void FillImageSizes(CaptureCalibrationInput* input) {
   for (size_t c = 0; c < input->cameras.size(); ++c) {
     CalibrationCamera& camera = input->cameras[c];
     for (const CalibrationFrame& frame : input->frames) {
       if (frame.camera != static_cast<int>(c) || !frame.unusable.empty()) continue;
-      const cv::Mat image = cv::imread(frame.path, cv::IMREAD_UNCHANGED);
-      if (image.empty()) continue;  // the calibration names the unreadable frame
-      camera.width_px = image.cols;
-      camera.height_px = image.rows;
+      const Result<ImageHeader> header = ReadImageHeader(frame.path);
+      if (!header.ok() || !CheckImageSize(*header, frame.path).ok()) continue;
+      // Within kMaxImagePixels, each side is well inside an int.
+      camera.width_px = static_cast<int>(header->width_px);
+      camera.height_px = static_cast<int>(header->height_px);
       break;
     }
     if (camera.nominal) {
@@ -136,7 +119,7 @@ Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config) {
   section.AllowOnlyKeys({"box", "box_height_mm", "box_yaw_deg", "cameras"});
   const std::string box_file = section.String("box");
   CalibrationSection out;
-  out.box_height_mm = section.Number("box_height_mm", {.min = -1e5, .max = 1e5});
+  out.box_height_mm = section.Number("box_height_mm", kPositionRangeMm);
   out.box_yaw_deg = section.Number("box_yaw_deg", 0.0, {.min = -360, .max = 360});
   HR_RETURN_IF_ERROR(config.root.status());
   HR_ASSIGN_OR_RETURN(
@@ -156,9 +139,7 @@ Result<RigConfig> LoadCaptureRigConfig(const std::string& capture_dir) {
 }
 
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir) {
-  const std::string manifest_path = (fs::path(capture_dir) / "manifest.json").string();
-  HR_ASSIGN_OR_RETURN(nlohmann::json manifest,
-                      ReadJsonFile(manifest_path, "is this a capture folder?"));
+  HR_ASSIGN_OR_RETURN(std::vector<ManifestFrame> frames, ReadManifestFrames(capture_dir));
   HR_ASSIGN_OR_RETURN(RigConfig config, LoadCaptureRigConfig(capture_dir));
   CaptureCalibrationInput input;
   HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
@@ -167,7 +148,7 @@ Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& c
   input.box_yaw_deg = section.box_yaw_deg;
   std::map<std::string, int> by_serial;
   HR_RETURN_IF_ERROR(AddCameras(config, &input, &by_serial));
-  HR_RETURN_IF_ERROR(AddFrames(capture_dir, manifest, manifest_path, by_serial, &input));
+  HR_RETURN_IF_ERROR(AddFrames(capture_dir, std::move(frames), by_serial, &input));
   FillImageSizes(&input);
   return input;
 }

@@ -43,11 +43,17 @@ Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config);
 // Capture and `devices` check it, so a mistake shows before any frame.
 Status CheckCalibrationSection(const RigConfig& config);
 
-// Errors name the file and field: a missing manifest or rig.yaml, a damaged
-// manifest frame entry, a frame file that does not verify against the size
-// and SHA-256 the manifest records (rig/capture_dataset.h VerifyFrameFile:
-// missing, changed, or leading outside the capture folder), an unknown
-// camera, a broken calibration section.
+// The frames are read and checked by rig/manifest_frames.h: a frame file that
+// does not verify against the size and SHA-256 the manifest records (missing,
+// changed, or leading outside the capture folder) is marked unusable with the
+// reason. Each camera's image size is read from its first usable frame's
+// header, nothing decoded (core/image_file.h; a frame whose header is
+// unreadable or claims more than kMaxImagePixels is skipped, and the
+// calibration names it). Errors name the file and field: a missing manifest
+// or rig.yaml, a damaged manifest frame entry, two entries with the same
+// SHA-256, an unknown camera (the entry's serial field, and what to do), a
+// frames/ folder leading outside the capture folder, a broken calibration
+// section.
 Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& capture_dir);
 
 // Holds every camera at the intrinsics the files give for its serial

@@ -44,6 +44,10 @@ constexpr const char* kJournal = "journal.jsonl";
 constexpr const char* kManifest = "manifest.json";
 constexpr const char* kMetadata = "capture.json";
 constexpr int64_t kMaxSeq = int64_t{1} << 50;  // far beyond any capture's record count
+// Journal records a session may append after a free-space check (a frame's
+// frame_stored, faults, session_end: each well under 1 KiB), and the growth
+// of the manifest by a frame's entry.
+constexpr uint64_t kJournalRoomBytes = 16384;
 constexpr const char* kAlteredAdvice =
     "the journal was altered: keep a copy of it, then correct or remove that line by hand";
 
@@ -162,8 +166,8 @@ Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal
   return planned;
 }
 
-Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, uint64_t bytes,
-                       const std::string& sha256) {
+Result<std::string> VerifyFrameFile(const std::string& capture_dir, const std::string& file,
+                                    uint64_t bytes, const std::string& sha256) {
   HR_ASSIGN_OR_RETURN(const std::string path,
                       ResolveInside((fs::path(capture_dir) / file).string(), capture_dir));
   uint64_t file_bytes = 0;
@@ -177,6 +181,20 @@ Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, 
                        std::to_string(bytes));
   }
   if (*actual != sha256) return CorruptData(path + ": its SHA-256 does not match its record");
+  return path;
+}
+
+Status CheckDistinctContent(const std::map<int, FrameContent>& frames, const std::string& advice) {
+  // Two exposures never give the same bytes: one frame vouched for by two
+  // views' records is a record (and its file) copied onto another view.
+  std::map<std::string, int> view_of_content;
+  for (const auto& [view, frame] : frames) {
+    const auto [other, inserted] = view_of_content.emplace(frame.sha256, view);
+    if (inserted) continue;
+    return CorruptData(frame.sha256_field + ": view " + std::to_string(view) +
+                       " has the same frame content as view " + std::to_string(other->second) +
+                       " (" + frames.at(other->second).record + "); " + advice);
+  }
   return Status::Ok();
 }
 
@@ -195,19 +213,12 @@ Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir
     claimed_line[frame->view] = i;
     claimed[frame->view] = std::move(frame).value();
   }
-  // Two exposures never give the same bytes: one frame vouched for by two
-  // views' records is a record (and its file) copied onto another view.
-  std::map<std::string, int> view_of_content;
+  std::map<int, FrameContent> contents;
   for (const auto& [view, frame] : claimed) {
-    const auto [other, inserted] = view_of_content.emplace(frame.sha256, view);
-    if (!inserted) {
-      return CorruptData(JournalLine(journal, claimed_line[view]) + ": field 'sha256': view " +
-                         std::to_string(view) + " has the same frame content as view " +
-                         std::to_string(other->second) + " (" +
-                         JournalLine(journal, claimed_line[other->second]) + "); " +
-                         kAlteredAdvice);
-    }
+    const std::string line = JournalLine(journal, claimed_line[view]);
+    contents[view] = {frame.sha256, line, line + ": field 'sha256'"};
   }
+  HR_RETURN_IF_ERROR(CheckDistinctContent(contents, kAlteredAdvice));
   std::map<int, FrameRecord> verified;
   for (auto& [view, frame] : claimed) {
     if (VerifyFrameFile(capture_dir, frame.file, frame.bytes, frame.sha256).ok())
@@ -254,16 +265,32 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(
   }
   auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(
       fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
-  CaptureStorage& out = *dataset->storage_;
-  HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text.data(),
-                                         config_text.size(), {}));
-  metadata.created_utc = UtcNow();
-  const std::string metadata_text = metadata.ToJson().dump(2) + "\n";
-  HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata_text.data(),
-                                         metadata_text.size(), {}));
-  dataset->metadata_ = std::move(metadata);
-  HR_RETURN_IF_ERROR(dataset->OpenJournal());
-  HR_RETURN_IF_ERROR(SyncFolder(parent.string()));
+  const Status created = [&]() -> Status {
+    CaptureStorage& out = *dataset->storage_;
+    HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->ConfigSnapshotPath(), config_text.data(),
+                                           config_text.size(), {}));
+    metadata.created_utc = UtcNow();
+    const std::string metadata_text = metadata.ToJson().dump(2) + "\n";
+    HR_RETURN_IF_ERROR(out.WriteFileAtomic(dataset->dir_ + "/" + kMetadata, metadata_text.data(),
+                                           metadata_text.size(), {}));
+    dataset->metadata_ = std::move(metadata);
+    HR_RETURN_IF_ERROR(dataset->OpenJournal());
+    return SyncFolder(parent.string());
+  }();
+  if (!created.ok()) {
+    const fs::path made = dataset->dir_;
+    dataset.reset();
+    // FailedPrecondition: OpenJournal found the journal locked by another
+    // process, which has taken the folder over; it stays as it is. Else (a
+    // full disk, say) what this call made goes, the folder last and only once
+    // empty, so that the same folder can be given again.
+    if (created.code() != StatusCode::kFailedPrecondition) {
+      for (const char* name : {kJournal, kMetadata, "rig.yaml", "frames"})
+        fs::remove(made / name, ec);
+      fs::remove(made, ec);
+    }
+    return created;
+  }
   return dataset;
 }
 
@@ -474,7 +501,7 @@ Result<StoredFrameInfo> CaptureDataset::StoreFrame(const Frame& frame,
   r.angle_commanded_deg = context.angle_commanded_deg;
   r.angle_measured_deg = context.angle_measured_deg;
   info.path = dir_ + "/" + r.file;
-  HR_RETURN_IF_ERROR(ReserveSpace(bytes.size()));
+  HR_RETURN_IF_ERROR(ReserveSpace(bytes.size(), "a frame of " + MegabytesText(bytes.size())));
   const Status written = storage_->WriteFileAtomic(
       info.path, bytes.data(), bytes.size(),
       [](const char* stage) { CrashPoint((std::string("frame_") + stage).c_str()); });
@@ -517,12 +544,20 @@ Result<uint64_t> CaptureDataset::FreeBytes() const { return storage_->FreeBytes(
 
 Status CaptureDataset::CheckFreeSpace(uint64_t bytes) const {
   std::lock_guard<std::mutex> lock(space_mutex_);
-  return CheckFreeSpaceLocked(bytes);
+  return CheckFreeSpaceLocked(bytes, "a write of " + MegabytesText(bytes));
 }
 
-Status CaptureDataset::ReserveSpace(uint64_t bytes) {
+Status CaptureDataset::WriteFile(const std::string& path, const void* data, size_t size) {
+  const std::string name = fs::path(path).lexically_relative(dir_).string();
+  HR_RETURN_IF_ERROR(ReserveSpace(size, name + " (" + MegabytesText(size) + ")"));
+  const Status written = storage_->WriteFileAtomic(path, data, size, {});
+  ReleaseSpace(size);
+  return written;
+}
+
+Status CaptureDataset::ReserveSpace(uint64_t bytes, const std::string& what) {
   std::lock_guard<std::mutex> lock(space_mutex_);
-  HR_RETURN_IF_ERROR(CheckFreeSpaceLocked(bytes));
+  HR_RETURN_IF_ERROR(CheckFreeSpaceLocked(bytes, what));
   reserved_bytes_ += bytes;
   return Status::Ok();
 }
@@ -532,16 +567,23 @@ void CaptureDataset::ReleaseSpace(uint64_t bytes) {
   reserved_bytes_ -= bytes;
 }
 
-Status CaptureDataset::CheckFreeSpaceLocked(uint64_t bytes) const {
+Status CaptureDataset::CheckFreeSpaceLocked(uint64_t bytes, const std::string& what) const {
   HR_ASSIGN_OR_RETURN(const uint64_t free, FreeBytes());
-  const uint64_t min_free = options_.min_free_bytes;
-  // Frames being written by other collectors count as written.
-  const uint64_t left = free > reserved_bytes_ ? free - reserved_bytes_ : 0;
-  if (left >= bytes && left - bytes >= min_free) return Status::Ok();
-  const std::string limit = "the " + MegabytesText(min_free) + " storage.min_free_mb keeps free";
-  if (bytes == 0) return IoError(dir_ + ": " + MegabytesText(free) + " free, less than " + limit);
-  return IoError(dir_ + ": " + MegabytesText(free) + " free; a frame of " + MegabytesText(bytes) +
-                 " would leave less than " + limit);
+  // Files being written by other threads count as written.
+  return CheckRoomOnDisk(dir_, free, reserved_bytes_, bytes, what, options_.min_free_bytes,
+                         manifest_bytes_.load() + kJournalRoomBytes);
+}
+
+Status CheckRoomOnDisk(const std::string& dir, uint64_t free, uint64_t reserved, uint64_t bytes,
+                       const std::string& what, uint64_t min_free, uint64_t beside) {
+  const uint64_t keep = min_free > UINT64_MAX - beside ? UINT64_MAX : min_free + beside;
+  const uint64_t left = free > reserved ? free - reserved : 0;
+  if (left >= bytes && left - bytes >= keep) return Status::Ok();
+  std::string limit = "the " + MegabytesText(min_free) + " storage.min_free_mb keeps free";
+  if (beside > 0) limit += " (beside " + MegabytesText(beside) + " for the journal and manifest)";
+  if (bytes == 0) return IoError(dir + ": " + MegabytesText(free) + " free, less than " + limit);
+  return IoError(dir + ": " + MegabytesText(free) + " free; " + what + " would leave less than " +
+                 limit);
 }
 
 void CaptureDataset::SetPlanSummary(int views_planned, const std::string& subject,
@@ -592,6 +634,7 @@ Status CaptureDataset::WriteManifestLocked(const std::string& status) {
                                    {"updated_utc", UtcNow()},
                                    {"frames", frames}};
   const std::string text = manifest.dump(2) + "\n";
+  manifest_bytes_ = text.size();
   return storage_->WriteFileAtomic(dir_ + "/" + kManifest, text.data(), text.size(),
                                    [](const char* stage) {
                                      if (std::string(stage) == "half_written")

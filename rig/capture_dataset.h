@@ -22,11 +22,12 @@
 // collectors store frames at once.
 //
 // Every file write (frames, journal records, manifest, rig.yaml,
-// capture.json) and the free-space reading go through the dataset's
-// CaptureStorage (core/capture_storage.h): the file system unless the caller
-// gives another.
+// capture.json, and the other files of the folder through WriteFile) and the
+// free-space reading go through the dataset's CaptureStorage
+// (core/capture_storage.h): the file system unless the caller gives another.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -46,7 +47,8 @@ namespace hairrig {
 struct DatasetOptions {
   int png_compression = 1;  // raw frames are stored as PNG, 0-9
   // Bytes a frame must leave free on the capture's disk (the rig config's
-  // storage.min_free_mb): StoreFrame refuses a frame that would leave less.
+  // storage.min_free_mb): StoreFrame refuses a frame that would leave less,
+  // WriteFile any other file.
   uint64_t min_free_bytes = 0;
 };
 
@@ -80,6 +82,9 @@ class CaptureDataset {
   // Creates `dir` (and its parents; FailedPrecondition if `dir` exists) with
   // the config snapshot, capture.json (metadata with its creation time) and
   // an empty journal. `storage` null: DefaultCaptureStorage(), the file system.
+  // On failure (IoError: a full disk) the files it made and `dir` are removed,
+  // so that `dir` can be given again; except when another process took the
+  // new folder over (its journal locked: FailedPrecondition), which keeps it.
   static Result<std::unique_ptr<CaptureDataset>> Create(
       const std::string& dir, const std::string& config_text, CaptureMetadata metadata,
       const DatasetOptions& options, std::shared_ptr<CaptureStorage> storage = nullptr);
@@ -129,11 +134,20 @@ class CaptureDataset {
   uint64_t BytesStored() const;  // of verified frames
   // Free bytes on the capture's disk, as its storage reports them.
   Result<uint64_t> FreeBytes() const;
-  // Ok when `bytes` more (0: none), beside the frames being written, leave at
-  // least options.min_free_bytes free on the capture's disk. IoError naming
-  // the folder, the free MB and the limit (storage.min_free_mb) otherwise, or
-  // why the free space is unknown.
+  // Ok when `bytes` more (0: none), beside the files being written, leave at
+  // least options.min_free_bytes free on the capture's disk, with room left
+  // for what a session journals and rewrites after a check (the manifest's
+  // size plus 16 KiB of journal records), so that those never take the disk
+  // below the limit either. IoError naming the folder, the free MB and the
+  // limit (storage.min_free_mb) otherwise, or why the free space is unknown.
   Status CheckFreeSpace(uint64_t bytes) const;
+  // Writes a file of the capture folder other than a frame (the contact
+  // sheet, the simulated rig's ground truth) atomically through the storage,
+  // once the check a frame passes (CheckFreeSpace, counting the files being
+  // written) allows its `size` bytes: IoError naming the folder, the file,
+  // the free MB and storage.min_free_mb when it would leave less, else the
+  // write's Status (an IoError naming `path` and the errno on a full disk).
+  Status WriteFile(const std::string& path, const void* data, size_t size);
 
   // Manifest fields the sequencer owns.
   void SetPlanSummary(int views_planned, const std::string& subject, const std::string& rig_name);
@@ -146,10 +160,11 @@ class CaptureDataset {
   Status WriteManifestLocked(const std::string& status);
   Status Repair(ResumeReport* report);
   // CheckFreeSpace, then counts `bytes` as written until ReleaseSpace, so
-  // that frames written at once cannot pass the check together.
-  Status ReserveSpace(uint64_t bytes);
+  // that files written at once cannot pass the check together. `what` names
+  // them in the refusal ("a frame of 2.100 MB").
+  Status ReserveSpace(uint64_t bytes, const std::string& what);
   void ReleaseSpace(uint64_t bytes);
-  Status CheckFreeSpaceLocked(uint64_t bytes) const;
+  Status CheckFreeSpaceLocked(uint64_t bytes, const std::string& what) const;
   Status ClearFramesFolder(ResumeReport* report);
   Result<std::vector<uint8_t>> EncodeForStorage(const Frame& frame, const FrameContext& context,
                                                 cv::Mat* image, std::string* extension) const;
@@ -161,7 +176,9 @@ class CaptureDataset {
   int journal_fd_ = -1;
   mutable std::mutex mutex_;
   mutable std::mutex space_mutex_;  // guards reserved_bytes_; taken without mutex_
-  uint64_t reserved_bytes_ = 0;     // frames being written
+  uint64_t reserved_bytes_ = 0;     // files being written
+  // The size of the manifest last written: CheckFreeSpace keeps room for its next version.
+  std::atomic<uint64_t> manifest_bytes_{0};
   std::vector<nlohmann::json> records_;
   std::map<int, FrameRecord> verified_;       // view -> frame_stored record
   std::map<int, PlannedViewRecord> planned_;  // view -> view_planned record
@@ -193,9 +210,28 @@ Result<std::map<int, PlannedViewRecord>> PlannedViews(const std::string& journal
 
 // Whether a frame file matches what vouches for it: `file` (relative to the
 // capture folder) resolved with its symlinks stays inside the folder, is a
-// regular file of `bytes` bytes and has SHA-256 `sha256`. The Status says why not.
-Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, uint64_t bytes,
-                       const std::string& sha256);
+// regular file of `bytes` bytes and has SHA-256 `sha256`. The resolved path,
+// the file that was checked, which is the one to read; else the Status says
+// why not, naming the file.
+Result<std::string> VerifyFrameFile(const std::string& capture_dir, const std::string& file,
+                                    uint64_t bytes, const std::string& sha256);
+
+// One view's frame as a record vouches for it, for CheckDistinctContent.
+struct FrameContent {
+  std::string sha256;
+  // Name the record and its SHA-256 in messages: "<capture>/journal.jsonl:
+  // line 12" and "<capture>/journal.jsonl: line 12: field 'sha256'".
+  std::string record;
+  std::string sha256_field;
+};
+// Two exposures never give the same bytes: one frame vouched for by two views'
+// records is a record (and its file) copied onto another view. CorruptData
+// "<sha256_field>: view 5 has the same frame content as view 2 (<record>);
+// <advice>" for the first view (by number) whose SHA-256 an earlier view
+// has; Ok when every view's differs. Resume, replay (VerifiedFrames) and the
+// stages after capture (rig/manifest_frames.h ReadManifestFrames) refuse such a
+// capture alike.
+Status CheckDistinctContent(const std::map<int, FrameContent>& frames, const std::string& advice);
 
 // The frames of a capture that count, decided in one way for resume and
 // replay: per view, the last frame_stored record of `records` (the capture's
@@ -206,6 +242,16 @@ Status VerifyFrameFile(const std::string& capture_dir, const std::string& file, 
 // record copied onto another view, its file copied too).
 Result<std::map<int, FrameRecord>> VerifiedFrames(const std::string& capture_dir,
                                                   const std::vector<nlohmann::json>& records);
+
+// The free-space rule every file of a capture honours (storage.min_free_mb),
+// CaptureDataset's check and that of the stages a capture command runs after
+// it: Ok when `bytes` more (0: none), beside `reserved` bytes being written,
+// leave at least `min_free` + `beside` of the `free` bytes on the disk holding
+// `dir` (`beside`: room kept for the journal and manifest written after the
+// check). IoError naming `dir`, the free MB, `what` ("a frame of 2.100 MB")
+// and the limit otherwise.
+Status CheckRoomOnDisk(const std::string& dir, uint64_t free, uint64_t reserved, uint64_t bytes,
+                       const std::string& what, uint64_t min_free, uint64_t beside);
 
 // Current UTC time as ISO 8601 with milliseconds ("2026-11-22T10:04:05.123Z").
 std::string UtcNow();

@@ -1,6 +1,9 @@
 #include "rig/capture_dataset.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -321,7 +324,7 @@ TEST(CaptureDatasetHostile, AFrameMustHaveExactlyTheRecordedSize) {
   const std::string sha256 = Sha256Hex(content.data(), content.size());
   EXPECT_TRUE(VerifyFrameFile(dir, "f.png", content.size(), sha256).ok());
   for (const uint64_t bytes : {content.size() + 1, uint64_t{1} << 20, content.size() - 1}) {
-    const Status s = VerifyFrameFile(dir, "f.png", bytes, sha256);
+    const Status s = VerifyFrameFile(dir, "f.png", bytes, sha256).status();
     EXPECT_EQ(s.code(), StatusCode::kCorruptData) << bytes << ": " << s.ToString();
     EXPECT_NE(s.message().find("f.png"), std::string::npos) << s.ToString();
   }
@@ -478,6 +481,58 @@ TEST(CaptureDatasetFullDisk, ARecordThatDoesNotFitLeavesTheJournalWhole) {
   ASSERT_TRUE(CaptureDataset::OpenForResume(dir, {}, &report).ok());
   EXPECT_EQ(report.journal_bytes_dropped, 0u);
   EXPECT_EQ(report.frames_verified, 1);
+}
+
+// A full disk while the capture is created (its rig.yaml cannot be written)
+// leaves no folder behind, so that the same --out can be given again.
+TEST(CaptureDatasetFullDisk, ACaptureThatCannotBeCreatedLeavesNoFolder) {
+  const std::string dir = FreshDir("dataset_full_create") + "/c";
+  auto disk = std::make_shared<QuotaStorage>(QuotaStorageOptions{.quota_bytes = 4});
+  const auto d = CaptureDataset::Create(dir, "name: test\n", {}, {}, disk);
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.status().code(), StatusCode::kIoError);
+  EXPECT_NE(d.status().message().find("No space left on device"), std::string::npos)
+      << d.status().ToString();
+  EXPECT_FALSE(fs::exists(dir));
+  EXPECT_TRUE(CaptureDataset::Create(dir, "name: test\n", {}, {}).ok());
+}
+
+// The file system, where another hairrig process (a --resume of the same
+// folder) opens and locks the journal of a capture being created as soon as
+// its capture.json is written.
+class AnotherProcessTakesTheJournal : public PosixCaptureStorage {
+ public:
+  ~AnotherProcessTakesTheJournal() override {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  Status WriteFileAtomic(const std::string& path, const void* data, size_t size,
+                         const StageHook& on_stage) override {
+    HR_RETURN_IF_ERROR(PosixCaptureStorage::WriteFileAtomic(path, data, size, on_stage));
+    if (fs::path(path).filename() != "capture.json") return Status::Ok();
+    const std::string journal = (fs::path(path).parent_path() / "journal.jsonl").string();
+    fd_ = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    EXPECT_GE(fd_, 0);
+    EXPECT_EQ(::flock(fd_, LOCK_EX | LOCK_NB), 0);
+    return Status::Ok();
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+// Create removes what it made when it fails, but not a folder another
+// process has taken over: with the journal's lock held by that process, the
+// folder is its capture.
+TEST(CaptureDataset, CreateKeepsAFolderAnotherProcessTookOver) {
+  const std::string dir = FreshDir("dataset_create_locked") + "/c";
+  const auto d = CaptureDataset::Create(dir, "name: test\n", {}, {},
+                                        std::make_shared<AnotherProcessTakesTheJournal>());
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.status().code(), StatusCode::kFailedPrecondition) << d.status().ToString();
+  EXPECT_NE(d.status().message().find("another hairrig process"), std::string::npos)
+      << d.status().ToString();
+  for (const char* file : {"rig.yaml", "capture.json", "journal.jsonl", "frames"})
+    EXPECT_TRUE(fs::exists(fs::path(dir) / file)) << file;
 }
 
 // storage.min_free_mb holds for each frame: one that would leave less free

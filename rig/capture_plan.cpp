@@ -68,6 +68,10 @@ namespace {
 
 constexpr double kMaxAngleDeg = 3600;  // ten turns either way
 constexpr int kMaxStops = 3600;
+// Free space to keep on the capture's disk, MB: 100 TB is more than any disk
+// a rig writes to holds, so a larger value is a mistake (1e300 would refuse
+// every capture as short of space).
+constexpr double kMaxMinFreeMb = 1e8;
 
 // "top, bottom": the names of `devices`' lights or cameras, for messages.
 template <typename Device>
@@ -224,8 +228,8 @@ Result<CapturePlan> ReadCapturePlan(const ConfigNode& root, const DeviceSet& dev
     node.AllowOnlyKeys({"stops", "angles_deg", "cameras", "lights", "views", "speed_deg_s",
                         "accel_deg_s2", "home", "exposure_s", "gain_db", "pixel_format",
                         "trigger_pulse_us"});
-  plan.motion.speed_deg_s = node.Number("speed_deg_s", 30, {.min = 0.01, .max = 3600});
-  plan.motion.accel_deg_s2 = node.Number("accel_deg_s2", 60, {.min = 0.01, .max = 36000});
+  plan.motion.speed_deg_s = node.Number("speed_deg_s", 30, kTurntableSpeedRange);
+  plan.motion.accel_deg_s2 = node.Number("accel_deg_s2", 60, kTurntableAccelRange);
   plan.home_first = node.Bool("home", true);
   plan.camera_settings = ReadCameraSettings(node);
   plan.trigger_pulse =
@@ -265,7 +269,7 @@ Result<CapturePolicies> ReadCapturePolicies(const ConfigNode& root) {
   const ConfigNode storage = root.OptionalChild("storage");
   if (storage.IsMap()) {
     storage.AllowOnlyKeys({"min_free_mb", "png_compression"});
-    p.min_free_mb = storage.Number("min_free_mb", p.min_free_mb, {.min = 0});
+    p.min_free_mb = storage.Number("min_free_mb", p.min_free_mb, {.min = 0, .max = kMaxMinFreeMb});
     p.png_compression = storage.Integer("png_compression", p.png_compression, {.min = 0, .max = 9});
     if (!storage.ok()) return storage.status();
   }

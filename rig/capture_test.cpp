@@ -1,8 +1,11 @@
 #include "rig/capture.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/file_util.h"
 #include "core/truth_maps.h"
 #include "rig/capture_plan.h"
 #include "rig/capture_test_util.h"
@@ -567,6 +571,9 @@ TEST(CaptureFaults, FullDiskStopsTheRunAndResumeFinishesIt) {
       << journal[fault_at].dump();
   const auto kept = VerifiedFramesOnDisk(s.dir);
   ASSERT_EQ(kept.size(), 10u);
+  // Nothing more is written after a storage stop: the contact sheet (which
+  // the disk, full only for frames, would take) waits for --resume.
+  EXPECT_FALSE(fs::exists(s.dir + "/contact_sheet.png"));
 
   std::string snapshot = ReadFile(s.dir + "/rig.yaml");
   const std::string faults = "  faults:\n" + fault + "\n";
@@ -585,6 +592,7 @@ TEST(CaptureFaults, FullDiskStopsTheRunAndResumeFinishesIt) {
   const auto after = VerifiedFramesOnDisk(s.dir);
   for (const auto& [view, record] : kept)
     EXPECT_EQ(after.at(view)["sha256"], record["sha256"]) << "view " << view;
+  EXPECT_TRUE(fs::exists(s.dir + "/contact_sheet.png"));
 }
 
 // The plan, devices and policies of a rig config, as RunCapture reads them.
@@ -639,8 +647,18 @@ TEST(CaptureSpace, BytesNeededToFinishCountsOnlyTheViewsLeft) {
   EXPECT_EQ(BytesNeededToFinish(p.plan, devices, {0}, huge), std::numeric_limits<uint64_t>::max());
 }
 
+// Bytes of the files under `dir`.
+uint64_t BytesIn(const std::string& dir) {
+  uint64_t bytes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.is_regular_file()) bytes += e.file_size();
+  }
+  return bytes;
+}
+
 // A capture stopped by a full disk with 33 of 38 views stored resumes on a
-// disk with room for its 5 missing views, far less than the whole plan needs.
+// disk with room for its 5 missing views (and its ground truth), far less than
+// the whole plan needs.
 TEST(CaptureSpace, ResumeNeedsRoomOnlyForTheMissingViews) {
   const std::string dir = FreshDir("space_resume");
   const std::string config = WriteSmallRig(dir, SimWithFaults("    - {kind: disk_full, at: 33}"));
@@ -650,8 +668,15 @@ TEST(CaptureSpace, ResumeNeedsRoomOnlyForTheMissingViews) {
   const uint64_t for_missing = BytesNeeded(config, first.missing_views);
   const uint64_t for_all = BytesNeeded(config, AllViews(38));
   ASSERT_GT(for_missing, 0u);
-  const uint64_t disk_bytes = for_missing + 1'000'000;  // a little for the journal and manifest
-  ASSERT_LT(disk_bytes, for_all);
+  // The ground truth (every view's maps) is written anew on the same disk, and
+  // the contact sheet the stopped session did not write: its 240 px wide
+  // thumbnails take less than the 300 x 400 px frames' raw bytes.
+  ASSERT_FALSE(fs::exists(first.dir + "/contact_sheet.png"));
+  const uint64_t contact_sheet = 38 * 300 * 400 * 3;
+  const uint64_t rewritten = BytesIn(first.dir + "/ground_truth") + contact_sheet;
+  // A little for the journal and manifest.
+  const uint64_t disk_bytes = for_missing + rewritten + 2'000'000;
+  ASSERT_LT(disk_bytes, for_all + rewritten);
   CaptureOptions o;
   o.out_dir = first.dir;
   o.resume = true;
@@ -687,7 +712,9 @@ class DiskFiller : public FrameSink {
 
 // storage.min_free_mb is checked before every frame is written, not only
 // when a stop is shot: the run stops (resumable) before a frame would leave
-// less free, and says where, how much is free and the limit.
+// less free, and says where, how much is free and the limit. Nothing written
+// after it (ground truth, journal, manifest, contact sheet) takes the disk
+// below the limit either.
 TEST(CaptureSpace, MinFreeSpaceIsKeptWhileFramesAreWritten) {
   const std::string dir = FreshDir("space_min_free");
   const std::string config = WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 1}\n"}});
@@ -713,16 +740,226 @@ TEST(CaptureSpace, MinFreeSpaceIsKeptWhileFramesAreWritten) {
   EXPECT_NE(s->message.find("--resume"), std::string::npos) << s->message;
   const auto free = disk->FreeBytes(s->dir);
   ASSERT_TRUE(free.ok());
-  // Below the limit only by what the journal and manifest took after the stop.
-  EXPECT_GE(*free + 65536, min_free) << "the frames went below storage.min_free_mb";
+  EXPECT_GE(*free, min_free) << "the capture's files went below storage.min_free_mb";
   ExpectConsistent(*s);
   ExpectNoStopAfterTheFirstFault(ReadJournal(s->dir));
+}
+
+// Every file under `dir`: its size and last write time.
+std::map<std::string, std::pair<uintmax_t, fs::file_time_type>> FilesIn(const std::string& dir) {
+  std::map<std::string, std::pair<uintmax_t, fs::file_time_type>> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.is_regular_file()) files[e.path().string()] = {e.file_size(), e.last_write_time()};
+  }
+  return files;
+}
+
+// Another program fills the capture's disk once the last frame is stored,
+// right before the ground truth is finished: it leaves half of
+// storage.min_free_mb free. The ground truth files as they were then.
+class DiskFillerAtTheEnd : public FrameSink {
+ public:
+  DiskFillerAtTheEnd(std::shared_ptr<QuotaStorage> disk, std::string capture_dir, uint64_t min_free)
+      : disk_(std::move(disk)), dir_(std::move(capture_dir)), min_free_(min_free) {}
+  void OnFrameStored(const StoredFrame&) override {}
+  void OnCaptureFinished() override {
+    const auto free = disk_->FreeBytes(dir_);
+    ASSERT_TRUE(free.ok());
+    if (*free > min_free_ / 2) disk_->Consume(*free - min_free_ / 2);
+    truth_when_full = FilesIn(dir_ + "/ground_truth");
+  }
+  std::map<std::string, std::pair<uintmax_t, fs::file_time_type>> truth_when_full;
+
+ private:
+  std::shared_ptr<QuotaStorage> disk_;
+  std::string dir_;
+  uint64_t min_free_;
+};
+
+// The ground truth honours storage.min_free_mb as the frames do: once the
+// disk is below the limit, no ground-truth file is written, the run ends
+// stopped (exit code 3, resumable) saying to free space, and --resume on a
+// disk with room writes the ground truth of every view, keeping every frame.
+TEST(CaptureSpace, GroundTruthIsNotWrittenBelowMinFreeAndResumeWritesIt) {
+  const std::string dir = FreshDir("space_truth");
+  const std::string config = WriteSmallRig(dir);  // storage.min_free_mb: 10
+  const uint64_t min_free = 10'000'000;
+  auto disk = std::make_shared<QuotaStorage>(
+      QuotaStorageOptions{.quota_bytes = BytesNeeded(config, AllViews(38)) + 100'000'000});
+  CaptureOptions o;
+  o.config_path = config;
+  o.out_dir = dir + "/c";
+  o.storage = disk;
+  DiskFillerAtTheEnd filler(disk, o.out_dir, min_free);
+  o.sink = &filler;
+  const auto s = RunCapture(o);
+  ASSERT_TRUE(s.ok()) << "a storage failure is a stopped run, not an error: "
+                      << s.status().ToString();
+  EXPECT_EQ(s->status, "stopped") << s->message;
+  EXPECT_EQ(s->views_completed, 38);
+  EXPECT_NE(s->message.find("ground_truth/"), std::string::npos) << s->message;
+  EXPECT_NE(s->message.find("storage.min_free_mb"), std::string::npos) << s->message;
+  EXPECT_NE(s->message.find("--resume"), std::string::npos) << s->message;
+  ASSERT_FALSE(filler.truth_when_full.empty());
+  EXPECT_EQ(FilesIn(s->dir + "/ground_truth"), filler.truth_when_full)
+      << "a ground-truth file was written below storage.min_free_mb";
+  ExpectConsistent(*s);
+  const auto kept = VerifiedFramesOnDisk(s->dir);
+  ASSERT_EQ(kept.size(), 38u);
+
+  CaptureOptions resume;
+  resume.out_dir = s->dir;
+  resume.resume = true;  // on the file system: room again
+  const auto resumed = RunCapture(resume);
+  ASSERT_TRUE(resumed.ok()) << resumed.status().ToString();
+  EXPECT_EQ(resumed->status, "complete") << resumed->message;
+  EXPECT_EQ(resumed->views_kept, 38);
+  EXPECT_EQ(resumed->frames, 0);
+  ExpectConsistent(*resumed);
+  ExpectGroundTruthOfEveryView(s->dir, 38);
+  const auto after = VerifiedFramesOnDisk(s->dir);
+  for (const auto& [view, record] : kept)
+    EXPECT_EQ(after.at(view)["sha256"], record["sha256"]) << "view " << view;
+}
+
+// The capture's disk fills up while the ground truth is written: from the
+// `at`-th file written under ground_truth/ on, each write fails with ENOSPC
+// inside write(2) after half its bytes, as a full disk's does (frames and the
+// rest still fit).
+class GroundTruthFillsTheDisk : public PosixCaptureStorage {
+ public:
+  explicit GroundTruthFillsTheDisk(int at) : at_(at) {}
+  Status WriteFileAtomic(const std::string& path, const void* data, size_t size,
+                         const StageHook& on_stage) override {
+    if (path.find("/ground_truth/") == std::string::npos || ++files_ < at_)
+      return PosixCaptureStorage::WriteFileAtomic(path, data, size, on_stage);
+    size_t budget = size / 2;
+    return ::hairrig::WriteFileAtomic(
+        path, data, size, on_stage, [&budget](int fd, const void* bytes, size_t n) -> ssize_t {
+          if (budget == 0) {
+            errno = ENOSPC;
+            return -1;
+          }
+          const ssize_t written = ::write(fd, bytes, std::min(n, budget));
+          if (written > 0) budget -= static_cast<size_t>(written);
+          return written;
+        });
+  }
+
+ private:
+  const int at_;
+  std::atomic<int> files_{0};
+};
+
+// ENOSPC in a ground-truth write is a full disk like any other: the run stops
+// (summary `stopped`, the command line's exit code 3, not an error and exit
+// code 1), says to free space, and --resume completes the capture and its
+// ground truth without touching the frames stored. The 1st ground-truth file
+// is ground_truth.json, written before anything moves; the 8th is one of the
+// first stop's maps, written as a simulated camera renders its frame.
+TEST(CaptureFaults, FullDiskInAGroundTruthWriteStopsTheRunAndResumeFinishesIt) {
+  for (const int at : {1, 8}) {
+    SCOPED_TRACE("ENOSPC from ground-truth file " + std::to_string(at));
+    const std::string dir = FreshDir("fault_truth_disk_" + std::to_string(at));
+    CaptureOptions o;
+    o.config_path = WriteSmallRig(dir);
+    o.out_dir = dir + "/c";
+    o.storage = std::make_shared<GroundTruthFillsTheDisk>(at);
+    const auto s = RunCapture(o);
+    ASSERT_TRUE(s.ok()) << "a full disk is a stopped run, not an error: " << s.status().ToString();
+    EXPECT_EQ(s->status, "stopped") << s->message;
+    EXPECT_LT(s->views_completed, 38);
+    EXPECT_NE(s->message.find("No space left on device"), std::string::npos) << s->message;
+    EXPECT_NE(s->message.find("/ground_truth/"), std::string::npos) << s->message;
+    EXPECT_NE(s->message.find("--resume"), std::string::npos) << s->message;
+    ExpectConsistent(*s);
+    const auto journal = ReadJournal(s->dir);
+    ExpectNoStopAfterTheFirstFault(journal);
+    const auto kept = VerifiedFramesOnDisk(s->dir);
+
+    CaptureOptions resume;
+    resume.out_dir = s->dir;
+    resume.resume = true;
+    const auto resumed = RunCapture(resume);
+    ASSERT_TRUE(resumed.ok()) << resumed.status().ToString();
+    EXPECT_EQ(resumed->status, "complete") << resumed->message;
+    EXPECT_EQ(resumed->views_kept, static_cast<int>(kept.size()));
+    ExpectConsistent(*resumed);
+    ExpectGroundTruthOfEveryView(s->dir, 38);
+    const auto after = VerifiedFramesOnDisk(s->dir);
+    for (const auto& [view, record] : kept)
+      EXPECT_EQ(after.at(view)["sha256"], record["sha256"]) << "view " << view;
+  }
+}
+
+// A capture observer that returns `status` when the capture ends.
+class EndingObserver : public CaptureObserver {
+ public:
+  explicit EndingObserver(Status status) : status_(std::move(status)) {}
+  Status OnCaptureBegin(const CapturePlan&, const CaptureFolder&) override { return Status::Ok(); }
+  Status OnCaptureEnd(const CaptureSummary&) override { return status_; }
+
+ private:
+  Status status_;
+};
+
+// Of the observers' errors at the end of a capture, the storage failure
+// stops the session and the other error is RunCapture's, whichever observer
+// came first.
+TEST(CaptureFaults, AnObserversErrorOutranksAnotherObserversStorageFailure) {
+  const std::string dir = FreshDir("observer_errors");
+  auto config = LoadRigConfig(WriteSmallRig(dir));
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  auto rig = BuildRig(*config);
+  ASSERT_TRUE(rig.ok()) << rig.status().ToString();
+  (*rig)->capture_observers.push_back(
+      std::make_shared<EndingObserver>(IoError(dir + "/c/extra: No space left on device")));
+  (*rig)->capture_observers.push_back(
+      std::make_shared<EndingObserver>(FailedPrecondition("the observer's own failure")));
+  CaptureOptions o;
+  o.rig = rig->get();
+  o.out_dir = dir + "/c";
+  const auto s = RunCapture(o);
+  ASSERT_FALSE(s.ok()) << "the observer's failure was lost; status " << s->status;
+  EXPECT_EQ(s.status().code(), StatusCode::kFailedPrecondition) << s.status().ToString();
+  EXPECT_EQ(s.status().message(), "the observer's own failure");
+  EXPECT_FALSE(fs::exists(dir + "/c/contact_sheet.png"));
+}
+
+// storage.min_free_mb beyond any disk (1e300, which would refuse every
+// capture as short of space), negative or not a number is refused when the
+// config is read, naming the file and the field, before the capture folder
+// exists. So are the simulated faults' counts and delays.
+TEST(Capture, NumbersBeyondAnyRigAreRefusedNamingTheFileAndField) {
+  const std::string dir = FreshDir("capture_number_ranges");
+  const std::vector<std::pair<std::map<std::string, std::string>, std::string>> cases = {
+      {{{"storage", "storage: {min_free_mb: 1e300}\n"}}, "field 'storage.min_free_mb'"},
+      {{{"storage", "storage: {min_free_mb: -1}\n"}}, "field 'storage.min_free_mb'"},
+      {{{"storage", "storage: {min_free_mb: .nan}\n"}}, "field 'storage.min_free_mb'"},
+      {{{"storage", "storage: {min_free_mb: .inf}\n"}}, "field 'storage.min_free_mb'"},
+      {SimWithFaults("    - {kind: turntable_timeout, at: 2000000000, count: 2000000000}"),
+       "field 'sim.faults[0].at'"},
+      {SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, delay_s: 1e300}"),
+       "field 'sim.faults[0].delay_s'"}};
+  for (const auto& [sections, field] : cases) {
+    CaptureOptions o;
+    o.config_path = WriteSmallRig(dir, sections);
+    o.out_dir = dir + "/c";
+    const auto s = RunCapture(o);
+    ASSERT_FALSE(s.ok()) << field;
+    EXPECT_EQ(s.status().code(), StatusCode::kInvalidArgument) << s.status().ToString();
+    EXPECT_NE(s.status().message().find(o.config_path + ":"), std::string::npos)
+        << s.status().ToString();
+    EXPECT_NE(s.status().message().find(field), std::string::npos) << s.status().ToString();
+    EXPECT_FALSE(fs::exists(o.out_dir));
+  }
 }
 
 TEST(CaptureFaults, NotEnoughSpaceForThePlanIsRefusedBeforeStarting) {
   const std::string dir = FreshDir("fault_no_space");
   CaptureOptions o;
-  o.config_path = WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 1.0e12}\n"}});
+  // 100 TB, the largest storage.min_free_mb: more than this machine's disk has free.
+  o.config_path = WriteSmallRig(dir, {{"storage", "storage: {min_free_mb: 1.0e8}\n"}});
   o.out_dir = dir + "/c";
   auto s = RunCapture(o);
   ASSERT_FALSE(s.ok());

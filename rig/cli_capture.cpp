@@ -68,7 +68,10 @@ void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
     options->on_progress = ProgressPrinter();
     options->on_captured = EndProgressLine;
     DispatchSummary(dispatch, [options] { return CaptureAndProcess(*options); });
-    dispatch.exit_code = [](const nlohmann::json& j) { return j["status"] == "complete" ? 0 : 3; };
+    // 3: the capture ended incomplete or stopped, or its calibration was skipped for lack of room.
+    dispatch.exit_code = [](const nlohmann::json& j) {
+      return j["status"] == "complete" && !j.contains("calibration_skipped") ? 0 : 3;
+    };
   });
 }
 

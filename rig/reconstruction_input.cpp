@@ -2,13 +2,14 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 
 #include "calibration/calibration_io.h"
 #include "core/calib_box.h"
 #include "core/head_config.h"
 #include "reconstruction/hair_segmentation.h"
 #include "rig/capture_calibration_input.h"
-#include "rig/safe_names.h"
+#include "rig/manifest_frames.h"
 
 namespace hairrig {
 
@@ -16,14 +17,39 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The frame's path when it lies inside the capture folder and exists.
-Result<std::string> FramePath(const fs::path& capture, const std::string& frame) {
-  const fs::path path = (capture / frame).lexically_normal();
-  if (frame.empty() || !PathIsInside(path.string(), capture.string()))
-    return CorruptData("frame '" + frame + "' is outside the capture folder");
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return NotFound(path.string() + " is missing");
-  return path.string();
+// The capture's frames by file name (as calibration.json names them), each
+// checked against its manifest record.
+Result<std::map<std::string, ManifestFrame>> CheckedFrames(const std::string& capture_dir) {
+  HR_ASSIGN_OR_RETURN(std::vector<ManifestFrame> frames, ReadManifestFrames(capture_dir));
+  HR_RETURN_IF_ERROR(VerifyManifestFrames(capture_dir, &frames));
+  std::map<std::string, ManifestFrame> by_file;
+  for (ManifestFrame& frame : frames) by_file.emplace(frame.file, std::move(frame));
+  return by_file;
+}
+
+// Why the calibrated view's frame (`file`, relative to the capture folder)
+// cannot be used, naming <capture>/<file>; "" when it can.
+std::string FrameProblem(const fs::path& capture,
+                         const std::map<std::string, ManifestFrame>& frames,
+                         const std::string& file) {
+  const auto frame = frames.find(file);
+  if (frame == frames.end())
+    return (capture / file).string() +
+           ": no manifest.json record vouches for it; calibrate the capture again";
+  return frame->second.unusable;
+}
+
+// FailedPrecondition naming the capture and the first views left out, with why.
+Status TooFewViews(const std::string& capture_dir, const ReconstructionInput& input) {
+  constexpr size_t kShown = 3;
+  std::string message = capture_dir + ": only " + std::to_string(input.views.size()) +
+                        " view(s) can be used, the reconstruction needs " +
+                        std::to_string(kMinStereoViews);
+  for (size_t i = 0; i < input.left_out.size() && i < kShown; ++i)
+    message += (i == 0 ? "; left out: " : "; ") + input.left_out[i];
+  if (input.left_out.size() > kShown)
+    message += "; and " + std::to_string(input.left_out.size() - kShown) + " more";
+  return FailedPrecondition(message);
 }
 
 }  // namespace
@@ -34,6 +60,7 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
   HR_ASSIGN_OR_RETURN(const StoredCalibration calibration, ReadCalibration(calibration_file));
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(capture_dir));
   HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+  HR_ASSIGN_OR_RETURN(const auto frames, CheckedFrames(capture_dir));
   const CalibBox& box = section.box;
   const std::array<Eigen::Vector3d, 8> corners = BoxCornerPoints(0.5 * box.size_mm);
   const std::vector<Eigen::Vector3d> box_corners(corners.begin(), corners.end());
@@ -51,15 +78,15 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
       input.left_out.push_back(name + ": the calibration failed (" + why + ")");
       continue;
     }
-    const Result<std::string> path = FramePath(capture, view.frame);
-    if (!path.ok()) {
-      input.left_out.push_back(name + ": " + path.status().message());
+    const std::string problem = FrameProblem(capture, frames, view.frame);
+    if (!problem.empty()) {
+      input.left_out.push_back(name + ": " + problem);
       continue;
     }
     ReconstructionView v;
     v.id = view.view;
     v.name = name;
-    v.image_path = *path;
+    v.image_path = frames.at(view.frame).path;
     v.camera = camera.intrinsics;
     v.cam_from_object = view.cam_from_object;
     const std::vector<cv::Point2f> outline =
@@ -67,6 +94,7 @@ Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& ca
     if (!outline.empty()) v.not_hair_px.push_back(outline);
     input.views.push_back(std::move(v));
   }
+  if (input.views.size() < kMinStereoViews) return TooFewViews(capture_dir, input);
   return input;
 }
 

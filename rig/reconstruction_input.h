@@ -15,10 +15,16 @@
 
 namespace hairrig {
 
-// Errors name the file: no calibration (run `hairrig calibrate` first), a
-// damaged calibration.json or rig.yaml. A view the calibration did not solve
-// or whose frame is missing or outside the capture folder is listed in
-// `left_out` with the reason; the rest are returned.
+// Each view's frame is checked against its manifest.json record before it is
+// used (rig/manifest_frames.h), and its image_path is the file that was
+// checked (its symlinks resolved). A view the calibration did not solve, or whose
+// frame no manifest record vouches for or does not verify (missing, changed:
+// another size or SHA-256, leading outside the capture folder), is listed in
+// `left_out` as "<view name>: <why>", the why naming <capture>/<file>; the rest are
+// returned. Errors name the file: no calibration (run `hairrig calibrate`
+// first), a damaged calibration.json, manifest.json or rig.yaml, a frames/
+// folder leading outside the capture folder (FailedPrecondition), fewer than
+// two usable views (FailedPrecondition naming the first views left out).
 Result<ReconstructionInput> LoadCaptureReconstructionInput(const std::string& capture_dir);
 
 // Keeps the views with the listed ids, in the listed order (all when `ids` is

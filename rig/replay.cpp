@@ -9,6 +9,7 @@
 #include <mutex>
 #include <thread>
 
+#include "core/config.h"
 #include "core/file_util.h"
 #include "core/sha256.h"
 #include "drivers/always_present_device.h"
@@ -16,7 +17,6 @@
 #include "drivers/trigger_bus.h"
 #include "rig/capture_dataset.h"
 #include "rig/journal_records.h"
-#include "rig/safe_names.h"
 
 namespace hairrig {
 
@@ -214,8 +214,9 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
  public:
   using ReplayDevice::ReplayDevice;
   TurntableCapabilities capabilities() const override {
-    return {.max_speed_deg_s = 3600,
-            .max_accel_deg_s2 = 36000,
+    // The fastest motion any rig config asks for: a replay never limits a plan.
+    return {.max_speed_deg_s = kTurntableSpeedRange.max,
+            .max_accel_deg_s2 = kTurntableAccelRange.max,
             .resolution_deg = 1e-6,
             .can_home = true,
             .settle_s = 0};

@@ -31,7 +31,7 @@ class WiringBus : public UsbRelayBus {
 
 class NoOpObserver : public CaptureObserver {
  public:
-  Status OnCaptureBegin(const CapturePlan&, const std::string&) override { return Status::Ok(); }
+  Status OnCaptureBegin(const CapturePlan&, const CaptureFolder&) override { return Status::Ok(); }
   Status OnCaptureEnd(const CaptureSummary&) override { return Status::Ok(); }
 };
 

@@ -1,6 +1,7 @@
 #include "rig/safe_names.h"
 
-#include <filesystem>
+#include <cctype>
+#include <cstdio>
 
 namespace hairrig {
 namespace {
@@ -56,26 +57,6 @@ std::string FileNamePart(const std::string& text) {
   if (out.empty()) return "_";
   if (out[0] == '.') out[0] = '_';
   return out;
-}
-
-bool PathIsInside(const std::string& path, const std::string& folder) {
-  namespace fs = std::filesystem;
-  const fs::path p = fs::absolute(path).lexically_normal();
-  const fs::path f = fs::absolute(folder).lexically_normal();
-  const fs::path rel = p.lexically_relative(f);
-  return !rel.empty() && *rel.begin() != ".." && rel.is_relative() && rel != ".";
-}
-
-Result<std::string> ResolveInside(const std::string& path, const std::string& folder) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path resolved = fs::weakly_canonical(fs::absolute(path, ec), ec);
-  if (ec) return IoError(path + ": cannot resolve the path (" + ec.message() + ")");
-  const fs::path root = fs::weakly_canonical(fs::absolute(folder, ec), ec);
-  if (ec) return IoError(folder + ": cannot resolve the path (" + ec.message() + ")");
-  if (!PathIsInside(resolved.string(), root.string()))
-    return CorruptData(path + " leads to " + resolved.string() + ", outside " + root.string());
-  return resolved.string();
 }
 
 }  // namespace hairrig

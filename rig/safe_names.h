@@ -18,14 +18,4 @@ Result<std::string> SubjectFolderName(const std::string& subject);
 // outside [A-Za-z0-9._-] becomes '_', a leading '.' too; never empty.
 std::string FileNamePart(const std::string& text);
 
-// True if `path` lies inside `folder` after both are made absolute and
-// lexically normalised (no "..", no absolute escape).
-bool PathIsInside(const std::string& path, const std::string& folder);
-
-// `path` with every symlink on the way resolved, if it then lies inside
-// `folder` (resolved the same way); CorruptData naming `path` and where it
-// leads otherwise. A symlink that points out of a capture folder (to
-// /dev/zero, to another capture) is caught here before anything reads it.
-Result<std::string> ResolveInside(const std::string& path, const std::string& folder);
-
 }  // namespace hairrig

@@ -62,13 +62,15 @@ std::vector<PlannedTruthView> TruthViews(const CapturePlan& plan) {
   return views;
 }
 
-// Writes each capture's ground truth from the world's renders.
+// Writes each capture's ground truth from the world's renders, each file
+// through the capture folder's writer (its storage and storage.min_free_mb).
 class GroundTruthWriter : public CaptureObserver {
  public:
   explicit GroundTruthWriter(std::shared_ptr<SimWorld> world) : world_(std::move(world)) {}
 
-  Status OnCaptureBegin(const CapturePlan& plan, const std::string& capture_dir) override {
-    HR_ASSIGN_OR_RETURN(truth_, CaptureGroundTruth::Begin(*world_, TruthViews(plan), capture_dir));
+  Status OnCaptureBegin(const CapturePlan& plan, const CaptureFolder& folder) override {
+    HR_ASSIGN_OR_RETURN(
+        truth_, CaptureGroundTruth::Begin(*world_, TruthViews(plan), folder.dir, folder.write));
     return Status::Ok();
   }
 

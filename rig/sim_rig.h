@@ -14,8 +14,9 @@
 // (sim_hw/sim_devices.h) rendering the scene: the `sim` backend of every device
 // kind acts on it; its captures are written to the world's disk (a `disk_full`
 // fault); each capture's ground truth (sim_hw/capture_truth.h) is written under
-// <capture>/ground_truth/ by a capture observer. The real backends reach
-// simulated peers of the world:
+// <capture>/ground_truth/ by a capture observer, through the capture's storage
+// and its storage.min_free_mb check (rig/capture.h CaptureFolder). The real
+// backends reach simulated peers of the world:
 //   - a `modbus` turntable with `host: sim` (TCP) or `device: sim` (RTU) talks
 //     to a simulated controller served on loopback or a pseudo-terminal
 //     (sim_hw/modbus_turntable_server.h);

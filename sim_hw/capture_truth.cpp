@@ -6,7 +6,6 @@
 #include <mutex>
 #include <set>
 
-#include "core/file_util.h"
 #include "core/parallel.h"
 #include "core/strand_io.h"
 #include "sim_hw/ground_truth.h"
@@ -20,7 +19,8 @@ constexpr double kAngleMatchDeg = 0.01;
 // ground_truth.json: each view at the angle its frame was rendered at where
 // known (`rendered_deg`), else at its stop's commanded angle.
 Status WriteTruthJson(const Scene& scene, const std::vector<PlannedTruthView>& views,
-                      const std::map<int, double>& rendered_deg, const std::string& dir) {
+                      const std::map<int, double>& rendered_deg, const std::string& dir,
+                      const FileWriter& write) {
   std::vector<ViewGroundTruth> truths;
   for (const PlannedTruthView& v : views) {
     const int camera = scene.FindCamera(v.camera_serial);
@@ -29,8 +29,16 @@ Status WriteTruthJson(const Scene& scene, const std::vector<PlannedTruthView>& v
     const double angle = rendered != rendered_deg.end() ? rendered->second : v.turntable_deg;
     truths.push_back(MakeViewGroundTruth(scene, v.view, v.stop, camera, angle));
   }
-  return WriteFileAtomic(dir + "/ground_truth.json",
-                         GroundTruthJson(scene, truths, /*with_maps=*/true));
+  const std::string text = GroundTruthJson(scene, truths, /*with_maps=*/true);
+  return write(dir + "/ground_truth.json", text.data(), text.size());
+}
+
+// The wig, turntable frame, as binary PLY.
+Status WriteTruthStrands(const SimWorld& world, const std::string& dir, const FileWriter& write) {
+  HR_ASSIGN_OR_RETURN(
+      const std::vector<uint8_t> bytes,
+      EncodeStrands(WorldRenderer(world).strands_turntable_mm(), StrandFormat::kPlyBinary));
+  return write(dir + "/ground_truth_strands.ply", bytes.data(), bytes.size());
 }
 
 std::vector<int> SceneCameras(const Scene& scene, const std::vector<PlannedTruthView>& views) {
@@ -45,11 +53,29 @@ struct CaptureGroundTruth::State {
   std::vector<PlannedTruthView> views;
   std::vector<int> scene_cameras;  // per view; -1: not a camera of the scene
   std::string dir, maps_dir;
+  FileWriter file_writer;  // the capture's (empty: the file system)
   std::mutex mutex;
   std::map<int, double> written;  // view -> the turntable angle its maps were rendered at (deg)
   std::set<int> writing;          // views whose maps a camera's thread is writing now
-  Status first_error;
+  Status first_error;             // of any write: once set, nothing more is written
   bool recording = true;
+
+  // Writes with file_writer unless an earlier write failed; keeps the first failure.
+  Status Write(const std::string& path, const void* data, size_t size) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!first_error.ok()) return first_error;
+    }
+    const Status s = WriteFileWith(file_writer, path, data, size);
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!s.ok() && first_error.ok()) first_error = s;
+    return s;
+  }
+  FileWriter Writer() {
+    return [this](const std::string& path, const void* data, size_t size) {
+      return Write(path, data, size);
+    };
+  }
 
   void Record(int scene_camera, double turntable_deg, const ViewTruthMaps& maps) {
     for (size_t i = 0; i < views.size(); ++i) {
@@ -57,11 +83,12 @@ struct CaptureGroundTruth::State {
       if (scene_cameras[i] != scene_camera || std::abs(off) > kAngleMatchDeg) continue;
       {
         std::lock_guard<std::mutex> lock(mutex);
-        if (!recording || written.count(views[i].view) > 0 || writing.count(views[i].view) > 0)
+        if (!recording || !first_error.ok() || written.count(views[i].view) > 0 ||
+            writing.count(views[i].view) > 0)
           continue;
         writing.insert(views[i].view);
       }
-      const Status s = WriteViewTruthMaps(maps_dir, views[i].view, maps);
+      const Status s = WriteViewTruthMaps(maps_dir, views[i].view, maps, Writer());
       std::lock_guard<std::mutex> lock(mutex);
       writing.erase(views[i].view);
       if (s.ok())
@@ -76,18 +103,19 @@ CaptureGroundTruth::CaptureGroundTruth(SimWorld& world, std::shared_ptr<State> s
     : world_(world), state_(std::move(state)) {}
 
 Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(
-    SimWorld& world, std::vector<PlannedTruthView> views, const std::string& capture_dir) {
+    SimWorld& world, std::vector<PlannedTruthView> views, const std::string& capture_dir,
+    FileWriter write) {
   const Scene& scene = WorldRenderer(world).scene();
   auto state = std::make_shared<State>();
   state->dir = capture_dir + "/ground_truth";
   state->maps_dir = state->dir + "/views";
+  state->file_writer = std::move(write);
   std::error_code ec;
   std::filesystem::create_directories(state->maps_dir, ec);
   if (ec) return IoError(state->maps_dir + ": cannot create (" + ec.message() + ")");
-  HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, state->dir));
-  HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir));
-  HR_RETURN_IF_ERROR(WriteStrands(state->dir + "/ground_truth_strands.ply",
-                                  WorldRenderer(world).strands_turntable_mm()));
+  HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, state->dir, state->Writer()));
+  HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir, state->Writer()));
+  HR_RETURN_IF_ERROR(WriteTruthStrands(world, state->dir, state->Writer()));
   state->scene_cameras = SceneCameras(scene, views);
   state->views = std::move(views);
   SetWorldTruthRecorder(world,
@@ -129,6 +157,10 @@ Status CaptureGroundTruth::Finish() {
   std::vector<Status> errors(missing.size());
   ParallelFor(missing.size(), 2, [&] {
     return [&](size_t k) {
+      {
+        std::lock_guard<std::mutex> lock(st.mutex);
+        if (!st.first_error.ok()) return;  // nothing more is written: no render either
+      }
       const PlannedTruthView& v = st.views[missing[k]];
       RenderOptions o;
       o.noise = false;
@@ -136,9 +168,14 @@ Status CaptureGroundTruth::Finish() {
       o.ground_truth = true;
       o.shade_hair = false;
       auto view = WorldRenderer(world_).Render(st.scene_cameras[missing[k]], v.turntable_deg, o);
-      errors[k] = view.ok() ? WriteViewTruthMaps(st.maps_dir, v.view, view->truth) : view.status();
+      errors[k] = view.ok() ? WriteViewTruthMaps(st.maps_dir, v.view, view->truth, st.Writer())
+                            : view.status();
     };
   });
+  {
+    std::lock_guard<std::mutex> lock(st.mutex);
+    HR_RETURN_IF_ERROR(st.first_error);  // the write that failed first, not one refused after it
+  }
   for (const Status& s : errors) HR_RETURN_IF_ERROR(s);
   std::map<int, double> rendered_deg;
   {
@@ -146,7 +183,7 @@ Status CaptureGroundTruth::Finish() {
     rendered_deg = st.written;
   }
   if (rendered_deg.empty()) return Status::Ok();
-  return WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir);
+  return WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir, st.Writer());
 }
 
 }  // namespace hairrig

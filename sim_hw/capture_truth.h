@@ -5,13 +5,17 @@
 // and views/NNN_*.png (per-pixel maps, sim_hw/ground_truth.h).
 // The maps come from the very renders that make the frames: a view's maps
 // are written when a simulated camera renders its frame, so the capture pays
-// no second render.
+// no second render. Every file is written with the capture's FileWriter
+// (core/capture_storage.h: its storage and free-space check), so a full disk
+// or the capture's storage.min_free_mb refuses a ground-truth file as it
+// refuses a frame.
 #pragma once
 
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "core/capture_storage.h"
 #include "core/status.h"
 
 namespace hairrig {
@@ -32,17 +36,21 @@ class CaptureGroundTruth {
   // Writes the JSON and the strands, then records the maps of each planned
   // view whose frame the world's cameras render (a render matches a view by
   // camera and by turntable angle, within 0.01 deg of the stop). Views of
-  // cameras the scene lacks are left out. Errors name the file.
+  // cameras the scene lacks are left out. Every file goes through `write`
+  // (empty: the file system); once a write fails, no further maps are
+  // written while recording. Errors name the file.
   static Result<std::unique_ptr<CaptureGroundTruth>> Begin(SimWorld& world,
                                                            std::vector<PlannedTruthView> views,
-                                                           const std::string& capture_dir);
+                                                           const std::string& capture_dir,
+                                                           FileWriter write = {});
   ~CaptureGroundTruth();  // stops recording
 
   // Stops recording, renders the maps of the views no camera rendered while
   // recording (a resumed capture's earlier views, views that failed) and
   // rewrites ground_truth.json with each recorded view at the angle its frame
   // was rendered at (the simulated encoder's, within 0.001 deg of the stop's);
-  // the first error of any write.
+  // the first error of any write (a write that failed while recording
+  // included: then nothing more is written).
   Status Finish();
 
   int views_recorded() const;  // maps written from the capture's own renders

@@ -44,11 +44,12 @@ std::string TruthHeadMeshName(const HeadSpec& head) {
   return FileExtension(head.mesh_file) == "obj" ? "head_mesh.obj" : "head_mesh.ply";
 }
 
-Status WriteTruthHeadMesh(const Scene& scene, const std::string& truth_dir) {
+Status WriteTruthHeadMesh(const Scene& scene, const std::string& truth_dir,
+                          const FileWriter& write) {
   const std::string name = TruthHeadMeshName(scene.head);
   if (name.empty()) return Status::Ok();
   HR_ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, ReadFileBytes(scene.head.mesh_file));
-  return WriteFileAtomic(truth_dir + "/" + name, bytes.data(), bytes.size());
+  return WriteFileWith(write, truth_dir + "/" + name, bytes.data(), bytes.size());
 }
 
 std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTruth>& views,

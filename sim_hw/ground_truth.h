@@ -47,7 +47,9 @@ std::string GroundTruthJson(const Scene& scene, const std::vector<ViewGroundTrut
 // "head_mesh.obj" for an OBJ mesh, copied as it is); "" for an ellipsoid head.
 std::string TruthHeadMeshName(const HeadSpec& head);
 // Copies the scene head's mesh file to <truth_dir>/TruthHeadMeshName(...)
-// (written atomically; nothing for an ellipsoid head). Errors name the file.
-Status WriteTruthHeadMesh(const Scene& scene, const std::string& truth_dir);
+// (written atomically with `write`, core/capture_storage.h; empty: the file
+// system; nothing for an ellipsoid head). Errors name the file.
+Status WriteTruthHeadMesh(const Scene& scene, const std::string& truth_dir,
+                          const FileWriter& write = {});
 
 }  // namespace hairrig

@@ -7,13 +7,18 @@
 #include <net/if.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <optional>
+#include <sstream>
 #include <vector>
 
 namespace hairrig {
@@ -191,7 +196,97 @@ Status ReplaceWithUnboundSocket(int fd) {
   return Status::Ok();
 }
 
+// The inode of the socket at `fd` ("socket:[inode]" in /proc/self/fd, the
+// inode column of /proc/net/udp); nullopt when `fd` is no socket.
+std::optional<uint64_t> SocketInode(int fd) {
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISSOCK(st.st_mode)) return std::nullopt;
+  return static_cast<uint64_t>(st.st_ino);
+}
+
+// Whether `fd` is a socket opened since `before` was taken (OpenSocketInodes).
+bool OpenedSince(int fd, const std::set<uint64_t>& before) {
+  const std::optional<uint64_t> inode = SocketInode(fd);
+  return inode && before.count(*inode) == 0;
+}
+
+// A hexadecimal field of /proc/net/udp.
+uint32_t ParseHex(const std::string& hex) {
+  return static_cast<uint32_t>(std::strtoul(hex.c_str(), nullptr, 16));
+}
+
+// Whether a local address of /proc/net/udp ("0100007F", the 32-bit word as
+// the kernel prints it) or udp6 (four such words) takes packets for `address`
+// (the wildcard, `address` itself, or `address` mapped into IPv6).
+bool TakesPacketsFor(const std::string& hex, in_addr address) {
+  std::vector<uint32_t> words;
+  for (size_t at = 0; at + 8 <= hex.size(); at += 8) words.push_back(ParseHex(hex.substr(at, 8)));
+  if (words.size() == 1) return words[0] == 0 || words[0] == address.s_addr;
+  if (words.size() != 4 || words[0] != 0 || words[1] != 0) return false;
+  return (words[2] == 0 && words[3] == 0) ||
+         (words[2] == htonl(0xFFFF) && words[3] == address.s_addr);
+}
+
+// Adds the inodes of the sockets in `table` (/proc/net/udp or udp6) that
+// take packets for `address`:kGvcpPort; false when it cannot be read.
+bool ReadGvcpServers(const char* table, in_addr address, std::set<uint64_t>* inodes) {
+  std::ifstream in(table);
+  if (!in) return false;
+  std::string line;
+  std::getline(in, line);  // the column names
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, remote, state, queues, timer, retransmits, uid, timeout;
+    uint64_t inode = 0;
+    if (!(fields >> slot >> local >> remote >> state >> queues >> timer >> retransmits >> uid >>
+          timeout >> inode)) {
+      continue;
+    }
+    const size_t colon = local.find(':');
+    if (colon == std::string::npos ||
+        ParseHex(local.substr(colon + 1)) != static_cast<uint32_t>(kGvcpPort)) {
+      continue;
+    }
+    if (TakesPacketsFor(local.substr(0, colon), address)) inodes->insert(inode);
+  }
+  return true;
+}
+
+// The inodes of the UDP sockets that take packets for `address`:kGvcpPort;
+// nullopt when the kernel's table of IPv4 sockets cannot be read.
+std::optional<std::set<uint64_t>> GvcpServerInodes(in_addr address) {
+  std::set<uint64_t> inodes;
+  if (!ReadGvcpServers("/proc/net/udp", address, &inodes)) return std::nullopt;
+  (void)ReadGvcpServers("/proc/net/udp6", address, &inodes);  // absent without IPv6
+  return inodes;
+}
+
 }  // namespace
+
+Status RequireSoleGvcpServer(const std::set<uint64_t>& before,
+                             const std::string& interface_address) {
+  in_addr served{};
+  if (inet_pton(AF_INET, interface_address.c_str(), &served) != 1) {
+    return InvalidArgument("GVCP guard: '" + interface_address + "' is not an IPv4 address");
+  }
+  const std::optional<std::set<uint64_t>> servers = GvcpServerInodes(served);
+  if (!servers) return Status::Ok();  // no /proc/net/udp to tell
+  const std::string endpoint = interface_address + ":" + std::to_string(kGvcpPort);
+  const std::set<uint64_t> open_now = OpenSocketInodes();
+  bool served_here = false;
+  for (uint64_t inode : *servers) {
+    if (open_now.count(inode) != 0 && before.count(inode) == 0) {  // the fake's
+      served_here = true;
+      continue;
+    }
+    return Unavailable(endpoint + " is already served by another UDP socket (inode " +
+                       std::to_string(inode) +
+                       "): two GigE Vision cameras on one port take each other's packets, and "
+                       "a client would get the other's answers and images");
+  }
+  if (!served_here) return Unavailable("the GigE fake camera could not bind " + endpoint);
+  return Status::Ok();
+}
 
 Status AttachGvcpFilter(int fd, GvcpMemoryLimits limits) {
   std::vector<sock_filter> code = GvcpFilter(limits);
@@ -214,7 +309,15 @@ std::set<int> OpenDescriptors() {
   return fds;
 }
 
-Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before,
+std::set<uint64_t> OpenSocketInodes() {
+  std::set<uint64_t> inodes;
+  for (int fd : OpenDescriptors()) {
+    if (const std::optional<uint64_t> inode = SocketInode(fd)) inodes.insert(*inode);
+  }
+  return inodes;
+}
+
+Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<uint64_t>& before,
                                             const std::string& interface_address,
                                             GvcpMemoryLimits limits) {
   in_addr served{};
@@ -225,7 +328,7 @@ Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before,
   GvcpGuardSummary summary;
   for (int fd : OpenDescriptors()) {
     sockaddr_in bound{};
-    if (before.count(fd) != 0 || !BoundToGvcpPort(fd, &bound)) continue;
+    if (!OpenedSince(fd, before) || !BoundToGvcpPort(fd, &bound)) continue;
     HR_RETURN_IF_ERROR(AttachGvcpFilter(fd, limits));
     ++summary.filtered;
     if (bound.sin_addr.s_addr == served.s_addr) continue;

@@ -41,6 +41,13 @@ Status AttachGvcpFilter(int fd, GvcpMemoryLimits limits);
 // The descriptors open in this process now.
 std::set<int> OpenDescriptors();
 
+// The inodes of the sockets open in this process now ("socket:[inode]" in
+// /proc/self/fd): the `before` of GuardGvFakeSockets and
+// RequireSoleGvcpServer, taken before the fake starts. A socket is told by
+// its inode, not its descriptor: a descriptor closed meanwhile (by another
+// thread) can be reused for one of the fake's sockets.
+std::set<uint64_t> OpenSocketInodes();
+
 struct GvcpGuardSummary {
   int filtered = 0;  // sockets on the GVCP port given the filter
   int confined = 0;  // broadcast sockets confined to the interface
@@ -48,11 +55,23 @@ struct GvcpGuardSummary {
 };
 
 // Guards the UDP sockets on the GVCP port opened since `before` (the fake
-// camera's), the fake serving on the interface with IPv4 address
-// `interface_address`. Unavailable when there is none, or the filter cannot
-// be attached: the fake must not serve unguarded.
-Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<int>& before,
+// camera's; `before` from OpenSocketInodes), the fake serving on the
+// interface with IPv4 address `interface_address`. Unavailable when there is
+// none, or the filter cannot be attached: the fake must not serve unguarded.
+Result<GvcpGuardSummary> GuardGvFakeSockets(const std::set<uint64_t>& before,
                                             const std::string& interface_address,
                                             GvcpMemoryLimits limits);
+
+// Checks that the GigE fake started since `before` alone serves
+// `interface_address` on the GVCP port. Unavailable when a UDP socket not
+// opened by this process since `before` (another process's, or one this
+// process had before) takes packets sent there (bound to that address or to
+// every address, IPv4 or IPv6, in this network namespace: /proc/net/udp,
+// udp6), or when none of the new sockets is bound there; Ok when
+// /proc/net/udp cannot be read. A second Aravis fake on the port starts
+// without its control socket and answers discovery; a client would get the
+// first one's answers and images.
+Status RequireSoleGvcpServer(const std::set<uint64_t>& before,
+                             const std::string& interface_address);
 
 }  // namespace hairrig

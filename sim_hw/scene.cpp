@@ -63,7 +63,7 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
   w->segment_mm = n.Number("segment_mm", w->segment_mm, {.min = 0.1, .max = 100});
   w->scalp_min_elevation_deg =
       n.Number("scalp_min_elevation_deg", w->scalp_min_elevation_deg, {.min = -90, .max = 89});
-  w->face_dir = n.Vec3("face_dir", w->face_dir);
+  w->face_dir = n.Vec3("face_dir", w->face_dir, kDirectionRange);
   if (w->face_dir.norm() < 1e-9) n.Fail("face_dir", "must not be the zero vector");
   w->face_dir.normalize();
   w->face_half_angle_deg =
@@ -86,9 +86,7 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
   w->bangs_length_mm = n.Number("bangs_length_mm", w->bangs_length_mm, {.min = 5, .max = 1000});
   w->fibre_diameter_um =
       n.Number("fibre_diameter_um", w->fibre_diameter_um, {.min = 10, .max = 500});
-  w->albedo = n.Vec3("albedo", w->albedo);
-  if (n.ok() && (w->albedo.minCoeff() < 0 || w->albedo.maxCoeff() > 1))
-    n.Fail("albedo", "each channel must lie in 0..1");
+  w->albedo = n.Vec3("albedo", w->albedo, kUnitRange);
   w->seed = static_cast<uint64_t>(n.Integer("seed", static_cast<int>(w->seed), {.min = 0}));
   if (w->style == WigStyle::kFile) {
     w->file = ResolveBesideFile(scene_path, n.String("file"));
@@ -111,24 +109,25 @@ SceneCamera ReadCamera(const ConfigNode& n) {
       n.Fail("resolution", "expected [width, height] between 16 and 20000 pixels");
     }
   }
-  c.intrinsics.fx_px = in.Number("fx_px", {.min = 1});
-  c.intrinsics.fy_px = in.Number("fy_px", {.min = 1});
-  c.intrinsics.cx_px = in.Number("cx_px", 0.5 * (c.intrinsics.width_px - 1));
-  c.intrinsics.cy_px = in.Number("cy_px", 0.5 * (c.intrinsics.height_px - 1));
+  c.intrinsics.fx_px = in.Number("fx_px", {.min = 1, .max = 1e6});
+  c.intrinsics.fy_px = in.Number("fy_px", {.min = 1, .max = 1e6});
+  c.intrinsics.cx_px = in.Number("cx_px", 0.5 * (c.intrinsics.width_px - 1), kPixelRange);
+  c.intrinsics.cy_px = in.Number("cy_px", 0.5 * (c.intrinsics.height_px - 1), kPixelRange);
   c.intrinsics.k1 = in.Number("k1", 0.0, {.min = -2, .max = 2});
   c.intrinsics.k2 = in.Number("k2", 0.0, {.min = -2, .max = 2});
   c.intrinsics.p1 = in.Number("p1", 0.0, {.min = -0.1, .max = 0.1});
   c.intrinsics.p2 = in.Number("p2", 0.0, {.min = -0.1, .max = 0.1});
   c.intrinsics.k3 = in.Number("k3", 0.0, {.min = -2, .max = 2});
-  const Eigen::Vector3d eye = n.Vec3("eye_mm");
-  const Eigen::Vector3d target = n.Vec3("target_mm");
+  const Eigen::Vector3d eye = n.Vec3("eye_mm", kPositionRangeMm);
+  const Eigen::Vector3d target = n.Vec3("target_mm", kPositionRangeMm);
   if (n.ok() && (eye - target).norm() < 1.0)
     n.Fail("target_mm", "the camera must look somewhere: eye_mm equals target_mm");
   c.cam_from_world = LookAt(eye, target);
   c.read_noise_dn = n.Number("read_noise_dn", c.read_noise_dn, {.min = 0, .max = 100});
   c.shot_noise_gain = n.Number("shot_noise_gain", c.shot_noise_gain, {.min = 0, .max = 10});
   c.exposure_s = n.Number("exposure_s", c.exposure_s, {.min = 1e-6, .max = 30});
-  c.sensitivity = n.Number("sensitivity", c.sensitivity, {.min = 1e-6});
+  // DN per unit radiance per second / 255 (default 50): 1e6 is far beyond any sensor.
+  c.sensitivity = n.Number("sensitivity", c.sensitivity, {.min = 1e-6, .max = 1e6});
   return c;
 }
 
@@ -163,24 +162,29 @@ Result<Scene> LoadScene(const std::string& path) {
   scene.turntable_from_box = ReadPoseConfig(box.Child("turntable_from_box"));
   for (const ConfigNode& l : root.Items("lights")) {
     l.AllowOnlyKeys({"name", "position_mm", "intensity"});
-    scene.lights.push_back(
-        {l.String("name"), l.Vec3("position_mm"), l.Number("intensity", 1.0, {.min = 0})});
+    scene.lights.push_back({l.String("name"), l.Vec3("position_mm", kPositionRangeMm),
+                            l.Number("intensity", 1.0, {.min = 0, .max = 1000})});
   }
   for (const ConfigNode& c : root.Items("cameras")) scene.cameras.push_back(ReadCamera(c));
-  scene.backdrop_albedo = root.Vec3("backdrop_albedo", scene.backdrop_albedo);
+  scene.backdrop_albedo = root.Vec3("backdrop_albedo", scene.backdrop_albedo, kUnitRange);
   scene.ambient = root.Number("ambient", scene.ambient, {.min = 0, .max = 1});
   if (root.Has("turntable")) {
     const ConfigNode t = root.Child("turntable");
     t.AllowOnlyKeys({"stops", "speed_deg_s", "accel_deg_s2", "settle_s", "camera_readout_s",
                      "camera_download_s"});
     scene.turntable_stops = t.Integer("stops", scene.turntable_stops, {.min = 1, .max = 3600});
+    // The rig config's limits for the same quantities (rig/capture_plan.cpp,
+    // drivers/devices_common.cpp).
     scene.turntable_speed_deg_s =
-        t.Number("speed_deg_s", scene.turntable_speed_deg_s, {.min = 0.01});
+        t.Number("speed_deg_s", scene.turntable_speed_deg_s, kTurntableSpeedRange);
     scene.turntable_accel_deg_s2 =
-        t.Number("accel_deg_s2", scene.turntable_accel_deg_s2, {.min = 0.01});
-    scene.turntable_settle_s = t.Number("settle_s", scene.turntable_settle_s, {.min = 0});
-    scene.camera_readout_s = t.Number("camera_readout_s", scene.camera_readout_s, {.min = 0});
-    scene.camera_download_s = t.Number("camera_download_s", scene.camera_download_s, {.min = 0});
+        t.Number("accel_deg_s2", scene.turntable_accel_deg_s2, kTurntableAccelRange);
+    scene.turntable_settle_s =
+        t.Number("settle_s", scene.turntable_settle_s, {.min = 0, .max = 60});
+    scene.camera_readout_s =
+        t.Number("camera_readout_s", scene.camera_readout_s, {.min = 0, .max = 60});
+    scene.camera_download_s =
+        t.Number("camera_download_s", scene.camera_download_s, {.min = 0, .max = 600});
   }
   if (!root.ok()) return root.status();
   HR_ASSIGN_OR_RETURN(scene.box, LoadCalibBox(box_file));

@@ -120,7 +120,9 @@ struct Scene {
 };
 
 // Errors name the file, line and field; a camera that sees the box behind it or
-// the box that intersects the head is refused with the reason.
+// the box that intersects the head is refused with the reason. Every number
+// has a range far beyond any real rig (positions within 100 m, the turntable's
+// and cameras' timings within the rig config's limits, core/config.h).
 Result<Scene> LoadScene(const std::string& path);
 // Checks geometry that a parser cannot see (box in front of every camera, box
 // clear of the head, intrinsics valid).

@@ -41,22 +41,37 @@ class SimAravisFeed::Impl {
     arv_fake_camera_set_fill_pattern(fake_, nullptr, nullptr);  // back to Aravis' own pattern
     g_object_unref(fake_);
     fake_ = nullptr;
+    gige_ = nullptr;
   }
 
-  // Holds a reference to `fake`, so that it outlives the camera that streams it.
-  void Attach(ArvFakeCamera* fake, bool fake_gates_triggers) {
+  // Holds a reference to `fake`, so that it outlives the camera that streams
+  // it; `gige` (which owns `fake`) outlives the feed's use of it. Detach
+  // leaves `gige` alone: SimGigECamera drops it before its feed detaches.
+  void Attach(ArvFakeCamera* fake, ArvGvFakeCamera* gige) {
     Detach();
     detaching_ = false;
-    acquiring_ = false;
-    fake_gates_triggers_ = fake_gates_triggers;
+    gige_ = gige;
+    // A frame withheld last left the GigE fake dropping every packet; the
+    // feed's fill lifts that before each frame, Aravis' own pattern would not.
+    if (gige != nullptr) g_object_set(gige, "gvsp-lost-ratio", 0.0, nullptr);
     fake_ = static_cast<ArvFakeCamera*>(g_object_ref(fake));
     arv_fake_camera_set_trigger_frequency(fake, 1000.0);
-    if (options_.render || !fake_gates_triggers)
+    if (options_.render || gige == nullptr)
       arv_fake_camera_set_fill_pattern(fake, &Impl::Fill, this);
     if (!options_.trigger_line.empty()) {
       subscription_ =
           WorldTriggers(*world_).Subscribe(options_.trigger_line, [this] { OnPulse(); });
     }
+  }
+
+  // Attaches again to the GigE fake it feeds, rendering or not (`render`);
+  // the in-process fake is always rendered.
+  void SetRender(bool render) {
+    options_.render = render;
+    if (fake_ == nullptr || gige_ == nullptr) return;
+    auto* fake = static_cast<ArvFakeCamera*>(g_object_ref(fake_));
+    Attach(fake, gige_);
+    g_object_unref(fake);
   }
 
   int frames() const { return frames_.load(); }
@@ -85,33 +100,40 @@ class SimAravisFeed::Impl {
       std::lock_guard<std::mutex> lock(mutex_);
       pulse_exposures_.push_back(ExposeWorldNow(*world_));
     }
-    if (fake_gates_triggers_) {
+    if (gige_ != nullptr) {
       // The GigE fake produces frames on software triggers only: present the pulse as one.
       arv_fake_camera_write_register(fake_, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, kSoftware);
       arv_fake_camera_write_register(fake_, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, 1);
     }
   }
 
-  // The in-process fake streams continuously whatever its trigger mode (its
-  // stream thread even runs before acquisition starts); the feed holds each
-  // frame until its trigger arrives, as a real camera does. False when the
-  // acquisition stops (or the feed detaches) first: the buffer then goes to a
-  // stream that is being torn down.
+  // The phase of the stream whose thread runs the fill. The in-process fake
+  // runs a thread per stream, from the stream's creation (before the
+  // acquisition starts) until the stream is dropped; the backend makes a
+  // stream per Arm and drops it after AcquisitionStop.
+  enum class StreamPhase { kBeforeStart, kAcquiring, kStopped };
+
+  // The in-process fake streams continuously whatever its trigger mode; the
+  // feed holds each frame until its trigger arrives, as a real camera does.
+  // False when the acquisition stops (or the feed detaches) first: the buffer
+  // then goes to a stream that is being dropped, at once, so that dropping it
+  // does not wait.
   bool AwaitTrigger() {
+    thread_local StreamPhase phase = StreamPhase::kBeforeStart;
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
     for (;;) {
       if (detaching_) return false;
       if (arv_fake_camera_get_acquisition_status(fake_) == 0) {
-        if (acquiring_) {
-          acquiring_ = false;  // stopped: the next stream waits for its start
+        if (phase == StreamPhase::kAcquiring) {
+          phase = StreamPhase::kStopped;
           std::lock_guard<std::mutex> lock(mutex_);
           pulse_exposures_.clear();  // AcquisitionStop aborts the frames not yet sent
-          return false;
         }
+        if (phase == StreamPhase::kStopped) return false;
         // Not started yet; a stream dropped without a start must not hang its thread.
         if (std::chrono::steady_clock::now() > give_up) return false;
       } else {
-        acquiring_ = true;
+        phase = StreamPhase::kAcquiring;
         if (InTriggerMode(kSoftware)) {
           if (arv_fake_camera_check_and_acknowledge_software_trigger(fake_)) return true;
         } else if (InTriggerMode(kLine0)) {
@@ -127,18 +149,34 @@ class SimAravisFeed::Impl {
 
   static void Fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 gain,
                    ArvPixelFormat format) {
-    static_cast<Impl*>(data)->Render(buffer, exposure_time_us, gain, format);
+    auto* self = static_cast<Impl*>(data);
+    // The GigE fake sends what the fill leaves, its status unchecked.
+    if (self->gige_ != nullptr) g_object_set(self->gige_, "gvsp-lost-ratio", 0.0, nullptr);
+    if (!self->Render(buffer, exposure_time_us, gain, format)) self->Withhold(buffer);
   }
 
-  void Render(ArvBuffer* buffer, guint32 exposure_time_us, guint32 gain, ArvPixelFormat format) {
-    if (!fake_gates_triggers_ && !AwaitTrigger()) return;
+  // A frame without the view is never served as an image: its buffer gets
+  // frame id 0, which GigE Vision reserves and the fake never gives, and the
+  // GigE fake drops every packet of it (its count of frame ids goes on, so
+  // the client sees a gap). Should an Attach lift the drop while the GigE
+  // fake still sends the frame, its packets carry id 0: the client's stream
+  // discards them as late, or delivers a frame with id 0.
+  void Withhold(ArvBuffer* buffer) {
+    arv_buffer_set_frame_id(buffer, 0);
+    if (gige_ != nullptr) g_object_set(gige_, "gvsp-lost-ratio", 1.0, nullptr);
+  }
+
+  // Fills `buffer` with the view of the frame's trigger; false when it
+  // cannot (the buffer then holds no view).
+  bool Render(ArvBuffer* buffer, guint32 exposure_time_us, guint32 gain, ArvPixelFormat format) {
+    if (gige_ == nullptr && !AwaitTrigger()) return false;
     WorldExposure exposure;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!pulse_exposures_.empty()) {
         exposure = pulse_exposures_.front();
         pulse_exposures_.pop_front();
-        if (fake_gates_triggers_) {
+        if (gige_ != nullptr) {
           arv_fake_camera_write_register(fake_, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, kLine0);
         }
       } else {
@@ -152,8 +190,7 @@ class SimAravisFeed::Impl {
     auto image = RenderWorldExposure(*world_, options_.scene_camera, exposure,
                                      exposure_time_us * 1e-6, static_cast<double>(gain),
                                      FrameNoiseSeed(*world_, options_.serial, sequence));
-    if (!image.ok() || out == nullptr)
-      return;  // the buffer keeps the fake's status; the client sees no image
+    if (!image.ok() || out == nullptr) return false;
     cv::Mat converted;
     int type = CV_8UC1;
     switch (format) {
@@ -178,12 +215,13 @@ class SimAravisFeed::Impl {
     // Width, height and pixel format are registers a GigE client writes; the
     // buffer holds at least what the fake computes from them, which may wrap.
     const uint64_t bytes = static_cast<uint64_t>(w) * static_cast<uint64_t>(h) * CV_ELEM_SIZE(type);
-    if (w <= 0 || h <= 0 || bytes > FakePayloadBytes(w, h, format)) return;
+    if (w <= 0 || h <= 0 || bytes > FakePayloadBytes(w, h, format)) return false;
     // The camera's region is its top-left w x h; outside the render is black.
     cv::Mat target(h, w, type, out);
     target.setTo(0);
     const cv::Rect overlap(0, 0, std::min(w, converted.cols), std::min(h, converted.rows));
     converted(overlap).copyTo(target(overlap));
+    return true;
   }
 
   std::shared_ptr<SimWorld> world_;
@@ -192,18 +230,18 @@ class SimAravisFeed::Impl {
   int subscription_ = 0;
   std::mutex mutex_;
   std::deque<WorldExposure> pulse_exposures_;  // the world at each pulse not yet rendered
-  bool fake_gates_triggers_ = false;
-  bool acquiring_ = false;  // the fake's acquisition was seen running (fill thread only)
+  ArvGvFakeCamera* gige_ = nullptr;            // the GigE fake serving fake_; null in-process
   std::atomic<bool> detaching_{false};
-  std::atomic<int> frames_{0};
+  std::atomic<int> frames_{0};  // made for a trigger, withheld ones included
 };
 
 SimAravisFeed::SimAravisFeed(std::shared_ptr<SimWorld> world, SimAravisOptions options)
     : impl_(std::make_unique<Impl>(std::move(world), std::move(options))) {}
 SimAravisFeed::~SimAravisFeed() = default;
-void SimAravisFeed::Attach(ArvFakeCamera* fake, bool fake_gates_triggers) {
-  impl_->Attach(fake, fake_gates_triggers);
+void SimAravisFeed::Attach(ArvFakeCamera* fake, ArvGvFakeCamera* gige) {
+  impl_->Attach(fake, gige);
 }
+void SimAravisFeed::SetRender(bool render) { impl_->SetRender(render); }
 int SimAravisFeed::frames_rendered() const { return impl_->frames(); }
 
 Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptions& options) {
@@ -214,8 +252,7 @@ Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptio
     g_clear_error(&error);
     return Internal("Aravis fake device " + options.serial + ": " + text);
   }
-  feed.Attach(arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(device)),
-              /*fake_gates_triggers=*/false);
+  feed.Attach(arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(device)));
   ArvCamera* camera = arv_camera_new_with_device(device, &error);
   g_object_unref(device);  // the camera holds it
   if (camera == nullptr) {
@@ -243,7 +280,7 @@ class SimGigECamera::Impl {
 Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimWorld> world,
                                                             SimAravisOptions options) {
   auto impl = std::make_unique<Impl>(world, options);
-  const std::set<int> before = OpenDescriptors();
+  const std::set<uint64_t> before = OpenSocketInodes();
   impl->gv = arv_gv_fake_camera_new(impl->address.c_str(), options.serial.c_str());
   if (impl->gv == nullptr || !arv_gv_fake_camera_is_running(impl->gv)) {
     return Unavailable("simulated GigE Vision camera " + options.serial +
@@ -256,6 +293,12 @@ Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimW
   const GvcpMemoryLimits limits{static_cast<uint32_t>(ARV_FAKE_CAMERA_MEMORY_SIZE + genicam_bytes),
                                 ARV_FAKE_CAMERA_MEMORY_SIZE};
   HR_RETURN_IF_ERROR(GuardGvFakeSockets(before, impl->address, limits).status());
+  const Status sole = RequireSoleGvcpServer(before, impl->address);
+  if (!sole.ok()) {
+    return Unavailable("simulated GigE Vision camera " + options.serial + ": " + sole.message() +
+                       "; stop the other one (a `hairrig sim serve`, a benchmark, "
+                       "arv-fake-gv-camera-0.8)");
+  }
   // The fake starts at 512 x 512; a client sees the scene camera's full frame.
   const auto& intrinsics = WorldRenderer(*world)
                                .scene()
@@ -265,7 +308,7 @@ Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimW
                                  static_cast<guint32>(intrinsics.width_px));
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT,
                                  static_cast<guint32>(intrinsics.height_px));
-  impl->feed.Attach(fake, /*fake_gates_triggers=*/true);
+  impl->feed.Attach(fake, impl->gv);
   return std::unique_ptr<SimGigECamera>(new SimGigECamera(std::move(impl)));
 }
 
@@ -274,6 +317,7 @@ SimGigECamera::~SimGigECamera() = default;
 const std::string& SimGigECamera::address() const { return impl_->address; }
 const std::string& SimGigECamera::serial() const { return impl_->options.serial; }
 int SimGigECamera::frames_rendered() const { return impl_->feed.frames_rendered(); }
+void SimGigECamera::SetRender(bool render) { impl_->feed.SetRender(render); }
 std::string SimGigECamera::Describe() const {
   return "simulated GigE Vision camera " + serial() + " at " + address();
 }

@@ -41,9 +41,11 @@ Result<std::vector<SimFault>> ParseSimFaults(const ConfigNode& faults) {
       if (kind == name) fault.kind = k;
     }
     fault.device = node.String("device", "");
-    fault.at = node.Integer("at", 1, {.min = 1});
-    fault.count = node.Integer("count", 1, {.min = 1});
-    fault.delay_s = node.Number("delay_s", fault.delay_s, {.min = 0});
+    // A capture has a few hundred events per device and waits minutes at
+    // most: a million events and an hour of device time are far beyond any test.
+    fault.at = node.Integer("at", 1, {.min = 1, .max = 1e6});
+    fault.count = node.Integer("count", 1, {.min = 1, .max = 1e6});
+    fault.delay_s = node.Number("delay_s", fault.delay_s, {.min = 0, .max = 3600});
     if (node.ok() && IsCameraFault(fault.kind) && fault.device.empty()) {
       node.Fail("device",
                 std::string("a ") + kind + " fault needs the serial of the camera it hits");

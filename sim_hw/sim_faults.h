@@ -20,9 +20,10 @@
 // `at` counts events of the device from 1 (triggers of that camera, moves of
 // the turntable) over the life of the simulated world, so a fault fires once
 // even when a capture retries. `count` is how many consecutive events it
-// affects (default 1). A disk_full fault's `at` is the frame files the disk
-// holds, counted over the life of the rig built with the fault (BuildRig):
-// a session resumed with the same fault stores `at` more frames.
+// affects (default 1). Both are at most 1,000,000, `delay_s` at most 3600.
+// A disk_full fault's `at` is the frame files the disk holds, counted over the
+// life of the rig built with the fault (BuildRig): a session resumed with the
+// same fault stores `at` more frames.
 #pragma once
 
 #include <string>

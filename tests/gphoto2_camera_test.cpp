@@ -17,7 +17,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
-#include <thread>
 
 #include "core/clock.h"
 #include "sim_hw/scene.h"
@@ -270,7 +269,8 @@ TEST(Gphoto2Camera, AShotOfAClosedSessionIsNotTakenForTheNextTrigger) {
   ASSERT_TRUE(b.camera->Close().ok());
   ASSERT_TRUE(b.camera->Open().ok());
   ASSERT_TRUE(b.camera->Arm().ok());
-  std::this_thread::sleep_for(milliseconds(700));  // the old shot is on the card by now
+  ASSERT_TRUE(hairrig_test::WaitUntil([&] { return b.server->shots() == 1; }))
+      << "the old shot never reached the card";
   const int64_t trigger_ns = SteadyNowNs();
   ASSERT_TRUE(b.camera->SoftwareTrigger().ok());
   auto frame = b.camera->WaitFrame(kFrameWait);

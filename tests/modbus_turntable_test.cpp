@@ -25,7 +25,13 @@ namespace {
 
 using std::chrono::milliseconds;
 constexpr milliseconds kMoveWait{20000};  // a liveness bound, not a speed check
+// How long the driver waits for each reply: a bound a busy machine keeps
+// (a reply the server withholds costs that much per attempt).
+constexpr int kReplyTimeoutMs = 1000;
 const MotionProfile kProfile{60.0, 240.0};
+// 100 degrees take a second of wall time at the tests' time scale (0.01): what
+// a test does while the table moves lands inside the move on a busy machine.
+const MotionProfile kSlowProfile{1.0, 240.0};
 constexpr char kSerial[] = "SIM-TT-0001";
 
 std::shared_ptr<SimWorld> MakeWorld(std::vector<SimFault> faults = {}) {
@@ -45,7 +51,7 @@ ModbusTurntableOptions ClientOptions(const ModbusTurntableServer& server, Transp
   ModbusTurntableOptions o;
   o.map = map;
   o.poll_ms = 2;
-  o.endpoint.timeout_ms = 100;
+  o.endpoint.timeout_ms = kReplyTimeoutMs;
   o.endpoint.retries = 2;
   if (transport == Transport::kTcp) {
     o.endpoint.host = server.host();
@@ -83,7 +89,7 @@ TEST_P(ModbusTurntableTest, HomesAndMovesThePlatformTheRendererSees) {
   ASSERT_TRUE(before.ok()) << before.status().ToString();
   EXPECT_FALSE(before->homed);
   ASSERT_TRUE(tt.Home(kMoveWait).ok());
-  ASSERT_TRUE(tt.StartMove(123.456, kProfile).ok());
+  ASSERT_TRUE(tt.StartMove(123.456, kSlowProfile).ok());
   EXPECT_EQ(tt.state(), DeviceState::kBusy);
   auto moving = tt.ReadStatus();
   ASSERT_TRUE(moving.ok());
@@ -126,7 +132,9 @@ TEST_P(ModbusTurntableTest, PersistentFaultsGiveClearErrorsAndReopenRecovers) {
   b.server->InjectFault(ModbusServerFault::kNoReply, 3);
   Status s = tt.HealthCheck();
   EXPECT_EQ(s.code(), StatusCode::kTimeout) << s.ToString();
-  EXPECT_NE(s.message().find("no reply within 100 ms"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("no reply within " + std::to_string(kReplyTimeoutMs) + " ms"),
+            std::string::npos)
+      << s.message();
   EXPECT_NE(s.message().find("3 attempts"), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("turntable 'turntable'"), std::string::npos) << s.message();
   EXPECT_EQ(tt.state(), DeviceState::kFaulted);
@@ -174,7 +182,7 @@ TEST_P(ModbusTurntableTest, StopFromAnotherThreadEndsTheWait) {
   Bench b = StartBench(GetParam());
   Turntable& tt = *b.table;
   ASSERT_TRUE(tt.Open().ok());
-  ASSERT_TRUE(tt.StartMove(359, {5.0, 240.0}).ok());  // 0.7 s of wall time at time_scale 0.01
+  ASSERT_TRUE(tt.StartMove(359, kSlowProfile).ok());
   std::thread stopper([&] {
     std::this_thread::sleep_for(milliseconds(50));
     EXPECT_TRUE(tt.Stop().ok());
@@ -291,7 +299,7 @@ ModbusEndpoint LoopbackEndpoint(int port, int timeout_ms) {
 // Such a peer was reported as a Modbus controller sending a "malformed reply".
 TEST(ModbusLink, APeerThatDoesNotSpeakModbusIsCannotConnect) {
   HttpPeer peer;
-  ModbusLink link(LoopbackEndpoint(peer.port(), 300));
+  ModbusLink link(LoopbackEndpoint(peer.port(), kReplyTimeoutMs));
   ASSERT_TRUE(link.Connect().ok());  // TCP connects; the first request shows what answers
   auto read = link.Read(100, 8);
   ASSERT_FALSE(read.ok());

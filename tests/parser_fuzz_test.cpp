@@ -27,6 +27,7 @@
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "core/head_json.h"
+#include "core/image_test_util.h"
 #include "core/json_file.h"
 #include "core/sha256.h"
 #include "core/strand_io.h"
@@ -369,7 +370,9 @@ void FuzzStrands(StrandFormat format, const std::string& name, uint32_t seed_num
 TEST(ParserFuzz, ColmapTextModels) {
   const std::string dir = TestDir("colmap");
   fs::create_directories(dir + "/images");
-  for (const char* image : {"a.jpg", "b.jpg"}) WriteText(dir + "/images/" + image, "x");
+  // Headers the reader accepts: the images are never decoded here.
+  WriteText(dir + "/images/a.jpg", PngClaiming(1200, 1600));
+  WriteText(dir + "/images/b.jpg", PngClaiming(640, 480));
   const std::string cameras =
       "# Camera list\n"
       "1 OPENCV 1200 1600 1750 1751 600.5 800.5 -0.03 0.012 0.0002 -0.0001\n"

@@ -1,13 +1,15 @@
 // Test helpers for camera backends: one software-triggered shot, arming for
-// a line trigger, and the PSNR between a delivered frame and the world rendered directly.
-// Header-only.
+// a line trigger, waiting for a condition, and the PSNR between a delivered
+// frame and the world rendered directly. Header-only.
 #pragma once
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <string>
+#include <thread>
 
 #include "drivers/camera.h"
 
@@ -16,6 +18,17 @@ namespace hairrig_test {
 // How long a camera test waits for a frame: a liveness bound, not a speed
 // check (sanitizer builds render slowly).
 constexpr std::chrono::milliseconds kFrameWait{20000};
+
+// Polls `done` until it holds; false after kFrameWait. For a state a
+// simulator reaches in its own thread, which a busy machine makes late.
+inline bool WaitUntil(const std::function<bool()>& done) {
+  const auto end = std::chrono::steady_clock::now() + kFrameWait;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return true;
+}
 
 // Configure, Arm, SoftwareTrigger, WaitFrame, Disarm.
 inline hairrig::Result<hairrig::Frame> ShootOnce(hairrig::Camera& camera,

@@ -23,6 +23,10 @@ namespace hairrig_test {
 
 inline constexpr char kModbusSerial[] = "SIM-TT-0001";
 inline constexpr int kUnit = 1;
+// How long a test waits for a reply that must come (a liveness bound a busy
+// machine keeps), and for one that must not (each wait costs that much).
+inline constexpr std::chrono::milliseconds kReplyWait{20000};
+inline constexpr std::chrono::milliseconds kNoReplyWait{300};
 
 using hairrig::ModbusTurntableServer;
 
@@ -50,7 +54,7 @@ inline int StartConnection(const ModbusTurntableServer& server) {
 inline int ConnectTo(const ModbusTurntableServer& server) {
   const int fd = StartConnection(server);
   pollfd p{fd, POLLOUT, 0};
-  if (fd < 0 || poll(&p, 1, 2000) != 1) return -1;
+  if (fd < 0 || poll(&p, 1, static_cast<int>(kReplyWait.count())) != 1) return -1;
   return fd;
 }
 
