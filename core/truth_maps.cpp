@@ -14,6 +14,7 @@
 #include "core/geometry_json.h"
 #include "core/head_json.h"
 #include "core/json_file.h"
+#include "core/sha256.h"
 
 namespace hairrig {
 
@@ -98,15 +99,64 @@ Result<ViewTruthMaps> ReadViewTruthMaps(const std::string& dir, int view) {
   return m;
 }
 
+namespace {
+
+// checksums.json: {"files": {"views/000_label.png": "<sha256>", ...}}.
+Result<std::map<std::string, std::string>> ReadTruthChecksums(const std::string& truth_dir) {
+  const std::string path = truth_dir + "/" + kTruthChecksumsFile;
+  HR_ASSIGN_OR_RETURN(const nlohmann::json root,
+                      ReadJsonFile(path,
+                                   "the ground truth was not finished; resume the capture "
+                                   "(hairrig capture --resume) to write it again"));
+  if (!root.is_object() || !root.contains("files") || !root["files"].is_object())
+    return CorruptData(path + ": field 'files': expected an object of file names and SHA-256s");
+  std::map<std::string, std::string> sums;
+  for (const auto& [name, value] : root["files"].items()) {
+    if (!value.is_string() || value.get<std::string>().size() != 64)
+      return CorruptData(path + ": field 'files." + name + "': expected a SHA-256");
+    sums[name] = value.get<std::string>();
+  }
+  return sums;
+}
+
+}  // namespace
+
+Status VerifyTruthFile(const CaptureTruth& truth, const std::string& path) {
+  HR_ASSIGN_OR_RETURN(const std::string resolved, ResolveInside(path, truth.dir));
+  const std::string name =
+      std::filesystem::path(resolved).lexically_relative(truth.dir).generic_string();
+  const auto it = truth.sha256.find(name);
+  if (it == truth.sha256.end())
+    return CorruptData(path + ": not among the files of " + truth.dir + "/" + kTruthChecksumsFile +
+                       "; the ground truth was changed after the capture");
+  HR_ASSIGN_OR_RETURN(const std::string actual, Sha256OfFile(resolved));
+  if (actual != it->second)
+    return CorruptData(path + ": its SHA-256 does not match " + truth.dir + "/" +
+                       kTruthChecksumsFile + "; the ground truth was changed after the capture");
+  return Status::Ok();
+}
+
+Result<ViewTruthMaps> ReadVerifiedViewTruthMaps(const CaptureTruth& truth, int view) {
+  for (const char* kind : {"label", "alpha", "orientation", "depth", "strand"})
+    HR_RETURN_IF_ERROR(VerifyTruthFile(truth, MapPath(truth.views_dir, view, kind)));
+  return ReadViewTruthMaps(truth.views_dir, view);
+}
+
 Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir) {
-  const std::filesystem::path truth_dir = std::filesystem::path(capture_dir) / "ground_truth";
-  const std::string path = (truth_dir / "ground_truth.json").string();
-  HR_ASSIGN_OR_RETURN(
-      nlohmann::json root,
-      ReadJsonFile(path, "only captures from the simulated rig have a ground truth"));
+  const std::string truth_path = (std::filesystem::path(capture_dir) / "ground_truth").string();
+  std::error_code ec;
+  if (!std::filesystem::exists(truth_path, ec))
+    return NotFound(truth_path +
+                    " is missing: only captures from the simulated rig have a "
+                    "ground truth");
+  CaptureTruth truth;
+  HR_ASSIGN_OR_RETURN(truth.dir, ResolveInside(truth_path, capture_dir));
+  HR_ASSIGN_OR_RETURN(truth.sha256, ReadTruthChecksums(truth.dir));
+  const std::string path = truth.dir + "/ground_truth.json";
+  HR_RETURN_IF_ERROR(VerifyTruthFile(truth, path));
+  HR_ASSIGN_OR_RETURN(nlohmann::json root, ReadJsonFile(path));
   if (!root.is_object() || !root.contains("views") || !root["views"].is_array())
     return CorruptData(path + ": views is not an array");
-  CaptureTruth truth;
   HR_ASSIGN_OR_RETURN(truth.turntable_from_box,
                       PoseFromJson(root.value("turntable_from_box", nlohmann::json()),
                                    path + ": turntable_from_box"));
@@ -124,14 +174,13 @@ Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir) {
                                                      where + ".cam_from_box"));
     truth.views[j["view"].get<int>()] = v;
   }
-  truth.views_dir = (truth_dir / "views").string();
-  truth.strands_file = (truth_dir / "ground_truth_strands.ply").string();
+  truth.views_dir = truth.dir + "/views";
+  truth.strands_file = truth.dir + "/ground_truth_strands.ply";
   if (root.contains("head")) {
-    HR_ASSIGN_OR_RETURN(HeadSpec head,
-                        HeadSpecFromJson(root["head"], truth_dir.string(), path + ": head"));
-    std::error_code ec;
+    HR_ASSIGN_OR_RETURN(HeadSpec head, HeadSpecFromJson(root["head"], truth.dir, path + ": head"));
     if (!head.mesh_file.empty() && !std::filesystem::is_regular_file(head.mesh_file, ec))
       return CorruptData(path + ": head.mesh_file " + head.mesh_file + " is missing");
+    if (!head.mesh_file.empty()) HR_RETURN_IF_ERROR(VerifyTruthFile(truth, head.mesh_file));
     truth.head = std::move(head);
   }
   return truth;

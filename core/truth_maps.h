@@ -64,6 +64,10 @@ struct CaptureTruth {
   std::string views_dir;      // the per-view maps' folder (<capture>/ground_truth/views)
   std::string strands_file;   // the true strands, turntable frame
                               // (<capture>/ground_truth/ground_truth_strands.ply)
+  // SHA-256 of each ground-truth file as written (checksums.json), by its path
+  // relative to <capture>/ground_truth ("views/003_label.png").
+  std::map<std::string, std::string> sha256;
+  std::string dir;  // <capture>/ground_truth, resolved
   // The true head, turntable frame (ground_truth.json's "head", core/head_json.h);
   // its mesh_file is absolute or relative to the working folder, e.g.
   // <capture>/ground_truth/head_mesh.ply. Absent in captures written before the
@@ -71,9 +75,23 @@ struct CaptureTruth {
   std::optional<HeadSpec> head;
 };
 
+// The file of the ground truth's checksums, written last: every file of the
+// ground truth, ground_truth.json included, with its SHA-256.
+constexpr const char* kTruthChecksumsFile = "checksums.json";
+
 // NotFound for a capture without ground truth (only the simulated rig writes
-// one); CorruptData naming the file and field for a damaged one (a head whose
-// mesh file is missing included).
+// one); CorruptData naming the file and field for a damaged one: a
+// ground_truth/ folder or a file leading outside the capture, a file that does
+// not match its checksum (ground_truth.json and the head's mesh are checked
+// here), no checksums.json (a ground truth that was not finished: resume the
+// capture), a head whose mesh file is missing.
 Result<CaptureTruth> ReadCaptureTruth(const std::string& capture_dir);
+
+// CorruptData naming `path` unless it lies inside truth.dir (symlinks
+// resolved) and matches its checksum; NotFound when it is missing.
+Status VerifyTruthFile(const CaptureTruth& truth, const std::string& path);
+
+// ReadViewTruthMaps of truth.views_dir, each file verified first.
+Result<ViewTruthMaps> ReadVerifiedViewTruthMaps(const CaptureTruth& truth, int view);
 
 }  // namespace hairrig

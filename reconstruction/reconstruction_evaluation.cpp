@@ -83,7 +83,7 @@ ViewResult EvaluateView(const std::string& dir, const std::string& name,
     if (!truth.views.count(r.accuracy.view))
       return NotFound("view " + name + " has no ground truth");
     HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps,
-                        ReadViewTruthMaps(truth.views_dir, r.accuracy.view));
+                        ReadVerifiedViewTruthMaps(truth, r.accuracy.view));
     const cv::Mat true_hair = maps.label == ViewTruthMaps::kHair;
     HR_ASSIGN_OR_RETURN(const cv::Mat label,
                         ReadImageFile(dir + "/masks/" + name + "_label.png", cv::IMREAD_UNCHANGED));
@@ -277,6 +277,7 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   const Rigid3d truth_from_estimate = truth.turntable_from_box * recon.object_from_box.Inverse();
   HR_ASSIGN_OR_RETURN(const std::vector<OrientedSample> estimate,
                       EstimateSamples(dir, truth_from_estimate));
+  HR_RETURN_IF_ERROR(VerifyTruthFile(truth, truth.strands_file));
   HR_ASSIGN_OR_RETURN(const StrandSet true_strands, ReadStrands(truth.strands_file));
   // The true strands sampled, and their samples tested for visibility, once for the points and the
   // strands.

@@ -106,7 +106,7 @@ void ExpectGroundTruthOfEveryView(const std::string& capture_dir, int views) {
     const double angle = v["turntable_deg"].get<double>();
     EXPECT_NEAR(std::remainder(angle - 360.0 * v["stop"].get<int>() / 19, 360.0), 0.0, 1e-3)
         << "view " << view;
-    auto recorded = ReadViewTruthMaps(capture_dir + "/ground_truth/views", view);
+    auto recorded = ReadVerifiedViewTruthMaps(*read, view);
     ASSERT_TRUE(recorded.ok()) << recorded.status().ToString();
     if (view % 9 != 0) continue;  // a few views rendered again
     RenderOptions o;
@@ -179,6 +179,49 @@ TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
 // d/v + v/a), each with 0.5 s settle; 19 exposures of 0.02 s; the last stop's
 // readout 0.05 s and download 0.25 s; all times time_scale. The efficiency is
 // printed, not asserted (a shared machine's timing is noise).
+// The ground truth is checked against its checksums before the evaluation
+// reads it: a map of another view, a folder or a file leading outside the
+// capture, and a ground truth without its checksums are refused by name.
+TEST(Capture, GroundTruthChangedAfterTheCaptureIsRefused) {
+  const std::string dir = FreshDir("capture_truth_changed");
+  CountingSink sink;
+  const CaptureSummary s = Capture(WriteSmallRig(dir), dir + "/c", &sink);
+  ASSERT_EQ(s.status, "complete") << s.message;
+  const std::string truth_dir = s.dir + "/ground_truth";
+  auto truth = ReadCaptureTruth(s.dir);
+  ASSERT_TRUE(truth.ok()) << truth.status().ToString();
+  ASSERT_TRUE(ReadVerifiedViewTruthMaps(*truth, 5).ok());
+  ASSERT_TRUE(VerifyTruthFile(*truth, truth->strands_file).ok());
+
+  fs::copy_file(truth_dir + "/views/007_label.png", truth_dir + "/views/005_label.png",
+                fs::copy_options::overwrite_existing);
+  auto swapped = ReadVerifiedViewTruthMaps(*truth, 5);
+  ASSERT_EQ(swapped.status().code(), StatusCode::kCorruptData);
+  EXPECT_NE(swapped.status().message().find("005_label.png: its SHA-256 does not match"),
+            std::string::npos)
+      << swapped.status().message();
+
+  const std::string outside = dir + "/outside";
+  fs::create_directories(outside);
+  fs::copy_file(truth_dir + "/views/006_depth.png", outside + "/006_depth.png");
+  fs::remove(truth_dir + "/views/006_depth.png");
+  fs::create_symlink(outside + "/006_depth.png", truth_dir + "/views/006_depth.png");
+  EXPECT_FALSE(ReadVerifiedViewTruthMaps(*truth, 6).ok()) << "a map leading outside the capture";
+
+  fs::rename(truth_dir, outside + "/ground_truth");
+  fs::create_directory_symlink(outside + "/ground_truth", truth_dir);
+  const auto moved = ReadCaptureTruth(s.dir);
+  ASSERT_FALSE(moved.ok());
+  EXPECT_NE(moved.status().message().find("ground_truth"), std::string::npos);
+
+  fs::remove(truth_dir);
+  fs::rename(outside + "/ground_truth", truth_dir);
+  fs::remove(truth_dir + "/checksums.json");
+  const auto unfinished = ReadCaptureTruth(s.dir);
+  ASSERT_EQ(unfinished.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(unfinished.status().message().find("--resume"), std::string::npos);
+}
+
 TEST(Capture, LowerBoundAndEfficiencyAtRealisticTimings) {
   const std::string dir = FreshDir("capture_efficiency");
   const double scale = 0.2;

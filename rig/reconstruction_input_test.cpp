@@ -23,6 +23,7 @@
 #include "reconstruction/head_scene_testing.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/journal_records.h"
+#include "tests/support/two_camera_rig.h"
 
 namespace hairrig {
 namespace {
@@ -47,11 +48,7 @@ void WriteText(const std::string& path, const std::string& text) {
 std::string CalibratedCapture(const std::string& name) {
   const std::string dir = FreshDir(name);
   fs::create_directories(dir + "/frames");
-  WriteText(dir + "/rig.yaml",
-            "name: frames test\ndevices:\n  cameras:\n"
-            "    - {name: upper, backend: sim, serial: SIM-CAM-UPPER}\n"
-            "    - {name: lower, backend: sim, serial: SIM-CAM-LOWER}\n"
-            "calibration:\n  box: calib-box.yaml\n  box_height_mm: 600\n");
+  WriteText(dir + "/rig.yaml", hairrig_test::kTwoCameraRigYaml);
   CaptureMetadata metadata;
   metadata.config_dir = fs::absolute("etc").string();
   WriteText(dir + "/capture.json", metadata.ToJson().dump());

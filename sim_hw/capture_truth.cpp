@@ -4,9 +4,11 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "core/parallel.h"
+#include "core/sha256.h"
 #include "core/strand_io.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/sim_devices.h"
@@ -59,6 +61,18 @@ struct CaptureGroundTruth::State {
   std::set<int> writing;          // views whose maps a camera's thread is writing now
   Status first_error;             // of any write: once set, nothing more is written
   bool recording = true;
+  std::map<std::string, std::string> sha256;  // of each file written, by its path under dir
+
+  // checksums.json: every file written so far with its SHA-256 (core/truth_maps.h).
+  Status WriteChecksums() {
+    nlohmann::json files = nlohmann::json::object();
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      for (const auto& [name, sum] : sha256) files[name] = sum;
+    }
+    const std::string text = nlohmann::json{{"files", files}}.dump(1);
+    return Write(dir + "/" + kTruthChecksumsFile, text.data(), text.size());
+  }
 
   // Writes with file_writer unless an earlier write failed; keeps the first failure.
   Status Write(const std::string& path, const void* data, size_t size) {
@@ -67,8 +81,10 @@ struct CaptureGroundTruth::State {
       if (!first_error.ok()) return first_error;
     }
     const Status s = WriteFileWith(file_writer, path, data, size);
+    const std::string name = std::filesystem::path(path).lexically_relative(dir).generic_string();
     std::lock_guard<std::mutex> lock(mutex);
     if (!s.ok() && first_error.ok()) first_error = s;
+    if (s.ok() && name != kTruthChecksumsFile) sha256[name] = Sha256Hex(data, size);
     return s;
   }
   FileWriter Writer() {
@@ -116,6 +132,7 @@ Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(
   HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, state->dir, state->Writer()));
   HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir, state->Writer()));
   HR_RETURN_IF_ERROR(WriteTruthStrands(world, state->dir, state->Writer()));
+  HR_RETURN_IF_ERROR(state->WriteChecksums());
   state->scene_cameras = SceneCameras(scene, views);
   state->views = std::move(views);
   SetWorldTruthRecorder(world,
@@ -183,7 +200,9 @@ Status CaptureGroundTruth::Finish() {
     rendered_deg = st.written;
   }
   if (rendered_deg.empty()) return Status::Ok();
-  return WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir, st.Writer());
+  HR_RETURN_IF_ERROR(
+      WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir, st.Writer()));
+  return st.WriteChecksums();
 }
 
 }  // namespace hairrig

@@ -2,7 +2,9 @@
 // beside the frames: <capture>/ground_truth/ground_truth.json (true cameras,
 // box and turntable per planned view, the head), head_mesh.ply (the head's
 // mesh, if it has one), ground_truth_strands.ply (the wig, turntable frame)
-// and views/NNN_*.png (per-pixel maps, sim_hw/ground_truth.h).
+// and views/NNN_*.png (per-pixel maps, sim_hw/ground_truth.h), and last
+// checksums.json, the SHA-256 of each of them (core/truth_maps.h), which the
+// evaluation checks before it reads a file.
 // The maps come from the very renders that make the frames: a view's maps
 // are written when a simulated camera renders its frame, so the capture pays
 // no second render. Every file is written with the capture's FileWriter

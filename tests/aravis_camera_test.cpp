@@ -406,6 +406,18 @@ TEST(AravisGigE, StreamsRenderedFramesOverLoopbackWithoutLoss) {
   EXPECT_TRUE(found.ok()) << found.ToString();
 }
 
+// One good frame, then a trigger whose frame the feed cannot render (a panel
+// asked for 150 %). The good frame gives the stream its frame id: a frame
+// lost before any arrived leaves no gap to see (the timeout uses up its trigger).
+void TriggerAFrameWithoutTheViewAfterAGoodOne(GigE& g) {
+  Camera& camera = *g.camera;
+  ASSERT_TRUE(camera.SoftwareTrigger().ok());
+  ASSERT_TRUE(camera.WaitFrame(kFrameWait).ok());
+  ASSERT_TRUE(SetWorldLightLevel(*g.w.world, kPanel, 1.5).ok());
+  ASSERT_TRUE(camera.SoftwareTrigger().ok());
+  ASSERT_TRUE(WaitUntil([&] { return g.fake->frames_rendered() == 2; }));
+}
+
 // A frame the fake has no view for is never sent: the wait for it times
 // out, and the next frame's id shows it lost. The frames after that one
 // cannot be paired with their triggers either: each gets the same report
@@ -414,13 +426,7 @@ TEST(AravisGigE, AFrameWithoutTheViewIsNeverSent) {
   GigE g;
   ASSERT_NO_FATAL_FAILURE(StartGigE(&g));
   Camera& camera = *g.camera;
-  // A first frame gives the stream its frame id: a frame lost before any
-  // arrived leaves no gap to see (its trigger is used up by the timeout).
-  ASSERT_TRUE(camera.SoftwareTrigger().ok());
-  ASSERT_TRUE(camera.WaitFrame(kFrameWait).ok());
-  ASSERT_TRUE(SetWorldLightLevel(*g.w.world, kPanel, 1.5).ok());
-  ASSERT_TRUE(camera.SoftwareTrigger().ok());
-  ASSERT_TRUE(WaitUntil([&] { return g.fake->frames_rendered() == 2; }));
+  ASSERT_NO_FATAL_FAILURE(TriggerAFrameWithoutTheViewAfterAGoodOne(g));
   const auto none = camera.WaitFrame(milliseconds(500));
   EXPECT_EQ(none.status().code(), StatusCode::kTimeout)
       << (none.ok() ? "a frame without the view came as an image" : none.status().ToString());
@@ -490,13 +496,7 @@ TEST(AravisGigE, TheFeedAttachedAgainAfterAWithheldFrameStreams) {
   GigE g;
   ASSERT_NO_FATAL_FAILURE(StartGigE(&g));
   Camera& camera = *g.camera;
-  // A first frame gives the stream its frame id: a frame lost before any
-  // arrived leaves no gap to see (its trigger is used up by the timeout).
-  ASSERT_TRUE(camera.SoftwareTrigger().ok());
-  ASSERT_TRUE(camera.WaitFrame(kFrameWait).ok());
-  ASSERT_TRUE(SetWorldLightLevel(*g.w.world, kPanel, 1.5).ok());
-  ASSERT_TRUE(camera.SoftwareTrigger().ok());
-  ASSERT_TRUE(WaitUntil([&] { return g.fake->frames_rendered() == 2; }));
+  ASSERT_NO_FATAL_FAILURE(TriggerAFrameWithoutTheViewAfterAGoodOne(g));
   EXPECT_EQ(camera.WaitFrame(milliseconds(500)).status().code(), StatusCode::kTimeout);
   g.fake->SetRender(false);  // detaches the feed and attaches it again
   ASSERT_TRUE(camera.Disarm().ok());

@@ -38,6 +38,7 @@
 #include "rig/replay.h"
 #include "simulation/helix_model.h"
 #include "tests/support/calibration_documents.h"
+#include "tests/support/two_camera_rig.h"
 
 namespace hairrig {
 namespace {
@@ -504,11 +505,7 @@ TEST(ParserFuzz, JournalRecords) {
 std::string CalibrationCapture(json* seed) {
   const std::string dir = TestDir("manifest_capture");
   fs::create_directories(dir + "/frames");
-  WriteText(dir + "/rig.yaml",
-            "name: fuzz\ndevices:\n  cameras:\n"
-            "    - {name: upper, backend: sim, serial: SIM-CAM-UPPER}\n"
-            "    - {name: lower, backend: sim, serial: SIM-CAM-LOWER}\n"
-            "calibration:\n  box: calib-box.yaml\n  box_height_mm: 600\n");
+  WriteText(dir + "/rig.yaml", hairrig_test::kTwoCameraRigYaml);
   CaptureMetadata metadata;
   metadata.config_dir = fs::absolute("etc").string();
   WriteText(dir + "/capture.json", metadata.ToJson().dump());

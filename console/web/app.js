@@ -328,18 +328,29 @@ function drawHistogram(canvas, bins) {
 
 // ---------- lights and turntable ----------
 
+// Sides whose switch the operator has just changed: the state the server
+// reports for them is not shown until their own request has answered, so an
+// answer or event that left before the change cannot undo the click.
+const lightsInFlight = new Set();
+
 function applyLights(lights) {
   for (const side of ['top', 'bottom']) {
-    if (side in lights) $(`#light-${side}`).checked = Boolean(lights[side]);
+    if (side in lights && !lightsInFlight.has(side)) {
+      $(`#light-${side}`).checked = Boolean(lights[side]);
+    }
   }
 }
 
 async function setLight(side, on) {
+  lightsInFlight.add(side);
   try {
-    applyLights((await api('POST', '/api/lights', { [side]: on })).lights ?? {});
+    const lights = (await api('POST', '/api/lights', { [side]: on })).lights ?? {};
+    $(`#light-${side}`).checked = Boolean(lights[side] ?? on);
   } catch (err) {
     $(`#light-${side}`).checked = !on;
     throw err;
+  } finally {
+    lightsInFlight.delete(side);
   }
 }
 
