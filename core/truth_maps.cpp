@@ -121,6 +121,30 @@ Result<std::map<std::string, std::string>> ReadTruthChecksums(const std::string&
 
 }  // namespace
 
+Status WriteTruthChecksums(const std::string& truth_dir,
+                           const std::map<std::string, std::string>& sha256,
+                           const FileWriter& write) {
+  nlohmann::json files = nlohmann::json::object();
+  for (const auto& [name, sum] : sha256) files[name] = sum;
+  const std::string text = nlohmann::json{{"files", files}}.dump(1);
+  return WriteFileWith(write, truth_dir + "/" + kTruthChecksumsFile, text.data(), text.size());
+}
+
+Result<std::map<std::string, std::string>> HashTruthFolder(const std::string& truth_dir) {
+  std::map<std::string, std::string> sums;
+  std::error_code ec;
+  for (auto it = std::filesystem::recursive_directory_iterator(truth_dir, ec);
+       !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec)) {
+    if (!it->is_regular_file(ec)) continue;
+    const std::string name =
+        std::filesystem::path(it->path()).lexically_relative(truth_dir).generic_string();
+    if (name == kTruthChecksumsFile) continue;
+    HR_ASSIGN_OR_RETURN(sums[name], Sha256OfFile(it->path().string()));
+  }
+  if (ec) return IoError(truth_dir + ": cannot list (" + ec.message() + ")");
+  return sums;
+}
+
 Status VerifyTruthFile(const CaptureTruth& truth, const std::string& path) {
   HR_ASSIGN_OR_RETURN(const std::string resolved, ResolveInside(path, truth.dir));
   const std::string name =

@@ -79,6 +79,15 @@ struct CaptureTruth {
 // ground truth, ground_truth.json included, with its SHA-256.
 constexpr const char* kTruthChecksumsFile = "checksums.json";
 
+// Writes <truth_dir>/checksums.json from `sha256` (path under truth_dir ->
+// SHA-256) with `write` (core/capture_storage.h; empty: the file system).
+Status WriteTruthChecksums(const std::string& truth_dir,
+                           const std::map<std::string, std::string>& sha256,
+                           const FileWriter& write = {});
+// The SHA-256 of every regular file under `truth_dir` but checksums.json, for
+// a ground truth whose writer kept no record of its own (a view set).
+Result<std::map<std::string, std::string>> HashTruthFolder(const std::string& truth_dir);
+
 // NotFound for a capture without ground truth (only the simulated rig writes
 // one); CorruptData naming the file and field for a damaged one: a
 // ground_truth/ folder or a file leading outside the capture, a file that does

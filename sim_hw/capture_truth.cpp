@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
-#include <nlohmann/json.hpp>
 #include <set>
 
 #include "core/parallel.h"
@@ -65,13 +64,12 @@ struct CaptureGroundTruth::State {
 
   // checksums.json: every file written so far with its SHA-256 (core/truth_maps.h).
   Status WriteChecksums() {
-    nlohmann::json files = nlohmann::json::object();
+    std::map<std::string, std::string> sums;
     {
       std::lock_guard<std::mutex> lock(mutex);
-      for (const auto& [name, sum] : sha256) files[name] = sum;
+      sums = sha256;
     }
-    const std::string text = nlohmann::json{{"files", files}}.dump(1);
-    return Write(dir + "/" + kTruthChecksumsFile, text.data(), text.size());
+    return WriteTruthChecksums(dir, sums, Writer());
   }
 
   // Writes with file_writer unless an earlier write failed; keeps the first failure.
@@ -199,9 +197,10 @@ Status CaptureGroundTruth::Finish() {
     std::lock_guard<std::mutex> lock(st.mutex);
     rendered_deg = st.written;
   }
-  if (rendered_deg.empty()) return Status::Ok();
-  HR_RETURN_IF_ERROR(
-      WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir, st.Writer()));
+  if (!rendered_deg.empty()) {
+    HR_RETURN_IF_ERROR(
+        WriteTruthJson(WorldRenderer(world_).scene(), st.views, rendered_deg, st.dir, st.Writer()));
+  }
   return st.WriteChecksums();
 }
 

@@ -77,6 +77,8 @@ Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::s
                                      GroundTruthJson(scene, truths, /*with_maps=*/true)));
   HR_RETURN_IF_ERROR(
       WriteStrands(out_dir + "/ground_truth_strands.ply", renderer.strands_turntable_mm()));
+  HR_ASSIGN_OR_RETURN(const auto sums, HashTruthFolder(out_dir));
+  HR_RETURN_IF_ERROR(WriteTruthChecksums(out_dir, sums));
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -32,7 +32,8 @@ struct RenderViewsSummary {
 // Writes <out>/<view>_<serial>.png for every view (view = stop * cameras +
 // camera, three digits), contact_sheet.png, ground_truth.json, head_mesh.ply
 // (a mesh head's mesh), ground_truth_strands.ply (turntable frame) and the per-pixel maps of every
-// view in <out>/views/ (sim_hw/ground_truth.h). `out` must exist.
+// view in <out>/views/ (sim_hw/ground_truth.h), and last checksums.json, the SHA-256 of
+// every file under <out> (core/truth_maps.h). `out` must exist.
 Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::string& out_dir,
                                           const RenderViewsOptions& options);
 
