@@ -17,6 +17,9 @@ const state = {
   estop: false,
   captureId: null,
   heartbeat: null,
+  // Captures whose capture_end has arrived: a state or progress event that
+  // left before the end (the e-stop's, say) cannot show them running again.
+  ended: new Set(),
 };
 
 // ---------- small helpers ----------
@@ -386,7 +389,9 @@ function selectCapture(id) {
   return true;
 }
 
-function showCapture(c) {
+function showCapture(c, ending = false) {
+  if (ending) state.ended.add(c.id);
+  else if (state.ended.has(c.id)) return;
   if (selectCapture(c.id)) attempt(() => loadCaptureViews(c.id));
   setText('#capture-status', c.status);
   $('#capture-status').dataset.status = c.status ?? '';
@@ -433,6 +438,7 @@ async function startCapture() {
 
 // Shows a capture the page just started, resumed or replayed.
 function watchCapture(id, word, hasViews) {
+  state.ended.delete(id);
   if (selectCapture(id) && hasViews) attempt(() => loadCaptureViews(id));
   setText('#capture-status', word);
   showMessage(`Capture ${id} ${word}`, 'info');
@@ -559,7 +565,7 @@ const handlers = {
   progress: showCapture,
   view: (v) => { selectCapture(v.id); addThumb(v); },
   fault: addFault,
-  capture_end: (c) => { showCapture(c); attempt(loadArchive); },
+  capture_end: (c) => { showCapture(c, true); attempt(loadArchive); },
   processed: (p) => { attempt(() => openResult(p.id)); attempt(loadArchive); },
   preview: applyPreview,
 };
