@@ -1,5 +1,5 @@
 // `hairrig batch`: the pipeline's stages over an archive of captures
-// (design.md section 10), with the local engine (the default) or on a Slurm
+// (docs/design.md section 10), with the local engine (the default) or on a Slurm
 // cluster (batch/engine.h). The batch folder keeps its state
 // (batch/batch_state.h).
 //

@@ -1,7 +1,7 @@
 // The simulate stage's one call into the dynamics: a fitted model to frames,
 // previews and summary.json, exactly as `hairrig simulate MODEL --out DIR`
 // with the settings' flags. It runs that command as a child process of the
-// hairrig binary, which holds the dynamics' driver (rig/cli_simulate.cpp).
+// hairrig binary, which holds the dynamics' driver (cli/cli_simulate.cpp).
 #pragma once
 
 #include <nlohmann/json.hpp>

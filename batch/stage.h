@@ -1,4 +1,4 @@
-// The stage contract (design.md section 10): `hairrig stage <name> --capture
+// The stage contract (docs/design.md section 10): `hairrig stage <name> --capture
 // DIR` runs one stage of one capture, writes its outputs inside DIR (the
 // folders of batch/stages.h), records the run in <folder>/result.json
 // (batch/stage_record.h) and fails with a Status (a non-zero exit) when the

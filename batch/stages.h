@@ -1,4 +1,4 @@
-// The pipeline's stages as batch jobs (design.md section 10) and their
+// The pipeline's stages as batch jobs (docs/design.md section 10) and their
 // options. Each stage reads and writes inside one capture folder:
 //
 //   stage        writes (inside the capture)   as the command line does

@@ -19,7 +19,7 @@
 set -euo pipefail
 captures="${1:-4}"
 jobs="${2:-10}"
-hairrig="${HAIRRIG:-build/rig/hairrig}"
+hairrig="${HAIRRIG:-build/cli/hairrig}"
 rig="${HAIRRIG_BENCH_RIG:-tests/data/batch_rig.yaml}"
 options="${HAIRRIG_BENCH_OPTIONS:-bench/batch_bench_options.json}"
 hairrig="$(cd "$(dirname "$hairrig")" && pwd)/$(basename "$hairrig")"

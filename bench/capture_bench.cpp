@@ -20,8 +20,8 @@
 #include "rig/capture.h"
 #include "rig/capture_dataset.h"
 #include "rig/rig_config.h"
-#include "rig/sim_rig.h"
 #include "sim_hw/renderer.h"
+#include "sim_rig/sim_rig.h"
 
 namespace fs = std::filesystem;
 using namespace hairrig;

@@ -11,7 +11,7 @@
 set -euo pipefail
 runs="${1:-3}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-hairrig="$root/build/rig/hairrig"
+hairrig="$root/build/cli/hairrig"
 out="$root/out/console-bench"
 source "$root/tests/support/start_console.sh"
 rm -rf "$out"

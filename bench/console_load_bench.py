@@ -16,7 +16,7 @@ Starts `hairrig serve` on the default simulated rig, then:
      every frame matching its journal record's SHA-256.
 
 Usage (from the repository root, after scripts/build):
-  python3 bench/console_load_bench.py [--hairrig build/rig/hairrig]
+  python3 bench/console_load_bench.py [--hairrig build/cli/hairrig]
       [--idle 2000] [--slow 200] [--tries 20] [--window 10] [--json OUT]
 
 Prints one line per figure and, with --json, writes them to OUT. Standard
@@ -213,7 +213,7 @@ def run_capture(port, lease, captures):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--hairrig", default="build/rig/hairrig")
+    parser.add_argument("--hairrig", default="build/cli/hairrig")
     parser.add_argument("--idle", type=int, default=2000)
     parser.add_argument("--slow", type=int, default=200)
     parser.add_argument("--tries", type=int, default=20)

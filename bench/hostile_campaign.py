@@ -55,7 +55,7 @@ kept; every variant works on its own copy. Variants marked slow (a stage that
 runs the whole reconstruction) are left out of --quick unless they are core.
 Run from the repository root:
 
-  python3 bench/hostile_campaign.py [--hairrig build/rig/hairrig] [--quick]
+  python3 bench/hostile_campaign.py [--hairrig build/cli/hairrig] [--quick]
       [--seed N] [--json OUT] [--timeout S] [--only TEXT] [--keep]
 
 Prints the table and every case that is not clean or handled (category,
@@ -2825,7 +2825,7 @@ def print_report(c, runtime):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--hairrig", default="build/rig/hairrig")
+    parser.add_argument("--hairrig", default="build/cli/hairrig")
     parser.add_argument("--quick", action="store_true", help="about 220 runs, the slow stages left out")
     parser.add_argument("--seed", type=int, default=20261124)
     parser.add_argument("--json", help="write every run and the table to this file")

@@ -11,7 +11,7 @@
 set -euo pipefail
 views="${1:-25}"
 serial="${2:-SIM-CAM-UPPER}"
-hairrig="${HAIRRIG:-build/rig/hairrig}"
+hairrig="${HAIRRIG:-build/cli/hairrig}"
 if ! command -v mrcal-calibrate-cameras >/dev/null; then
   echo "mrcal_compare: mrcal is not installed (apt-get install mrcal)" >&2
   exit 2

@@ -1,4 +1,4 @@
-// Bundle adjustment of a capture's views from the calibration box (design.md
+// Bundle adjustment of a capture's views from the calibration box (docs/design.md
 // section 5), in Ceres with a robust (Huber) loss.
 //
 // Mode `turntable`: camera c fixed in the world, the box rigid on the

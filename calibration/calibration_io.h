@@ -1,4 +1,4 @@
-// A capture's calibration on disk (<capture>/calibration/, design.md sections
+// A capture's calibration on disk (<capture>/calibration/, docs/design.md sections
 // 4-5), written by `hairrig calibrate` and read by later stages:
 //
 //   calibration.json        the project's own: per camera the intrinsics (and

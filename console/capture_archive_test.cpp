@@ -6,7 +6,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "rig/capture_test_util.h"
+#include "tests/support/capture_test_util.h"
 
 namespace hairrig {
 namespace {

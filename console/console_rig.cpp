@@ -312,7 +312,7 @@ void ConsoleRig::WatchSafetyInputs() {
   for (const auto& line : rig_->devices.input_lines) {
     InputLine* input = line.get();
     input->OnChange([this, input](bool active) {
-      if (active) EStop(input->Describe() + " went active");
+      if (active) EStop(DescribeSafetyStop(*input));
     });
   }
 }
@@ -605,10 +605,14 @@ nlohmann::json ConsoleRig::EStop(const std::string& who) {
 }
 
 Status ConsoleRig::ReleaseEStop() {
+  // A safety input that cannot be read counts as pressed (drivers/input_line.h).
   for (const auto& line : rig_->devices.input_lines) {
-    const Result<bool> active =
-        line->state() == DeviceState::kReady ? line->IsActive() : Result<bool>(false);
-    if (active.ok() && *active)
+    const Result<bool> active = line->IsActive();
+    if (!active.ok()) {
+      return FailedPrecondition(line->Describe() + " cannot be read (" + active.status().message() +
+                                "): check its wiring and reconnect it, then release the e-stop");
+    }
+    if (*active)
       return FailedPrecondition(line->Describe() + " is still active: release it on the rig first");
   }
   {

@@ -1,5 +1,5 @@
 // The rig as the operator console drives it: one process owns the rig's
-// devices (design.md section 9). Between captures it keeps them open for the
+// devices (docs/design.md section 9). Between captures it keeps them open for the
 // live view, the lights and the turntable; a capture, a resume and a replay run
 // the same library calls as the command line (rig/capture_and_process.h,
 // rig/replay_capture.h) on a worker thread, with this rig's devices, and report
@@ -60,7 +60,7 @@ class ConsoleRig {
   void Shutdown();
 
   // {"version", "rig", "estop", "busy", "capture", "turntable", "lights"}
-  // (console_api in the README); "control" is the server's.
+  // (docs/console-api.md); "control" is the server's.
   nlohmann::json State();
   // {"devices": [...]}: name, kind, backend, serial, model, state, health (a
   // health check each while idle; "in use by the capture" while one runs).

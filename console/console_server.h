@@ -1,7 +1,7 @@
-// `hairrig serve`: the operator console (design.md section 9). One process
+// `hairrig serve`: the operator console (docs/design.md section 9). One process
 // owns the rig's devices (console/console_rig.h) and serves the page
 // (console/web/, built into the binary) and a JSON API with live events
-// (Server-Sent Events), documented in the README's "Operator console".
+// (Server-Sent Events), documented in docs/console-api.md.
 //
 // Security: it listens on 127.0.0.1 unless told otherwise, and beyond
 // loopback only with a token, which every API request must carry

@@ -16,8 +16,8 @@
 #include <thread>
 
 #include "console/estop_client.h"
-#include "rig/capture_test_util.h"
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
+#include "tests/support/capture_test_util.h"
 #include "tests/support/open_file_limit.h"
 #include "tests/support/raw_http.h"
 
@@ -585,6 +585,40 @@ TEST_F(ConsoleServerTest, TheEStopStopsACaptureFromAnyClientAndResumeCompletesIt
   const nlohmann::json entry = GetJson("/api/captures/" + id);
   EXPECT_EQ(entry["status"], "complete");
   EXPECT_EQ(testing::VerifiedFramesOnDisk(captures_ + "/" + id).size(), 16u);
+}
+
+// The e-stop's wiring breaks while the table jogs: the console stops as for a
+// pressed e-stop and refuses to release it while the line cannot be read.
+TEST_F(ConsoleServerTest, AnEStopLineThatCannotBeReadHoldsTheEStop) {
+  const std::string dir = testing::FreshDir("console_input_lost");
+  const std::string rig = RigAtTimeScale(dir, 0.01);
+  {
+    std::ifstream in(rig);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string yaml = text.str();
+    const std::string sim = "sim:\n";
+    yaml.insert(yaml.find(sim) + sim.size(), "  faults:\n    - {kind: input_lost, at: 1}\n");
+    std::ofstream(rig) << yaml;
+  }
+  StartServer("127.0.0.1:0", "", rig);
+  const std::string lease = Claim("technician");
+  auto [status, body] = Post("/api/turntable/jog", {{"degrees", 90}}, lease);
+  nlohmann::json state;
+  for (int i = 0; i < 200; ++i) {
+    state = GetJson("/api/state");
+    if (state["estop"]["active"].get<bool>()) break;
+    std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_TRUE(state["estop"]["active"].get<bool>()) << state.dump();
+  EXPECT_NE(state["estop"]["reason"].get<std::string>().find("cannot be read"), std::string::npos)
+      << state.dump();
+  std::tie(status, body) = Post("/api/estop/release", nlohmann::json::object(), lease);
+  EXPECT_EQ(status, 409) << body.dump();
+  EXPECT_NE(body["error"].get<std::string>().find("SIM-ESTOP"), std::string::npos) << body.dump();
+  EXPECT_NE(body["error"].get<std::string>().find("cannot be read"), std::string::npos)
+      << body.dump();
+  EXPECT_TRUE(GetJson("/api/state")["estop"]["active"].get<bool>());
 }
 
 TEST_F(ConsoleServerTest, TheCommandLineEStopReachesTheConsoleOrSaysToUseTheHardwareOne) {

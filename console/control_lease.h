@@ -1,4 +1,4 @@
-// One controlling client at a time (design.md section 9): the console's other
+// One controlling client at a time (docs/design.md section 9): the console's other
 // clients read only. A client claims control and gets a lease, a random token
 // it sends with every request that changes the rig; the lease lapses when its
 // holder goes quiet (a closed browser never locks the rig), and another client

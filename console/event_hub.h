@@ -1,4 +1,4 @@
-// The console's live events (design.md section 9): what happened, in order,
+// The console's live events (docs/design.md section 9): what happened, in order,
 // for every page and script that listens (GET /api/events, Server-Sent Events).
 #pragma once
 

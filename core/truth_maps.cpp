@@ -150,6 +150,11 @@ Status VerifyTruthFile(const CaptureTruth& truth, const std::string& path) {
   const std::string name =
       std::filesystem::path(resolved).lexically_relative(truth.dir).generic_string();
   const auto it = truth.sha256.find(name);
+  std::error_code ec;
+  if (it == truth.sha256.end() && !std::filesystem::exists(resolved, ec))
+    return NotFound(path +
+                    " is missing: a view's maps are written once the capture stores its "
+                    "frame (resume the capture to shoot it)");
   if (it == truth.sha256.end())
     return CorruptData(path + ": not among the files of " + truth.dir + "/" + kTruthChecksumsFile +
                        "; the ground truth was changed after the capture");

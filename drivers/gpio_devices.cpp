@@ -130,14 +130,16 @@ class GpioInput : public GpioDevice<InputLine, GpioInputLine> {
     stop_ = true;
     if (watcher_.joinable()) watcher_.join();
   }
-  // Delivers every edge to the callback until stopped; an I/O failure faults
-  // the device and ends the watch (a safety input that cannot be read is
-  // reported, never ignored).
+  // Delivers every edge to the callback until stopped. An I/O failure faults
+  // the device, tells the callback `true` (a safety input that cannot be read
+  // counts as pressed: drivers/input_line.h) and ends the watch.
   void Watch() {
     while (!stop_) {
       auto edge = line_->WaitEdge(std::chrono::milliseconds(50));
       if (!edge.ok()) {
         (void)Checked(edge.status());
+        std::lock_guard<std::mutex> lock(callback_mutex_);
+        if (callback_) callback_(true);
         return;
       }
       if (!edge.value()) continue;

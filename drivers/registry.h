@@ -9,7 +9,7 @@
 //     input_lines:   [{name: estop, backend: sim, serial: ...}]   (safety inputs)
 // Backends register a factory per kind; the registry knows none of them, so
 // drivers/ stays free of sim_hw/ and the simulated rig's plug point
-// (rig/sim_rig.h) wires the two together.
+// (sim_rig/sim_rig.h) wires the two together.
 #pragma once
 
 #include <functional>

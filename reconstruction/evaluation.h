@@ -1,5 +1,5 @@
 // Accuracy of the reconstruction's stages against per-pixel ground truth
-// (the simulated rig's maps, design.md section 3), computed once here for
+// (the simulated rig's maps, docs/design.md section 3), computed once here for
 // `hairrig eval reconstruction`, the tests and the benchmarks.
 #pragma once
 

@@ -47,7 +47,7 @@ struct LineMvsOptions {
   int views_in_cost = 2;         // ... of which the best this many score a hypothesis
   double min_baseline_deg = 8;   // neighbour views are at least this far in viewing direction ...
   double max_baseline_deg = 50;  // ... and at most this far
-  int iterations = 4;            // with the hull's prior 4 find the depth 6 do (README)
+  int iterations = 4;            // with the hull's prior 4 find the depth 6 do (docs/accuracy.md)
   int samples = 7;               // along the segment (odd)
   double sample_step_px = 2.0;   // their spacing, as seen in the reference view
   double orientation_truncation_deg = 25;

@@ -36,7 +36,7 @@ struct FusionOptions {
   // quarter of a view. A view whose plane is further than angle_tolerance_deg
   // from the stereo's direction is left out; with fewer than two views left
   // the stereo's direction stays. Off: on the demo capture it changes point
-  // precision by under 0.01 (README).
+  // precision by under 0.01 (docs/accuracy.md).
   bool multiview_direction = false;
   // Luo 2013 Sec. 4 Eq. 2 on the merged points (point_orientation_field.h):
   // each direction replaced by the field's of this sigma (mm) over the

@@ -1,5 +1,5 @@
 // Reconstruction I: from calibrated views to a cloud of oriented 3D points
-// (design.md section 6), each step a library call of its own:
+// (docs/design.md section 6), each step a library call of its own:
 //
 //   per view   hair segmentation (hair_segmentation.h) -> masks/
 //              2D orientation map (orientation_map.h)  -> orientation/

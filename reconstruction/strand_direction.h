@@ -55,7 +55,7 @@ struct DirectionOptions {
   // exceeds 1), instead of alpha_close times its share. Where the points cover
   // the hair densely every segment overlaps hundreds of others, the pairwise
   // terms drown Eq. 5, and the few overlaps that are wrong (segments crossing
-  // between layers) can reverse whole regions (README, "Strands"). A
+  // between layers) can reverse whole regions (docs/accuracy.md, "Strands"). A
   // departure from the paper, whose ribbons are few; `false` weighs every
   // overlap as Eq. 7.
   bool share_overlaps = true;
@@ -63,7 +63,7 @@ struct DirectionOptions {
   // share; a pair stays when either of its segments keeps it), 0 keeps all.
   // Where the hair is dense a segment overlaps hundreds of others; the
   // strongest few carry its neighbourhood's direction, and the minimum cut
-  // over all of them is the stage's largest cost (README, "Strands").
+  // over all of them is the stage's largest cost (docs/accuracy.md, "Strands").
   int max_overlaps = 32;
   // Overlaps are looked for from every overlap_stride-th vertex of each
   // segment (1: every vertex, as Eq. 7 counts them; 2 halves the queries,

@@ -1,4 +1,4 @@
-// The strand protocol of `hairrig eval reconstruction` (design.md section 6):
+// The strand protocol of `hairrig eval reconstruction` (docs/design.md section 6):
 // reconstructed strands against the true strands of a simulated capture.
 //
 //   samples      both strand sets sampled along their length (point_evaluation.h's

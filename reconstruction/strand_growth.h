@@ -64,7 +64,7 @@ struct StrandGrowthOptions {
   // (a strand left with its root alone counts as dropped_short). 0 (the
   // default, as the paper: I_d and the length only) turns the rule off; it
   // suits short hair and cuts long hair's strands where they pass under its
-  // seen surface (README, "Strands").
+  // seen surface (docs/accuracy.md, "Strands").
   double max_off_hair_mm = 0;
   double off_hair_mm = 4;
   // Bao & Qi growth only: where the directed segment vertex nearest the

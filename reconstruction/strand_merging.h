@@ -24,7 +24,7 @@ struct StrandMergeOptions {
   // ... for this long (arc length), the strand has merged. 0 (the default)
   // turns it off: on the demo capture it cut half the strands and brought the
   // median length to the truth's, but left consistency where it was and cost
-  // 0.02 of precision (README, "Strands").
+  // 0.02 of precision (docs/accuracy.md, "Strands").
   double run_mm = 0;
 
   Status Check() const;

@@ -114,7 +114,7 @@ class Sequencer {
   // --- setup and teardown --------------------------------------------------
   Status Setup();
   void StopCollectors();
-  void OnSafetyInput(const Device& line, bool active);
+  void OnSafetyInput(const InputLine& line, bool active);
   void OnControl(CaptureControl::Kind kind, const std::string& reason);
   void SafetyStop(const std::string& what, const std::string& input_name, const Device* device,
                   const Status& fault);
@@ -307,10 +307,11 @@ void Sequencer::StopCollectors() {
   }
 }
 
-void Sequencer::OnSafetyInput(const Device& line, bool active) {
+void Sequencer::OnSafetyInput(const InputLine& line, bool active) {
   if (!active) return;
-  SafetyStop(line.Describe() + " went active (e-stop or interlock)", line.info().name, &line,
-             Unavailable("safety input active"));
+  const bool unreadable = line.state() == DeviceState::kFaulted;
+  SafetyStop(DescribeSafetyStop(line), line.info().name, &line,
+             Unavailable(unreadable ? "safety input unreadable" : "safety input active"));
 }
 
 void Sequencer::OnControl(CaptureControl::Kind kind, const std::string& reason) {

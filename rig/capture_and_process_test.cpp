@@ -6,9 +6,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "rig/capture_test_util.h"
-#include "rig/sim_rig.h"
 #include "sim_hw/quota_storage.h"
+#include "sim_rig/sim_rig.h"
+#include "tests/support/capture_test_util.h"
 
 namespace hairrig {
 namespace {
@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 using hairrig::testing::FreshDir;
 using hairrig::testing::WriteSmallRig;
 
-// The small rig is the simulated one (rig/sim_rig.h).
+// The small rig is the simulated one (sim_rig/sim_rig.h).
 [[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 TEST(CaptureAndProcess, ACaptureForASubjectGoesToItsFolder) {

@@ -1,4 +1,4 @@
-// The calibration's input from a capture folder (design.md section 4): the
+// The calibration's input from a capture folder (docs/design.md section 4): the
 // frames from manifest.json (view, stop, measured turntable angle, camera
 // serial, file), the cameras and the `calibration` section of the rig config
 // snapshot (<capture>/rig.yaml, relative paths against the folder of the

@@ -1,4 +1,4 @@
-// The capture dataset (design.md section 4): one folder per capture.
+// The capture dataset (docs/design.md section 4): one folder per capture.
 //
 //   <capture>/rig.yaml          the rig config as used (snapshot)
 //   <capture>/capture.json      written once at creation: format version, creation time,

@@ -11,9 +11,9 @@
 
 #include "core/file_util.h"
 #include "core/sha256.h"
-#include "rig/capture_test_util.h"
 #include "rig/replay.h"
 #include "sim_hw/quota_storage.h"
+#include "tests/support/capture_test_util.h"
 
 namespace hairrig {
 namespace {

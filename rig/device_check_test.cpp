@@ -4,13 +4,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "rig/capture_test_util.h"
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
+#include "tests/support/capture_test_util.h"
 
 namespace hairrig {
 namespace {
 
-// The small rig is the simulated one (rig/sim_rig.h).
+// The small rig is the simulated one (sim_rig/sim_rig.h).
 [[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 // The small simulated rig: seven devices, each opened and healthy.

@@ -1,4 +1,4 @@
-// The reconstruction's input from a calibrated capture folder (design.md
+// The reconstruction's input from a calibrated capture folder (docs/design.md
 // sections 4-6): every view that calibration.json solved, with its frame,
 // its camera's solved lens model, cam_from_object (the turntable frame in
 // turntable mode, the box frame in free mode) and the calibration box's

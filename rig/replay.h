@@ -1,6 +1,6 @@
 // The `replay` device backend: a recorded capture folder plays the part of
 // the rig that recorded it, so the sequencer and every later stage run on it
-// with no hardware (design.md sections 2 and 4).
+// with no hardware (docs/design.md sections 2 and 4).
 //
 // The turntable reports the recorded measured angle of the stop whose
 // commanded angle it is sent to; each camera, when triggered, serves the

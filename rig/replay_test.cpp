@@ -7,9 +7,9 @@
 #include "core/file_util.h"
 #include "rig/capture.h"
 #include "rig/capture_calibration_input.h"
-#include "rig/capture_test_util.h"
 #include "rig/replay_capture.h"
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
+#include "tests/support/capture_test_util.h"
 
 namespace hairrig {
 namespace {
@@ -17,7 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace hairrig::testing;
 
-// The recordings are made with the simulated rig (rig/sim_rig.h).
+// The recordings are made with the simulated rig (sim_rig/sim_rig.h).
 [[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 Result<CaptureSummary> Replay(const std::string& recorded, const std::string& out, double speed) {

@@ -92,7 +92,7 @@ struct RigBuildOptions {
 // rig's `sim`) and hooks that rewrite a real backend's options before its
 // device is built (the simulated rig points `host: sim`, `port: sim`,
 // `address: sim`, `device: sim` and `bus: sim` at simulated peers it serves:
-// rig/sim_rig.h). Errors name the file, line and field.
+// sim_rig/sim_rig.h). Errors name the file, line and field.
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& options = {});
 
 }  // namespace hairrig

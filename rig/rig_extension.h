@@ -1,6 +1,6 @@
 // The rig's extension point: code outside the production rig plugs into every
 // rig config this process loads and every rig it builds, without rig/ knowing
-// it. The simulated rig (rig/sim_rig.h) is one: it reads the config's `sim`
+// it. The simulated rig (sim_rig/sim_rig.h) is one: it reads the config's `sim`
 // section, registers the `sim` backend, serves simulated peers that the real
 // backends talk to and writes each capture's ground truth.
 //

@@ -8,7 +8,7 @@
 
 #include "core/file_util.h"
 #include "rig/capture.h"
-#include "rig/capture_test_util.h"
+#include "tests/support/capture_test_util.h"
 
 namespace hairrig {
 namespace {

@@ -1,6 +1,6 @@
 // Pictures of strands on a head, for `hairrig simulate`'s previews. The
 // drawing is plugged in by whoever links a renderer (the simulated rig
-// registers its own, rig/sim_rig.h), so that the dynamics run without it.
+// registers its own, sim_rig/sim_rig.h), so that the dynamics run without it.
 #pragma once
 
 #include <functional>

@@ -157,15 +157,18 @@ int CaptureGroundTruth::views_recorded() const {
   return static_cast<int>(state_->written.size());
 }
 
-Status CaptureGroundTruth::Finish() {
+Status CaptureGroundTruth::Finish(const std::vector<int>& views_without_frames) {
   StopRecording();
   State& st = *state_;
+  const std::set<int> skipped(views_without_frames.begin(), views_without_frames.end());
   std::vector<size_t> missing;
   {
     std::lock_guard<std::mutex> lock(st.mutex);
     HR_RETURN_IF_ERROR(st.first_error);
     for (size_t i = 0; i < st.views.size(); ++i) {
-      if (st.scene_cameras[i] >= 0 && st.written.count(st.views[i].view) == 0) missing.push_back(i);
+      const int view = st.views[i].view;
+      if (st.scene_cameras[i] >= 0 && st.written.count(view) == 0 && skipped.count(view) == 0)
+        missing.push_back(i);
     }
   }
   // Geometry only: unshaded, without noise, a view per thread.

@@ -48,12 +48,14 @@ class CaptureGroundTruth {
   ~CaptureGroundTruth();  // stops recording
 
   // Stops recording, renders the maps of the views no camera rendered while
-  // recording (a resumed capture's earlier views, views that failed) and
-  // rewrites ground_truth.json with each recorded view at the angle its frame
-  // was rendered at (the simulated encoder's, within 0.001 deg of the stop's);
-  // the first error of any write (a write that failed while recording
-  // included: then nothing more is written).
-  Status Finish();
+  // recording (a resumed capture's earlier views, views whose render did not
+  // match) except `views_without_frames` (views a stopped or incomplete
+  // capture has no frame of: their maps are written by the session that
+  // shoots them), and rewrites ground_truth.json with each recorded view at
+  // the angle its frame was rendered at (the simulated encoder's, within
+  // 0.001 deg of the stop's); the first error of any write (a write that
+  // failed while recording included: then nothing more is written).
+  Status Finish(const std::vector<int>& views_without_frames = {});
 
   int views_recorded() const;  // maps written from the capture's own renders
 

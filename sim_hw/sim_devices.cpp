@@ -139,21 +139,31 @@ class SimWorld {
     return input_active_;
   }
   void SetInputActive(bool active) {
-    std::vector<InputFn> fns;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (input_active_ == active) return;
       input_active_ = active;
-      for (auto& [name, fn] : input_callbacks_) fns.push_back(fn);
     }
-    for (auto& fn : fns) fn(active);
+    NotifyInputs(active);
   }
-  // Presses the e-stop `after_s` device seconds from now, from another thread.
-  void ScheduleEstop(double after_s) {
+  // The safety inputs' wiring is broken (an input_lost fault): they cannot be
+  // read from then on.
+  bool InputsLost() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return inputs_lost_;
+  }
+  // `after_s` device seconds from now, from another thread: presses the e-stop
+  // (kEstop) or breaks the inputs' wiring (kInputLost), telling the lines'
+  // callbacks `true` either way.
+  void ScheduleSafetyEvent(SimFaultKind kind, double after_s) {
     if (estop_timer_.joinable()) estop_timer_.join();
-    estop_timer_ = std::thread([this, after_s] {
+    estop_timer_ = std::thread([this, kind, after_s] {
       SleepSim(after_s);
-      SetInputActive(true);
+      if (kind == SimFaultKind::kInputLost) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        inputs_lost_ = true;
+      }
+      NotifyInputs(true);
     });
   }
 
@@ -217,6 +227,14 @@ class SimWorld {
   static bool SameWorld(const WorldExposure& a, const WorldExposure& b) {
     return std::abs(a.angle_deg - b.angle_deg) < 1e-9 && a.light_levels == b.light_levels;
   }
+  void NotifyInputs(bool active) {
+    std::vector<InputFn> fns;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto& [name, fn] : input_callbacks_) fns.push_back(fn);
+    }
+    for (auto& fn : fns) fn(active);
+  }
   double AngleLocked() const {
     return move_start_deg_ + TrapezoidPosition(move_target_deg_ - move_start_deg_, move_profile_,
                                                SimSecondsSince(move_start_));
@@ -233,6 +251,7 @@ class SimWorld {
   bool stuck_ = false;
   std::map<std::string, int> event_counts_;
   std::map<std::string, InputFn> input_callbacks_;
+  bool inputs_lost_ = false;
   bool input_active_ = false;
   std::thread estop_timer_;
   std::unique_ptr<SimTurntableController> turntable_controller_;
@@ -344,7 +363,7 @@ double SimTurntableController::time_scale() const { return world_.time_scale(); 
 
 TurntableFaultCode SimTurntableController::StartMove(double target_deg, const MotionProfile& p) {
   const TurntableCapabilities caps = capabilities();
-  double estop_after_s = -1;
+  std::optional<SafetyEvent> safety_event;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!std::isfinite(target_deg) ||
@@ -353,34 +372,36 @@ TurntableFaultCode SimTurntableController::StartMove(double target_deg, const Mo
       fault_ = TurntableFaultCode::kLimit;
       return fault_;
     }
-    estop_after_s = StartMoveLocked(target_deg, p);
+    safety_event = StartMoveLocked(target_deg, p);
     homing_ = false;
   }
-  // Outside the lock: the e-stop's handlers may call Stop().
-  if (estop_after_s >= 0) world_.ScheduleEstop(estop_after_s);
+  // Outside the lock: the inputs' handlers may call Stop().
+  if (safety_event) world_.ScheduleSafetyEvent(safety_event->kind, safety_event->after_s);
   return TurntableFaultCode::kNone;
 }
 
 void SimTurntableController::StartHome() {
-  double estop_after_s = -1;
+  std::optional<SafetyEvent> safety_event;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    estop_after_s = StartMoveLocked(
+    safety_event = StartMoveLocked(
         0.0, {world_.scene().turntable_speed_deg_s, world_.scene().turntable_accel_deg_s2});
     homing_ = true;
   }
-  if (estop_after_s >= 0) world_.ScheduleEstop(estop_after_s);
+  if (safety_event) world_.ScheduleSafetyEvent(safety_event->kind, safety_event->after_s);
 }
 
-double SimTurntableController::StartMoveLocked(double target_deg, const MotionProfile& p) {
+std::optional<SimTurntableController::SafetyEvent> SimTurntableController::StartMoveLocked(
+    double target_deg, const MotionProfile& p) {
   const double move_s = MoveDurationS(target_deg - world_.AngleDeg(), p);
   world_.StartMove(target_deg, p);
   target_deg_ = target_deg;
   stall_after_s_ = -1;
   move_start_ = Clock::now();
-  const SimFault* fault = world_.NextEventFault(
-      "", {SimFaultKind::kTurntableTimeout, SimFaultKind::kTurntableStall, SimFaultKind::kEstop});
-  if (!fault) return -1;
+  const SimFault* fault =
+      world_.NextEventFault("", {SimFaultKind::kTurntableTimeout, SimFaultKind::kTurntableStall,
+                                 SimFaultKind::kEstop, SimFaultKind::kInputLost});
+  if (!fault) return std::nullopt;
   switch (fault->kind) {
     case SimFaultKind::kTurntableTimeout:
       world_.JamMove();
@@ -389,11 +410,12 @@ double SimTurntableController::StartMoveLocked(double target_deg, const MotionPr
       stall_after_s_ = 0.5 * move_s;
       break;
     case SimFaultKind::kEstop:
-      return 0.2 * move_s;
+    case SimFaultKind::kInputLost:
+      return SafetyEvent{fault->kind, 0.2 * move_s};
     default:
       break;
   }
-  return -1;
+  return std::nullopt;
 }
 
 void SimTurntableController::Stop() {
@@ -548,16 +570,31 @@ class SimTriggerLine : public SimDevice<TriggerLine> {
   bool active_ = false;
 };
 
+// Once the world's inputs are lost (an input_lost fault), every read fails and
+// faults the line, and the line's callback hears `true` after the fault.
 class SimInputLine : public SimDevice<InputLine> {
  public:
   using SimDevice::SimDevice;
   ~SimInputLine() override { world_->SetInputCallback(info().name, nullptr); }
   Result<bool> IsActive() override {
     HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsActive"));
+    if (world_->InputsLost()) return Fault(InputLost());
     return world_->InputActive();
   }
   void OnChange(std::function<void(bool active)> callback) override {
-    world_->SetInputCallback(info().name, std::move(callback));
+    if (!callback) {
+      world_->SetInputCallback(info().name, nullptr);
+      return;
+    }
+    world_->SetInputCallback(info().name, [this, callback = std::move(callback)](bool active) {
+      if (world_->InputsLost()) (void)Fault(InputLost());
+      callback(active);
+    });
+  }
+
+ private:
+  static Status InputLost() {
+    return Unavailable("the line cannot be read (simulated input_lost fault: wiring broken)");
   }
 };
 

@@ -12,6 +12,7 @@ constexpr std::pair<SimFaultKind, const char*> kKindNames[] = {
     {SimFaultKind::kTurntableTimeout, "turntable_timeout"},
     {SimFaultKind::kTurntableStall, "turntable_stall"},
     {SimFaultKind::kEstop, "estop"},
+    {SimFaultKind::kInputLost, "input_lost"},
     {SimFaultKind::kDiskFull, "disk_full"},
 };
 
@@ -36,7 +37,7 @@ Result<std::vector<SimFault>> ParseSimFaults(const ConfigNode& faults) {
     SimFault fault;
     const std::string kind =
         node.Choice("kind", {"drop_frame", "camera_gone", "download_timeout", "turntable_timeout",
-                             "turntable_stall", "estop", "disk_full"});
+                             "turntable_stall", "estop", "input_lost", "disk_full"});
     for (const auto& [k, name] : kKindNames) {
       if (kind == name) fault.kind = k;
     }

@@ -1,4 +1,4 @@
-// Fault injection for the simulated rig (design.md section 3): the faults a
+// Fault injection for the simulated rig (docs/design.md section 3): the faults a
 // real rig meets, switched on from the rig config so that tests can drive the
 // capture's error handling through the same device interfaces.
 //
@@ -14,6 +14,8 @@
 //       - {kind: turntable_timeout, at: 4, count: 1}   # the 4th move never reaches position
 //       - {kind: turntable_stall, at: 6}               # the 6th move ends in a controller fault
 //       - {kind: estop, at: 3}                         # e-stop pressed during the 3rd move
+//       - {kind: input_lost, at: 3}    # the safety inputs' wiring breaks during the 3rd move:
+//                                 # they cannot be read from then on (a read faults the line)
 //       - {kind: disk_full, at: 10}                    # the capture's disk holds 10 frame files:
 //                                 # writing the 11th fails with ENOSPC (sim_hw/quota_storage.h)
 //
@@ -40,6 +42,7 @@ enum class SimFaultKind {
   kTurntableTimeout,
   kTurntableStall,
   kEstop,
+  kInputLost,
   kDiskFull,
 };
 

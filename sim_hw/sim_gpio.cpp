@@ -18,6 +18,7 @@ struct SimGpioProvider::Line {
   std::vector<SimGpioTransition> transitions;
   std::deque<GpioEdge> events;  // pending, for an input's requester
   std::condition_variable event_cv;
+  Status broken;  // BreakLine: what every read returns from then on
 };
 
 struct SimGpioProvider::Chip {
@@ -44,13 +45,16 @@ class SimGpioHandle : public GpioOutputLine, public GpioInputLine {
   }
   Result<bool> Get() override {
     std::lock_guard<std::mutex> lock(provider_->mutex_);
+    if (!line_->broken.ok()) return line_->broken;
     return line_->level != line_->active_low;
   }
   Result<std::optional<GpioEdge>> WaitEdge(std::chrono::milliseconds timeout) override {
     std::unique_lock<std::mutex> lock(provider_->mutex_);
-    if (!line_->event_cv.wait_for(lock, timeout, [this] { return !line_->events.empty(); })) {
+    if (!line_->event_cv.wait_for(
+            lock, timeout, [this] { return !line_->events.empty() || !line_->broken.ok(); })) {
       return std::optional<GpioEdge>();
     }
+    if (!line_->broken.ok()) return line_->broken;
     const GpioEdge edge = line_->events.front();
     line_->events.pop_front();
     return std::optional<GpioEdge>(edge);
@@ -170,6 +174,17 @@ Status SimGpioProvider::DriveInput(const std::string& chip, int offset, bool lev
     line->events.push_back({level != line->active_low, now});
     line->event_cv.notify_all();
   }
+  return Status::Ok();
+}
+
+Status SimGpioProvider::BreakLine(const std::string& chip, int offset, Status error) {
+  if (error.ok()) return InvalidArgument("BreakLine needs the error the line's reads return");
+  std::lock_guard<std::mutex> lock(mutex_);
+  Line* line = FindLine(chips_, chip, offset);
+  if (line == nullptr)
+    return NotFound("no simulated line " + std::to_string(offset) + " of " + chip);
+  line->broken = std::move(error);
+  line->event_cv.notify_all();
   return Status::Ok();
 }
 

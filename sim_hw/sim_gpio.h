@@ -40,6 +40,9 @@ class SimGpioProvider : public GpioProvider, public std::enable_shared_from_this
   // Drives an input's physical level (a button, a door switch); an edge event
   // reaches the line's requester when the level changes.
   Status DriveInput(const std::string& chip, int offset, bool level);
+  // Breaks a line as an unplugged chip or a cut cable would: its requester's
+  // reads and edge waits fail with `error` (not ok) from then on.
+  Status BreakLine(const std::string& chip, int offset, Status error);
   // Who holds a line ("" when free).
   std::string Consumer(const std::string& chip, int offset) const;
 

@@ -16,8 +16,10 @@
 
 #include <chrono>
 #include <mutex>
+#include <optional>
 
 #include "drivers/turntable.h"
+#include "sim_hw/sim_faults.h"
 
 namespace hairrig {
 
@@ -60,9 +62,14 @@ class SimTurntableController {
   double time_scale() const;
 
  private:
-  // Starts the world's motion and draws the move's injected fault; returns
-  // the device seconds after which the e-stop is to be pressed, or -1.
-  double StartMoveLocked(double target_deg, const MotionProfile& profile);
+  // A fault of the safety inputs (estop, input_lost) drawn for a move, which
+  // the caller schedules outside the lock (the inputs' handlers may call Stop()).
+  struct SafetyEvent {
+    SimFaultKind kind = SimFaultKind::kEstop;
+    double after_s = 0;  // device seconds into the move
+  };
+  // Starts the world's motion and draws the move's injected fault.
+  std::optional<SafetyEvent> StartMoveLocked(double target_deg, const MotionProfile& profile);
 
   SimWorld& world_;
   std::mutex mutex_;

@@ -1,4 +1,4 @@
-// `hairrig batch` end to end (design.md section 10), as a lab runs it: three
+// `hairrig batch` end to end (docs/design.md section 10), as a lab runs it: three
 // small simulated captures (tests/data/batch_rig.yaml at three sets of
 // turntable angles) through every stage on a private single-node Slurm
 // cluster on 127.0.0.1 that the test starts and stops

@@ -18,8 +18,8 @@
 #include <thread>
 
 #include "rig/capture.h"
-#include "rig/capture_test_util.h"
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
+#include "tests/support/capture_test_util.h"
 #include "tests/support/modbus_tcp_peer.h"
 #include "tests/support/open_file_limit.h"
 
@@ -29,7 +29,7 @@ namespace {
 using namespace hairrig::testing;
 using Ms = std::chrono::milliseconds;
 
-// The rig these tests build is the simulated one (rig/sim_rig.h).
+// The rig these tests build is the simulated one (sim_rig/sim_rig.h).
 [[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 constexpr size_t kHeld = 1000;

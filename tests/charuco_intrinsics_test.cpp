@@ -94,7 +94,7 @@ TEST(ChArUcoIntrinsics, RenderedCornersAreFoundWhereTheCameraProjectsThem) {
 
 // Why DetectChArUcoCorners refines every corner again: OpenCV 4.6's own
 // interpolated corners come about half a pixel off the rendered truth in x
-// and y (the README's +0.50 / +0.51 px).
+// and y (docs/accuracy.md: +0.50 / +0.51 px).
 TEST(ChArUcoIntrinsics, OpenCvsInterpolatedCornersAreHalfAPixelOff) {
   const Fixture f = Load();
   const SceneCamera& camera = f.scene.cameras[0];

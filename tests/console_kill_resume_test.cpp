@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "rig/capture_test_util.h"
+#include "tests/support/capture_test_util.h"
 #include "tests/support/command_run.h"
 
 namespace hairrig {

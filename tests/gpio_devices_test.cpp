@@ -99,6 +99,37 @@ TEST(GpioDevices, SafetyInputReportsEveryEdgeWithItsPolarity) {
   EXPECT_TRUE((*estop)->Close().ok());
 }
 
+// A cut cable or an unplugged chip: the line faults and its callback hears
+// `true`, because a safety input that cannot be read counts as pressed.
+TEST(GpioDevices, ASafetyInputThatCannotBeReadCountsAsPressed) {
+  Gpio g;
+  auto estop = g.Make<InputLine>(DeviceKind::kInputLine,
+                                 "{name: estop, serial: E1, chip: hairrig-io, line: 4}");
+  ASSERT_TRUE(estop.ok()) << estop.status().ToString();
+  ASSERT_TRUE((*estop)->Open().ok());
+  std::mutex m;
+  std::condition_variable cv;
+  std::vector<bool> seen;
+  (*estop)->OnChange([&](bool active) {
+    std::lock_guard<std::mutex> lock(m);
+    seen.push_back(active);
+    cv.notify_all();
+  });
+  EXPECT_FALSE((*estop)->IsActive().value());
+  ASSERT_TRUE(g.provider->BreakLine("hairrig-io", 4, Unavailable("No such device")).ok());
+  {
+    std::unique_lock<std::mutex> lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, milliseconds(5000), [&] { return !seen.empty(); }));
+  }
+  EXPECT_TRUE(seen[0]);
+  EXPECT_EQ((*estop)->state(), DeviceState::kFaulted);
+  EXPECT_FALSE((*estop)->IsActive().ok());
+  const std::string said = DescribeSafetyStop(**estop);
+  EXPECT_NE(said.find("cannot be read"), std::string::npos) << said;
+  EXPECT_NE(said.find("estop"), std::string::npos) << said;
+  EXPECT_TRUE((*estop)->Close().ok());
+}
+
 TEST(GpioDevices, ALineHeldByAnotherDeviceIsRefusedNamingTheHolder) {
   Gpio g;
   auto a = g.Make<TriggerLine>(DeviceKind::kTriggerLine,

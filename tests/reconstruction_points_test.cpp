@@ -69,7 +69,7 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   ASSERT_TRUE(evaluation.ok()) << evaluation.status().ToString();
   std::printf("%s", evaluation->BriefReport().c_str());
   const ReconstructionEvaluation& e = *evaluation;
-  // Measured at half size (the full-size capture does better, README): hair
+  // Measured at half size (the full-size capture does better, docs/accuracy.md): hair
   // IoU median 0.78, orientation median 13.7 deg with 97 % kept, depth median
   // 10 mm, at (3 mm, 30 deg) precision 0.79 and visible-surface recall 0.60.
   ASSERT_EQ(e.visible.size(), 5u);

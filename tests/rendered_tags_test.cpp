@@ -124,7 +124,7 @@ TEST(RenderedTags, DetectedWithUnbiasedCornersOnAllDefaultViews) {
   EXPECT_EQ(sweep.found_expected, sweep.expected);
   for (const std::string& missed : sweep.missed) ADD_FAILURE() << missed << " was not detected";
   EXPECT_EQ(sweep.wrong_ids, 0);
-  // Measured: bias 0.018 px (the README's figure at the default lenses' 1 %), RMS 0.095 px.
+  // Measured: bias 0.018 px (docs/accuracy.md's figure at the default lenses' 1 %), RMS 0.095 px.
   EXPECT_LT(sweep.corrected.BiasPx(), 0.02);
   EXPECT_LT(sweep.corrected.RmsPx(), 0.15);
   // The correction is real: without it the corners are off by about half a pixel in x and y.
@@ -132,7 +132,7 @@ TEST(RenderedTags, DetectedWithUnbiasedCornersOnAllDefaultViews) {
 }
 
 // libapriltag fits straight tag edges, so lens distortion biases its corners:
-// the README's 0.008 px with no distortion and 0.026 px with twice the default
+// docs/accuracy.md's 0.008 px with no distortion and 0.026 px with twice the default
 // lenses' (about 2 % at the image corners), each held within 2x.
 TEST(RenderedTags, CornerBiasGrowsWithLensDistortion) {
   auto scene = LoadScene("etc/scenes/default.yaml");

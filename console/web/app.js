@@ -104,7 +104,7 @@ async function api(method, path, body) {
   const headers = {};
   if (token) headers.Authorization = `Bearer ${token}`;
   if (method !== 'GET' && state.lease) headers['X-Hairrig-Lease'] = state.lease;
-  if (method === 'POST' && body === undefined) body = {};
+  if (method !== 'GET' && body === undefined) body = {};  // a change is always JSON (the server refuses others)
   if (body !== undefined) headers['Content-Type'] = 'application/json';
   let response;
   try {

@@ -157,6 +157,14 @@ try {
       stoppedId, { timeout: 60_000 });
   });
 
+  await step('control-released', async () => {
+    await page.click('#release-control');
+    await page.waitForFunction(() => document.querySelector('#control-status')?.dataset.mine === 'false',
+                               null, { timeout: 30_000 });
+    const { control } = await api('/api/state');
+    if (control.holder !== null) throw new Error(`the server still names a holder: ${control.holder}`);
+  });
+
   if (consoleErrors.length) throw new Error(`errors in the page: ${consoleErrors.join('; ')}`);
   console.log('console browser test: all steps passed');
 } finally {

@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "cli/cli.h"
 #include "console/console_server.h"
 #include "console/estop_client.h"
-#include "rig/cli.h"
 
 namespace hairrig {
 namespace {

@@ -1,4 +1,4 @@
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
 
 #include <filesystem>
 
@@ -74,10 +74,11 @@ class GroundTruthWriter : public CaptureObserver {
     return Status::Ok();
   }
 
-  Status OnCaptureEnd(const CaptureSummary&) override {
+  // A stopped capture's views without a frame get their maps when shot.
+  Status OnCaptureEnd(const CaptureSummary& summary) override {
     if (!truth_) return Status::Ok();
     const std::unique_ptr<CaptureGroundTruth> truth = std::move(truth_);
-    return truth->Finish();
+    return truth->Finish(summary.missing_views);
   }
 
  private:

@@ -7,13 +7,13 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "rig/rig_config.h"
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
 #include "tests/support/camera_checks.h"
 
 namespace hairrig {
 namespace {
 
-// The rigs these tests build are simulated ones (rig/sim_rig.h).
+// The rigs these tests build are simulated ones (sim_rig/sim_rig.h).
 [[maybe_unused]] const bool kSimRigRegistered = (RegisterSimRig(), true);
 
 using std::chrono::milliseconds;

@@ -1,4 +1,4 @@
-#include "rig/capture_test_util.h"
+#include "tests/support/capture_test_util.h"
 
 #include <gtest/gtest.h>
 

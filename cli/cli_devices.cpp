@@ -1,7 +1,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "rig/cli.h"
+#include "cli/cli.h"
 #include "rig/device_check.h"
 #include "rig/device_discovery.h"
 

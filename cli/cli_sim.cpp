@@ -4,7 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "rig/cli.h"
+#include "cli/cli.h"
 #include "rig/rig_config.h"
 #include "sim_hw/charuco_views.h"
 #include "sim_hw/sim_serve.h"

@@ -8,7 +8,7 @@
 
 #include "batch/batch.h"
 #include "batch/process.h"
-#include "rig/cli.h"
+#include "cli/cli.h"
 
 namespace hairrig {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "batch/process.h"
 #include "batch/stage.h"
-#include "rig/cli.h"
+#include "cli/cli.h"
 
 namespace hairrig {
 namespace {

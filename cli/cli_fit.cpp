@@ -1,6 +1,6 @@
 #include <CLI/CLI.hpp>
 
-#include "rig/cli.h"
+#include "cli/cli.h"
 #include "simulation/fit_strand_file.h"
 
 namespace hairrig {

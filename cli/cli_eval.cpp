@@ -4,9 +4,9 @@
 #include <cstdio>
 
 #include "calibration/calibration_evaluation.h"
+#include "cli/cli.h"
 #include "reconstruction/reconstruction_evaluation.h"
 #include "rig/capture_calibration_input.h"
-#include "rig/cli.h"
 
 namespace hairrig {
 

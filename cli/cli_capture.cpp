@@ -3,9 +3,9 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
+#include "cli/cli.h"
 #include "core/log.h"
 #include "rig/capture_and_process.h"
-#include "rig/cli.h"
 
 namespace hairrig {
 namespace {

@@ -1,5 +1,5 @@
 // The `hairrig` command line: each subcommand parses, validates, calls the
-// libraries and writes; no algorithm lives here (design.md section 7).
+// libraries and writes; no algorithm lives here (docs/design.md section 7).
 #pragma once
 
 #include <cstdio>

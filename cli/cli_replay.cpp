@@ -1,6 +1,6 @@
 #include <CLI/CLI.hpp>
 
-#include "rig/cli.h"
+#include "cli/cli.h"
 #include "rig/replay_capture.h"
 
 namespace hairrig {

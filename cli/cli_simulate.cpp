@@ -2,7 +2,7 @@
 // a strand file and a preview per frame, and a summary (rig/simulate_run.h).
 #include <CLI/CLI.hpp>
 
-#include "rig/cli.h"
+#include "cli/cli.h"
 #include "rig/simulate_run.h"
 
 namespace hairrig {

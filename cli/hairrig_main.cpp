@@ -3,10 +3,10 @@
 #include <exception>
 #include <iostream>
 
+#include "cli/cli.h"
 #include "core/log.h"
 #include "core/version.h"
-#include "rig/cli.h"
-#include "rig/sim_rig.h"
+#include "sim_rig/sim_rig.h"
 
 namespace {
 

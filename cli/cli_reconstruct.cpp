@@ -9,8 +9,8 @@
 #include <memory>
 #include <mutex>
 
+#include "cli/cli.h"
 #include "core/log.h"
-#include "rig/cli.h"
 #include "rig/reconstruct_capture.h"
 #include "rig/reconstruction_input.h"
 

@@ -1,8 +1,8 @@
 #include <CLI/CLI.hpp>
 
 #include "calibration/intrinsics_folder.h"
+#include "cli/cli.h"
 #include "rig/capture_calibration_input.h"
-#include "rig/cli.h"
 
 namespace hairrig {
 namespace {

@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""The tables of docs/ that come from a bench's JSON output, generated from it.
+
+A bench run is recorded once, with the commit, date and command that made it:
+
+  python3 bench/console_load_bench.py --json /tmp/load.json
+  python3 bench/docs_figures.py record console_load /tmp/load.json \\
+      "python3 bench/console_load_bench.py --json OUT"
+
+which writes docs/figures/console_load.json. A table in docs/*.md that shows it
+sits between two markers,
+
+  <!-- figures: console_load -->
+  ...
+  <!-- end figures -->
+
+and `python3 bench/docs_figures.py` rewrites every such table from its record,
+so a figure in docs/ cannot drift from the bench output it quotes.
+`--check` rewrites nothing and exits 1 naming each table that differs from its
+record (tests/docs_figures runs it).
+"""
+
+import argparse
+import datetime
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+FIGURES = os.path.join(ROOT, "docs", "figures")
+BLOCK = re.compile(r"(<!-- figures: (\w+) -->\n)(.*?)(<!-- end figures -->)", re.S)
+
+
+def provenance(record):
+    return "`%s` %s" % (record["commit"], record["date"])
+
+
+def console_load_table(record):
+    r = record["result"]
+    estop = sorted(r["estop_ms"])
+    state = sorted(r["state_ms"])
+    cap = r["capture"]
+    rows = [
+        ("connections held: idle / slow-header", "%d / %d" % (r["idle"], r["slow"])),
+        ("e-stops acted on", "%d of %d" % (r["estop_answered"], r["tries"])),
+        ("e-stop latency, median / max",
+         "%.1f ms / %.1f ms" % (statistics.median(estop), estop[-1])),
+        ("state read, median / max", "%.1f ms / %.1f ms" % (statistics.median(state), state[-1])),
+        ("console CPU, load held / no load",
+         "%.1f %% / %.1f %% of a core" % (100 * r["cpu_under_load"], 100 * r["cpu_no_load"])),
+    ]
+    if cap.get("started"):
+        rows.append(("a capture started under the load",
+                     "%d of %d frames verified" % (cap["frames_verified"], cap["frames"])))
+    lines = ["| what | figure | commit, date |", "| --- | --- | --- |"]
+    lines += ["| %s | %s | %s |" % (what, figure, provenance(record)) for what, figure in rows]
+    return lines
+
+
+def hostile_campaign_table(record):
+    r = record["result"]
+    names = {"crash": "crashes", "hang": "hangs", "clean": "clean errors"}
+    columns = [names.get(c, c) for c in r["columns"]]
+    lines = ["| " + " | ".join(columns) + " |", "| " + " | ".join("---" for _ in columns) + " |"]
+    for row in r["table"]:
+        lines.append("| " + " | ".join(str(x) for x in row) + " |")
+    lines.append("")
+    lines.append("Mode `%s`, seed %s, %.0f s; %s." % (r["mode"], r["seed"], r["runtime_s"],
+                                                        provenance(record)))
+    return lines
+
+
+RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table}
+
+
+def load_record(name):
+    path = os.path.join(FIGURES, name + ".json")
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        raise SystemExit("docs_figures: %s: %s (record it with `docs_figures.py record`)" % (path, e))
+
+
+def render(name):
+    if name not in RENDERERS:
+        raise SystemExit("docs_figures: no renderer '%s' (known: %s)" % (name, ", ".join(RENDERERS)))
+    record = load_record(name)
+    lines = RENDERERS[name](record)
+    lines += ["", "Recorded with `%s`." % record["command"], ""]
+    return "\n".join(lines) + "\n"
+
+
+def update(check):
+    differing = []
+    docs = os.path.join(ROOT, "docs")
+    for file in sorted(os.listdir(docs)):
+        if not file.endswith(".md"):
+            continue
+        path = os.path.join(docs, file)
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+        new = BLOCK.sub(lambda m: m.group(1) + render(m.group(2)) + m.group(4), text)
+        for m in BLOCK.finditer(text):
+            if m.group(3) != render(m.group(2)):
+                differing.append("docs/%s: the '%s' table" % (file, m.group(2)))
+        if new != text and not check:
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(new)
+    return differing
+
+
+def record(name, result_path, command):
+    with open(result_path, encoding="utf-8") as f:
+        result = json.load(f)
+    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True, check=True).stdout.strip()
+    os.makedirs(FIGURES, exist_ok=True)
+    out = os.path.join(FIGURES, name + ".json")
+    with open(out, "w", encoding="utf-8") as f:
+        json.dump({"command": command, "commit": commit,
+                   "date": datetime.date.today().isoformat(), "result": result}, f, indent=1)
+        f.write("\n")
+    print(out)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true", help="change nothing; exit 1 when a table differs")
+    sub = parser.add_subparsers(dest="action")
+    rec = sub.add_parser("record", help="store a bench's JSON output as docs/figures/NAME.json")
+    rec.add_argument("name", choices=sorted(RENDERERS))
+    rec.add_argument("result")
+    rec.add_argument("command", help="the command that made the output, as a reader would type it")
+    args = parser.parse_args()
+    if args.action == "record":
+        record(args.name, args.result, args.command)
+        return 0
+    differing = update(args.check)
+    if args.check and differing:
+        print("docs_figures: out of date with docs/figures/ (run python3 bench/docs_figures.py):")
+        for d in differing:
+            print("  " + d)
+        return 1
+    print("docs_figures: %s" % ("every table matches its record" if args.check else "tables written"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
