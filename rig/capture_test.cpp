@@ -137,12 +137,13 @@ void ExpectGroundTruthOfEveryStoredView(const std::string& capture_dir, int view
 TEST(Capture, DefaultPlanGivesThirtyEightVerifiedViews) {
   const std::string dir = FreshDir("capture_complete");
   CountingSink sink;
-  // When half the views are stored: the ETA and the wall time it gave.
+  // When half the views are stored: the ETA and the wall time it gave. (Two
+  // cameras' frames stored at once may report 18 and then 20.)
   double eta_at_half = -1;
   std::chrono::steady_clock::time_point half;
   const CaptureSummary s =
       Capture(WriteSmallRig(dir), dir + "/c", &sink, [&](const CaptureProgress& p) {
-        if (p.step.rfind("stored", 0) == 0 && p.views_done == 19 && eta_at_half < 0) {
+        if (p.step.rfind("stored", 0) == 0 && p.views_done >= 19 && eta_at_half < 0) {
           eta_at_half = p.eta_s;
           half = std::chrono::steady_clock::now();
         }
