@@ -192,7 +192,7 @@ Result<CameraIntrinsics> ReadChArUcoTruthIntrinsics(const std::string& path) {
   return intrinsics;
 }
 
-Status IntrinsicsEvalOptions::Validate() const {
+Status IntrinsicsEvalOptions::Check() const {
   if (dir.empty())
     return InvalidArgument("eval intrinsics: dir (the calibrated image folder) is required");
   return Status::Ok();
@@ -239,7 +239,7 @@ std::string IntrinsicsEvaluation::BriefReport() const {
 }
 
 Result<IntrinsicsEvaluation> EvaluateIntrinsicsFolder(const IntrinsicsEvalOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   namespace fs = std::filesystem;
   IntrinsicsEvaluation e;
   e.dir = options.dir;

@@ -90,7 +90,7 @@ Result<CameraIntrinsics> ReadChArUcoTruthIntrinsics(const std::string& path);
 struct IntrinsicsEvalOptions {
   std::string dir;  // holds intrinsics.json and ground_truth.json
 
-  Status Validate() const;  // InvalidArgument naming the field
+  Status Check() const;  // InvalidArgument naming the field
 };
 
 struct IntrinsicsEvaluation {

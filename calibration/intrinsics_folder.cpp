@@ -40,7 +40,7 @@ Result<std::vector<std::string>> ImagesIn(const std::string& dir) {
 
 }  // namespace
 
-Status IntrinsicsFolderOptions::Validate() const {
+Status IntrinsicsFolderOptions::Check() const {
   if (images_dir.empty())
     return InvalidArgument("calibrate-intrinsics: images_dir (the image folder) is required");
   if (board_file.empty()) return InvalidArgument("calibrate-intrinsics: board_file is required");
@@ -85,7 +85,7 @@ std::string IntrinsicsFolderSummary::BriefReport() const {
 }
 
 Result<IntrinsicsFolderSummary> CalibrateIntrinsicsFolder(const IntrinsicsFolderOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(const ChArUcoBoard board, LoadChArUcoBoard(options.board_file));
   HR_ASSIGN_OR_RETURN(const std::vector<std::string> images, ImagesIn(options.images_dir));
   IntrinsicsFolderSummary summary;

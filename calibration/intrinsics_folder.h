@@ -23,7 +23,7 @@ struct IntrinsicsFolderOptions {
   ChArUcoCalibrationOptions calibration;
 
   // InvalidArgument naming the field: a missing folder, board or serial, threads < 1.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct IntrinsicsFolderSummary {

@@ -63,7 +63,7 @@ void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([options, &dispatch] {
-    const Status valid = options->Validate();
+    const Status valid = options->Check();
     if (!valid.ok()) throw CLI::ValidationError("capture", valid.message());
     options->on_progress = ProgressPrinter();
     options->on_captured = EndProgressLine;

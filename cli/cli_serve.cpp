@@ -44,7 +44,7 @@ void AddConsoleCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
     if (options->token.empty()) {
       if (const char* env = std::getenv("HAIRRIG_CONSOLE_TOKEN")) options->token = env;
     }
-    const Status valid = options->Validate();
+    const Status valid = options->Check();
     if (!valid.ok()) throw CLI::ValidationError("serve", valid.message());
     std::signal(SIGINT, OnStopSignal);
     std::signal(SIGTERM, OnStopSignal);

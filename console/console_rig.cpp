@@ -34,7 +34,7 @@ class ConsoleFrameSink : public FrameSink {
   const std::string id_;
 };
 
-Status ConsoleRigOptions::Validate() const {
+Status ConsoleRigOptions::Check() const {
   if (captures_dir.empty())
     return InvalidArgument("captures_dir (--captures, the folder of captures) is required");
   if (!(live.fps > 0 && live.fps <= 30))
@@ -68,7 +68,7 @@ const char* ConsoleRig::BusyName(Busy busy) {
 }
 
 Status ConsoleRig::Start() {
-  HR_RETURN_IF_ERROR(options_.Validate());
+  HR_RETURN_IF_ERROR(options_.Check());
   std::error_code ec;
   fs::create_directories(options_.captures_dir, ec);
   if (ec)

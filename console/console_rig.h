@@ -41,7 +41,7 @@ struct ConsoleRigOptions {
 
   // InvalidArgument naming the field: no captures_dir, live.fps outside
   // (0, 30], live.max_width_px outside [64, 4096], threads below 1.
-  Status Validate() const;
+  Status Check() const;
 };
 
 class ConsoleRig {

@@ -135,8 +135,8 @@ bool IsLoopbackHost(const std::string& host) {
   return false;
 }
 
-Status ConsoleOptions::Validate() const {
-  HR_RETURN_IF_ERROR(rig.Validate());
+Status ConsoleOptions::Check() const {
+  HR_RETURN_IF_ERROR(rig.Check());
   std::string host;
   int port = 0;
   HR_RETURN_IF_ERROR(SplitListen(listen, &host, &port));
@@ -482,7 +482,7 @@ void ConsoleServer::Impl::Routes() {
 }
 
 Status ConsoleServer::Impl::Start(std::string* host, int* port) {
-  HR_RETURN_IF_ERROR(options_.Validate());
+  HR_RETURN_IF_ERROR(options_.Check());
   HR_RETURN_IF_ERROR(SplitListen(options_.listen, host, port));
   loopback_ = IsLoopbackHost(*host);
   HR_RETURN_IF_ERROR(rig_.Start());

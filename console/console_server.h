@@ -41,7 +41,7 @@ struct ConsoleOptions {
   // InvalidArgument naming the field: a malformed listen address, a
   // non-loopback host without a token (or a short one), the rig's or the
   // HTTP server's options.
-  Status Validate() const;
+  Status Check() const;
 };
 
 // True for 127.0.0.0/8, ::1 and "localhost".

@@ -433,9 +433,9 @@ TEST_F(ConsoleServerTest, BeyondLoopbackEveryApiRequestNeedsTheToken) {
   ConsoleOptions options;
   options.rig.captures_dir = testing::FreshDir("console_token");
   options.listen = "0.0.0.0:0";
-  EXPECT_EQ(options.Validate().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(options.Check().code(), StatusCode::kInvalidArgument);
   options.token = "short";
-  EXPECT_EQ(options.Validate().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(options.Check().code(), StatusCode::kInvalidArgument);
 
   const std::string token = "0123456789abcdef-token";
   StartServer("0.0.0.0:0", token);

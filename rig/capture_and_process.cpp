@@ -120,7 +120,7 @@ std::string CaptureBriefReport(const CaptureSummary& s) {
 
 }  // namespace
 
-Status CaptureAndProcessOptions::Validate() const {
+Status CaptureAndProcessOptions::Check() const {
   if (out_dir.empty())
     return InvalidArgument("capture: out_dir (--out, the capture folder) is required");
   if (!intrinsics_files.empty() && !calibrate)
@@ -169,7 +169,7 @@ std::string CaptureAndProcessSummary::BriefReport() const {
 }
 
 Result<CaptureAndProcessSummary> CaptureAndProcess(const CaptureAndProcessOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(CaptureOptions capture, MakeCaptureOptions(options));
   std::unique_ptr<TagDetectionSink> sink;
   if (options.calibrate) {

@@ -46,7 +46,7 @@ struct CaptureAndProcessOptions {
 
   // InvalidArgument naming the option: no out_dir, intrinsics_files or
   // reconstruct without calibrate, threads below 1.
-  Status Validate() const;
+  Status Check() const;
 };
 
 // The calibration of a capture calibrated as it was shot, with the delays

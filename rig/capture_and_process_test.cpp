@@ -110,15 +110,15 @@ TEST(CaptureAndProcess, NoRoomForTheCalibrationAboveMinFreeSkipsItAndKeepsTheCap
 
 TEST(CaptureAndProcess, OptionsThatNeedCalibrateAreNamed) {
   CaptureAndProcessOptions options;
-  EXPECT_NE(options.Validate().message().find("out_dir"), std::string::npos);
+  EXPECT_NE(options.Check().message().find("out_dir"), std::string::npos);
   options.out_dir = "capture";
   options.intrinsics_files = {"camera.json"};
-  EXPECT_EQ(options.Validate().message(), "--intrinsics needs --calibrate");
+  EXPECT_EQ(options.Check().message(), "--intrinsics needs --calibrate");
   options.intrinsics_files.clear();
   options.reconstruct = true;
-  EXPECT_EQ(options.Validate().message(), "--reconstruct needs --calibrate");
+  EXPECT_EQ(options.Check().message(), "--reconstruct needs --calibrate");
   options.calibrate = true;
-  EXPECT_TRUE(options.Validate().ok());
+  EXPECT_TRUE(options.Check().ok());
 }
 
 }  // namespace

@@ -276,7 +276,7 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
   return done;
 }
 
-Status CaptureCalibrationEvalOptions::Validate() const {
+Status CaptureCalibrationEvalOptions::Check() const {
   if (capture_dir.empty())
     return InvalidArgument("eval calibration: capture_dir (the capture folder) is required");
   return Status::Ok();
@@ -284,7 +284,7 @@ Status CaptureCalibrationEvalOptions::Validate() const {
 
 Result<CalibrationEvaluation> EvaluateCaptureCalibration(
     const CaptureCalibrationEvalOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   const std::string& dir = options.capture_dir;
   HR_ASSIGN_OR_RETURN(
       const StoredCalibration calibration,

@@ -93,7 +93,7 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
 struct CaptureCalibrationEvalOptions {
   std::string capture_dir;  // a calibrated capture of the simulated rig
 
-  Status Validate() const;  // InvalidArgument naming the field
+  Status Check() const;  // InvalidArgument naming the field
 };
 
 // `hairrig eval calibration`: <capture>/calibration/calibration.json against

@@ -75,7 +75,7 @@ Result<ReconstructStage> ParseReconstructStage(const std::string& name) {
   return InvalidArgument("reconstruct stage '" + name + "' is not one of points, strands, all");
 }
 
-Status ReconstructCaptureOptions::Validate() const {
+Status ReconstructCaptureOptions::Check() const {
   if (dir.empty()) return InvalidArgument("reconstruct: the capture folder is required");
   if (!colmap_dir.empty() && images_dir.empty()) {
     return InvalidArgument("--colmap needs --images (the folder the model's image names are in)");
@@ -106,7 +106,7 @@ std::string ReconstructCaptureSummary::BriefReport() const {
 }
 
 Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOptions& o) {
-  HR_RETURN_IF_ERROR(o.Validate());
+  HR_RETURN_IF_ERROR(o.Check());
   HR_ASSIGN_OR_RETURN(const ReconstructionInput input, LoadInput(o));
   ReconstructCaptureSummary summary;
   if (o.stage != ReconstructStage::kStrands) {

@@ -40,7 +40,7 @@ struct ReconstructCaptureOptions {
   StrandReconstructionOptions strands;
   ReconstructionProgress progress;  // optional
 
-  Status Validate() const;  // InvalidArgument naming the option
+  Status Check() const;  // InvalidArgument naming the option
 };
 
 struct ReconstructCaptureSummary {

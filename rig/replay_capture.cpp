@@ -12,7 +12,7 @@ namespace hairrig {
 
 namespace fs = std::filesystem;
 
-Status ReplayCaptureOptions::Validate() const {
+Status ReplayCaptureOptions::Check() const {
   if (recorded_dir.empty())
     return InvalidArgument("replay: the recorded capture folder is required");
   if (!std::isfinite(speed) || speed < 0)
@@ -38,7 +38,7 @@ std::string ReplayCaptureSummary::BriefReport() const {
 }
 
 Result<ReplayCaptureSummary> ReplayCapture(const ReplayCaptureOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   const std::string out_dir =
       options.out_dir.empty() ? options.recorded_dir + "-replay" : options.out_dir;
   HR_RETURN_IF_ERROR(CheckReplayOutDir(options.recorded_dir, out_dir));

@@ -16,7 +16,7 @@ struct ReplayCaptureOptions {
       out_dir;       // the new capture folder; must not exist (default: recorded_dir + "-replay")
   double speed = 0;  // 0: as fast as possible; 1: recorded timing; 2: twice as fast
 
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct ReplayCaptureSummary {

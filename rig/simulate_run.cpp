@@ -169,7 +169,7 @@ Status WriteFrame(const SimulateRunOptions& o, SimulateSetup& setup,
 
 }  // namespace
 
-Status SimulateRunOptions::Validate() const {
+Status SimulateRunOptions::Check() const {
   if (model_file.empty()) return InvalidArgument("simulate: model_file is required");
   if (out_dir.empty()) return InvalidArgument("simulate: out_dir (--out) is required");
   if (!(seconds > 0) || !(fps > 0) || !std::isfinite(seconds) || !std::isfinite(fps)) {
@@ -225,7 +225,7 @@ std::string SimulateRunSummary::BriefReport() const {
 }
 
 Result<SimulateRunSummary> SimulateRun(const SimulateRunOptions& o) {
-  HR_RETURN_IF_ERROR(o.Validate());
+  HR_RETURN_IF_ERROR(o.Check());
   if (fs::exists(o.out_dir) && !fs::is_empty(o.out_dir)) {
     return FailedPrecondition(o.out_dir +
                               " already exists and is not empty: choose a new --out folder");

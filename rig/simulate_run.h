@@ -47,7 +47,7 @@ struct SimulateRunOptions {
   bool keep_lengths = true;
 
   // InvalidArgument naming the field and its range.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct SimulateRunSummary {

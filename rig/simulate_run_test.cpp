@@ -115,21 +115,21 @@ TEST(SimulateRun, TheFramesDoNotDependOnTheThreadCount) {
 TEST(SimulateRun, OptionsOutOfRangeAreNamed) {
   SimulateRunOptions o = ShortWind("model.json", "out");
   o.fps = 0;
-  EXPECT_NE(o.Validate().message().find("--fps"), std::string::npos);
+  EXPECT_NE(o.Check().message().find("--fps"), std::string::npos);
   o.fps = 10;
   o.up = Eigen::Vector3d::Zero();
-  EXPECT_NE(o.Validate().message().find("--up"), std::string::npos);
+  EXPECT_NE(o.Check().message().find("--up"), std::string::npos);
   o.up = Eigen::Vector3d(0, 0, 2);
   o.preview_every = -1;
-  EXPECT_NE(o.Validate().message().find("--preview-every"), std::string::npos);
+  EXPECT_NE(o.Check().message().find("--preview-every"), std::string::npos);
   o.preview_every = 0;
   o.threads = -1;
-  EXPECT_NE(o.Validate().message().find("--threads"), std::string::npos);
+  EXPECT_NE(o.Check().message().find("--threads"), std::string::npos);
   o.threads = 0;
   o.time_step_s = 0;
-  EXPECT_NE(o.Validate().message().find("time_step_s"), std::string::npos);
+  EXPECT_NE(o.Check().message().find("time_step_s"), std::string::npos);
   o.time_step_s = 1.0 / 240;
-  EXPECT_TRUE(o.Validate().ok());
+  EXPECT_TRUE(o.Check().ok());
 }
 
 }  // namespace

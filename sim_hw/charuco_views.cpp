@@ -231,7 +231,7 @@ Result<std::vector<int>> SelectCameras(const Scene& scene, const ChArUcoSetsOpti
 
 }  // namespace
 
-Status ChArUcoSetsOptions::Validate() const {
+Status ChArUcoSetsOptions::Check() const {
   if (scene_file.empty()) return InvalidArgument("sim charuco: scene_file is required");
   if (board_file.empty()) return InvalidArgument("sim charuco: board_file is required");
   if (out_dir.empty()) return InvalidArgument("sim charuco: out_dir (--out) is required");
@@ -267,7 +267,7 @@ std::string ChArUcoSetsSummary::BriefReport() const {
 }
 
 Result<ChArUcoSetsSummary> WriteChArUcoSets(const ChArUcoSetsOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(const Scene scene, LoadScene(options.scene_file));
   HR_ASSIGN_OR_RETURN(const ChArUcoBoard board, LoadChArUcoBoard(options.board_file));
   HR_ASSIGN_OR_RETURN(const std::vector<int> cameras, SelectCameras(scene, options));

@@ -73,7 +73,7 @@ struct ChArUcoSetsOptions {
   int threads = 2;                   // cameras rendered at once, at least 1
 
   // InvalidArgument naming the field and its range.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct ChArUcoSetsSummary {

@@ -133,7 +133,7 @@ void StopSimulators(Simulators& s, SimServeSummary* summary) {
 
 }  // namespace
 
-Status SimServeOptions::Validate() const {
+Status SimServeOptions::Check() const {
   if (scene_file.empty()) return InvalidArgument("sim serve: scene_file is required");
   if (modbus_port < 0 || modbus_port > 65535) {
     return InvalidArgument("sim serve: modbus_port must be 0 (a free port) to 65535, got " +
@@ -177,7 +177,7 @@ std::string SimServeSummary::BriefReport() const {
 }
 
 Result<SimServeSummary> ServeSimulatedDevices(const SimServeOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(const Scene scene, LoadScene(options.scene_file));
   SimWorldOptions world_options;
   world_options.time_scale = options.time_scale;

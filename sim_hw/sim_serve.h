@@ -33,7 +33,7 @@ struct SimServeOptions {
   std::function<void(const std::string& endpoints)> on_serving;
 
   // InvalidArgument naming the field and its range.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct SimServeSummary {

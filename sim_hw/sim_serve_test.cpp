@@ -48,15 +48,15 @@ TEST(SimServe, OptionsOutOfRangeAreNamed) {
   SimServeOptions options;
   options.scene_file = "etc/scenes/default.yaml";
   options.slave_id = 0;
-  EXPECT_NE(options.Validate().message().find("slave_id"), std::string::npos);
+  EXPECT_NE(options.Check().message().find("slave_id"), std::string::npos);
   options.slave_id = 1;
   options.modbus_port = 70000;
-  EXPECT_NE(options.Validate().message().find("modbus_port"), std::string::npos);
+  EXPECT_NE(options.Check().message().find("modbus_port"), std::string::npos);
   options.modbus_port = 0;
   options.time_scale = 0;
-  EXPECT_NE(options.Validate().message().find("time_scale"), std::string::npos);
+  EXPECT_NE(options.Check().message().find("time_scale"), std::string::npos);
   options.time_scale = 1;
-  EXPECT_TRUE(options.Validate().ok());
+  EXPECT_TRUE(options.Check().ok());
   const auto refused = ServeSimulatedDevices(SimServeOptions{});
   EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
 }

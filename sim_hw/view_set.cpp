@@ -97,7 +97,7 @@ std::string CropText(const cv::Rect& r) {
 
 }  // namespace
 
-Status RenderSceneViewsOptions::Validate() const {
+Status RenderSceneViewsOptions::Check() const {
   if (scene_file.empty()) return InvalidArgument("sim render: scene_file is required");
   if (out_dir.empty())
     return InvalidArgument("sim render: out_dir (--out, the output folder) is required");
@@ -126,7 +126,7 @@ std::string RenderSceneViewsSummary::BriefReport() const {
 }
 
 Result<RenderSceneViewsSummary> RenderSceneViews(const RenderSceneViewsOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(const std::unique_ptr<Renderer> renderer, LoadRenderer(options.scene_file));
   std::error_code ec;
   std::filesystem::create_directories(options.out_dir, ec);
@@ -139,7 +139,7 @@ Result<RenderSceneViewsSummary> RenderSceneViews(const RenderSceneViewsOptions& 
   return summary;
 }
 
-Status RenderViewFileOptions::Validate() const {
+Status RenderViewFileOptions::Check() const {
   if (scene_file.empty()) return InvalidArgument("sim render: scene_file is required");
   const std::string ext = FileExtension(out_file);
   if (ext != "png" && ext != "tif" && ext != "tiff" && ext != "jpg") {
@@ -165,7 +165,7 @@ std::string RenderViewFileSummary::BriefReport() const {
 }
 
 Result<RenderViewFileSummary> RenderViewFile(const RenderViewFileOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(const std::unique_ptr<Renderer> renderer, LoadRenderer(options.scene_file));
   const Scene& scene = renderer->scene();
   const int n = NumViews(scene);

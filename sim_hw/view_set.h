@@ -43,7 +43,7 @@ struct RenderSceneViewsOptions {
   RenderViewsOptions render;
 
   // InvalidArgument naming the field: no scene or folder, render.threads < 1.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct RenderSceneViewsSummary {
@@ -69,7 +69,7 @@ struct RenderViewFileOptions {
   std::optional<cv::Rect> crop_px;  // only these pixels, at full resolution; inside the view
 
   // InvalidArgument naming the field: no scene, an output that is not an image file name.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct RenderViewFileSummary {
