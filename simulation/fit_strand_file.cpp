@@ -8,7 +8,7 @@
 
 namespace hairrig {
 
-Status FitStrandFileOptions::Validate() const {
+Status FitStrandFileOptions::Check() const {
   if (strands_file.empty()) return InvalidArgument("fit: strands_file is required");
   if (out_file.empty()) return InvalidArgument("fit: out_file (--out, the model file) is required");
   if (fit.guides.num_guides < 0) {
@@ -22,9 +22,7 @@ Status FitStrandFileOptions::Validate() const {
         "fit: guides.target_rms_mm (--target-rms) must be a positive distance in mm");
   }
   if (fit.threads < 0) return InvalidArgument("fit: threads must be 0 (one per core) or more");
-  std::string why;
-  if (!fit.fitting.IsValid(&why)) return InvalidArgument("fit: fitting options: " + why);
-  return Status::Ok();
+  return fit.Check().WithContext("fit");
 }
 
 nlohmann::json FitStrandFileSummary::ToJson() const {
@@ -52,7 +50,7 @@ std::string FitStrandFileSummary::BriefReport() const {
 }
 
 Result<FitStrandFileSummary> FitStrandFile(const FitStrandFileOptions& options) {
-  HR_RETURN_IF_ERROR(options.Validate());
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(options.strands_file));
   if (options.fit.guides.num_guides > static_cast<int>(strands.num_strands())) {
     return InvalidArgument("--guides " + std::to_string(options.fit.guides.num_guides) +

@@ -18,7 +18,7 @@ struct FitStrandFileOptions {
   // InvalidArgument naming the field: a missing file name, a negative guide
   // count, threads or target RMS, fitting options that FloatingTangentsOptions
   // refuses.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct FitStrandFileSummary {

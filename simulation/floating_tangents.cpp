@@ -15,23 +15,21 @@ namespace {
 constexpr double kRadToDeg = 180 / kPi;
 }  // namespace
 
-bool FloatingTangentsOptions::IsValid(std::string* why) const {
+Status FloatingTangentsOptions::Check() const {
   if (min_elements < 1 || max_elements < min_elements) {
-    *why = "element counts need 1 <= min_elements <= max_elements";
-  } else if (!adaptive && fixed_elements < 1) {
-    *why = "fixed_elements must be at least 1";
-  } else if (!(min_length_mm > 0) || !(max_length_mm > min_length_mm)) {
-    *why = "lengths need 0 < min_length_mm < max_length_mm";
-  } else if (!(target_mean_error_mm >= 0)) {
-    *why = "target_mean_error_mm must be 0 (off) or positive";
-  } else if (!(straight_sagitta_mm >= 0)) {
-    *why = "straight_sagitta_mm must be 0 (off) or positive";
-  } else if (!(error_sagitta_mm > 0)) {
-    *why = "error_sagitta_mm must be positive";
-  } else {
-    return true;
+    return InvalidArgument("element counts need 1 <= min_elements <= max_elements, got " +
+                           std::to_string(min_elements) + " and " + std::to_string(max_elements));
   }
-  return false;
+  if (!adaptive && fixed_elements < 1) return InvalidArgument("fixed_elements must be at least 1");
+  if (!(min_length_mm > 0) || !(max_length_mm > min_length_mm) || !std::isfinite(max_length_mm))
+    return InvalidArgument("lengths need 0 < min_length_mm < max_length_mm, both finite");
+  if (!(target_mean_error_mm >= 0) || !std::isfinite(target_mean_error_mm))
+    return InvalidArgument("target_mean_error_mm must be 0 (off) or positive");
+  if (!(straight_sagitta_mm >= 0) || !std::isfinite(straight_sagitta_mm))
+    return InvalidArgument("straight_sagitta_mm must be 0 (off) or positive");
+  if (!(error_sagitta_mm > 0) || !std::isfinite(error_sagitta_mm))
+    return InvalidArgument("error_sagitta_mm must be positive");
+  return Status::Ok();
 }
 
 double PiecewiseHelix::length_mm() const {
@@ -484,8 +482,7 @@ Result<PiecewiseHelix> FitWithElementCount(const StrandSpline& spline, const Bre
 Result<PiecewiseHelix> FitFloatingTangents(const std::vector<Eigen::Vector3d>& points_mm,
                                            const FloatingTangentsOptions& options,
                                            StrandFitSummary* summary) {
-  std::string why;
-  if (!options.IsValid(&why)) return InvalidArgument("floating tangents options: " + why);
+  HR_RETURN_IF_ERROR(options.Check().WithContext("floating tangents options"));
   HR_ASSIGN_OR_RETURN(StrandSpline spline, StrandSpline::Create(points_mm));
   int n = options.adaptive ? AdaptiveElementCount(spline, options) : options.fixed_elements;
   if (options.adaptive && options.target_mean_error_mm > 0) {

@@ -58,7 +58,9 @@ struct FloatingTangentsOptions {
   // chords stray from the curve by at most this (mm): each element gets
   // length * sqrt(curvature / (8 sagitta)) chords, at least 2.
   double error_sagitta_mm = 0.005;
-  bool IsValid(std::string* why) const;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 struct PiecewiseHelix {

@@ -93,15 +93,20 @@ void RestoreSegmentLengths(const StrandSet& rest, StrandSet* blended) {
 
 }  // namespace
 
+Status GuideInterpolationOptions::Check() const {
+  if (guides_per_strand < 1 || guides_per_strand > 8) {
+    return InvalidArgument("guides_per_strand must lie in 1..8, got " +
+                           std::to_string(guides_per_strand));
+  }
+  if (!(regularisation >= 0) || !std::isfinite(regularisation))
+    return InvalidArgument("regularisation must be finite and >= 0");
+  return Status::Ok();
+}
+
 Result<GuideInterpolation> GuideInterpolation::Build(
     const StrandSet& full_rest, const std::vector<std::vector<Eigen::Vector3d>>& guides_rest,
     const GuideInterpolationOptions& options) {
-  if (options.guides_per_strand < 1 || options.guides_per_strand > 8) {
-    return InvalidArgument("guide interpolation: guides_per_strand must lie in 1..8");
-  }
-  if (!(options.regularisation >= 0) || !std::isfinite(options.regularisation)) {
-    return InvalidArgument("guide interpolation: regularisation must be finite and >= 0");
-  }
+  HR_RETURN_IF_ERROR(options.Check().WithContext("guide interpolation"));
   if (guides_rest.empty()) return InvalidArgument("guide interpolation: no guide");
   HR_RETURN_IF_ERROR(full_rest.Validate());
   GuideInterpolation out;

@@ -34,6 +34,9 @@ struct GuideInterpolationOptions {
   int guides_per_strand = 4;    // K
   double regularisation = 0.1;  // beta
   bool keep_lengths = true;     // restore each segment's rest length after the blend
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 class GuideInterpolation {

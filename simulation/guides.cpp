@@ -115,14 +115,32 @@ std::pair<Cluster, Cluster> Split(const Features& f, const Cluster& c, const Gui
 
 }  // namespace
 
+Status GuideOptions::Check() const {
+  if (num_guides < 0) {
+    return InvalidArgument("num_guides must be 0 (grow to target_rms_mm) or more, got " +
+                           std::to_string(num_guides));
+  }
+  if (!(target_rms_mm > 0) || !std::isfinite(target_rms_mm))
+    return InvalidArgument("target_rms_mm must be finite and positive");
+  if (samples < 2)
+    return InvalidArgument("samples must be at least 2, got " + std::to_string(samples));
+  if (max_guides < 1)
+    return InvalidArgument("max_guides must be at least 1, got " + std::to_string(max_guides));
+  if (kmeans_iterations < 1) {
+    return InvalidArgument("kmeans_iterations must be at least 1, got " +
+                           std::to_string(kmeans_iterations));
+  }
+  return Status::Ok();
+}
+
 Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions& o) {
+  HR_RETURN_IF_ERROR(o.Check().WithContext("guide selection"));
   HR_RETURN_IF_ERROR(strands.Validate());
   const int n = static_cast<int>(strands.num_strands());
   if (n == 0) return InvalidArgument("guide selection: the hair model has no strands");
-  if (o.samples < 2 || o.num_guides < 0 || o.num_guides > n || !(o.target_rms_mm > 0) ||
-      o.kmeans_iterations < 1) {
-    return InvalidArgument("guide selection: need samples >= 2, 0 <= num_guides <= " +
-                           std::to_string(n) + " strands, target_rms_mm > 0");
+  if (o.num_guides > n) {
+    return InvalidArgument("guide selection: num_guides " + std::to_string(o.num_guides) +
+                           " is more than the " + std::to_string(n) + " strands");
   }
   Features f(n, 3 * o.samples);
   const auto offsets = strands.Offsets();

@@ -24,6 +24,9 @@ struct GuideOptions {
   int samples = 16;            // resampling per strand
   int max_guides = 100000;     // safety bound when growing by target
   int kmeans_iterations = 12;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 struct GuideSelection {

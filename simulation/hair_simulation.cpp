@@ -90,11 +90,28 @@ Environment HairSimulation::EnvironmentAt(double t) const {
   return env;
 }
 
+Status HairSimulationOptions::Check() const {
+  HR_RETURN_IF_ERROR(material.Check().WithContext("material"));
+  HR_RETURN_IF_ERROR(dynamics.Check().WithContext("dynamics"));
+  if (!up.allFinite() || std::abs(up.norm() - 1) > 1e-6)
+    return InvalidArgument("up must be a unit vector");
+  if (has_head && (!head_radii_mm.allFinite() || !(head_radii_mm.minCoeff() > 0)))
+    return InvalidArgument("head_radii_mm must be finite and positive");
+  if (has_head && !head_center_mm.allFinite())
+    return InvalidArgument("head_center_mm must be finite");
+  if (!std::isfinite(shake_amplitude_deg))
+    return InvalidArgument("shake_amplitude_deg must be finite");
+  if (!std::isfinite(shake_frequency_hz) || shake_frequency_hz < 0)
+    return InvalidArgument("shake_frequency_hz must be finite and >= 0");
+  if (!wind_m_s.allFinite()) return InvalidArgument("wind_m_s must be finite");
+  if (threads < 0) return InvalidArgument("threads must be 0 (one per core) or more");
+  return Status::Ok();
+}
+
 Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(
     const HelixModel& model, const HairSimulationOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("simulation options"));
   if (model.guides.empty()) return InvalidArgument("simulation: the model has no guide strand");
-  HR_RETURN_IF_ERROR(options.material.Validate());
-  std::string why;
   DynamicsOptions dynamics_options = options.dynamics;
   if (options.has_head) {
     dynamics_options.use_head = true;
@@ -102,10 +119,7 @@ Result<std::unique_ptr<HairSimulation>> HairSimulation::Create(
     dynamics_options.head.radii_m = 1e-3 * options.head_radii_mm;
     dynamics_options.head_surface = options.head_surface;
   }
-  if (!dynamics_options.IsValid(&why)) return InvalidArgument("simulation options: " + why);
-  if (!options.up.allFinite() || std::abs(options.up.norm() - 1) > 1e-6) {
-    return InvalidArgument("simulation options: up must be a unit vector");
-  }
+  HR_RETURN_IF_ERROR(dynamics_options.Check().WithContext("simulation options: dynamics"));
   auto impl = std::make_unique<Impl>();
   impl->options = options;
   impl->options.dynamics = dynamics_options;

@@ -43,6 +43,10 @@ struct HairSimulationOptions {
   // the head starts without contact forces; false: the margin everywhere.
   bool contact_from_rest = true;
   int threads = 0;  // 0: one per core
+
+  // InvalidArgument naming the field (material.* and dynamics.* for the
+  // nested ones) for a value out of range or not finite.
+  Status Check() const;
 };
 
 struct HairSimulationStats {

@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
+#include <string>
 
 #include "core/head_model.h"
 #include "simulation/guide_interpolation.h"
@@ -325,6 +327,102 @@ TEST(GuideInterpolation, AStrandLongerThanItsGuidesBendsWithThemAllAlong) {
   EXPECT_LT(tail_start.dot(tail_end), std::cos(0.17f)) << "the tail turns by more than 10 deg";
   EXPECT_GT(p[48].y() - 1.0f, 50.0f) << "the tip swings with the guides' tips";
   EXPECT_NEAR(moved->StrandLengths()[0], 240.0, 0.01);
+}
+
+// Every simulation options struct refuses a bad value with InvalidArgument
+// naming the field; its defaults pass.
+TEST(SimulationOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(GuideOptions{}.Check().ok());
+  EXPECT_TRUE(GuideInterpolationOptions{}.Check().ok());
+  EXPECT_TRUE(FloatingTangentsOptions{}.Check().ok());
+  EXPECT_TRUE(FitOptions{}.Check().ok());
+  EXPECT_TRUE(DynamicsOptions{}.Check().ok());
+  EXPECT_TRUE(HairMaterial{}.Check().ok());
+  EXPECT_TRUE(HairSimulationOptions{}.Check().ok());
+  {
+    GuideOptions o;
+    o.samples = 1;
+    expect_named(o.Check(), "samples");
+    o = GuideOptions{};
+    o.target_rms_mm = std::nan("");
+    expect_named(o.Check(), "target_rms_mm");
+    o = GuideOptions{};
+    o.kmeans_iterations = 0;
+    expect_named(o.Check(), "kmeans_iterations");
+  }
+  {
+    GuideInterpolationOptions o;
+    o.guides_per_strand = 9;
+    expect_named(o.Check(), "guides_per_strand");
+    o = GuideInterpolationOptions{};
+    o.regularisation = std::numeric_limits<double>::infinity();
+    expect_named(o.Check(), "regularisation");
+  }
+  {
+    FloatingTangentsOptions o;
+    o.error_sagitta_mm = 0;
+    expect_named(o.Check(), "error_sagitta_mm");
+    o = FloatingTangentsOptions{};
+    o.adaptive = false;
+    o.fixed_elements = 0;
+    expect_named(o.Check(), "fixed_elements");
+  }
+  {
+    FitOptions o;
+    o.threads = -1;
+    expect_named(o.Check(), "threads");
+    o = FitOptions{};
+    o.guides.samples = 0;
+    expect_named(o.Check(), "guides: samples");
+    o = FitOptions{};
+    o.fitting.min_elements = 0;
+    expect_named(o.Check(), "fitting: element counts");
+  }
+  {
+    DynamicsOptions o;
+    o.quadrature_points = 6;
+    expect_named(o.Check(), "quadrature_points");
+    o = DynamicsOptions{};
+    o.contact_friction = -1;
+    expect_named(o.Check(), "contact_friction");
+  }
+  {
+    HairSimulationOptions o;
+    o.material.poisson_ratio = 0.7;
+    expect_named(o.Check(), "material: hair material: poisson_ratio");
+    o = HairSimulationOptions{};
+    o.dynamics.air_drag = std::nan("");
+    expect_named(o.Check(), "dynamics: air_drag");
+    o = HairSimulationOptions{};
+    o.has_head = true;
+    o.head_radii_mm = Eigen::Vector3d(80, 0, 90);
+    expect_named(o.Check(), "head_radii_mm");
+    o = HairSimulationOptions{};
+    o.shake_frequency_hz = -1;
+    expect_named(o.Check(), "shake_frequency_hz");
+    o = HairSimulationOptions{};
+    o.threads = -2;
+    expect_named(o.Check(), "threads");
+  }
+}
+
+// The entry points refuse bad options before any work, naming the field.
+TEST(SimulationOptions, EntryPointsCheckTheirOptions) {
+  HairSimulationOptions o;
+  o.wind_m_s = Eigen::Vector3d(std::nan(""), 0, 0);
+  auto sim = HairSimulation::Create(SmallHairstyle(2), o);
+  ASSERT_FALSE(sim.ok());
+  EXPECT_NE(sim.status().message().find("wind_m_s"), std::string::npos) << sim.status().ToString();
+
+  GuideInterpolationOptions interpolation;
+  interpolation.guides_per_strand = 0;
+  auto interp = GuideInterpolation::Build(StraightStrand(3, 5.0f), HangingGuides(), interpolation);
+  ASSERT_FALSE(interp.ok());
+  EXPECT_NE(interp.status().message().find("guides_per_strand"), std::string::npos);
 }
 
 }  // namespace

@@ -35,8 +35,16 @@ HelixElement ElementFromJson(const JsonObject& e) {
 }
 }  // namespace
 
+Status FitOptions::Check() const {
+  HR_RETURN_IF_ERROR(guides.Check().WithContext("guides"));
+  HR_RETURN_IF_ERROR(fitting.Check().WithContext("fitting"));
+  if (threads < 0) return InvalidArgument("threads must be 0 (one per core) or more");
+  return Status::Ok();
+}
+
 Result<HelixModel> FitHairModel(const StrandSet& strands, const FitOptions& options,
                                 FitSummary* summary) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("fit"));
   const auto t0 = std::chrono::steady_clock::now();
   HR_ASSIGN_OR_RETURN(GuideSelection selection, SelectGuides(strands, options.guides));
   HelixModel model;

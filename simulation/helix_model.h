@@ -21,6 +21,10 @@ struct FitOptions {
   GuideOptions guides;
   FloatingTangentsOptions fitting;
   int threads = 0;  // guides fitted in parallel; 0: one thread per core
+
+  // InvalidArgument naming the field (guides.* and fitting.* for the nested
+  // ones) for a value out of range.
+  Status Check() const;
 };
 
 struct FitSummary {

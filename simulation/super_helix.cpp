@@ -23,7 +23,7 @@ Eigen::Vector3d HairMaterial::SecondMoments() const {
   return {i0, kPi / 4 * a1 * a2 * a2 * a2, kPi / 4 * a1 * a1 * a1 * a2};
 }
 
-Status HairMaterial::Validate() const {
+Status HairMaterial::Check() const {
   const std::pair<const char*, double> fields[] = {{"density_kg_m3", density_kg_m3},
                                                    {"youngs_modulus_pa", youngs_modulus_pa},
                                                    {"semi_axis_1_m", semi_axis_1_m},

@@ -38,7 +38,7 @@ struct HairMaterial {
   // C^H = E (I_0, I_1, I_2): twist and bending stiffness, N m^2.
   Eigen::Vector3d Stiffness() const { return youngs_modulus_pa * SecondMoments(); }
   // InvalidArgument naming the first field that is not finite and positive.
-  Status Validate() const;
+  Status Check() const;
 };
 
 struct SuperHelix {

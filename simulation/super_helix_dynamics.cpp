@@ -68,28 +68,26 @@ double HeadEllipsoid::Distance(const Eigen::Vector3d& p, Eigen::Vector3d* normal
   return (g - 1) / gradient_norm;
 }
 
-bool DynamicsOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& message) {
-    *why = message;
-    return false;
-  };
+Status DynamicsOptions::Check() const {
   if (!std::isfinite(time_step_s) || time_step_s <= 0)
-    return fail("time_step_s must be finite and positive");
+    return InvalidArgument("time_step_s must be finite and positive");
   if (quadrature_points < 1 || quadrature_points > 5)
-    return fail("quadrature_points must lie in 1..5");
-  if (!std::isfinite(air_drag) || air_drag < 0) return fail("air_drag must be finite and >= 0");
+    return InvalidArgument("quadrature_points must lie in 1..5");
+  if (!std::isfinite(air_drag) || air_drag < 0)
+    return InvalidArgument("air_drag must be finite and >= 0");
   if (!(cg_relative_tolerance > 0) || cg_relative_tolerance >= 1)
-    return fail("cg_relative_tolerance must lie in (0, 1)");
-  if (use_head &&
-      (!head.radii_m.allFinite() || head.radii_m.minCoeff() <= 0 || !head.center_m.allFinite())) {
-    return fail("head radii must be finite and positive and its centre finite");
-  }
-  if (!std::isfinite(contact_margin_m) || contact_margin_m < 0 ||
-      !std::isfinite(contact_stiffness) || contact_stiffness < 0 ||
-      !std::isfinite(contact_friction) || contact_friction < 0) {
-    return fail("contact margin, stiffness and friction must be finite and >= 0");
-  }
-  return true;
+    return InvalidArgument("cg_relative_tolerance must lie in (0, 1)");
+  if (use_head && (!head.radii_m.allFinite() || head.radii_m.minCoeff() <= 0))
+    return InvalidArgument("head.radii_m must be finite and positive");
+  if (use_head && !head.center_m.allFinite())
+    return InvalidArgument("head.center_m must be finite");
+  if (!std::isfinite(contact_margin_m) || contact_margin_m < 0)
+    return InvalidArgument("contact_margin_m must be finite and >= 0");
+  if (!std::isfinite(contact_stiffness) || contact_stiffness < 0)
+    return InvalidArgument("contact_stiffness must be finite and >= 0");
+  if (!std::isfinite(contact_friction) || contact_friction < 0)
+    return InvalidArgument("contact_friction must be finite and >= 0");
+  return Status::Ok();
 }
 
 SuperHelixDynamics::SuperHelixDynamics(const SuperHelix& strand, const HairMaterial& material,

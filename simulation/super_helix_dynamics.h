@@ -71,7 +71,9 @@ struct DynamicsOptions {
   double contact_margin_m = 0.5e-3;  // hair keeps this far from the head
   double contact_stiffness = 50;     // N / m^2: force per length per metre of penetration
   double contact_friction = 2e-3;    // viscous friction along the head, N s / m^2
-  bool IsValid(std::string* why) const;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 // What the world does to the strands at one instant, in the simulation frame.

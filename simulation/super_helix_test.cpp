@@ -104,7 +104,7 @@ TEST(SuperHelix, RejectsDegenerateGuides) {
   EXPECT_FALSE(SuperHelixFromPiecewiseHelix(guide, Eigen::Vector3d::UnitX(), &q).ok());
   HairMaterial bad;
   bad.semi_axis_1_m = std::nan("");
-  EXPECT_FALSE(bad.Validate().ok());
+  EXPECT_FALSE(bad.Check().ok());
 }
 
 // (a) A straight horizontal cantilever settles to the elastica's tip drop.
