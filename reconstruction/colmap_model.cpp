@@ -312,8 +312,15 @@ Status AddImage(const fs::path& images_txt, const Line& line,
 
 }  // namespace
 
+Status ColmapReadOptions::Check() const {
+  if (images_dir.empty())
+    return InvalidArgument("images_dir (the folder the model's image names are in) is required");
+  return Status::Ok();
+}
+
 Result<ReconstructionInput> ReadColmapModel(const std::string& model_dir,
                                             const ColmapReadOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("COLMAP model " + model_dir));
   const fs::path cameras_txt = fs::path(model_dir) / "cameras.txt";
   const fs::path images_txt = fs::path(model_dir) / "images.txt";
   HR_ASSIGN_OR_RETURN(const auto cameras, ReadCameras(cameras_txt));

@@ -18,9 +18,12 @@
 namespace hairrig {
 
 struct ColmapReadOptions {
-  std::string images_dir;  // where NAME of images.txt is found
+  std::string images_dir;  // where NAME of images.txt is found (required)
   std::string
       masks_dir;  // optional: <masks_dir>/<NAME>.png (COLMAP's own convention) or <stem>.png
+
+  // InvalidArgument naming images_dir when it is empty.
+  Status Check() const;
 };
 
 // Nothing outside `images_dir` (and `masks_dir`) is read: a NAME that is
@@ -36,7 +39,8 @@ struct ColmapReadOptions {
 // the line and the one it repeats. Both files are read only if they are regular
 // files of at most kMaxFileBytes (core/file_util.h).
 //
-// CorruptData naming the file and line for a malformed line, an unknown
+// InvalidArgument for bad options (ColmapReadOptions::Check). CorruptData
+// naming the file and line for a malformed line, an unknown
 // camera model, a non-finite or out-of-range number, or an image whose camera
 // is not listed; NotFound for a missing file. An image whose file is missing is
 // left out with its reason (ReconstructionInput::left_out); no image left is

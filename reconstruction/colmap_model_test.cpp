@@ -89,7 +89,7 @@ TEST(ColmapModel, ErrorsNameTheFileAndLine) {
   auto quaternion = Model("quat", ok_cameras, "1 2 0 0 0 0 0 1000 1 a.png\n\n").Read();
   EXPECT_NE(quaternion.status().message().find("has norm 2"), std::string::npos)
       << quaternion.status().message();
-  auto missing = ReadColmapModel("/nonexistent-model", {});
+  auto missing = ReadColmapModel("/nonexistent-model", {"/nonexistent-model/images", ""});
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
 }
 

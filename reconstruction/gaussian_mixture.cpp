@@ -10,17 +10,6 @@ namespace {
 
 constexpr double kLog2Pi = 1.8378770664093453;
 
-Status CheckOptions(const MixtureFitOptions& o) {
-  if (o.components < 1 || o.components > 64)
-    return InvalidArgument("mixture components must be in 1..64");
-  if (o.max_iterations < 1) return InvalidArgument("mixture max_iterations must be at least 1");
-  if (!(o.relative_tolerance >= 0))
-    return InvalidArgument("mixture relative_tolerance must be >= 0");
-  if (!(o.variance_floor > 0)) return InvalidArgument("mixture variance_floor must be positive");
-  if (o.kmeans_attempts < 1) return InvalidArgument("mixture kmeans_attempts must be at least 1");
-  return Status::Ok();
-}
-
 // Weighted mean and covariance (plus the floor) of the rows of `x` with
 // weights `w` summing to `total` > 0.
 void WeightedMoments(const Eigen::MatrixXd& x, const Eigen::VectorXd& w, double total, double floor,
@@ -114,9 +103,23 @@ void Maximise(const Eigen::MatrixXd& x, const Eigen::MatrixXd& resp, double floo
 
 }  // namespace
 
+Status MixtureFitOptions::Check() const {
+  if (components < 1 || components > 64) {
+    return InvalidArgument("mixture components must be in 1..64, got " +
+                           std::to_string(components));
+  }
+  if (max_iterations < 1) return InvalidArgument("mixture max_iterations must be at least 1");
+  if (!(relative_tolerance >= 0) || !std::isfinite(relative_tolerance))
+    return InvalidArgument("mixture relative_tolerance must be finite and >= 0");
+  if (!(variance_floor > 0) || !std::isfinite(variance_floor))
+    return InvalidArgument("mixture variance_floor must be finite and positive");
+  if (kmeans_attempts < 1) return InvalidArgument("mixture kmeans_attempts must be at least 1");
+  return Status::Ok();
+}
+
 Result<GaussianMixture> FitGaussianMixture(const cv::Mat1f& samples,
                                            const MixtureFitOptions& options) {
-  HR_RETURN_IF_ERROR(CheckOptions(options));
+  HR_RETURN_IF_ERROR(options.Check());
   if (samples.empty() || samples.cols > 8)
     return InvalidArgument("mixture samples need 1..8 feature columns and at least one row");
   if (samples.rows < 2 * options.components) {

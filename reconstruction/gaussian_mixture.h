@@ -39,6 +39,9 @@ struct MixtureFitOptions {
   // cv::theRNG() is restored afterwards): the same samples give the same fit.
   uint64_t seed = 0x5eed5eedULL;
   int kmeans_attempts = 10;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 // `samples`: one row per sample, one column per feature (1..8 columns).

@@ -12,6 +12,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <vector>
 
+#include "core/status.h"
 #include "core/strands.h"
 
 namespace hairrig {
@@ -42,6 +43,9 @@ struct SampleMatchOptions {
   bool directed =
       false;  // the sign of the direction counts (strands root to tip); else d and -d are the same
   int threads = 2;  // at least 1 is used
+
+  // Every value is valid (threads below 1 run on one thread).
+  Status Check() const { return Status::Ok(); }
 };
 
 // One score per threshold, in the order given. precision = share of

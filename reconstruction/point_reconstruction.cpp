@@ -203,11 +203,11 @@ Status PointReconstructionOptions::Check() const {
   if (threads < 1) return InvalidArgument("reconstruction threads must be at least 1");
   if (!(min_orientation_confidence >= 0 && min_orientation_confidence < 1))
     return InvalidArgument("reconstruction min_orientation_confidence must be in [0, 1)");
-  HR_RETURN_IF_ERROR(segmentation.Check());
-  HR_RETURN_IF_ERROR(orientation.Check());
-  HR_RETURN_IF_ERROR(hull.Check());
-  HR_RETURN_IF_ERROR(mvs.Check());
-  return fusion.Check();
+  HR_RETURN_IF_ERROR(segmentation.Check().WithContext("segmentation"));
+  HR_RETURN_IF_ERROR(orientation.Check().WithContext("orientation"));
+  HR_RETURN_IF_ERROR(hull.Check().WithContext("hull"));
+  HR_RETURN_IF_ERROR(mvs.Check().WithContext("mvs"));
+  return fusion.Check().WithContext("fusion");
 }
 
 nlohmann::json PointReconstructionSummary::ToJson() const {

@@ -209,8 +209,9 @@ Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
   auto evaluation = EvaluateStrands(in_truth_frame, true_strands, truth_samples,
                                     truth_sample_strand, visible, head.get(), strand_options);
   if (!evaluation.ok()) return evaluation.status().WithContext(path);
-  const cv::Mat preview =
-      RenderStrandPreview({&in_truth_frame, &true_strands}, {"reconstruction", "ground truth"}, {});
+  HR_ASSIGN_OR_RETURN(const cv::Mat preview,
+                      RenderStrandPreview({&in_truth_frame, &true_strands},
+                                          {"reconstruction", "ground truth"}, {}));
   // A capture that cannot be written to (an archive) is still scored.
   const std::string preview_file = (fs::path(dir) / "strands" / "preview_truth.jpg").string();
   const Status written = WriteImageAtomic(preview_file, preview);

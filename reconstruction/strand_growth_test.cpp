@@ -4,11 +4,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/head_spec.h"
+#include "reconstruction/colmap_model.h"
+#include "reconstruction/gaussian_mixture.h"
+#include "reconstruction/point_evaluation.h"
+#include "reconstruction/point_reconstruction.h"
+#include "reconstruction/strand_preview.h"
 #include "reconstruction/strand_reconstruction.h"
 
 namespace hairrig {
@@ -338,6 +344,100 @@ TEST(StrandReconstructionOptions, RootElevationOutsideItsRangeIsRefused) {
     options.root_elevation_deg = elevation;
     EXPECT_TRUE(options.Check().ok()) << elevation;
   }
+}
+
+// The reconstruction options refuse a bad value with InvalidArgument naming
+// the field; a nested struct's field is named after the field holding it.
+TEST(ReconstructionOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(MixtureFitOptions{}.Check().ok());
+  EXPECT_TRUE(StrandPreviewOptions{}.Check().ok());
+  EXPECT_TRUE(StrandOverlayOptions{}.Check().ok());
+  EXPECT_TRUE(SampleMatchOptions{}.Check().ok());
+  EXPECT_TRUE(StrandReconstructionOptions{}.Check().ok());
+  EXPECT_TRUE(PointReconstructionOptions{}.Check().ok());
+  {
+    MixtureFitOptions o;
+    o.variance_floor = std::numeric_limits<double>::infinity();
+    expect_named(o.Check(), "variance_floor");
+    o = MixtureFitOptions{};
+    o.relative_tolerance = std::nan("");
+    expect_named(o.Check(), "relative_tolerance");
+    o = MixtureFitOptions{};
+    o.kmeans_attempts = 0;
+    expect_named(o.Check(), "kmeans_attempts");
+  }
+  expect_named(ColmapReadOptions{}.Check(), "images_dir");
+  EXPECT_TRUE((ColmapReadOptions{"images", ""}.Check().ok()));
+  {
+    StrandPreviewOptions o;
+    o.view_px = 4;
+    expect_named(o.Check(), "view_px");
+    o = StrandPreviewOptions{};
+    o.azimuths_deg = {0, std::nan("")};
+    expect_named(o.Check(), "azimuths_deg");
+    o = StrandPreviewOptions{};
+    o.max_strands = 0;
+    expect_named(o.Check(), "max_strands");
+  }
+  {
+    StrandOverlayOptions o;
+    o.opacity = 1.5;
+    expect_named(o.Check(), "opacity");
+    o = StrandOverlayOptions{};
+    o.view_px = 100000;
+    expect_named(o.Check(), "view_px");
+  }
+  {
+    SampleMatchOptions o;
+    o.threads = 0;
+    EXPECT_TRUE(o.Check().ok()) << "threads below 1 run on one thread";
+  }
+  {
+    StrandReconstructionOptions o;
+    o.growth.step_mm = 0;
+    expect_named(o.Check(), "growth: strand step_mm");
+    o = StrandReconstructionOptions{};
+    o.wisps.spacing_mm = -1;
+    expect_named(o.Check(), "wisps: wisp spacing_mm");
+  }
+  {
+    PointReconstructionOptions o;
+    o.mvs.samples = 2;
+    expect_named(o.Check(), "mvs: mvs samples");
+    o = PointReconstructionOptions{};
+    o.segmentation.border_px = 0;
+    expect_named(o.Check(), "segmentation: segmentation border_px");
+  }
+}
+
+// The entry points taking the new options refuse bad ones before any work.
+TEST(ReconstructionOptions, EntryPointsCheckTheirOptions) {
+  StrandPreviewOptions preview;
+  preview.view_px = 0;
+  const Result<cv::Mat> picture = RenderStrandPreview({}, {}, preview);
+  ASSERT_FALSE(picture.ok());
+  EXPECT_NE(picture.status().message().find("view_px"), std::string::npos);
+
+  StrandOverlayOptions overlay;
+  overlay.max_strands = 0;
+  const Result<cv::Mat> over = RenderStrandsOverViews({}, StrandSet{}, overlay);
+  ASSERT_FALSE(over.ok());
+  EXPECT_NE(over.status().message().find("max_strands"), std::string::npos);
+
+  const Result<ReconstructionInput> colmap = ReadColmapModel("/nonexistent-model", {});
+  ASSERT_FALSE(colmap.ok());
+  EXPECT_EQ(colmap.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(colmap.status().message().find("images_dir"), std::string::npos);
+
+  MixtureFitOptions mixture;
+  mixture.max_iterations = 0;
+  const Result<GaussianMixture> fit = FitGaussianMixture(cv::Mat1f(100, 3, 1.0f), mixture);
+  ASSERT_FALSE(fit.ok());
+  EXPECT_NE(fit.status().message().find("max_iterations"), std::string::npos);
 }
 
 }  // namespace

@@ -63,10 +63,37 @@ std::vector<PreviewEdge> ViewEdges(const StrandSet& set, size_t step, double azi
   return edges;
 }
 
+// InvalidArgument unless view_px lies in 16..4096.
+Status CheckViewPx(int view_px) {
+  if (view_px < 16 || view_px > 4096)
+    return InvalidArgument("view_px must lie in 16..4096, got " + std::to_string(view_px));
+  return Status::Ok();
+}
+
 }  // namespace
 
-cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models,
-                            const std::vector<std::string>& labels, const StrandPreviewOptions& o) {
+Status StrandPreviewOptions::Check() const {
+  for (double azimuth : azimuths_deg) {
+    if (!std::isfinite(azimuth)) return InvalidArgument("azimuths_deg must be finite");
+  }
+  HR_RETURN_IF_ERROR(CheckViewPx(view_px));
+  if (max_strands < 1)
+    return InvalidArgument("max_strands must be at least 1, got " + std::to_string(max_strands));
+  return Status::Ok();
+}
+
+Status StrandOverlayOptions::Check() const {
+  HR_RETURN_IF_ERROR(CheckViewPx(view_px));
+  if (max_strands < 1)
+    return InvalidArgument("max_strands must be at least 1, got " + std::to_string(max_strands));
+  if (!(opacity >= 0 && opacity <= 1)) return InvalidArgument("opacity must lie in [0, 1]");
+  return Status::Ok();
+}
+
+Result<cv::Mat> RenderStrandPreview(const std::vector<const StrandSet*>& models,
+                                    const std::vector<std::string>& labels,
+                                    const StrandPreviewOptions& o) {
+  HR_RETURN_IF_ERROR(o.Check().WithContext("strand preview"));
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
   for (const StrandSet* m : models)
     for (const Eigen::Vector3f& p : m->points_mm) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -95,7 +122,7 @@ cv::Mat RenderStrandPreview(const std::vector<const StrandSet*>& models,
                   cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     }
   }
-  return canvas;
+  return cv::Mat(canvas);
 }
 
 namespace {
@@ -155,6 +182,7 @@ Result<cv::Mat3b> OverlayOneView(const ReconstructionView& view, const StrandSet
 
 Result<cv::Mat> RenderStrandsOverViews(const std::vector<ReconstructionView>& views,
                                        const StrandSet& strands, const StrandOverlayOptions& o) {
+  HR_RETURN_IF_ERROR(o.Check().WithContext("strands over views"));
   std::vector<cv::Mat3b> tiles;
   for (const ReconstructionView& view : views) {
     HR_ASSIGN_OR_RETURN(cv::Mat3b tile, OverlayOneView(view, strands, o));

@@ -60,7 +60,8 @@ Status WriteOutputs(const std::string& dir, const StrandModel& model,
     rows.insert(rows.begin() + 1, &model.wisp_centres);
     labels.insert(labels.begin() + 1, "wisps");
   }
-  const cv::Mat preview = RenderStrandPreview(rows, labels, StrandPreviewOptions{});
+  HR_ASSIGN_OR_RETURN(const cv::Mat preview,
+                      RenderStrandPreview(rows, labels, StrandPreviewOptions{}));
   HR_RETURN_IF_ERROR(WriteImageAtomic(dir + "/preview.jpg", preview));
   return WriteFileAtomic(dir + "/summary.json", summary.ToJson().dump(1));
 }
@@ -241,16 +242,16 @@ Status StrandReconstructionOptions::Check() const {
   if (threads < 1) return InvalidArgument("threads must be at least 1");
   if (!(root_elevation_deg > 0 && root_elevation_deg <= 90))
     return InvalidArgument("root_elevation_deg must lie in (0, 90]");
-  HR_RETURN_IF_ERROR(segments.Check());
-  HR_RETURN_IF_ERROR(direction.Check());
-  HR_RETURN_IF_ERROR(field.Check());
-  HR_RETURN_IF_ERROR(growth.Check());
-  HR_RETURN_IF_ERROR(merging.Check());
-  HR_RETURN_IF_ERROR(ribbons.Check());
-  HR_RETURN_IF_ERROR(connections.Check());
-  HR_RETURN_IF_ERROR(ribbon_direction.Check());
-  HR_RETURN_IF_ERROR(wisps.Check());
-  return synthesis.Check();
+  HR_RETURN_IF_ERROR(segments.Check().WithContext("segments"));
+  HR_RETURN_IF_ERROR(direction.Check().WithContext("direction"));
+  HR_RETURN_IF_ERROR(field.Check().WithContext("field"));
+  HR_RETURN_IF_ERROR(growth.Check().WithContext("growth"));
+  HR_RETURN_IF_ERROR(merging.Check().WithContext("merging"));
+  HR_RETURN_IF_ERROR(ribbons.Check().WithContext("ribbons"));
+  HR_RETURN_IF_ERROR(connections.Check().WithContext("connections"));
+  HR_RETURN_IF_ERROR(ribbon_direction.Check().WithContext("ribbon_direction"));
+  HR_RETURN_IF_ERROR(wisps.Check().WithContext("wisps"));
+  return synthesis.Check().WithContext("synthesis");
 }
 
 nlohmann::json StrandReconstructionSummary::ToJson() const {
