@@ -1,6 +1,8 @@
 #include "calibration/apriltag_detector.h"
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 extern "C" {
 #include <apriltag/apriltag.h>
@@ -22,10 +24,18 @@ struct TagDetector::Impl {
 TagDetector::TagDetector(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 TagDetector::~TagDetector() = default;
 
+Status TagDetectorOptions::Check() const {
+  if (!(decimate >= 0) || !std::isfinite(decimate))
+    return InvalidArgument("decimate must be 0 (auto) or a finite positive factor");
+  if (threads < 1) return InvalidArgument("threads must be at least 1");
+  if (max_hamming < 0 || max_hamming > 3) {
+    return InvalidArgument("max_hamming must lie in 0..3, got " + std::to_string(max_hamming));
+  }
+  return Status::Ok();
+}
+
 Result<std::unique_ptr<TagDetector>> TagDetector::Create(const TagDetectorOptions& options) {
-  if (options.threads < 1) return InvalidArgument("tag detector: threads must be at least 1");
-  if (options.decimate < 0)
-    return InvalidArgument("tag detector: decimate must be 0 (auto) or positive");
+  HR_RETURN_IF_ERROR(options.Check().WithContext("tag detector"));
   auto impl = std::make_unique<Impl>();
   impl->options = options;
   impl->family = tag36h11_create();

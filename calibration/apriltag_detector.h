@@ -36,10 +36,14 @@ struct TagDetectorOptions {
   // With `subtract_half_pixel` false, corners are returned as libapriltag
   // gives them (for measuring the convention offset only).
   bool subtract_half_pixel = true;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 class TagDetector {
  public:
+  // InvalidArgument naming the field of bad options (TagDetectorOptions::Check).
   static Result<std::unique_ptr<TagDetector>> Create(const TagDetectorOptions& options);
   ~TagDetector();
   // Accepts CV_8UC1 or CV_8UC3 (BGR). InvalidArgument for other types or an empty image.

@@ -293,8 +293,21 @@ Status ValidateInput(const BundleAdjustmentInput& input) {
 
 }  // namespace
 
+Status BundleAdjustmentOptions::Check() const {
+  if (!(huber_px > 0) || !std::isfinite(huber_px))
+    return InvalidArgument("huber_px must be a finite positive number of pixels");
+  if (max_iterations < 1) {
+    return InvalidArgument("max_iterations must be at least 1, got " +
+                           std::to_string(max_iterations));
+  }
+  if (threads < 1)
+    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
+  return Status::Ok();
+}
+
 Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
                                                    const BundleAdjustmentOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("bundle adjustment"));
   HR_RETURN_IF_ERROR(ValidateInput(input));
   const bool turntable = options.mode == CalibrationMode::kTurntable;
   ceres::Problem problem;

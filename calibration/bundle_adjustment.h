@@ -52,6 +52,9 @@ struct BundleAdjustmentOptions {
   double huber_px = 1.0;
   int max_iterations = 100;
   int threads = 2;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 struct BundleAdjustmentInput {
@@ -102,8 +105,9 @@ struct BundleAdjustmentResult {
   bool converged = false;
 };
 
-// InvalidArgument for a view of an unknown camera, a camera without views,
-// invalid intrinsics or no observation at all; the message names them.
+// InvalidArgument for bad options (BundleAdjustmentOptions::Check), a view of
+// an unknown camera, a camera without views, invalid intrinsics or no
+// observation at all; the message names them.
 Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
                                                    const BundleAdjustmentOptions& options);
 

@@ -243,8 +243,19 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
   return observations;
 }
 
+Status CaptureCalibrationOptions::Check() const {
+  if (threads < 1)
+    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
+  if (!(huber_px > 0) || !std::isfinite(huber_px))
+    return InvalidArgument("huber_px must be a finite positive number of pixels");
+  HR_RETURN_IF_ERROR(detector.Check().WithContext("detector"));
+  HR_RETURN_IF_ERROR(pose.Check().WithContext("pose"));
+  return prior_check.Check().WithContext("prior_check");
+}
+
 Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input,
                                             const CaptureCalibrationOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("calibration"));
   HR_RETURN_IF_ERROR(ValidateInput(input, options));
   CaptureCalibration out;
   out.mode = options.mode;

@@ -79,6 +79,10 @@ struct CaptureCalibrationOptions {
   // test each camera's prior against them (CameraCalibration::prior_check).
   bool check_priors = true;
   PriorCheckOptions prior_check;
+
+  // InvalidArgument naming the field (detector.*, pose.* and prior_check.*
+  // for the nested ones) for a value out of range or not finite.
+  Status Check() const;
 };
 
 struct FrameCalibration {
@@ -128,7 +132,8 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
 
 // FailedPrecondition when nothing can be solved (no camera with usable views,
 // no turntable axis in turntable mode: the message says what to try);
-// InvalidArgument for bad input (no frames, a frame of an unknown camera,
+// InvalidArgument for bad options (CaptureCalibrationOptions::Check) or bad
+// input (no frames, a frame of an unknown camera,
 // fix_intrinsics without values, invalid nominal intrinsics, a prior for
 // another image size, a NaN angle). A prior the views reject is not an
 // error: CameraCalibration::prior_check says so and JudgeCalibration fails it.

@@ -103,9 +103,20 @@ ChArUcoCorners DetectChArUcoCorners(const cv::Mat& image, const ChArUcoBoard& bo
   return out;
 }
 
+Status ChArUcoCalibrationOptions::Check() const {
+  if (min_corners < 4)
+    return InvalidArgument("min_corners must be at least 4, got " + std::to_string(min_corners));
+  if (min_images < 1)
+    return InvalidArgument("min_images must be at least 1, got " + std::to_string(min_images));
+  if (threads < 1)
+    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
+  return Status::Ok();
+}
+
 Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(
     const std::vector<std::string>& image_paths, const ChArUcoBoard& board,
     const ChArUcoCalibrationOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("calibrate-intrinsics"));
   if (image_paths.empty()) return InvalidArgument("calibrate-intrinsics: no images given");
   ChArUcoCalibration out;
   out.images.resize(image_paths.size());

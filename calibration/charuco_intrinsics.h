@@ -36,9 +36,12 @@ ChArUcoCorners DetectChArUcoCorners(const cv::Mat& image, const ChArUcoBoard& bo
 
 struct ChArUcoCalibrationOptions {
   bool fix_k3 = true;    // k3 is rarely observable on low-distortion lenses
-  int min_corners = 12;  // per image
-  int min_images = 6;
-  int threads = 2;  // detection
+  int min_corners = 12;  // per image, at least 4
+  int min_images = 6;    // at least 1
+  int threads = 2;       // detection, at least 1
+
+  // InvalidArgument naming the field for a value out of range.
+  Status Check() const;
 };
 
 struct ChArUcoImage {
@@ -59,7 +62,8 @@ struct ChArUcoCalibration {
   std::vector<ChArUcoImage> images;  // input order
 };
 
-// InvalidArgument for no paths; FailedPrecondition when fewer than
+// InvalidArgument for no paths or bad options (ChArUcoCalibrationOptions::Check,
+// the field named); FailedPrecondition when fewer than
 // `min_images` images show the board well enough (the message says how many
 // did and why the others failed, and what to record instead) or when the
 // images disagree on their size; the rest of the failures are per image (one

@@ -46,11 +46,7 @@ Status IntrinsicsFolderOptions::Check() const {
   if (board_file.empty()) return InvalidArgument("calibrate-intrinsics: board_file is required");
   if (serial.empty())
     return InvalidArgument("calibrate-intrinsics: serial (the camera's serial) is required");
-  if (calibration.threads < 1) {
-    return InvalidArgument("calibrate-intrinsics: calibration.threads must be at least 1, got " +
-                           std::to_string(calibration.threads));
-  }
-  return Status::Ok();
+  return calibration.Check().WithContext("calibrate-intrinsics: calibration");
 }
 
 nlohmann::json IntrinsicsFolderSummary::ToJson() const {

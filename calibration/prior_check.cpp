@@ -40,6 +40,12 @@ std::string Format(const char* format, double a, double b = 0, double c = 0) {
 
 }  // namespace
 
+Status PriorCheckOptions::Check() const {
+  if (!(reject_sigma > 0) || !std::isfinite(reject_sigma))
+    return InvalidArgument("reject_sigma must be a finite positive number of sigmas");
+  return Status::Ok();
+}
+
 double ChiSquareSigma(double chi2, int dof) {
   if (dof <= 0) return 0;
   const double k = dof;
@@ -55,6 +61,10 @@ PriorCheck CheckIntrinsicsPrior(
   PriorCheck out;
   out.prior = prior;
   out.from_views = from_views;
+  if (const Status valid = options.Check(); !valid.ok()) {
+    out.not_tested = "prior check options: " + valid.message();
+    return out;
+  }
   if (!from_views_covariance.allFinite()) {
     out.not_tested = "the covariance of the intrinsics the views alone give cannot be computed";
     return out;

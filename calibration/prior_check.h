@@ -27,6 +27,9 @@ struct PriorCheckOptions {
   // The prior is rejected when the chi-square's normal deviate exceeds this
   // (5 sigma: a tail probability of 3e-7 for a prior of the camera itself).
   double reject_sigma = 5.0;
+
+  // InvalidArgument naming reject_sigma unless it is finite and positive.
+  Status Check() const;
 };
 
 struct PriorCheck {
@@ -48,6 +51,8 @@ struct PriorCheck {
 // `from_views_covariance` as BundleAdjustmentResult::intrinsics_covariance
 // (NaN: not tested); `prior_stddev` as CalibrationCamera::nominal_stddev (all
 // 0: the prior's own uncertainty is not known and only the views' counts).
+// Bad options (PriorCheckOptions::Check) leave the prior not tested, with
+// the reason in `not_tested`.
 PriorCheck CheckIntrinsicsPrior(
     const CameraIntrinsics& prior,
     const std::array<double, CameraIntrinsics::kNumParams>& prior_stddev,

@@ -3,6 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <string>
+
+#include "calibration/apriltag_detector.h"
+#include "calibration/capture_calibration.h"
+#include "calibration/charuco_intrinsics.h"
+#include "calibration/intrinsics_folder.h"
+#include "calibration/view_pose.h"
 
 namespace hairrig {
 namespace {
@@ -58,6 +66,135 @@ TEST(PriorCheck, AnUnknownCovarianceIsNotTested) {
   EXPECT_FALSE(check.tested);
   EXPECT_FALSE(check.rejected);
   EXPECT_NE(DescribePriorCheck(check).find("not tested"), std::string::npos);
+}
+
+// The calibration options refuse a bad value with InvalidArgument naming the
+// field; a nested struct's field is named after the field holding it.
+TEST(CalibrationOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(TagDetectorOptions{}.Check().ok());
+  EXPECT_TRUE(ViewPoseOptions{}.Check().ok());
+  EXPECT_TRUE(PriorCheckOptions{}.Check().ok());
+  EXPECT_TRUE(BundleAdjustmentOptions{}.Check().ok());
+  EXPECT_TRUE(ChArUcoCalibrationOptions{}.Check().ok());
+  EXPECT_TRUE(CaptureCalibrationOptions{}.Check().ok());
+  {
+    TagDetectorOptions o;
+    o.max_hamming = 4;
+    expect_named(o.Check(), "max_hamming");
+    o = TagDetectorOptions{};
+    o.decimate = std::nan("");
+    expect_named(o.Check(), "decimate");
+    o = TagDetectorOptions{};
+    o.threads = 0;
+    expect_named(o.Check(), "threads");
+  }
+  {
+    ViewPoseOptions o;
+    o.ransac_threshold_px = std::numeric_limits<double>::infinity();
+    expect_named(o.Check(), "ransac_threshold_px");
+    o = ViewPoseOptions{};
+    o.max_tag_rms_px = 0;
+    expect_named(o.Check(), "max_tag_rms_px");
+    o = ViewPoseOptions{};
+    o.min_tags = 0;
+    expect_named(o.Check(), "min_tags");
+  }
+  {
+    PriorCheckOptions o;
+    o.reject_sigma = -1;
+    expect_named(o.Check(), "reject_sigma");
+  }
+  {
+    BundleAdjustmentOptions o;
+    o.huber_px = std::nan("");
+    expect_named(o.Check(), "huber_px");
+    o = BundleAdjustmentOptions{};
+    o.max_iterations = 0;
+    expect_named(o.Check(), "max_iterations");
+    o = BundleAdjustmentOptions{};
+    o.threads = 0;
+    expect_named(o.Check(), "threads");
+  }
+  {
+    ChArUcoCalibrationOptions o;
+    o.min_corners = 3;
+    expect_named(o.Check(), "min_corners");
+    o = ChArUcoCalibrationOptions{};
+    o.min_images = 0;
+    expect_named(o.Check(), "min_images");
+  }
+  {
+    CaptureCalibrationOptions o;
+    o.threads = 0;
+    expect_named(o.Check(), "threads");
+    o = CaptureCalibrationOptions{};
+    o.huber_px = -1;
+    expect_named(o.Check(), "huber_px");
+    o = CaptureCalibrationOptions{};
+    o.detector.max_hamming = 9;
+    expect_named(o.Check(), "detector: max_hamming");
+    o = CaptureCalibrationOptions{};
+    o.pose.min_tags = 0;
+    expect_named(o.Check(), "pose: min_tags");
+    o = CaptureCalibrationOptions{};
+    o.prior_check.reject_sigma = std::nan("");
+    expect_named(o.Check(), "prior_check: reject_sigma");
+  }
+  {
+    IntrinsicsFolderOptions o;
+    o.images_dir = "images";
+    o.board_file = "board.yaml";
+    o.serial = "CAM-1";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.calibration.min_images = 0;
+    expect_named(o.Check(), "calibration: min_images");
+  }
+}
+
+// The entry points taking the options refuse bad ones before any work.
+TEST(CalibrationOptions, EntryPointsCheckTheirOptions) {
+  TagDetectorOptions detector;
+  detector.max_hamming = -1;
+  const auto created = TagDetector::Create(detector);
+  ASSERT_FALSE(created.ok());
+  EXPECT_NE(created.status().message().find("max_hamming"), std::string::npos);
+
+  ViewPoseOptions pose;
+  pose.min_tags = 0;
+  const Result<ViewPose> view = EstimateViewPose(ViewObservations{}, Camera(1750), pose);
+  ASSERT_FALSE(view.ok());
+  EXPECT_NE(view.status().message().find("min_tags"), std::string::npos);
+
+  BundleAdjustmentOptions ba;
+  ba.huber_px = 0;
+  const Result<BundleAdjustmentResult> solved = RunBundleAdjustment(BundleAdjustmentInput{}, ba);
+  ASSERT_FALSE(solved.ok());
+  EXPECT_NE(solved.status().message().find("huber_px"), std::string::npos);
+
+  ChArUcoCalibrationOptions charuco;
+  charuco.threads = 0;
+  const Result<ChArUcoCalibration> intrinsics =
+      CalibrateIntrinsicsFromChArUco({"a.png"}, ChArUcoBoard{}, charuco);
+  ASSERT_FALSE(intrinsics.ok());
+  EXPECT_NE(intrinsics.status().message().find("threads"), std::string::npos);
+
+  CaptureCalibrationOptions capture;
+  capture.pose.ransac_threshold_px = 0;
+  const Result<CaptureCalibration> calibrated =
+      CalibrateCapture(CaptureCalibrationInput{}, capture);
+  ASSERT_FALSE(calibrated.ok());
+  EXPECT_NE(calibrated.status().message().find("pose: ransac_threshold_px"), std::string::npos);
+
+  PriorCheckOptions prior;
+  prior.reject_sigma = 0;
+  const PriorCheck check =
+      CheckIntrinsicsPrior(Camera(1750), {}, Camera(1760), ViewsCovariance(), prior);
+  EXPECT_FALSE(check.tested);
+  EXPECT_NE(check.not_tested.find("reject_sigma"), std::string::npos) << check.not_tested;
 }
 
 }  // namespace

@@ -58,9 +58,20 @@ ViewObservations MatchToBox(const std::vector<TagDetection>& detections, const C
   return out;
 }
 
+Status ViewPoseOptions::Check() const {
+  if (!(ransac_threshold_px > 0) || !std::isfinite(ransac_threshold_px))
+    return InvalidArgument("ransac_threshold_px must be a finite positive number of pixels");
+  if (!(max_tag_rms_px > 0) || !std::isfinite(max_tag_rms_px))
+    return InvalidArgument("max_tag_rms_px must be a finite positive number of pixels");
+  if (min_tags < 1)
+    return InvalidArgument("min_tags must be at least 1, got " + std::to_string(min_tags));
+  return Status::Ok();
+}
+
 Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
                                   const CameraIntrinsics& intrinsics,
                                   const ViewPoseOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("view pose"));
   HR_RETURN_IF_ERROR(intrinsics.Validate());
   ViewPose pose;
   pose.rejected = observations.rejected;

@@ -48,6 +48,9 @@ struct ViewPoseOptions {
   double ransac_threshold_px = 3.0;  // tag reprojection RMS of an inlier of a hypothesis
   double max_tag_rms_px = 1.5;       // a tag above this after the fit is left out
   int min_tags = 2;                  // one planar tag gives an ambiguous pose
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 struct ViewPose {
@@ -59,7 +62,7 @@ struct ViewPose {
 
 // FailedPrecondition when fewer than `min_tags` usable tags remain (the
 // message says how many and why the others were left out); InvalidArgument
-// for invalid intrinsics.
+// for invalid intrinsics or options (ViewPoseOptions::Check).
 Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
                                   const CameraIntrinsics& intrinsics,
                                   const ViewPoseOptions& options = {});
