@@ -468,6 +468,19 @@ Result<AravisCameraOptions> ParseAravisCameraOptions(const ConfigNode& device) {
   return o;
 }
 
+Status AravisCameraOptions::Check() const {
+  HR_RETURN_IF_ERROR(nominal.Check());
+  if (buffers < 2 || buffers > 256)
+    return InvalidArgument("buffers must lie in 2..256, got " + std::to_string(buffers));
+  if (packet_size < 0 || packet_size > 16384) {
+    return InvalidArgument("packet_size must lie in 0..16384 (0: negotiated), got " +
+                           std::to_string(packet_size));
+  }
+  if (trigger_source.empty())
+    return InvalidArgument("trigger_source must name a GenICam line (Line0)");
+  return Status::Ok();
+}
+
 std::unique_ptr<Camera> MakeAravisCamera(const DeviceInfo& info, AravisCameraOptions options) {
   return std::make_unique<AravisCamera>(info, std::move(options));
 }
@@ -518,6 +531,7 @@ void RegisterAravisBackend(DeviceRegistry* registry, AravisOptionsHook hook) {
       [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
         HR_ASSIGN_OR_RETURN(AravisCameraOptions options, ParseAravisCameraOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        HR_RETURN_IF_ERROR(options.Check().WithContext("camera " + c.name));
         const std::string where = options.address.empty() ? "found by serial" : options.address;
         return MakeAravisCamera(c.Info("Aravis camera (" + where + ")"), std::move(options));
       });

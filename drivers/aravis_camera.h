@@ -67,6 +67,10 @@ struct AravisCameraOptions {
   // checked. The device takes the returned reference.
   std::function<Result<ArvCamera*>()> connect;
   std::string connect_name;  // how messages name the camera `connect` opens
+
+  // InvalidArgument naming the config field for a value out of the range
+  // ParseAravisCameraOptions accepts (the hook's rewrites included).
+  Status Check() const;
 };
 
 Result<AravisCameraOptions> ParseAravisCameraOptions(const ConfigNode& device);

@@ -31,6 +31,9 @@ struct CameraNominal {
   double LatencyWallS(double exposure_s) const {
     return (exposure_s + readout_s + download_s) * time_scale;
   }
+  // InvalidArgument naming the field for a value outside the ranges
+  // ReadCameraNominal accepts, or a time_scale that is not finite and positive.
+  Status Check() const;
 };
 // Reads the fields, keeping `defaults` for those absent; errors are recorded on `device`.
 CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& defaults);

@@ -29,6 +29,20 @@ CameraNominal ReadCameraNominal(const ConfigNode& device, const CameraNominal& d
   return n;
 }
 
+Status CameraNominal::Check() const {
+  if (width_px < 0 || width_px > 100000)
+    return InvalidArgument("width_px must lie in 0..100000, got " + std::to_string(width_px));
+  if (height_px < 0 || height_px > 100000)
+    return InvalidArgument("height_px must lie in 0..100000, got " + std::to_string(height_px));
+  if (!(readout_s >= 0 && readout_s <= 60))
+    return InvalidArgument("readout_s must lie in [0, 60] s, got " + std::to_string(readout_s));
+  if (!(download_s >= 0 && download_s <= 600))
+    return InvalidArgument("download_s must lie in [0, 600] s, got " + std::to_string(download_s));
+  if (!(time_scale > 0) || !std::isfinite(time_scale))
+    return InvalidArgument("time_scale must be finite and positive");
+  return Status::Ok();
+}
+
 Status CheckExposure(const Camera& camera, const CameraCapabilities& caps, double exposure_s) {
   if (exposure_s >= caps.min_exposure_s && exposure_s <= caps.max_exposure_s) return Status::Ok();
   return OutOfRange(camera.Describe() + ": exposure_s " + std::to_string(exposure_s) +

@@ -668,6 +668,24 @@ Result<Gphoto2CameraOptions> ParseGphoto2CameraOptions(const ConfigNode& device)
   return o;
 }
 
+Status Gphoto2CameraOptions::Check() const {
+  HR_RETURN_IF_ERROR(nominal.Check());
+  if (port.rfind("disk:", 0) == 0 && model.empty()) {
+    return InvalidArgument(
+        "model: a camera on a disk: port needs its model (libgphoto2 cannot detect it there)");
+  }
+  for (const auto& setting : settings) {
+    if (setting.first.empty()) return InvalidArgument("settings: a setting has no name");
+  }
+  if (busy_attempts < 1) {
+    return InvalidArgument("busy_attempts must be at least 1, got " +
+                           std::to_string(busy_attempts));
+  }
+  if (!(busy_backoff_s >= 0) || !std::isfinite(busy_backoff_s))
+    return InvalidArgument("busy_backoff_s must be a finite number of seconds, 0 or more");
+  return Status::Ok();
+}
+
 std::unique_ptr<hairrig::Camera> MakeGphoto2Camera(const DeviceInfo& info,
                                                    Gphoto2CameraOptions options) {
   return std::make_unique<Gphoto2Camera>(info, std::move(options));
@@ -699,6 +717,7 @@ void RegisterGphoto2Backend(DeviceRegistry* registry, Gphoto2OptionsHook hook) {
       [hook](const DeviceConfig& c) -> Result<std::unique_ptr<hairrig::Camera>> {
         HR_ASSIGN_OR_RETURN(Gphoto2CameraOptions options, ParseGphoto2CameraOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        HR_RETURN_IF_ERROR(options.Check().WithContext("camera " + c.name));
         const std::string where = options.port.empty() ? "found by serial" : options.port;
         return MakeGphoto2Camera(
             c.Info("libgphoto2 camera" + (options.model.empty() ? "" : " " + options.model) + " (" +

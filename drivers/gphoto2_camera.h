@@ -55,6 +55,11 @@ struct Gphoto2CameraOptions {
   CameraNominal nominal;  // width_px, height_px, readout_s (0.2), download_s (1.0)
   int busy_attempts = 3;
   double busy_backoff_s = 0.2;
+
+  // InvalidArgument naming the field for a value out of range (the hook's
+  // rewrites included): a disk: port without its model, busy_attempts below
+  // 1, a negative or non-finite busy_backoff_s, the nominal timings.
+  Status Check() const;
 };
 
 Result<Gphoto2CameraOptions> ParseGphoto2CameraOptions(const ConfigNode& device);

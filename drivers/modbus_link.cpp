@@ -121,6 +121,29 @@ std::string ModbusEndpoint::Describe() const {
          std::to_string(stop_bits) + " unit " + std::to_string(slave_id);
 }
 
+Status ModbusEndpoint::Check() const {
+  const auto in = [](int value, int lo, int hi) { return value >= lo && value <= hi; };
+  const auto range = [](const char* field, int lo, int hi, int value) {
+    return InvalidArgument(std::string(field) + " must lie in " + std::to_string(lo) + ".." +
+                           std::to_string(hi) + ", got " + std::to_string(value));
+  };
+  if (transport == Transport::kTcp) {
+    if (host.empty()) return InvalidArgument("host: a TCP controller needs its address");
+    if (!in(port, 0, 65535)) return range("port", 0, 65535, port);
+  } else {
+    if (device.empty()) return InvalidArgument("device: an RTU controller needs its serial device");
+    if (!in(baud, 300, 4000000)) return range("baud", 300, 4000000, baud);
+    if (parity != 'N' && parity != 'E' && parity != 'O')
+      return InvalidArgument("parity must be none, even or odd");
+    if (!in(data_bits, 5, 8)) return range("data_bits", 5, 8, data_bits);
+    if (!in(stop_bits, 1, 2)) return range("stop_bits", 1, 2, stop_bits);
+  }
+  if (!in(slave_id, 1, 247)) return range("slave_id", 1, 247, slave_id);
+  if (!in(timeout_ms, 1, 60000)) return range("timeout_ms", 1, 60000, timeout_ms);
+  if (!in(retries, 0, 20)) return range("retries", 0, 20, retries);
+  return Status::Ok();
+}
+
 Result<ModbusEndpoint> ParseModbusEndpoint(const ConfigNode& node) {
   ModbusEndpoint e;
   e.transport = node.Choice("transport", {"tcp", "rtu"}, "tcp") == "rtu"

@@ -45,6 +45,9 @@ struct ModbusEndpoint {
 
   // "tcp 127.0.0.1:502 unit 1", "rtu /dev/ttyUSB0 19200 8N1 unit 3".
   std::string Describe() const;
+  // InvalidArgument naming the config field for a value out of the range
+  // ParseModbusEndpoint accepts (a host or device missing for its transport).
+  Status Check() const;
 };
 
 // Reads transport, host, port, device, baud, parity (none|even|odd),

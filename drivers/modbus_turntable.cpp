@@ -1,5 +1,8 @@
 #include "drivers/modbus_turntable.h"
 
+#include <cmath>
+#include <string>
+
 #include "drivers/polled_turntable.h"
 
 namespace hairrig {
@@ -196,6 +199,23 @@ Result<ModbusTurntableOptions> ParseModbusTurntableOptions(const ConfigNode& dev
   return options;
 }
 
+Status ModbusTurntableOptions::Check() const {
+  HR_RETURN_IF_ERROR(endpoint.Check());
+  if (!(map.counts_per_degree >= 1e-3 && map.counts_per_degree <= 1e7))
+    return InvalidArgument("counts_per_degree must lie in [0.001, 1e7]");
+  if (!(map.max_speed_deg_s > 0) || !std::isfinite(map.max_speed_deg_s))
+    return InvalidArgument("limits.max_speed_deg_s must be finite and positive");
+  if (!(map.max_accel_deg_s2 > 0) || !std::isfinite(map.max_accel_deg_s2))
+    return InvalidArgument("limits.max_accel_deg_s2 must be finite and positive");
+  if (!(map.settle_s >= 0 && map.settle_s <= 60))
+    return InvalidArgument("limits.settle_s must lie in [0, 60] s");
+  if (poll_ms < 1 || poll_ms > 1000)
+    return InvalidArgument("poll_ms must lie in 1..1000, got " + std::to_string(poll_ms));
+  if (!(time_scale > 0) || !std::isfinite(time_scale))
+    return InvalidArgument("time_scale must be finite and positive");
+  return Status::Ok();
+}
+
 std::unique_ptr<Turntable> MakeModbusTurntable(const DeviceInfo& info,
                                                ModbusTurntableOptions options) {
   return std::make_unique<ModbusTurntable>(info, std::move(options));
@@ -212,6 +232,7 @@ void RegisterModbusTurntableBackend(DeviceRegistry* registry, ModbusOptionsHook 
       [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Turntable>> {
         HR_ASSIGN_OR_RETURN(ModbusTurntableOptions options, ParseModbusTurntableOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        HR_RETURN_IF_ERROR(options.Check().WithContext("turntable " + c.name));
         const DeviceInfo info =
             c.Info("Modbus turntable controller (" + options.endpoint.Describe() + ")");
         return MakeModbusTurntable(info, std::move(options));

@@ -35,6 +35,11 @@ struct ModbusTurntableOptions {
   int poll_ms = 10;  // status polling period while waiting for a move
   double time_scale =
       1.0;  // wall s per device s: 1 for real hardware (a simulated controller sets its own)
+
+  // InvalidArgument naming the config field for a value out of the range
+  // ParseModbusTurntableOptions accepts (the hook's rewrites included):
+  // the endpoint's fields, counts_per_degree, limits.*, poll_ms, time_scale.
+  Status Check() const;
 };
 
 // Every field of the device's map, with errors naming the file, line and field.

@@ -2,6 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "drivers/aravis_camera.h"
+#include "drivers/gphoto2_camera.h"
+#include "drivers/modbus_turntable.h"
+#include "drivers/usb_relay.h"
+#include "drivers/v4l2_camera.h"
+
 namespace hairrig {
 namespace {
 
@@ -82,6 +92,112 @@ TEST(Registry, DuplicateSerialIsRefused) {
   auto set = BuildDevices(root->Child("devices"), MakeRegistry());
   EXPECT_NE(set.status().message().find("used by two devices"), std::string::npos)
       << set.status().ToString();
+}
+
+// The backends' options re-check the ranges their parsers accept, naming the
+// config field; their defaults pass (a UVC camera's and a relay light's once
+// the fields the config requires are set).
+TEST(DriverOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(CameraNominal{}.Check().ok());
+  EXPECT_TRUE(AravisCameraOptions{}.Check().ok());
+  EXPECT_TRUE(Gphoto2CameraOptions{}.Check().ok());
+  EXPECT_TRUE(V4l2CameraOptions{}.Check().ok());
+  EXPECT_TRUE(ModbusTurntableOptions{}.Check().ok());
+  {
+    CameraNominal o;
+    o.readout_s = std::nan("");
+    expect_named(o.Check(), "readout_s");
+    o = CameraNominal{};
+    o.time_scale = 0;
+    expect_named(o.Check(), "time_scale");
+  }
+  {
+    AravisCameraOptions o;
+    o.buffers = 1;
+    expect_named(o.Check(), "buffers");
+    o = AravisCameraOptions{};
+    o.packet_size = 20000;
+    expect_named(o.Check(), "packet_size");
+    o = AravisCameraOptions{};
+    o.nominal.download_s = std::numeric_limits<double>::infinity();
+    expect_named(o.Check(), "download_s");
+  }
+  {
+    Gphoto2CameraOptions o;
+    o.port = "disk:/tmp/dslr";
+    expect_named(o.Check(), "model");
+    o = Gphoto2CameraOptions{};
+    o.busy_attempts = 0;
+    expect_named(o.Check(), "busy_attempts");
+    o = Gphoto2CameraOptions{};
+    o.busy_backoff_s = -1;
+    expect_named(o.Check(), "busy_backoff_s");
+  }
+  {
+    V4l2CameraOptions o;
+    o.buffers = 64;
+    expect_named(o.Check(), "buffers");
+    o = V4l2CameraOptions{};
+    o.nominal.width_px = 0;
+    expect_named(o.Check(), "width_px");
+  }
+  {
+    UsbRelayLightOptions o;
+    o.board_id = "AB12C";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.channel = 9;
+    expect_named(o.Check(), "channel");
+    o.channel = 1;
+    o.board_id = "TOOLONG";
+    expect_named(o.Check(), "board");
+  }
+  {
+    ModbusTurntableOptions o;
+    o.endpoint.slave_id = 0;
+    expect_named(o.Check(), "slave_id");
+    o = ModbusTurntableOptions{};
+    o.endpoint.transport = ModbusEndpoint::Transport::kRtu;
+    expect_named(o.Check(), "device");
+    o.endpoint.device = "/dev/ttyUSB0";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.endpoint.baud = 100;
+    expect_named(o.Check(), "baud");
+    o = ModbusTurntableOptions{};
+    o.map.max_speed_deg_s = std::nan("");
+    expect_named(o.Check(), "limits.max_speed_deg_s");
+    o = ModbusTurntableOptions{};
+    o.poll_ms = 0;
+    expect_named(o.Check(), "poll_ms");
+    o = ModbusTurntableOptions{};
+    o.time_scale = -1;
+    expect_named(o.Check(), "time_scale");
+  }
+}
+
+// A backend checks the options its hook hands back before it builds the
+// device, naming the config file's line, the device and the field.
+TEST(DriverOptions, TheBackendChecksTheOptionsAfterItsHook) {
+  auto root = ConfigNode::LoadString(
+      "devices:\n  lights:\n    - {name: top, backend: usbrelay, serial: L1, board: AB12C, "
+      "channel: 2}\n  cameras: []\n",
+      "rig.yaml");
+  ASSERT_TRUE(root.ok()) << root.status().ToString();
+  DeviceRegistry registry;
+  RegisterUsbRelayBackend(&registry, [](const DeviceConfig&, UsbRelayLightOptions* options) {
+    options->channel = 0;
+    return Status::Ok();
+  });
+  auto set = BuildDevices(root->Child("devices"), registry);
+  ASSERT_FALSE(set.ok());
+  const std::string m = set.status().message();
+  EXPECT_EQ(set.status().code(), StatusCode::kInvalidArgument) << m;
+  EXPECT_NE(m.find("rig.yaml:3:"), std::string::npos) << m;
+  EXPECT_NE(m.find("light top"), std::string::npos) << m;
+  EXPECT_NE(m.find("channel"), std::string::npos) << m;
 }
 
 }  // namespace

@@ -250,6 +250,19 @@ Result<UsbRelayLightOptions> ParseUsbRelayLightOptions(
   return o;
 }
 
+Status UsbRelayLightOptions::Check() const {
+  if (board_id.empty() || board_id.size() > 5) {
+    return InvalidArgument("board must be a relay board's id of 1 to 5 characters, got " +
+                           QuotedExcerpt(board_id));
+  }
+  if (channel < 1 || channel > kUsbRelayMaxChannels) {
+    return InvalidArgument("channel must lie in 1.." + std::to_string(kUsbRelayMaxChannels) +
+                           ", got " + std::to_string(channel));
+  }
+  if (bus_name.empty()) return InvalidArgument("bus must name a bus (usb)");
+  return Status::Ok();
+}
+
 std::unique_ptr<Light> MakeUsbRelayLight(const DeviceInfo& info, UsbRelayLightOptions options) {
   return std::make_unique<UsbRelayLight>(info, std::move(options));
 }
@@ -262,6 +275,7 @@ void RegisterUsbRelayBackend(DeviceRegistry* registry, UsbRelayOptionsHook hook,
         HR_ASSIGN_OR_RETURN(UsbRelayLightOptions options,
                             ParseUsbRelayLightOptions(c.node, hook_fields));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        HR_RETURN_IF_ERROR(options.Check().WithContext("light " + c.name));
         if (options.bus_name != kLibusbRelayBusName && !options.bus) {
           return InvalidArgument(
               c.node.Where() + ": bus " + QuotedExcerpt(options.bus_name) +

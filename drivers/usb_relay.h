@@ -57,6 +57,10 @@ struct UsbRelayLightOptions {
   // The boards' bus. Null: libusb, for bus_name "usb"; any other bus_name
   // needs a hook that sets it.
   std::shared_ptr<UsbRelayBus> bus;
+
+  // InvalidArgument naming the config field (board, channel, bus) for a
+  // value out of the range ParseUsbRelayLightOptions accepts.
+  Status Check() const;
 };
 // `hook_fields`: further fields of the device's map that the backend's hook
 // reads (allowed here, not read).

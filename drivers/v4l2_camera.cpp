@@ -395,6 +395,15 @@ Result<V4l2CameraOptions> ParseV4l2CameraOptions(const ConfigNode& device) {
   return o;
 }
 
+Status V4l2CameraOptions::Check() const {
+  HR_RETURN_IF_ERROR(nominal.Check());
+  if (nominal.width_px <= 0 || nominal.height_px <= 0)
+    return InvalidArgument("width_px and height_px: a UVC frame size must be given");
+  if (buffers < 2 || buffers > 32)
+    return InvalidArgument("buffers must lie in 2..32, got " + std::to_string(buffers));
+  return Status::Ok();
+}
+
 std::unique_ptr<Camera> MakeV4l2Camera(const DeviceInfo& info, V4l2CameraOptions options) {
   return std::make_unique<V4l2Camera>(info, std::move(options));
 }
@@ -405,6 +414,7 @@ void RegisterV4l2Backend(DeviceRegistry* registry, V4l2OptionsHook hook) {
       [hook](const DeviceConfig& c) -> Result<std::unique_ptr<Camera>> {
         HR_ASSIGN_OR_RETURN(V4l2CameraOptions options, ParseV4l2CameraOptions(c.node));
         if (hook) HR_RETURN_IF_ERROR(hook(c, &options));
+        HR_RETURN_IF_ERROR(options.Check().WithContext("camera " + c.name));
         return MakeV4l2Camera(
             c.Info("UVC camera" + (options.device.empty() ? "" : " (" + options.device + ")")),
             std::move(options));

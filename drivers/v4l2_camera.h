@@ -44,6 +44,10 @@ struct V4l2CameraOptions {
   int buffers = 4;
   CameraNominal nominal{1280, 720, 0.0, 0.05, 1.0};
   std::shared_ptr<V4l2Io> io;  // null: the system calls
+
+  // InvalidArgument naming the config field for a value out of the range
+  // ParseV4l2CameraOptions accepts (the hook's rewrites included).
+  Status Check() const;
 };
 
 Result<V4l2CameraOptions> ParseV4l2CameraOptions(const ConfigNode& device);
