@@ -42,6 +42,22 @@ bool LightShadowMap::ToTexel(const Eigen::Vector3d& p, double* u, double* v, dou
   return *u >= 0 && *v >= 0 && *u < res_ - 1 && *v < res_ - 1;
 }
 
+Status ShadowMapOptions::Check() const {
+  if (resolution < 1 || resolution > 8192)
+    return InvalidArgument("resolution must lie in 1..8192, got " + std::to_string(resolution));
+  if (head_resolution < 1 || head_resolution > 16384) {
+    return InvalidArgument("head_resolution must lie in 1..16384, got " +
+                           std::to_string(head_resolution));
+  }
+  if (layers < 1 || layers > 1024)
+    return InvalidArgument("layers must lie in 1..1024, got " + std::to_string(layers));
+  if (!(layer_mm > 0) || !std::isfinite(layer_mm))
+    return InvalidArgument("layer_mm must be finite and positive");
+  if (!(fibre_opacity >= 0) || !std::isfinite(fibre_opacity))
+    return InvalidArgument("fibre_opacity must be finite and 0 or more");
+  return Status::Ok();
+}
+
 LightShadowMap LightShadowMap::Build(const Eigen::Vector3d& light_mm,
                                      const std::vector<Eigen::Vector3d>& points,
                                      const std::vector<size_t>& offsets, double fibre_diameter_mm,

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/status.h"
 #include "core/strands.h"
 #include "core/triangle_mesh.h"
 
@@ -25,6 +26,9 @@ struct ShadowMapOptions {
   // A fibre's projected area times this is its optical depth; below 1 because
   // a fibre lets part of the light through (its TT lobe).
   double fibre_opacity = 0.7;
+
+  // InvalidArgument naming the field for a value out of range or not finite.
+  Status Check() const;
 };
 
 class LightShadowMap {

@@ -396,9 +396,22 @@ struct ModbusTurntableServer::Impl {
 ModbusTurntableServer::ModbusTurntableServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ModbusTurntableServer::~ModbusTurntableServer() { Stop(); }
 
+Status ModbusServerOptions::Check() const {
+  if (slave_id < 1 || slave_id > 247)
+    return InvalidArgument("slave_id must lie in 1..247, got " + std::to_string(slave_id));
+  if (map.serial_registers < 0 || serial.size() > 2 * static_cast<size_t>(map.serial_registers)) {
+    return InvalidArgument("serial " + serial + " does not fit in " +
+                           std::to_string(map.serial_registers) + " serial registers");
+  }
+  if (!(map.counts_per_degree >= 1e-3 && map.counts_per_degree <= 1e7))
+    return InvalidArgument("counts_per_degree must lie in [0.001, 1e7]");
+  return Status::Ok();
+}
+
 Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(
     std::shared_ptr<SimWorld> world, ModbusServerOptions options, const std::string& host,
     int port) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("Modbus server"));
   auto impl = std::make_unique<Impl>();
   impl->controller = &WorldTurntableController(*world);
   impl->world = std::move(world);
@@ -425,6 +438,7 @@ Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartTcp(
 
 Result<std::unique_ptr<ModbusTurntableServer>> ModbusTurntableServer::StartRtu(
     std::shared_ptr<SimWorld> world, ModbusServerOptions options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("Modbus RTU server"));
   auto impl = std::make_unique<Impl>();
   impl->controller = &WorldTurntableController(*world);
   impl->world = std::move(world);

@@ -45,7 +45,12 @@ enum class ModbusServerFault {
 struct ModbusServerOptions {
   ModbusRegisterMap map;
   std::string serial;  // written to the serial registers
-  int slave_id = 1;
+  int slave_id = 1;    // 1..247
+
+  // InvalidArgument naming the field: slave_id out of 1..247, a serial
+  // longer than the serial registers hold, counts_per_degree out of
+  // [0.001, 1e7].
+  Status Check() const;
 };
 
 class ModbusTurntableServer {

@@ -16,8 +16,17 @@ bool IsFrameFile(const std::string& path) {
 
 }  // namespace
 
+Status QuotaStorageOptions::Check() const {
+  if (frame_files < -1) {
+    return InvalidArgument("frame_files must be -1 (no limit) or more, got " +
+                           std::to_string(frame_files));
+  }
+  return Status::Ok();
+}
+
 Status QuotaStorage::WriteFileAtomic(const std::string& path, const void* data, size_t size,
                                      const StageHook& on_stage) {
+  HR_RETURN_IF_ERROR(options_.Check().WithContext("quota storage"));
   Call call;
   if (options_.frame_files >= 0 && IsFrameFile(path)) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -38,6 +47,7 @@ Status QuotaStorage::WriteFileAtomic(const std::string& path, const void* data, 
 
 Status QuotaStorage::AppendDurably(int fd, const std::string& path, const void* data, size_t size,
                                    const StageHook& on_stage) {
+  HR_RETURN_IF_ERROR(options_.Check().WithContext("quota storage"));
   Call call;
   const Status s = ::hairrig::AppendDurably(
       fd, path, data, size, on_stage,

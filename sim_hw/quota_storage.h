@@ -30,8 +30,12 @@ struct QuotaStorageOptions {
   // looked sufficient, as when another program fills the disk between a
   // check and the write. -1: no limit.
   int frame_files = -1;
+
+  // InvalidArgument naming frame_files below -1 (every quota_bytes is valid).
+  Status Check() const;
 };
 
+// Bad options (QuotaStorageOptions::Check) fail every write with their error.
 class QuotaStorage : public PosixCaptureStorage {
  public:
   explicit QuotaStorage(const QuotaStorageOptions& options) : options_(options) {}

@@ -729,8 +729,22 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const Scene& scene) {
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
+Status RenderOptions::Check() const {
+  for (size_t i = 0; i < light_levels.size(); ++i) {
+    if (!(light_levels[i] >= 0 && light_levels[i] <= 1))
+      return InvalidArgument("light_levels[" + std::to_string(i) + "] must lie in 0..1");
+  }
+  if (!(exposure_s >= 0) || !std::isfinite(exposure_s))
+    return InvalidArgument("exposure_s must be 0 (the nominal exposure) or a finite positive time");
+  if (!std::isfinite(gain_db)) return InvalidArgument("gain_db must be finite");
+  if (threads < 1)
+    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
+  return Status::Ok();
+}
+
 Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg,
                                       const RenderOptions& options) const {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("render options"));
   const Scene& scene = impl_->scene;
   HR_RETURN_IF_ERROR(CheckCameraIndex(scene, camera_index));
   if (!std::isfinite(turntable_deg))
@@ -787,6 +801,7 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg,
 
 Result<cv::Mat> Renderer::Expose(int camera_index, const cv::Mat3f& radiance,
                                  const RenderOptions& options) const {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("render options"));
   const Scene& scene = impl_->scene;
   HR_RETURN_IF_ERROR(CheckCameraIndex(scene, camera_index));
   const SceneCamera& camera = scene.cameras[static_cast<size_t>(camera_index)];

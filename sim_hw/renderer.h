@@ -41,6 +41,10 @@ struct RenderOptions {
   bool shade_hair = true;     // false: fibres drawn unlit and no shadow maps built (for
                            // ground-truth maps alone: the geometry is the same, the image is not)
   bool keep_radiance = false;  // fill RenderedView::radiance
+
+  // InvalidArgument naming the field: a light level outside 0..1, a negative
+  // or non-finite exposure, a non-finite gain, threads below 1.
+  Status Check() const;
 };
 
 // Ground truth of one tag in one rendered view.
@@ -76,16 +80,17 @@ class Renderer {
   // Not safe while another thread renders.
   void SetStrands(StrandSet strands_turntable_mm);
 
-  // OutOfRange for a camera index outside the scene; InvalidArgument for light
-  // levels of the wrong count or outside 0..1. Thread-safe (const). The hair's
-  // buffers of up to two finished renders are kept for the next ones (a few
-  // hundred MB for a 50,000-strand wig), for as long as the renderer lives.
+  // OutOfRange for a camera index outside the scene; InvalidArgument for bad
+  // options (RenderOptions::Check) or light levels of the wrong count. Thread-safe (const). The
+  // hair's buffers of up to two finished renders are kept for the next ones (a few hundred MB for a
+  // 50,000-strand wig), for as long as the renderer lives.
   Result<RenderedView> Render(int camera_index, double turntable_deg,
                               const RenderOptions& options) const;
   // The 8-bit BGR image camera `camera_index` records of `radiance` (a
   // RenderedView::radiance of that camera) with `options`' exposure, gain and
   // noise: the same image Render gives for those options. OutOfRange for a
-  // camera outside the scene, InvalidArgument for a radiance of another size.
+  // camera outside the scene, InvalidArgument for bad options or a radiance
+  // of another size.
   Result<cv::Mat> Expose(int camera_index, const cv::Mat3f& radiance,
                          const RenderOptions& options) const;
 

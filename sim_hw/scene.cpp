@@ -1,10 +1,13 @@
 #include "sim_hw/scene.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <string>
 
 #include "core/config.h"
 #include "core/head_config.h"
+#include "core/string_format.h"
 
 namespace hairrig {
 
@@ -132,6 +135,41 @@ SceneCamera ReadCamera(const ConfigNode& n) {
 }
 
 }  // namespace
+
+Status WigOptions::Check() const {
+  // InvalidArgument unless lo <= value <= hi (NaN is outside).
+  const auto range = [](const char* field, double value, double lo, double hi) {
+    if (value >= lo && value <= hi) return Status::Ok();
+    return InvalidArgument(
+        StringPrintf("wig.%s must lie in [%g, %g], got %g", field, lo, hi, value));
+  };
+  HR_RETURN_IF_ERROR(range("strands", num_strands, 1, 2e6));
+  if (!(min_length_mm > 0 && max_length_mm >= min_length_mm && max_length_mm < 5000))
+    return InvalidArgument("wig.length_mm must be [min, max] with 0 < min <= max < 5000");
+  HR_RETURN_IF_ERROR(range("segment_mm", segment_mm, 0.1, 100));
+  HR_RETURN_IF_ERROR(range("scalp_min_elevation_deg", scalp_min_elevation_deg, -90, 89));
+  if (!face_dir.allFinite() || face_dir.norm() < 1e-9)
+    return InvalidArgument("wig.face_dir must be a finite, non-zero direction");
+  HR_RETURN_IF_ERROR(range("face_half_angle_deg", face_half_angle_deg, 0, 180));
+  HR_RETURN_IF_ERROR(range("wave_amplitude_mm", wave_amplitude_mm, 0, 200));
+  HR_RETURN_IF_ERROR(range("wave_period_mm", wave_period_mm, 1, 2000));
+  HR_RETURN_IF_ERROR(range("curl_radius_mm", curl_radius_mm, 0, 200));
+  HR_RETURN_IF_ERROR(range("curl_pitch_mm", curl_pitch_mm, 0.5, 2000));
+  HR_RETURN_IF_ERROR(range("wisps", wisps, 0, 1e5));
+  HR_RETURN_IF_ERROR(range("clump", clump, 0, 1));
+  HR_RETURN_IF_ERROR(range("frizz_mm", frizz_mm, 0, 50));
+  HR_RETURN_IF_ERROR(range("flyaways", flyaway_fraction, 0, 1));
+  HR_RETURN_IF_ERROR(range("flyaway_mm", flyaway_mm, 0, 500));
+  HR_RETURN_IF_ERROR(range("comb", comb, 0, 2));
+  HR_RETURN_IF_ERROR(range("bangs_depth_deg", bangs_depth_deg, 0, 90));
+  HR_RETURN_IF_ERROR(range("bangs_length_mm", bangs_length_mm, 5, 1000));
+  HR_RETURN_IF_ERROR(range("fibre_diameter_um", fibre_diameter_um, 10, 500));
+  if (!(albedo.minCoeff() >= 0 && albedo.maxCoeff() <= 1))
+    return InvalidArgument("wig.albedo must have every channel in [0, 1]");
+  if (style == WigStyle::kFile && file.empty())
+    return InvalidArgument("wig.file is required with style file");
+  return Status::Ok();
+}
 
 Result<Scene> LoadScene(const std::string& path) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));

@@ -62,6 +62,11 @@ struct WigOptions {
   double fibre_diameter_um = 70;
   Eigen::Vector3d albedo{0.30, 0.18, 0.09};  // linear RGB of the fibre (its absorption colour)
   uint64_t seed = 1;
+
+  // InvalidArgument naming the scene file's field (wig.strands, wig.length_mm,
+  // ...) for a value outside the range LoadScene accepts, or style file
+  // without wig.file.
+  Status Check() const;
 };
 
 // How hair fibres are shaded and shadowed (sim_hw/renderer.h).

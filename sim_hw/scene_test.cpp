@@ -2,10 +2,23 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
+
+#include "sim_hw/deep_opacity.h"
+#include "sim_hw/modbus_turntable_server.h"
+#include "sim_hw/quota_storage.h"
+#include "sim_hw/renderer.h"
+#include "sim_hw/sim_aravis.h"
+#include "sim_hw/sim_devices.h"
+#include "sim_hw/sim_dslr_server.h"
+#include "sim_hw/sim_v4l2.h"
+#include "sim_hw/view_set.h"
+#include "sim_hw/wig.h"
 
 namespace hairrig {
 namespace {
@@ -78,6 +91,140 @@ TEST(Scene, NumbersBeyondAnyRigAreRefusedNamingTheFileAndField) {
     EXPECT_NE(scene.status().message().find("field '" + c.field + "'"), std::string::npos)
         << scene.status().ToString();
   }
+}
+
+// The simulated rig's options refuse a bad value with InvalidArgument naming
+// the field; their defaults pass (the cameras' once they have a serial).
+TEST(SimOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(ShadowMapOptions{}.Check().ok());
+  EXPECT_TRUE(QuotaStorageOptions{}.Check().ok());
+  EXPECT_TRUE(RenderOptions{}.Check().ok());
+  EXPECT_TRUE(RenderViewsOptions{}.Check().ok());
+  EXPECT_TRUE(WigOptions{}.Check().ok());
+  EXPECT_TRUE(SimWorldOptions{}.Check().ok());
+  EXPECT_TRUE(ModbusServerOptions{}.Check().ok());
+  EXPECT_TRUE(SimV4l2Options{}.Check().ok());
+  {
+    ShadowMapOptions o;
+    o.layers = 0;
+    expect_named(o.Check(), "layers");
+    o = ShadowMapOptions{};
+    o.layer_mm = std::nan("");
+    expect_named(o.Check(), "layer_mm");
+  }
+  {
+    QuotaStorageOptions o;
+    o.frame_files = -2;
+    expect_named(o.Check(), "frame_files");
+  }
+  {
+    RenderOptions o;
+    o.light_levels = {1.0, 1.5};
+    expect_named(o.Check(), "light_levels[1]");
+    o = RenderOptions{};
+    o.exposure_s = std::numeric_limits<double>::infinity();
+    expect_named(o.Check(), "exposure_s");
+    o = RenderOptions{};
+    o.threads = 0;
+    expect_named(o.Check(), "threads");
+  }
+  {
+    RenderViewsOptions o;
+    o.threads = 0;
+    expect_named(o.Check(), "threads");
+    RenderSceneViewsOptions scene_views;
+    scene_views.scene_file = "scene.yaml";
+    scene_views.out_dir = "out";
+    EXPECT_TRUE(scene_views.Check().ok()) << scene_views.Check().ToString();
+    scene_views.render.light_levels = {-1};
+    expect_named(scene_views.Check(), "render: light_levels[0]");
+  }
+  {
+    WigOptions o;
+    o.segment_mm = 0;
+    expect_named(o.Check(), "wig.segment_mm");
+    o = WigOptions{};
+    o.min_length_mm = 300;
+    o.max_length_mm = 200;
+    expect_named(o.Check(), "wig.length_mm");
+    o = WigOptions{};
+    o.clump = std::nan("");
+    expect_named(o.Check(), "wig.clump");
+    o = WigOptions{};
+    o.style = WigStyle::kFile;
+    expect_named(o.Check(), "wig.file");
+  }
+  {
+    SimWorldOptions o;
+    o.time_scale = 0;
+    expect_named(o.Check(), "time_scale");
+    o = SimWorldOptions{};
+    SimFault fault;
+    fault.count = 0;
+    o.faults = {fault};
+    expect_named(o.Check(), "faults[0].count");
+  }
+  {
+    ModbusServerOptions o;
+    o.slave_id = 248;
+    expect_named(o.Check(), "slave_id");
+    o = ModbusServerOptions{};
+    o.serial = std::string(40, 'S');
+    expect_named(o.Check(), "serial");
+  }
+  {
+    SimAravisOptions o;
+    expect_named(o.Check(), "serial");
+    o.serial = "SIM-1";
+    EXPECT_TRUE(o.Check().ok());
+    o.scene_camera = -1;
+    expect_named(o.Check(), "scene_camera");
+  }
+  {
+    SimDslrOptions o;
+    expect_named(o.Check(), "serial");
+    o.serial = "SIM-1";
+    EXPECT_TRUE(o.Check().ok());
+    o.reply_timeout_ms = 0;
+    expect_named(o.Check(), "reply_timeout_ms");
+  }
+  {
+    SimV4l2Options o;
+    o.fps = 0;
+    expect_named(o.Check(), "fps");
+    o = SimV4l2Options{};
+    o.node.clear();
+    expect_named(o.Check(), "node");
+  }
+}
+
+// The entry points taking the options refuse bad ones before any work.
+TEST(SimOptions, EntryPointsCheckTheirOptions) {
+  WigOptions wig;
+  wig.num_strands = 0;
+  const Result<StrandSet> strands = GenerateWig(wig, HeadSpec{});
+  ASSERT_FALSE(strands.ok());
+  EXPECT_NE(strands.status().message().find("wig.strands"), std::string::npos)
+      << strands.status().ToString();
+
+  SimWorldOptions world;
+  world.time_scale = -1;
+  const auto created = CreateSimWorld(Scene{}, world);
+  ASSERT_FALSE(created.ok());
+  EXPECT_NE(created.status().message().find("time_scale"), std::string::npos);
+
+  RenderSceneViewsOptions views;
+  views.scene_file = "scene.yaml";
+  views.out_dir = ::testing::TempDir() + "/sim_options_views";
+  views.render.threads = 0;
+  const auto rendered = RenderSceneViews(views);
+  ASSERT_FALSE(rendered.ok());
+  EXPECT_NE(rendered.status().message().find("render: threads"), std::string::npos)
+      << rendered.status().ToString();
 }
 
 }  // namespace

@@ -244,7 +244,17 @@ void SimAravisFeed::Attach(ArvFakeCamera* fake, ArvGvFakeCamera* gige) {
 void SimAravisFeed::SetRender(bool render) { impl_->SetRender(render); }
 int SimAravisFeed::frames_rendered() const { return impl_->frames(); }
 
+Status SimAravisOptions::Check() const {
+  if (serial.empty())
+    return InvalidArgument("serial (the camera's DeviceSerialNumber) is required");
+  if (scene_camera < 0) {
+    return InvalidArgument("scene_camera must be 0 or more, got " + std::to_string(scene_camera));
+  }
+  return Status::Ok();
+}
+
 Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("simulated Aravis camera"));
   GError* error = nullptr;
   ArvDevice* device = arv_fake_device_new(options.serial.c_str(), &error);
   if (device == nullptr) {
@@ -279,6 +289,7 @@ class SimGigECamera::Impl {
 
 Result<std::unique_ptr<SimGigECamera>> SimGigECamera::Start(std::shared_ptr<SimWorld> world,
                                                             SimAravisOptions options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("simulated GigE Vision camera"));
   auto impl = std::make_unique<Impl>(world, options);
   const std::set<uint64_t> before = OpenSocketInodes();
   impl->gv = arv_gv_fake_camera_new(impl->address.c_str(), options.serial.c_str());

@@ -51,6 +51,9 @@ struct SimAravisOptions {
   int scene_camera = 0;      // the scene camera whose view it renders
   std::string trigger_line;  // world trigger line wired to Line0; "" for none
   bool render = true;  // false: Aravis' own test pattern (to time the transport alone; GigE only)
+
+  // InvalidArgument naming the field: an empty serial, a negative scene_camera.
+  Status Check() const;
 };
 
 // Renders the world into one fake camera's buffers. Keep it alive as long
@@ -82,6 +85,7 @@ class SimAravisFeed {
 
 // An in-process Aravis fake camera with `feed`'s serial, opened. The caller
 // owns the returned reference (g_object_unref); `feed` must outlive it.
+// InvalidArgument for bad options (SimAravisOptions::Check).
 Result<ArvCamera*> OpenSimAravisCamera(SimAravisFeed& feed, const SimAravisOptions& options);
 
 // Aravis' GigE Vision fake camera on 127.0.0.1, fed by the world.
@@ -91,7 +95,7 @@ class SimGigECamera {
   // already takes packets for 127.0.0.1:3956 (another GigE fake: Aravis lets
   // both bind it, and the client would get part of its answers and images
   // from the other). Run one at a time (tests hold the ctest resource lock
-  // gige_fake_port).
+  // gige_fake_port). InvalidArgument for bad options (SimAravisOptions::Check).
   static Result<std::unique_ptr<SimGigECamera>> Start(std::shared_ptr<SimWorld> world,
                                                       SimAravisOptions options);
   ~SimGigECamera();

@@ -259,11 +259,25 @@ class SimWorld {
   mutable std::map<int, std::shared_ptr<const CachedRadiance>> radiance_cache_;
 };
 
+Status SimWorldOptions::Check() const {
+  if (!(time_scale > 0) || !std::isfinite(time_scale))
+    return InvalidArgument("sim time_scale must be a positive number (1 = real time)");
+  for (size_t i = 0; i < faults.size(); ++i) {
+    const SimFault& f = faults[i];
+    const std::string field = "sim faults[" + std::to_string(i) + "].";
+    if (f.at < 0)
+      return InvalidArgument(field + "at must be 0 or more, got " + std::to_string(f.at));
+    if (f.count < 1)
+      return InvalidArgument(field + "count must be at least 1, got " + std::to_string(f.count));
+    if (!(f.delay_s >= 0) || !std::isfinite(f.delay_s))
+      return InvalidArgument(field + "delay_s must be a finite number of seconds, 0 or more");
+  }
+  return Status::Ok();
+}
+
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene,
                                                  const SimWorldOptions& options) {
-  if (!(options.time_scale > 0) || !std::isfinite(options.time_scale)) {
-    return InvalidArgument("sim time_scale must be a positive number (1 = real time)");
-  }
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(std::unique_ptr<Renderer> renderer, Renderer::Create(scene));
   return std::make_shared<SimWorld>(std::move(renderer), options);
 }

@@ -34,9 +34,14 @@ struct SimWorldOptions {
   double time_scale = 0.01;  // > 0
   bool noise = true;
   std::vector<SimFault> faults;
+
+  // InvalidArgument naming the field: a time_scale that is not finite and
+  // positive, a fault's negative at, count below 1, negative or non-finite delay_s.
+  Status Check() const;
 };
 
-// Creates the world (renderer included) for `scene`.
+// Creates the world (renderer included) for `scene`. InvalidArgument for bad
+// options (SimWorldOptions::Check).
 Result<std::shared_ptr<SimWorld>> CreateSimWorld(const Scene& scene,
                                                  const SimWorldOptions& options);
 const Renderer& WorldRenderer(const SimWorld& world);

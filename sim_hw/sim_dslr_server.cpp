@@ -648,9 +648,21 @@ int RemoveStaleSimDslrFolders(const std::string& parent) {
   return removed;
 }
 
+Status SimDslrOptions::Check() const {
+  if (serial.empty()) return InvalidArgument("serial (the camera's serial number) is required");
+  if (scene_camera < 0) {
+    return InvalidArgument("scene_camera must be 0 or more, got " + std::to_string(scene_camera));
+  }
+  if (reply_timeout_ms < 1) {
+    return InvalidArgument("reply_timeout_ms must be at least 1, got " +
+                           std::to_string(reply_timeout_ms));
+  }
+  return Status::Ok();
+}
+
 Result<std::unique_ptr<SimDslrServer>> SimDslrServer::Start(std::shared_ptr<SimWorld> world,
                                                             SimDslrOptions options) {
-  if (options.serial.empty()) return InvalidArgument("simulated DSLR: a serial number is required");
+  HR_RETURN_IF_ERROR(options.Check().WithContext("simulated DSLR"));
   const Scene& scene = WorldRenderer(*world).scene();
   if (options.scene_camera < 0 || options.scene_camera >= static_cast<int>(scene.cameras.size())) {
     return InvalidArgument("simulated DSLR " + options.serial + ": the scene has no camera " +

@@ -40,6 +40,10 @@ struct SimDslrOptions {
   std::string folder;  // the port folder; "" makes a fresh one under $TMPDIR (removed on Stop;
                        // stale ones of killed processes are removed first)
   int reply_timeout_ms = 30000;  // the camlib's limit on waiting for any reply (told in HELLO)
+
+  // InvalidArgument naming the field: an empty serial, a negative
+  // scene_camera, a reply_timeout_ms below 1.
+  Status Check() const;
 };
 
 // The folder holding the simulated DSLR's camlib beside links to the system
@@ -67,8 +71,9 @@ class SimDslrServer {
     kClaimed,     // the next `count` connections are refused as claimed by another process
   };
 
-  // Binds the socket and starts serving. InvalidArgument for a bad scene
-  // camera or empty serial; IoError when the folder or socket cannot be made.
+  // Binds the socket and starts serving. InvalidArgument for bad options
+  // (SimDslrOptions::Check) or a scene camera the scene lacks; IoError when
+  // the folder or socket cannot be made.
   static Result<std::unique_ptr<SimDslrServer>> Start(std::shared_ptr<SimWorld> world,
                                                       SimDslrOptions options);
   ~SimDslrServer();

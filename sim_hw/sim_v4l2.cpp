@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -412,6 +413,15 @@ class SimV4l2Device::Impl {
   int delivered_ = 0;
   int dropped_ = 0;
 };
+
+Status SimV4l2Options::Check() const {
+  if (scene_camera < 0) {
+    return InvalidArgument("scene_camera must be 0 or more, got " + std::to_string(scene_camera));
+  }
+  if (node.empty()) return InvalidArgument("node (the device path) is required");
+  if (!(fps > 0) || !std::isfinite(fps)) return InvalidArgument("fps must be finite and positive");
+  return Status::Ok();
+}
 
 SimV4l2Device::SimV4l2Device(std::shared_ptr<SimWorld> world, SimV4l2Options options)
     : impl_(std::make_unique<Impl>(std::move(world), std::move(options))) {}

@@ -22,6 +22,7 @@
 #include <memory>
 #include <string>
 
+#include "core/status.h"
 #include "drivers/v4l2_io.h"
 
 namespace hairrig {
@@ -33,6 +34,10 @@ struct SimV4l2Options {
   int scene_camera = 0;  // the scene camera whose view it shows
   std::string node = "/dev/video0";
   double fps = 30;  // frames per device second
+
+  // InvalidArgument naming the field: a negative scene_camera, an empty
+  // node, an fps that is not finite and positive.
+  Status Check() const;
 };
 
 class SimV4l2Device : public V4l2Io {

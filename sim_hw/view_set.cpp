@@ -24,8 +24,19 @@ std::string ViewFileName(int view, const std::string& serial) {
   return std::string(buf) + "_" + serial + ".png";
 }
 
+Status RenderViewsOptions::Check() const {
+  if (threads < 1)
+    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
+  for (size_t i = 0; i < light_levels.size(); ++i) {
+    if (!(light_levels[i] >= 0 && light_levels[i] <= 1))
+      return InvalidArgument("light_levels[" + std::to_string(i) + "] must lie in 0..1");
+  }
+  return Status::Ok();
+}
+
 Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::string& out_dir,
                                           const RenderViewsOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("render views"));
   const auto t0 = std::chrono::steady_clock::now();
   const Scene& scene = renderer.scene();
   const int n = NumViews(scene);
@@ -101,11 +112,7 @@ Status RenderSceneViewsOptions::Check() const {
   if (scene_file.empty()) return InvalidArgument("sim render: scene_file is required");
   if (out_dir.empty())
     return InvalidArgument("sim render: out_dir (--out, the output folder) is required");
-  if (render.threads < 1) {
-    return InvalidArgument("sim render: render.threads must be at least 1, got " +
-                           std::to_string(render.threads));
-  }
-  return Status::Ok();
+  return render.Check().WithContext("sim render: render");
 }
 
 nlohmann::json RenderSceneViewsSummary::ToJson() const {
@@ -141,6 +148,10 @@ Result<RenderSceneViewsSummary> RenderSceneViews(const RenderSceneViewsOptions& 
 
 Status RenderViewFileOptions::Check() const {
   if (scene_file.empty()) return InvalidArgument("sim render: scene_file is required");
+  if (view < 0) return InvalidArgument("--view " + std::to_string(view) + " must be 0 or more");
+  if (crop_px && (crop_px->width <= 0 || crop_px->height <= 0))
+    return InvalidArgument("--crop " + CropText(*crop_px) +
+                           " must have a positive width and height");
   const std::string ext = FileExtension(out_file);
   if (ext != "png" && ext != "tif" && ext != "tiff" && ext != "jpg") {
     return InvalidArgument("--out " + out_file +

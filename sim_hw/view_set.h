@@ -19,6 +19,9 @@ struct RenderViewsOptions {
   int threads = 2;
   bool noise = true;
   std::vector<double> light_levels;  // empty: all panels on
+
+  // InvalidArgument naming the field: threads below 1, a light level outside 0..1.
+  Status Check() const;
 };
 
 struct RenderViewsSummary {
@@ -33,7 +36,8 @@ struct RenderViewsSummary {
 // camera, three digits), contact_sheet.png, ground_truth.json, head_mesh.ply
 // (a mesh head's mesh), ground_truth_strands.ply (turntable frame) and the per-pixel maps of every
 // view in <out>/views/ (sim_hw/ground_truth.h), and last checksums.json, the SHA-256 of
-// every file under <out> (core/truth_maps.h). `out` must exist.
+// every file under <out> (core/truth_maps.h). `out` must exist. InvalidArgument
+// for bad options (RenderViewsOptions::Check).
 Result<RenderViewsSummary> RenderAllViews(const Renderer& renderer, const std::string& out_dir,
                                           const RenderViewsOptions& options);
 
@@ -42,7 +46,7 @@ struct RenderSceneViewsOptions {
   std::string out_dir;     // created
   RenderViewsOptions render;
 
-  // InvalidArgument naming the field: no scene or folder, render.threads < 1.
+  // InvalidArgument naming the field: no scene or folder, bad render options.
   Status Check() const;
 };
 
@@ -68,7 +72,8 @@ struct RenderViewFileOptions {
   bool noise = true;                // sensor noise, seeded by the scene's seed and the view
   std::optional<cv::Rect> crop_px;  // only these pixels, at full resolution; inside the view
 
-  // InvalidArgument naming the field: no scene, an output that is not an image file name.
+  // InvalidArgument naming the field: no scene, a negative view, an output
+  // that is not an image file name, an empty crop.
   Status Check() const;
 };
 

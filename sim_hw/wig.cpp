@@ -361,6 +361,7 @@ Result<StrandSet> FileGuidedWig(const WigOptions& o, const HeadModel& head) {
 }  // namespace
 
 Result<StrandSet> GenerateWig(const WigOptions& o, const HeadModel& head) {
+  HR_RETURN_IF_ERROR(o.Check());
   if (o.style == WigStyle::kFile) return FileGuidedWig(o, head);
   if (!head.head().scalp.defined && o.wisps == 0) return IndependentStrands(o, head);
   if (!head.head().scalp.defined) {
