@@ -936,9 +936,14 @@ std::shared_ptr<CaptureStorage> CaptureStorageFor(const CaptureOptions& options,
   return DefaultCaptureStorage();
 }
 
-Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
-  if (options.out_dir.empty())
+Status CaptureOptions::Check() const {
+  if (out_dir.empty())
     return InvalidArgument("--out is required: the folder the capture is written to");
+  return rig_build.Check().WithContext("rig_build");
+}
+
+Result<CaptureSummary> RunCapture(const CaptureOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
   std::string config_text;
   HR_ASSIGN_OR_RETURN(const RigConfig config, LoadSessionConfig(options, &config_text));
   std::unique_ptr<Rig> built;

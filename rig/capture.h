@@ -91,6 +91,9 @@ struct CaptureOptions {
   // closed): the capture opens, uses and closes its devices instead of
   // building its own. Null: RunCapture builds the rig (rig_build).
   Rig* rig = nullptr;
+
+  // InvalidArgument naming the field: no out_dir (--out), bad rig_build.
+  Status Check() const;
 };
 
 struct CaptureSummary {

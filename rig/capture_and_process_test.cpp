@@ -2,10 +2,19 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
 
+#include "rig/capture.h"
+#include "rig/capture_calibration_input.h"
+#include "rig/capture_dataset.h"
+#include "rig/device_check.h"
+#include "rig/reconstruct_capture.h"
+#include "rig/replay.h"
+#include "rig/rig_config.h"
 #include "sim_hw/quota_storage.h"
 #include "sim_rig/sim_rig.h"
 #include "tests/support/capture_test_util.h"
@@ -119,6 +128,96 @@ TEST(CaptureAndProcess, OptionsThatNeedCalibrateAreNamed) {
   EXPECT_EQ(options.Check().message(), "--reconstruct needs --calibrate");
   options.calibrate = true;
   EXPECT_TRUE(options.Check().ok());
+}
+
+// The rig's options refuse a bad value with InvalidArgument naming the field;
+// a nested struct's field is named after the field holding it.
+TEST(RigOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(CalibrateFolderOptions{}.Check().ok());
+  EXPECT_TRUE(DatasetOptions{}.Check().ok());
+  EXPECT_TRUE(ReplayOptions{}.Check().ok());
+  EXPECT_TRUE(DeviceCheckOptions{}.Check().ok());
+  EXPECT_TRUE(RigBuildOptions{}.Check().ok());
+  {
+    CalibrateFolderOptions o;
+    o.calibration.threads = 0;
+    expect_named(o.Check(), "calibration: threads");
+    o = CalibrateFolderOptions{};
+    o.calibration.detector.max_hamming = 7;
+    expect_named(o.Check(), "calibration: detector: max_hamming");
+    o = CalibrateFolderOptions{};
+    o.prior_files = {"a.json", ""};
+    expect_named(o.Check(), "prior_files[1]");
+  }
+  {
+    CaptureOptions o;
+    expect_named(o.Check(), "--out");
+    o.out_dir = "capture";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+  }
+  {
+    DatasetOptions o;
+    o.png_compression = 10;
+    expect_named(o.Check(), "png_compression");
+  }
+  {
+    ReplayOptions o;
+    o.speed = std::nan("");
+    expect_named(o.Check(), "speed");
+    o.speed = -1;
+    expect_named(o.Check(), "speed");
+  }
+  {
+    ReconstructCaptureOptions o;
+    o.dir = "capture";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.points.fusion.max_cost = 2;
+    expect_named(o.Check(), "points: fusion: fusion max_cost");
+    o.stage = ReconstructStage::kStrands;
+    EXPECT_TRUE(o.Check().ok()) << "the points' options are not used by the strands stage";
+    o.strands.threads = 0;
+    expect_named(o.Check(), "strands: threads");
+  }
+}
+
+// The entry points taking the options refuse bad ones before any work.
+TEST(RigOptions, EntryPointsCheckTheirOptions) {
+  const std::string dir = FreshDir("rig_options");
+  const std::string dataset_dir = dir + "/dataset";
+  DatasetOptions dataset;
+  dataset.png_compression = -1;
+  const auto created = CaptureDataset::Create(dataset_dir, "", {}, dataset);
+  ASSERT_FALSE(created.ok());
+  EXPECT_NE(created.status().message().find("png_compression"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dataset_dir)) << "nothing is made for bad options";
+
+  const auto source = OpenReplaySource(dir, {.speed = -2});
+  ASSERT_FALSE(source.ok());
+  EXPECT_NE(source.status().message().find("speed"), std::string::npos);
+
+  const auto captured = RunCapture(CaptureOptions{});
+  ASSERT_FALSE(captured.ok());
+  EXPECT_NE(captured.status().message().find("--out"), std::string::npos);
+
+  CalibrateFolderOptions calibrate;
+  calibrate.calibration.huber_px = 0;
+  const auto calibrated = CalibrateCaptureFolder(dir + "/no_capture", calibrate);
+  ASSERT_FALSE(calibrated.ok());
+  EXPECT_EQ(calibrated.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(calibrated.status().message().find("calibration: huber_px"), std::string::npos)
+      << calibrated.status().ToString();
+
+  ReconstructCaptureOptions reconstruct;
+  reconstruct.dir = dir + "/no_capture";
+  reconstruct.points.segmentation.work_scale = 0;
+  const auto reconstructed = ReconstructCapture(reconstruct);
+  ASSERT_FALSE(reconstructed.ok());
+  EXPECT_NE(reconstructed.status().message().find("points: segmentation"), std::string::npos)
+      << reconstructed.status().ToString();
 }
 
 }  // namespace

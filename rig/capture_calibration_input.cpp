@@ -245,8 +245,18 @@ std::string CalibratedFolder::BriefReport() const {
   return text;
 }
 
+Status CalibrateFolderOptions::Check() const {
+  HR_RETURN_IF_ERROR(calibration.Check().WithContext("calibration"));
+  for (size_t i = 0; i < prior_files.size(); ++i) {
+    if (prior_files[i].empty())
+      return InvalidArgument("prior_files[" + std::to_string(i) + "] is empty: name a file");
+  }
+  return Status::Ok();
+}
+
 Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
                                                 const CalibrateFolderOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
   CalibratedFolder done;
   HR_ASSIGN_OR_RETURN(done.input, LoadCaptureCalibrationInput(capture_dir));
   CaptureCalibrationOptions calibration = options.calibration;

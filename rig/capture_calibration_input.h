@@ -69,6 +69,10 @@ struct CalibrateFolderOptions {
   // Tags already detected (TagDetectionSink::WaitForAll), by DetectionKey of the frame path.
   const std::map<std::string, ViewObservations>* detected = nullptr;
   std::function<void()> on_written;  // called once calibration.json and the exports are written
+
+  // InvalidArgument naming the field: calibration.* (CaptureCalibrationOptions::Check),
+  // an empty prior_files entry.
+  Status Check() const;
 };
 
 struct CalibratedFolder {
@@ -86,7 +90,8 @@ struct CalibratedFolder {
 };
 
 // `hairrig calibrate`: loads the capture, solves it and writes
-// <capture>/calibration/ with its report.
+// <capture>/calibration/ with its report. InvalidArgument for bad options
+// (CalibrateFolderOptions::Check).
 Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
                                                 const CalibrateFolderOptions& options);
 

@@ -248,9 +248,18 @@ Status CaptureDataset::OpenJournal() {
   return Status::Ok();
 }
 
+Status DatasetOptions::Check() const {
+  if (png_compression < 0 || png_compression > 9) {
+    return InvalidArgument("storage.png_compression must lie in 0..9, got " +
+                           std::to_string(png_compression));
+  }
+  return Status::Ok();
+}
+
 Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(
     const std::string& dir, const std::string& config_text, CaptureMetadata metadata,
     const DatasetOptions& options, std::shared_ptr<CaptureStorage> storage) {
+  HR_RETURN_IF_ERROR(options.Check());
   std::error_code ec;
   if (Exists(dir)) {
     return FailedPrecondition(
@@ -297,6 +306,7 @@ Result<std::unique_ptr<CaptureDataset>> CaptureDataset::Create(
 Result<std::unique_ptr<CaptureDataset>> CaptureDataset::OpenForResume(
     const std::string& dir, const DatasetOptions& options, ResumeReport* report,
     std::shared_ptr<CaptureStorage> storage) {
+  HR_RETURN_IF_ERROR(options.Check());
   auto dataset = std::unique_ptr<CaptureDataset>(new CaptureDataset(
       fs::absolute(dir).lexically_normal().string(), options, std::move(storage)));
   HR_ASSIGN_OR_RETURN(dataset->metadata_, ReadResumableCapture(dataset->dir_));

@@ -50,6 +50,9 @@ struct DatasetOptions {
   // storage.min_free_mb): StoreFrame refuses a frame that would leave less,
   // WriteFile any other file.
   uint64_t min_free_bytes = 0;
+
+  // InvalidArgument naming png_compression outside 0..9 (every min_free_bytes is valid).
+  Status Check() const;
 };
 
 // What the sequencer knows about a frame beyond the frame itself.
@@ -85,6 +88,7 @@ class CaptureDataset {
   // On failure (IoError: a full disk) the files it made and `dir` are removed,
   // so that `dir` can be given again; except when another process took the
   // new folder over (its journal locked: FailedPrecondition), which keeps it.
+  // InvalidArgument for bad options (DatasetOptions::Check), before anything is made.
   static Result<std::unique_ptr<CaptureDataset>> Create(
       const std::string& dir, const std::string& config_text, CaptureMetadata metadata,
       const DatasetOptions& options, std::shared_ptr<CaptureStorage> storage = nullptr);
@@ -96,7 +100,7 @@ class CaptureDataset {
   // process writing the capture; CorruptData naming file, line and field for
   // a damaged capture.json or journal record. A missing frames/ is made anew.
   // The repair's journal records are written through `storage` (null: the
-  // file system).
+  // file system). InvalidArgument for bad options (DatasetOptions::Check).
   static Result<std::unique_ptr<CaptureDataset>> OpenForResume(
       const std::string& dir, const DatasetOptions& options, ResumeReport* report,
       std::shared_ptr<CaptureStorage> storage = nullptr);

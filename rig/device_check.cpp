@@ -56,6 +56,7 @@ std::string DeviceCheckSummary::BriefReport() const {
 }
 
 Result<DeviceCheckSummary> CheckDevices(const DeviceCheckOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
   std::string path = options.config_path;
   if (path.empty()) {
     HR_ASSIGN_OR_RETURN(path, DefaultRigConfigPath());

@@ -12,6 +12,9 @@ namespace hairrig {
 
 struct DeviceCheckOptions {
   std::string config_path;  // the rig config; empty: the simulated rig (DefaultRigConfigPath)
+
+  // Every value is valid (an empty config_path is the simulated rig's).
+  Status Check() const { return Status::Ok(); }
 };
 
 struct DeviceCheck {

@@ -82,7 +82,9 @@ Status ReconstructCaptureOptions::Check() const {
   }
   if (!colmap_dir.empty() && stage != ReconstructStage::kPoints)
     HR_RETURN_IF_ERROR(CheckColmapHead(head_file));
-  if (stage != ReconstructStage::kPoints) HR_RETURN_IF_ERROR(strands.Check());
+  if (stage != ReconstructStage::kStrands) HR_RETURN_IF_ERROR(points.Check().WithContext("points"));
+  if (stage != ReconstructStage::kPoints)
+    HR_RETURN_IF_ERROR(strands.Check().WithContext("strands"));
   return Status::Ok();
 }
 

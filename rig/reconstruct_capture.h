@@ -40,7 +40,9 @@ struct ReconstructCaptureOptions {
   StrandReconstructionOptions strands;
   ReconstructionProgress progress;  // optional
 
-  Status Check() const;  // InvalidArgument naming the option
+  // InvalidArgument naming the option (points.* and strands.* for the nested
+  // ones, checked where the stage runs them).
+  Status Check() const;
 };
 
 struct ReconstructCaptureSummary {

@@ -154,11 +154,15 @@ double DownloadSeconds(const FrameRecord& r) {
 
 }  // namespace
 
+Status ReplayOptions::Check() const {
+  if (!(speed >= 0) || !std::isfinite(speed))
+    return InvalidArgument("replay speed must be 0 (as fast as possible) or a positive factor");
+  return Status::Ok();
+}
+
 Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir,
                                                        const ReplayOptions& options) {
-  if (!(options.speed >= 0) || !std::isfinite(options.speed)) {
-    return InvalidArgument("replay speed must be 0 (as fast as possible) or a positive factor");
-  }
+  HR_RETURN_IF_ERROR(options.Check());
   // Read-only: the recorded folder is never modified (OpenForResume would repair it).
   const std::string journal_path = capture_dir + "/journal.jsonl";
   HR_ASSIGN_OR_RETURN(const std::vector<nlohmann::json> records, ReadJournalRecords(journal_path));

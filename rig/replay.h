@@ -23,12 +23,16 @@ class ReplaySource;
 
 struct ReplayOptions {
   double speed = 0;  // 0: as fast as possible; 1: recorded timing; 2: twice as fast
+
+  // InvalidArgument naming speed unless it is 0 or a finite positive factor.
+  Status Check() const;
 };
 
 // Reads the capture's journal and serves its verified frames only
 // (rig/capture_dataset.h VerifiedFrames: inside the folder, size and SHA-256
 // as recorded; checked again when a frame is served). NotFound / CorruptData
-// name the folder, file, journal line and field.
+// name the folder, file, journal line and field; InvalidArgument for bad options
+// (ReplayOptions::Check).
 Result<std::shared_ptr<ReplaySource>> OpenReplaySource(const std::string& capture_dir,
                                                        const ReplayOptions& options);
 int ReplayFrameCount(const ReplaySource& source);

@@ -88,6 +88,7 @@ void RegisterRealBackends(DeviceRegistry* registry, const RigBackendHooks& hooks
 }  // namespace
 
 Result<std::unique_ptr<Rig>> BuildRig(const RigConfig& config, const RigBuildOptions& build) {
+  HR_RETURN_IF_ERROR(build.Check());
   auto rig = std::make_unique<Rig>();
   rig->config = config;
   DeviceRegistry registry;

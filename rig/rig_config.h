@@ -84,6 +84,10 @@ struct RigBuildOptions {
   // Called with the built rig (devices closed, extensions' peers serving), for
   // observers such as a test that reaches a simulated peer.
   std::function<void(const Rig&)> on_built;
+
+  // Every value is valid: an unknown backend_override is refused by the
+  // device registry, naming the device.
+  Status Check() const { return Status::Ok(); }
 };
 
 // Builds every device (closed) with the real backends (modbus, gphoto2,
