@@ -37,11 +37,12 @@ class ConsoleFrameSink : public FrameSink {
 Status ConsoleRigOptions::Check() const {
   if (captures_dir.empty())
     return InvalidArgument("captures_dir (--captures, the folder of captures) is required");
-  if (!(live.fps > 0 && live.fps <= 30))
-    return InvalidArgument("live.fps must be in (0, 30] frames per second");
-  if (live.max_width_px < 64 || live.max_width_px > 4096)
-    return InvalidArgument("live.max_width_px must be in [64, 4096]");
+  HR_RETURN_IF_ERROR(live.Check().WithContext("live"));
   if (threads < 1) return InvalidArgument("threads must be at least 1");
+  if (thumbnail_width_px < 16 || thumbnail_width_px > 4096) {
+    return InvalidArgument("thumbnail_width_px must be in [16, 4096], got " +
+                           std::to_string(thumbnail_width_px));
+  }
   return Status::Ok();
 }
 

@@ -36,11 +36,11 @@ struct ConsoleRigOptions {
   std::string config_path;   // the rig config; empty: the simulated rig (DefaultRigConfigPath)
   std::string captures_dir;  // where captures are written and listed (created)
   LiveViewOptions live;
-  int threads = 2;  // tag detection, calibration and reconstruction after a capture
-  int thumbnail_width_px = 240;
+  int threads = 2;               // tag detection, calibration and reconstruction after a capture
+  int thumbnail_width_px = 240;  // 16..4096
 
-  // InvalidArgument naming the field: no captures_dir, live.fps outside
-  // (0, 30], live.max_width_px outside [64, 4096], threads below 1.
+  // InvalidArgument naming the field: no captures_dir, live.* (LiveViewOptions::Check),
+  // threads below 1, thumbnail_width_px outside [16, 4096].
   Status Check() const;
 };
 

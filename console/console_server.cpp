@@ -136,7 +136,7 @@ bool IsLoopbackHost(const std::string& host) {
 }
 
 Status ConsoleOptions::Check() const {
-  HR_RETURN_IF_ERROR(rig.Check());
+  HR_RETURN_IF_ERROR(rig.Check().WithContext("rig"));
   std::string host;
   int port = 0;
   HR_RETURN_IF_ERROR(SplitListen(listen, &host, &port));
@@ -145,6 +145,7 @@ Status ConsoleOptions::Check() const {
                            " is beyond loopback: a token is required (--token, or the "
                            "HAIRRIG_CONSOLE_TOKEN environment variable)");
   if (!token.empty() && token.size() < 16) return InvalidArgument("token: at least 16 characters");
+  if (lease_ttl.count() <= 0) return InvalidArgument("lease_ttl must be positive");
   if (max_event_streams < 1) return InvalidArgument("max_event_streams must be at least 1");
   return http.Check();
 }

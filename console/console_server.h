@@ -39,8 +39,9 @@ struct ConsoleOptions {
   HttpServerOptions http;
 
   // InvalidArgument naming the field: a malformed listen address, a
-  // non-loopback host without a token (or a short one), the rig's or the
-  // HTTP server's options.
+  // non-loopback host without a token (or a short one), a lease_ttl that is
+  // not positive, max_event_streams below 1, the rig's (rig.*) or the HTTP
+  // server's (http: ...) options.
   Status Check() const;
 };
 

@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <string>
 #include <thread>
 
 #include "console/estop_client.h"
@@ -693,6 +695,51 @@ TEST_F(ConsoleServerTest, TheEStopIsActedOnWhileThousandsOfConnectionsAreHeld) {
   // The slow-header clients are dropped (5 s after their first byte).
   for (int i = 0; i < 300 && pressure.reopened() == 0; ++i) std::this_thread::sleep_for(100ms);
   EXPECT_GT(pressure.reopened(), 0) << "the server dropped the slow-header connections";
+}
+
+// The console's options refuse a bad value with InvalidArgument naming the
+// field; a nested struct's field is named after the field holding it.
+TEST(ConsoleOptionsCheck, NamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(LiveViewOptions{}.Check().ok());
+  {
+    LiveViewOptions o;
+    o.fps = 0;
+    expect_named(o.Check(), "fps");
+    o = LiveViewOptions{};
+    o.max_width_px = 32;
+    expect_named(o.Check(), "max_width_px");
+    o = LiveViewOptions{};
+    o.frame_timeout_s = std::numeric_limits<double>::infinity();
+    expect_named(o.Check(), "frame_timeout_s");
+  }
+  {
+    ConsoleRigOptions o;
+    expect_named(o.Check(), "captures_dir");
+    o.captures_dir = "captures";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.live.fps = 60;
+    expect_named(o.Check(), "live: fps");
+    o.live.fps = 5;
+    o.thumbnail_width_px = 8;
+    expect_named(o.Check(), "thumbnail_width_px");
+  }
+  {
+    ConsoleOptions o;
+    o.rig.captures_dir = "captures";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.rig.live.max_width_px = 10000;
+    expect_named(o.Check(), "rig: live: max_width_px");
+    o.rig.live.max_width_px = 480;
+    o.lease_ttl = std::chrono::milliseconds(0);
+    expect_named(o.Check(), "lease_ttl");
+    o.lease_ttl = std::chrono::milliseconds(15000);
+    o.http.normal_workers = 0;
+    expect_named(o.Check(), "http: normal_workers");
+  }
 }
 
 }  // namespace

@@ -1,12 +1,25 @@
 #include "console/live_view.h"
 
 #include <chrono>
+#include <cmath>
+#include <string>
 
 #include "core/clock.h"
 #include "core/log.h"
 #include "drivers/frame_image.h"
 
 namespace hairrig {
+
+Status LiveViewOptions::Check() const {
+  if (!(fps > 0 && fps <= 30)) return InvalidArgument("fps must be in (0, 30] frames per second");
+  if (max_width_px < 64 || max_width_px > 4096) {
+    return InvalidArgument("max_width_px must be in [64, 4096], got " +
+                           std::to_string(max_width_px));
+  }
+  if (!(frame_timeout_s > 0) || !std::isfinite(frame_timeout_s))
+    return InvalidArgument("frame_timeout_s must be a finite positive number of seconds");
+  return Status::Ok();
+}
 
 void LiveView::Start(const std::vector<Camera*>& cameras, const CaptureSettings& settings) {
   Stop();

@@ -28,6 +28,10 @@ struct LiveViewOptions {
   // A frame not received this long after its trigger (wall seconds, beyond
   // the exposure) counts as lost; the camera is triggered again.
   double frame_timeout_s = 5;
+
+  // InvalidArgument naming the field: fps outside (0, 30], max_width_px
+  // outside [64, 4096], a frame_timeout_s that is not finite and positive.
+  Status Check() const;
 };
 
 struct LivePreview {
