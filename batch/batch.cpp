@@ -357,7 +357,17 @@ nlohmann::json SubmitSummary::ToJson() const {
           {"report", report.ToJson()}};
 }
 
+Status SubmitOptions::Check() const {
+  if (batch_dir.empty()) return InvalidArgument("batch_dir (the batch folder) is required");
+  if (max_parallel && *max_parallel < 0)
+    return InvalidArgument("--max-parallel must be 0 (no limit) or more");
+  if (hairrig_exe.empty())
+    return InvalidArgument("the hairrig binary's path is needed for the jobs");
+  return Status::Ok();
+}
+
 Result<SubmitSummary> SubmitBatch(const SubmitOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
   const std::string batch_dir = AbsoluteFolder(options.batch_dir);
   std::error_code ec;
   fs::create_directories(batch_dir, ec);
@@ -370,6 +380,7 @@ Result<SubmitSummary> SubmitBatch(const SubmitOptions& options) {
 }
 
 Result<SubmitSummary> ResubmitFailed(const SubmitOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
   const std::string batch_dir = AbsoluteFolder(options.batch_dir);
   HR_RETURN_IF_ERROR(ReadBatchState(batch_dir).status());  // names a folder without a batch
   HR_ASSIGN_OR_RETURN(const BatchLock lock, BatchLock::Acquire(batch_dir));

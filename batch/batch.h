@@ -41,6 +41,10 @@ struct SubmitOptions {
   // entry over the latest submission's; empty: the latest submission's.
   std::vector<std::string> time_limit, mem;
   std::string hairrig_exe;  // the absolute path of the hairrig binary the jobs run
+
+  // InvalidArgument naming the field: no batch_dir, a negative max_parallel,
+  // no hairrig_exe.
+  Status Check() const;
 };
 
 struct StageCell {

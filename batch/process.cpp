@@ -128,6 +128,7 @@ std::string ProcessResult::Describe() const {
 
 Result<ProcessResult> RunProcess(const std::vector<std::string>& argv,
                                  const ProcessOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
   if (argv.empty() || argv[0].empty()) return InvalidArgument("RunProcess: no program given");
   FileActions actions;
   ::posix_spawn_file_actions_addopen(actions.get(), STDIN_FILENO, "/dev/null", O_RDONLY, 0);

@@ -24,6 +24,9 @@ struct ProcessOptions {
   std::string working_dir;
   // Captured bytes kept per stream; the rest is read and dropped.
   size_t max_capture_bytes = size_t{4} << 20;
+
+  // Every value is valid (empty strings are the defaults above; 0 keeps no byte).
+  Status Check() const { return Status::Ok(); }
 };
 
 struct ProcessResult {

@@ -340,7 +340,18 @@ Result<InputFiles> StageInputFiles(Stage stage, const std::string& capture_dir,
   return files;
 }
 
+Status StageOptions::Check() const {
+  if (capture_dir.empty()) return InvalidArgument("capture_dir (--capture) is required");
+  const int threads = settings.Threads(stage);
+  if (threads < 1 || threads > 1024) {
+    return InvalidArgument(std::string(StageName(stage)) + ".threads must lie in 1..1024, got " +
+                           std::to_string(threads));
+  }
+  return Status::Ok();
+}
+
 Result<StageResult> RunStage(const StageOptions& o) {
+  HR_RETURN_IF_ERROR(o.Check());
   const auto start = std::chrono::steady_clock::now();
   std::error_code ec;
   if (!fs::is_directory(o.capture_dir, ec))

@@ -51,6 +51,10 @@ struct StageOptions {
   bool force = false;  // run even when the inputs are unchanged
   std::string
       hairrig_exe;  // the hairrig binary; the simulate stage runs it (batch/simulate_stage.h)
+
+  // InvalidArgument naming the field: no capture_dir, the stage's threads
+  // outside 1..1024 (named as in the stage options file: "fit.threads").
+  Status Check() const;
 };
 
 struct StageResult {

@@ -11,7 +11,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
 
+#include "batch/batch.h"
+#include "batch/process.h"
 #include "batch/stage_record.h"
 #include "core/strand_io.h"
 
@@ -257,6 +260,55 @@ TEST(StageNames, ListsComeBackInPipelineOrder) {
   EXPECT_EQ(ParseStageList({})->size(), 4u);
   EXPECT_FALSE(ParseStageList({"fit,sing"}).ok());
   EXPECT_STREQ(StageFolder(Stage::kReconstruct), "reconstruction");
+}
+
+// The batch's options refuse a bad value with InvalidArgument naming the
+// field, before any folder is made or any stage record written.
+TEST(BatchOptions, CheckNamesTheBadField) {
+  const auto expect_named = [](const Status& s, const std::string& field) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field << ": " << s.ToString();
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.ToString();
+  };
+  EXPECT_TRUE(ProcessOptions{}.Check().ok());
+  {
+    SubmitOptions o;
+    expect_named(o.Check(), "batch_dir");
+    o.batch_dir = "batch";
+    o.hairrig_exe = "/usr/bin/hairrig";
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.max_parallel = -1;
+    expect_named(o.Check(), "--max-parallel");
+    o.max_parallel.reset();
+    o.hairrig_exe.clear();
+    expect_named(o.Check(), "hairrig binary");
+  }
+  {
+    StageOptions o;
+    expect_named(o.Check(), "capture_dir");
+    o = FitOptionsFor("capture");
+    EXPECT_TRUE(o.Check().ok()) << o.Check().ToString();
+    o.settings.fit.threads = 0;
+    expect_named(o.Check(), "fit.threads");
+  }
+
+  const std::string dir = ::testing::TempDir() + "/stage_test/options_batch";
+  fs::remove_all(dir);
+  SubmitOptions submit;
+  submit.batch_dir = dir + "/batch";
+  submit.max_parallel = -3;
+  submit.hairrig_exe = "/usr/bin/hairrig";
+  const Result<SubmitSummary> submitted = SubmitBatch(submit);
+  ASSERT_FALSE(submitted.ok());
+  EXPECT_NE(submitted.status().message().find("--max-parallel"), std::string::npos);
+  EXPECT_FALSE(fs::exists(submit.batch_dir)) << "no batch folder is made for bad options";
+
+  const std::string capture = StrandsCapture("options");
+  StageOptions stage = FitOptionsFor(capture);
+  stage.settings.fit.threads = 2000;
+  const Result<StageResult> r = RunStage(stage);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("fit.threads"), std::string::npos);
+  EXPECT_FALSE(ReadStageRecord(capture, Stage::kFit).ok()) << "no result.json for bad options";
 }
 
 }  // namespace
