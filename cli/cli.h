@@ -10,6 +10,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/log.h"
 #include "core/status.h"
 
 namespace CLI {
@@ -22,6 +23,15 @@ namespace hairrig {
 struct CommonOptions {
   bool json = false;  // print the summary as one JSON object on stdout
   std::string log_level = "info";
+
+  // InvalidArgument naming --log-level when it is not one of debug, info,
+  // warning, error, off.
+  Status Check() const {
+    LogLevel level;
+    if (ParseLogLevel(log_level, &level)) return Status::Ok();
+    return InvalidArgument("--log-level '" + log_level +
+                           "' is not one of debug, info, warning, error, off");
+  }
 };
 
 // A subcommand's work: returns its summary as JSON, or a Status for the error.

@@ -44,14 +44,12 @@ int Run(int argc, char** argv) {
     std::fprintf(stderr, "hairrig: error: %s\n", e.what());
     return 1;
   }
-  LogLevel level;
-  if (!ParseLogLevel(common.log_level, &level)) {
-    std::fprintf(
-        stderr, "hairrig: error: --log-level '%s' is not one of debug, info, warning, error, off\n",
-        common.log_level.c_str());
+  if (const Status valid = common.Check(); !valid.ok()) {
+    std::fprintf(stderr, "hairrig: error: %s\n", valid.message().c_str());
     return 2;
   }
-  SetLogLevel(level);
+  LogLevel level = LogLevel::kInfo;
+  if (ParseLogLevel(common.log_level, &level)) SetLogLevel(level);
   if (!dispatch.action) {
     std::cerr << app.help();
     return 2;

@@ -48,6 +48,15 @@ TEST(Cli, HelpListsTheCommands) {
   EXPECT_NE(r.output.find("replay"), std::string::npos);
 }
 
+// The options every command shares are checked before any command runs, and
+// the error names the option.
+TEST(Cli, ABadLogLevelIsNamed) {
+  const CommandRun r = Hairrig("--log-level loud devices");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--log-level 'loud'"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("healthy"), std::string::npos) << "no command ran";
+}
+
 TEST(Cli, DevicesOnTheDefaultRigAreHealthyAsJson) {
   const CommandRun r = Hairrig("devices --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
