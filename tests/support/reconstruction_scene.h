@@ -24,6 +24,14 @@ struct ReducedCaptureOptions {
   double scale = 0.5;
   int strands = 10000;
   int stops = 12;
+
+  // InvalidArgument naming the field: scale outside (0, 1], strands or stops below 1.
+  hairrig::Status Check() const {
+    if (!(scale > 0 && scale <= 1)) return hairrig::InvalidArgument("scale must lie in (0, 1]");
+    if (strands < 1) return hairrig::InvalidArgument("strands must be at least 1");
+    if (stops < 1) return hairrig::InvalidArgument("stops must be at least 1");
+    return hairrig::Status::Ok();
+  }
 };
 
 inline hairrig::Scene ReducedScene(const ReducedCaptureOptions& o) {
@@ -46,6 +54,9 @@ inline hairrig::Scene ReducedScene(const ReducedCaptureOptions& o) {
 inline hairrig::ReconstructionInput RenderReducedCapture(const std::string& dir,
                                                          const ReducedCaptureOptions& o) {
   namespace fs = std::filesystem;
+  const hairrig::Status valid = o.Check();
+  EXPECT_TRUE(valid.ok()) << valid.ToString();
+  if (!valid.ok()) return {};
   const std::string truth_dir = dir + "/ground_truth";
   fs::create_directories(truth_dir);
   const hairrig::Scene scene = ReducedScene(o);
