@@ -265,7 +265,7 @@ Status ValidateInput(const BundleAdjustmentInput& input) {
   std::vector<int> views_of(input.cameras.size(), 0);
   size_t corners = 0;
   for (size_t c = 0; c < input.cameras.size(); ++c) {
-    const Status s = input.cameras[c].Validate();
+    const Status s = input.cameras[c].Check();
     if (!s.ok()) return s.WithContext("bundle adjustment: camera " + std::to_string(c));
   }
   for (size_t v = 0; v < input.views.size(); ++v) {

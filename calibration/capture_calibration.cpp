@@ -42,7 +42,7 @@ Status ValidateInput(const CaptureCalibrationInput& input,
       return InvalidArgument("calibration: intrinsics are to be held fixed but camera " +
                              camera.name + " has no prior values");
     if (camera.nominal) {
-      const Status valid = camera.nominal->Validate();
+      const Status valid = camera.nominal->Check();
       if (!valid.ok())
         return InvalidArgument("calibration: camera " + camera.name + ": " + valid.message());
       HR_RETURN_IF_ERROR(CheckPriorImageSize(camera, options));

@@ -186,7 +186,7 @@ Result<ChArUcoCalibration> CalibrateIntrinsicsFromChArUco(
   out.intrinsics =
       IntrinsicsFromOpenCv(solve.camera_matrix, solve.distortion, size.width, size.height);
   HR_RETURN_IF_ERROR(
-      out.intrinsics.Validate().WithContext("calibrate-intrinsics: the solution is not usable"));
+      out.intrinsics.Check().WithContext("calibrate-intrinsics: the solution is not usable"));
   for (int p = 0; p < CameraIntrinsics::kNumParams && p < solve.stddev.rows; ++p)
     out.stddev[static_cast<size_t>(p)] = solve.stddev.at<double>(p);
   if (options.fix_k3) out.stddev[8] = 0;

@@ -259,7 +259,7 @@ Result<IntrinsicsFromViews> SolveIntrinsicsFromViews(
   HR_ASSIGN_OR_RETURN(out.rms_px, RefineOverPlanes(planes, params, &poses));
   out.intrinsics = CameraIntrinsics::FromParams(params, width_px, height_px);
   out.planes = static_cast<int>(planes.size());
-  const Status valid = out.intrinsics.Validate();
+  const Status valid = out.intrinsics.Check();
   if (!valid.ok())
     return FailedPrecondition("intrinsics from views: the solution is not usable: " +
                               valid.message());

@@ -72,7 +72,7 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
                                   const CameraIntrinsics& intrinsics,
                                   const ViewPoseOptions& options) {
   HR_RETURN_IF_ERROR(options.Check().WithContext("view pose"));
-  HR_RETURN_IF_ERROR(intrinsics.Validate());
+  HR_RETURN_IF_ERROR(intrinsics.Check());
   ViewPose pose;
   pose.rejected = observations.rejected;
   // Undistorted (normalised) corners, so that PnP sees a pinhole camera.

@@ -23,7 +23,7 @@ CameraIntrinsics CameraIntrinsics::FromParams(const double* p, int width_px, int
   return c;
 }
 
-Status CameraIntrinsics::Validate() const {
+Status CameraIntrinsics::Check() const {
   const auto params = ToParams();
   for (int i = 0; i < kNumParams; ++i) {
     if (!std::isfinite(params[i])) {

@@ -37,7 +37,7 @@ struct CameraIntrinsics {
 
   // Finite values, positive focal lengths and image size, principal point
   // inside the image. The message names the offending parameter.
-  Status Validate() const;
+  Status Check() const;
 };
 
 // Distorts normalised coordinates (x, y) = (X/Z, Y/Z). `params` as ToParams().

@@ -84,23 +84,23 @@ TEST(CameraModel, ProjectCheckedRefusesPointsBehind) {
   EXPECT_DOUBLE_EQ(uv.x(), 50.0);
 }
 
-TEST(CameraModel, ValidateNamesTheBadParameter) {
+TEST(CameraModel, CheckNamesTheBadParameter) {
   CameraIntrinsics c = SmallCamera();
-  EXPECT_TRUE(c.Validate().ok());
+  EXPECT_TRUE(c.Check().ok());
   c.k2 = std::nan("");
-  const Status s = c.Validate();
+  const Status s = c.Check();
   EXPECT_FALSE(s.ok());
   EXPECT_NE(s.message().find("k2"), std::string::npos) << s.message();
   c.k2 = 0;
   c.fx_px = -1;
-  EXPECT_FALSE(c.Validate().ok());
+  EXPECT_FALSE(c.Check().ok());
   c.fx_px = 1e308;  // finite, but no lens
-  const Status huge = c.Validate();
+  const Status huge = c.Check();
   EXPECT_FALSE(huge.ok());
   EXPECT_NE(huge.message().find("1000 x the image's long side"), std::string::npos)
       << huge.message();
   c.fx_px = 999.0 * std::max(c.width_px, c.height_px);
-  EXPECT_TRUE(c.Validate().ok());
+  EXPECT_TRUE(c.Check().ok());
 }
 
 }  // namespace

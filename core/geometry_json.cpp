@@ -75,7 +75,7 @@ Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::
   }
   const CameraIntrinsics camera = CameraIntrinsics::FromParams(
       params.data(), j["width_px"].get<int>(), j["height_px"].get<int>());
-  const Status valid = camera.Validate();
+  const Status valid = camera.Check();
   if (!valid.ok()) return InvalidArgument(where + ": " + valid.message());
   return camera;
 }

@@ -26,7 +26,7 @@ nlohmann::json PoseToJson(const Rigid3d& a_from_b);
 Result<Rigid3d> PoseFromJson(const nlohmann::json& j, const std::string& where);
 
 nlohmann::json IntrinsicsToJson(const CameraIntrinsics& camera);
-// InvalidArgument names `where` and the member; the result is Validate()d.
+// InvalidArgument names `where` and the member; the result passes CameraIntrinsics::Check().
 Result<CameraIntrinsics> IntrinsicsFromJson(const nlohmann::json& j, const std::string& where);
 
 nlohmann::json Vector3ToJson(const Eigen::Vector3d& v);

@@ -412,12 +412,12 @@ Result<StrandSet> DecodeStrands(const std::vector<uint8_t>& bytes, StrandFormat 
     return Internal("unknown strand format");
   }();
   if (!set.ok()) return set;
-  HR_RETURN_IF_ERROR(set->Validate().WithContext(name));
+  HR_RETURN_IF_ERROR(set->Check().WithContext(name));
   return set;
 }
 
 Result<std::vector<uint8_t>> EncodeStrands(const StrandSet& strands, StrandFormat format) {
-  HR_RETURN_IF_ERROR(strands.Validate().WithContext("cannot write strands"));
+  HR_RETURN_IF_ERROR(strands.Check().WithContext("cannot write strands"));
   switch (format) {
     case StrandFormat::kHair:
       return EncodeHair(strands);

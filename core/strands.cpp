@@ -42,7 +42,7 @@ Status CheckCoordinates(const Eigen::Vector3f& p, size_t strand, uint32_t vertex
 
 }  // namespace
 
-Status StrandSet::Validate() const {
+Status StrandSet::Check() const {
   size_t total = 0;
   for (size_t i = 0; i < point_counts.size(); ++i) {
     if (point_counts[i] == 0) return CorruptData("strand " + std::to_string(i) + " has no points");

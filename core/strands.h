@@ -33,7 +33,7 @@ struct StrandSet {
   // Counts consistent, every coordinate finite and within
   // +-kMaxStrandCoordinateMm, colours absent or one per point. CorruptData
   // names the strand and the vertex in it (0-based, in the set's order).
-  Status Validate() const;
+  Status Check() const;
   // Polyline length of every strand (mm).
   std::vector<double> StrandLengths() const;
 };

@@ -36,7 +36,7 @@ void TriangleMesh::Transform(const Rigid3d& to_from_mesh) {
   for (auto& v : vertices_mm) v = to_from_mesh * v;
 }
 
-Status TriangleMesh::Validate(const std::string& name) const {
+Status TriangleMesh::Check(const std::string& name) const {
   if (triangles.empty()) return CorruptData(name + ": the mesh has no triangles");
   for (size_t i = 0; i < vertices_mm.size(); ++i) {
     if (!vertices_mm[i].allFinite())
@@ -121,7 +121,7 @@ Result<TriangleMesh> DecodePlyMesh(const std::vector<uint8_t>& bytes, const std:
       }
     }
   }
-  HR_RETURN_IF_ERROR(mesh.Validate(name));
+  HR_RETURN_IF_ERROR(mesh.Check(name));
   return mesh;
 }
 
@@ -158,7 +158,7 @@ Result<TriangleMesh> DecodeObjMesh(const std::string& text, const std::string& n
       }
     }
   }
-  HR_RETURN_IF_ERROR(mesh.Validate(name));
+  HR_RETURN_IF_ERROR(mesh.Check(name));
   return mesh;
 }
 

@@ -37,7 +37,7 @@ struct TriangleMesh {
   // Every vertex mapped through `to_from_mesh`.
   void Transform(const Rigid3d& to_from_mesh);
   // Indices in range, coordinates finite, at least one triangle.
-  Status Validate(const std::string& name) const;
+  Status Check(const std::string& name) const;
 };
 
 // PLY or OBJ by the file's extension (.ply, .obj).

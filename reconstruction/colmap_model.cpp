@@ -138,7 +138,7 @@ Result<CameraIntrinsics> CameraFromLine(const fs::path& path, const Line& line) 
   // COLMAP's pixel centres are at +0.5 (see the header).
   c.cx_px -= 0.5;
   c.cy_px -= 0.5;
-  const Status valid = c.Validate();
+  const Status valid = c.Check();
   if (!valid.ok()) return LineError(path, line, valid.message());
   return c;
 }

@@ -566,7 +566,7 @@ std::vector<OrientedSample> SampleStrands(const StrandSet& strands, double step_
   for (size_t k = 0; k < strands.point_counts.size(); ++k) {
     const uint32_t count = strands.point_counts[k];
     if (count > strands.points_mm.size() - first)
-      break;  // counts inconsistent with the points (see Validate)
+      break;  // counts inconsistent with the points (see StrandSet::Check)
     SampleStrand(strands.points_mm.data() + first, count, step_mm, &samples);
     if (sample_strand != nullptr) sample_strand->resize(samples.size(), static_cast<uint32_t>(k));
     first += count;

@@ -124,9 +124,9 @@ Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_fram
                                          const StrandEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
   const StrandSet& estimate = estimate_in_truth_frame;
-  if (const Status s = estimate.Validate(); !s.ok())
+  if (const Status s = estimate.Check(); !s.ok())
     return InvalidArgument("reconstructed strands: " + s.message());
-  if (const Status s = truth.Validate(); !s.ok())
+  if (const Status s = truth.Check(); !s.ok())
     return InvalidArgument("true strands: " + s.message());
   if (truth_sample_strand.size() != truth_samples.size())
     return InvalidArgument("strand evaluation: " + std::to_string(truth_sample_strand.size()) +
@@ -253,7 +253,7 @@ std::string StrandEvaluation::BriefReport() const {
 Result<TruthConsistencyReference> ConsistencyOfTruthSubset(const StrandSet& truth, int64_t strands,
                                                            const StrandEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
-  if (const Status s = truth.Validate(); !s.ok())
+  if (const Status s = truth.Check(); !s.ok())
     return InvalidArgument("true strands: " + s.message());
   if (strands < 1) return InvalidArgument("consistency reference: strands must be at least 1");
   const int64_t every = std::max<int64_t>(

@@ -97,7 +97,7 @@ struct StrandEvaluation {
 // on the visible surface), or is empty for no visible-surface scores.
 // `true_head` may be null (no root scores). Either set may be empty (its
 // scores are then 0). InvalidArgument for options that fail Check(), a strand
-// set that fails StrandSet::Validate() (naming which), or a mask of another size.
+// set that fails StrandSet::Check() (naming which), or a mask of another size.
 // Time: a few MatchSamples runs over the samples (seconds for millions of samples).
 Result<StrandEvaluation> EvaluateStrands(const StrandSet& estimate_in_truth_frame,
                                          const StrandSet& truth,

@@ -341,7 +341,7 @@ TEST(Wisps, SynthesisedStrandsLieInTheirWispsAndStartOnTheScalp) {
   thin.thickness_mm = 0.5;
   const StrandSet strands = SynthesizeStrands(*wisps, 300, 7, thin);
   ASSERT_EQ(strands.num_strands(), 300u);
-  ASSERT_TRUE(strands.Validate().ok());
+  ASSERT_TRUE(strands.Check().ok());
   const std::vector<size_t> offsets = strands.Offsets();
   int roots_on_scalp = 0;
   for (size_t s = 0; s < strands.num_strands(); ++s) {

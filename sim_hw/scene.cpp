@@ -234,8 +234,7 @@ Status ValidateScene(const Scene& scene) {
   if (scene.cameras.empty()) return InvalidArgument(scene.path + ": the scene has no cameras");
   const Eigen::Vector3d half = 0.5 * scene.box.size_mm;
   for (const SceneCamera& cam : scene.cameras) {
-    HR_RETURN_IF_ERROR(
-        cam.intrinsics.Validate().WithContext(scene.path + ": camera " + cam.serial));
+    HR_RETURN_IF_ERROR(cam.intrinsics.Check().WithContext(scene.path + ": camera " + cam.serial));
     for (int stop = 0; stop < scene.turntable_stops; ++stop) {
       const Rigid3d cam_from_box = cam.cam_from_world *
                                    WorldFromTurntable(scene.StopAngleDeg(stop)) *

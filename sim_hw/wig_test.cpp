@@ -35,7 +35,7 @@ TEST(Wig, EveryStyleIsSeededHangsDownAndStaysOutsideTheHead) {
     ASSERT_TRUE(a.ok() && b.ok());
     EXPECT_EQ(a->points_mm, b->points_mm) << "same seed, same strands";
     EXPECT_EQ(a->num_strands(), 500u);
-    EXPECT_TRUE(a->Validate().ok());
+    EXPECT_TRUE(a->Check().ok());
     EXPECT_GE(MinEllipsoidLevel(*a, head), 1.0 - 1e-4);
     // Tips are below roots on average: the hair falls.
     double drop = 0;

@@ -108,7 +108,7 @@ Result<GuideInterpolation> GuideInterpolation::Build(
     const GuideInterpolationOptions& options) {
   HR_RETURN_IF_ERROR(options.Check().WithContext("guide interpolation"));
   if (guides_rest.empty()) return InvalidArgument("guide interpolation: no guide");
-  HR_RETURN_IF_ERROR(full_rest.Validate());
+  HR_RETURN_IF_ERROR(full_rest.Check());
   GuideInterpolation out;
   out.rest_ = full_rest;
   out.guides_rest_ = guides_rest;

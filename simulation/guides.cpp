@@ -135,7 +135,7 @@ Status GuideOptions::Check() const {
 
 Result<GuideSelection> SelectGuides(const StrandSet& strands, const GuideOptions& o) {
   HR_RETURN_IF_ERROR(o.Check().WithContext("guide selection"));
-  HR_RETURN_IF_ERROR(strands.Validate());
+  HR_RETURN_IF_ERROR(strands.Check());
   const int n = static_cast<int>(strands.num_strands());
   if (n == 0) return InvalidArgument("guide selection: the hair model has no strands");
   if (o.num_guides > n) {

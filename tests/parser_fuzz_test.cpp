@@ -360,7 +360,7 @@ void FuzzStrands(StrandFormat format, const std::string& name, uint32_t seed_num
     ExpectClean(name, i, name, [&] {
       const auto set = DecodeStrands(bytes, format, name);
       if (set.ok()) {
-        EXPECT_TRUE(set->Validate().ok()) << name << " input " << i;
+        EXPECT_TRUE(set->Check().ok()) << name << " input " << i;
       }
       return set.status();
     });
