@@ -385,6 +385,7 @@ Result<StrandSet> GenerateWig(const WigOptions& o, const HeadModel& head) {
 }
 
 Result<StrandSet> GenerateWig(const WigOptions& options, const HeadSpec& head) {
+  HR_RETURN_IF_ERROR(options.Check());
   HR_ASSIGN_OR_RETURN(std::unique_ptr<HeadModel> model, HeadModel::Build(head));
   return GenerateWig(options, *model);
 }

@@ -15,7 +15,7 @@ namespace hairrig {
 
 // Strands in the turntable frame (mm), root first. For WigStyle::kFile the
 // file's strands (placed by options.turntable_from_file) are the wisp guides.
-// Errors name the field (wig.file).
+// Errors name the field (wig.file; bad options as WigOptions::Check).
 Result<StrandSet> GenerateWig(const WigOptions& options, const HeadModel& head);
 // The same on the head the scene part describes (built for the call).
 Result<StrandSet> GenerateWig(const WigOptions& options, const HeadSpec& head);
