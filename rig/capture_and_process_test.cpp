@@ -195,7 +195,7 @@ TEST(RigOptions, EntryPointsCheckTheirOptions) {
   EXPECT_NE(created.status().message().find("png_compression"), std::string::npos);
   EXPECT_FALSE(fs::exists(dataset_dir)) << "nothing is made for bad options";
 
-  const auto source = OpenReplaySource(dir, {.speed = -2});
+  const auto source = OpenReplaySource(dir, {.speed = -2.0});
   ASSERT_FALSE(source.ok());
   EXPECT_NE(source.status().message().find("speed"), std::string::npos);
 

@@ -140,7 +140,7 @@ TEST(SimOptions, CheckNamesTheBadField) {
     scene_views.scene_file = "scene.yaml";
     scene_views.out_dir = "out";
     EXPECT_TRUE(scene_views.Check().ok()) << scene_views.Check().ToString();
-    scene_views.render.light_levels = {-1};
+    scene_views.render.light_levels = {-1.0};
     expect_named(scene_views.Check(), "render: light_levels[0]");
   }
   {
