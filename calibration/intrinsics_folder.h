@@ -22,7 +22,8 @@ struct IntrinsicsFolderOptions {
   std::string mrcal_corners_file;  // non-empty: the corners for mrcal too (WriteMrcalCorners)
   ChArUcoCalibrationOptions calibration;
 
-  // InvalidArgument naming the field: a missing folder, board or serial, threads < 1.
+  // InvalidArgument naming the field: a missing folder, board or serial,
+  // calibration.* (ChArUcoCalibrationOptions::Check).
   Status Check() const;
 };
 
