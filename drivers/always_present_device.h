@@ -1,6 +1,6 @@
-// Open/Close/HealthCheck for devices with no connection to manage (the
+// DoOpen/DoClose/DoHealthCheck for devices with no connection to manage (the
 // simulated and replayed backends): Open always finds the unit, HealthCheck
-// passes while it is open.
+// passes while it is open (Device checks that).
 #pragma once
 
 #include "drivers/device.h"
@@ -11,17 +11,14 @@ template <typename Base>
 class AlwaysPresentDevice : public Base {
  public:
   using Base::Base;
-  Status Open() override {
+
+ protected:
+  Status DoOpen() override {
     this->SetState(DeviceState::kReady);
     return Status::Ok();
   }
-  Status Close() override {
-    this->SetState(DeviceState::kClosed);
-    return Status::Ok();
-  }
-  Status HealthCheck() override {
-    return this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck");
-  }
+  Status DoClose() override { return Status::Ok(); }
+  Status DoHealthCheck() override { return Status::Ok(); }
 };
 
 }  // namespace hairrig

@@ -70,7 +70,7 @@ class AravisCamera : public Camera {
  public:
   AravisCamera(DeviceInfo info, AravisCameraOptions options)
       : Camera(std::move(info)), options_(std::move(options)) {}
-  ~AravisCamera() override { (void)Close(); }
+  ~AravisCamera() override { (void)AravisCamera::DoClose(); }
 
   double time_scale() const override { return options_.nominal.time_scale; }
 
@@ -86,7 +86,13 @@ class AravisCamera : public Camera {
             .download_s = options_.nominal.download_s};
   }
 
-  Status Open() override {
+  AravisStreamStats stats() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stream_ ? StatsLocked() : last_stats_;
+  }
+
+ protected:
+  Status DoOpen() override {
     (void)Close();
     std::lock_guard<std::mutex> lock(mutex_);
     HR_ASSIGN_OR_RETURN(ArvCamera * camera, Connect());
@@ -123,7 +129,7 @@ class AravisCamera : public Camera {
     return Status::Ok();
   }
 
-  Status Close() override {
+  Status DoClose() override {
     (void)Disarm();
     std::lock_guard<std::mutex> lock(mutex_);
     if (camera_ && control_lost_handler_ != 0) {
@@ -131,12 +137,10 @@ class AravisCamera : public Camera {
     }
     control_lost_handler_ = 0;
     camera_.reset();
-    SetState(DeviceState::kClosed);
     return Status::Ok();
   }
 
-  Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+  Status DoHealthCheck() override {
     std::lock_guard<std::mutex> lock(mutex_);
     GError* error = nullptr;
     arv_camera_get_device_serial_number(camera_.get(), &error);
@@ -146,8 +150,7 @@ class AravisCamera : public Camera {
     return Status::Ok();
   }
 
-  Status Configure(const CaptureSettings& s) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+  Status DoConfigure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     if (s.format == PixelFormat::kEncoded)
       return OutOfRange(Describe() + ": delivers raw frames only");
@@ -169,8 +172,7 @@ class AravisCamera : public Camera {
     return Status::Ok();
   }
 
-  Status Arm() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+  Status DoArm() override {
     std::lock_guard<std::mutex> lock(mutex_);
     ArvCamera* camera = camera_.get();
     GError* error = nullptr;
@@ -200,11 +202,10 @@ class AravisCamera : public Camera {
     sequence_ = 0;
     frame_ids_.Reset();
     triggers_.Clear();
-    SetState(DeviceState::kBusy);
     return Status::Ok();
   }
 
-  Status Disarm() override {
+  Status DoDisarm() override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stream_) {
       last_stats_ = StatsLocked();
@@ -213,12 +214,10 @@ class AravisCamera : public Camera {
       g_clear_error(&error);
       stream_.reset();
     }
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
 
-  Status SoftwareTrigger() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+  Status DoSoftwareTrigger() override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (gone_) return Fault(Unavailable("lost its control channel; reopen it"));
     const int64_t t = SteadyNowNs();
@@ -229,8 +228,7 @@ class AravisCamera : public Camera {
     return Status::Ok();
   }
 
-  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+  Result<Frame> DoWaitFrame(std::chrono::milliseconds timeout) override {
     ArvStream* stream = nullptr;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -253,12 +251,7 @@ class AravisCamera : public Camera {
     return frame;
   }
 
-  void LineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
-
-  AravisStreamStats stats() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return stream_ ? StatsLocked() : last_stats_;
-  }
+  void DoLineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
 
  private:
   static void OnControlLost(ArvDevice*, gpointer self) {

@@ -10,6 +10,16 @@
 // time), Unavailable if the camera dropped off the bus. A camera that ignores
 // a trigger without reporting it shifts the pairing of its later frames; the
 // backends cannot tell that from a late frame.
+//
+// States (drivers/device.h; each call checks its row, then calls its Do hook):
+//   call              allowed in   transition
+//   Configure         ready        -
+//   Arm               ready        -> busy on success
+//   Disarm            any state    busy -> ready on success
+//   SoftwareTrigger   busy         -
+//   LineTriggerSent   any state    -
+//   WaitFrame         busy         -
+//   CapturePreview    ready        -
 #pragma once
 
 #include <chrono>
@@ -66,26 +76,39 @@ class Camera : public Device {
  public:
   using Device::Device;
   virtual CameraCapabilities capabilities() const = 0;
-  // ready -> ready. OutOfRange names the setting outside the capabilities.
-  virtual Status Configure(const CaptureSettings& settings) = 0;
-  virtual Status Arm() = 0;
-  virtual Status Disarm() = 0;
-  virtual Status SoftwareTrigger() = 0;
+  // OutOfRange names the setting outside the capabilities.
+  Status Configure(const CaptureSettings& settings);
+  Status Arm();
+  Status Disarm();
+  Status SoftwareTrigger();
   // The host is about to pulse this camera's trigger line (TriggerSource::kLine);
   // `sent_ns` on the SteadyNowNs clock. Frames are dated by these, in order, as
   // by software triggers, so that a frame arriving after its view timed out
   // carries its own trigger time, not a guess from its arrival. Called for
   // every armed camera on the line, whether or not the host waits for its
   // frame. Backends that see the pulse themselves (simulated, replayed) ignore it.
-  virtual void LineTriggerSent(int64_t sent_ns) = 0;
-  virtual Result<Frame> WaitFrame(std::chrono::milliseconds timeout) = 0;
+  void LineTriggerSent(int64_t sent_ns);
+  Result<Frame> WaitFrame(std::chrono::milliseconds timeout);
   // One frame of the camera's live-view stream (a DSLR's preview, smaller than
   // its shots), taken without firing the shutter, storing a file or counting a
   // shot; ready state (not armed), with the exposure of the last Configure.
   // Unimplemented when the camera has no such stream: a live view then
   // triggers full frames (harmless for industrial cameras, which have no
   // mechanical shutter).
-  virtual Result<Frame> CapturePreview(std::chrono::milliseconds timeout) {
+  Result<Frame> CapturePreview(std::chrono::milliseconds timeout);
+
+ protected:
+  // The backend's side of the calls above, called once the state allows the call.
+  virtual Status DoConfigure(const CaptureSettings& settings) = 0;
+  // Starts acquisition; Arm marks the device busy after it succeeds.
+  virtual Status DoArm() = 0;
+  // Stops acquisition; Disarm marks a busy device ready after it succeeds.
+  virtual Status DoDisarm() = 0;
+  virtual Status DoSoftwareTrigger() = 0;
+  virtual void DoLineTriggerSent(int64_t sent_ns) = 0;
+  virtual Result<Frame> DoWaitFrame(std::chrono::milliseconds timeout) = 0;
+  // Unimplemented unless the backend has a live-view stream.
+  virtual Result<Frame> DoCapturePreview(std::chrono::milliseconds timeout) {
     (void)timeout;
     return Unimplemented(Describe() + ": no live-view stream");
   }

@@ -51,6 +51,19 @@ Status Device::RequireState(std::initializer_list<DeviceState> allowed, const ch
                             DeviceStateName(now) + hint);
 }
 
+Status Device::Open() { return DoOpen(); }
+
+Status Device::Close() {
+  const Status s = DoClose();
+  SetState(DeviceState::kClosed);
+  return s;
+}
+
+Status Device::HealthCheck() {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+  return DoHealthCheck();
+}
+
 Status Device::Fault(const Status& status) {
   SetState(DeviceState::kFaulted);
   return status.WithContext(Describe());

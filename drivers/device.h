@@ -10,6 +10,25 @@
 // A call made in the wrong state returns FailedPrecondition naming the device,
 // the call and the state. Devices are identified by serial number, never by
 // port or bus order; `name` is the role the rig config gives it ("upper").
+//
+// The states are enforced here and in the interfaces of drivers/, once for
+// every backend: each call of an interface is public and non-virtual; it
+// checks the state against the interface's table (RequireState), and only
+// when the state allows it calls the backend's protected hook of the same name
+// with a `Do` prefix (Open -> DoOpen). The call makes the transitions every
+// backend shares; the hook makes the others (and marks the device faulted on
+// an I/O failure, through Fault). A backend overrides the hooks and checks no
+// state of this table itself. Queries (info, state, capabilities, time_scale)
+// answer in any state.
+//
+// Every device:
+//   call          allowed in    transition
+//   Open          any state     -> ready, made by DoOpen (a reopen reconnects)
+//   Close         any state     -> closed, whatever DoClose returns
+//   HealthCheck   ready, busy   -
+// DoOpen marks the device ready itself, before it starts anything that can
+// fault the device (a gpiod input line's edge watcher), so that such a fault
+// is never overwritten.
 #pragma once
 
 #include <atomic>
@@ -46,12 +65,12 @@ class Device {
   // "camera 'upper' (sim, serial SIM-CAM-UPPER)": how messages name the device.
   std::string Describe() const;
 
-  // closed/faulted -> ready. Finds the unit by serial; Unavailable if absent.
-  virtual Status Open() = 0;
-  // any -> closed. Safe to call twice.
-  virtual Status Close() = 0;
+  // Finds the unit by serial and connects; Unavailable if absent. -> ready.
+  Status Open();
+  // Releases the unit. -> closed. Safe to call twice.
+  Status Close();
   // Talks to the unit (reads a status register, a config value) without side effects.
-  virtual Status HealthCheck() = 0;
+  Status HealthCheck();
   // Wall-clock seconds per device second: 1 for real hardware; a simulated
   // device whose timings are scaled to run faster returns its scale. Timings a
   // device reports (capabilities, exposure) are in device seconds.
@@ -63,6 +82,13 @@ class Device {
   Status RequireState(std::initializer_list<DeviceState> allowed, const char* call) const;
   // Marks the device faulted and returns `status` prefixed with Describe().
   Status Fault(const Status& status);
+
+  // The backend's side of Open, Close and HealthCheck, called once the state allows the call.
+  // Connects and marks the device ready; an I/O failure marks it faulted (Fault).
+  virtual Status DoOpen() = 0;
+  // Releases the unit; Close marks the device closed after it.
+  virtual Status DoClose() = 0;
+  virtual Status DoHealthCheck() = 0;
 
  private:
   DeviceInfo info_;

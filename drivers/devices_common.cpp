@@ -5,8 +5,10 @@
 #include "core/config.h"
 #include "drivers/camera.h"
 #include "drivers/camera_support.h"
+#include "drivers/input_line.h"
 #include "drivers/light.h"
 #include "drivers/polled_turntable.h"
+#include "drivers/trigger_line.h"
 #include "drivers/turntable.h"
 
 namespace hairrig {
@@ -50,10 +52,110 @@ Status CheckExposure(const Camera& camera, const CameraCapabilities& caps, doubl
                     std::to_string(caps.max_exposure_s) + " s");
 }
 
+// --- the state tables of drivers/turntable.h, light.h, camera.h, trigger_line.h, input_line.h
+
+Status Turntable::Home(std::chrono::milliseconds timeout) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
+  return DoHome(timeout);
+}
+
+Status Turntable::StartMove(double target_deg, const MotionProfile& profile) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+  return DoStartMove(target_deg, profile);
+}
+
+Result<TurntableStatus> Turntable::ReadStatus() {
+  HR_RETURN_IF_ERROR(
+      RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
+  return DoReadStatus();
+}
+
+Status Turntable::WaitInPosition(std::chrono::milliseconds timeout) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+  return DoWaitInPosition(timeout);
+}
+
+Status Turntable::Stop() {
+  HR_RETURN_IF_ERROR(
+      RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
+  HR_RETURN_IF_ERROR(DoStop());
+  if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+  return Status::Ok();
+}
+
 Status Turntable::MoveTo(double target_deg, const MotionProfile& profile,
                          std::chrono::milliseconds timeout) {
   HR_RETURN_IF_ERROR(StartMove(target_deg, profile));
   return WaitInPosition(timeout);
+}
+
+Status Light::SetOn(bool on) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetOn"));
+  return DoSetOn(on);
+}
+
+Status Light::SetLevel(double level) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetLevel"));
+  return DoSetLevel(level);
+}
+
+Result<bool> Light::IsOn() {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsOn"));
+  return DoIsOn();
+}
+
+Status Camera::Configure(const CaptureSettings& settings) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+  return DoConfigure(settings);
+}
+
+Status Camera::Arm() {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+  HR_RETURN_IF_ERROR(DoArm());
+  SetState(DeviceState::kBusy);
+  return Status::Ok();
+}
+
+Status Camera::Disarm() {
+  HR_RETURN_IF_ERROR(DoDisarm());
+  if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
+  return Status::Ok();
+}
+
+Status Camera::SoftwareTrigger() {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+  return DoSoftwareTrigger();
+}
+
+void Camera::LineTriggerSent(int64_t sent_ns) { DoLineTriggerSent(sent_ns); }
+
+Result<Frame> Camera::WaitFrame(std::chrono::milliseconds timeout) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+  return DoWaitFrame(timeout);
+}
+
+Result<Frame> Camera::CapturePreview(std::chrono::milliseconds timeout) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "CapturePreview"));
+  return DoCapturePreview(timeout);
+}
+
+Status TriggerLine::Pulse(std::chrono::microseconds width) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
+  return DoPulse(width);
+}
+
+Status TriggerLine::Set(bool active) {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Set"));
+  return DoSet(active);
+}
+
+Result<bool> InputLine::IsActive() {
+  HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsActive"));
+  return DoIsActive();
+}
+
+void InputLine::OnChange(std::function<void(bool active)> callback) {
+  DoOnChange(std::move(callback));
 }
 
 Status CheckMoveRequest(const std::string& device, double target_deg, const MotionProfile& p,
@@ -84,10 +186,6 @@ void PolledTurntable::MoveStarted(double target_deg) {
 }
 
 void PolledTurntable::StopRequested() { stopped_ = true; }
-
-void PolledTurntable::StopDone() {
-  if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
-}
 
 Status PolledTurntable::WaitUntilDone(std::chrono::milliseconds timeout,
                                       std::chrono::milliseconds period,

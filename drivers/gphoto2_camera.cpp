@@ -324,7 +324,7 @@ class Gphoto2Camera : public Camera {
  public:
   Gphoto2Camera(DeviceInfo info, Gphoto2CameraOptions options)
       : Camera(std::move(info)), options_(std::move(options)) {}
-  ~Gphoto2Camera() override { (void)Close(); }
+  ~Gphoto2Camera() override { (void)Gphoto2Camera::DoClose(); }
 
   double time_scale() const override { return options_.nominal.time_scale; }
 
@@ -339,7 +339,8 @@ class Gphoto2Camera : public Camera {
             .download_s = options_.nominal.download_s};
   }
 
-  Status Open() override {
+ protected:
+  Status DoOpen() override {
     std::lock_guard<std::mutex> lock(mutex_);
     session_.reset();
     HR_ASSIGN_OR_RETURN(session_, FindBySerial());
@@ -358,23 +359,20 @@ class Gphoto2Camera : public Camera {
     return Status::Ok();
   }
 
-  Status Close() override {
+  Status DoClose() override {
     std::lock_guard<std::mutex> lock(mutex_);
     session_.reset();
-    SetState(DeviceState::kClosed);
     return Status::Ok();
   }
 
-  Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+  Status DoHealthCheck() override {
     std::lock_guard<std::mutex> lock(mutex_);
     auto serial = session_->Serial();
     if (!serial.ok()) return FaultIfGone(serial.status());
     return Status::Ok();
   }
 
-  Status Configure(const CaptureSettings& s) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+  Status DoConfigure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     std::lock_guard<std::mutex> lock(mutex_);
     const std::string shutter = NearestChoice(shutter_choices_, s.exposure_s, ShutterSeconds);
@@ -387,23 +385,17 @@ class Gphoto2Camera : public Camera {
     return Status::Ok();
   }
 
-  Status Arm() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+  Status DoArm() override {
     std::lock_guard<std::mutex> lock(mutex_);
     sequence_ = 0;
     triggers_.Clear();
-    HR_RETURN_IF_ERROR(DiscardQueuedFilesLocked());
-    SetState(DeviceState::kBusy);
-    return Status::Ok();
+    return DiscardQueuedFilesLocked();
   }
 
-  Status Disarm() override {
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
-    return Status::Ok();
-  }
+  // Arming starts nothing on the body that disarming would stop.
+  Status DoDisarm() override { return Status::Ok(); }
 
-  Status SoftwareTrigger() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+  Status DoSoftwareTrigger() override {
     std::lock_guard<std::mutex> lock(mutex_);
     const int64_t t = SteadyNowNs();
     HR_RETURN_IF_ERROR(FaultIfGone(Retrying("trigger", [this] {
@@ -414,12 +406,11 @@ class Gphoto2Camera : public Camera {
     return Status::Ok();
   }
 
-  void LineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
+  void DoLineTriggerSent(int64_t sent_ns) override { triggers_.Sent(sent_ns); }
 
   // The body's live view (gp_camera_capture_preview): no shutter, no file.
-  Result<Frame> CapturePreview(std::chrono::milliseconds timeout) override {
+  Result<Frame> DoCapturePreview(std::chrono::milliseconds timeout) override {
     (void)timeout;  // libgphoto2 bounds the call itself
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "CapturePreview"));
     std::lock_guard<std::mutex> lock(mutex_);
     CameraFile* raw_file = nullptr;
     gp_file_new(&raw_file);
@@ -443,8 +434,7 @@ class Gphoto2Camera : public Camera {
     return f;  // width and height stay 0: the preview's size is the body's, read on decoding
   }
 
-  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+  Result<Frame> DoWaitFrame(std::chrono::milliseconds timeout) override {
     const auto deadline = Clock::now() + timeout;
     for (;;) {
       const auto left =

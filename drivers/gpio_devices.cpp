@@ -8,7 +8,7 @@ namespace hairrig {
 
 namespace {
 
-// Open/Close/HealthCheck of a device holding one requested line.
+// Close/HealthCheck of a device holding one requested line, and the request of Open.
 template <typename Base, typename Line>
 class GpioDevice : public Base {
  public:
@@ -16,18 +16,14 @@ class GpioDevice : public Base {
              GpioLineRequest request)
       : Base(info), provider_(std::move(provider)), request_(std::move(request)) {}
 
-  Status Close() override {
+ protected:
+  Status DoClose() override {
     line_.reset();
-    this->SetState(DeviceState::kClosed);
     return Status::Ok();
   }
-  Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(
-        this->RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+  Status DoHealthCheck() override {
     return line_ ? Status::Ok() : Internal(this->Describe() + ": ready without a line");
   }
-
- protected:
   // Requests the line through `request` (a provider call) and marks the device ready.
   template <typename RequestFn>
   Status OpenWith(RequestFn request) {
@@ -54,28 +50,26 @@ Result<std::unique_ptr<GpioOutputLine>> RequestOutput(GpioProvider& p, const Gpi
 class GpioLight : public GpioDevice<Light, GpioOutputLine> {
  public:
   using GpioDevice::GpioDevice;
-  ~GpioLight() override { (void)Close(); }
+  ~GpioLight() override { (void)GpioLight::DoClose(); }
   LightCapabilities capabilities() const override { return {.dimmable = false}; }
-  Status Open() override { return OpenWith(RequestOutput); }
-  Status Close() override {
+
+ protected:
+  Status DoOpen() override { return OpenWith(RequestOutput); }
+  Status DoClose() override {
     if (line_ && on_) (void)line_->Set(false);  // panels off when the program lets go
     on_ = false;
-    return GpioDevice::Close();
+    return GpioDevice::DoClose();
   }
-  Status SetOn(bool on) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetOn"));
+  Status DoSetOn(bool on) override {
     HR_RETURN_IF_ERROR(Checked(line_->Set(on)));
     on_ = on;
     return Status::Ok();
   }
-  Status SetLevel(double level) override {
+  Status DoSetLevel(double level) override {
     HR_ASSIGN_OR_RETURN(const bool on, OnOffFromLevel(*this, level, "a GPIO-switched panel"));
-    return SetOn(on);
+    return DoSetOn(on);
   }
-  Result<bool> IsOn() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsOn"));
-    return on_;
-  }
+  Result<bool> DoIsOn() override { return on_; }
 
  private:
   bool on_ = false;
@@ -84,25 +78,26 @@ class GpioLight : public GpioDevice<Light, GpioOutputLine> {
 class GpioTrigger : public GpioDevice<TriggerLine, GpioOutputLine> {
  public:
   using GpioDevice::GpioDevice;
-  Status Open() override { return OpenWith(RequestOutput); }
-  Status Pulse(std::chrono::microseconds width) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
+
+ protected:
+  Status DoOpen() override { return OpenWith(RequestOutput); }
+  Status DoPulse(std::chrono::microseconds width) override {
     if (width.count() <= 0) return InvalidArgument(Describe() + ": pulse width must be positive");
     HR_RETURN_IF_ERROR(Checked(line_->Set(true)));
     std::this_thread::sleep_for(width);
     return Checked(line_->Set(false));
   }
-  Status Set(bool active) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Set"));
-    return Checked(line_->Set(active));
-  }
+  Status DoSet(bool active) override { return Checked(line_->Set(active)); }
 };
 
 class GpioInput : public GpioDevice<InputLine, GpioInputLine> {
  public:
   using GpioDevice::GpioDevice;
   ~GpioInput() override { StopWatcher(); }
-  Status Open() override {
+
+ protected:
+  // The line is ready before the watcher starts: a fault the watcher finds stays.
+  Status DoOpen() override {
     StopWatcher();
     HR_RETURN_IF_ERROR(
         OpenWith([](GpioProvider& p, const GpioLineRequest& r) { return p.RequestInput(r); }));
@@ -110,17 +105,16 @@ class GpioInput : public GpioDevice<InputLine, GpioInputLine> {
     watcher_ = std::thread([this] { Watch(); });
     return Status::Ok();
   }
-  Status Close() override {
+  Status DoClose() override {
     StopWatcher();
-    return GpioDevice::Close();
+    return GpioDevice::DoClose();
   }
-  Result<bool> IsActive() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsActive"));
+  Result<bool> DoIsActive() override {
     auto level = line_->Get();
     if (!level.ok()) return Checked(level.status());
     return level.value();
   }
-  void OnChange(std::function<void(bool active)> callback) override {
+  void DoOnChange(std::function<void(bool active)> callback) override {
     std::lock_guard<std::mutex> lock(callback_mutex_);
     callback_ = std::move(callback);
   }

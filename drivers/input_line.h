@@ -4,6 +4,11 @@
 // off. A safety input that cannot be read counts as active (fail-safe): a
 // backend whose line faults says so once through the OnChange callback, with
 // `true`, after marking the device faulted.
+//
+// States (drivers/device.h; each call checks its row, then calls its Do hook):
+//   call       allowed in   transition
+//   IsActive   ready        -
+//   OnChange   any state    -
 #pragma once
 
 #include <functional>
@@ -17,12 +22,17 @@ class InputLine : public Device {
  public:
   using Device::Device;
   // Level now (true = active, i.e. stop requested).
-  virtual Result<bool> IsActive() = 0;
+  Result<bool> IsActive();
   // Called on every edge, from a driver thread, with the new level, and with
   // `true` when the line faults (state() is then faulted). One callback per
   // line; an empty function removes it. The callback must be quick and must
   // not call back into this device.
-  virtual void OnChange(std::function<void(bool active)> callback) = 0;
+  void OnChange(std::function<void(bool active)> callback);
+
+ protected:
+  // The backend's side of the calls above, called once the state allows the call.
+  virtual Result<bool> DoIsActive() = 0;
+  virtual void DoOnChange(std::function<void(bool active)> callback) = 0;
 };
 
 // What a safety input's stop says: "<line> went active (e-stop or interlock)",

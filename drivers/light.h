@@ -1,4 +1,10 @@
 // An LED panel (switched by GPIO or a USB relay board, or simulated).
+//
+// States (drivers/device.h; each call checks its row, then calls its Do hook):
+//   call       allowed in   transition
+//   SetOn      ready        -
+//   SetLevel   ready        -
+//   IsOn       ready        -
 #pragma once
 
 #include <string>
@@ -15,10 +21,16 @@ class Light : public Device {
  public:
   using Device::Device;
   virtual LightCapabilities capabilities() const = 0;
-  virtual Status SetOn(bool on) = 0;
+  Status SetOn(bool on);
   // 0..1; OutOfRange outside it, FailedPrecondition if not dimmable and not 0 or 1.
-  virtual Status SetLevel(double level) = 0;
-  virtual Result<bool> IsOn() = 0;
+  Status SetLevel(double level);
+  Result<bool> IsOn();
+
+ protected:
+  // The backend's side of the calls above, called once the state allows the call.
+  virtual Status DoSetOn(bool on) = 0;
+  virtual Status DoSetLevel(double level) = 0;
+  virtual Result<bool> DoIsOn() = 0;
 };
 
 // The on/off state a level asks of a panel that is only on or off: 0 -> off,

@@ -27,7 +27,9 @@ class ModbusTurntable : public PolledTurntable {
             .settle_s = options_.map.settle_s};
   }
 
-  Status Open() override {
+ protected:
+  // Clears a fault latched by the controller.
+  Status DoOpen() override {
     HR_RETURN_IF_ERROR(Fail(link_.Connect()));
     HR_RETURN_IF_ERROR(CheckSerial());
     HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
@@ -38,26 +40,20 @@ class ModbusTurntable : public PolledTurntable {
     return Status::Ok();
   }
 
-  Status Close() override {
+  Status DoClose() override {
     link_.Disconnect();
-    SetState(DeviceState::kClosed);
     return Status::Ok();
   }
 
-  Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
-    return ReadRegisters().status();
-  }
+  Status DoHealthCheck() override { return ReadRegisters().status(); }
 
-  Status Home(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
+  Status DoHome(std::chrono::milliseconds timeout) override {
     HR_RETURN_IF_ERROR(Fail(Command(options_.map.cmd_home)));
     MoveStarted(0);
     return Wait(timeout, /*need_homed=*/true);
   }
 
-  Status StartMove(double target_deg, const MotionProfile& p) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+  Status DoStartMove(double target_deg, const MotionProfile& p) override {
     HR_RETURN_IF_ERROR(CheckMoveRequest(Describe(), target_deg, p, capabilities()));
     const ModbusRegisterMap& m = options_.map;
     auto target = DegreesToCounts(target_deg, m);
@@ -76,9 +72,7 @@ class ModbusTurntable : public PolledTurntable {
     return Status::Ok();
   }
 
-  Result<TurntableStatus> ReadStatus() override {
-    HR_RETURN_IF_ERROR(RequireState(
-        {DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
+  Result<TurntableStatus> DoReadStatus() override {
     HR_ASSIGN_OR_RETURN(const Registers r, ReadRegisters());
     const ModbusRegisterMap& m = options_.map;
     TurntableStatus s{.position_deg = CountsToDegrees(r.position, m),
@@ -91,18 +85,13 @@ class ModbusTurntable : public PolledTurntable {
     return s;
   }
 
-  Status WaitInPosition(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+  Status DoWaitInPosition(std::chrono::milliseconds timeout) override {
     return Wait(timeout, /*need_homed=*/false);
   }
 
-  Status Stop() override {
-    HR_RETURN_IF_ERROR(
-        RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
+  Status DoStop() override {
     StopRequested();
-    HR_RETURN_IF_ERROR(Command(options_.map.cmd_stop).WithContext(Describe() + ": stop"));
-    StopDone();
-    return Status::Ok();
+    return Command(options_.map.cmd_stop).WithContext(Describe() + ": stop");
   }
 
  private:

@@ -28,9 +28,8 @@ class PolledTurntable : public Turntable {
   // Records a commanded move (or homing) to `target_deg`: the device is busy.
   void MoveStarted(double target_deg);
   // Records a stop request: a running wait returns Unavailable at its next poll.
+  // (Turntable::Stop marks a busy device ready once DoStop succeeds.)
   void StopRequested();
-  // The controller took the stop: a busy device is ready again.
-  void StopDone();
   // Calls `poll` every `period` until done (ready), a fault (faulted,
   // DeviceFault), a stop (Unavailable) or `timeout` (Timeout). A failing
   // poll's status is returned as it is.

@@ -20,22 +20,20 @@ class TestLight : public Light {
  public:
   using Light::Light;
   LightCapabilities capabilities() const override { return {}; }
-  Status Open() override {
+
+ protected:
+  Status DoOpen() override {
     SetState(DeviceState::kReady);
     return Status::Ok();
   }
-  Status Close() override {
-    SetState(DeviceState::kClosed);
-    return Status::Ok();
-  }
-  Status HealthCheck() override { return RequireState({DeviceState::kReady}, "HealthCheck"); }
-  Status SetOn(bool on) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetOn"));
+  Status DoClose() override { return Status::Ok(); }
+  Status DoHealthCheck() override { return Status::Ok(); }
+  Status DoSetOn(bool on) override {
     on_ = on;
     return Status::Ok();
   }
-  Status SetLevel(double level) override { return SetOn(level > 0.5); }
-  Result<bool> IsOn() override { return on_; }
+  Status DoSetLevel(double level) override { return DoSetOn(level > 0.5); }
+  Result<bool> DoIsOn() override { return on_; }
 
  private:
   bool on_ = false;

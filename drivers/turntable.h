@@ -1,6 +1,19 @@
 // A motorised turntable (Modbus stepper/servo controller, or simulated).
 // Angles in degrees, increasing counter-clockwise seen from above (about world
 // +z, core/transform.h). Positions are absolute after Home().
+//
+// States (drivers/device.h; each call checks its row, then calls its Do hook):
+//   call            allowed in              transition
+//   Home            ready, busy             the backend's (polled: busy while homing, then ready)
+//   StartMove       ready, busy             the backend's: busy once the controller took the move
+//   ReadStatus      ready, busy, faulted    the backend's (polled: busy -> ready when in position)
+//   WaitInPosition  ready, busy             the backend's: ready when in position
+//   Stop            ready, busy, faulted    busy -> ready on success
+//   MoveTo          StartMove, then WaitInPosition, each with its own row
+// Stop's transition is made by Stop itself; the motion transitions stay with
+// the backend, which marks the device busy when the controller has the
+// command, so that a Stop() from another thread (an e-stop) that ends the move
+// is never overwritten.
 #pragma once
 
 #include <chrono>
@@ -48,19 +61,28 @@ class Turntable : public Device {
   using Device::Device;
   virtual TurntableCapabilities capabilities() const = 0;
   // Finds the index and sets position 0. Blocks up to `timeout`.
-  virtual Status Home(std::chrono::milliseconds timeout) = 0;
+  Status Home(std::chrono::milliseconds timeout);
   // Starts an absolute move and returns at once (state busy until in position).
   // OutOfRange if the profile exceeds the capabilities.
-  virtual Status StartMove(double target_deg, const MotionProfile& profile) = 0;
-  virtual Result<TurntableStatus> ReadStatus() = 0;
+  Status StartMove(double target_deg, const MotionProfile& profile);
+  Result<TurntableStatus> ReadStatus();
   // Blocks until the in-position flag is set; Timeout if not within `timeout`,
   // DeviceFault if the controller reports a fault (stall, following error).
-  virtual Status WaitInPosition(std::chrono::milliseconds timeout) = 0;
+  Status WaitInPosition(std::chrono::milliseconds timeout);
   // Decelerates to a stop at once (e-stop, interlock); valid in any open state.
-  virtual Status Stop() = 0;
+  Status Stop();
 
   // StartMove then WaitInPosition.
   Status MoveTo(double target_deg, const MotionProfile& profile, std::chrono::milliseconds timeout);
+
+ protected:
+  // The backend's side of the calls above, called once the state allows the call.
+  virtual Status DoHome(std::chrono::milliseconds timeout) = 0;
+  virtual Status DoStartMove(double target_deg, const MotionProfile& profile) = 0;
+  virtual Result<TurntableStatus> DoReadStatus() = 0;
+  virtual Status DoWaitInPosition(std::chrono::milliseconds timeout) = 0;
+  // Commands the stop; Stop marks a busy device ready after it succeeds.
+  virtual Status DoStop() = 0;
 };
 
 }  // namespace hairrig

@@ -131,11 +131,12 @@ class UsbRelayLight : public Light {
       : Light(std::move(info)), options_(std::move(options)) {
     if (!options_.bus) options_.bus = MakeLibusbRelayBus();
   }
-  ~UsbRelayLight() override { (void)Close(); }
+  ~UsbRelayLight() override { (void)UsbRelayLight::DoClose(); }
 
   LightCapabilities capabilities() const override { return {.dimmable = false}; }
 
-  Status Open() override {
+ protected:
+  Status DoOpen() override {
     port_path_.clear();
     auto boards = options_.bus->List();
     if (!boards.ok()) return Fault(boards.status());
@@ -166,29 +167,21 @@ class UsbRelayLight : public Light {
                     "; check its USB cable"));
   }
 
-  Status Close() override {
+  Status DoClose() override {
     if (state() == DeviceState::kReady) (void)Switch(false);  // panels off when the program lets go
-    SetState(DeviceState::kClosed);
     return Status::Ok();
   }
 
-  Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "HealthCheck"));
-    return ReadState(port_path_).status();
-  }
+  Status DoHealthCheck() override { return ReadState(port_path_).status(); }
 
-  Status SetOn(bool on) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetOn"));
-    return Switch(on);
-  }
+  Status DoSetOn(bool on) override { return Switch(on); }
 
-  Status SetLevel(double level) override {
+  Status DoSetLevel(double level) override {
     HR_ASSIGN_OR_RETURN(const bool on, OnOffFromLevel(*this, level, "a relay-switched panel"));
-    return SetOn(on);
+    return DoSetOn(on);
   }
 
-  Result<bool> IsOn() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsOn"));
+  Result<bool> DoIsOn() override {
     HR_ASSIGN_OR_RETURN(UsbRelayState state, ReadState(port_path_));
     return state.IsOn(options_.channel);
   }

@@ -38,7 +38,7 @@ class V4l2Camera : public Camera {
       : Camera(std::move(info)), options_(std::move(options)) {
     if (!options_.io) options_.io = SystemV4l2Io();
   }
-  ~V4l2Camera() override { (void)Close(); }
+  ~V4l2Camera() override { (void)V4l2Camera::DoClose(); }
 
   double time_scale() const override { return options_.nominal.time_scale; }
 
@@ -53,7 +53,8 @@ class V4l2Camera : public Camera {
             .download_s = options_.nominal.download_s};
   }
 
-  Status Open() override {
+ protected:
+  Status DoOpen() override {
     (void)Close();
     std::lock_guard<std::mutex> lock(mutex_);
     HR_ASSIGN_OR_RETURN(path_, FindNode());
@@ -69,23 +70,20 @@ class V4l2Camera : public Camera {
     return Status::Ok();
   }
 
-  Status Close() override {
+  Status DoClose() override {
     std::lock_guard<std::mutex> lock(mutex_);
     ReleaseLocked();
-    SetState(DeviceState::kClosed);
     return Status::Ok();
   }
 
-  Status HealthCheck() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "HealthCheck"));
+  Status DoHealthCheck() override {
     std::lock_guard<std::mutex> lock(mutex_);
     v4l2_capability caps{};
     if (io().Ioctl(fd_, VIDIOC_QUERYCAP, &caps) != 0) return GoneLocked("VIDIOC_QUERYCAP");
     return Status::Ok();
   }
 
-  Status Configure(const CaptureSettings& s) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+  Status DoConfigure(const CaptureSettings& s) override {
     HR_RETURN_IF_ERROR(CheckExposure(*this, capabilities(), s.exposure_s));
     if (s.trigger == TriggerSource::kLine) {
       return OutOfRange(Describe() +
@@ -106,8 +104,7 @@ class V4l2Camera : public Camera {
     return Status::Ok();
   }
 
-  Status Arm() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+  Status DoArm() override {
     std::lock_guard<std::mutex> lock(mutex_);
     for (size_t i = 0; i < buffers_.size(); ++i) {
       v4l2_buffer b = BufferRequest(static_cast<uint32_t>(i));
@@ -118,29 +115,25 @@ class V4l2Camera : public Camera {
     streaming_ = true;
     sequence_ = 0;
     pending_triggers_ns_.clear();
-    SetState(DeviceState::kBusy);
     return Status::Ok();
   }
 
-  Status Disarm() override {
+  Status DoDisarm() override {
     std::lock_guard<std::mutex> lock(mutex_);
     StreamOffLocked();
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
 
-  Status SoftwareTrigger() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+  Status DoSoftwareTrigger() override {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_triggers_ns_.push_back(SteadyNowNs());
     return Status::Ok();
   }
 
   // UVC cameras have no trigger input: Configure refuses TriggerSource::kLine.
-  void LineTriggerSent(int64_t) override {}
+  void DoLineTriggerSent(int64_t) override {}
 
-  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+  Result<Frame> DoWaitFrame(std::chrono::milliseconds timeout) override {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     for (;;) {
       int64_t trigger_ns = 0;

@@ -225,14 +225,14 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
             .can_home = true,
             .settle_s = 0};
   }
-  Status Home(std::chrono::milliseconds) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Home"));
+
+ protected:
+  Status DoHome(std::chrono::milliseconds) override {
     source_->SetTarget(0);
     position_deg_ = 0;
     return Status::Ok();
   }
-  Status StartMove(double target_deg, const MotionProfile&) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+  Status DoStartMove(double target_deg, const MotionProfile&) override {
     const RecordedStop* stop = source_->FindStop(target_deg);
     if (!stop) {
       return NotFound(Describe() + ": the recording has no stop at " + std::to_string(target_deg) +
@@ -246,8 +246,7 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
     SetState(DeviceState::kBusy);
     return Status::Ok();
   }
-  Result<TurntableStatus> ReadStatus() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "ReadStatus"));
+  Result<TurntableStatus> DoReadStatus() override {
     TurntableStatus s;
     s.position_deg = position_deg_;
     s.target_deg = source_->Target();
@@ -256,17 +255,15 @@ class ReplayTurntable : public ReplayDevice<Turntable> {
     s.homed = true;
     return s;
   }
-  Status WaitInPosition(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+  Status DoWaitInPosition(std::chrono::milliseconds timeout) override {
     if (arrival_ > Clock::now() + timeout)
       return Timeout(Describe() + ": recorded move is longer than the timeout");
     std::this_thread::sleep_until(arrival_);
     SetState(DeviceState::kReady);
     return Status::Ok();
   }
-  Status Stop() override {
+  Status DoStop() override {
     arrival_ = Clock::now();
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
 
@@ -279,14 +276,15 @@ class ReplayLight : public ReplayDevice<Light> {
  public:
   using ReplayDevice::ReplayDevice;
   LightCapabilities capabilities() const override { return {.dimmable = true}; }
-  Status SetOn(bool on) override { return SetLevel(on ? 1 : 0); }
-  Status SetLevel(double level) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetLevel"));
+
+ protected:
+  Status DoSetOn(bool on) override { return DoSetLevel(on ? 1 : 0); }
+  Status DoSetLevel(double level) override {
     level_ = level;
     source_->SetLight(info().name, level);
     return Status::Ok();
   }
-  Result<bool> IsOn() override { return level_ > 0; }
+  Result<bool> DoIsOn() override { return level_ > 0; }
 
  private:
   double level_ = 0;
@@ -295,12 +293,13 @@ class ReplayLight : public ReplayDevice<Light> {
 class ReplayTriggerLine : public ReplayDevice<TriggerLine> {
  public:
   using ReplayDevice::ReplayDevice;
-  Status Pulse(std::chrono::microseconds) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
+
+ protected:
+  Status DoPulse(std::chrono::microseconds) override {
     source_->triggers.Fire(info().name);
     return Status::Ok();
   }
-  Status Set(bool active) override {
+  Status DoSet(bool active) override {
     if (active) source_->triggers.Fire(info().name);
     return Status::Ok();
   }
@@ -309,8 +308,10 @@ class ReplayTriggerLine : public ReplayDevice<TriggerLine> {
 class ReplayInputLine : public ReplayDevice<InputLine> {
  public:
   using ReplayDevice::ReplayDevice;
-  Result<bool> IsActive() override { return false; }
-  void OnChange(std::function<void(bool)>) override {}
+
+ protected:
+  Result<bool> DoIsActive() override { return false; }
+  void DoOnChange(std::function<void(bool)>) override {}
 };
 
 class ReplayCamera : public ReplayDevice<Camera> {
@@ -329,37 +330,33 @@ class ReplayCamera : public ReplayDevice<Camera> {
             .readout_s = 0,
             .download_s = 0};
   }
-  Status Configure(const CaptureSettings& settings) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+
+ protected:
+  Status DoConfigure(const CaptureSettings& settings) override {
     settings_ = settings;
     return Status::Ok();
   }
-  Status Arm() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+  Status DoArm() override {
     Unsubscribe();
     if (settings_.trigger == TriggerSource::kLine) {
       line_ = settings_.trigger_line;
       subscription_ = source_->triggers.Subscribe(line_, [this] { OnTrigger(); });
     }
-    SetState(DeviceState::kBusy);
     return Status::Ok();
   }
-  Status Disarm() override {
+  Status DoDisarm() override {
     Unsubscribe();
     std::lock_guard<std::mutex> lock(mutex_);
     pending_.clear();
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
-  Status SoftwareTrigger() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
+  Status DoSoftwareTrigger() override {
     OnTrigger();
     return Status::Ok();
   }
   // The replay's trigger bus hands this camera each pulse with its exact time.
-  void LineTriggerSent(int64_t) override {}
-  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
+  void DoLineTriggerSent(int64_t) override {}
+  Result<Frame> DoWaitFrame(std::chrono::milliseconds timeout) override {
     Pending next;
     {
       std::unique_lock<std::mutex> lock(mutex_);

@@ -486,14 +486,14 @@ class SimTurntable : public SimDevice<PolledTurntable> {
   SimTurntable(DeviceInfo info, std::shared_ptr<SimWorld> world)
       : SimDevice(std::move(info), world), controller_(world->turntable_controller()) {}
   TurntableCapabilities capabilities() const override { return controller_.capabilities(); }
-  Status Home(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "Home"));
+
+ protected:
+  Status DoHome(std::chrono::milliseconds timeout) override {
     controller_.StartHome();
     MoveStarted(0);
-    return WaitInPosition(timeout);
+    return DoWaitInPosition(timeout);
   }
-  Status StartMove(double target_deg, const MotionProfile& p) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "StartMove"));
+  Status DoStartMove(double target_deg, const MotionProfile& p) override {
     HR_RETURN_IF_ERROR(CheckMoveRequest(Describe(), target_deg, p, capabilities()));
     controller_.ClearFault();
     const TurntableFaultCode refused = controller_.StartMove(target_deg, p);
@@ -502,9 +502,7 @@ class SimTurntable : public SimDevice<PolledTurntable> {
     MoveStarted(target_deg);
     return Status::Ok();
   }
-  Result<TurntableStatus> ReadStatus() override {
-    HR_RETURN_IF_ERROR(RequireState(
-        {DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "ReadStatus"));
+  Result<TurntableStatus> DoReadStatus() override {
     const TurntableControllerStatus c = controller_.Poll();
     TurntableStatus s{.position_deg = c.position_deg,
                       .target_deg = target_deg(),
@@ -517,8 +515,7 @@ class SimTurntable : public SimDevice<PolledTurntable> {
   }
   // Polls like a real driver reading the status register, so that Stop() from
   // another thread (an e-stop) ends the wait at once.
-  Status WaitInPosition(std::chrono::milliseconds timeout) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady, DeviceState::kBusy}, "WaitInPosition"));
+  Status DoWaitInPosition(std::chrono::milliseconds timeout) override {
     return WaitUntilDone(timeout, std::chrono::milliseconds(2), [this]() -> Result<MotionPoll> {
       const TurntableControllerStatus c = controller_.Poll();
       MotionPoll p{.position_deg = c.position_deg, .done = c.in_position, .fault = std::nullopt};
@@ -526,12 +523,9 @@ class SimTurntable : public SimDevice<PolledTurntable> {
       return p;
     });
   }
-  Status Stop() override {
-    HR_RETURN_IF_ERROR(
-        RequireState({DeviceState::kReady, DeviceState::kBusy, DeviceState::kFaulted}, "Stop"));
+  Status DoStop() override {
     controller_.Stop();
     StopRequested();
-    StopDone();
     return Status::Ok();
   }
 
@@ -544,19 +538,17 @@ class SimLight : public SimDevice<Light> {
   SimLight(DeviceInfo info, std::shared_ptr<SimWorld> world, std::string scene_light)
       : SimDevice(std::move(info), std::move(world)), scene_light_(std::move(scene_light)) {}
   LightCapabilities capabilities() const override { return {.dimmable = true}; }
-  Status SetOn(bool on) override { return SetLevel(on ? 1.0 : 0.0); }
-  Status SetLevel(double level) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "SetLevel"));
+
+ protected:
+  Status DoSetOn(bool on) override { return DoSetLevel(on ? 1.0 : 0.0); }
+  Status DoSetLevel(double level) override {
     if (!(level >= 0 && level <= 1)) return OutOfRange(Describe() + ": level must be within 0..1");
     return world_->SetLightLevel(scene_light_, level);
   }
-  Result<bool> IsOn() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsOn"));
-    return world_->LightLevel(scene_light_) > 0;
-  }
-  Status Close() override {
+  Result<bool> DoIsOn() override { return world_->LightLevel(scene_light_) > 0; }
+  Status DoClose() override {
     if (state() == DeviceState::kReady) (void)world_->SetLightLevel(scene_light_, 0.0);
-    return SimDevice::Close();
+    return SimDevice::DoClose();
   }
 
  private:
@@ -566,15 +558,15 @@ class SimLight : public SimDevice<Light> {
 class SimTriggerLine : public SimDevice<TriggerLine> {
  public:
   using SimDevice::SimDevice;
-  Status Pulse(std::chrono::microseconds width) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Pulse"));
+
+ protected:
+  Status DoPulse(std::chrono::microseconds width) override {
     if (width.count() <= 0) return InvalidArgument(Describe() + ": pulse width must be positive");
     world_->triggers().Fire(info().name);  // cameras latch on the rising edge
     std::this_thread::sleep_for(width);
     return Status::Ok();
   }
-  Status Set(bool active) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Set"));
+  Status DoSet(bool active) override {
     if (active && !active_) world_->triggers().Fire(info().name);
     active_ = active;
     return Status::Ok();
@@ -590,12 +582,13 @@ class SimInputLine : public SimDevice<InputLine> {
  public:
   using SimDevice::SimDevice;
   ~SimInputLine() override { world_->SetInputCallback(info().name, nullptr); }
-  Result<bool> IsActive() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "IsActive"));
+
+ protected:
+  Result<bool> DoIsActive() override {
     if (world_->InputsLost()) return Fault(InputLost());
     return world_->InputActive();
   }
-  void OnChange(std::function<void(bool active)> callback) override {
+  void DoOnChange(std::function<void(bool active)> callback) override {
     if (!callback) {
       world_->SetInputCallback(info().name, nullptr);
       return;
@@ -637,8 +630,9 @@ class SimCamera : public SimDevice<Camera> {
             .readout_s = world_->scene().camera_readout_s,
             .download_s = world_->scene().camera_download_s};
   }
-  Status Configure(const CaptureSettings& s) override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Configure"));
+
+ protected:
+  Status DoConfigure(const CaptureSettings& s) override {
     const auto caps = capabilities();
     HR_RETURN_IF_ERROR(CheckExposure(*this, caps, s.exposure_s));
     if (s.format == PixelFormat::kEncoded)
@@ -651,7 +645,7 @@ class SimCamera : public SimDevice<Camera> {
   }
   // A camera that dropped off the bus stays absent for the configured number
   // of Open() attempts (fault camera_gone), like a DSLR that re-enumerates.
-  Status Open() override {
+  Status DoOpen() override {
     if (gone_) {
       if (open_failures_left_ > 0) {
         --open_failures_left_;
@@ -661,14 +655,13 @@ class SimCamera : public SimDevice<Camera> {
       gone_ = false;
     }
     StopWorker();
-    return SimDevice::Open();
+    return SimDevice::DoOpen();
   }
-  Status HealthCheck() override {
+  Status DoHealthCheck() override {
     if (gone_) return Fault(Unavailable("not found on the bus"));
-    return SimDevice::HealthCheck();
+    return SimDevice::DoHealthCheck();
   }
-  Status Arm() override {
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kReady}, "Arm"));
+  Status DoArm() override {
     StopWorker();
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -681,25 +674,21 @@ class SimCamera : public SimDevice<Camera> {
       subscribed_line_ = settings_.trigger_line;
       subscription_ = world_->triggers().Subscribe(subscribed_line_, [this] { OnTrigger(); });
     }
-    SetState(DeviceState::kBusy);
     return Status::Ok();
   }
-  Status Disarm() override {
+  Status DoDisarm() override {
     StopWorker();
-    if (state() == DeviceState::kBusy) SetState(DeviceState::kReady);
     return Status::Ok();
   }
-  Status SoftwareTrigger() override {
+  Status DoSoftwareTrigger() override {
     if (gone_) return Fault(Unavailable("dropped off the bus; reopen it"));
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "SoftwareTrigger (after Arm)"));
     OnTrigger();
     return Status::Ok();
   }
   // The world's trigger bus hands this camera each pulse with its exact time.
-  void LineTriggerSent(int64_t) override {}
-  Result<Frame> WaitFrame(std::chrono::milliseconds timeout) override {
+  void DoLineTriggerSent(int64_t) override {}
+  Result<Frame> DoWaitFrame(std::chrono::milliseconds timeout) override {
     if (gone_) return Fault(Unavailable("dropped off the bus; reopen it"));
-    HR_RETURN_IF_ERROR(RequireState({DeviceState::kBusy}, "WaitFrame (after Arm)"));
     std::unique_lock<std::mutex> lock(mutex_);
     if (!cv_.wait_for(lock, timeout, [this] { return !ready_.empty() || gone_; })) {
       return Timeout(Describe() + ": no frame within " + std::to_string(timeout.count()) + " ms");
@@ -709,9 +698,9 @@ class SimCamera : public SimDevice<Camera> {
     ready_.pop_front();
     return frame;
   }
-  Status Close() override {
+  Status DoClose() override {
     StopWorker();
-    return SimDevice::Close();
+    return SimDevice::DoClose();
   }
 
  private:
