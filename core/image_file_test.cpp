@@ -9,7 +9,7 @@
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/image_test_util.h"
+#include "tests/support/image_test_util.h"
 
 namespace hairrig {
 namespace {

@@ -4,7 +4,7 @@
 
 #include "core/file_util.h"
 #include "core/strand_io.h"
-#include "core/strand_test_util.h"
+#include "tests/support/strand_test_util.h"
 
 namespace hairrig {
 namespace {

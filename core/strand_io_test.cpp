@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "core/file_util.h"
-#include "core/strand_test_util.h"
+#include "tests/support/strand_test_util.h"
 
 namespace hairrig {
 namespace {

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/image_test_util.h"
+#include "tests/support/image_test_util.h"
 
 namespace hairrig {
 namespace {

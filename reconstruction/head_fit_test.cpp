@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "reconstruction/hair_segmentation.h"
-#include "reconstruction/head_scene_testing.h"
+#include "tests/support/head_scene_testing.h"
 
 namespace hairrig {
 namespace {

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "reconstruction/plane_scene_testing.h"
+#include "tests/support/plane_scene_testing.h"
 
 namespace hairrig {
 namespace {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/statistics.h"
-#include "reconstruction/plane_scene_testing.h"
+#include "tests/support/plane_scene_testing.h"
 
 namespace hairrig {
 namespace {

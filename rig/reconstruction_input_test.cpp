@@ -18,11 +18,11 @@
 #include "calibration/calibration_report.h"
 #include "calibration/capture_calibration.h"
 #include "core/head_config.h"
-#include "core/image_test_util.h"
 #include "core/sha256.h"
-#include "reconstruction/head_scene_testing.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/journal_records.h"
+#include "tests/support/head_scene_testing.h"
+#include "tests/support/image_test_util.h"
 #include "tests/support/two_camera_rig.h"
 
 namespace hairrig {

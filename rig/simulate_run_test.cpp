@@ -9,10 +9,10 @@
 #include "core/file_util.h"
 #include "core/json_file.h"
 #include "core/strand_io.h"
-#include "core/strand_test_util.h"
 #include "sim_rig/sim_rig.h"
 #include "simulation/fit_strand_file.h"
 #include "tests/support/capture_test_util.h"
+#include "tests/support/strand_test_util.h"
 
 namespace hairrig {
 namespace {

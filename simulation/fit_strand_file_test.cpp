@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/strand_io.h"
-#include "core/strand_test_util.h"
+#include "tests/support/strand_test_util.h"
 
 namespace hairrig {
 namespace {

@@ -27,7 +27,6 @@
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "core/head_json.h"
-#include "core/image_test_util.h"
 #include "core/json_file.h"
 #include "core/sha256.h"
 #include "core/strand_io.h"
@@ -38,6 +37,7 @@
 #include "rig/replay.h"
 #include "simulation/helix_model.h"
 #include "tests/support/calibration_documents.h"
+#include "tests/support/image_test_util.h"
 #include "tests/support/two_camera_rig.h"
 
 namespace hairrig {

@@ -11,7 +11,7 @@
 #include "core/head_model.h"
 #include "reconstruction/hair_segmentation.h"
 #include "reconstruction/head_fit.h"
-#include "reconstruction/plane_scene_testing.h"
+#include "tests/support/plane_scene_testing.h"
 
 namespace hairrig::head_scene {
 
