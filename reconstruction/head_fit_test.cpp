@@ -1,4 +1,4 @@
-// The head fit on the analytic subject of head_scene_testing.h: the labels
+// The head fit on the analytic subject of tests/support/head_scene_testing.h: the labels
 // are exact, so the fit's errors are the method's own.
 #include "reconstruction/head_fit.h"
 

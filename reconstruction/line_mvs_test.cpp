@@ -1,4 +1,4 @@
-// Line MVS on an analytic scene (plane_scene_testing.h): the orientation maps
+// Line MVS on an analytic scene (tests/support/plane_scene_testing.h): the orientation maps
 // and grey images are exact projections, so the depth found must be the plane's.
 #include "reconstruction/line_mvs.h"
 

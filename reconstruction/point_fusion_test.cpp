@@ -1,5 +1,5 @@
 // Fusion of line depth maps into oriented points, on the analytic plane of
-// strands (plane_scene_testing.h) with exact depths and directions that the
+// strands (tests/support/plane_scene_testing.h) with exact depths and directions that the
 // stereo got wrong in a known way.
 #include "reconstruction/point_fusion.h"
 

@@ -3,7 +3,7 @@
 // capture, is never used); and where the strands' head comes from: a head
 // file, or a head fitted to the views' labels (written beside the
 // reconstruction for reconstruct --head and simulate --head), on the analytic
-// subject of reconstruction/head_scene_testing.h.
+// subject of tests/support/head_scene_testing.h.
 #include "rig/reconstruction_input.h"
 
 #include <gtest/gtest.h>
