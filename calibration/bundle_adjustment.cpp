@@ -291,27 +291,8 @@ Status ValidateInput(const BundleAdjustmentInput& input) {
   return Status::Ok();
 }
 
-}  // namespace
-
-Status BundleAdjustmentOptions::Check() const {
-  if (!(huber_px > 0) || !std::isfinite(huber_px))
-    return InvalidArgument("huber_px must be a finite positive number of pixels");
-  if (max_iterations < 1) {
-    return InvalidArgument("max_iterations must be at least 1, got " +
-                           std::to_string(max_iterations));
-  }
-  if (threads < 1)
-    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
-  return Status::Ok();
-}
-
-Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
-                                                   const BundleAdjustmentOptions& options) {
-  HR_RETURN_IF_ERROR(options.Check().WithContext("bundle adjustment"));
-  HR_RETURN_IF_ERROR(ValidateInput(input));
-  const bool turntable = options.mode == CalibrationMode::kTurntable;
-  ceres::Problem problem;
-  Blocks b(input, turntable);
+// The parameter blocks' initial values: the input's, the turntable mode's derived from them.
+void InitialiseBlocks(const BundleAdjustmentInput& input, bool turntable, Blocks& b) {
   for (size_t c = 0; c < input.cameras.size(); ++c) {
     const auto params = input.cameras[c].ToParams();
     std::copy(params.begin(), params.end(), b.intrinsics[c]);
@@ -320,8 +301,6 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     b.view_poses[v].Set(input.views[v].cam_from_box_init);
 
   // Turntable mode: cameras from their best-observed view, angles from the encoder.
-  auto& intrinsics = b.intrinsics;
-  auto& view_poses = b.view_poses;
   auto& turntable_from_box = b.turntable_from_box;
   auto& cam_from_world = b.cam_from_world;
   auto& stop_rad = b.stop_rad;
@@ -340,7 +319,16 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
           WorldFromTurntable(v.turntable_deg).Inverse());
     }
   }
+}
 
+// The residual blocks: one per observed corner, view by view, under one shared Huber loss.
+void AddCornerResiduals(const BundleAdjustmentInput& input, const BundleAdjustmentOptions& options,
+                        bool turntable, Blocks& b, ceres::Problem& problem) {
+  auto& intrinsics = b.intrinsics;
+  auto& view_poses = b.view_poses;
+  auto& turntable_from_box = b.turntable_from_box;
+  auto& cam_from_world = b.cam_from_world;
+  auto& stop_rad = b.stop_rad;
   ceres::LossFunction* loss =
       new ceres::HuberLoss(options.huber_px);  // shared; the problem deletes it once
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
@@ -362,9 +350,12 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
       }
     }
   }
-  // Manifolds and the gauge.
-  double prior_sigma_px =
-      1.0;  // the corner noise the prior weighs against; updated after a first solve
+}
+
+// The intrinsics' manifolds (k3 held), holds and priors; true when a prior is soft.
+bool HoldIntrinsics(const BundleAdjustmentInput& input, const BundleAdjustmentOptions& options,
+                    Blocks& b, double* prior_sigma_px, ceres::Problem& problem) {
+  auto& intrinsics = b.intrinsics;
   bool soft_prior = false;
   for (size_t c = 0; c < intrinsics.size(); ++c) {
     double* intr = intrinsics[c];
@@ -376,7 +367,7 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
     } else if (options.hard_prior || !has_sd) {
       problem.SetParameterBlockConstant(intr);
     } else {
-      IntrinsicsPrior prior{{}, {}, &prior_sigma_px};
+      IntrinsicsPrior prior{{}, {}, prior_sigma_px};
       std::copy(intr, intr + CameraIntrinsics::kNumParams, prior.prior.begin());
       std::vector<int> held;
       for (int i = 0; i < CameraIntrinsics::kNumParams; ++i) {
@@ -393,6 +384,15 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
       soft_prior = true;
     }
   }
+  return soft_prior;
+}
+
+// The poses' quaternion manifolds and, in turntable mode, the gauge (box height, first stop).
+void FixGauge(bool turntable, Blocks& b, ceres::Problem& problem) {
+  auto& view_poses = b.view_poses;
+  auto& turntable_from_box = b.turntable_from_box;
+  auto& cam_from_world = b.cam_from_world;
+  auto& stop_rad = b.stop_rad;
   if (turntable) {
     for (PoseBlock& cw : cam_from_world) {
       if (problem.HasParameterBlock(cw.q))
@@ -408,7 +408,12 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
         problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
     }
   }
+}
 
+// The solve; with a soft prior, a second one with the prior weighed against the noise found.
+void SolveProblem(const BundleAdjustmentInput& input, const BundleAdjustmentOptions& options,
+                  bool turntable, bool soft_prior, const Blocks& b, double* prior_sigma_px,
+                  ceres::Problem& problem, ceres::Solver::Summary* summary) {
   ceres::Solver::Options solver;
   solver.linear_solver_type = turntable ? ceres::DENSE_QR : ceres::DENSE_SCHUR;
   solver.max_num_iterations = options.max_iterations;
@@ -416,17 +421,21 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   solver.function_tolerance = 1e-12;
   solver.parameter_tolerance = 1e-12;
   solver.gradient_tolerance = 1e-14;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  if (soft_prior && summary.IsSolutionUsable()) {
+  ceres::Solve(solver, &problem, summary);
+  if (soft_prior && summary->IsSolutionUsable()) {
     // Weigh the prior against the corner noise actually found, and solve again.
-    prior_sigma_px = CornerResidualSigma(b, input, summary.num_effective_parameters);
-    ceres::Solve(solver, &problem, &summary);
+    *prior_sigma_px = CornerResidualSigma(b, input, summary->num_effective_parameters);
+    ceres::Solve(solver, &problem, summary);
   }
-  if (!summary.IsSolutionUsable()) {
-    return FailedPrecondition("bundle adjustment did not converge: " + summary.message);
-  }
+}
 
+// The result: the estimate and its reprojection errors, its uncertainties sized but unset.
+BundleAdjustmentResult ReadResult(const BundleAdjustmentInput& input, bool turntable,
+                                  const Blocks& b, const ceres::Solver::Summary& summary) {
+  auto& intrinsics = b.intrinsics;
+  auto& turntable_from_box = b.turntable_from_box;
+  auto& cam_from_world = b.cam_from_world;
+  auto& stop_rad = b.stop_rad;
   BundleAdjustmentResult result;
   result.iterations = static_cast<int>(summary.iterations.size());
   result.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -459,6 +468,42 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   result.intrinsics_stddev.assign(input.cameras.size(), {});
   result.intrinsics_covariance.assign(input.cameras.size(), IntrinsicsCovariance::Constant(NAN));
   result.view_uncertainty.assign(input.views.size(), {});
+  return result;
+}
+
+}  // namespace
+
+Status BundleAdjustmentOptions::Check() const {
+  if (!(huber_px > 0) || !std::isfinite(huber_px))
+    return InvalidArgument("huber_px must be a finite positive number of pixels");
+  if (max_iterations < 1) {
+    return InvalidArgument("max_iterations must be at least 1, got " +
+                           std::to_string(max_iterations));
+  }
+  if (threads < 1)
+    return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
+  return Status::Ok();
+}
+
+Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
+                                                   const BundleAdjustmentOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check().WithContext("bundle adjustment"));
+  HR_RETURN_IF_ERROR(ValidateInput(input));
+  const bool turntable = options.mode == CalibrationMode::kTurntable;
+  ceres::Problem problem;
+  Blocks b(input, turntable);
+  InitialiseBlocks(input, turntable, b);
+  AddCornerResiduals(input, options, turntable, b, problem);
+  double prior_sigma_px =
+      1.0;  // the corner noise the prior weighs against; updated after a first solve
+  const bool soft_prior = HoldIntrinsics(input, options, b, &prior_sigma_px, problem);
+  FixGauge(turntable, b, problem);
+  ceres::Solver::Summary summary;
+  SolveProblem(input, options, turntable, soft_prior, b, &prior_sigma_px, problem, &summary);
+  if (!summary.IsSolutionUsable()) {
+    return FailedPrecondition("bundle adjustment did not converge: " + summary.message);
+  }
+  BundleAdjustmentResult result = ReadResult(input, turntable, b, summary);
   FillUncertainties(problem, b, input, &result);
   return result;
 }
