@@ -6,6 +6,8 @@
 
 #include <condition_variable>
 #include <mutex>
+#include <optional>
+#include <vector>
 
 #include "sim_hw/sim_gpio.h"
 
@@ -66,6 +68,33 @@ TEST(GpioDevices, TriggerPulseHasAtLeastTheRequestedWidth) {
   EXPECT_EQ((*trig)->Pulse(std::chrono::microseconds(0)).code(), StatusCode::kInvalidArgument);
 }
 
+// Records what an input line's OnChange callback hears, for a test to wait on.
+class EdgeRecorder {
+ public:
+  explicit EdgeRecorder(InputLine& line) : line_(line) {
+    line.OnChange([this](bool active) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      seen_.push_back(active);
+      changed_.notify_all();
+    });
+  }
+  // The n-th level heard (from 1); nullopt when it did not come within 5 s.
+  std::optional<bool> Wait(size_t n) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!changed_.wait_for(lock, milliseconds(5000), [&] { return seen_.size() >= n; }))
+      return std::nullopt;
+    return seen_[n - 1];
+  }
+
+  ~EdgeRecorder() { line_.OnChange(nullptr); }
+
+ private:
+  InputLine& line_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<bool> seen_;
+};
+
 TEST(GpioDevices, SafetyInputReportsEveryEdgeWithItsPolarity) {
   Gpio g;
   auto estop = g.Make<InputLine>(
@@ -74,28 +103,13 @@ TEST(GpioDevices, SafetyInputReportsEveryEdgeWithItsPolarity) {
   ASSERT_TRUE(estop.ok()) << estop.status().ToString();
   ASSERT_TRUE(g.provider->DriveInput("hairrig-io", 3, true).ok());  // released button, pulled up
   ASSERT_TRUE((*estop)->Open().ok());
-  std::mutex m;
-  std::condition_variable cv;
-  std::vector<bool> seen;
-  (*estop)->OnChange([&](bool active) {
-    std::lock_guard<std::mutex> lock(m);
-    seen.push_back(active);
-    cv.notify_all();
-  });
+  EdgeRecorder edges(**estop);
   EXPECT_FALSE((*estop)->IsActive().value());
   ASSERT_TRUE(g.provider->DriveInput("hairrig-io", 3, false).ok());  // pressed: pulls the line low
-  {
-    std::unique_lock<std::mutex> lock(m);
-    ASSERT_TRUE(cv.wait_for(lock, milliseconds(5000), [&] { return seen.size() == 1; }));
-  }
-  EXPECT_TRUE(seen[0]);
+  EXPECT_EQ(edges.Wait(1), std::optional<bool>(true));
   EXPECT_TRUE((*estop)->IsActive().value());
   ASSERT_TRUE(g.provider->DriveInput("hairrig-io", 3, true).ok());
-  {
-    std::unique_lock<std::mutex> lock(m);
-    ASSERT_TRUE(cv.wait_for(lock, milliseconds(5000), [&] { return seen.size() == 2; }));
-  }
-  EXPECT_FALSE(seen[1]);
+  EXPECT_EQ(edges.Wait(2), std::optional<bool>(false));
   EXPECT_TRUE((*estop)->Close().ok());
 }
 
@@ -107,21 +121,10 @@ TEST(GpioDevices, ASafetyInputThatCannotBeReadCountsAsPressed) {
                                  "{name: estop, serial: E1, chip: hairrig-io, line: 4}");
   ASSERT_TRUE(estop.ok()) << estop.status().ToString();
   ASSERT_TRUE((*estop)->Open().ok());
-  std::mutex m;
-  std::condition_variable cv;
-  std::vector<bool> seen;
-  (*estop)->OnChange([&](bool active) {
-    std::lock_guard<std::mutex> lock(m);
-    seen.push_back(active);
-    cv.notify_all();
-  });
+  EdgeRecorder edges(**estop);
   EXPECT_FALSE((*estop)->IsActive().value());
   ASSERT_TRUE(g.provider->BreakLine("hairrig-io", 4, Unavailable("No such device")).ok());
-  {
-    std::unique_lock<std::mutex> lock(m);
-    ASSERT_TRUE(cv.wait_for(lock, milliseconds(5000), [&] { return !seen.empty(); }));
-  }
-  EXPECT_TRUE(seen[0]);
+  EXPECT_EQ(edges.Wait(1), std::optional<bool>(true));
   EXPECT_EQ((*estop)->state(), DeviceState::kFaulted);
   EXPECT_FALSE((*estop)->IsActive().ok());
   const std::string said = DescribeSafetyStop(**estop);
