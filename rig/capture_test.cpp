@@ -433,6 +433,15 @@ TEST(CaptureFaults, CameraThatStaysGoneLeavesTheCaptureIncomplete) {
   ExpectGroundTruthOfEveryStoredView(s.dir, 38);
 }
 
+// The frame timeout of the late-download test: above a frame's render time
+// on a busy machine (a sanitizer build renders about ten times slower), far
+// below the late download's 300 s.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr const char* kLateFrameTimeout = "frame_timeout_s: 20";
+#else
+constexpr const char* kLateFrameTimeout = "frame_timeout_s: 2";
+#endif
+
 TEST(CaptureFaults, LateDownloadTimesOutAndIsReshot) {
   const std::string dir = FreshDir("fault_late");
   const CaptureSummary s = Capture(
@@ -441,7 +450,8 @@ TEST(CaptureFaults, LateDownloadTimesOutAndIsReshot) {
           WithRetries(
               SimWithFaults(
                   "    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 300}"),
-              "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n")),
+              "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  " +
+                  std::string(kLateFrameTimeout) + "\n")),
       dir + "/c");
   EXPECT_EQ(s.status, "complete") << s.message;
   EXPECT_EQ(s.views_completed, 38);
@@ -949,7 +959,12 @@ TEST(CaptureFaults, FullDiskInAGroundTruthWriteStopsTheRunAndResumeFinishesIt) {
     const auto s = RunCapture(o);
     ASSERT_TRUE(s.ok()) << "a full disk is a stopped run, not an error: " << s.status().ToString();
     EXPECT_EQ(s->status, "stopped") << s->message;
-    EXPECT_LT(s->views_completed, 38);
+    // The 1st file is written before anything moves. The 8th is written by a
+    // camera's thread after it renders one of the first views, so on a busy
+    // machine the sweep may have shot every view by the time it fails.
+    if (at == 1) {
+      EXPECT_LT(s->views_completed, 38);
+    }
     EXPECT_NE(s->message.find("No space left on device"), std::string::npos) << s->message;
     EXPECT_NE(s->message.find("/ground_truth/"), std::string::npos) << s->message;
     EXPECT_NE(s->message.find("--resume"), std::string::npos) << s->message;
