@@ -20,7 +20,19 @@ namespace {
 
 constexpr double kDegToRad = kPi / 180;
 
-// A box corner in the turntable mode: cam_from_world * Rz(theta) * turntable_from_box.
+// A box point in the turntable mode's camera frame:
+// cam_from_world * Rz(theta) * turntable_from_box * p_box.
+template <typename T>
+CornerVec3<T> TurntablePoint(const T* q_cam_from_world, const T* t_cam_from_world,
+                             const T* theta_rad, const T* q_turntable_from_box,
+                             const T* t_turntable_from_box, const CornerVec3<T>& p_box) {
+  const CornerVec3<T> p_tt = PosedPoint(q_turntable_from_box, t_turntable_from_box, p_box);
+  const T c = cos(theta_rad[0]), s = sin(theta_rad[0]);
+  const CornerVec3<T> p_world(c * p_tt.x() - s * p_tt.y(), s * p_tt.x() + c * p_tt.y(), p_tt.z());
+  return PosedPoint(q_cam_from_world, t_cam_from_world, p_world);
+}
+
+// A box corner in the turntable mode (TurntablePoint).
 struct TurntableCorner {
   Eigen::Vector2d observed;
   Eigen::Vector3d p_box;
@@ -28,14 +40,92 @@ struct TurntableCorner {
   bool operator()(const T* intrinsics, const T* q_cam_from_world, const T* t_cam_from_world,
                   const T* theta_rad, const T* q_turntable_from_box, const T* t_turntable_from_box,
                   T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q_tb(q_turntable_from_box);
-    const CornerVec3<T> p_tt =
-        q_tb * p_box.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_turntable_from_box);
-    const T c = cos(theta_rad[0]), s = sin(theta_rad[0]);
-    const CornerVec3<T> p_world(c * p_tt.x() - s * p_tt.y(), s * p_tt.x() + c * p_tt.y(), p_tt.z());
-    const Eigen::Map<const Eigen::Quaternion<T>> q_cw(q_cam_from_world);
-    const CornerVec3<T> p_cam = q_cw * p_world + Eigen::Map<const CornerVec3<T>>(t_cam_from_world);
+    const CornerVec3<T> p_cam =
+        TurntablePoint(q_cam_from_world, t_cam_from_world, theta_rad, q_turntable_from_box,
+                       t_turntable_from_box, CornerVec3<T>(p_box.cast<T>()));
     return ProjectResidual(intrinsics, p_cam, observed, residual);
+  }
+};
+
+// Point (a, b) of a tag's own frame on the box being refined: TagPointInBox
+// with the delta blocks of the tag's face and of the tag.
+struct RefinedBoxPoint {
+  const BoxFace* face = nullptr;
+  const BoxTag* tag = nullptr;
+  double a_mm = 0, b_mm = 0;
+  template <typename T>
+  CornerVec3<T> operator()(const T* face_delta, const T* tag_delta) const {
+    return TagPointInBox(*face, *tag, a_mm, b_mm, face_delta, tag_delta);
+  }
+};
+
+// TurntableCorner with the corner on the box being refined.
+struct TurntableRefinedCorner {
+  Eigen::Vector2d observed;
+  RefinedBoxPoint point;
+  template <typename T>
+  bool operator()(const T* intrinsics, const T* q_cam_from_world, const T* t_cam_from_world,
+                  const T* theta_rad, const T* q_turntable_from_box, const T* t_turntable_from_box,
+                  const T* face_delta, const T* tag_delta, T* residual) const {
+    const CornerVec3<T> p_cam =
+        TurntablePoint(q_cam_from_world, t_cam_from_world, theta_rad, q_turntable_from_box,
+                       t_turntable_from_box, point(face_delta, tag_delta));
+    return ProjectResidual(intrinsics, p_cam, observed, residual);
+  }
+};
+
+// PosedCorner (calibration/corner_cost.h) with the corner on the box being refined.
+struct PosedRefinedCorner {
+  Eigen::Vector2d observed;
+  RefinedBoxPoint point;
+  template <typename T>
+  bool operator()(const T* intrinsics, const T* q_cam_from_box, const T* t_cam_from_box,
+                  const T* face_delta, const T* tag_delta, T* residual) const {
+    return ProjectResidual(intrinsics,
+                           PosedPoint(q_cam_from_box, t_cam_from_box, point(face_delta, tag_delta)),
+                           observed, residual);
+  }
+};
+
+// A Gaussian prior holding a box delta block (3 values) at 0: delta / sd,
+// scaled by the corner noise (*sigma_px) as IntrinsicsPrior is. Held values
+// (sd 0) give 0.
+struct BoxDeltaPrior {
+  std::array<double, 3> inverse_sd;
+  const double* sigma_px;
+  template <typename T>
+  bool operator()(const T* delta, T* residual) const {
+    for (size_t i = 0; i < 3; ++i) residual[i] = delta[i] * T(inverse_sd[i] * *sigma_px);
+    return true;
+  }
+};
+
+// The box refinement's gauge: the observed tags' corners keep their mean
+// position (3 rows: the sum of their displacements) and their mean orientation
+// (3 rows: the sum of (rest - centroid) x displacement, over the corners' RMS
+// radius), each weighted by `weight` per mm. Parameters: the face delta blocks,
+// then the tag delta blocks; point i uses blocks face_block[i] and tag_block[i].
+struct BoxGauge {
+  std::vector<RefinedBoxPoint> points;
+  std::vector<int> face_block, tag_block;
+  std::vector<Eigen::Vector3d> rest;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double radius_mm = 1;
+  double weight = 1;
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residual) const {
+    CornerVec3<T> sum_moved = CornerVec3<T>::Zero(), sum_turned = CornerVec3<T>::Zero();
+    for (size_t i = 0; i < points.size(); ++i) {
+      const CornerVec3<T> moved =
+          points[i](parameters[face_block[i]], parameters[tag_block[i]]) - rest[i].cast<T>();
+      sum_moved += moved;
+      sum_turned += CornerVec3<T>((rest[i] - centroid).cast<T>()).cross(moved);
+    }
+    for (int k = 0; k < 3; ++k) {
+      residual[k] = T(weight) * sum_moved[k];
+      residual[3 + k] = T(weight / radius_mm) * sum_turned[k];
+    }
+    return true;
   }
 };
 
@@ -78,38 +168,69 @@ struct PoseBlock {
 
 // Every parameter block of the problem, all in one arena laid out in a fixed
 // order (intrinsics per camera, view poses, turntable_from_box, cam_from_world
-// per camera, stop angles): Ceres orders parameter blocks by address in
-// places (the blocks of an elimination group, the covariance's), so blocks
-// in separate allocations could give results whose last bits vary from run
-// to run.
+// per camera, stop angles, then with box refinement the face and tag deltas):
+// Ceres orders parameter blocks by address in places (the blocks of an
+// elimination group, the covariance's), so blocks in separate allocations
+// could give results whose last bits vary from run to run.
 struct Blocks {
-  Blocks(const BundleAdjustmentInput& input, bool turntable_mode) : turntable(turntable_mode) {
-    std::set<int> stops;
-    for (const CalibrationView& v : input.views) stops.insert(v.stop);
+  Blocks(const BundleAdjustmentInput& input, bool turntable_mode, bool refine_box)
+      : turntable(turntable_mode), box(&input.box) {
+    std::set<int> stops, tags, faces;
+    for (const CalibrationView& v : input.views) {
+      stops.insert(v.stop);
+      for (const TagObservation& tag : v.tags) {
+        const BoxTag* t = refine_box ? box->FindTag(tag.id) : nullptr;
+        if (t != nullptr) tags.insert(t->id), faces.insert(t->face);
+      }
+    }
     const size_t cameras = input.cameras.size(), views = turntable ? 0 : input.views.size();
     const size_t poses = views + (turntable ? 1 + cameras : 0);
-    arena.assign(
-        cameras * CameraIntrinsics::kNumParams + poses * 7 + (turntable ? stops.size() : 0), 0.0);
+    arena.assign(cameras * CameraIntrinsics::kNumParams + poses * 7 +
+                     (turntable ? stops.size() : 0) + 3 * (tags.size() + faces.size()),
+                 0.0);
     double* next = arena.data();
     auto take = [&next](size_t n) { return std::exchange(next, next + n); };
     auto take_pose = [&take]() { return PoseBlock{take(4), take(3)}; };
     for (size_t c = 0; c < cameras; ++c) intrinsics.push_back(take(CameraIntrinsics::kNumParams));
     for (size_t v = 0; v < views; ++v) view_poses.push_back(take_pose());
-    if (!turntable) return;
-    turntable_from_box = take_pose();
-    for (size_t c = 0; c < cameras; ++c) cam_from_world.push_back(take_pose());
-    for (int stop : stops) stop_rad[stop] = take(1);
+    if (turntable) {
+      turntable_from_box = take_pose();
+      for (size_t c = 0; c < cameras; ++c) cam_from_world.push_back(take_pose());
+      for (int stop : stops) stop_rad[stop] = take(1);
+    }
+    for (int face : faces) face_delta[face] = take(3);
+    for (int id : tags) tag_delta[id] = take(3);
   }
   Blocks(const Blocks&) = delete;
   Blocks& operator=(const Blocks&) = delete;
 
   bool turntable = false;
+  const CalibBox* box = nullptr;
   std::vector<double> arena;              // sized once: the pointers below point into it
   std::vector<double*> intrinsics;        // per camera, CameraIntrinsics::kNumParams each
   std::vector<PoseBlock> view_poses;      // free mode, per view
   PoseBlock turntable_from_box;           // turntable mode
   std::vector<PoseBlock> cam_from_world;  // turntable mode, per camera
   std::map<int, double*> stop_rad;        // turntable mode, per stop
+  std::map<int, double*> face_delta;      // box refinement, per face index: offset, tilts (rad)
+  std::map<int, double*> tag_delta;       // box refinement, per tag id: du, dv, turn (rad)
+
+  bool Refined(const TagObservation& tag) const { return tag_delta.count(tag.id) > 0; }
+
+  // Corner k of an observed tag on the box being refined (RefinedBoxPoint).
+  RefinedBoxPoint Point(const TagObservation& tag, size_t k) const {
+    const BoxTag* t = box->FindTag(tag.id);
+    return {&box->faces[static_cast<size_t>(t->face)], t, kTagCornerSigns[k][0] * 0.5 * t->size_mm,
+            kTagCornerSigns[k][1] * 0.5 * t->size_mm};
+  }
+
+  // Corner k of an observed tag in the box frame, as the blocks hold it now.
+  Eigen::Vector3d Corner(const TagObservation& tag, size_t k) const {
+    if (!Refined(tag)) return tag.corners_box_mm[k];
+    const RefinedBoxPoint p = Point(tag, k);
+    return p(static_cast<const double*>(face_delta.at(p.tag->face)),
+             static_cast<const double*>(tag_delta.at(tag.id)));
+  }
 
   Rigid3d CamFromBox(const CalibrationView& v, size_t view_index) const {
     if (!turntable) return view_poses[view_index].ToRigid();
@@ -123,14 +244,21 @@ struct Blocks {
         {intrinsics[static_cast<size_t>(v.camera)], CameraIntrinsics::kNumParams}};
     if (!turntable) {
       out.insert(out.end(), {{view_poses[view_index].q, 4}, {view_poses[view_index].t, 3}});
-      return out;
+    } else {
+      PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
+      out.insert(out.end(), {{cw.q, 4},
+                             {cw.t, 3},
+                             {stop_rad.at(v.stop), 1},
+                             {turntable_from_box.q, 4},
+                             {turntable_from_box.t, 3}});
     }
-    PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
-    out.insert(out.end(), {{cw.q, 4},
-                           {cw.t, 3},
-                           {stop_rad.at(v.stop), 1},
-                           {turntable_from_box.q, 4},
-                           {turntable_from_box.t, 3}});
+    std::set<double*> box_blocks;
+    for (const TagObservation& tag : v.tags) {
+      if (!Refined(tag)) continue;
+      box_blocks.insert(face_delta.at(box->FindTag(tag.id)->face));
+      box_blocks.insert(tag_delta.at(tag.id));
+    }
+    for (double* block : box_blocks) out.emplace_back(block, 3);
     return out;
   }
 };
@@ -143,7 +271,7 @@ double ViewSquaredError(const Blocks& blocks, const CalibrationView& v, size_t v
   double sq = 0;
   for (const TagObservation& tag : v.tags)
     for (size_t i = 0; i < 4; ++i)
-      sq += (Project(k, pose * tag.corners_box_mm[i]) - tag.corners_px[i]).squaredNorm();
+      sq += (Project(k, pose * blocks.Corner(tag, i)) - tag.corners_px[i]).squaredNorm();
   return sq;
 }
 
@@ -174,12 +302,48 @@ Eigen::VectorXd Predict(const Blocks& blocks, const CalibrationView& v, size_t v
   out.segment<3>(3) = pose.Inverse().translation;
   Eigen::Index row = 6;
   for (const TagObservation& tag : v.tags) {
-    for (const Eigen::Vector3d& corner : tag.corners_box_mm) {
-      out.segment<2>(row) = Project(k, pose * corner);
+    for (size_t i = 0; i < 4; ++i) {
+      out.segment<2>(row) = Project(k, pose * blocks.Corner(tag, i));
       row += 2;
     }
   }
   return out;
+}
+
+// The standard deviations of a box delta block's three values (mm or rad); 0
+// for held values, NaN where the covariance has no block.
+std::array<double, 3> DeltaStddev(const ceres::Covariance& covariance, ceres::Problem& problem,
+                                  const double* block, double sigma_px) {
+  if (problem.IsParameterBlockConstant(const_cast<double*>(block))) return {0, 0, 0};
+  Eigen::Matrix3d cov;  // symmetric: Ceres' row-major order reads the same
+  if (!covariance.GetCovarianceBlock(block, block, cov.data())) return {NAN, NAN, NAN};
+  std::array<double, 3> sd;
+  for (Eigen::Index i = 0; i < 3; ++i)
+    sd[static_cast<size_t>(i)] = sigma_px * std::sqrt(std::max(0.0, cov(i, i)));
+  return sd;
+}
+
+// Box refinement's standard deviations, into the moves and the refined box.
+void FillBoxUncertainties(const ceres::Covariance& covariance, ceres::Problem& problem,
+                          const Blocks& blocks, double sigma_px, BundleAdjustmentResult* result) {
+  for (FaceRefinement& move : result->face_moves) {
+    const auto sd = DeltaStddev(covariance, problem, blocks.face_delta.at(move.face), sigma_px);
+    move.moved_sd_mm = sd[0];
+    move.tilted_sd_deg = std::max(sd[1], sd[2]) / kDegToRad;
+    BoxFace& face = result->box.faces[static_cast<size_t>(move.face)];
+    face.offset_sd_mm = move.moved_sd_mm;
+    face.tilt_sd_deg = move.tilted_sd_deg;
+  }
+  for (TagRefinement& move : result->tag_moves) {
+    const auto sd = DeltaStddev(covariance, problem, blocks.tag_delta.at(move.id), sigma_px);
+    move.moved_sd_mm = {sd[0], sd[1]};
+    move.turned_sd_deg = sd[2] / kDegToRad;
+    for (BoxTag& tag : result->box.tags) {
+      if (tag.id != move.id) continue;
+      tag.center_sd_mm = move.moved_sd_mm;
+      tag.turn_sd_deg = move.turned_sd_deg;
+    }
+  }
 }
 
 // The standard deviations of the estimated intrinsics and the ViewUncertainty
@@ -224,6 +388,7 @@ void FillUncertainties(ceres::Problem& problem, Blocks& blocks, const BundleAdju
           have ? sigma_px * std::sqrt(std::max(0.0, block(i, i))) : NAN;
   }
   if (!ok) return;
+  FillBoxUncertainties(covariance, problem, blocks, sigma_px, result);
   for (size_t vi = 0; vi < input.views.size(); ++vi) {
     const CalibrationView& v = input.views[vi];
     if (v.tags.empty()) continue;
@@ -291,6 +456,21 @@ Status ValidateInput(const BundleAdjustmentInput& input) {
   return Status::Ok();
 }
 
+// Box refinement needs every observed tag on the input box.
+Status CheckBoxHasObservedTags(const BundleAdjustmentInput& input) {
+  for (size_t v = 0; v < input.views.size(); ++v) {
+    for (const TagObservation& tag : input.views[v].tags) {
+      if (input.box.FindTag(tag.id) == nullptr) {
+        return InvalidArgument("bundle adjustment: view " + std::to_string(v) + " observes tag " +
+                               std::to_string(tag.id) +
+                               ", which the box to refine does not have: give the box the tags "
+                               "were matched to");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
 // The parameter blocks' initial values: the input's, the turntable mode's derived from them.
 void InitialiseBlocks(const BundleAdjustmentInput& input, bool turntable, Blocks& b) {
   for (size_t c = 0; c < input.cameras.size(); ++c) {
@@ -321,6 +501,28 @@ void InitialiseBlocks(const BundleAdjustmentInput& input, bool turntable, Blocks
   }
 }
 
+// One corner's residual on the box being refined.
+void AddRefinedCornerResidual(const CalibrationView& v, size_t view_index,
+                              const TagObservation& tag, size_t k, ceres::LossFunction* loss,
+                              Blocks& b, ceres::Problem& problem) {
+  double* intr = b.intrinsics[static_cast<size_t>(v.camera)];
+  const RefinedBoxPoint point = b.Point(tag, k);
+  double* face = b.face_delta.at(point.tag->face);
+  double* tag_block = b.tag_delta.at(tag.id);
+  if (b.turntable) {
+    auto* cost = new ceres::AutoDiffCostFunction<TurntableRefinedCorner, 2, 9, 4, 3, 1, 4, 3, 3, 3>(
+        new TurntableRefinedCorner{tag.corners_px[k], point});
+    PoseBlock& cw = b.cam_from_world[static_cast<size_t>(v.camera)];
+    problem.AddResidualBlock(cost, loss, intr, cw.q, cw.t, b.stop_rad.at(v.stop),
+                             b.turntable_from_box.q, b.turntable_from_box.t, face, tag_block);
+  } else {
+    auto* cost = new ceres::AutoDiffCostFunction<PosedRefinedCorner, 2, 9, 4, 3, 3, 3>(
+        new PosedRefinedCorner{tag.corners_px[k], point});
+    PoseBlock& pose = b.view_poses[view_index];
+    problem.AddResidualBlock(cost, loss, intr, pose.q, pose.t, face, tag_block);
+  }
+}
+
 // The residual blocks: one per observed corner, view by view, under one shared Huber loss.
 void AddCornerResiduals(const BundleAdjustmentInput& input, const BundleAdjustmentOptions& options,
                         bool turntable, Blocks& b, ceres::Problem& problem) {
@@ -336,7 +538,9 @@ void AddCornerResiduals(const BundleAdjustmentInput& input, const BundleAdjustme
     double* intr = intrinsics[static_cast<size_t>(v.camera)];
     for (const TagObservation& tag : v.tags) {
       for (size_t k = 0; k < 4; ++k) {
-        if (turntable) {
+        if (b.Refined(tag)) {
+          AddRefinedCornerResidual(v, vi, tag, k, loss, b, problem);
+        } else if (turntable) {
           auto* cost = new ceres::AutoDiffCostFunction<TurntableCorner, 2, 9, 4, 3, 1, 4, 3>(
               new TurntableCorner{tag.corners_px[k], tag.corners_box_mm[k]});
           PoseBlock& cw = cam_from_world[static_cast<size_t>(v.camera)];
@@ -387,6 +591,81 @@ bool HoldIntrinsics(const BundleAdjustmentInput& input, const BundleAdjustmentOp
   return soft_prior;
 }
 
+// A delta block's prior with standard deviations `sd` (0: held exactly).
+void HoldBoxDelta(double* block, const std::array<double, 3>& sd, const double* sigma_px,
+                  ceres::Problem& problem) {
+  BoxDeltaPrior prior{{}, sigma_px};
+  std::vector<int> held;
+  for (size_t i = 0; i < 3; ++i) {
+    prior.inverse_sd[i] = sd[i] > 0 ? 1.0 / sd[i] : 0.0;
+    if (!(sd[i] > 0)) held.push_back(static_cast<int>(i));
+  }
+  if (held.size() == 3) {
+    problem.SetParameterBlockConstant(block);
+    return;
+  }
+  problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<BoxDeltaPrior, 3, 3>(new BoxDeltaPrior(prior)), nullptr,
+      block);
+  if (!held.empty()) problem.SetManifold(block, new ceres::SubsetManifold(3, held));
+}
+
+// Box refinement: every face and tag delta block held by its prior (the input
+// box's own standard deviations where it states them, else the tolerance's).
+void HoldBox(const BoxTolerance& tolerance, Blocks& b, const double* sigma_px,
+             ceres::Problem& problem) {
+  const auto either = [](double own, double fallback) { return own > 0 ? own : fallback; };
+  for (const auto& [index, block] : b.face_delta) {
+    const BoxFace& face = b.box->faces[static_cast<size_t>(index)];
+    const double tilt_rad = either(face.tilt_sd_deg, tolerance.face_tilt_deg) * kDegToRad;
+    HoldBoxDelta(block, {either(face.offset_sd_mm, tolerance.face_offset_mm), tilt_rad, tilt_rad},
+                 sigma_px, problem);
+  }
+  for (const auto& [id, block] : b.tag_delta) {
+    const BoxTag& tag = *b.box->FindTag(id);
+    HoldBoxDelta(block,
+                 {either(tag.center_sd_mm.x(), tolerance.tag_center_mm),
+                  either(tag.center_sd_mm.y(), tolerance.tag_center_mm),
+                  either(tag.turn_sd_deg, tolerance.tag_turn_deg) * kDegToRad},
+                 sigma_px, problem);
+  }
+}
+
+// Box refinement's gauge (BoxGauge) over every corner of the refined tags.
+void FixBoxGauge(Blocks& b, ceres::Problem& problem) {
+  BoxGauge gauge;
+  std::vector<double*> parameters;
+  std::map<const double*, int> index;
+  for (auto* blocks : {&b.face_delta, &b.tag_delta}) {
+    for (const auto& [key, block] : *blocks) {
+      index[block] = static_cast<int>(parameters.size());
+      parameters.push_back(block);
+    }
+  }
+  for (const auto& [id, block] : b.tag_delta) {
+    TagObservation tag;
+    tag.id = id;
+    for (size_t k = 0; k < 4; ++k) {
+      gauge.points.push_back(b.Point(tag, k));
+      gauge.face_block.push_back(index.at(b.face_delta.at(gauge.points.back().tag->face)));
+      gauge.tag_block.push_back(index.at(block));
+      gauge.rest.push_back(gauge.points.back().tag->corners_box_mm[k]);
+    }
+  }
+  if (gauge.points.empty()) return;
+  for (const Eigen::Vector3d& p : gauge.rest) gauge.centroid += p;
+  gauge.centroid /= static_cast<double>(gauge.rest.size());
+  double sq = 0;
+  for (const Eigen::Vector3d& p : gauge.rest) sq += (p - gauge.centroid).squaredNorm();
+  gauge.radius_mm = std::max(1.0, std::sqrt(sq / static_cast<double>(gauge.rest.size())));
+  // A mean drift of 1 um weighs as much as a corner residual of 1 px.
+  gauge.weight = 1e3 / static_cast<double>(gauge.points.size());
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<BoxGauge, 4>(new BoxGauge(gauge));
+  for (size_t i = 0; i < parameters.size(); ++i) cost->AddParameterBlock(3);
+  cost->SetNumResiduals(6);
+  problem.AddResidualBlock(cost, nullptr, parameters);
+}
+
 // The poses' quaternion manifolds and, in turntable mode, the gauge (box height, first stop).
 void FixGauge(bool turntable, Blocks& b, ceres::Problem& problem) {
   auto& view_poses = b.view_poses;
@@ -429,6 +708,43 @@ void SolveProblem(const BundleAdjustmentInput& input, const BundleAdjustmentOpti
   }
 }
 
+// Box refinement's moves and the refined box (standard deviations set by FillUncertainties).
+void ReadRefinedBox(const BundleAdjustmentInput& input, const Blocks& b,
+                    BundleAdjustmentResult* result) {
+  if (b.tag_delta.empty()) return;
+  result->box_refined = true;
+  result->box = input.box;
+  for (const auto& [index, delta] : b.face_delta) {
+    FaceRefinement move;
+    move.face = index;
+    move.moved_mm = delta[0];
+    move.tilted_u_deg = delta[1] / kDegToRad;
+    move.tilted_v_deg = delta[2] / kDegToRad;
+    result->face_moves.push_back(move);
+    BoxFace& face = result->box.faces[static_cast<size_t>(index)];
+    face.offset_mm += move.moved_mm;
+    face.tilt_u_deg += move.tilted_u_deg;
+    face.tilt_v_deg += move.tilted_v_deg;
+  }
+  std::map<int, int> views_of;
+  for (const CalibrationView& v : input.views)
+    for (const TagObservation& tag : v.tags) ++views_of[tag.id];
+  for (const auto& [id, delta] : b.tag_delta) {
+    TagRefinement move;
+    move.id = id;
+    move.views = views_of[id];
+    move.moved_mm = {delta[0], delta[1]};
+    move.turned_deg = delta[2] / kDegToRad;
+    result->tag_moves.push_back(move);
+    for (BoxTag& tag : result->box.tags) {
+      if (tag.id != id) continue;
+      tag.center_face_mm += move.moved_mm;
+      tag.turn_deg += move.turned_deg;
+    }
+  }
+  PlaceTags(&result->box);
+}
+
 // The result: the estimate and its reprojection errors, its uncertainties sized but unset.
 BundleAdjustmentResult ReadResult(const BundleAdjustmentInput& input, bool turntable,
                                   const Blocks& b, const ceres::Solver::Summary& summary) {
@@ -468,6 +784,7 @@ BundleAdjustmentResult ReadResult(const BundleAdjustmentInput& input, bool turnt
   result.intrinsics_stddev.assign(input.cameras.size(), {});
   result.intrinsics_covariance.assign(input.cameras.size(), IntrinsicsCovariance::Constant(NAN));
   result.view_uncertainty.assign(input.views.size(), {});
+  ReadRefinedBox(input, b, &result);
   return result;
 }
 
@@ -482,7 +799,7 @@ Status BundleAdjustmentOptions::Check() const {
   }
   if (threads < 1)
     return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
-  return Status::Ok();
+  return box_tolerance.Check().WithContext("box_tolerance");
 }
 
 Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
@@ -490,13 +807,20 @@ Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& 
   HR_RETURN_IF_ERROR(options.Check().WithContext("bundle adjustment"));
   HR_RETURN_IF_ERROR(ValidateInput(input));
   const bool turntable = options.mode == CalibrationMode::kTurntable;
+  const bool refine_box = !options.box_tolerance.Zero();
+  if (refine_box) HR_RETURN_IF_ERROR(CheckBoxHasObservedTags(input));
   ceres::Problem problem;
-  Blocks b(input, turntable);
+  Blocks b(input, turntable, refine_box);
   InitialiseBlocks(input, turntable, b);
   AddCornerResiduals(input, options, turntable, b, problem);
   double prior_sigma_px =
-      1.0;  // the corner noise the prior weighs against; updated after a first solve
-  const bool soft_prior = HoldIntrinsics(input, options, b, &prior_sigma_px, problem);
+      1.0;  // the corner noise the priors weigh against; updated after a first solve
+  bool soft_prior = HoldIntrinsics(input, options, b, &prior_sigma_px, problem);
+  if (refine_box) {
+    HoldBox(options.box_tolerance, b, &prior_sigma_px, problem);
+    FixBoxGauge(b, problem);
+    soft_prior = true;
+  }
   FixGauge(turntable, b, problem);
   ceres::Solver::Summary summary;
   SolveProblem(input, options, turntable, soft_prior, b, &prior_sigma_px, problem, &summary);

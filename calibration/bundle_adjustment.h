@@ -16,6 +16,16 @@
 // standard deviations). The covariance of the estimate gives each camera's
 // intrinsics standard deviations and each view's predicted pose and
 // projection errors (ViewUncertainty). Millimetres, degrees, pixels.
+//
+// Box refinement (BundleAdjustmentOptions::box_tolerance not zero): the box as
+// built (core/calib_box.h) is solved with the cameras. Each observed tag's
+// place (du, dv mm) and turn in its face, and each face's offset along its
+// normal and tilts about u and v, are parameters held towards the input box by
+// Gaussian priors with the tolerance's standard deviations (or the input box's
+// own, where it states them), weighed against the corner noise like the
+// intrinsics' priors. Gauge, fixed explicitly: the observed tags' corners keep
+// their mean position and mean orientation, so the refinement cannot move or
+// turn the box as a whole (the box pose does that).
 #pragma once
 
 #include <Eigen/Core>
@@ -24,6 +34,7 @@
 #include <vector>
 
 #include "calibration/view_pose.h"
+#include "core/calib_box.h"
 #include "core/camera_model.h"
 #include "core/status.h"
 #include "core/transform.h"
@@ -52,6 +63,8 @@ struct BundleAdjustmentOptions {
   double huber_px = 1.0;
   int max_iterations = 100;
   int threads = 2;
+  // Box refinement's priors (see above); all zero: the box is taken as exact.
+  BoxTolerance box_tolerance;
 
   // InvalidArgument naming the field for a value out of range or not finite.
   Status Check() const;
@@ -64,6 +77,28 @@ struct BundleAdjustmentInput {
   // Per camera (empty, or one per camera): standard deviations of the prior
   // intrinsics (kParamNames order); all zero = no stated uncertainty.
   std::vector<std::array<double, CameraIntrinsics::kNumParams>> prior_stddev;
+  // The box the views' tags are on (matched by id); needed for box refinement.
+  CalibBox box;
+};
+
+// What box refinement made of one observed tag: how far it moved in its face
+// from the input box (mm along the face's u and v) and turned about its normal
+// (deg), with standard deviations (NaN when the covariance is rank deficient).
+struct TagRefinement {
+  int id = -1;
+  int views = 0;  // views that observed it
+  Eigen::Vector2d moved_mm = Eigen::Vector2d::Zero();
+  double turned_deg = 0;
+  Eigen::Vector2d moved_sd_mm = Eigen::Vector2d::Constant(NAN);
+  double turned_sd_deg = NAN;
+};
+
+// The same for a face holding observed tags: moved along its normal (mm) and
+// tilted about its u and v axes (deg).
+struct FaceRefinement {
+  int face = -1;  // index into CalibBox::faces
+  double moved_mm = 0, tilted_u_deg = 0, tilted_v_deg = 0;
+  double moved_sd_mm = NAN, tilted_sd_deg = NAN;  // tilted: the larger of the two
 };
 
 // What the covariance of the estimate predicts for one view's errors, as the
@@ -103,11 +138,18 @@ struct BundleAdjustmentResult {
   double residual_sigma_px = 0;
   int iterations = 0;
   bool converged = false;
+  // With box refinement: the input box with its observed tags and faces as
+  // solved (standard deviations included, PlaceTags applied), and the moves.
+  bool box_refined = false;
+  CalibBox box;
+  std::vector<TagRefinement> tag_moves;    // by tag id
+  std::vector<FaceRefinement> face_moves;  // by face index
 };
 
 // InvalidArgument for bad options (BundleAdjustmentOptions::Check), a view of
-// an unknown camera, a camera without views, invalid intrinsics or no
-// observation at all; the message names them.
+// an unknown camera, a camera without views, invalid intrinsics, no
+// observation at all, or (with box refinement) a tag the input box does not
+// have; the message names them.
 Result<BundleAdjustmentResult> RunBundleAdjustment(const BundleAdjustmentInput& input,
                                                    const BundleAdjustmentOptions& options);
 

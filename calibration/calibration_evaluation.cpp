@@ -1,5 +1,6 @@
 #include "calibration/calibration_evaluation.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -178,6 +179,28 @@ Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calib
   e.corner_noise_px = CornerNoise(calibration, truth.views, box);
   e.uncertainty = CompareUncertainty(calibration, truth.views);
   return e;
+}
+
+Rigid3d TruthFromEstimatedBox(const CalibBox& estimated, const CalibBox& truth,
+                              const std::vector<int>& tag_ids) {
+  std::vector<Eigen::Vector3d> from, to;
+  for (const BoxTag& tag : estimated.tags) {
+    const BoxTag* true_tag = truth.FindTag(tag.id);
+    const bool chosen =
+        tag_ids.empty() || std::find(tag_ids.begin(), tag_ids.end(), tag.id) != tag_ids.end();
+    if (true_tag == nullptr || !chosen) continue;
+    from.insert(from.end(), tag.corners_box_mm.begin(), tag.corners_box_mm.end());
+    to.insert(to.end(), true_tag->corners_box_mm.begin(), true_tag->corners_box_mm.end());
+  }
+  if (from.size() < 3) return Rigid3d();
+  Eigen::Matrix3Xd src(3, from.size()), dst(3, to.size());
+  for (size_t i = 0; i < from.size(); ++i) {
+    src.col(static_cast<Eigen::Index>(i)) = from[i];
+    dst.col(static_cast<Eigen::Index>(i)) = to[i];
+  }
+  const Eigen::Matrix4d fit = Eigen::umeyama(src, dst, /*with_scaling=*/false);
+  return Rigid3d(Eigen::Quaterniond(Eigen::Matrix3d(fit.topLeftCorner<3, 3>())),
+                 fit.topRightCorner<3, 1>());
 }
 
 Result<CameraIntrinsics> ReadChArUcoTruthIntrinsics(const std::string& path) {

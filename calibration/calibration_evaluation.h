@@ -81,6 +81,16 @@ struct CalibrationEvaluation {
 Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calibration,
                                                   const CaptureTruth& truth, const CalibBox& box);
 
+// The rigid transform from the box frame `estimated` defines to the one
+// `truth` defines, fitted over the corners of the tags both have (least
+// squares without scale, Umeyama 1991). A box's frame is fixed by its tags
+// alone, so a calibration against a box as built compares with the truth in
+// the frame of the true tags. `tag_ids`: the tags to fit over (the observed
+// ones; the others keep their drawn place); empty: every tag. Identity with
+// fewer than 3 corners in common.
+Rigid3d TruthFromEstimatedBox(const CalibBox& estimated, const CalibBox& truth,
+                              const std::vector<int>& tag_ids = {});
+
 // The true intrinsics in a ChArUco image set's ground_truth.json (format
 // "hairrig-charuco-truth", sim_hw/charuco_views.h). NotFound when the file is
 // absent; CorruptData naming the file and field for another format or a

@@ -147,6 +147,10 @@ nlohmann::json CalibrationJson(const CaptureCalibrationInput& input,
       "Object frame: turntable in turntable mode, box in free mode.";
   root["rms_px"] = result.rms_px;
   root["residual_sigma_px"] = result.residual_sigma_px;
+  root["box"] = {{"file", input.box_source},
+                 {"refined", result.box_refined},
+                 {"sigma_as_given_px", result.sigma_box_as_given_px},
+                 {"sigma_refined_px", result.sigma_box_refined_px}};
   root["converged"] = result.converged;
   root["iterations"] = result.iterations;
   if (result.mode == CalibrationMode::kTurntable)
@@ -274,6 +278,20 @@ Status WriteCalibration(const std::string& dir, const CaptureCalibrationInput& i
     if (!result.cameras[c].solved) continue;
     const std::string file = (root / "opencv" / (input.cameras[c].serial + ".yaml")).string();
     HR_RETURN_IF_ERROR(WriteFileAtomic(file, OpenCvYaml(result.cameras[c].intrinsics)));
+  }
+  const fs::path box_file = root / "box_as_built.yaml";
+  if (!result.box_refined) {
+    std::error_code ec;  // an earlier calibration's box is not this one's
+    fs::remove(box_file, ec);
+    if (ec) return IoError(box_file.string() + ": cannot remove (" + ec.message() + ")");
+  } else {
+    HR_RETURN_IF_ERROR(WriteCalibBox(
+        result.box_as_built, box_file.string(),
+        "The calibration box as built, refined with the cameras of this capture from\n" +
+            (input.box_source.empty() ? std::string("the box it was given") : input.box_source) +
+            " (standard deviations: *_sd_*). Give it to a later capture's calibration\n"
+            "with `hairrig calibrate --box FILE`, or name it in the rig config's "
+            "calibration.box."));
   }
   std::string cameras, images;
   ColmapText(input, result, &cameras, &images);

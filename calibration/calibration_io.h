@@ -11,6 +11,9 @@
 //                           cam_from_turntable (the frame the hair is fixed in;
 //                           cam_from_box in free mode), so COLMAP and OpenMVS
 //                           accept the capture
+//   box_as_built.yaml       the box as refined with the cameras (core/calib_box.h
+//                           format, with standard deviations), when it was refined:
+//                           the box to give a later capture's calibration (--box)
 //
 // Frames as in core/transform.h; mm and px.
 #pragma once

@@ -22,6 +22,12 @@ namespace {
 constexpr double kOutlierFactor = 3.0;
 constexpr double kOutlierFloorPx = 0.5;
 constexpr double kFailedRmsPx = 2.0;
+// The box is not as given when the residuals with it as given are this many
+// times those with it refined (refining a box that is exact changes them by
+// about 2 %: its parameters are few against the corners).
+constexpr double kBoxMisfitRatio = 1.5;
+// A refined tag that moved more than this many build tolerances is named.
+constexpr double kTagMovedTolerances = 4.0;
 
 double MedianSolvedRms(const CaptureCalibration& result) {
   std::vector<double> rms;
@@ -60,6 +66,54 @@ void JudgePriors(const CaptureCalibrationInput& input, const CaptureCalibration&
   }
 }
 
+// The tags that moved most in the box refinement, largest first: "3 (1.2 mm),
+// 7 (0.9 mm)". At most `count` of them.
+std::string LargestTagMoves(const CaptureCalibration& result, size_t count) {
+  std::vector<TagRefinement> moves = result.tag_moves;
+  std::sort(moves.begin(), moves.end(), [](const TagRefinement& a, const TagRefinement& b) {
+    return a.moved_mm.norm() > b.moved_mm.norm();
+  });
+  std::string text;
+  for (size_t i = 0; i < moves.size() && i < count; ++i)
+    text += (i ? ", " : "") + std::to_string(moves[i].id) +
+            Format(" (%.2f mm)", moves[i].moved_mm.norm());
+  return text;
+}
+
+// Whether the box is the one the calibration was given: taken as exact, its
+// residuals must not be well above those with the box refined; refined, no
+// tag may have moved far beyond the build tolerance.
+void JudgeBox(const CaptureCalibrationInput& input, const CaptureCalibration& result,
+              CalibrationVerdict* verdict) {
+  const std::string file = input.box_source.empty() ? "the box file" : input.box_source;
+  const bool misfit = result.sigma_box_as_given_px > kBoxMisfitRatio * result.sigma_box_refined_px;
+  if (!result.box_refined && misfit) {
+    verdict->reasons.push_back(
+        "the box is not as " + file + " says: corner residuals " +
+        Format("%.2f px with it as given, %.2f px with it refined", result.sigma_box_as_given_px,
+               result.sigma_box_refined_px) +
+        " (the tags that moved most: " + LargestTagMoves(result, 3) +
+        "); calibrate with the box refined, or give the box as built (--box)");
+  }
+  if (result.box_refined) {
+    const BoxTolerance& tolerance = result.box_tolerance;
+    for (const TagRefinement& move : result.tag_moves) {
+      const bool moved = move.moved_mm.norm() > kTagMovedTolerances * tolerance.tag_center_mm;
+      const bool turned = std::abs(move.turned_deg) > kTagMovedTolerances * tolerance.tag_turn_deg;
+      if (!moved && !turned) continue;
+      verdict->reasons.push_back(
+          "tag " + std::to_string(move.id) +
+          Format(" moved %.2f mm and turned %.2f deg", move.moved_mm.norm(), move.turned_deg) +
+          " from its place in " + file +
+          Format(" (build tolerance %.2f mm, %.2f deg)", tolerance.tag_center_mm,
+                 tolerance.tag_turn_deg) +
+          ": it may be peeling off, or printed with another id; fix it and refine the box again");
+    }
+  }
+  if (!verdict->reasons.empty() && verdict->level == CalibrationVerdict::Level::kGood)
+    verdict->level = CalibrationVerdict::Level::kCheck;
+}
+
 }  // namespace
 
 CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input,
@@ -96,6 +150,7 @@ CalibrationVerdict JudgeCalibration(const CaptureCalibrationInput& input,
     verdict.reasons.insert(verdict.reasons.begin(), Format("overall RMS %.2f px is above %.1f px",
                                                            result.rms_px, kFailedRmsPx));
   }
+  JudgeBox(input, result, &verdict);
   JudgePriors(input, result, &verdict);
   return verdict;
 }
@@ -159,6 +214,31 @@ Status DrawResiduals(const std::string& path, const cv::Mat& image, const Camera
   return WriteImageAtomic(path, shown, {cv::IMWRITE_JPEG_QUALITY, 85});
 }
 
+// The box used, the box check and each refined tag's and face's move.
+std::string BoxText(const CaptureCalibrationInput& input, const CaptureCalibration& result) {
+  std::ostringstream out;
+  out << "box: " << (input.box_source.empty() ? "(unnamed)" : input.box_source)
+      << (result.box_refined ? ", refined with the cameras" : ", taken as exact") << "\n";
+  out << Format("  corner residual sigma: %.3f px with the box as given, %.3f px refined\n",
+                result.sigma_box_as_given_px, result.sigma_box_refined_px);
+  if (result.tag_moves.empty()) return out.str();
+  out << "  tags moved (in their face, mm; turned, deg; +- one standard deviation):\n";
+  for (const TagRefinement& m : result.tag_moves) {
+    out << "    tag " << m.id << " (" << m.views << " views): " << Format("%+.3f, ", m.moved_mm.x())
+        << Format("%+.3f mm +- ", m.moved_mm.y())
+        << Format("%.3f, %.3f", m.moved_sd_mm.x(), m.moved_sd_mm.y())
+        << Format("; %+.3f deg +- %.3f\n", m.turned_deg, m.turned_sd_deg);
+  }
+  out << "  faces moved (along the normal, mm; tilted about u, v, deg):\n";
+  for (const FaceRefinement& m : result.face_moves) {
+    out << "    face " << result.box_as_built.faces[static_cast<size_t>(m.face)].name << ": "
+        << Format("%+.3f mm +- %.3f; ", m.moved_mm, m.moved_sd_mm)
+        << Format("%+.3f, %+.3f deg", m.tilted_u_deg, m.tilted_v_deg)
+        << Format(" +- %.3f\n", m.tilted_sd_deg);
+  }
+  return out.str();
+}
+
 // `not_drawn`: per frame, why its residual image could not be drawn, or "".
 std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibration& result,
                        const CalibrationVerdict& verdict,
@@ -172,8 +252,9 @@ std::string ReportText(const CaptureCalibrationInput& input, const CaptureCalibr
       << ", " << result.iterations << " iterations" << (result.converged ? "" : " (NOT converged)")
       << "\n";
   out << Format("time: detection %.2f s, initialisation %.2f s", result.detect_s, result.init_s)
-      << Format(", bundle adjustment %.2f s, prior check %.2f s\n\ncameras:\n", result.solve_s,
+      << Format(", bundle adjustment %.2f s, prior check %.2f s\n\n", result.solve_s,
                 result.prior_check_s);
+  out << BoxText(input, result) << "\ncameras:\n";
   for (size_t c = 0; c < result.cameras.size(); ++c) {
     const CameraCalibration& cam = result.cameras[c];
     out << "  " << input.cameras[c].name << " (" << input.cameras[c].serial << "): ";

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "calibration/intrinsics_from_views.h"
 #include "calibration/turntable_axis.h"
@@ -92,6 +93,13 @@ void InitialiseIntrinsics(const CaptureCalibrationInput& input,
 // Step 2b: a pose per frame from its camera's starting intrinsics.
 void InitialisePoses(const CaptureCalibrationInput& input, const CaptureCalibrationOptions& options,
                      const std::vector<ViewObservations>& observations, CaptureCalibration* out) {
+  // With the box refined, a tag is judged against the box it may be.
+  ViewPoseOptions pose_options = options.pose;
+  double largest_tag_mm = 0;
+  for (const BoxTag& tag : input.box.tags) largest_tag_mm = std::max(largest_tag_mm, tag.size_mm);
+  pose_options.box_tolerance_mm =
+      std::max(pose_options.box_tolerance_mm,
+               options.box_tolerance.CornerMm(largest_tag_mm, 0.5 * input.box.size_mm.maxCoeff()));
   for (size_t f = 0; f < input.frames.size(); ++f) {
     FrameCalibration& frame = out->frames[f];
     if (!frame.failure.empty()) continue;  // unreadable
@@ -103,7 +111,7 @@ void InitialisePoses(const CaptureCalibrationInput& input, const CaptureCalibrat
                       " has no starting intrinsics";
       continue;
     }
-    auto pose = EstimateViewPose(observations[f], camera.initial, options.pose);
+    auto pose = EstimateViewPose(observations[f], camera.initial, pose_options);
     if (!pose.ok()) {
       frame.failure = pose.status().message();
       continue;
@@ -205,7 +213,70 @@ void CheckPriors(const BundleAdjustmentInput& ba, const BundleAdjustmentResult& 
   }
 }
 
+// The box check: the views solved once more, from the solution, with the box
+// refined when the solution took it as given and as given when it was refined;
+// both sigmas and the refined solve's moves into `out`.
+void CheckBox(const BundleAdjustmentInput& ba, const BundleAdjustmentResult& solution,
+              const BundleAdjustmentOptions& ba_options, const CalibBox& given,
+              CaptureCalibration* out) {
+  out->box_refined = solution.box_refined;
+  out->box_tolerance = ba_options.box_tolerance;
+  out->box_as_built = solution.box_refined ? solution.box : given;
+  BundleAdjustmentInput again = ba;
+  for (size_t v = 0; v < again.views.size(); ++v)
+    again.views[v].cam_from_box_init = solution.cam_from_box[v];
+  again.turntable_from_box_init = solution.turntable_from_box;
+  for (size_t c = 0; c < again.cameras.size(); ++c) again.cameras[c] = solution.cameras[c];
+  BundleAdjustmentOptions other = ba_options;
+  other.box_tolerance = solution.box_refined ? BoxTolerance{} : kHandBuiltBoxTolerance;
+  const auto compared = RunBundleAdjustment(again, other);
+  const BundleAdjustmentResult* refined = solution.box_refined ? &solution : nullptr;
+  if (compared.ok() && !solution.box_refined) refined = &*compared;
+  const double other_sigma = compared.ok() ? compared->residual_sigma_px : NAN;
+  out->sigma_box_as_given_px = solution.box_refined ? other_sigma : solution.residual_sigma_px;
+  out->sigma_box_refined_px = solution.box_refined ? solution.residual_sigma_px : other_sigma;
+  if (refined != nullptr) {
+    out->tag_moves = refined->tag_moves;
+    out->face_moves = refined->face_moves;
+  }
+}
+
+// Observations matched earlier (while the frames landed, maybe to another box
+// file) with their corners placed on `box`; a tag it lacks is rejected.
+ViewObservations PlaceOnBox(const ViewObservations& matched, const CalibBox& box) {
+  ViewObservations out;
+  out.rejected = matched.rejected;
+  for (const TagObservation& tag : matched.tags) {
+    const BoxTag* on_box = box.FindTag(tag.id);
+    if (on_box == nullptr) {
+      out.rejected.push_back({tag.id, "not on the calibration box given"});
+      continue;
+    }
+    out.tags.push_back({tag.id, tag.corners_px, on_box->corners_box_mm});
+  }
+  return out;
+}
+
+// The frames' tag corners on the box as refined, so that what is drawn and
+// exported from them matches the solve.
+void UseRefinedCorners(CaptureCalibration* out) {
+  for (FrameCalibration& frame : out->frames) {
+    for (TagObservation& tag : frame.tags) {
+      const BoxTag* refined = out->box_as_built.FindTag(tag.id);
+      if (refined != nullptr) tag.corners_box_mm = refined->corners_box_mm;
+    }
+  }
+}
+
 }  // namespace
+
+std::vector<int> TagsUsed(const CaptureCalibration& result) {
+  std::set<int> ids;
+  for (const FrameCalibration& frame : result.frames)
+    if (frame.solved)
+      for (const TagObservation& tag : frame.tags) ids.insert(tag.id);
+  return {ids.begin(), ids.end()};
+}
 
 std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& frames,
                                            const CalibBox& box, const TagDetectorOptions& detector,
@@ -220,7 +291,7 @@ std::vector<ViewObservations> DetectFrames(const std::vector<CalibrationFrame>& 
         return;
       }
       if (frames[f].observations) {
-        observations[f] = *frames[f].observations;
+        observations[f] = PlaceOnBox(*frames[f].observations, box);
         return;
       }
       if (!tag_detector.ok()) {
@@ -248,6 +319,7 @@ Status CaptureCalibrationOptions::Check() const {
     return InvalidArgument("threads must be at least 1, got " + std::to_string(threads));
   if (!(huber_px > 0) || !std::isfinite(huber_px))
     return InvalidArgument("huber_px must be a finite positive number of pixels");
+  HR_RETURN_IF_ERROR(box_tolerance.Check().WithContext("box_tolerance"));
   HR_RETURN_IF_ERROR(detector.Check().WithContext("detector"));
   HR_RETURN_IF_ERROR(pose.Check().WithContext("pose"));
   return prior_check.Check().WithContext("prior_check");
@@ -299,8 +371,12 @@ Result<CaptureCalibration> CalibrateCapture(const CaptureCalibrationInput& input
   ba_options.hard_prior = options.hard_prior;
   ba_options.huber_px = options.huber_px;
   ba_options.threads = std::max(1, options.threads);
+  ba_options.box_tolerance = options.box_tolerance;
+  ba.box = input.box;
   HR_ASSIGN_OR_RETURN(BundleAdjustmentResult solution, RunBundleAdjustment(ba, ba_options));
   CopySolution(solution, map, &out);
+  CheckBox(ba, solution, ba_options, input.box, &out);
+  if (out.box_refined) UseRefinedCorners(&out);
   out.solve_s = SecondsSince(start);
 
   if (options.fix_intrinsics && options.check_priors) {

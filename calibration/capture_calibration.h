@@ -55,6 +55,7 @@ struct CaptureCalibrationInput {
   std::vector<CalibrationCamera> cameras;
   std::vector<CalibrationFrame> frames;
   CalibBox box;
+  std::string box_source;  // the box's file, for the report
   // Height of the box origin along the turntable axis (turntable mode): the
   // cameras cannot see it, the rig config gives it.
   double box_height_mm = 0;
@@ -79,6 +80,9 @@ struct CaptureCalibrationOptions {
   // test each camera's prior against them (CameraCalibration::prior_check).
   bool check_priors = true;
   PriorCheckOptions prior_check;
+  // The box refined with the cameras (calibration/bundle_adjustment.h), held
+  // to the input box with these tolerances; all zero: the box is taken as exact.
+  BoxTolerance box_tolerance = kHandBuiltBoxTolerance;
 
   // InvalidArgument naming the field (detector.*, pose.* and prior_check.*
   // for the nested ones) for a value out of range or not finite.
@@ -118,8 +122,23 @@ struct CaptureCalibration {
   double residual_sigma_px = 0;
   int iterations = 0;
   bool converged = false;
+  // The box: refined with the cameras (options.box_tolerance not zero), or
+  // taken as given. box_as_built is the refined box, else the input's.
+  bool box_refined = false;
+  BoxTolerance box_tolerance;  // the refinement's, when box_refined
+  CalibBox box_as_built;
+  // The box check: the corner residuals' sigma (px) of the same views solved
+  // with the box as given and with it refined (one of them is the solve
+  // above, the other a second solve from its result); the tags' and faces'
+  // moves are the refined solve's. NaN where the second solve failed.
+  double sigma_box_as_given_px = NAN, sigma_box_refined_px = NAN;
+  std::vector<TagRefinement> tag_moves;
+  std::vector<FaceRefinement> face_moves;
   double detect_s = 0, init_s = 0, solve_s = 0, prior_check_s = 0;  // wall time of each step
 };
+
+// The ids of the tags the solved views used, ascending.
+std::vector<int> TagsUsed(const CaptureCalibration& result);
 
 // Tags of every frame, matched to the box, over `threads` threads; a frame
 // with `observations` keeps them. A frame that cannot be read (core/image_file.h

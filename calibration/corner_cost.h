@@ -25,18 +25,26 @@ bool ProjectResidual(const T* intrinsics, const CornerVec3<T>& p_cam,
   return true;
 }
 
-// A point (mm, model frame) seen under one pose: cam_from_model as a
+// A model-frame point in the camera frame under cam_from_model as a
 // quaternion block (Eigen order x, y, z, w) and a translation block (mm).
+template <typename T>
+CornerVec3<T> PosedPoint(const T* q_cam_from_model, const T* t_cam_from_model,
+                         const CornerVec3<T>& p_model) {
+  const Eigen::Map<const Eigen::Quaternion<T>> q(q_cam_from_model);
+  return q * p_model + Eigen::Map<const CornerVec3<T>>(t_cam_from_model);
+}
+
+// A point (mm, model frame) seen under one pose (PosedPoint).
 struct PosedCorner {
   Eigen::Vector2d observed;
   Eigen::Vector3d p_model;
   template <typename T>
   bool operator()(const T* intrinsics, const T* q_cam_from_model, const T* t_cam_from_model,
                   T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q(q_cam_from_model);
-    const CornerVec3<T> p_cam =
-        q * p_model.cast<T>() + Eigen::Map<const CornerVec3<T>>(t_cam_from_model);
-    return ProjectResidual(intrinsics, p_cam, observed, residual);
+    return ProjectResidual(
+        intrinsics,
+        PosedPoint(q_cam_from_model, t_cam_from_model, CornerVec3<T>(p_model.cast<T>())), observed,
+        residual);
   }
 };
 

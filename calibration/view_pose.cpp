@@ -29,6 +29,20 @@ double TagRmsPx(const TagObservation& tag, const Rigid3d& cam_from_box,
   return std::sqrt(sum / 4);
 }
 
+// A tag's RMS beyond what a box off its model by `tolerance_mm` (one standard
+// deviation) may give at the tag's distance: 3 tolerances, in pixels.
+double TagMisfitPx(const TagObservation& tag, const Rigid3d& cam_from_box,
+                   const CameraIntrinsics& intrinsics, double tolerance_mm) {
+  const double rms = TagRmsPx(tag, cam_from_box, intrinsics);
+  if (tolerance_mm <= 0 || !std::isfinite(rms)) return rms;
+  double depth_mm = 0;
+  for (const Eigen::Vector3d& corner : tag.corners_box_mm) depth_mm += (cam_from_box * corner).z();
+  depth_mm /= 4;
+  if (depth_mm <= 0) return rms;
+  const double focal_px = 0.5 * (intrinsics.fx_px + intrinsics.fy_px);
+  return std::max(0.0, rms - 3 * tolerance_mm * focal_px / depth_mm);
+}
+
 std::string Summary(const std::vector<RejectedTag>& rejected) {
   std::string text;
   for (const RejectedTag& r : rejected)
@@ -63,6 +77,8 @@ Status ViewPoseOptions::Check() const {
     return InvalidArgument("ransac_threshold_px must be a finite positive number of pixels");
   if (!(max_tag_rms_px > 0) || !std::isfinite(max_tag_rms_px))
     return InvalidArgument("max_tag_rms_px must be a finite positive number of pixels");
+  if (!(box_tolerance_mm >= 0) || !std::isfinite(box_tolerance_mm))
+    return InvalidArgument("box_tolerance_mm must be a finite number of mm, 0 or more");
   if (min_tags < 1)
     return InvalidArgument("min_tags must be at least 1, got " + std::to_string(min_tags));
   return Status::Ok();
@@ -115,7 +131,7 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
       size_t inliers = 0;
       double error = 0;
       for (const TagObservation* tag : usable) {
-        const double rms = TagRmsPx(*tag, candidate, intrinsics);
+        const double rms = TagMisfitPx(*tag, candidate, intrinsics, options.box_tolerance_mm);
         if (rms < options.ransac_threshold_px) {
           ++inliers;
           error += rms;
@@ -142,13 +158,14 @@ Result<ViewPose> EstimateViewPose(const ViewObservations& observations,
     kept_object.clear();
     kept_image.clear();
     for (size_t t = 0; t < usable.size(); ++t) {
-      const double rms = TagRmsPx(*usable[t], rough, intrinsics);
+      const double misfit = TagMisfitPx(*usable[t], rough, intrinsics, options.box_tolerance_mm);
       const double limit = pass == 0 ? options.ransac_threshold_px : options.max_tag_rms_px;
-      if (rms > limit) {
+      if (misfit > limit) {
         if (pass == 1) {
-          pose.rejected.push_back({usable[t]->id, "corners disagree with the box model (" +
-                                                      std::to_string(rms) +
-                                                      " px RMS under the view's pose)"});
+          pose.rejected.push_back(
+              {usable[t]->id, "corners disagree with the box model (" +
+                                  std::to_string(TagRmsPx(*usable[t], rough, intrinsics)) +
+                                  " px RMS under the view's pose)"});
         }
         continue;
       }

@@ -48,6 +48,10 @@ struct ViewPoseOptions {
   double ransac_threshold_px = 3.0;  // tag reprojection RMS of an inlier of a hypothesis
   double max_tag_rms_px = 1.5;       // a tag above this after the fit is left out
   int min_tags = 2;                  // one planar tag gives an ambiguous pose
+  // How far the box's tags may be off their model (mm, one standard deviation,
+  // a box as built): both thresholds above then apply to a tag's RMS beyond 3
+  // such deviations at the tag's distance. 0: the model is exact.
+  double box_tolerance_mm = 0;
 
   // InvalidArgument naming the field for a value out of range or not finite.
   Status Check() const;

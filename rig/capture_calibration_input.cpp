@@ -1,5 +1,6 @@
 #include "rig/capture_calibration_input.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -122,8 +123,8 @@ Result<CalibrationSection> ReadCalibrationSection(const RigConfig& config) {
   out.box_height_mm = section.Number("box_height_mm", kPositionRangeMm);
   out.box_yaw_deg = section.Number("box_yaw_deg", 0.0, {.min = -360, .max = 360});
   HR_RETURN_IF_ERROR(config.root.status());
-  HR_ASSIGN_OR_RETURN(
-      out.box, LoadCalibBox((fs::path(config.relative_to) / box_file).lexically_normal().string()));
+  out.box_file = (fs::path(config.relative_to) / box_file).lexically_normal().string();
+  HR_ASSIGN_OR_RETURN(out.box, LoadCalibBox(out.box_file));
   return out;
 }
 
@@ -144,6 +145,7 @@ Result<CaptureCalibrationInput> LoadCaptureCalibrationInput(const std::string& c
   CaptureCalibrationInput input;
   HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
   input.box = section.box;
+  input.box_source = section.box_file;
   input.box_height_mm = section.box_height_mm;
   input.box_yaw_deg = section.box_yaw_deg;
   std::map<std::string, int> by_serial;
@@ -264,6 +266,10 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
     HR_RETURN_IF_ERROR(ApplyIntrinsicsPriors(options.prior_files, &done.input));
     calibration.fix_intrinsics = true;
   }
+  if (!options.box_file.empty()) {
+    HR_ASSIGN_OR_RETURN(done.input.box, LoadCalibBox(options.box_file));
+    done.input.box_source = options.box_file;
+  }
   if (options.detected != nullptr) {
     for (CalibrationFrame& frame : done.input.frames) {
       const auto found = options.detected->find(DetectionKey(frame.path));
@@ -284,6 +290,111 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count() -
       done.write_s;
   return done;
+}
+
+Status RefineBoxOptions::Check() const {
+  if (capture_dirs.empty())
+    return InvalidArgument("calibrate-box: name at least one capture folder");
+  if (out_file.empty())
+    return InvalidArgument("calibrate-box: --out (the box file to write) is required");
+  for (size_t i = 0; i < prior_files.size(); ++i) {
+    if (prior_files[i].empty())
+      return InvalidArgument("prior_files[" + std::to_string(i) + "] is empty: name a file");
+  }
+  if (calibration.box_tolerance.Zero())
+    return InvalidArgument(
+        "calibration: box_tolerance is zero: nothing of the box would be refined");
+  return calibration.Check().WithContext("calibration");
+}
+
+namespace {
+
+// One capture of RefineBoxFromCaptures, solved against `box`.
+Result<RefinedBox::Step> RefineBoxStep(const std::string& capture_dir,
+                                       const RefineBoxOptions& options, CalibBox* box,
+                                       std::string* box_source) {
+  HR_ASSIGN_OR_RETURN(CaptureCalibrationInput input, LoadCaptureCalibrationInput(capture_dir));
+  CaptureCalibrationOptions calibration = options.calibration;
+  if (!options.prior_files.empty()) {
+    HR_RETURN_IF_ERROR(ApplyIntrinsicsPriors(options.prior_files, &input));
+    calibration.fix_intrinsics = true;
+  }
+  if (box_source->empty()) {
+    *box = input.box;
+    *box_source = input.box_source;
+  }
+  input.box = *box;
+  input.box_source = *box_source;
+  auto result = CalibrateCapture(input, calibration);
+  if (!result.ok()) return result.status().WithContext(capture_dir);
+  RefinedBox::Step step;
+  step.capture_dir = capture_dir;
+  step.views = static_cast<int>(result->frames.size());
+  for (const FrameCalibration& frame : result->frames) step.views_solved += frame.solved;
+  step.sigma_as_given_px = result->sigma_box_as_given_px;
+  step.sigma_refined_px = result->sigma_box_refined_px;
+  for (const TagRefinement& move : result->tag_moves) {
+    step.largest_tag_move_mm = std::max(step.largest_tag_move_mm, move.moved_mm.norm());
+    step.largest_tag_sd_mm = std::max(step.largest_tag_sd_mm, move.moved_sd_mm.maxCoeff());
+  }
+  step.verdict = JudgeCalibration(input, *result).name();
+  *box = result->box_as_built;
+  *box_source = capture_dir + "/(refined)";
+  return step;
+}
+
+}  // namespace
+
+Result<RefinedBox> RefineBoxFromCaptures(const RefineBoxOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
+  RefinedBox out;
+  out.out_file = options.out_file;
+  std::string source;
+  if (!options.box_file.empty()) {
+    HR_ASSIGN_OR_RETURN(out.box, LoadCalibBox(options.box_file));
+    source = options.box_file;
+  }
+  for (const std::string& dir : options.capture_dirs) {
+    HR_ASSIGN_OR_RETURN(RefinedBox::Step step, RefineBoxStep(dir, options, &out.box, &source));
+    out.steps.push_back(std::move(step));
+  }
+  std::string captures;
+  for (const std::string& dir : options.capture_dirs) captures += "\n  " + dir;
+  HR_RETURN_IF_ERROR(
+      WriteCalibBox(out.box, options.out_file,
+                    "The calibration box as built, refined by `hairrig calibrate-box` "
+                    "from the captures below in turn,\nstarting from the box in the "
+                    "first one's rig config or --box:" +
+                        captures));
+  return out;
+}
+
+nlohmann::json RefinedBox::ToJson() const {
+  nlohmann::json steps_json = nlohmann::json::array();
+  for (const Step& step : steps) {
+    steps_json.push_back({{"capture", step.capture_dir},
+                          {"views", step.views},
+                          {"views_solved", step.views_solved},
+                          {"sigma_as_given_px", step.sigma_as_given_px},
+                          {"sigma_refined_px", step.sigma_refined_px},
+                          {"largest_tag_move_mm", step.largest_tag_move_mm},
+                          {"largest_tag_sd_mm", step.largest_tag_sd_mm},
+                          {"verdict", step.verdict}});
+  }
+  return {{"out", out_file}, {"captures", steps_json}};
+}
+
+std::string RefinedBox::BriefReport() const {
+  std::string text = "box as built: " + out_file + "\n";
+  for (const Step& step : steps) {
+    text += StringPrintf(
+        "  %s: %d of %d views solved, corner residuals %.3f px with the box as given, %.3f px "
+        "refined; tags moved up to %.3f mm (sd up to %.3f mm); verdict %s\n",
+        step.capture_dir.c_str(), step.views_solved, step.views, step.sigma_as_given_px,
+        step.sigma_refined_px, step.largest_tag_move_mm, step.largest_tag_sd_mm,
+        step.verdict.c_str());
+  }
+  return text;
 }
 
 Status CaptureCalibrationEvalOptions::Check() const {

@@ -42,6 +42,17 @@ Status WriteTruthStrands(const SimWorld& world, const std::string& dir, const Fi
   return write(dir + "/ground_truth_strands.ply", bytes.data(), bytes.size());
 }
 
+// The box the frames show, as built (the drawn box when the scene says nothing
+// of its build), in the format a calibration's box_as_built.yaml has.
+Status WriteTruthBox(const Scene& scene, const std::string& dir, const FileWriter& write) {
+  const std::string text =
+      CalibBoxYaml(scene.box,
+                   "The calibration box of the simulated rig as built (ground truth).\n"
+                   "Scene: " +
+                       scene.path);
+  return write(dir + "/box_as_built.yaml", text.data(), text.size());
+}
+
 std::vector<int> SceneCameras(const Scene& scene, const std::vector<PlannedTruthView>& views) {
   std::vector<int> cameras;
   for (const PlannedTruthView& v : views) cameras.push_back(scene.FindCamera(v.camera_serial));
@@ -130,6 +141,7 @@ Result<std::unique_ptr<CaptureGroundTruth>> CaptureGroundTruth::Begin(
   HR_RETURN_IF_ERROR(WriteTruthHeadMesh(scene, state->dir, state->Writer()));
   HR_RETURN_IF_ERROR(WriteTruthJson(scene, views, {}, state->dir, state->Writer()));
   HR_RETURN_IF_ERROR(WriteTruthStrands(world, state->dir, state->Writer()));
+  HR_RETURN_IF_ERROR(WriteTruthBox(scene, state->dir, state->Writer()));
   HR_RETURN_IF_ERROR(state->WriteChecksums());
   state->scene_cameras = SceneCameras(scene, views);
   state->views = std::move(views);

@@ -266,21 +266,25 @@ struct Renderer::Impl {
       t_far = std::min(t_far, t1);
     }
     if (axis < 0 || t_near > t_far || t_near <= 0) return {};
-    const Eigen::Vector3d p = o + t_near * d;
     BoxHit hit;
     hit.hit = true;
     hit.face =
         2 * axis + (d[axis] > 0 ? 1 : 0);  // entering through the face whose normal opposes d
     hit.z = t_near * d_cam.z();
     hit.albedo = kWhiteAlbedo;
-    const BoxFace& face = scene.box.faces[static_cast<size_t>(hit.face)];
-    const Eigen::Vector3d rel = p - face.center_box_mm;
-    const double fu = rel.dot(face.right_box), fv = rel.dot(face.down_box);
+    // The box's outline is the drawn cuboid; a tag's pattern is looked up
+    // where the ray meets the tag's own plane (as built: moved, turned, tilted).
     for (const FaceTag& ft : face_tags[static_cast<size_t>(hit.face)]) {
-      const double cell = ft.tag->size_mm / (ft.pattern.width - 2);
+      const BoxTag& tag = *ft.tag;
+      const Eigen::Vector3d tag_normal = tag.right_box.cross(tag.down_box);
+      const double along = d.dot(tag_normal);
+      if (std::abs(along) < 1e-12) continue;
+      const Eigen::Vector3d rel =
+          o + ((tag.center_box_mm - o).dot(tag_normal) / along) * d - tag.center_box_mm;
+      const double cell = tag.size_mm / (ft.pattern.width - 2);
       const double half_printed = 0.5 * cell * ft.pattern.width;
-      const double lu = fu - ft.tag->center_face_mm.x() + half_printed;
-      const double lv = fv - ft.tag->center_face_mm.y() + half_printed;
+      const double lu = rel.dot(tag.right_box) + half_printed;
+      const double lv = rel.dot(tag.down_box) + half_printed;
       if (lu < 0 || lv < 0 || lu >= 2 * half_printed || lv >= 2 * half_printed) continue;
       const int col = std::min(ft.pattern.width - 1, static_cast<int>(lu / cell));
       const int row = std::min(ft.pattern.width - 1, static_cast<int>(lv / cell));
@@ -654,21 +658,20 @@ struct Renderer::Impl {
         t.in_image =
             t.in_image && c.x() >= 4 && c.y() >= 4 && c.x() <= v.width - 5 && c.y() <= v.height - 5;
       }
-      t.unoccluded = t.in_image && t.facing_deg > 0 && TagUnoccluded(v, cam_from_box, tag, face);
+      t.unoccluded = t.in_image && t.facing_deg > 0 && TagUnoccluded(v, cam_from_box, tag);
       truths.push_back(t);
     }
     return truths;
   }
 
   // No head or hair over any of 9 x 9 points spread over the printed tag.
-  bool TagUnoccluded(const View& v, const Rigid3d& cam_from_box, const BoxTag& tag,
-                     const BoxFace& face) const {
+  bool TagUnoccluded(const View& v, const Rigid3d& cam_from_box, const BoxTag& tag) const {
     const double half_printed = 0.5 * tag.size_mm * 10.0 / 8.0;
     for (int j = 0; j <= 8; ++j) {
       for (int i = 0; i <= 8; ++i) {
         const double du = (i / 4.0 - 1.0) * half_printed * 0.98,
                      dv = (j / 4.0 - 1.0) * half_printed * 0.98;
-        const Eigen::Vector3d p = tag.center_box_mm + du * face.right_box + dv * face.down_box;
+        const Eigen::Vector3d p = tag.center_box_mm + du * tag.right_box + dv * tag.down_box;
         Eigen::Vector2d uv;
         if (!ProjectChecked(v.camera->intrinsics, cam_from_box * p, &uv)) return false;
         const int x = static_cast<int>(std::lround(uv.x())),

@@ -134,6 +134,49 @@ SceneCamera ReadCamera(const ConfigNode& n) {
   return c;
 }
 
+// calib_box.as_built: how the box in the images departs from its drawing,
+// either drawn at random ({seed, tag_center_sd_mm, tag_turn_sd_deg,
+// face_offset_sd_mm, face_tilt_sd_deg}) or read from a box file ({file}).
+struct AsBuiltBox {
+  std::string file;  // empty: drawn with `spread`
+  BoxTolerance spread;
+  uint64_t seed = 1;
+};
+
+AsBuiltBox ReadAsBuiltBox(const ConfigNode& box, const std::string& scene_path) {
+  AsBuiltBox out;
+  if (!box.Has("as_built")) return out;
+  const ConfigNode a = box.Child("as_built");
+  a.AllowOnlyKeys({"file", "seed", "tag_center_sd_mm", "tag_turn_sd_deg", "face_offset_sd_mm",
+                   "face_tilt_sd_deg"});
+  if (a.Has("file")) {
+    out.file = ResolveBesideFile(scene_path, a.String("file"));
+    return out;
+  }
+  out.seed = static_cast<uint64_t>(a.Integer("seed", 1, {.min = 0}));
+  // A hand-built box: millimetres and degrees, not centimetres.
+  out.spread.tag_center_mm = a.Number("tag_center_sd_mm", 0.0, {.min = 0, .max = 10});
+  out.spread.tag_turn_deg = a.Number("tag_turn_sd_deg", 0.0, {.min = 0, .max = 10});
+  out.spread.face_offset_mm = a.Number("face_offset_sd_mm", 0.0, {.min = 0, .max = 10});
+  out.spread.face_tilt_deg = a.Number("face_tilt_sd_deg", 0.0, {.min = 0, .max = 10});
+  return out;
+}
+
+// The box the renderer draws: the drawn one, or as built.
+Result<CalibBox> BuildSceneBox(const CalibBox& drawn, const AsBuiltBox& as_built) {
+  if (!as_built.file.empty()) {
+    HR_ASSIGN_OR_RETURN(CalibBox built, LoadCalibBox(as_built.file));
+    for (const BoxTag& tag : drawn.tags) {
+      if (built.FindTag(tag.id) == nullptr)
+        return InvalidArgument(as_built.file + ": the as-built box has no tag " +
+                               std::to_string(tag.id) + ", which the drawn box has");
+    }
+    return built;
+  }
+  if (as_built.spread.Zero()) return drawn;
+  return BuildBoxWithErrors(drawn, as_built.spread, as_built.seed);
+}
+
 }  // namespace
 
 Status WigOptions::Check() const {
@@ -195,9 +238,10 @@ Result<Scene> LoadScene(const std::string& path) {
         h.Number("roughness_deg", scene.hair_shading.roughness_deg, {.min = 1, .max = 45});
   }
   const ConfigNode box = root.Child("calib_box");
-  box.AllowOnlyKeys({"file", "turntable_from_box"});
+  box.AllowOnlyKeys({"file", "turntable_from_box", "as_built"});
   const std::string box_file = ResolveBesideFile(path, box.String("file"));
   scene.turntable_from_box = ReadPoseConfig(box.Child("turntable_from_box"));
+  const AsBuiltBox as_built = ReadAsBuiltBox(box, path);
   for (const ConfigNode& l : root.Items("lights")) {
     l.AllowOnlyKeys({"name", "position_mm", "intensity"});
     scene.lights.push_back({l.String("name"), l.Vec3("position_mm", kPositionRangeMm),
@@ -225,7 +269,8 @@ Result<Scene> LoadScene(const std::string& path) {
         t.Number("camera_download_s", scene.camera_download_s, {.min = 0, .max = 600});
   }
   if (!root.ok()) return root.status();
-  HR_ASSIGN_OR_RETURN(scene.box, LoadCalibBox(box_file));
+  HR_ASSIGN_OR_RETURN(scene.drawn_box, LoadCalibBox(box_file));
+  HR_ASSIGN_OR_RETURN(scene.box, BuildSceneBox(scene.drawn_box, as_built));
   HR_RETURN_IF_ERROR(ValidateScene(scene));
   return scene;
 }

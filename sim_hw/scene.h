@@ -106,7 +106,11 @@ struct Scene {
   HeadSpec head;
   WigOptions wig;
   HairShading hair_shading;
+  // The box the images show, as built (calib_box.as_built), and as drawn
+  // (calib_box.file: what a calibration is given). The same box unless the
+  // scene says how it was built.
   CalibBox box;
+  CalibBox drawn_box;
   Rigid3d turntable_from_box;
   std::vector<SceneLight> lights;
   std::vector<SceneCamera> cameras;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -49,6 +50,33 @@ TEST(Scene, TheSmallSceneLoads) {
   const auto scene = LoadScene(SmallSceneWith("small", "name: small", "name: small"));
   ASSERT_TRUE(scene.ok()) << scene.status().ToString();
   EXPECT_EQ(scene->cameras.size(), 2u);
+}
+
+// calib_box.as_built: the images show a box off its drawing, the scene keeps
+// the drawn one for the calibration; the same seed gives the same box.
+TEST(Scene, ABoxAsBuiltDepartsFromTheDrawnOne) {
+  const auto scene = LoadScene("etc/scenes/hand_built_box.yaml");
+  ASSERT_TRUE(scene.ok()) << scene.status().ToString();
+  const auto drawn = LoadCalibBox("etc/calib-box.yaml");
+  ASSERT_TRUE(drawn.ok()) << drawn.status().ToString();
+  double largest_mm = 0;
+  for (const BoxTag& tag : drawn->tags) {
+    EXPECT_EQ(scene->drawn_box.FindTag(tag.id)->corners_box_mm[0], tag.corners_box_mm[0]);
+    const BoxTag& built = *scene->box.FindTag(tag.id);
+    largest_mm = std::max(largest_mm, (built.center_box_mm - tag.center_box_mm).norm());
+  }
+  EXPECT_GT(largest_mm, 0.5);
+  EXPECT_LT(largest_mm, 5.0);
+  const auto again = LoadScene("etc/scenes/hand_built_box.yaml");
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->box.tags[3].corners_box_mm[2], scene->box.tags[3].corners_box_mm[2]);
+  const std::string box_line = "file: " + fs::absolute("etc/calib-box.yaml").string();
+  const std::string path = SmallSceneWith(
+      "as_built_typo", box_line, box_line + "\n  as_built: {seed: 2, tag_centre_sd_mm: 0.5}");
+  const auto typo = LoadScene(path);
+  ASSERT_FALSE(typo.ok());
+  EXPECT_NE(typo.status().message().find("tag_centre_sd_mm"), std::string::npos)
+      << typo.status().ToString();
 }
 
 // Numbers no real rig comes near (1e300 overflows the geometry and the

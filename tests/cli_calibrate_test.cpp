@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/calib_box.h"
 #include "reconstruction/colmap_model.h"
 #include "rig/reconstruction_input.h"
 #include "tests/support/command_run.h"
@@ -102,8 +103,8 @@ TEST_F(CliCalibrate, BothModesWriteEveryOutputAndMeetTheGroundTruth) {
   const std::string out = capture_ + "/calibration";
   for (const char* file :
        {"calibration.json", "opencv/SIM-CAM-UPPER.yaml", "opencv/SIM-CAM-LOWER.yaml",
-        "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt", "report/report.txt",
-        "report/view_rms.png", "report/residuals/000_SIM-CAM-UPPER.jpg"})
+        "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt", "box_as_built.yaml",
+        "report/report.txt", "report/view_rms.png", "report/residuals/000_SIM-CAM-UPPER.jpg"})
     EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
 
   r = Hairrig("eval calibration " + capture_ + " --json");
@@ -138,6 +139,47 @@ TEST_F(CliCalibrate, BothModesWriteEveryOutputAndMeetTheGroundTruth) {
   EXPECT_GT(Median(start, "camera_centre_mm"), 1.5 * Median(ours, "camera_centre_mm"));
   EXPECT_GT(Median(start, "rotation_deg"), 1.5 * Median(ours, "rotation_deg"));
   EXPECT_LT(Median(ours, "camera_centre_mm"), Median(free_mode["solved"], "camera_centre_mm"));
+}
+
+// The box as built: written by calibrate, taken back by --box (the report
+// names it), refined by calibrate-box from two captures in turn with smaller
+// standard deviations, and no file of it with --exact-box.
+TEST_F(CliCalibrate, TheBoxAsBuiltIsWrittenTakenBackAndRefinedFromSeveralCaptures) {
+  CommandRun r = Hairrig("--log-level warning calibrate " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string given = ::testing::TempDir() + "/cli_calibrate_box_once.yaml";
+  fs::copy_file(capture_ + "/calibration/box_as_built.yaml", given,
+                fs::copy_options::overwrite_existing);
+  const auto once = hairrig::LoadCalibBox(given);
+  ASSERT_TRUE(once.ok()) << once.status().ToString();
+
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --box " + given + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(LastLineJson(r.output)["verdict"], "good") << r.output;
+  std::ifstream report(capture_ + "/calibration/report/report.txt");
+  const std::string text((std::istreambuf_iterator<char>(report)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("box: " + given + ", refined with the cameras"), std::string::npos) << text;
+
+  const std::string twice = ::testing::TempDir() + "/cli_calibrate_box_twice.yaml";
+  r = Hairrig("--log-level warning calibrate-box " + capture_ + " " + capture_ + " --out " + twice +
+              " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(LastLineJson(r.output)["captures"].size(), 2u) << r.output;
+  const auto refined = hairrig::LoadCalibBox(twice);
+  ASSERT_TRUE(refined.ok()) << refined.status().ToString();
+  int compared = 0;
+  for (const hairrig::BoxTag& tag : once->tags) {
+    if (!(tag.center_sd_mm.x() > 0)) continue;
+    ++compared;
+    EXPECT_LT(refined->FindTag(tag.id)->center_sd_mm.x(), 0.9 * tag.center_sd_mm.x())
+        << "tag " << tag.id;
+  }
+  EXPECT_GE(compared, 8);
+
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --exact-box --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(capture_ + "/calibration/box_as_built.yaml"));
 }
 
 // The COLMAP export read back by the reconstruction's COLMAP reader gives the

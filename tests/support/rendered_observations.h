@@ -16,7 +16,7 @@ inline Result<ViewObservations> RenderedObservations(const Renderer& renderer,
   HR_ASSIGN_OR_RETURN(RenderedView rendered,
                       renderer.Render(camera, scene.StopAngleDeg(stop), options));
   HR_ASSIGN_OR_RETURN(std::vector<TagDetection> detections, detector.Detect(rendered.image));
-  return MatchToBox(detections, scene.box);
+  return MatchToBox(detections, scene.drawn_box);
 }
 
 }  // namespace hairrig

@@ -18,7 +18,7 @@ inline double SceneBoxYawDeg(const hairrig::Scene& scene) {
 
 inline hairrig::CaptureCalibrationInput SceneCalibrationInput(const hairrig::Scene& scene) {
   hairrig::CaptureCalibrationInput input;
-  input.box = scene.box;
+  input.box = scene.drawn_box;  // what the calibration is given
   input.box_height_mm = scene.turntable_from_box.translation.z();
   input.box_yaw_deg = SceneBoxYawDeg(scene);
   for (const hairrig::SceneCamera& camera : scene.cameras) {
