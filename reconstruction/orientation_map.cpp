@@ -119,6 +119,63 @@ OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& 
   return out;
 }
 
+// The bank over one scale of the (cropped) grey image: the shading removed by
+// the difference of Gaussians, the first pass and the refinement passes.
+OrientationMap FilterScale(const cv::Mat& grey, const std::vector<GaborPair>& bank,
+                           const OrientationOptions& options) {
+  cv::Mat1f input, coarse;
+  grey.convertTo(input, CV_32F, 1.0 / 255);
+  cv::GaussianBlur(input, coarse, cv::Size(), options.dog_coarse_px);
+  if (options.dog_fine_px > 0) cv::GaussianBlur(input, input, cv::Size(), options.dog_fine_px);
+  input -= coarse;
+  OrientationMap pass = FilterPass(input, bank, options.quadrature, options.threads);
+  for (int p = 0; p < options.refinement_passes; ++p) {
+    // The confidence in response units (high on the fibres, where the even kernel peaks).
+    const cv::Mat1f ridges(cv::Mat(pass.confidence.mul(pass.response)));
+    pass = FilterPass(ridges, bank, options.quadrature, options.threads);
+  }
+  return pass;
+}
+
+// `coarse` (a map of the image at a smaller size) brought to `size`: the
+// direction interpolated as the doubled-angle vector, confidence and response
+// bilinearly.
+OrientationMap Upsampled(const OrientationMap& coarse, cv::Size size) {
+  cv::Mat1f c2(coarse.angle_deg.size()), s2(coarse.angle_deg.size());
+  for (int y = 0; y < c2.rows; ++y) {
+    for (int x = 0; x < c2.cols; ++x) {
+      const double a = DegToRad(2.0 * coarse.angle_deg(y, x));
+      c2(y, x) = static_cast<float>(std::cos(a));
+      s2(y, x) = static_cast<float>(std::sin(a));
+    }
+  }
+  OrientationMap out;
+  cv::resize(c2, c2, size, 0, 0, cv::INTER_LINEAR);
+  cv::resize(s2, s2, size, 0, 0, cv::INTER_LINEAR);
+  cv::resize(coarse.confidence, out.confidence, size, 0, 0, cv::INTER_LINEAR);
+  cv::resize(coarse.response, out.response, size, 0, 0, cv::INTER_LINEAR);
+  out.angle_deg = cv::Mat1f(size);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      const double deg = 0.5 * RadToDeg(std::atan2(s2(y, x), c2(y, x)));
+      out.angle_deg(y, x) = static_cast<float>(deg < 0 ? deg + 180.0 : deg);
+    }
+  }
+  return out;
+}
+
+// Per pixel, the scale with the higher confidence.
+void KeepMoreConfident(const OrientationMap& other, OrientationMap* best) {
+  for (int y = 0; y < best->angle_deg.rows; ++y) {
+    for (int x = 0; x < best->angle_deg.cols; ++x) {
+      if (other.confidence(y, x) <= best->confidence(y, x)) continue;
+      best->angle_deg(y, x) = other.angle_deg(y, x);
+      best->confidence(y, x) = other.confidence(y, x);
+      best->response(y, x) = other.response(y, x);
+    }
+  }
+}
+
 }  // namespace
 
 Status OrientationOptions::Check() const {
@@ -132,6 +189,7 @@ Status OrientationOptions::Check() const {
   }
   if (refinement_passes < 0 || refinement_passes > 10)
     return InvalidArgument("orientation refinement_passes must be 0..10");
+  if (scales < 1 || scales > 5) return InvalidArgument("orientation scales must be 1..5");
   if (threads < 1) return InvalidArgument("orientation threads must be at least 1");
   return Status::Ok();
 }
@@ -155,8 +213,9 @@ Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat
   for (int k = 0; k < options.directions; ++k)
     bank.push_back(MakeGaborPair(kPi * k / options.directions, options));
   const int kernel_reach = bank[0].even.rows / 2;
-  const int reach = kernel_reach * (options.refinement_passes + 1) +
-                    static_cast<int>(std::ceil(3 * options.dog_coarse_px));
+  const int coarsest = 1 << (options.scales - 1);
+  const int reach = coarsest * (kernel_reach * (options.refinement_passes + 1) +
+                                static_cast<int>(std::ceil(3 * options.dog_coarse_px)));
   const cv::Rect area = WorkingArea(region, image.size(), reach);
 
   cv::Mat grey;
@@ -164,17 +223,11 @@ Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat
     cv::cvtColor(image(area), grey, cv::COLOR_BGR2GRAY);
   else
     grey = image(area);
-  cv::Mat1f input, coarse;
-  grey.convertTo(input, CV_32F, 1.0 / 255);
-  cv::GaussianBlur(input, coarse, cv::Size(), options.dog_coarse_px);
-  if (options.dog_fine_px > 0) cv::GaussianBlur(input, input, cv::Size(), options.dog_fine_px);
-  input -= coarse;
-
-  OrientationMap pass = FilterPass(input, bank, options.quadrature, options.threads);
-  for (int p = 0; p < options.refinement_passes; ++p) {
-    // The confidence in response units (high on the fibres, where the even kernel peaks).
-    const cv::Mat1f ridges(cv::Mat(pass.confidence.mul(pass.response)));
-    pass = FilterPass(ridges, bank, options.quadrature, options.threads);
+  OrientationMap pass = FilterScale(grey, bank, options);
+  cv::Mat level = grey;
+  for (int scale = 1; scale < options.scales; ++scale) {
+    cv::pyrDown(level, level);
+    KeepMoreConfident(Upsampled(FilterScale(level, bank, options), grey.size()), &pass);
   }
 
   OrientationMap out{cv::Mat1f(image.size(), std::numeric_limits<float>::quiet_NaN()),

@@ -10,7 +10,9 @@
 // (Chai et al. 2012). The paper's even kernel and this module's default, the
 // quadrature pair's energy, are both options, measured side by side in
 // bench/orientation_bench.cpp. A difference of Gaussians removes the shading
-// before the first pass.
+// before the first pass. With `scales` > 1 the bank also runs on an image
+// pyramid and each pixel keeps its most confident scale (per-pixel scale
+// selection, as Paris et al. 2004 choose among filter parameters).
 //
 // Angles in degrees in [0, 180), image frame: 0 along +x, 90 along +y (down
 // the image), the convention of the simulated rig's ground truth.
@@ -38,6 +40,13 @@ struct OrientationOptions {
   // depend on where a pixel lies across a fibre (measured: median error 7.9 deg
   // instead of 12.4 deg on the default scene).
   bool quadrature = true;
+  // Scales of an image pyramid the bank runs on: 1 = the image alone (Luo et
+  // al.); n > 1 adds the image at 1/2, ..., 1/2^(n-1) of its size, which tunes
+  // the same bank to wavelengths 2x, ..., 2^(n-1)x (hair whose flow shows at
+  // the scale of wisps, not of single fibres). Each pixel takes the direction
+  // of the scale where its confidence is highest; the confidence compares
+  // between scales because it is the responses' spread relative to their peak.
+  int scales = 1;
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.

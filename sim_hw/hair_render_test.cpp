@@ -7,12 +7,14 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "core/camera_model.h"
 #include "core/head_model.h"
 #include "sim_hw/ground_truth.h"
 #include "sim_hw/renderer.h"
+#include "sim_hw/scene_variations.h"
 #include "tests/support/default_scene.h"
 
 namespace hairrig {
@@ -227,6 +229,48 @@ TEST(HairRender, HairCastsAShadowOnTheHead) {
       sum_with / std::max(1, n) / 3, sum_without / std::max(1, n) / 3);
   ASSERT_GT(n, 500);
   EXPECT_LT(sum_with, 0.7 * sum_without);  // measured: 0.48 as bright
+}
+
+// Over the hair's pixels: the mean grey and the mean squared Laplacian (the
+// detail finer than a few pixels).
+struct HairDetail {
+  double mean = 0, fine = 0;
+};
+HairDetail MeasureHairDetail(const RenderedView& view) {
+  cv::Mat grey, laplacian;
+  cv::cvtColor(view.image, grey, cv::COLOR_BGR2GRAY);
+  cv::Laplacian(grey, laplacian, CV_32F);
+  const cv::Mat hair = view.truth.label == ViewTruthMaps::kHair;
+  HairDetail d;
+  d.mean = cv::mean(grey, hair)[0];
+  d.fine = cv::mean(laplacian.mul(laplacian), hair)[0];
+  return d;
+}
+
+// Fibre sparkle puts detail along the fibres at their own scale, keeping the
+// hair as bright on average; defocus takes detail away.
+TEST(HairRender, FibreSparkleAddsDetailAndDefocusRemovesIt) {
+  Scene scene = DefaultScene();
+  auto plain = Renderer::Create(scene);
+  ASSERT_TRUE(plain.ok());
+  const HairDetail base = MeasureHairDetail(RenderTruth(**plain, 0, 60.0));
+  ASSERT_TRUE(ApplySceneVariations({"fibre_sparkle"}, &scene).ok());
+  auto sparkling = Renderer::Create(scene);
+  ASSERT_TRUE(sparkling.ok());
+  const HairDetail sparkle = MeasureHairDetail(RenderTruth(**sparkling, 0, 60.0));
+  scene = DefaultScene();
+  ASSERT_TRUE(ApplySceneVariations({"defocus"}, &scene).ok());
+  auto blurred = Renderer::Create(scene);
+  ASSERT_TRUE(blurred.ok());
+  const HairDetail defocus = MeasureHairDetail(RenderTruth(**blurred, 0, 60.0));
+  std::printf(
+      "hair mean grey / mean squared Laplacian: plain %.1f / %.1f, sparkle %.1f / %.1f, "
+      "defocus %.1f / %.1f\n",
+      base.mean, base.fine, sparkle.mean, sparkle.fine, defocus.mean, defocus.fine);
+  EXPECT_GT(sparkle.fine, 1.3 * base.fine);
+  EXPECT_NEAR(sparkle.mean, base.mean, 0.2 * base.mean);
+  EXPECT_LT(defocus.fine, 0.7 * base.fine);
+  EXPECT_NEAR(defocus.mean, base.mean, 0.1 * base.mean);
 }
 
 }  // namespace

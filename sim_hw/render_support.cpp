@@ -7,25 +7,30 @@ namespace render_support {
 
 cv::Mat ExposeRadiance(const cv::Mat3f& radiance, const SceneCamera& camera, double exposure_s,
                        double gain_db, bool noise, uint64_t noise_seed) {
+  const CameraPipeline& pipeline = camera.pipeline;
   const double exposure = exposure_s > 0 ? exposure_s : camera.exposure_s;
   const float scale =
-      static_cast<float>(255.0 * exposure * camera.sensitivity * std::pow(10.0, gain_db / 20.0));
+      static_cast<float>(255.0 * exposure * camera.sensitivity * std::pow(10.0, gain_db / 20.0) *
+                         std::exp2(pipeline.exposure_ev));
   const float read = static_cast<float>(camera.read_noise_dn);
-  const float shot = static_cast<float>(camera.shot_noise_gain);
+  const float shot = static_cast<float>(camera.shot_noise_gain * pipeline.ShotVarianceScale());
   NoiseSource source(noise_seed);
-  cv::Mat image(radiance.rows, radiance.cols, CV_8UC3);
+  // Linear DN per photosite: every channel, or the one its colour filter passes.
+  cv::Mat3f sensor_dn(radiance.rows, radiance.cols, cv::Vec3f(0, 0, 0));
   for (int y = 0; y < radiance.rows; ++y) {
     const cv::Vec3f* in = radiance.ptr<cv::Vec3f>(y);
-    cv::Vec3b* out = image.ptr<cv::Vec3b>(y);
+    cv::Vec3f* out = sensor_dn.ptr<cv::Vec3f>(y);
     for (int x = 0; x < radiance.cols; ++x) {
-      for (int c = 0; c < 3; ++c) {
+      const int first = pipeline.bayer ? BayerChannel(x, y) : 0;
+      const int last = pipeline.bayer ? first + 1 : 3;
+      for (int c = first; c < last; ++c) {
         float dn = in[x][c] * scale;
         if (noise) dn += source.Next() * std::sqrt(read * read + shot * std::max(dn, 0.0f));
-        out[x][c] = static_cast<uint8_t>(std::clamp(std::lround(dn), 0L, 255L));
+        out[x][c] = std::clamp(dn, 0.0f, 255.0f);
       }
     }
   }
-  return image;
+  return DevelopImage(sensor_dn, pipeline);
 }
 
 }  // namespace render_support

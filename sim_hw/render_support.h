@@ -70,6 +70,15 @@ inline uint32_t HashPixel(int x, int y, uint32_t salt) {
   return h;
 }
 
+// A 64-bit hash of `x` whose every bit depends on every bit of `x` (the
+// finaliser of splitmix64): seeds for NoiseSource from structured indices.
+inline uint64_t MixBits(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
 // Fast reproducible standard normal samples (xorshift + a precomputed table).
 class NoiseSource {
  public:
@@ -118,9 +127,11 @@ class NoiseSource {
   uint64_t state_;
 };
 
-// The 8-bit BGR image a camera records of `radiance` (linear, BGR): exposure
-// (s; 0 = the camera's nominal) and gain (dB) scale it, then read and shot
-// noise as the scene camera states, reproducible from `noise_seed`.
+// The 8-bit BGR image a camera records of `radiance` (linear, BGR, on the
+// sensor: defocus already applied): exposure (s; 0 = the camera's nominal),
+// gain (dB) and the pipeline's exposure error scale it, then read and shot
+// noise as the scene camera states at the pipeline's ISO, reproducible from
+// `noise_seed`, then the camera's processing (sim_hw/camera_pipeline.h).
 cv::Mat ExposeRadiance(const cv::Mat3f& radiance, const SceneCamera& camera, double exposure_s,
                        double gain_db, bool noise, uint64_t noise_seed);
 

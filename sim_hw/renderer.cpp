@@ -22,6 +22,7 @@ namespace hairrig {
 namespace {
 using render_support::HashPixel;
 using render_support::kEdgeSamples;
+using render_support::MixBits;
 using render_support::NoiseSource;
 using render_support::RayTable;
 
@@ -43,6 +44,8 @@ struct HairSegment {
   uint32_t strand = 0;
   cv::Vec3f color_a, color_b;  // radiance at its ends (BGR)
   float angle_deg = 0;         // 2D direction in [0, 180)
+  float grains = 0;            // fibre grains along it (HairShading::fibre_grain_mm); 0: smooth
+  uint32_t grain_seed = 0;
   float Depth() const { return 0.5f * (za + zb); }
 };
 
@@ -363,9 +366,10 @@ struct Renderer::Impl {
   }
 
   // Radiance of a fibre segment at p with tangent t (camera frame).
-  cv::Vec3f ShadeStrand(const View& v, const Eigen::Vector3d& p, const Eigen::Vector3d& t) const {
+  // `albedo` is the fibre's own colour.
+  cv::Vec3f ShadeStrand(const View& v, const Eigen::Vector3d& p, const Eigen::Vector3d& t,
+                        const Eigen::Vector3d& albedo) const {
     const Eigen::Vector3d to_camera = (-p).normalized();
-    const Eigen::Vector3d& albedo = scene.wig.albedo;
     Eigen::Vector3d radiance = 0.9 * v.ambient * albedo;
     for (size_t i = 0; i < v.light_power.size(); ++i) {
       if (v.light_power[i] <= 0) continue;
@@ -383,6 +387,28 @@ struct Renderer::Impl {
     }
     return {static_cast<float>(radiance.z()), static_cast<float>(radiance.y()),
             static_cast<float>(radiance.x())};
+  }
+
+  // A fibre's colour: the wig's, scaled by the fibre's own log-normal factor.
+  Eigen::Vector3d FibreAlbedo(size_t strand) const {
+    const double sd = scene.hair_shading.fibre_albedo_sd;
+    if (sd <= 0) return scene.wig.albedo;
+    NoiseSource source(MixBits((scene.wig.seed << 32) + strand));
+    const double scale = std::exp(sd * source.Next() - 0.5 * sd * sd);
+    return (scene.wig.albedo * scale).cwiseMin(1.0);
+  }
+
+  // The fibre's grain at `t` along a segment: log-normal, mean 1, interpolated
+  // between grains (HairShading::fibre_grain_sd).
+  float Grain(const HairSegment& seg, float t) const {
+    const float g = t * seg.grains;
+    const uint64_t i = static_cast<uint64_t>(g);
+    const float f = g - static_cast<float>(i);
+    const uint64_t base = static_cast<uint64_t>(seg.grain_seed) << 24;
+    const float n = NoiseSource(MixBits(base + i)).Next() * (1 - f) +
+                    NoiseSource(MixBits(base + i + 1)).Next() * f;
+    const float sd = static_cast<float>(scene.hair_shading.fibre_grain_sd);
+    return std::exp(sd * n - 0.5f * sd * sd);
   }
 
   // Draws `seg` into the rows [y_begin, y_end) of the view: per pixel within
@@ -421,7 +447,8 @@ struct Renderer::Impl {
         if (v.depth(y, x) < z - kOcclusionMarginMm) continue;
         const float alpha = std::min(1.0f, w < 1 ? w * (1.0f - d) : 0.5f * w + 0.5f - d);
         if (alpha <= 0) continue;
-        const cv::Vec3f color = seg.color_a + t * (seg.color_b - seg.color_a);
+        cv::Vec3f color = seg.color_a + t * (seg.color_b - seg.color_a);
+        if (seg.grains > 0) color *= Grain(seg, t);
         cv::Vec3f& radiance = v.radiance(y, x);
         radiance = radiance * (1.0f - alpha) + color * alpha;
         float& coverage = v.hair_alpha(y, x);
@@ -453,6 +480,8 @@ struct Renderer::Impl {
     const auto offsets = strands.Offsets();
     const cv::Mat1f occluders = FarthestOpaqueNearby(v);
     const double fibre_mm = 1e-3 * scene.wig.fibre_diameter_um;
+    const double grain_sd = scene.hair_shading.fibre_grain_sd;
+    const double grain_mm = scene.hair_shading.fibre_grain_mm;
     const double focal = 0.5 * (v.camera->intrinsics.fx_px + v.camera->intrinsics.fy_px);
     const auto visible = [&](size_t i) {
       const Eigen::Vector2d& a = uv[i - 1];
@@ -487,12 +516,13 @@ struct Renderer::Impl {
         if (first_segment[s + 1] == first_segment[s]) return;
         // Radiance at each end of a visible segment, with the tangent of the chord around it.
         color.assign(last - first, cv::Vec3f(0, 0, 0));
+        const Eigen::Vector3d albedo = FibreAlbedo(s);
         for (size_t i = first; i < last && v.shade_hair; ++i) {
           const bool needed =
               (i > first && segment_visible[i]) || (i + 1 < last && segment_visible[i + 1]);
           if (!needed) continue;
           const size_t a = i == first ? i : i - 1, b = i + 1 < last ? i + 1 : i;
-          color[i - first] = ShadeStrand(v, p_cam[i], (p_cam[b] - p_cam[a]).normalized());
+          color[i - first] = ShadeStrand(v, p_cam[i], (p_cam[b] - p_cam[a]).normalized(), albedo);
         }
         HairSegment* out = &all[first_segment[s]];
         for (size_t i = first + 1; i < last; ++i) {
@@ -503,6 +533,10 @@ struct Renderer::Impl {
           seg.za = static_cast<float>(p_cam[i - 1].z()), seg.zb = static_cast<float>(p_cam[i].z());
           seg.width_px = static_cast<float>(fibre_mm * focal / (0.5 * (seg.za + seg.zb)));
           seg.strand = static_cast<uint32_t>(s);
+          if (grain_sd > 0) {
+            seg.grains = static_cast<float>((p_cam[i] - p_cam[i - 1]).norm() / grain_mm);
+            seg.grain_seed = static_cast<uint32_t>(i);
+          }
           seg.color_a = color[i - 1 - first], seg.color_b = color[i - first];
           double angle = RadToDeg(std::atan2(b.y() - a.y(), b.x() - a.x()));
           if (angle < 0) angle += 180;
@@ -683,6 +717,22 @@ struct Renderer::Impl {
     return true;
   }
 
+  // The lens' depth of field over the radiance, by the nearest surface's depth
+  // (the hair where it covers at least half a pixel).
+  void Defocus(View& v) const {
+    const CameraPipeline& pipeline = v.camera->pipeline;
+    if (pipeline.f_number <= 0 && pipeline.lens_blur_px <= 0) return;
+    cv::Mat1f depth = v.depth.clone();
+    for (int y = 0; y < v.height; ++y) {
+      for (int x = 0; x < v.width; ++x) {
+        if (v.hair_alpha(y, x) >= 0.5f) depth(y, x) = std::min(depth(y, x), v.hair_front_z(y, x));
+      }
+    }
+    const double focal = 0.5 * (v.camera->intrinsics.fx_px + v.camera->intrinsics.fy_px);
+    const double focus = pipeline.focus_mm > 0 ? pipeline.focus_mm : v.camera->target_distance_mm;
+    v.radiance = DefocusRadiance(v.radiance, depth, pipeline, focal, focus);
+  }
+
   cv::Mat Expose(const View& v, const RenderOptions& o) const {
     return render_support::ExposeRadiance(v.radiance, *v.camera, o.exposure_s, o.gain_db, o.noise,
                                           o.noise_seed);
@@ -794,6 +844,7 @@ Result<RenderedView> Renderer::Render(int camera_index, double turntable_deg,
   impl_->DrawHead(v);
   impl_->DrawBox(v);
   if (options.draw_hair) impl_->DrawHair(v, *scratch);
+  impl_->Defocus(v);
   RenderedView out;
   out.tags = impl_->TagTruths(v);
   out.image = impl_->Expose(v, options);

@@ -1,6 +1,8 @@
 // Renders what a simulated camera sees: backdrop, head (an ellipsoid or a
 // mesh, skin-shaded), calibration box with its AprilTags, and the hair,
-// through the camera's lens distortion, exposure and sensor noise.
+// through the camera's lens distortion, depth of field, exposure, sensor noise
+// and processing (sim_hw/camera_pipeline.h: all but distortion, exposure and
+// noise are off unless the scene's camera_pipeline turns them on).
 //
 // Geometry is exact where calibration depends on it: the box and the head are
 // ray-cast per pixel through the inverse of the lens model (no image warping),
@@ -11,7 +13,8 @@
 // diameter w at depth z covers w f / z pixels across (about 0.12 px for 70 um
 // at 1 m), spread over the pixels within one pixel of its centre line by a
 // tent filter, composited back to front. Fibres are shaded with R, TT and TRT
-// lobes (sim_hw/hair_shading.h) and shadowed by a deep opacity map per LED
+// lobes (sim_hw/hair_shading.h), each fibre optionally with its own shade and
+// a grain of glints along it (HairShading), and shadowed by a deep opacity map per LED
 // panel (sim_hw/deep_opacity.h), which also darkens the head under the hair.
 // All panels off gives a dark frame (noise only).
 #pragma once

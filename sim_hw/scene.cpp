@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/head_config.h"
 #include "core/string_format.h"
+#include "sim_hw/scene_variations.h"
 
 namespace hairrig {
 
@@ -126,6 +127,7 @@ SceneCamera ReadCamera(const ConfigNode& n) {
   if (n.ok() && (eye - target).norm() < 1.0)
     n.Fail("target_mm", "the camera must look somewhere: eye_mm equals target_mm");
   c.cam_from_world = LookAt(eye, target);
+  c.target_distance_mm = (eye - target).norm();
   c.read_noise_dn = n.Number("read_noise_dn", c.read_noise_dn, {.min = 0, .max = 100});
   c.shot_noise_gain = n.Number("shot_noise_gain", c.shot_noise_gain, {.min = 0, .max = 10});
   c.exposure_s = n.Number("exposure_s", c.exposure_s, {.min = 1e-6, .max = 30});
@@ -142,6 +144,26 @@ struct AsBuiltBox {
   BoxTolerance spread;
   uint64_t seed = 1;
 };
+
+// camera_pipeline: what every camera of the scene does between the light and
+// its file (sim_hw/camera_pipeline.h).
+CameraPipeline ReadCameraPipeline(const ConfigNode& n) {
+  n.AllowOnlyKeys({"iso", "exposure_ev", "white_balance", "bayer", "tone", "jpeg_quality",
+                   "f_number", "focus_mm", "pixel_um", "lens_blur_px"});
+  CameraPipeline p;
+  p.iso = n.Number("iso", p.iso, {.min = 25, .max = 102400});
+  p.exposure_ev = n.Number("exposure_ev", p.exposure_ev, {.min = -6, .max = 6});
+  p.white_balance = n.Vec3("white_balance", p.white_balance, {.min = 0.1, .max = 10});
+  p.bayer = n.Bool("bayer", p.bayer);
+  p.tone = n.Choice("tone", {"linear", "srgb"}, "linear") == "srgb" ? CameraPipeline::Tone::kSrgb
+                                                                    : CameraPipeline::Tone::kLinear;
+  p.jpeg_quality = n.Integer("jpeg_quality", p.jpeg_quality, {.min = 0, .max = 100});
+  if (n.Has("f_number")) p.f_number = n.Number("f_number", {.min = 0.7, .max = 64});
+  p.focus_mm = n.Number("focus_mm", p.focus_mm, {.min = 0, .max = 1e6});
+  p.pixel_um = n.Number("pixel_um", p.pixel_um, {.min = 0.5, .max = 100});
+  p.lens_blur_px = n.Number("lens_blur_px", p.lens_blur_px, {.min = 0, .max = 20});
+  return p;
+}
 
 AsBuiltBox ReadAsBuiltBox(const ConfigNode& box, const std::string& scene_path) {
   AsBuiltBox out;
@@ -217,7 +239,8 @@ Status WigOptions::Check() const {
 Result<Scene> LoadScene(const std::string& path) {
   HR_ASSIGN_OR_RETURN(ConfigNode root, ConfigNode::LoadFile(path));
   root.AllowOnlyKeys({"name", "seed", "head", "wig", "hair_shading", "calib_box", "lights",
-                      "cameras", "backdrop_albedo", "ambient", "turntable"});
+                      "cameras", "camera_pipeline", "backdrop_albedo", "ambient", "turntable",
+                      "variations"});
   Scene scene;
   scene.path = path;
   scene.name = root.String("name", "unnamed scene");
@@ -226,7 +249,8 @@ Result<Scene> LoadScene(const std::string& path) {
   if (root.Has("wig")) ReadWig(root.Child("wig"), path, &scene.wig);
   if (root.Has("hair_shading")) {
     const ConfigNode h = root.Child("hair_shading");
-    h.AllowOnlyKeys({"model", "shadows", "cuticle_tilt_deg", "roughness_deg"});
+    h.AllowOnlyKeys({"model", "shadows", "cuticle_tilt_deg", "roughness_deg", "fibre_albedo_sd",
+                     "fibre_grain_sd", "fibre_grain_mm"});
     scene.hair_shading.model =
         h.Choice("model", {"marschner", "kajiya-kay"}, "marschner") == "kajiya-kay"
             ? HairShading::Model::kKajiyaKay
@@ -236,6 +260,13 @@ Result<Scene> LoadScene(const std::string& path) {
         h.Number("cuticle_tilt_deg", scene.hair_shading.cuticle_tilt_deg, {.min = -20, .max = 20});
     scene.hair_shading.roughness_deg =
         h.Number("roughness_deg", scene.hair_shading.roughness_deg, {.min = 1, .max = 45});
+    HairShading& shading = scene.hair_shading;
+    shading.fibre_albedo_sd =
+        h.Number("fibre_albedo_sd", shading.fibre_albedo_sd, {.min = 0, .max = 2});
+    shading.fibre_grain_sd =
+        h.Number("fibre_grain_sd", shading.fibre_grain_sd, {.min = 0, .max = 3});
+    shading.fibre_grain_mm =
+        h.Number("fibre_grain_mm", shading.fibre_grain_mm, {.min = 0.01, .max = 100});
   }
   const ConfigNode box = root.Child("calib_box");
   box.AllowOnlyKeys({"file", "turntable_from_box", "as_built"});
@@ -247,7 +278,13 @@ Result<Scene> LoadScene(const std::string& path) {
     scene.lights.push_back({l.String("name"), l.Vec3("position_mm", kPositionRangeMm),
                             l.Number("intensity", 1.0, {.min = 0, .max = 1000})});
   }
-  for (const ConfigNode& c : root.Items("cameras")) scene.cameras.push_back(ReadCamera(c));
+  const CameraPipeline pipeline = root.Has("camera_pipeline")
+                                      ? ReadCameraPipeline(root.Child("camera_pipeline"))
+                                      : CameraPipeline();
+  for (const ConfigNode& c : root.Items("cameras")) {
+    scene.cameras.push_back(ReadCamera(c));
+    scene.cameras.back().pipeline = pipeline;
+  }
   scene.backdrop_albedo = root.Vec3("backdrop_albedo", scene.backdrop_albedo, kUnitRange);
   scene.ambient = root.Number("ambient", scene.ambient, {.min = 0, .max = 1});
   if (root.Has("turntable")) {
@@ -271,6 +308,11 @@ Result<Scene> LoadScene(const std::string& path) {
   if (!root.ok()) return root.status();
   HR_ASSIGN_OR_RETURN(scene.drawn_box, LoadCalibBox(box_file));
   HR_ASSIGN_OR_RETURN(scene.box, BuildSceneBox(scene.drawn_box, as_built));
+  const std::vector<std::string> variations =
+      root.Has("variations") ? root.Strings("variations") : std::vector<std::string>();
+  HR_RETURN_IF_ERROR(root.status());
+  HR_RETURN_IF_ERROR(
+      ApplySceneVariations(variations, &scene).WithContext(root.Where() + ": field 'variations'"));
   HR_RETURN_IF_ERROR(ValidateScene(scene));
   return scene;
 }
@@ -280,6 +322,7 @@ Status ValidateScene(const Scene& scene) {
   const Eigen::Vector3d half = 0.5 * scene.box.size_mm;
   for (const SceneCamera& cam : scene.cameras) {
     HR_RETURN_IF_ERROR(cam.intrinsics.Check().WithContext(scene.path + ": camera " + cam.serial));
+    HR_RETURN_IF_ERROR(cam.pipeline.Check().WithContext(scene.path + ": camera " + cam.serial));
     for (int stop = 0; stop < scene.turntable_stops; ++stop) {
       const Rigid3d cam_from_box = cam.cam_from_world *
                                    WorldFromTurntable(scene.StopAngleDeg(stop)) *

@@ -13,6 +13,7 @@
 #include "core/status.h"
 #include "core/strands.h"
 #include "core/transform.h"
+#include "sim_hw/camera_pipeline.h"
 
 namespace hairrig {
 
@@ -81,6 +82,13 @@ struct HairShading {
   double cuticle_tilt_deg =
       -5;  // alpha: R shifts by alpha, TT by -alpha/2, TRT by -3 alpha/2 (towards the root)
   double roughness_deg = 7;  // beta: R's longitudinal width; TT beta/2, TRT 2 beta
+  // Fibre-level appearance: each fibre's colour scaled by its own factor (log-
+  // normal, mean 1, this sd of the log), and its radiance along it by a grain
+  // of glints and dull stretches `fibre_grain_mm` long (log-normal, sd of the
+  // log fibre_grain_sd), finer than a pixel. 0: every fibre alike and smooth.
+  double fibre_albedo_sd = 0;
+  double fibre_grain_sd = 0;
+  double fibre_grain_mm = 0.5;
 };
 
 struct SceneLight {
@@ -97,6 +105,8 @@ struct SceneCamera {
   double shot_noise_gain = 0.04;  // shot-noise variance per DN of signal
   double exposure_s = 0.02;       // nominal exposure
   double sensitivity = 50.0;      // DN per unit radiance per second / 255
+  double target_distance_mm = 1000;  // from the eye to the point it looks at (the focus)
+  CameraPipeline pipeline;           // the scene's camera_pipeline
 };
 
 struct Scene {

@@ -108,7 +108,12 @@ TEST(Scene, NumbersBeyondAnyRigAreRefusedNamingTheFileAndField) {
       {"camera_readout_s: 0.05", "camera_readout_s: 1e300", "turntable.camera_readout_s"},
       {"camera_download_s: 0.25", "camera_download_s: 1e300", "turntable.camera_download_s"},
       {"speed_deg_s: 30", "speed_deg_s: -1", "turntable.speed_deg_s"},
-      {"settle_s: 0.5", "settle_s: .nan", "turntable.settle_s"}};
+      {"settle_s: 0.5", "settle_s: .nan", "turntable.settle_s"},
+      {"ambient: 0.05", "ambient: 0.05\ncamera_pipeline: {jpeg_quality: 101}",
+       "camera_pipeline.jpeg_quality"},
+      {"ambient: 0.05", "ambient: 0.05\ncamera_pipeline: {iso: .nan}", "camera_pipeline.iso"},
+      {"ambient: 0.05", "ambient: 0.05\nhair_shading: {fibre_grain_sd: 1e300}",
+       "hair_shading.fibre_grain_sd"}};
   for (size_t i = 0; i < cases.size(); ++i) {
     const Case& c = cases[i];
     const std::string path = SmallSceneWith("range_" + std::to_string(i), c.from, c.to);
@@ -120,6 +125,31 @@ TEST(Scene, NumbersBeyondAnyRigAreRefusedNamingTheFileAndField) {
     EXPECT_NE(scene.status().message().find("field '" + c.field + "'"), std::string::npos)
         << scene.status().ToString();
   }
+}
+
+// camera_pipeline applies to every camera; variations come after the file's
+// own values; an unknown variation is named with the known ones.
+TEST(Scene, CameraPipelineAndVariations) {
+  const auto scene = LoadScene(SmallSceneWith(
+      "pipeline", "ambient: 0.05",
+      "ambient: 0.05\ncamera_pipeline: {jpeg_quality: 90, iso: 400}\nvariations: [grey_backdrop, "
+      "bayer]"));
+  ASSERT_TRUE(scene.ok()) << scene.status().ToString();
+  for (const SceneCamera& camera : scene->cameras) {
+    EXPECT_EQ(camera.pipeline.jpeg_quality, 90);
+    EXPECT_EQ(camera.pipeline.iso, 400);
+    EXPECT_TRUE(camera.pipeline.bayer);
+  }
+  EXPECT_EQ(scene->backdrop_albedo, Eigen::Vector3d(0.3, 0.3, 0.3));
+  const std::string path =
+      SmallSceneWith("unknown_variation", "ambient: 0.05", "ambient: 0.05\nvariations: [nope]");
+  const auto refused = LoadScene(path);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
+  for (const std::string part :
+       {path, std::string("'variations'"), std::string("'nope'"), std::string("photograph")})
+    EXPECT_NE(refused.status().message().find(part), std::string::npos)
+        << refused.status().ToString();
 }
 
 // The simulated rig's options refuse a bad value with InvalidArgument naming

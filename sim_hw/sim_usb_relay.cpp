@@ -91,8 +91,8 @@ Status SimUsbRelayBus::SetReport(const std::string& port_path, const UsbRelayRep
   HR_ASSIGN_OR_RETURN(State * s, FindLocked(port_path));
   const uint8_t all = static_cast<uint8_t>((1u << s->board.channels) - 1);
   const int channel = report[1];
-  const uint8_t bit =
-      channel >= 1 && channel <= s->board.channels ? static_cast<uint8_t>(1u << (channel - 1)) : 0;
+  const bool addressed = channel >= 1 && channel <= s->board.channels;
+  const uint8_t bit = static_cast<uint8_t>(addressed ? 1u << (channel - 1) : 0u);
   uint8_t wanted = s->mask;
   switch (report[0]) {
     case 0xFF:
