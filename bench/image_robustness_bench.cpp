@@ -2,14 +2,15 @@
 // under every scene variation of sim_hw/scene_variations.h, against the
 // simulated rig's ground truth. Run from the repository root:
 //   build/bench/hairrig_image_robustness_bench [--scene F]... [--vary a,b]... [--views N]
-//       [--scales S] [--pictures DIR]
+//       [--scales S] [--smoothing PX] [--pictures DIR]
 // Scenes default to etc/scenes/default.yaml and etc/scenes/curly_blond.yaml;
 // variations to none and each of the library's, one at a time (--vary a+b
 // combines). For each, N views spread over both cameras and the turntable
 // (default 3) are rendered and scored: hair mask IoU of the segmentation, and
 // the orientation map's median error (deg) on the true hair the segmentation
 // kept, at confidence >= 0.2, with the share of those pixels kept (--scales:
-// the orientation map's pyramid, OrientationOptions::scales). Prints one
+// the orientation map's pyramid, OrientationOptions::scales; --smoothing: its
+// smoothing_px). Prints one
 // Markdown table per scene. --pictures writes each variation's first view.
 #include <algorithm>
 #include <cstdio>
@@ -109,8 +110,8 @@ int Run(const std::vector<std::string>& scenes, std::vector<std::string> variati
       std::fprintf(stderr, "%s\n", scene.status().ToString().c_str());
       return 1;
     }
-    std::printf("\n%s (%d views, orientation scales %d)\n\n", path.c_str(), options.views,
-                options.orientation.scales);
+    std::printf("\n%s (%d views, orientation scales %d, smoothing %.1f px)\n\n", path.c_str(),
+                options.views, options.orientation.scales, options.orientation.smoothing_px);
     std::printf("| variation | hair IoU | orientation median (deg) | kept at conf >= 0.2 |\n");
     std::printf("| --- | --- | --- | --- |\n");
     for (const std::string& variation : variations) {
@@ -144,13 +145,15 @@ int main(int argc, char** argv) {
       options.views = std::max(1, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--scales") == 0 && has_value) {
       options.orientation.scales = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--smoothing") == 0 && has_value) {
+      options.orientation.smoothing_px = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--pictures") == 0 && has_value) {
       options.pictures = argv[++i];
       std::filesystem::create_directories(options.pictures);
     } else {
       std::fprintf(stderr,
                    "usage: %s [--scene F]... [--vary a,b+c,...] [--views N] [--scales S] "
-                   "[--pictures DIR]\n",
+                   "[--smoothing PX] [--pictures DIR]\n",
                    argv[0]);
       return 2;
     }

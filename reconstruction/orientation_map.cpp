@@ -176,6 +176,35 @@ void KeepMoreConfident(const OrientationMap& other, OrientationMap* best) {
   }
 }
 
+// The directions averaged over a Gaussian window of `sigma_px`, each weighed
+// by its confidence, as doubled-angle vectors; the confidence scaled by how
+// well they agree.
+void SmoothDirections(double sigma_px, OrientationMap* map) {
+  const cv::Size size = map->angle_deg.size();
+  cv::Mat1f c2(size), s2(size);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      const double a = DegToRad(2.0 * map->angle_deg(y, x));
+      const float w = map->confidence(y, x);
+      c2(y, x) = static_cast<float>(w * std::cos(a));
+      s2(y, x) = static_cast<float>(w * std::sin(a));
+    }
+  }
+  cv::Mat1f weight;
+  cv::GaussianBlur(c2, c2, cv::Size(), sigma_px);
+  cv::GaussianBlur(s2, s2, cv::Size(), sigma_px);
+  cv::GaussianBlur(map->confidence, weight, cv::Size(), sigma_px);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      const double deg = 0.5 * RadToDeg(std::atan2(s2(y, x), c2(y, x)));
+      map->angle_deg(y, x) = static_cast<float>(deg < 0 ? deg + 180.0 : deg);
+      const float agreement =
+          weight(y, x) > 1e-6f ? std::hypot(c2(y, x), s2(y, x)) / weight(y, x) : 0.0f;
+      map->confidence(y, x) *= std::min(agreement, 1.0f);
+    }
+  }
+}
+
 }  // namespace
 
 Status OrientationOptions::Check() const {
@@ -190,6 +219,8 @@ Status OrientationOptions::Check() const {
   if (refinement_passes < 0 || refinement_passes > 10)
     return InvalidArgument("orientation refinement_passes must be 0..10");
   if (scales < 1 || scales > 5) return InvalidArgument("orientation scales must be 1..5");
+  if (!(smoothing_px >= 0 && smoothing_px <= 50))
+    return InvalidArgument("orientation smoothing_px must be 0..50");
   if (threads < 1) return InvalidArgument("orientation threads must be at least 1");
   return Status::Ok();
 }
@@ -215,7 +246,8 @@ Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat
   const int kernel_reach = bank[0].even.rows / 2;
   const int coarsest = 1 << (options.scales - 1);
   const int reach = coarsest * (kernel_reach * (options.refinement_passes + 1) +
-                                static_cast<int>(std::ceil(3 * options.dog_coarse_px)));
+                                static_cast<int>(std::ceil(3 * options.dog_coarse_px))) +
+                    static_cast<int>(std::ceil(3 * options.smoothing_px));
   const cv::Rect area = WorkingArea(region, image.size(), reach);
 
   cv::Mat grey;
@@ -229,6 +261,7 @@ Result<OrientationMap> ComputeOrientationMap(const cv::Mat& image, const cv::Mat
     cv::pyrDown(level, level);
     KeepMoreConfident(Upsampled(FilterScale(level, bank, options), grey.size()), &pass);
   }
+  if (options.smoothing_px > 0) SmoothDirections(options.smoothing_px, &pass);
 
   OrientationMap out{cv::Mat1f(image.size(), std::numeric_limits<float>::quiet_NaN()),
                      cv::Mat1f(image.size(), 0.0f), cv::Mat1f(image.size(), 0.0f)};

@@ -47,6 +47,12 @@ struct OrientationOptions {
   // of the scale where its confidence is highest; the confidence compares
   // between scales because it is the responses' spread relative to their peak.
   int scales = 1;
+  // Sigma (px) of a confidence-weighted average of the directions (as doubled-
+  // angle vectors) after the bank; 0 = none. Fibre-scale glints scatter the
+  // bank's answer pixel by pixel around a flow that is smooth over a wisp; the
+  // average keeps the flow. The confidence is then multiplied by the
+  // directions' agreement in the window (the average vector's length, 0..1).
+  double smoothing_px = 0;
   int threads = 2;
 
   // InvalidArgument naming the field for a value out of range.
