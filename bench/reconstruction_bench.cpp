@@ -5,7 +5,8 @@
 //       [--stride N] [--iterations N] [--mls SIGMA_MM] [--views 0,1,2,...]
 //       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-behind MM]
 //       [--min-confidence C] [--min-agreeing N] [--multiview-direction yes|no]
-//       [--direction-sigma MM] [--tag SUFFIX]
+//       [--direction-sigma MM] [--orientation-scales S] [--orientation-smoothing PX]
+//       [--tag SUFFIX]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
 // reconstructions go to CAPTURE/bench-reconstruction-<cost>[-mls]<SUFFIX>/
 // (the capture's own reconstruction/ is left alone). The last line compares
@@ -45,7 +46,8 @@ int main(int argc, char** argv) {
                  "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] "
                  "[--mls SIGMA_MM] [--views 0,1,...] [--neighbours N] [--views-in-cost N] "
                  "[--samples N] [--prior-behind MM] [--min-confidence C] [--min-agreeing N] "
-                 "[--multiview-direction yes|no] [--direction-sigma MM] [--tag SUFFIX]\n",
+                 "[--multiview-direction yes|no] [--direction-sigma MM] [--orientation-scales S] "
+                 "[--orientation-smoothing PX] [--tag SUFFIX]\n",
                  argv[0]);
     return 2;
   }
@@ -83,6 +85,10 @@ int main(int argc, char** argv) {
       options.fusion.direction_sigma_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--prior-behind") == 0) {
       options.mvs.prior_behind_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--orientation-scales") == 0) {
+      options.orientation.scales = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--orientation-smoothing") == 0) {
+      options.orientation.smoothing_px = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--min-confidence") == 0) {
       options.min_orientation_confidence = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--views") == 0) {
