@@ -251,16 +251,14 @@ Result<Scene> LoadScene(const std::string& path) {
     const ConfigNode h = root.Child("hair_shading");
     h.AllowOnlyKeys({"model", "shadows", "cuticle_tilt_deg", "roughness_deg", "fibre_albedo_sd",
                      "fibre_grain_sd", "fibre_grain_mm"});
-    scene.hair_shading.model =
-        h.Choice("model", {"marschner", "kajiya-kay"}, "marschner") == "kajiya-kay"
-            ? HairShading::Model::kKajiyaKay
-            : HairShading::Model::kMarschner;
-    scene.hair_shading.shadows = h.Bool("shadows", scene.hair_shading.shadows);
-    scene.hair_shading.cuticle_tilt_deg =
-        h.Number("cuticle_tilt_deg", scene.hair_shading.cuticle_tilt_deg, {.min = -20, .max = 20});
-    scene.hair_shading.roughness_deg =
-        h.Number("roughness_deg", scene.hair_shading.roughness_deg, {.min = 1, .max = 45});
     HairShading& shading = scene.hair_shading;
+    shading.model = h.Choice("model", {"marschner", "kajiya-kay"}, "marschner") == "kajiya-kay"
+                        ? HairShading::Model::kKajiyaKay
+                        : HairShading::Model::kMarschner;
+    shading.shadows = h.Bool("shadows", shading.shadows);
+    shading.cuticle_tilt_deg =
+        h.Number("cuticle_tilt_deg", shading.cuticle_tilt_deg, {.min = -20, .max = 20});
+    shading.roughness_deg = h.Number("roughness_deg", shading.roughness_deg, {.min = 1, .max = 45});
     shading.fibre_albedo_sd =
         h.Number("fibre_albedo_sd", shading.fibre_albedo_sd, {.min = 0, .max = 2});
     shading.fibre_grain_sd =
