@@ -433,13 +433,16 @@ TEST(CaptureFaults, CameraThatStaysGoneLeavesTheCaptureIncomplete) {
   ExpectGroundTruthOfEveryStoredView(s.dir, 38);
 }
 
-// The frame timeout of the late-download test: above a frame's render time
-// on a busy machine (a sanitizer build renders about ten times slower), far
-// below the late download's 300 s.
+// The frame timeout of the late-download tests: above a frame's render time
+// on a busy machine (a sanitizer build renders about ten times slower). A
+// frame meant to arrive after its view timed out is late by more than that:
+// kLateFrameDelay device seconds at the small rig's time_scale 0.01.
 #if defined(__SANITIZE_ADDRESS__)
 constexpr const char* kLateFrameTimeout = "frame_timeout_s: 20";
+constexpr const char* kLateFrameDelay = "delay_s: 3000";
 #else
 constexpr const char* kLateFrameTimeout = "frame_timeout_s: 2";
+constexpr const char* kLateFrameDelay = "delay_s: 300";
 #endif
 
 TEST(CaptureFaults, LateDownloadTimesOutAndIsReshot) {
@@ -513,9 +516,11 @@ void ExpectEveryFrameShowsItsStop(const std::string& capture_dir, const std::str
 // and never stored as that next view.
 TEST(CaptureFaults, FrameArrivingAfterItsViewTimedOutIsNotStoredForTheNextView) {
   const std::string dir = FreshDir("fault_late_real_backends");
-  auto sections = WithRetries(
-      SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, delay_s: 150}"),
-      "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  frame_timeout_s: 1\n");
+  auto sections =
+      WithRetries(SimWithFaults("    - {kind: download_timeout, device: SIM-CAM-UPPER, at: 2, " +
+                                std::string(kLateFrameDelay) + "}"),
+                  "retries:\n  camera: {attempts: 3, backoff_s: 0.01}\n  " +
+                      std::string(kLateFrameTimeout) + "\n");
   sections["devices"] = SmallRigDevices(
       "{name: turntable, backend: sim, serial: SIM-TT-0001}",
       "{name: upper, backend: gphoto2, serial: SIM-CAM-UPPER, port: sim, trigger_line: trig0}",
