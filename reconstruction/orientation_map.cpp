@@ -137,30 +137,42 @@ OrientationMap FilterScale(const cv::Mat& grey, const std::vector<GaborPair>& ba
   return pass;
 }
 
+// Directions as doubled-angle vectors (cos 2a, sin 2a), each scaled by
+// `weight` (empty: 1), so that a and a + 180 deg agree and averaging them is linear.
+void DoubledAngleVectors(const cv::Mat1f& angle_deg, const cv::Mat1f& weight, cv::Mat1f* c2,
+                         cv::Mat1f* s2) {
+  *c2 = cv::Mat1f(angle_deg.size());
+  *s2 = cv::Mat1f(angle_deg.size());
+  for (int y = 0; y < angle_deg.rows; ++y) {
+    for (int x = 0; x < angle_deg.cols; ++x) {
+      const double a = DegToRad(2.0 * angle_deg(y, x));
+      const double w = weight.empty() ? 1.0 : weight(y, x);
+      (*c2)(y, x) = static_cast<float>(w * std::cos(a));
+      (*s2)(y, x) = static_cast<float>(w * std::sin(a));
+    }
+  }
+}
+
+// The direction in [0, 180) of a doubled-angle vector.
+float AngleOfDoubled(float c2, float s2) {
+  const double deg = 0.5 * RadToDeg(std::atan2(s2, c2));
+  return static_cast<float>(deg < 0 ? deg + 180.0 : deg);
+}
+
 // `coarse` (a map of the image at a smaller size) brought to `size`: the
 // direction interpolated as the doubled-angle vector, confidence and response
 // bilinearly.
 OrientationMap Upsampled(const OrientationMap& coarse, cv::Size size) {
-  cv::Mat1f c2(coarse.angle_deg.size()), s2(coarse.angle_deg.size());
-  for (int y = 0; y < c2.rows; ++y) {
-    for (int x = 0; x < c2.cols; ++x) {
-      const double a = DegToRad(2.0 * coarse.angle_deg(y, x));
-      c2(y, x) = static_cast<float>(std::cos(a));
-      s2(y, x) = static_cast<float>(std::sin(a));
-    }
-  }
+  cv::Mat1f c2, s2;
+  DoubledAngleVectors(coarse.angle_deg, cv::Mat1f(), &c2, &s2);
   OrientationMap out;
   cv::resize(c2, c2, size, 0, 0, cv::INTER_LINEAR);
   cv::resize(s2, s2, size, 0, 0, cv::INTER_LINEAR);
   cv::resize(coarse.confidence, out.confidence, size, 0, 0, cv::INTER_LINEAR);
   cv::resize(coarse.response, out.response, size, 0, 0, cv::INTER_LINEAR);
   out.angle_deg = cv::Mat1f(size);
-  for (int y = 0; y < size.height; ++y) {
-    for (int x = 0; x < size.width; ++x) {
-      const double deg = 0.5 * RadToDeg(std::atan2(s2(y, x), c2(y, x)));
-      out.angle_deg(y, x) = static_cast<float>(deg < 0 ? deg + 180.0 : deg);
-    }
-  }
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x) out.angle_deg(y, x) = AngleOfDoubled(c2(y, x), s2(y, x));
   return out;
 }
 
@@ -180,24 +192,14 @@ void KeepMoreConfident(const OrientationMap& other, OrientationMap* best) {
 // by its confidence, as doubled-angle vectors; the confidence scaled by how
 // well they agree.
 void SmoothDirections(double sigma_px, OrientationMap* map) {
-  const cv::Size size = map->angle_deg.size();
-  cv::Mat1f c2(size), s2(size);
-  for (int y = 0; y < size.height; ++y) {
-    for (int x = 0; x < size.width; ++x) {
-      const double a = DegToRad(2.0 * map->angle_deg(y, x));
-      const float w = map->confidence(y, x);
-      c2(y, x) = static_cast<float>(w * std::cos(a));
-      s2(y, x) = static_cast<float>(w * std::sin(a));
-    }
-  }
-  cv::Mat1f weight;
+  cv::Mat1f c2, s2, weight;
+  DoubledAngleVectors(map->angle_deg, map->confidence, &c2, &s2);
   cv::GaussianBlur(c2, c2, cv::Size(), sigma_px);
   cv::GaussianBlur(s2, s2, cv::Size(), sigma_px);
   cv::GaussianBlur(map->confidence, weight, cv::Size(), sigma_px);
-  for (int y = 0; y < size.height; ++y) {
-    for (int x = 0; x < size.width; ++x) {
-      const double deg = 0.5 * RadToDeg(std::atan2(s2(y, x), c2(y, x)));
-      map->angle_deg(y, x) = static_cast<float>(deg < 0 ? deg + 180.0 : deg);
+  for (int y = 0; y < c2.rows; ++y) {
+    for (int x = 0; x < c2.cols; ++x) {
+      map->angle_deg(y, x) = AngleOfDoubled(c2(y, x), s2(y, x));
       const float agreement =
           weight(y, x) > 1e-6f ? std::hypot(c2(y, x), s2(y, x)) / weight(y, x) : 0.0f;
       map->confidence(y, x) *= std::min(agreement, 1.0f);
