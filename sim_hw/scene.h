@@ -101,10 +101,10 @@ struct SceneCamera {
   std::string serial;  // matched to Camera devices by serial
   CameraIntrinsics intrinsics;
   Rigid3d cam_from_world;
-  double read_noise_dn = 1.5;     // std dev of additive noise, 8-bit DN
-  double shot_noise_gain = 0.04;  // shot-noise variance per DN of signal
-  double exposure_s = 0.02;       // nominal exposure
-  double sensitivity = 50.0;      // DN per unit radiance per second / 255
+  double read_noise_dn = 1.5;        // std dev of additive noise, 8-bit DN
+  double shot_noise_gain = 0.04;     // shot-noise variance per DN of signal
+  double exposure_s = 0.02;          // nominal exposure
+  double sensitivity = 50.0;         // DN per unit radiance per second / 255
   double target_distance_mm = 1000;  // from the eye to the point it looks at (the focus)
   CameraPipeline pipeline;           // the scene's camera_pipeline
 };
