@@ -154,8 +154,10 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
       ->check(CLI::Range(1, 50))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
-  cmd->callback(
-      [args, &dispatch] { DispatchSummary(dispatch, [args] { return RunReconstruct(*args); }); });
+  cmd->callback([args, &dispatch] {
+    DispatchSummary(dispatch, [args] { return RunReconstruct(*args); });
+    dispatch.exit_code = [](const nlohmann::json& j) { return j["verdict"] == "failed" ? 3 : 0; };
+  });
 }
 
 }  // namespace hairrig

@@ -24,6 +24,7 @@ bool IsServedFile(const std::string& relative) {
       "contact_sheet\\.png|journal\\.jsonl|manifest\\.json"
       "|calibration/report/(view_rms\\.png|report\\.txt|verdict\\.json"
       "|residuals/[A-Za-z0-9_-][A-Za-z0-9._-]*\\.jpg)"
+      "|reconstruction/verdict\\.json"
       "|reconstruction/([A-Za-z0-9_-]+/)?[A-Za-z0-9_-][A-Za-z0-9._-]*\\.(jpg|png)"
       "|simulation/[A-Za-z0-9_-][A-Za-z0-9._-]*/[A-Za-z0-9_-][A-Za-z0-9._-]*\\.png");
   return relative.size() <= 256 && std::regex_match(relative, served);
@@ -77,6 +78,15 @@ nlohmann::json CalibrationDetails(const std::string& id, const fs::path& dir) {
   for (const std::string& f : ServedFilesUnder(dir, "calibration/report/residuals", false))
     out["residuals"].push_back(Url(id, f));
   return out;
+}
+
+// The reconstruction's verdict.json ({verdict, reasons}), or null.
+nlohmann::json ReconstructionVerdictDetails(const fs::path& dir) {
+  Result<nlohmann::json> verdict = ReadJsonFile((dir / "reconstruction/verdict.json").string());
+  if (!verdict.ok()) return nullptr;
+  const JsonObject v(*verdict, "reconstruction/verdict.json");
+  nlohmann::json out = {{"verdict", v.String("verdict")}, {"reasons", v.Raw("reasons")}};
+  return v.ok() ? out : nullptr;
 }
 
 }  // namespace
@@ -189,6 +199,7 @@ Result<nlohmann::json> CaptureArchive::Details(const std::string& id) const {
   }
   const fs::path root(dir);
   out["calibration"] = CalibrationDetails(id, root);
+  out["reconstruction"] = ReconstructionVerdictDetails(root);
   std::error_code ec;
   auto url_if = [&](const std::string& relative) -> nlohmann::json {
     if (fs::is_regular_file(root / relative, ec)) return Url(id, relative);
@@ -196,7 +207,7 @@ Result<nlohmann::json> CaptureArchive::Details(const std::string& id) const {
   };
   nlohmann::json reconstruction = nlohmann::json::array(), simulation = nlohmann::json::array();
   for (const std::string& f : ServedFilesUnder(root, "reconstruction", true))
-    reconstruction.push_back(Url(id, f));
+    if (!f.ends_with(".json")) reconstruction.push_back(Url(id, f));  // the pictures
   for (const std::string& f : ServedFilesUnder(root, "simulation", true)) {
     if (simulation.size() < 8) simulation.push_back(Url(id, f));
   }
@@ -212,9 +223,10 @@ Result<std::string> CaptureArchive::FilePath(const std::string& id,
                                              const std::string& relative) const {
   HR_ASSIGN_OR_RETURN(const std::string dir, CaptureDir(id));
   if (!IsServedFile(relative))
-    return InvalidArgument("'" + relative.substr(0, 80) +
-                           "' is not a file the console serves (the contact sheet, journal, "
-                           "manifest, calibration report and the pipeline's pictures)");
+    return InvalidArgument(
+        "'" + relative.substr(0, 80) +
+        "' is not a file the console serves (the contact sheet, journal, "
+        "manifest, calibration report, reconstruction verdict and the pipeline's pictures)");
   const std::string path = (fs::path(dir) / relative).string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return NotFound(id + "/" + relative + " does not exist");

@@ -49,6 +49,7 @@ class CaptureArchive {
   Result<ArchiveEntry> Entry(const std::string& id) const;
   // Entry plus "views" [{view, camera, thumb}], "calibration" {verdict,
   // rms_px, reasons, views [{name, rms_px, solved}], residuals [urls]} or
+  // null, "reconstruction" {verdict, reasons} (reconstruction/verdict.json) or
   // null, and "files" {contact_sheet, journal, view_rms, reconstruction [urls],
   // simulation [urls]} (urls under /api/captures/<id>/).
   Result<nlohmann::json> Details(const std::string& id) const;

@@ -111,6 +111,7 @@ TEST_F(CaptureArchiveTest, ThumbnailsAndDetailsComeFromTheManifest) {
   ASSERT_EQ((*details)["views"].size(), 1u);
   EXPECT_EQ((*details)["views"][0]["thumb"], "/api/captures/older/views/0/thumb.jpg");
   EXPECT_TRUE((*details)["calibration"].is_null());
+  EXPECT_TRUE((*details)["reconstruction"].is_null());
   EXPECT_EQ((*details)["files"]["journal"], "/api/captures/older/files/journal.jsonl");
   EXPECT_TRUE((*details)["files"]["contact_sheet"].is_null());
   EXPECT_TRUE((*details)["files"]["reconstruction"].empty());
@@ -127,6 +128,8 @@ TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
             R"({"rms_px": 0.1, "views": [{"frame": "frames/000_CAM.png", "solved": true,
                 "rms_px": 0.1}, {"frame": "frames/001_CAM.png", "solved": false}]})");
   WriteText(dir / "calibration/report/residuals/000_CAM.jpg", "jpeg");
+  WriteText(dir / "reconstruction/verdict.json",
+            R"({"verdict": "check", "reasons": ["the strands are short"], "views_to_check": []})");
   const CaptureArchive archive(root_);
   const Result<nlohmann::json> details = archive.Details("older");
   ASSERT_TRUE(details.ok()) << details.status().ToString();
@@ -144,6 +147,10 @@ TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
   EXPECT_EQ(calibration["residuals"].size(), 1u);
   EXPECT_TRUE(archive.Entry("older")->reconstructed);
   EXPECT_EQ(archive.Entry("older")->verdict.value_or(""), "good");
+  const nlohmann::json& reconstruction = (*details)["reconstruction"];
+  EXPECT_EQ(reconstruction["verdict"], "check");
+  EXPECT_EQ(reconstruction["reasons"], nlohmann::json::array({"the strands are short"}));
+  EXPECT_TRUE(archive.FilePath("older", "reconstruction/verdict.json").ok());
   EXPECT_TRUE(archive.FilePath("older", "reconstruction/strands/preview.jpg").ok());
   EXPECT_EQ(archive.FilePath("older", "reconstruction/strands/strands.ply").status().code(),
             StatusCode::kInvalidArgument);

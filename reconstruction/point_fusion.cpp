@@ -19,21 +19,27 @@ struct ViewGeometry {
   Rigid3d object_from_cam;
 };
 
-// Does view w's map hold the same segment at p (object frame)?
-bool Agrees(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3d& p,
-            const Eigen::Vector3f& direction, const FusionOptions& options, double cos_tolerance) {
+// How view w's map holds the segment at p (object frame) along `direction`.
+enum class Agreement { kNone, kDepthOnly, kDepthAndDirection };
+
+Agreement AgreementOf(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3d& p,
+                      const Eigen::Vector3f& direction, const FusionOptions& options,
+                      double cos_tolerance) {
   const Eigen::Vector3d q = g.cam_from_object_rotation * p + g.cam_from_object_translation;
-  if (q.z() <= 1.0) return false;
+  if (q.z() <= 1.0) return Agreement::kNone;
   double uv[2];
   ProjectCamPoint(g.params.data(), q.data(), uv);
   const int gx = static_cast<int>(std::lround(uv[0] / map.stride_px));
   const int gy = static_cast<int>(std::lround(uv[1] / map.stride_px));
-  if (gx < 0 || gy < 0 || gx >= map.depth_mm.cols || gy >= map.depth_mm.rows) return false;
+  if (gx < 0 || gy < 0 || gx >= map.depth_mm.cols || gy >= map.depth_mm.rows)
+    return Agreement::kNone;
   const float depth = map.depth_mm(gy, gx);
-  if (!(depth > 0) || map.cost(gy, gx) > options.max_cost) return false;
-  if (std::abs(depth - q.z()) > options.depth_tolerance_mm) return false;
+  if (!(depth > 0) || map.cost(gy, gx) > options.max_cost) return Agreement::kNone;
+  if (std::abs(depth - q.z()) > options.depth_tolerance_mm) return Agreement::kNone;
   const cv::Vec3f& d = map.direction(gy, gx);
-  return std::abs(direction.dot(Eigen::Vector3f(d[0], d[1], d[2]))) >= cos_tolerance;
+  return std::abs(direction.dot(Eigen::Vector3f(d[0], d[1], d[2]))) >= cos_tolerance
+             ? Agreement::kDepthAndDirection
+             : Agreement::kDepthOnly;
 }
 
 // The plane through view w's camera centre that holds the 2D orientation
@@ -105,11 +111,17 @@ float PointConfidence(float cost, int agreeing) {
   return (1.0f - cost) * (1.0f - std::ldexp(1.0f, -agreeing));
 }
 
+// Counts per reference view: candidate cells, and (cell, other view) pairs
+// that agree on the depth, and of those on the direction too.
+struct CellCounts {
+  int64_t candidates = 0, depth_pairs = 0, direction_pairs = 0;
+};
+
 // The consistent points of reference view r, before merging.
 std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
                                             const std::vector<LineDepthMap>& maps,
                                             const std::vector<ViewGeometry>& geometry, size_t r,
-                                            const FusionOptions& options, int64_t* candidates) {
+                                            const FusionOptions& options, CellCounts* counts) {
   std::vector<OrientedPoint> out;
   const LineDepthMap& map = maps[r];
   const double cos_tolerance = std::cos(DegToRad(options.angle_tolerance_deg));
@@ -123,7 +135,7 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
       const Result<Eigen::Vector2d> n =
           UndistortPixel(views[r].camera, Eigen::Vector2d(px.x, px.y));
       if (!n.ok()) continue;
-      ++*candidates;
+      ++counts->candidates;
       const Eigen::Vector3d p =
           geometry[r].object_from_cam * (Eigen::Vector3d(n->x(), n->y(), 1.0) * depth);
       const cv::Vec3f& d = map.direction(gy, gx);
@@ -132,8 +144,13 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
       point.direction = Eigen::Vector3f(d[0], d[1], d[2]);
       point.views.push_back(static_cast<uint16_t>(r));
       for (size_t w = 0; w < views.size(); ++w) {
-        if (w != r && Agrees(geometry[w], maps[w], p, point.direction, options, cos_tolerance))
-          point.views.push_back(static_cast<uint16_t>(w));
+        if (w == r) continue;
+        const Agreement a =
+            AgreementOf(geometry[w], maps[w], p, point.direction, options, cos_tolerance);
+        counts->depth_pairs += a != Agreement::kNone;
+        if (a != Agreement::kDepthAndDirection) continue;
+        ++counts->direction_pairs;
+        point.views.push_back(static_cast<uint16_t>(w));
       }
       const int agreeing = static_cast<int>(point.views.size()) - 1;
       if (agreeing < options.min_agreeing_views) continue;
@@ -221,16 +238,18 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
     geometry[v].object_from_cam = views[v].cam_from_object.Inverse();
   }
   std::vector<std::vector<OrientedPoint>> per_view(views.size());
-  std::vector<int64_t> candidates(views.size(), 0);
+  std::vector<CellCounts> counts(views.size());
   ParallelFor(views.size(), options.threads, [&] {
     return [&](size_t r) {
-      per_view[r] = ConsistentPoints(views, maps, geometry, r, options, &candidates[r]);
+      per_view[r] = ConsistentPoints(views, maps, geometry, r, options, &counts[r]);
     };
   });
   std::vector<OrientedPoint> all;
   FusionSummary s;
   for (size_t r = 0; r < views.size(); ++r) {
-    s.candidates += candidates[r];
+    s.candidates += counts[r].candidates;
+    s.depth_pairs += counts[r].depth_pairs;
+    s.direction_pairs += counts[r].direction_pairs;
     all.insert(all.end(), std::make_move_iterator(per_view[r].begin()),
                std::make_move_iterator(per_view[r].end()));
     per_view[r].clear();

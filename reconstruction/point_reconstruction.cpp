@@ -21,6 +21,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The median of `values` where `mask` is non-zero (0 for an empty mask).
+double MedianOver(const cv::Mat1f& values, const cv::Mat1b& mask) {
+  std::vector<float> kept;
+  for (int y = 0; y < values.rows; ++y)
+    for (int x = 0; x < values.cols; ++x)
+      if (mask(y, x)) kept.push_back(values(y, x));
+  return Median(std::move(kept));
+}
+
 // A view after segmentation and orientation: what the stereo and the report need.
 struct PreparedView {
   std::string why_not;       // non-empty: left out
@@ -121,6 +130,7 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
       map->confidence < static_cast<float>(options.min_orientation_confidence));
   p.mvs.hair = hair & (map->confidence >= static_cast<float>(options.min_orientation_confidence));
   p.summary.stereo_pixels = cv::countNonZero(p.mvs.hair);
+  p.summary.median_orientation_confidence = MedianOver(map->confidence, hair);
   p.written = WriteSegmentation(out_dir + "/masks", view.name, *seg);
   if (p.written.ok())
     p.written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
@@ -216,6 +226,7 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
     views_json.push_back({{"name", v.name},
                           {"hair_pixels", v.hair_pixels},
                           {"stereo_pixels", v.stereo_pixels},
+                          {"median_orientation_confidence", v.median_orientation_confidence},
                           {"depth_cells", v.depth_cells},
                           {"median_cost", v.median_cost},
                           {"points_seen", v.points_seen}});
@@ -233,6 +244,8 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
                          {{"candidates", fusion.candidates},
                           {"consistent", fusion.consistent},
                           {"points", fusion.points},
+                          {"depth_pairs", fusion.depth_pairs},
+                          {"direction_pairs", fusion.direction_pairs},
                           {"mls", fusion.mls},
                           {"smoothed_directions", fusion.smoothed_directions}}},
                         {"seconds",
@@ -253,6 +266,9 @@ std::string PointReconstructionSummary::BriefReport() const {
   s << "points: " << fusion.points << " oriented points from " << views.size() << " views ("
     << fusion.consistent << " of " << fusion.candidates
     << " depth cells confirmed by another view), " << object_frame << " frame\n";
+  if (fusion.depth_pairs > 0)
+    s << "directions: " << fusion.direction_pairs << " of " << fusion.depth_pairs
+      << " view pairs that agree on a cell's depth agree on its direction\n";
   s << "time: " << total_s << " s (segmentation and orientation " << segmentation_s << " s, hull "
     << hull_s << " s, stereo " << stereo_s << " s, fusion " << fusion_s << " s, writing "
     << writing_s << " s)\n";

@@ -59,11 +59,12 @@ struct PointReconstructionOptions {
 
 struct ViewPointsSummary {
   std::string name;
-  int hair_pixels = 0;     // segmented as hair
-  int stereo_pixels = 0;   // ... with a confident orientation: the stereo's input
-  int depth_cells = 0;     // grid cells with a depth under the fusion's max_cost
-  double median_cost = 0;  // of those cells
-  int points_seen = 0;     // fused points this view sees
+  int hair_pixels = 0;                       // segmented as hair
+  int stereo_pixels = 0;                     // ... with a confident orientation: the stereo's input
+  double median_orientation_confidence = 0;  // over the hair pixels, 0..1 (OrientationMap)
+  int depth_cells = 0;                       // grid cells with a depth under the fusion's max_cost
+  double median_cost = 0;                    // of those cells
+  int points_seen = 0;                       // fused points this view sees
 };
 
 struct PointReconstructionSummary {

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <nlohmann/json.hpp>
 
+#include "core/file_util.h"
 #include "core/image_file.h"
 #include "core/log.h"
 #include "core/strand_io.h"
+#include "core/string_format.h"
 #include "reconstruction/colmap_model.h"
+#include "reconstruction/point_cloud.h"
 #include "reconstruction/strand_preview.h"
 #include "rig/reconstruction_input.h"
 
@@ -37,9 +40,8 @@ std::vector<ReconstructionView> SpreadViews(const std::vector<ReconstructionView
   return chosen;
 }
 
-Result<std::string> WriteOverViews(const ReconstructionInput& input,
+Result<std::string> WriteOverViews(const ReconstructionInput& input, const StrandSet& strands,
                                    const std::string& strands_dir) {
-  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(strands_dir + "/strands.ply"));
   HR_ASSIGN_OR_RETURN(
       const cv::Mat picture,
       RenderStrandsOverViews(SpreadViews(input.views, 4), strands, StrandOverlayOptions{}));
@@ -47,6 +49,20 @@ Result<std::string> WriteOverViews(const ReconstructionInput& input,
   const std::string path = strands_dir + "/over_views.jpg";
   HR_RETURN_IF_ERROR(WriteImageAtomic(path, picture));
   return path;
+}
+
+// The strands' over-views picture and plausibility (reconstruction_verdict.h).
+Status CheckStrands(const ReconstructionInput& input, const Eigen::Vector3d& head_centre_mm,
+                    const std::string& reconstruction_dir, ReconstructCaptureSummary* summary) {
+  const std::string& strands_dir = summary->strands->output_dir;
+  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(strands_dir + "/strands.ply"));
+  HR_ASSIGN_OR_RETURN(summary->over_views_picture, WriteOverViews(input, strands, strands_dir));
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
+                      ReadPointCloudPly(reconstruction_dir + "/points.ply"));
+  HR_ASSIGN_OR_RETURN(summary->plausibility,
+                      MeasureStrandPlausibility(strands, points, input.views,
+                                                reconstruction_dir + "/masks", head_centre_mm));
+  return Status::Ok();
 }
 
 Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput& input,
@@ -63,7 +79,7 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
           o.dir + "/reconstruction/points.ply, head " + head.source);
   HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
                                                            head.source, o.strands));
-  return Status::Ok();
+  return CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir, summary);
 }
 
 }  // namespace
@@ -93,15 +109,27 @@ nlohmann::json ReconstructCaptureSummary::ToJson() const {
   if (points) j["points"] = points->ToJson();
   if (head_fit) j["head_fit"] = head_fit->ToJson();
   if (strands) j["strands"] = strands->ToJson();
+  if (plausibility) j["plausibility"] = plausibility->ToJson();
+  j["verdict"] = verdict.name();
+  j["reasons"] = verdict.reasons;
+  j["views_to_check"] = verdict.views_to_check;
   if (!over_views_picture.empty()) j["over_views_picture"] = over_views_picture;
   j["brief"] = BriefReport();
   return j;
 }
 
 std::string ReconstructCaptureSummary::BriefReport() const {
-  std::string brief = (points ? points->BriefReport() : "") +
-                      (head_fit ? head_fit->BriefReport() : "") +
-                      (strands ? strands->BriefReport() : "");
+  std::string brief = std::string("verdict: ") + verdict.name() + "\n";
+  for (const std::string& reason : verdict.reasons) brief += "  - " + reason + "\n";
+  brief += (points ? points->BriefReport() : "") + (head_fit ? head_fit->BriefReport() : "") +
+           (strands ? strands->BriefReport() : "");
+  if (plausibility) {
+    brief += StringPrintf(
+        "  strands' median length %.0f mm, the hair spans %.0f mm; %.2f %% of the samples facing "
+        "a camera lie over skin (%d views)\n",
+        plausibility->median_length_mm, plausibility->hair_extent_mm,
+        100 * plausibility->over_skin_share(), plausibility->views_measured);
+  }
   if (!over_views_picture.empty())
     brief += "  strands over the input views: " + over_views_picture + "\n";
   return brief;
@@ -117,9 +145,11 @@ Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOpt
   }
   if (o.stage != ReconstructStage::kPoints) {
     HR_RETURN_IF_ERROR(RunStrands(o, input, &summary));
-    HR_ASSIGN_OR_RETURN(summary.over_views_picture,
-                        WriteOverViews(input, summary.strands->output_dir));
   }
+  summary.verdict = JudgeReconstruction(summary.points ? &*summary.points : nullptr,
+                                        summary.plausibility ? &*summary.plausibility : nullptr);
+  HR_RETURN_IF_ERROR(
+      WriteFileAtomic(o.dir + "/reconstruction/verdict.json", summary.verdict.ToJson().dump(1)));
   return summary;
 }
 

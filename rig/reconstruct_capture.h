@@ -5,7 +5,10 @@
 // Besides what the two stages write (reconstruction/point_reconstruction.h,
 // reconstruction/strand_reconstruction.h), the strands stage writes
 // reconstruction/strands/over_views.jpg: the strands projected over four of
-// the input views, spread around the turntable.
+// the input views, spread around the turntable, and the stages that ran
+// are judged (reconstruction/reconstruction_verdict.h) into
+// reconstruction/verdict.json: {"verdict": good|check|failed, "reasons",
+// "views_to_check"}, also first in the summary.
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
@@ -16,6 +19,7 @@
 #include "core/status.h"
 #include "reconstruction/head_fit.h"
 #include "reconstruction/point_reconstruction.h"
+#include "reconstruction/reconstruction_verdict.h"
 #include "reconstruction/strand_reconstruction.h"
 
 namespace hairrig {
@@ -49,7 +53,9 @@ struct ReconstructCaptureSummary {
   std::optional<PointReconstructionSummary> points;
   std::optional<HeadFitSummary> head_fit;  // when the strands' head was fitted to the views
   std::optional<StrandReconstructionSummary> strands;
-  std::string over_views_picture;  // empty when the strands stage did not run
+  std::string over_views_picture;                  // empty when the strands stage did not run
+  std::optional<StrandPlausibility> plausibility;  // when the strands stage ran
+  ReconstructionVerdict verdict;  // on the stages that ran; also written to verdict.json
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };

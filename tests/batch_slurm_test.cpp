@@ -226,6 +226,8 @@ TEST_F(BatchSlurm, AFailedStageBlocksItsCaptureUntilResubmittedAndLocalRunsMatch
     for (Stage stage : kAllStages)
       EXPECT_EQ(StateOf(first, done, stage), "done") << done << " " << StageName(stage);
     EXPECT_TRUE(fs::exists(archive + "/" + done + "/simulation/head-shake/summary.json")) << done;
+    // The reconstruction judged itself (reconstruction/reconstruction_verdict.h).
+    EXPECT_TRUE(fs::exists(archive + "/" + done + "/reconstruction/verdict.json")) << done;
   }
   EXPECT_EQ(StateOf(first, kFaultyCapture, Stage::kCalibrate), "done");
   EXPECT_EQ(StateOf(first, kFaultyCapture, Stage::kReconstruct), "failed");

@@ -463,6 +463,11 @@ function showResult(capture) {
   setText('#rms-total', Number.isFinite(cal?.rms_px) ? `RMS ${cal.rms_px.toFixed(3)} px` : '');
   drawRmsPlot($('#rms-plot'), cal?.views ?? []);
   fillImages('#residuals', cal?.residuals ?? [], 'residuals');
+  const rec = capture.reconstruction;
+  setText('#reconstruction-verdict', rec ? rec.verdict : 'not reconstructed');
+  $('#reconstruction-verdict').dataset.verdict = rec?.verdict ?? '';
+  $('#reconstruction-reasons').replaceChildren(
+    ...(rec?.reasons ?? []).map((reason) => el('li', { textContent: reason })));
   fillImages('#reconstruction', capture.files?.reconstruction ?? [], 'reconstruction preview');
 }
 
