@@ -40,6 +40,8 @@ void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch)
       return;
     }
     DispatchSummary(dispatch, [options] { return CheckDevices(*options); });
+    // A rig with a device that fails to open or its health check is not ready.
+    dispatch.exit_code = [](const nlohmann::json& j) { return j["healthy"] == j["total"] ? 0 : 3; };
   });
 }
 

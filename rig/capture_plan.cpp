@@ -83,7 +83,8 @@ std::string NamesOf(const std::vector<std::unique_ptr<Device>>& devices) {
 
 // Light name -> level from the map at `key`; a light the map leaves out is
 // off, a name that is no configured light is an error (a typo must not
-// switch a panel off).
+// switch a panel off), and so is a level between 0 and 1 for a light that
+// is not dimmable (it would be switched fully on).
 std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std::string& key,
                                               const DeviceSet& devices,
                                               const std::map<std::string, double>& fallback) {
@@ -91,7 +92,12 @@ std::map<std::string, double> ReadLightLevels(const ConfigNode& node, const std:
   const ConfigNode levels = node.Child(key);
   std::map<std::string, double> out;
   for (const auto& light : devices.lights) {
-    out[light->info().name] = levels.Number(light->info().name, 0.0, {.min = 0, .max = 1});
+    const std::string& name = light->info().name;
+    const double level = levels.Number(name, 0.0, {.min = 0, .max = 1});
+    out[name] = level;
+    if (level > 0 && level < 1 && !light->capabilities().dimmable)
+      levels.Fail(name, "light " + QuotedExcerpt(name) + " (backend " + light->info().backend +
+                            ") is not dimmable: give 0 (off) or 1 (on)");
   }
   for (const std::string& name : levels.Keys()) {
     if (!out.count(name)) {

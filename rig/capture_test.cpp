@@ -726,6 +726,46 @@ uint64_t BytesNeeded(const std::string& config_path, const std::vector<int>& vie
   return p.rig ? BytesNeededToFinish(p.plan, p.rig->devices, views, p.policies) : 0;
 }
 
+// A light that can only be switched, as a relay board's or a GPIO line's.
+class SwitchOnlyLight : public Light {
+ public:
+  using Light::Light;
+  LightCapabilities capabilities() const override { return {.dimmable = false}; }
+
+ protected:
+  Status DoOpen() override { return Status::Ok(); }
+  Status DoClose() override { return Status::Ok(); }
+  Status DoHealthCheck() override { return Status::Ok(); }
+  Status DoSetOn(bool) override { return Status::Ok(); }
+  Status DoSetLevel(double) override { return Status::Ok(); }
+  Result<bool> DoIsOn() override { return false; }
+};
+
+// A level between 0 and 1 is refused for a light that cannot dim (it would
+// be switched fully on), naming the light; accepted for one that can.
+TEST(CapturePlan, ALevelBetweenOffAndOnNeedsADimmableLight) {
+  const std::string dir = FreshDir("plan_dimmable");
+  const std::string path = WriteSmallRig(dir, {{"plan", "plan: {stops: 2, lights: {top: 0.5}}\n"}});
+  auto config = LoadRigConfig(path);
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  auto rig = BuildRig(*config);
+  ASSERT_TRUE(rig.ok()) << rig.status().ToString();
+  DeviceSet& devices = (*rig)->devices;
+  auto dimmed = ReadCapturePlan(config->root, devices);
+  ASSERT_TRUE(dimmed.ok()) << dimmed.status().ToString();
+  EXPECT_EQ(dimmed->stops.at(0).light_levels.at("top"), 0.5);
+
+  ASSERT_EQ(devices.lights.at(0)->info().name, "top");
+  devices.lights[0] = std::make_unique<SwitchOnlyLight>(devices.lights[0]->info());
+  auto refused = ReadCapturePlan(config->root, devices);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("light 'top' (backend sim) is not dimmable: give 0 "
+                                            "(off) or 1 (on)"),
+            std::string::npos)
+      << refused.status().ToString();
+  EXPECT_NE(refused.status().message().find("rig.yaml"), std::string::npos);
+}
+
 TEST(CaptureSpace, BytesNeededToFinishCountsOnlyTheViewsLeft) {
   const std::string dir = FreshDir("space_needed");
   const PlanOfRig p =
