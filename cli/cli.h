@@ -60,6 +60,11 @@ void DispatchSummary(Dispatch& dispatch, Run run) {
   };
 }
 
+// The exit code of a command whose summary carries a verdict: 3 when it is "failed".
+inline int FailedVerdictExitCode(const nlohmann::json& summary) {
+  return summary["verdict"] == "failed" ? 3 : 0;
+}
+
 void AddDevicesCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddSimCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddCaptureCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
@@ -69,9 +74,9 @@ void AddSimulateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch
 void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddEvalCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
+void AddExportCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddStageCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddBatchCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
-// `hairrig serve`: the operator console (console/console_server.h).
 // `hairrig serve`: the operator console (console/console_server.h).
 void AddConsoleCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);
 void AddEStopCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch);

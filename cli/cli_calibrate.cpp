@@ -104,7 +104,7 @@ void AddCalibrateCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatc
     args->options.calibration.mode =
         args->mode == "free" ? CalibrationMode::kFree : CalibrationMode::kTurntable;
     DispatchSummary(dispatch, [args] { return CalibrateCaptureFolder(args->dir, args->options); });
-    dispatch.exit_code = [](const nlohmann::json& j) { return j["verdict"] == "failed" ? 3 : 0; };
+    dispatch.exit_code = FailedVerdictExitCode;
   });
   AddCalibrateIntrinsicsCommand(app, common, dispatch);
   AddCalibrateBoxCommand(app, common, dispatch);

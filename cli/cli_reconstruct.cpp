@@ -156,7 +156,7 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
     DispatchSummary(dispatch, [args] { return RunReconstruct(*args); });
-    dispatch.exit_code = [](const nlohmann::json& j) { return j["verdict"] == "failed" ? 3 : 0; };
+    dispatch.exit_code = FailedVerdictExitCode;
   });
 }
 

@@ -30,6 +30,7 @@ int Run(int argc, char** argv) {
   AddSimulateCommand(app, common, dispatch);
   AddCalibrateCommand(app, common, dispatch);
   AddReconstructCommand(app, common, dispatch);
+  AddExportCommand(app, common, dispatch);
   AddEvalCommand(app, common, dispatch);
   AddSimCommand(app, common, dispatch);
   AddStageCommand(app, common, dispatch);

@@ -55,6 +55,16 @@ std::vector<std::string> ServedFilesUnder(const fs::path& capture_dir, const std
   return out;
 }
 
+// A verdict's "reasons": a list of strings (anything else is recorded as an error).
+nlohmann::json Reasons(const JsonObject& verdict) {
+  const nlohmann::json& reasons = verdict.Raw("reasons");
+  if (reasons.is_array() && std::all_of(reasons.begin(), reasons.end(),
+                                        [](const nlohmann::json& r) { return r.is_string(); }))
+    return reasons;
+  verdict.Fail("reasons", "is not a list of strings");
+  return nlohmann::json::array();
+}
+
 // The calibration's summary from calibration.json and the report's verdict.json.
 nlohmann::json CalibrationDetails(const std::string& id, const fs::path& dir) {
   Result<nlohmann::json> verdict = ReadJsonFile((dir / "calibration/report/verdict.json").string());
@@ -64,7 +74,7 @@ nlohmann::json CalibrationDetails(const std::string& id, const fs::path& dir) {
   const JsonObject v(*verdict, "verdict.json");
   const JsonObject c(*calibration, "calibration.json");
   nlohmann::json out = {{"verdict", v.String("verdict")},
-                        {"reasons", v.Raw("reasons")},
+                        {"reasons", Reasons(v)},
                         {"rms_px", c.Number("rms_px")},
                         {"views", nlohmann::json::array()},
                         {"residuals", nlohmann::json::array()}};
@@ -85,7 +95,7 @@ nlohmann::json ReconstructionVerdictDetails(const fs::path& dir) {
   Result<nlohmann::json> verdict = ReadJsonFile((dir / "reconstruction/verdict.json").string());
   if (!verdict.ok()) return nullptr;
   const JsonObject v(*verdict, "reconstruction/verdict.json");
-  nlohmann::json out = {{"verdict", v.String("verdict")}, {"reasons", v.Raw("reasons")}};
+  nlohmann::json out = {{"verdict", v.String("verdict")}, {"reasons", Reasons(v)}};
   return v.ok() ? out : nullptr;
 }
 

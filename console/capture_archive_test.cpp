@@ -151,6 +151,9 @@ TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
   EXPECT_EQ(reconstruction["verdict"], "check");
   EXPECT_EQ(reconstruction["reasons"], nlohmann::json::array({"the strands are short"}));
   EXPECT_TRUE(archive.FilePath("older", "reconstruction/verdict.json").ok());
+  // A verdict whose reasons are not a list of strings is not shown (the page maps over them).
+  WriteText(dir / "reconstruction/verdict.json", R"({"verdict": "good", "reasons": "none"})");
+  EXPECT_TRUE((*archive.Details("older"))["reconstruction"].is_null());
   EXPECT_TRUE(archive.FilePath("older", "reconstruction/strands/preview.jpg").ok());
   EXPECT_EQ(archive.FilePath("older", "reconstruction/strands/strands.ply").status().code(),
             StatusCode::kInvalidArgument);

@@ -114,7 +114,7 @@ float PointConfidence(float cost, int agreeing) {
 // Counts per reference view: candidate cells, and (cell, other view) pairs
 // that agree on the depth, and of those on the direction too.
 struct CellCounts {
-  int64_t candidates = 0, depth_pairs = 0, direction_pairs = 0;
+  int64_t candidates = 0, depth_pairs = 0, direction_pairs = 0, depth_confirmed = 0;
 };
 
 // The consistent points of reference view r, before merging.
@@ -143,15 +143,18 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
       point.position_mm = p.cast<float>();
       point.direction = Eigen::Vector3f(d[0], d[1], d[2]);
       point.views.push_back(static_cast<uint16_t>(r));
+      int64_t depth_pairs = 0;
       for (size_t w = 0; w < views.size(); ++w) {
         if (w == r) continue;
         const Agreement a =
             AgreementOf(geometry[w], maps[w], p, point.direction, options, cos_tolerance);
-        counts->depth_pairs += a != Agreement::kNone;
+        depth_pairs += a != Agreement::kNone;
         if (a != Agreement::kDepthAndDirection) continue;
         ++counts->direction_pairs;
         point.views.push_back(static_cast<uint16_t>(w));
       }
+      counts->depth_pairs += depth_pairs;
+      counts->depth_confirmed += depth_pairs > 0;
       const int agreeing = static_cast<int>(point.views.size()) - 1;
       if (agreeing < options.min_agreeing_views) continue;
       point.confidence = PointConfidence(cost, agreeing);
@@ -250,6 +253,7 @@ Result<std::vector<OrientedPoint>> FusePoints(const std::vector<MvsView>& views,
     s.candidates += counts[r].candidates;
     s.depth_pairs += counts[r].depth_pairs;
     s.direction_pairs += counts[r].direction_pairs;
+    s.depth_confirmed += counts[r].depth_confirmed;
     all.insert(all.end(), std::make_move_iterator(per_view[r].begin()),
                std::make_move_iterator(per_view[r].end()));
     per_view[r].clear();

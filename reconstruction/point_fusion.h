@@ -55,12 +55,15 @@ struct FusionSummary {
   int64_t candidates = 0;  // cells with an estimate under max_cost
   int64_t consistent = 0;  // ... that enough other views agree with
   int64_t points = 0;      // after merging
-  // (candidate, other view) pairs where the other view's map holds a depth
-  // within depth_tolerance_mm, and of those, pairs whose directions agree
-  // too: where two views agree on where the hair is, do they agree on its
-  // direction? (the reconstruction's verdict)
+  // For the reconstruction's verdict: (candidate, other view) pairs where
+  // the other view's map holds a depth under max_cost within
+  // depth_tolerance_mm of the candidate's, and of those, the pairs whose
+  // directions agree within angle_tolerance_deg too (where two views agree
+  // on where the hair is, do they agree on its direction?); and the
+  // candidates with at least one such depth pair.
   int64_t depth_pairs = 0;
   int64_t direction_pairs = 0;
+  int64_t depth_confirmed = 0;
   bool mls = false;                  // the points were MLS-filtered
   bool smoothed_directions = false;  // ... and their directions smoothed by Eq. 2
 };

@@ -13,6 +13,7 @@
 #include "core/file_util.h"
 #include "core/geometry_json.h"
 #include "core/image_file.h"
+#include "core/json_file.h"
 #include "core/parallel.h"
 #include "core/statistics.h"
 
@@ -246,6 +247,7 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
                           {"points", fusion.points},
                           {"depth_pairs", fusion.depth_pairs},
                           {"direction_pairs", fusion.direction_pairs},
+                          {"depth_confirmed", fusion.depth_confirmed},
                           {"mls", fusion.mls},
                           {"smoothed_directions", fusion.smoothed_directions}}},
                         {"seconds",
@@ -260,6 +262,29 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
   return out;
 }
 
+Result<PointReconstructionSummary> ReadPointSummaryFigures(const std::string& path) {
+  HR_ASSIGN_OR_RETURN(const nlohmann::json j, ReadJsonFile(path));
+  const JsonObject summary(j, path);
+  const JsonObject fusion = summary.Object("fusion");
+  PointReconstructionSummary s;
+  const JsonIntRange counts{.min = 0, .max = int64_t{1} << 50};
+  s.fusion.candidates = fusion.Integer("candidates", counts);
+  s.fusion.consistent = fusion.Integer("consistent", counts);
+  s.fusion.points = fusion.Integer("points", counts);
+  s.fusion.depth_pairs = fusion.Integer("depth_pairs", counts);
+  s.fusion.direction_pairs = fusion.Integer("direction_pairs", counts);
+  s.fusion.depth_confirmed = fusion.Integer("depth_confirmed", counts);
+  for (const JsonObject& view : summary.Objects("views")) {
+    ViewPointsSummary v;
+    v.name = view.String("name");
+    v.median_orientation_confidence =
+        view.Number("median_orientation_confidence", {.min = 0, .max = 1});
+    s.views.push_back(std::move(v));
+  }
+  if (!summary.ok()) return summary.status();
+  return s;
+}
+
 std::string PointReconstructionSummary::BriefReport() const {
   std::ostringstream s;
   s.precision(3);
@@ -268,7 +293,8 @@ std::string PointReconstructionSummary::BriefReport() const {
     << " depth cells confirmed by another view), " << object_frame << " frame\n";
   if (fusion.depth_pairs > 0)
     s << "directions: " << fusion.direction_pairs << " of " << fusion.depth_pairs
-      << " view pairs that agree on a cell's depth agree on its direction\n";
+      << " view pairs that agree on a cell's depth agree on its direction; "
+      << fusion.depth_confirmed << " cells at a depth another view confirms\n";
   s << "time: " << total_s << " s (segmentation and orientation " << segmentation_s << " s, hull "
     << hull_s << " s, stereo " << stereo_s << " s, fusion " << fusion_s << " s, writing "
     << writing_s << " s)\n";

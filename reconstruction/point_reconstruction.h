@@ -84,6 +84,14 @@ struct PointReconstructionSummary {
   std::string BriefReport() const;  // a few lines for a person
 };
 
+// The figures of a points stage's summary.json that the reconstruction's
+// verdict reads (reconstruction_verdict.h): each view's name and median
+// orientation confidence, and the fusion's counts; for a run of the strands
+// stage alone. NotFound when the file is absent; CorruptData naming the file
+// and field when a figure is missing or malformed (a summary written before
+// the verdict: run the points stage again).
+Result<PointReconstructionSummary> ReadPointSummaryFigures(const std::string& path);
+
 // (stage, done, total): stage is "segmentation", "hull", "stereo", "fusion" or "writing".
 using ReconstructionProgress = std::function<void(const std::string&, int, int)>;
 

@@ -48,7 +48,8 @@ double HairExtentMm(const std::vector<OrientedPoint>& points) {
   return extent;
 }
 
-// Adds one view's (facing, over skin) counts for every sample_step-th vertex.
+// Adds one view's (facing, over skin) counts for every sample_step-th point
+// of the set (the strands' points in one list).
 void CountOverSkin(const StrandSet& strands, const ReconstructionView& view, const cv::Mat1b& label,
                    const Eigen::Vector3d& head_centre_mm, int sample_step,
                    StrandPlausibility* out) {
@@ -58,8 +59,10 @@ void CountOverSkin(const StrandSet& strands, const ReconstructionView& view, con
     if (!(p_cam.z() < centre_depth)) continue;
     Eigen::Vector2d uv;
     if (!ProjectChecked(view.camera, p_cam, &uv)) continue;
-    const int x = static_cast<int>(std::floor(uv.x())), y = static_cast<int>(std::floor(uv.y()));
-    if (x < 0 || y < 0 || x >= label.cols || y >= label.rows) continue;
+    // Pixel (0, 0)'s centre is at (0, 0) (core/camera_model.h): the nearest pixel.
+    const double u = std::round(uv.x()), v = std::round(uv.y());
+    if (!(u >= 0 && v >= 0 && u < label.cols && v < label.rows)) continue;
+    const int x = static_cast<int>(u), y = static_cast<int>(v);
     ++out->samples_facing;
     out->samples_over_skin += label(y, x) == kSegHead;
   }
@@ -71,14 +74,22 @@ void Raise(ReconstructionVerdict::Level level, ReconstructionVerdict* verdict) {
 
 void JudgeAgreement(const FusionSummary& fusion, const ReconstructionVerdictOptions& o,
                     ReconstructionVerdict* verdict) {
-  if (fusion.candidates <= 0) return;
+  if (fusion.candidates <= 0 || fusion.points <= 0) {
+    Raise(ReconstructionVerdict::Level::kFailed, verdict);
+    verdict->reasons.push_back(
+        fusion.candidates <= 0
+            ? "the stereo found no depth under the fusion's cost limit in any view"
+            : "no depth cell is confirmed by another view: no points");
+    return;
+  }
   const double confirmed =
-      static_cast<double>(fusion.consistent) / static_cast<double>(fusion.candidates);
+      static_cast<double>(fusion.depth_confirmed) / static_cast<double>(fusion.candidates);
   if (confirmed < o.failed_confirmed_share) {
     Raise(ReconstructionVerdict::Level::kFailed, verdict);
     verdict->reasons.push_back(StringPrintf(
-        "only %.1f %% of the depth cells are confirmed by another view (failed below %.0f %%): "
-        "the views disagree; check the calibration's verdict and the views' overlap",
+        "only %.1f %% of the depth cells are at a depth another view confirms (failed below "
+        "%.0f %%): the views disagree on where the hair is; check the calibration's verdict and "
+        "the views' overlap",
         Percent(confirmed), Percent(o.failed_confirmed_share)));
   }
   if (fusion.depth_pairs <= 0) return;
@@ -109,7 +120,7 @@ void JudgePoints(const PointReconstructionSummary& points, const ReconstructionV
         v.name.c_str(), v.median_orientation_confidence, o.min_view_confidence, v.name.c_str()));
   }
   if (2 * unclear.size() > points.views.size()) {
-    verdict->level = ReconstructionVerdict::Level::kFailed;
+    Raise(ReconstructionVerdict::Level::kFailed, verdict);
     verdict->reasons.push_back(StringPrintf(
         "%zu of %zu views show no clear hair orientation: the images do not show the hair's "
         "flow (focus, exposure, motion blur)",
@@ -124,6 +135,17 @@ void JudgePoints(const PointReconstructionSummary& points, const ReconstructionV
 
 void JudgeStrands(const StrandPlausibility& s, const ReconstructionVerdictOptions& o,
                   ReconstructionVerdict* verdict) {
+  if (s.strands <= 0) {
+    Raise(ReconstructionVerdict::Level::kFailed, verdict);
+    verdict->reasons.push_back("no strands were grown");
+    return;
+  }
+  if (s.views_measured == 0) {
+    Raise(ReconstructionVerdict::Level::kCheck, verdict);
+    verdict->reasons.push_back(
+        "strands over skin not checked: no view's label mask (masks/<view>_label.png) could be "
+        "read; run the points stage again");
+  }
   if (s.hair_extent_mm > 0) {
     const double share = s.median_length_mm / s.hair_extent_mm;
     if (share < o.check_length_share) {

@@ -81,7 +81,7 @@ struct StrandPlausibility {
 struct ReconstructionVerdict {
   enum class Level { kGood, kCheck, kFailed } level = Level::kGood;
   std::vector<std::string> reasons;         // one line each; empty when good
-  std::vector<std::string> views_to_check;  // view names
+  std::vector<std::string> views_to_check;  // names of the views whose orientation is unclear
   const char* name() const;                 // "good", "check", "failed"
   nlohmann::json ToJson() const;            // {"verdict", "reasons", "views_to_check"}
 };
@@ -89,8 +89,9 @@ struct ReconstructionVerdict {
 // Measures `strands` (the object frame, mm) against the fused `points`, the
 // views' label masks written by the points stage under `masks_dir`
 // (<name>_label.png; a view without one is not measured) and the head's
-// centre (the object frame). Every `sample_step`-th vertex of each strand is
-// projected. InvalidArgument for sample_step < 1.
+// centre (the object frame). Every `sample_step`-th point of the set (the
+// strands' points taken as one list) is projected. InvalidArgument for
+// sample_step < 1.
 Result<StrandPlausibility> MeasureStrandPlausibility(const StrandSet& strands,
                                                      const std::vector<OrientedPoint>& points,
                                                      const std::vector<ReconstructionView>& views,

@@ -5,14 +5,12 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/support/verdict_reasons.h"
+
 namespace hairrig {
 namespace {
 
-bool HasReasonWith(const ReconstructionVerdict& v, const std::string& text) {
-  for (const std::string& r : v.reasons)
-    if (r.find(text) != std::string::npos) return true;
-  return false;
-}
+using hairrig_test::HasReasonWith;
 
 // Ten views with clear orientation, 60 % of the depth cells confirmed.
 PointReconstructionSummary SoundPoints() {
@@ -25,6 +23,8 @@ PointReconstructionSummary SoundPoints() {
   }
   s.fusion.candidates = 1000;
   s.fusion.consistent = 600;
+  s.fusion.depth_confirmed = 800;
+  s.fusion.points = 500;
   s.fusion.depth_pairs = 2000;
   s.fusion.direction_pairs = 1400;  // 70 %
   return s;
@@ -35,6 +35,7 @@ StrandPlausibility SoundStrands() {
   s.strands = 100;
   s.median_length_mm = 180;
   s.hair_extent_mm = 300;
+  s.views_measured = 10;
   s.samples_facing = 1000;
   s.samples_over_skin = 5;
   return s;
@@ -54,7 +55,8 @@ TEST(ReconstructionVerdict, ViewsThatAgreeOnDepthButNotOnDirectionFailWithTheRea
   points.fusion.direction_pairs = 400;  // 20 %
   ReconstructionVerdict v = JudgeReconstruction(&points, nullptr);
   EXPECT_STREQ(v.name(), "failed");
-  EXPECT_TRUE(HasReasonWith(v, "only 20.0 % agree on its direction")) << v.reasons[0];
+  EXPECT_TRUE(HasReasonWith(v, "only 20.0 % agree on its direction"))
+      << ::testing::PrintToString(v.reasons);
   points.fusion.direction_pairs = 700;  // 35 %: between failed and check
   v = JudgeReconstruction(&points, nullptr);
   EXPECT_STREQ(v.name(), "check");
@@ -63,12 +65,20 @@ TEST(ReconstructionVerdict, ViewsThatAgreeOnDepthButNotOnDirectionFailWithTheRea
   EXPECT_STREQ(JudgeReconstruction(&points, nullptr).name(), "good");
 }
 
-TEST(ReconstructionVerdict, ViewsThatHardlyAgreeFail) {
+TEST(ReconstructionVerdict, ViewsThatHardlyAgreeOrFindNothingFail) {
   PointReconstructionSummary points = SoundPoints();
-  points.fusion.consistent = 30;  // 3 %
-  const ReconstructionVerdict v = JudgeReconstruction(&points, nullptr);
+  points.fusion.depth_confirmed = 30;  // 3 %
+  ReconstructionVerdict v = JudgeReconstruction(&points, nullptr);
   EXPECT_STREQ(v.name(), "failed");
-  EXPECT_TRUE(HasReasonWith(v, "only 3.0 % of the depth cells are confirmed")) << v.reasons[0];
+  EXPECT_TRUE(HasReasonWith(v, "only 3.0 % of the depth cells are at a depth another view"))
+      << ::testing::PrintToString(v.reasons);
+  points = SoundPoints();
+  points.fusion.points = 0;
+  v = JudgeReconstruction(&points, nullptr);
+  EXPECT_STREQ(v.name(), "failed");
+  EXPECT_TRUE(HasReasonWith(v, "no points")) << ::testing::PrintToString(v.reasons);
+  points.fusion.candidates = 0;
+  EXPECT_TRUE(HasReasonWith(JudgeReconstruction(&points, nullptr), "found no depth"));
 }
 
 TEST(ReconstructionVerdict, ViewsWithoutClearOrientationAreNamed) {
@@ -92,6 +102,12 @@ TEST(ReconstructionVerdict, ShortStrandsAndStrandsOverSkinAreReported) {
   EXPECT_STREQ(v.name(), "check");
   EXPECT_TRUE(HasReasonWith(v, "the strands are short: median 30 mm where the hair spans 300 mm"));
   strands.median_length_mm = 10;
+  EXPECT_STREQ(JudgeReconstruction(nullptr, &strands).name(), "failed");
+  strands = SoundStrands();
+  strands.views_measured = 0;
+  EXPECT_TRUE(
+      HasReasonWith(JudgeReconstruction(nullptr, &strands), "strands over skin not checked"));
+  strands.strands = 0;
   EXPECT_STREQ(JudgeReconstruction(nullptr, &strands).name(), "failed");
 
   strands = SoundStrands();
@@ -138,18 +154,20 @@ TEST(StrandPlausibility, CountsSamplesInFrontOfTheHeadOverSkin) {
   for (float z : {-10.f, 0.f, 10.f}) strands.points_mm.emplace_back(20.f, -50.f, z);
   // Behind the head's centre, over the head's half: hidden, not counted.
   for (float z : {-10.f, 0.f, 10.f}) strands.points_mm.emplace_back(-20.f, 50.f, z);
-  strands.point_counts = {3, 3, 3};
+  // In front, 0.4 px left of the boundary's pixel centre (u = 99.6): the hair's pixel 100.
+  strands.points_mm.emplace_back(-0.38f, -50.f, 0.f);
+  strands.point_counts = {3, 3, 3, 1};
   std::vector<OrientedPoint> points(101);
   for (size_t i = 0; i < points.size(); ++i)
     points[i].position_mm = Eigen::Vector3f(0, 0, static_cast<float>(i) * 2.0f);  // 0..200 mm
 
   auto s = MeasureStrandPlausibility(strands, points, {view}, dir, Eigen::Vector3d::Zero(), 1);
   ASSERT_TRUE(s.ok()) << s.status().ToString();
-  EXPECT_EQ(s->strands, 3);
+  EXPECT_EQ(s->strands, 4);
   EXPECT_DOUBLE_EQ(s->median_length_mm, 20.0);
   EXPECT_NEAR(s->hair_extent_mm, 192.0, 4.0);
   EXPECT_EQ(s->views_measured, 1);
-  EXPECT_EQ(s->samples_facing, 6);
+  EXPECT_EQ(s->samples_facing, 7);
   EXPECT_EQ(s->samples_over_skin, 3);
 
   // A view without a label mask is not measured.

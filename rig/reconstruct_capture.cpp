@@ -82,6 +82,25 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
   return CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir, summary);
 }
 
+// The verdict on the stages' figures; a run of the strands stage alone
+// judges the points from the points stage's summary.json.
+void Judge(const std::string& reconstruction_dir, ReconstructCaptureSummary* summary) {
+  std::optional<PointReconstructionSummary> points = summary->points;
+  Status points_read;
+  if (!points) {
+    Result<PointReconstructionSummary> read =
+        ReadPointSummaryFigures(reconstruction_dir + "/summary.json");
+    if (read.ok()) points = *read;
+    points_read = read.status();
+  }
+  summary->verdict = JudgeReconstruction(points ? &*points : nullptr,
+                                         summary->plausibility ? &*summary->plausibility : nullptr);
+  if (points_read.ok()) return;
+  summary->verdict.level = std::max(summary->verdict.level, ReconstructionVerdict::Level::kCheck);
+  summary->verdict.reasons.push_back("the points were not judged: " + points_read.ToString() +
+                                     "; run `hairrig reconstruct DIR --stage points` again");
+}
+
 }  // namespace
 
 Result<ReconstructStage> ParseReconstructStage(const std::string& name) {
@@ -146,8 +165,7 @@ Result<ReconstructCaptureSummary> ReconstructCapture(const ReconstructCaptureOpt
   if (o.stage != ReconstructStage::kPoints) {
     HR_RETURN_IF_ERROR(RunStrands(o, input, &summary));
   }
-  summary.verdict = JudgeReconstruction(summary.points ? &*summary.points : nullptr,
-                                        summary.plausibility ? &*summary.plausibility : nullptr);
+  Judge(o.dir + "/reconstruction", &summary);
   HR_RETURN_IF_ERROR(
       WriteFileAtomic(o.dir + "/reconstruction/verdict.json", summary.verdict.ToJson().dump(1)));
   return summary;

@@ -22,17 +22,14 @@
 #include "core/truth_maps.h"
 #include "reconstruction/point_reconstruction.h"
 #include "tests/support/reconstruction_scene.h"
+#include "tests/support/verdict_reasons.h"
 
 namespace hairrig {
 namespace {
 
 namespace fs = std::filesystem;
 
-bool HasReasonWith(const ReconstructionVerdict& v, const std::string& text) {
-  for (const std::string& r : v.reasons)
-    if (r.find(text) != std::string::npos) return true;
-  return false;
-}
+using hairrig_test::HasReasonWith;
 
 cv::Mat ReadImage(const std::string& path) {
   cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);

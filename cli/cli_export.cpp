@@ -1,0 +1,40 @@
+#include <CLI/CLI.hpp>
+
+#include "cli/cli.h"
+#include "rig/gltf_export.h"
+
+namespace hairrig {
+
+void AddExportCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) {
+  auto* cmd = app.add_subcommand(
+      "export",
+      "A capture's strands, head and simulation as binary glTF (.glb) for Blender and three.js, "
+      "with a decimated copy for display");
+  auto options = std::make_shared<GltfExportOptions>();
+  cmd->add_option("DIR", options->dir, "a capture folder with reconstruction/strands/strands.ply")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--out", options->out_file,
+                  "the .glb to write (default DIR/reconstruction/strands/hair.glb); the display "
+                  "copy goes beside it as <name>.display.glb");
+  cmd->add_option("--head", options->head_file,
+                  "a head file (default: DIR's fitted head, else its rig.yaml's)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--simulation", options->simulation_dir,
+                  "a `hairrig simulate` output folder to add as an animation")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--display-strands", options->display_strands,
+                  "strands in the display copy and in each animation frame")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--display-points", options->display_points,
+                  "points per strand in the display copy and the animation")
+      ->check(CLI::Range(2, 10000))
+      ->capture_default_str();
+  cmd->add_flag("--json", common.json, "print the summary as one JSON object");
+  cmd->callback([options, &dispatch] {
+    DispatchSummary(dispatch, [options] { return ExportCaptureGltf(*options); });
+  });
+}
+
+}  // namespace hairrig

@@ -1,0 +1,320 @@
+#include "core/gltf_writer.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "core/file_util.h"
+
+namespace hairrig {
+
+namespace {
+
+// glTF 2.0 constants (specification sections 3.6 and 4.4 of the GLB container).
+constexpr uint32_t kGlbMagic = 0x46546C67;  // "glTF"
+constexpr uint32_t kJsonChunk = 0x4E4F534A;
+constexpr uint32_t kBinChunk = 0x004E4942;
+constexpr int kUnsignedByte = 5121, kUnsignedInt = 5125, kFloat = 5126;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+constexpr int kLinesMode = 1, kTrianglesMode = 4;
+constexpr int64_t kMaxStrands = int64_t{1} << 24;  // the strand id is an exact float below this
+
+// mm, +z up -> m, +y up (a rotation of -90 deg about x).
+Eigen::Vector3f ToGltf(const Eigen::Vector3f& p_mm) {
+  return Eigen::Vector3f(p_mm.x(), p_mm.z(), -p_mm.y()) * 1e-3f;
+}
+
+nlohmann::json Vec3Json(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
+
+// The JSON document and the binary chunk being built.
+class GlbBuilder {
+ public:
+  nlohmann::json doc = {{"asset", {{"version", "2.0"}}},
+                        {"scene", 0},
+                        {"scenes", {{{"nodes", nlohmann::json::array()}}}},
+                        {"nodes", nlohmann::json::array()},
+                        {"meshes", nlohmann::json::array()},
+                        {"materials", nlohmann::json::array()},
+                        {"accessors", nlohmann::json::array()},
+                        {"bufferViews", nlohmann::json::array()}};
+  std::vector<uint8_t> bin;
+
+  // Positions converted to glTF's frame, with the bounds glTF requires.
+  int AddPositions(const std::vector<Eigen::Vector3f>& points_mm) {
+    std::vector<Eigen::Vector3f> converted;
+    converted.reserve(points_mm.size());
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+    for (const Eigen::Vector3f& p : points_mm) {
+      converted.push_back(ToGltf(p));
+      lo = lo.cwiseMin(converted.back());
+      hi = hi.cwiseMax(converted.back());
+    }
+    return AddVec3(converted, kArrayBuffer, {{"min", Vec3Json(lo)}, {"max", Vec3Json(hi)}});
+  }
+  int AddVec3(const std::vector<Eigen::Vector3f>& values, int target, nlohmann::json extra = {}) {
+    const int view = AddView(values.data(), values.size() * sizeof(Eigen::Vector3f), target);
+    return AddAccessor(view, kFloat, values.size(), "VEC3", std::move(extra));
+  }
+  int AddScalars(const std::vector<float>& values, int target, nlohmann::json extra = {}) {
+    const int view = AddView(values.data(), values.size() * sizeof(float), target);
+    return AddAccessor(view, kFloat, values.size(), "SCALAR", std::move(extra));
+  }
+  int AddColours(const std::vector<std::array<uint8_t, 3>>& colours) {
+    std::vector<uint8_t> rgba;
+    rgba.reserve(colours.size() * 4);
+    for (const auto& c : colours) rgba.insert(rgba.end(), {c[0], c[1], c[2], 255});
+    const int view = AddView(rgba.data(), rgba.size(), kArrayBuffer);
+    return AddAccessor(view, kUnsignedByte, colours.size(), "VEC4", {{"normalized", true}});
+  }
+  int AddIndices(const std::vector<uint32_t>& indices) {
+    const int view =
+        AddView(indices.data(), indices.size() * sizeof(uint32_t), kElementArrayBuffer);
+    return AddAccessor(view, kUnsignedInt, indices.size(), "SCALAR");
+  }
+  int AddMaterial(const std::array<float, 4>& colour, bool double_sided) {
+    return Append(
+        "materials",
+        {{"pbrMetallicRoughness",
+          {{"baseColorFactor", colour}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.8}}},
+         {"doubleSided", double_sided}});
+  }
+  int AddMeshNode(const std::string& name, nlohmann::json primitive) {
+    const int mesh = Append("meshes", {{"name", name}, {"primitives", {std::move(primitive)}}});
+    return Append("nodes", {{"name", name}, {"mesh", mesh}});
+  }
+  int Append(const char* array, nlohmann::json value) {
+    if (!doc.contains(array)) doc[array] = nlohmann::json::array();
+    doc[array].push_back(std::move(value));
+    return static_cast<int>(doc[array].size()) - 1;
+  }
+
+ private:
+  int AddView(const void* data, size_t bytes, int target) {
+    const size_t offset = bin.size();
+    bin.resize(offset + bytes);
+    if (bytes > 0) std::memcpy(bin.data() + offset, data, bytes);
+    bin.resize((bin.size() + 3) / 4 * 4, 0);  // every view starts 4-byte aligned
+    nlohmann::json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}};
+    if (target != 0) view["target"] = target;
+    return Append("bufferViews", std::move(view));
+  }
+  int AddAccessor(int view, int component_type, size_t count, const char* type,
+                  nlohmann::json extra = {}) {
+    nlohmann::json accessor = {
+        {"bufferView", view}, {"componentType", component_type}, {"count", count}, {"type", type}};
+    if (extra.is_object()) accessor.update(extra);
+    return Append("accessors", std::move(accessor));
+  }
+};
+
+Status CheckStrands(const std::string& name, const StrandSet& strands) {
+  const std::string what = "glTF strand set '" + name + "'";
+  if (strands.point_counts.empty()) return InvalidArgument(what + " has no strands");
+  if (static_cast<int64_t>(strands.point_counts.size()) > kMaxStrands)
+    return InvalidArgument(what + " has more than 2^24 strands");
+  uint64_t total = 0;
+  for (const uint32_t count : strands.point_counts) total += count;
+  if (total != strands.points_mm.size())
+    return InvalidArgument(what + ": its strands' point counts sum to " + std::to_string(total) +
+                           ", not its " + std::to_string(strands.points_mm.size()) + " points");
+  if (!strands.colors.empty() && strands.colors.size() != strands.points_mm.size())
+    return InvalidArgument(what + ": " + std::to_string(strands.colors.size()) + " colours for " +
+                           std::to_string(strands.points_mm.size()) + " points");
+  for (size_t i = 0; i < strands.points_mm.size(); ++i)
+    if (!strands.points_mm[i].allFinite())
+      return InvalidArgument(what + ": point " + std::to_string(i) + " is not finite");
+  return Status::Ok();
+}
+
+// An index pair per segment of every strand.
+std::vector<uint32_t> SegmentIndices(const StrandSet& strands) {
+  std::vector<uint32_t> indices;
+  uint32_t first = 0;
+  for (const uint32_t count : strands.point_counts) {
+    for (uint32_t i = 1; i < count; ++i) indices.insert(indices.end(), {first + i - 1, first + i});
+    first += count;
+  }
+  return indices;
+}
+
+std::vector<float> StrandIds(const StrandSet& strands) {
+  std::vector<float> ids;
+  ids.reserve(strands.points_mm.size());
+  for (size_t s = 0; s < strands.point_counts.size(); ++s)
+    ids.insert(ids.end(), strands.point_counts[s], static_cast<float>(s));
+  return ids;
+}
+
+// A LINES node for `strands`; `indices` and `ids` are accessors shared by
+// an animation's frames (-1: made here).
+int AddStrandNode(GlbBuilder* b, const std::string& name, const StrandSet& strands, int material,
+                  int indices, int ids, GltfWriteSummary* summary) {
+  nlohmann::json attributes = {{"POSITION", b->AddPositions(strands.points_mm)}};
+  attributes["_STRAND_ID"] = ids >= 0 ? ids : b->AddScalars(StrandIds(strands), kArrayBuffer);
+  if (!strands.colors.empty()) attributes["COLOR_0"] = b->AddColours(strands.colors);
+  summary->vertices += static_cast<int64_t>(strands.points_mm.size());
+  return b->AddMeshNode(
+      name, {{"attributes", attributes},
+             {"indices", indices >= 0 ? indices : b->AddIndices(SegmentIndices(strands))},
+             {"mode", kLinesMode},
+             {"material", material}});
+}
+
+// Area-weighted vertex normals, in glTF's frame.
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3d> sum(mesh.vertices_mm.size(), Eigen::Vector3d::Zero());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d& a = mesh.vertices_mm[t[0]];
+    const Eigen::Vector3d n = (mesh.vertices_mm[t[1]] - a).cross(mesh.vertices_mm[t[2]] - a);
+    for (const uint32_t v : t) sum[v] += n;
+  }
+  std::vector<Eigen::Vector3f> normals;
+  normals.reserve(sum.size());
+  for (const Eigen::Vector3d& n : sum) {
+    const Eigen::Vector3d unit = n.norm() > 0 ? n.normalized() : Eigen::Vector3d::UnitZ();
+    normals.push_back(Eigen::Vector3f(static_cast<float>(unit.x()), static_cast<float>(unit.z()),
+                                      static_cast<float>(-unit.y())));
+  }
+  return normals;
+}
+
+Result<int> AddMesh(GlbBuilder* b, const GltfTriangleMesh& m, GltfWriteSummary* summary) {
+  const std::string what = "glTF mesh '" + m.name + "'";
+  if (m.mesh == nullptr || m.mesh->triangles.empty()) return InvalidArgument(what + " is empty");
+  std::vector<Eigen::Vector3f> vertices;
+  vertices.reserve(m.mesh->vertices_mm.size());
+  for (const Eigen::Vector3d& v : m.mesh->vertices_mm) {
+    if (!v.allFinite()) return InvalidArgument(what + " has a vertex that is not finite");
+    vertices.push_back(v.cast<float>());
+  }
+  std::vector<uint32_t> indices;
+  indices.reserve(3 * m.mesh->triangles.size());
+  for (const auto& t : m.mesh->triangles) {
+    for (const uint32_t v : t) {
+      if (v >= vertices.size())
+        return InvalidArgument(what + ": a triangle indexes vertex " + std::to_string(v) + " of " +
+                               std::to_string(vertices.size()));
+      indices.push_back(v);
+    }
+  }
+  summary->vertices += static_cast<int64_t>(vertices.size());
+  const nlohmann::json attributes = {{"POSITION", b->AddPositions(vertices)},
+                                     {"NORMAL", b->AddVec3(VertexNormals(*m.mesh), kArrayBuffer)}};
+  return b->AddMeshNode(m.name, {{"attributes", attributes},
+                                 {"indices", b->AddIndices(indices)},
+                                 {"mode", kTrianglesMode},
+                                 {"material", b->AddMaterial(m.colour, false)}});
+}
+
+Status CheckAnimation(const GltfStrandAnimation& a) {
+  const std::string what = "glTF animation '" + a.name + "'";
+  if (a.frames.empty()) return InvalidArgument(what + " has no frames");
+  if (!(a.fps > 0 && std::isfinite(a.fps))) return InvalidArgument(what + ": fps must be positive");
+  for (size_t f = 0; f < a.frames.size(); ++f) {
+    if (a.frames[f] == nullptr)
+      return InvalidArgument(what + ": frame " + std::to_string(f) + " is missing");
+    HR_RETURN_IF_ERROR(CheckStrands(a.name + "' frame '" + std::to_string(f), *a.frames[f]));
+    if (a.frames[f]->point_counts != a.frames[0]->point_counts)
+      return InvalidArgument(
+          what + ": frame " + std::to_string(f) +
+          " has other strands than frame 0 (every frame needs the same point counts)");
+  }
+  return Status::Ok();
+}
+
+// The frames as children of one node, shown in turn by STEP scale channels.
+int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* summary) {
+  const StrandSet& first = *a.frames[0];
+  const int material = b->AddMaterial(a.colour, true);
+  const int indices = b->AddIndices(SegmentIndices(first));
+  const int ids = b->AddScalars(StrandIds(first), kArrayBuffer);
+  const size_t n = a.frames.size();
+  std::vector<float> times(n);
+  for (size_t k = 0; k < n; ++k) times[k] = static_cast<float>(static_cast<double>(k) / a.fps);
+  const int input = b->AddScalars(times, 0, {{"min", {times.front()}}, {"max", {times.back()}}});
+  nlohmann::json children = nlohmann::json::array(), samplers = nlohmann::json::array(),
+                 channels = nlohmann::json::array();
+  for (size_t f = 0; f < n; ++f) {
+    const int node = AddStrandNode(b, a.name + "_frame_" + std::to_string(f), *a.frames[f],
+                                   material, indices, ids, summary);
+    if (f != 0) b->doc["nodes"][node]["scale"] = {0.0, 0.0, 0.0};
+    std::vector<Eigen::Vector3f> scales(n, Eigen::Vector3f::Zero());
+    scales[f] = Eigen::Vector3f::Ones();
+    samplers.push_back(
+        {{"input", input}, {"output", b->AddVec3(scales, 0)}, {"interpolation", "STEP"}});
+    channels.push_back({{"sampler", f}, {"target", {{"node", node}, {"path", "scale"}}}});
+    children.push_back(node);
+  }
+  b->Append("animations", {{"name", a.name}, {"samplers", samplers}, {"channels", channels}});
+  summary->frames += static_cast<int>(n);
+  summary->segments += static_cast<int64_t>(SegmentIndices(first).size() / 2);
+  return b->Append("nodes", {{"name", a.name}, {"children", children}});
+}
+
+void AppendU32(std::vector<uint8_t>* out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out->push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+
+}  // namespace
+
+Result<std::vector<uint8_t>> EncodeGlb(const GltfScene& scene, GltfWriteSummary* summary_out) {
+  GltfWriteSummary summary;
+  GlbBuilder b;
+  b.doc["asset"]["generator"] = scene.generator;
+  std::vector<int> roots;
+  for (const GltfStrandSet& set : scene.strand_sets) {
+    if (set.strands == nullptr)
+      return InvalidArgument("glTF strand set '" + set.name + "' is missing");
+    HR_RETURN_IF_ERROR(CheckStrands(set.name, *set.strands));
+    roots.push_back(AddStrandNode(&b, set.name, *set.strands, b.AddMaterial(set.colour, true), -1,
+                                  -1, &summary));
+    summary.strands += static_cast<int64_t>(set.strands->point_counts.size());
+    summary.segments += static_cast<int64_t>(SegmentIndices(*set.strands).size() / 2);
+  }
+  for (const GltfTriangleMesh& mesh : scene.meshes) {
+    HR_ASSIGN_OR_RETURN(const int node, AddMesh(&b, mesh, &summary));
+    roots.push_back(node);
+  }
+  for (const GltfStrandAnimation& animation : scene.animations) {
+    HR_RETURN_IF_ERROR(CheckAnimation(animation));
+    roots.push_back(AddAnimation(&b, animation, &summary));
+    summary.strands += static_cast<int64_t>(animation.frames[0]->point_counts.size());
+  }
+  if (roots.empty())
+    return InvalidArgument("glTF: nothing to write (no strands, mesh or animation)");
+  b.doc["scenes"][0]["nodes"] = roots;
+  b.doc["buffers"] = {{{"byteLength", b.bin.size()}}};
+  for (const char* array : {"meshes", "materials"})
+    if (b.doc[array].empty()) b.doc.erase(array);
+  summary.nodes = static_cast<int>(b.doc["nodes"].size());
+
+  std::string json = b.doc.dump();
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  std::vector<uint8_t> out;
+  const size_t total = 12 + 8 + json.size() + 8 + b.bin.size();
+  if (total > UINT32_MAX) return InvalidArgument("glTF: the file would exceed 4 GiB (GLB's limit)");
+  out.reserve(total);
+  AppendU32(&out, kGlbMagic);
+  AppendU32(&out, 2);
+  AppendU32(&out, static_cast<uint32_t>(total));
+  AppendU32(&out, static_cast<uint32_t>(json.size()));
+  AppendU32(&out, kJsonChunk);
+  out.insert(out.end(), json.begin(), json.end());
+  AppendU32(&out, static_cast<uint32_t>(b.bin.size()));
+  AppendU32(&out, kBinChunk);
+  out.insert(out.end(), b.bin.begin(), b.bin.end());
+  summary.bytes = static_cast<int64_t>(out.size());
+  if (summary_out != nullptr) *summary_out = summary;
+  return out;
+}
+
+Result<GltfWriteSummary> WriteGlb(const std::string& path, const GltfScene& scene) {
+  GltfWriteSummary summary;
+  HR_ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, EncodeGlb(scene, &summary));
+  HR_RETURN_IF_ERROR(WriteFileAtomic(path, bytes.data(), bytes.size()));
+  summary.path = path;
+  return summary;
+}
+
+}  // namespace hairrig

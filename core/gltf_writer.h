@@ -1,0 +1,84 @@
+// Hair as a binary glTF 2.0 file (.glb), the format Blender, three.js and
+// most DCC tools import without a plug-in (Khronos glTF 2.0 specification):
+//
+//   - every strand set is one node holding one LINES primitive (an index
+//     pair per segment, so the strands of a set share one draw call; a
+//     strand is a connected run of segments): POSITION, COLOR_0 where the
+//     strands carry colours (RGBA8, normalised), and _STRAND_ID (FLOAT, the
+//     strand's index in its set) for tools that split the strands again;
+//   - every triangle mesh (the head) is one node with POSITION, NORMAL and
+//     TRIANGLES;
+//   - an animation (simulated strands, one StrandSet per frame, all of the
+//     same topology) is a node whose children are the frames, each a LINES
+//     node sharing one index buffer; an animation named like the node shows
+//     each frame at its time (k / fps) by a STEP animation of the frames'
+//     scale (1 on its frame, 0 elsewhere); without the animation the first
+//     frame shows.
+//
+// Units and frames: the input is in mm in the turntable (or object) frame,
+// +z up; the file is in metres with +y up as glTF requires:
+// (x, y, z) mm -> (x, z, -y) / 1000 m, a rotation, so handedness is kept.
+//
+// Failure modes: InvalidArgument for a set with no strands or more than
+// 2^24 (the strand id is a float), a StrandSet whose counts do not sum to
+// its points, colours of another count than its points, a non-finite
+// coordinate (naming the set and the point), a triangle that indexes past
+// its mesh's vertices, frames of differing topology or fps not positive;
+// IoError naming the path when the file cannot be written (written
+// atomically: a failed write leaves no partial file).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "core/strands.h"
+#include "core/triangle_mesh.h"
+
+namespace hairrig {
+
+struct GltfStrandSet {
+  std::string name;                                        // the node's and the mesh's name
+  const StrandSet* strands = nullptr;                      // mm, +z up
+  std::array<float, 4> colour{0.35f, 0.22f, 0.12f, 1.0f};  // linear RGBA, the material's
+};
+
+struct GltfTriangleMesh {
+  std::string name;
+  const TriangleMesh* mesh = nullptr;  // mm, +z up
+  std::array<float, 4> colour{0.8f, 0.7f, 0.62f, 1.0f};
+};
+
+struct GltfStrandAnimation {
+  std::string name;                      // the node's and the animation's name
+  std::vector<const StrandSet*> frames;  // mm, +z up, every frame the same point counts
+  double fps = 30;
+  std::array<float, 4> colour{0.35f, 0.22f, 0.12f, 1.0f};
+};
+
+struct GltfScene {
+  std::string generator = "hairrig";  // asset.generator
+  std::vector<GltfStrandSet> strand_sets;
+  std::vector<GltfTriangleMesh> meshes;
+  std::vector<GltfStrandAnimation> animations;
+};
+
+struct GltfWriteSummary {
+  std::string path;
+  int64_t bytes = 0;
+  int nodes = 0;
+  int64_t strands = 0;   // over the strand sets (an animation's strands counted once)
+  int64_t vertices = 0;  // strand and mesh vertices, every animation frame included
+  int64_t segments = 0;  // over the strand sets and one frame of each animation
+  int frames = 0;        // over the animations
+};
+
+// Writes `scene` to `path` (.glb). See the file comment for the layout and errors.
+Result<GltfWriteSummary> WriteGlb(const std::string& path, const GltfScene& scene);
+
+// The same file's bytes, for tests and servers that send it.
+Result<std::vector<uint8_t>> EncodeGlb(const GltfScene& scene, GltfWriteSummary* summary = nullptr);
+
+}  // namespace hairrig

@@ -1,0 +1,61 @@
+// `hairrig export`: a capture's hair as binary glTF (core/gltf_writer.h),
+// for Blender, three.js and other tools:
+//
+//   <out>.glb          every reconstructed strand (reconstruction/strands/
+//                      strands.ply) as the node "strands", the subject's head
+//                      as "head", and, with a simulation folder, its frames
+//                      as an animated node named after the folder, each frame
+//                      decimated as below (the frames' strand files are the
+//                      simulation's data; 31 frames of 20,000 strands would
+//                      be 1.8 GB)
+//   <out>.display.glb  the same scene with the strands decimated for display:
+//                      at most display_strands strands (every k-th) of at most
+//                      display_points points each (every j-th point, the tip
+//                      kept)
+//
+// Units: the files are in metres, +y up; the capture's turntable frame
+// (mm, +z up) is rotated into it. The head is, in order: head_file, the
+// fitted reconstruction/head.yaml, the capture's rig.yaml head; none when the
+// capture has neither (the summary says so).
+//
+// Errors: InvalidArgument for bad options; NotFound naming the strand file
+// when the capture has no strands (run `hairrig reconstruct` first) or a
+// simulation folder without frames; the readers' errors naming the file; an
+// IoError naming the output that cannot be written.
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+
+#include "core/gltf_writer.h"
+#include "core/status.h"
+
+namespace hairrig {
+
+struct GltfExportOptions {
+  std::string dir;             // a capture folder with reconstruction/strands/strands.ply
+  std::string out_file;        // <out>.glb; empty: <dir>/reconstruction/strands/hair.glb
+  std::string head_file;       // empty: the capture's (see above)
+  std::string simulation_dir;  // a `hairrig simulate` output folder; empty: no animation
+  int display_strands = 2000;  // 1 .. 1,000,000
+  int display_points = 32;     // 2 .. 10,000
+
+  // InvalidArgument naming the option.
+  Status Check() const;
+};
+
+struct GltfExportSummary {
+  GltfWriteSummary full, display;
+  std::string head_source;  // where the head came from; empty: no head
+  nlohmann::json ToJson() const;
+  std::string BriefReport() const;
+};
+
+Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& options);
+
+// At most `max_strands` strands (every k-th, k = ceil(strands / max_strands)),
+// each with at most `max_points` points (every j-th, the tip kept); colours
+// follow their points. max_strands >= 1 and max_points >= 2.
+StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points);
+
+}  // namespace hairrig

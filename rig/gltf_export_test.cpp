@@ -1,0 +1,81 @@
+#include "rig/gltf_export.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/strand_capture.h"
+
+namespace hairrig {
+namespace {
+
+namespace fs = std::filesystem;
+
+using hairrig_test::Comb;
+using hairrig_test::MakeStrandCapture;
+
+TEST(DecimateStrands, KeepsEveryKthStrandAndItsTip) {
+  const StrandSet d = DecimateStrands(Comb(100, 50), 30, 10);
+  EXPECT_EQ(d.point_counts.size(), 25u);  // every 4th of 100
+  for (const uint32_t c : d.point_counts) EXPECT_LE(c, 10u);
+  // Every 6th point of 50 (0, 6, .., 48) and the tip (49).
+  EXPECT_EQ(d.point_counts[0], 10u);
+  EXPECT_EQ(d.points_mm[9].z(), 300.0f - 2.0f * 49);
+  const StrandSet whole = DecimateStrands(Comb(3, 5), 10, 10);
+  EXPECT_EQ(whole.points_mm, Comb(3, 5).points_mm);
+}
+
+TEST(GltfExport, StrandsHeadAndAnimationAtTwoLevels) {
+  const std::string dir = MakeStrandCapture("gltf_export", 4);
+  GltfExportOptions o;
+  o.dir = dir;
+  o.head_file = "etc/heads/mannequin.yaml";
+  o.simulation_dir = dir + "/simulation/head-shake";
+  o.display_strands = 20;
+  o.display_points = 8;
+  const auto s = ExportCaptureGltf(o);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  std::printf("%s", s->BriefReport().c_str());
+  EXPECT_EQ(s->full.path, dir + "/reconstruction/strands/hair.glb");
+  EXPECT_EQ(s->display.path, dir + "/reconstruction/strands/hair.display.glb");
+  EXPECT_EQ(s->head_source, "etc/heads/mannequin.yaml");
+  // The full level: 100 strands, then the 20 animated (decimated) strands.
+  EXPECT_EQ(s->full.strands, 120);
+  EXPECT_EQ(s->full.frames, 4);
+  EXPECT_EQ(s->display.strands, 40);
+  EXPECT_LT(s->display.bytes, s->full.bytes);
+  EXPECT_EQ(static_cast<int64_t>(fs::file_size(s->full.path)), s->full.bytes);
+  EXPECT_TRUE(fs::exists(s->display.path));
+  EXPECT_EQ(s->ToJson()["full"]["frames"], 4);
+}
+
+TEST(GltfExport, MissingInputIsNamed) {
+  const std::string dir = ::testing::TempDir() + "/gltf_export_empty";
+  fs::create_directories(dir);
+  GltfExportOptions o;
+  o.dir = dir;
+  auto s = ExportCaptureGltf(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("strands.ply"), std::string::npos) << s.status().ToString();
+
+  o.dir = MakeStrandCapture("gltf_export_nosim", 0);
+  o.simulation_dir = o.dir + "/simulation/head-shake";
+  s = ExportCaptureGltf(o);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.status().message().find("no frame_NNNN strand files"), std::string::npos)
+      << s.status().ToString();
+  o.display_points = 1;
+  EXPECT_NE(ExportCaptureGltf(o).status().message().find("--display-points"), std::string::npos);
+
+  // No head anywhere: exported without one, and the summary says so.
+  o = {};
+  o.dir = MakeStrandCapture("gltf_export_nohead", 0);
+  s = ExportCaptureGltf(o);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_TRUE(s->head_source.empty());
+  EXPECT_NE(s->BriefReport().find("no head"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hairrig

@@ -1,0 +1,54 @@
+// Test helper: a capture folder holding only what `hairrig export` reads: a
+// comb of straight strands as reconstruction/strands/strands.ply, and a
+// `hairrig simulate`-like output under simulation/head-shake/ (frames that
+// sway further each frame, and a summary.json at 10 fps).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "core/file_util.h"
+#include "core/strand_io.h"
+
+namespace hairrig_test {
+
+// `count` vertical strands of `points` points, 10 mm apart on a grid, 2 mm
+// between points, hanging from z = 300 mm; each point k moved sway_mm * k in x.
+inline hairrig::StrandSet Comb(int count, int points, float sway_mm = 0) {
+  hairrig::StrandSet s;
+  for (int i = 0; i < count; ++i) {
+    for (int k = 0; k < points; ++k)
+      s.points_mm.emplace_back(10.0f * static_cast<float>(i % 10) + sway_mm * static_cast<float>(k),
+                               10.0f * static_cast<float>(i / 10),
+                               300.0f - 2.0f * static_cast<float>(k));
+    s.point_counts.push_back(static_cast<uint32_t>(points));
+  }
+  return s;
+}
+
+// <TempDir>/<name> (made afresh) with a comb of 100 strands of 50 points and
+// `frames` simulated frames of it; the folder's path.
+inline std::string MakeStrandCapture(const std::string& name, int frames) {
+  namespace fs = std::filesystem;
+  const std::string dir = ::testing::TempDir() + "/" + name;
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/reconstruction/strands");
+  EXPECT_TRUE(
+      hairrig::WriteStrands(dir + "/reconstruction/strands/strands.ply", Comb(100, 50)).ok());
+  const std::string simulation = dir + "/simulation/head-shake";
+  fs::create_directories(simulation + "/frames");
+  for (int f = 0; f < frames; ++f) {
+    char file[32];
+    std::snprintf(file, sizeof file, "/frame_%04d.hair", f);
+    EXPECT_TRUE(hairrig::WriteStrands(simulation + "/frames" + file,
+                                      Comb(100, 50, 0.1f * static_cast<float>(f)))
+                    .ok());
+  }
+  EXPECT_TRUE(hairrig::WriteFileAtomic(simulation + "/summary.json", R"({"fps": 10})").ok());
+  return dir;
+}
+
+}  // namespace hairrig_test
