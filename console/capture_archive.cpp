@@ -24,7 +24,8 @@ bool IsServedFile(const std::string& relative) {
       "contact_sheet\\.png|journal\\.jsonl|manifest\\.json"
       "|calibration/report/(view_rms\\.png|report\\.txt|verdict\\.json"
       "|residuals/[A-Za-z0-9_-][A-Za-z0-9._-]*\\.jpg)"
-      "|reconstruction/verdict\\.json"
+      "|reconstruction/verdict\\.json|reconstruction/points\\.ply"
+      "|reconstruction/strands/(strands\\.(ply|hair|data)|[A-Za-z0-9_-]+(\\.display)?\\.glb)"
       "|reconstruction/([A-Za-z0-9_-]+/)?[A-Za-z0-9_-][A-Za-z0-9._-]*\\.(jpg|png)"
       "|simulation/[A-Za-z0-9_-][A-Za-z0-9._-]*/[A-Za-z0-9_-][A-Za-z0-9._-]*\\.png");
   return relative.size() <= 256 && std::regex_match(relative, served);
@@ -216,8 +217,14 @@ Result<nlohmann::json> CaptureArchive::Details(const std::string& id) const {
     return nullptr;
   };
   nlohmann::json reconstruction = nlohmann::json::array(), simulation = nlohmann::json::array();
-  for (const std::string& f : ServedFilesUnder(root, "reconstruction", true))
-    if (!f.ends_with(".json")) reconstruction.push_back(Url(id, f));  // the pictures
+  nlohmann::json downloads = nlohmann::json::array();
+  for (const std::string& f : ServedFilesUnder(root, "reconstruction", true)) {
+    if (f.ends_with(".jpg") || f.ends_with(".png")) {
+      reconstruction.push_back(Url(id, f));
+    } else if (!f.ends_with(".json")) {
+      downloads.push_back(Url(id, f));  // points, strands, glTF
+    }
+  }
   for (const std::string& f : ServedFilesUnder(root, "simulation", true)) {
     if (simulation.size() < 8) simulation.push_back(Url(id, f));
   }
@@ -225,7 +232,8 @@ Result<nlohmann::json> CaptureArchive::Details(const std::string& id) const {
                   {"journal", Url(id, "journal.jsonl")},
                   {"view_rms", url_if("calibration/report/view_rms.png")},
                   {"reconstruction", reconstruction},
-                  {"simulation", simulation}};
+                  {"simulation", simulation},
+                  {"downloads", downloads}};
   return out;
 }
 
@@ -233,10 +241,10 @@ Result<std::string> CaptureArchive::FilePath(const std::string& id,
                                              const std::string& relative) const {
   HR_ASSIGN_OR_RETURN(const std::string dir, CaptureDir(id));
   if (!IsServedFile(relative))
-    return InvalidArgument(
-        "'" + relative.substr(0, 80) +
-        "' is not a file the console serves (the contact sheet, journal, "
-        "manifest, calibration report, reconstruction verdict and the pipeline's pictures)");
+    return InvalidArgument("'" + relative.substr(0, 80) +
+                           "' is not a file the console serves (the contact sheet, journal, "
+                           "manifest, calibration report, reconstruction verdict, the pipeline's "
+                           "pictures and the reconstruction's points, strands and glTF files)");
   const std::string path = (fs::path(dir) / relative).string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return NotFound(id + "/" + relative + " does not exist");
@@ -268,6 +276,7 @@ std::string ContentTypeOf(const std::string& path) {
   if (ext == ".jpg" || ext == ".jpeg") return "image/jpeg";
   if (ext == ".png") return "image/png";
   if (ext == ".json") return "application/json";
+  if (ext == ".glb") return "model/gltf-binary";
   if (ext == ".txt" || ext == ".jsonl") return "text/plain; charset=utf-8";
   return "application/octet-stream";
 }

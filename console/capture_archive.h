@@ -50,14 +50,16 @@ class CaptureArchive {
   // Entry plus "views" [{view, camera, thumb}], "calibration" {verdict,
   // rms_px, reasons, views [{name, rms_px, solved}], residuals [urls]} or
   // null, "reconstruction" {verdict, reasons} (reconstruction/verdict.json) or
-  // null, and "files" {contact_sheet, journal, view_rms, reconstruction [urls],
-  // simulation [urls]} (urls under /api/captures/<id>/).
+  // null, and "files" {contact_sheet, journal, view_rms, reconstruction [urls
+  // of pictures], simulation [urls], downloads [urls of points.ply, the strand
+  // files and .glb files]} (urls under /api/captures/<id>/).
   Result<nlohmann::json> Details(const std::string& id) const;
   // A file of the capture by its path relative to the capture folder, if it
   // is of a kind served (contact_sheet.png, journal.jsonl, manifest.json, the
   // calibration report's text, verdict, RMS chart and residual images, the
-  // reconstruction's and the simulation's pictures): InvalidArgument for any
-  // other path, NotFound when absent.
+  // reconstruction's verdict and the reconstruction's and the simulation's
+  // pictures; the reconstruction's points.ply, strands.{ply,hair,data} and
+  // strands/*.glb): InvalidArgument for any other path, NotFound when absent.
   Result<std::string> FilePath(const std::string& id, const std::string& relative) const;
   // View `view`'s stored frame as a JPEG at most `max_width_px` wide.
   Result<std::vector<uint8_t>> Thumbnail(const std::string& id, int view, int max_width_px) const;

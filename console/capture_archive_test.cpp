@@ -120,7 +120,9 @@ TEST_F(CaptureArchiveTest, ThumbnailsAndDetailsComeFromTheManifest) {
 TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
   const fs::path dir = fs::path(root_) / "older";
   WriteText(dir / "reconstruction/strands/preview.jpg", "jpeg");
-  WriteText(dir / "reconstruction/strands/strands.ply", "ply");  // data, not a picture
+  WriteText(dir / "reconstruction/strands/strands.ply", "ply");  // data: a download
+  WriteText(dir / "reconstruction/strands/hair.display.glb", "glTF");
+  WriteText(dir / "reconstruction/strands/segments.ply", "ply");  // an intermediate: not served
   WriteText(dir / "simulation/head-shake/frame_0000.png", "png");
   WriteText(dir / "calibration/report/verdict.json",
             R"({"verdict": "good", "reasons": [], "views_to_check": []})");
@@ -155,7 +157,13 @@ TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
   WriteText(dir / "reconstruction/verdict.json", R"({"verdict": "good", "reasons": "none"})");
   EXPECT_TRUE((*archive.Details("older"))["reconstruction"].is_null());
   EXPECT_TRUE(archive.FilePath("older", "reconstruction/strands/preview.jpg").ok());
-  EXPECT_EQ(archive.FilePath("older", "reconstruction/strands/strands.ply").status().code(),
+  EXPECT_TRUE(archive.FilePath("older", "reconstruction/strands/strands.ply").ok());
+  EXPECT_EQ(ContentTypeOf("x/hair.display.glb"), "model/gltf-binary");
+  EXPECT_EQ(
+      files["downloads"],
+      nlohmann::json::array({"/api/captures/older/files/reconstruction/strands/hair.display.glb",
+                             "/api/captures/older/files/reconstruction/strands/strands.ply"}));
+  EXPECT_EQ(archive.FilePath("older", "reconstruction/strands/segments.ply").status().code(),
             StatusCode::kInvalidArgument);
 }
 

@@ -137,11 +137,13 @@ nlohmann::json GltfExportSummary::ToJson() const {
 
 std::string GltfExportSummary::BriefReport() const {
   std::string text;
-  for (const GltfWriteSummary* s : {&full, &display})
+  for (const GltfWriteSummary* s : {&full, &display}) {
+    if (s->path.empty()) continue;
     text += StringPrintf("%s: %lld strands, %lld vertices, %d animation frames, %.1f MB\n",
                          s->path.c_str(), static_cast<long long>(s->strands),
                          static_cast<long long>(s->vertices), s->frames,
                          static_cast<double>(s->bytes) / 1e6);
+  }
   text += head_source.empty() ? "  no head (give --head FILE)\n" : "  head: " + head_source + "\n";
   return text;
 }
@@ -168,9 +170,11 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
     animation = fs::path(o.simulation_dir).filename().string();
     if (animation.empty()) animation = "simulation";
   }
-  HR_ASSIGN_OR_RETURN(summary.full,
-                      WriteGlb(out_file, SceneOf(strands, head_mesh, simulation.frames, animation,
-                                                 simulation.fps)));
+  if (!o.display_only) {
+    HR_ASSIGN_OR_RETURN(summary.full,
+                        WriteGlb(out_file, SceneOf(strands, head_mesh, simulation.frames, animation,
+                                                   simulation.fps)));
+  }
   const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points);
   HR_ASSIGN_OR_RETURN(summary.display,
                       WriteGlb(DisplayPath(out_file), SceneOf(display, head_mesh, simulation.frames,

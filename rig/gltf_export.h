@@ -39,13 +39,14 @@ struct GltfExportOptions {
   std::string simulation_dir;  // a `hairrig simulate` output folder; empty: no animation
   int display_strands = 2000;  // 1 .. 1,000,000
   int display_points = 32;     // 2 .. 10,000
+  bool display_only = false;   // write <out>.display.glb alone (the reconstruction does)
 
   // InvalidArgument naming the option.
   Status Check() const;
 };
 
 struct GltfExportSummary {
-  GltfWriteSummary full, display;
+  GltfWriteSummary full, display;  // full.path empty when display_only
   std::string head_source;  // where the head came from; empty: no head
   nlohmann::json ToJson() const;
   std::string BriefReport() const;

@@ -11,6 +11,7 @@
 #include "reconstruction/colmap_model.h"
 #include "reconstruction/point_cloud.h"
 #include "reconstruction/strand_preview.h"
+#include "rig/gltf_export.h"
 #include "rig/reconstruction_input.h"
 
 namespace hairrig {
@@ -79,7 +80,16 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
           o.dir + "/reconstruction/points.ply, head " + head.source);
   HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
                                                            head.source, o.strands));
-  return CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir, summary);
+  HR_RETURN_IF_ERROR(
+      CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir, summary));
+  // The display copy as glTF, for the console's 3D view and for download.
+  GltfExportOptions gltf;
+  gltf.dir = o.dir;
+  gltf.head_file = o.head_file == kFittedHead ? "" : o.head_file;
+  gltf.display_only = true;
+  HR_ASSIGN_OR_RETURN(const GltfExportSummary exported, ExportCaptureGltf(gltf));
+  summary->display_glb = exported.display.path;
+  return Status::Ok();
 }
 
 // The verdict on the stages' figures; a run of the strands stage alone
@@ -133,6 +143,7 @@ nlohmann::json ReconstructCaptureSummary::ToJson() const {
   j["reasons"] = verdict.reasons;
   j["views_to_check"] = verdict.views_to_check;
   if (!over_views_picture.empty()) j["over_views_picture"] = over_views_picture;
+  if (!display_glb.empty()) j["display_glb"] = display_glb;
   j["brief"] = BriefReport();
   return j;
 }
@@ -151,6 +162,7 @@ std::string ReconstructCaptureSummary::BriefReport() const {
   }
   if (!over_views_picture.empty())
     brief += "  strands over the input views: " + over_views_picture + "\n";
+  if (!display_glb.empty()) brief += "  for display and download (glTF): " + display_glb + "\n";
   return brief;
 }
 

@@ -5,7 +5,9 @@
 // Besides what the two stages write (reconstruction/point_reconstruction.h,
 // reconstruction/strand_reconstruction.h), the strands stage writes
 // reconstruction/strands/over_views.jpg: the strands projected over four of
-// the input views, spread around the turntable, and the stages that ran
+// the input views, spread around the turntable, and
+// reconstruction/strands/hair.display.glb (rig/gltf_export.h: at most 2,000
+// strands and the head, for display and download); the stages that ran
 // are judged (reconstruction/reconstruction_verdict.h) into
 // reconstruction/verdict.json: {"verdict": good|check|failed, "reasons",
 // "views_to_check"}, also first in the summary.
@@ -53,7 +55,8 @@ struct ReconstructCaptureSummary {
   std::optional<PointReconstructionSummary> points;
   std::optional<HeadFitSummary> head_fit;  // when the strands' head was fitted to the views
   std::optional<StrandReconstructionSummary> strands;
-  std::string over_views_picture;                  // empty when the strands stage did not run
+  std::string over_views_picture;  // empty when the strands stage did not run
+  std::string display_glb;         // strands/hair.display.glb (rig/gltf_export.h); likewise
   std::optional<StrandPlausibility> plausibility;  // when the strands stage ran
   ReconstructionVerdict verdict;  // on the stages that ran; also written to verdict.json
   nlohmann::json ToJson() const;

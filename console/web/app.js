@@ -469,6 +469,14 @@ function showResult(capture) {
   $('#reconstruction-reasons').replaceChildren(
     ...(rec?.reasons ?? []).map((reason) => el('li', { textContent: reason })));
   fillImages('#reconstruction', capture.files?.reconstruction ?? [], 'reconstruction preview');
+  const downloads = (capture.files?.downloads ?? []).map((url) => {
+    const name = url.split('/files/').pop();
+    const a = link('', withToken(url), name);
+    a.download = name.split('/').pop();
+    return el('li', {}, a);
+  });
+  $('#downloads').replaceChildren(
+    ...(downloads.length ? downloads : [el('li', { className: 'none', textContent: 'none' })]));
 }
 
 function fillImages(selector, urls, what) {
