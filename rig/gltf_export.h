@@ -47,7 +47,7 @@ struct GltfExportOptions {
 
 struct GltfExportSummary {
   GltfWriteSummary full, display;  // full.path empty when display_only
-  std::string head_source;  // where the head came from; empty: no head
+  std::string head_source;         // where the head came from; empty: no head
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };
