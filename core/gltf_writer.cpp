@@ -138,6 +138,13 @@ std::vector<uint32_t> SegmentIndices(const StrandSet& strands) {
   return indices;
 }
 
+// Segments of every strand: a strand of n points has n - 1.
+int64_t SegmentCount(const StrandSet& strands) {
+  int64_t segments = 0;
+  for (const uint32_t count : strands.point_counts) segments += count > 0 ? count - 1 : 0;
+  return segments;
+}
+
 std::vector<float> StrandIds(const StrandSet& strands) {
   std::vector<float> ids;
   ids.reserve(strands.points_mm.size());
@@ -248,7 +255,7 @@ int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* 
   }
   b->Append("animations", {{"name", a.name}, {"samplers", samplers}, {"channels", channels}});
   summary->frames += static_cast<int>(n);
-  summary->segments += static_cast<int64_t>(SegmentIndices(first).size() / 2);
+  summary->segments += SegmentCount(first);
   return b->Append("nodes", {{"name", a.name}, {"children", children}});
 }
 
@@ -270,7 +277,7 @@ Result<std::vector<uint8_t>> EncodeGlb(const GltfScene& scene, GltfWriteSummary*
     roots.push_back(AddStrandNode(&b, set.name, *set.strands, b.AddMaterial(set.colour, true), -1,
                                   -1, &summary));
     summary.strands += static_cast<int64_t>(set.strands->point_counts.size());
-    summary.segments += static_cast<int64_t>(SegmentIndices(*set.strands).size() / 2);
+    summary.segments += SegmentCount(*set.strands);
   }
   for (const GltfTriangleMesh& mesh : scene.meshes) {
     HR_ASSIGN_OR_RETURN(const int node, AddMesh(&b, mesh, &summary));

@@ -72,6 +72,19 @@ void Raise(ReconstructionVerdict::Level level, ReconstructionVerdict* verdict) {
   verdict->level = std::max(verdict->level, level);
 }
 
+// Raises the verdict for `value` below `check` (check) or `failed` (failed)
+// and returns the level's word and its threshold for the reason; nullptr
+// when `value` is at or above `check`.
+const char* RaiseBelow(double value, double check, double failed, double* threshold,
+                       ReconstructionVerdict* verdict) {
+  if (value >= check) return nullptr;
+  const bool is_failed = value < failed;
+  Raise(is_failed ? ReconstructionVerdict::Level::kFailed : ReconstructionVerdict::Level::kCheck,
+        verdict);
+  *threshold = is_failed ? failed : check;
+  return is_failed ? "failed" : "check";
+}
+
 void JudgeAgreement(const FusionSummary& fusion, const ReconstructionVerdictOptions& o,
                     ReconstructionVerdict* verdict) {
   if (fusion.candidates <= 0 || fusion.points <= 0) {
@@ -95,15 +108,15 @@ void JudgeAgreement(const FusionSummary& fusion, const ReconstructionVerdictOpti
   if (fusion.depth_pairs <= 0) return;
   const double directions =
       static_cast<double>(fusion.direction_pairs) / static_cast<double>(fusion.depth_pairs);
-  if (directions >= o.check_direction_agreement) return;
+  double threshold = 0;
+  const char* level = RaiseBelow(directions, o.check_direction_agreement,
+                                 o.failed_direction_agreement, &threshold, verdict);
+  if (level == nullptr) return;
   const bool failed = directions < o.failed_direction_agreement;
-  Raise(failed ? ReconstructionVerdict::Level::kFailed : ReconstructionVerdict::Level::kCheck,
-        verdict);
   verdict->reasons.push_back(StringPrintf(
       "where two views agree on the hair's depth, only %.1f %% agree on its direction (%s below "
       "%.0f %%): the orientation maps %s; see orientation/*.jpg",
-      Percent(directions), failed ? "failed" : "check",
-      Percent(failed ? o.failed_direction_agreement : o.check_direction_agreement),
+      Percent(directions), level, Percent(threshold),
       failed ? "do not show the hair's flow"
              : "follow the hair less well than on clear images (noise, glints, defocus)"));
 }
@@ -148,15 +161,13 @@ void JudgeStrands(const StrandPlausibility& s, const ReconstructionVerdictOption
   }
   if (s.hair_extent_mm > 0) {
     const double share = s.median_length_mm / s.hair_extent_mm;
-    if (share < o.check_length_share) {
-      const bool failed = share < o.failed_length_share;
-      Raise(failed ? ReconstructionVerdict::Level::kFailed : ReconstructionVerdict::Level::kCheck,
-            verdict);
+    double threshold = 0;
+    if (const char* level =
+            RaiseBelow(share, o.check_length_share, o.failed_length_share, &threshold, verdict)) {
       verdict->reasons.push_back(StringPrintf(
           "the strands are short: median %.0f mm where the hair spans %.0f mm (%s below "
           "%.0f %% of it); growth stops where the 3D orientation is missing",
-          s.median_length_mm, s.hair_extent_mm, failed ? "failed" : "check",
-          Percent(failed ? o.failed_length_share : o.check_length_share)));
+          s.median_length_mm, s.hair_extent_mm, level, Percent(threshold)));
     }
   }
   if (s.samples_facing > 0 && s.over_skin_share() > o.max_over_skin_share) {
