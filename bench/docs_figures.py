@@ -73,7 +73,33 @@ def hostile_campaign_table(record):
     return lines
 
 
-RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table}
+def console_viewer_table(record):
+    r = record["result"]
+    full, display = r["export_full"], r["export_display"]
+    export_s, first, fps = sorted(r["export_s"]), sorted(r["first_frame_ms"]), sorted(r["orbit_fps"])
+    rows = [
+        ("`hairrig export` of %s strands with %d simulated frames, median (runs)"
+         % ("{:,}".format(r["strands"]), full["frames"]),
+         "%.2f s (%s)" % (statistics.median(export_s), ", ".join("%.2f" % s for s in export_s))),
+        ("files written: every strand / display copy",
+         "%.1f MB / %.1f MB (%s vertices)" % (full["bytes"] / 1e6, display["bytes"] / 1e6,
+                                              "{:,}".format(display["vertices"]))),
+        ("3D view, Open to the model's first frame, median (runs)",
+         "%.0f ms (%s)" % (statistics.median(first), ", ".join("%.0f" % x for x in first))),
+        ("3D view while orbiting as a drag draws it (1,000 strands through every 2nd point), median (runs)",
+         "%.1f frames/s (%s)" % (statistics.median(fps), ", ".join("%.1f" % x for x in fps))),
+        ("3D view while orbiting with every display strand drawn, median of runs",
+         "%.1f frames/s" % statistics.median(r["orbit_fps_full_detail"])),
+        ("95th-percentile frame interval while orbiting, median of runs",
+         "%.0f ms" % statistics.median(r["orbit_interval_ms_p95"])),
+    ]
+    lines = ["| what | figure | commit, date |", "| --- | --- | --- |"]
+    lines += ["| %s | %s | %s |" % (what, figure, provenance(record)) for what, figure in rows]
+    return lines
+
+
+RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table,
+             "console_viewer": console_viewer_table}
 
 
 def load_record(name):

@@ -23,13 +23,23 @@ void AddExportCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) 
   cmd->add_option("--simulation", options->simulation_dir,
                   "a `hairrig simulate` output folder to add as an animation")
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--display-strands", options->display_strands,
-                  "strands in the display copy and in each animation frame")
+  cmd->add_option("--display-strands", options->display_strands, "strands in the display copy")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   cmd->add_option("--display-points", options->display_points,
                   "points per strand in the display copy and the animation")
       ->check(CLI::Range(2, 10000))
+      ->capture_default_str();
+  cmd->add_option("--animation-strands", options->animation_strands,
+                  "strands in each animation frame (both files)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--display-cloud", options->display_cloud,
+                  "oriented points in the display copy (0: none)")
+      ->check(CLI::Range(0, 10000000))
+      ->capture_default_str();
+  cmd->add_option("--threads", options->threads, "simulation frames read at once (0: one per core)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([options, &dispatch] {

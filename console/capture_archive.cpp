@@ -100,6 +100,39 @@ nlohmann::json ReconstructionVerdictDetails(const fs::path& dir) {
   return v.ok() ? out : nullptr;
 }
 
+// The reconstruction's headline figures from its summaries (each null when
+// its summary lacks it): oriented points, the share of depth-agreeing view
+// pairs that also agree on the direction (the verdict's check), strands and
+// their mean length (mm).
+nlohmann::json ReconstructionFigures(const fs::path& dir) {
+  nlohmann::json out = {{"points", nullptr},
+                        {"direction_agreement", nullptr},
+                        {"strands", nullptr},
+                        {"strand_mean_length_mm", nullptr}};
+  if (Result<nlohmann::json> points = ReadJsonFile((dir / "reconstruction/summary.json").string());
+      points.ok()) {
+    const JsonObject fusion = JsonObject(*points, "reconstruction/summary.json").Object("fusion");
+    const double depth_pairs = fusion.NumberOr("depth_pairs", 0, {.min = 0});
+    if (fusion.Has("points")) out["points"] = fusion.Integer("points", {.min = 0});
+    if (depth_pairs > 0)
+      out["direction_agreement"] = fusion.NumberOr("direction_pairs", 0, {.min = 0}) / depth_pairs;
+    if (!fusion.ok()) out["points"] = out["direction_agreement"] = nullptr;
+  }
+  if (Result<nlohmann::json> strands =
+          ReadJsonFile((dir / "reconstruction/strands/summary.json").string());
+      strands.ok()) {
+    const JsonObject s =
+        JsonObject(*strands, "reconstruction/strands/summary.json").Object("strands");
+    const int64_t count = s.Integer("count", {.min = 0});
+    const double length = s.Number("mean_length_mm", {.min = 0});
+    if (s.ok()) {
+      out["strands"] = count;
+      out["strand_mean_length_mm"] = length;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Status CheckCaptureId(const std::string& id) {
@@ -211,6 +244,7 @@ Result<nlohmann::json> CaptureArchive::Details(const std::string& id) const {
   const fs::path root(dir);
   out["calibration"] = CalibrationDetails(id, root);
   out["reconstruction"] = ReconstructionVerdictDetails(root);
+  out["reconstruction_figures"] = ReconstructionFigures(root);
   std::error_code ec;
   auto url_if = [&](const std::string& relative) -> nlohmann::json {
     if (fs::is_regular_file(root / relative, ec)) return Url(id, relative);
@@ -233,6 +267,7 @@ Result<nlohmann::json> CaptureArchive::Details(const std::string& id) const {
                   {"view_rms", url_if("calibration/report/view_rms.png")},
                   {"reconstruction", reconstruction},
                   {"simulation", simulation},
+                  {"model", url_if("reconstruction/strands/hair.display.glb")},
                   {"downloads", downloads}};
   return out;
 }

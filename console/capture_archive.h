@@ -50,8 +50,11 @@ class CaptureArchive {
   // Entry plus "views" [{view, camera, thumb}], "calibration" {verdict,
   // rms_px, reasons, views [{name, rms_px, solved}], residuals [urls]} or
   // null, "reconstruction" {verdict, reasons} (reconstruction/verdict.json) or
-  // null, and "files" {contact_sheet, journal, view_rms, reconstruction [urls
-  // of pictures], simulation [urls], downloads [urls of points.ply, the strand
+  // null, "reconstruction_figures" {points, direction_agreement (0..1),
+  // strands, strand_mean_length_mm; each null when not measured}, and "files"
+  // {contact_sheet, journal, view_rms, reconstruction [urls of pictures],
+  // simulation [urls], model (the 3D view's reconstruction/strands/
+  // hair.display.glb, or null), downloads [urls of points.ply, the strand
   // files and .glb files]} (urls under /api/captures/<id>/).
   Result<nlohmann::json> Details(const std::string& id) const;
   // A file of the capture by its path relative to the capture folder, if it

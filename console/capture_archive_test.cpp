@@ -165,6 +165,31 @@ TEST_F(CaptureArchiveTest, ThePipelinesPicturesAreListedWhenItsStagesRan) {
                              "/api/captures/older/files/reconstruction/strands/strands.ply"}));
   EXPECT_EQ(archive.FilePath("older", "reconstruction/strands/segments.ply").status().code(),
             StatusCode::kInvalidArgument);
+  EXPECT_EQ(files["model"], "/api/captures/older/files/reconstruction/strands/hair.display.glb");
+}
+
+TEST_F(CaptureArchiveTest, TheReconstructionsFiguresComeFromItsSummaries) {
+  const fs::path dir = fs::path(root_) / "older";
+  const CaptureArchive archive(root_);
+  nlohmann::json figures = (*archive.Details("older"))["reconstruction_figures"];
+  EXPECT_TRUE(figures["points"].is_null());
+  EXPECT_TRUE(figures["strands"].is_null());
+  EXPECT_TRUE((*archive.Details("older"))["files"]["model"].is_null());
+  WriteText(dir / "reconstruction/summary.json",
+            R"({"fusion": {"points": 420, "depth_pairs": 1000, "direction_pairs": 524}})");
+  WriteText(dir / "reconstruction/strands/summary.json",
+            R"({"strands": {"count": 20, "mean_length_mm": 241.5}})");
+  figures = (*archive.Details("older"))["reconstruction_figures"];
+  EXPECT_EQ(figures["points"], 420);
+  EXPECT_DOUBLE_EQ(figures["direction_agreement"].get<double>(), 0.524);
+  EXPECT_EQ(figures["strands"], 20);
+  EXPECT_DOUBLE_EQ(figures["strand_mean_length_mm"].get<double>(), 241.5);
+  // A summary with a field of the wrong kind shows nothing of it rather than a wrong figure.
+  WriteText(dir / "reconstruction/strands/summary.json",
+            R"({"strands": {"count": "many", "mean_length_mm": 241.5}})");
+  figures = (*archive.Details("older"))["reconstruction_figures"];
+  EXPECT_TRUE(figures["strands"].is_null());
+  EXPECT_EQ(figures["points"], 420);
 }
 
 TEST(ContentTypeOf, ByExtension) {

@@ -112,8 +112,8 @@ std::string SseMessage(const ConsoleEvent& e) {
          "\n\n";
 }
 
-const EmbeddedFile* FindAsset(const std::string& path) {
-  for (const EmbeddedFile& f : ConsoleWebAssets()) {
+const EmbeddedFile* FindAsset(const std::vector<EmbeddedFile>& assets, const std::string& path) {
+  for (const EmbeddedFile& f : assets) {
     if (path == f.path) return &f;
   }
   return nullptr;
@@ -253,15 +253,22 @@ void ConsoleServer::Impl::ControlledPost(
 }
 
 void ConsoleServer::Impl::StaticRoutes() {
-  auto serve = [](const std::string& path, Response& res) {
-    const EmbeddedFile* f = FindAsset(path);
+  auto serve = [](const std::vector<EmbeddedFile>& assets, const std::string& path, Response& res) {
+    const EmbeddedFile* f = FindAsset(assets, path);
     if (!f) return SendJson(res, 404, {{"error", "no such page"}});
     res.SetHeader("Cache-Control", "no-cache");
     res.SetContent(reinterpret_cast<const char*>(f->data), f->size, AssetContentType(path));
   };
-  http_.Route("GET", "/", [serve](const Request&, Response& res) { serve("index.html", res); });
-  http_.Route("GET", R"(/([a-z]+\.(html|js|css)))",
-              [serve](const Request& req, Response& res) { serve(req.matches[1], res); });
+  http_.Route("GET", "/", [serve](const Request&, Response& res) {
+    serve(ConsoleWebAssets(), "index.html", res);
+  });
+  http_.Route("GET", R"(/([a-z]+\.(html|js|css)))", [serve](const Request& req, Response& res) {
+    serve(ConsoleWebAssets(), req.matches[1], res);
+  });
+  http_.Route("GET", R"(/vendor/(three/[a-z/]*[A-Za-z]+(\.module)?\.js))",
+              [serve](const Request& req, Response& res) {
+                serve(ConsoleVendorAssets(), req.matches[1], res);
+              });
 }
 
 void ConsoleServer::Impl::RigRoutes() {

@@ -1,5 +1,6 @@
-// The console's page (console/web/), built into the binary so that it is
-// served offline with no files beside the executable.
+// The console's page (console/web/) and the three.js modules its 3D view
+// imports, built into the binary so that they are served offline with no
+// files beside the executable.
 #pragma once
 
 #include <cstddef>
@@ -14,5 +15,9 @@ struct EmbeddedFile {
 };
 
 const std::vector<EmbeddedFile>& ConsoleWebAssets();
+
+// three.js for the page's 3D view (Debian's libjs-three), paths relative to
+// /usr/share/javascript: "three/build/three.module.js", served under /vendor/.
+const std::vector<EmbeddedFile>& ConsoleVendorAssets();
 
 }  // namespace hairrig

@@ -17,7 +17,7 @@ constexpr uint32_t kJsonChunk = 0x4E4F534A;
 constexpr uint32_t kBinChunk = 0x004E4942;
 constexpr int kUnsignedByte = 5121, kUnsignedInt = 5125, kFloat = 5126;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
-constexpr int kLinesMode = 1, kTrianglesMode = 4;
+constexpr int kPointsMode = 0, kLinesMode = 1, kTrianglesMode = 4;
 constexpr int64_t kMaxStrands = int64_t{1} << 24;  // the strand id is an exact float below this
 
 // mm, +z up -> m, +y up (a rotation of -90 deg about x).
@@ -214,6 +214,23 @@ Result<int> AddMesh(GlbBuilder* b, const GltfTriangleMesh& m, GltfWriteSummary* 
                                  {"material", b->AddMaterial(m.colour, false)}});
 }
 
+Result<int> AddPointCloud(GlbBuilder* b, const GltfPointCloud& c, GltfWriteSummary* summary) {
+  const std::string what = "glTF point cloud '" + c.name + "'";
+  if (c.points_mm == nullptr || c.points_mm->empty()) return InvalidArgument(what + " is empty");
+  if (c.colours != nullptr && c.colours->size() != c.points_mm->size())
+    return InvalidArgument(what + ": " + std::to_string(c.colours->size()) + " colours for " +
+                           std::to_string(c.points_mm->size()) + " points");
+  for (size_t i = 0; i < c.points_mm->size(); ++i)
+    if (!(*c.points_mm)[i].allFinite())
+      return InvalidArgument(what + ": point " + std::to_string(i) + " is not finite");
+  nlohmann::json attributes = {{"POSITION", b->AddPositions(*c.points_mm)}};
+  if (c.colours != nullptr) attributes["COLOR_0"] = b->AddColours(*c.colours);
+  summary->vertices += static_cast<int64_t>(c.points_mm->size());
+  return b->AddMeshNode(c.name, {{"attributes", attributes},
+                                 {"mode", kPointsMode},
+                                 {"material", b->AddMaterial(c.colour, true)}});
+}
+
 Status CheckAnimation(const GltfStrandAnimation& a) {
   const std::string what = "glTF animation '" + a.name + "'";
   if (a.frames.empty()) return InvalidArgument(what + " has no frames");
@@ -283,13 +300,17 @@ Result<std::vector<uint8_t>> EncodeGlb(const GltfScene& scene, GltfWriteSummary*
     HR_ASSIGN_OR_RETURN(const int node, AddMesh(&b, mesh, &summary));
     roots.push_back(node);
   }
+  for (const GltfPointCloud& cloud : scene.point_clouds) {
+    HR_ASSIGN_OR_RETURN(const int node, AddPointCloud(&b, cloud, &summary));
+    roots.push_back(node);
+  }
   for (const GltfStrandAnimation& animation : scene.animations) {
     HR_RETURN_IF_ERROR(CheckAnimation(animation));
     roots.push_back(AddAnimation(&b, animation, &summary));
     summary.strands += static_cast<int64_t>(animation.frames[0]->point_counts.size());
   }
   if (roots.empty())
-    return InvalidArgument("glTF: nothing to write (no strands, mesh or animation)");
+    return InvalidArgument("glTF: nothing to write (no strands, mesh, points or animation)");
   b.doc["scenes"][0]["nodes"] = roots;
   b.doc["buffers"] = {{{"byteLength", b.bin.size()}}};
   for (const char* array : {"meshes", "materials"})

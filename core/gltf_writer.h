@@ -8,6 +8,8 @@
 //     strand's index in its set) for tools that split the strands again;
 //   - every triangle mesh (the head) is one node with POSITION, NORMAL and
 //     TRIANGLES;
+//   - every point cloud is one node holding one POINTS primitive: POSITION
+//     and COLOR_0 where the points carry colours;
 //   - an animation (simulated strands, one StrandSet per frame, all of the
 //     same topology) is a node whose children are the frames, each a LINES
 //     node sharing one index buffer; an animation named like the node shows
@@ -23,11 +25,13 @@
 // 2^24 (the strand id is a float), a StrandSet whose counts do not sum to
 // its points, colours of another count than its points, a non-finite
 // coordinate (naming the set and the point), a triangle that indexes past
-// its mesh's vertices, frames of differing topology or fps not positive;
+// its mesh's vertices, an empty point cloud or one whose colours are of
+// another count than its points, frames of differing topology or fps not positive;
 // IoError naming the path when the file cannot be written (written
 // atomically: a failed write leaves no partial file).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -51,6 +55,13 @@ struct GltfTriangleMesh {
   std::array<float, 4> colour{0.8f, 0.7f, 0.62f, 1.0f};
 };
 
+struct GltfPointCloud {
+  std::string name;
+  const std::vector<Eigen::Vector3f>* points_mm = nullptr;       // mm, +z up
+  const std::vector<std::array<uint8_t, 3>>* colours = nullptr;  // sRGB per point, or null
+  std::array<float, 4> colour{0.9f, 0.9f, 0.9f, 1.0f};           // linear RGBA, the material's
+};
+
 struct GltfStrandAnimation {
   std::string name;                      // the node's and the animation's name
   std::vector<const StrandSet*> frames;  // mm, +z up, every frame the same point counts
@@ -62,6 +73,7 @@ struct GltfScene {
   std::string generator = "hairrig";  // asset.generator
   std::vector<GltfStrandSet> strand_sets;
   std::vector<GltfTriangleMesh> meshes;
+  std::vector<GltfPointCloud> point_clouds;
   std::vector<GltfStrandAnimation> animations;
 };
 
@@ -70,7 +82,7 @@ struct GltfWriteSummary {
   int64_t bytes = 0;
   int nodes = 0;
   int64_t strands = 0;   // over the strand sets (an animation's strands counted once)
-  int64_t vertices = 0;  // strand and mesh vertices, every animation frame included
+  int64_t vertices = 0;  // strand, mesh and point vertices, every animation frame included
   int64_t segments = 0;  // over the strand sets and one frame of each animation
   int frames = 0;        // over the animations
 };

@@ -141,6 +141,34 @@ TEST(GltfWriter, AnAnimationShowsOneFrameAtATime) {
             glb.doc["meshes"][2]["primitives"][0]["indices"]);
 }
 
+TEST(GltfWriter, APointCloudIsPointsInMetresWithYUp) {
+  const std::vector<Eigen::Vector3f> points = {{10, 20, 30}, {-10, 0, 5}};
+  const std::vector<std::array<uint8_t, 3>> colours = {{255, 0, 0}, {0, 255, 0}};
+  GltfScene scene;
+  scene.point_clouds.push_back({.name = "points", .points_mm = &points, .colours = &colours});
+  GltfWriteSummary summary;
+  auto bytes = EncodeGlb(scene, &summary);
+  ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+  EXPECT_EQ(summary.vertices, 2);
+  const Glb glb = Parse(*bytes);
+  const nlohmann::json& primitive = glb.doc["meshes"][0]["primitives"][0];
+  EXPECT_EQ(primitive["mode"], 0);
+  EXPECT_FALSE(primitive.contains("indices"));
+  const std::vector<float> positions = Floats(glb, primitive["attributes"]["POSITION"]);
+  const std::vector<float> expected = {0.010f, 0.030f, -0.020f, -0.010f, 0.005f, 0};
+  ASSERT_EQ(positions.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(positions[i], expected[i], 1e-7f) << i;
+  EXPECT_EQ(glb.doc["accessors"][primitive["attributes"]["COLOR_0"].get<int>()]["count"], 2);
+
+  const std::vector<std::array<uint8_t, 3>> one_colour = {{1, 2, 3}};
+  scene.point_clouds[0].colours = &one_colour;
+  EXPECT_NE(EncodeGlb(scene).status().message().find("'points': 1 colours for 2 points"),
+            std::string::npos);
+  const std::vector<Eigen::Vector3f> none;
+  scene.point_clouds[0].points_mm = &none;
+  EXPECT_NE(EncodeGlb(scene).status().message().find("'points' is empty"), std::string::npos);
+}
+
 TEST(GltfWriter, BadInputIsNamed) {
   StrandSet strands = TwoStrands();
   GltfScene scene;

@@ -1,6 +1,7 @@
 #include "rig/gltf_export.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -8,8 +9,10 @@
 #include "core/head_config.h"
 #include "core/head_model.h"
 #include "core/json_file.h"
+#include "core/parallel.h"
 #include "core/strand_io.h"
 #include "core/string_format.h"
+#include "reconstruction/point_cloud.h"
 #include "rig/capture_calibration_input.h"
 
 namespace hairrig {
@@ -19,6 +22,13 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kStrandsFile = "/reconstruction/strands/strands.ply";
+constexpr const char* kPointsFile = "/reconstruction/points.ply";
+constexpr const char* kTruthStrandsFile = "/ground_truth/ground_truth_strands.ply";
+
+bool IsFile(const std::string& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
 
 // The head spec and where it came from, or no head (empty source).
 Result<std::pair<std::optional<HeadSpec>, std::string>> FindHead(const GltfExportOptions& o) {
@@ -27,12 +37,11 @@ Result<std::pair<std::optional<HeadSpec>, std::string>> FindHead(const GltfExpor
     return std::make_pair(std::optional<HeadSpec>(head), o.head_file);
   }
   const std::string fitted = o.dir + "/reconstruction/head.yaml";
-  std::error_code ec;
-  if (fs::is_regular_file(fitted, ec)) {
+  if (IsFile(fitted)) {
     HR_ASSIGN_OR_RETURN(const HeadSpec head, LoadHeadFile(fitted));
     return std::make_pair(std::optional<HeadSpec>(head), fitted);
   }
-  if (fs::is_regular_file(o.dir + "/rig.yaml", ec)) {
+  if (IsFile(o.dir + "/rig.yaml")) {
     HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(o.dir));
     if (config.head) return std::make_pair(config.head, o.dir + "/rig.yaml");
   }
@@ -46,7 +55,8 @@ struct SimulationFrames {
 };
 
 // Each frame decimated as it is read (a frame of 20,000 strands is about 60 MB).
-Result<SimulationFrames> ReadSimulation(const std::string& dir, int max_strands, int max_points) {
+Result<SimulationFrames> ReadSimulation(const std::string& dir, int max_strands, int max_points,
+                                        int threads) {
   std::vector<std::string> files;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir + "/frames", ec))
@@ -61,10 +71,21 @@ Result<SimulationFrames> ReadSimulation(const std::string& dir, int max_strands,
     out.fps = s.NumberOr("fps", 30, {.min = 1e-3, .max = 1e4});
     HR_RETURN_IF_ERROR(s.status());
   }
-  for (const std::string& file : files) {
-    HR_ASSIGN_OR_RETURN(const StrandSet frame, ReadStrands(file));
-    out.frames.push_back(DecimateStrands(frame, max_strands, max_points));
-  }
+  // Read in parallel (reading and parsing is most of an export's time); the
+  // first error in frame order is returned.
+  out.frames.resize(files.size());
+  std::vector<Status> errors(files.size());
+  ParallelFor(files.size(), threads, [&] {
+    return [&](size_t i) {
+      Result<StrandSet> frame = ReadStrands(files[i]);
+      if (!frame.ok()) {
+        errors[i] = frame.status();
+        return;
+      }
+      out.frames[i] = DecimateStrands(*frame, max_strands, max_points);
+    };
+  });
+  for (const Status& e : errors) HR_RETURN_IF_ERROR(e);
   return out;
 }
 
@@ -73,11 +94,44 @@ std::string DisplayPath(const std::string& out_file) {
   return (path.parent_path() / (path.stem().string() + ".display.glb")).string();
 }
 
-// The scene of one level: `strands`, the head, the frames.
+// What only the display level carries: the oriented points and the true strands.
+struct DisplayExtras {
+  std::vector<Eigen::Vector3f> points_mm;
+  std::vector<std::array<uint8_t, 3>> point_colours;
+  std::optional<StrandSet> truth;
+};
+
+Result<DisplayExtras> ReadDisplayExtras(const GltfExportOptions& o) {
+  DisplayExtras extras;
+  if (o.display_cloud > 0 && IsFile(o.dir + kPointsFile)) {
+    HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
+                        ReadPointCloudPly(o.dir + kPointsFile));
+    const size_t cap = static_cast<size_t>(o.display_cloud);
+    const size_t stride = std::max<size_t>(1, (points.size() + cap - 1) / cap);
+    for (size_t i = 0; i < points.size(); i += stride) {
+      extras.points_mm.push_back(points[i].position_mm);
+      extras.point_colours.push_back(DirectionColour(points[i].direction));
+    }
+  }
+  if (IsFile(o.dir + kTruthStrandsFile)) {
+    HR_ASSIGN_OR_RETURN(const StrandSet truth, ReadStrands(o.dir + kTruthStrandsFile));
+    extras.truth = DecimateStrands(truth, o.display_strands, o.display_points);
+  }
+  return extras;
+}
+
+// The scene of one level: `strands`, the head, the frames, and the display's extras.
 GltfScene SceneOf(const StrandSet& strands, const TriangleMesh* head,
-                  const std::vector<StrandSet>& frames, const std::string& animation, double fps) {
+                  const std::vector<StrandSet>& frames, const std::string& animation, double fps,
+                  const DisplayExtras* extras = nullptr) {
   GltfScene scene;
   scene.strand_sets.push_back({.name = "strands", .strands = &strands});
+  if (extras != nullptr && extras->truth && !extras->truth->point_counts.empty())
+    scene.strand_sets.push_back(
+        {.name = "truth", .strands = &*extras->truth, .colour = {0.1f, 0.6f, 0.2f, 1.0f}});
+  if (extras != nullptr && !extras->points_mm.empty())
+    scene.point_clouds.push_back(
+        {.name = "points", .points_mm = &extras->points_mm, .colours = &extras->point_colours});
   if (head != nullptr) scene.meshes.push_back({.name = "head", .mesh = head});
   if (!frames.empty()) {
     GltfStrandAnimation a{.name = animation, .frames = {}, .fps = fps};
@@ -95,6 +149,11 @@ Status GltfExportOptions::Check() const {
     return InvalidArgument("export: --display-strands must be in 1 .. 1,000,000");
   if (display_points < 2 || display_points > 10000)
     return InvalidArgument("export: --display-points must be in 2 .. 10,000");
+  if (threads < 0) return InvalidArgument("export: --threads must be 0 (one per core) or more");
+  if (animation_strands < 1 || animation_strands > 1000000)
+    return InvalidArgument("export: --animation-strands must be in 1 .. 1,000,000");
+  if (display_cloud < 0 || display_cloud > 10000000)
+    return InvalidArgument("export: --display-cloud must be in 0 .. 10,000,000");
   return Status::Ok();
 }
 
@@ -126,13 +185,23 @@ StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_poi
   return out;
 }
 
+std::array<uint8_t, 3> DirectionColour(const Eigen::Vector3f& direction) {
+  const Eigen::Vector3f d = direction.cwiseAbs().cwiseMin(1.0f);
+  auto channel = [](float v) { return static_cast<uint8_t>(std::lround(255.0f * v)); };
+  return {channel(d.x()), channel(d.y()), channel(d.z())};
+}
+
 nlohmann::json GltfExportSummary::ToJson() const {
   auto level = [](const GltfWriteSummary& s) {
     return nlohmann::json{{"path", s.path},         {"bytes", s.bytes},
                           {"strands", s.strands},   {"vertices", s.vertices},
                           {"segments", s.segments}, {"frames", s.frames}};
   };
-  return {{"full", level(full)}, {"display", level(display)}, {"head", head_source}};
+  return {{"full", level(full)},
+          {"display", level(display)},
+          {"head", head_source},
+          {"truth_strands", truth_strands},
+          {"cloud_points", cloud_points}};
 }
 
 std::string GltfExportSummary::BriefReport() const {
@@ -145,6 +214,11 @@ std::string GltfExportSummary::BriefReport() const {
                          static_cast<double>(s->bytes) / 1e6);
   }
   text += head_source.empty() ? "  no head (give --head FILE)\n" : "  head: " + head_source + "\n";
+  if (cloud_points > 0)
+    text += StringPrintf("  display: %lld oriented points\n", static_cast<long long>(cloud_points));
+  if (truth_strands > 0)
+    text += StringPrintf("  display: %lld true strands (ground truth)\n",
+                         static_cast<long long>(truth_strands));
   return text;
 }
 
@@ -165,8 +239,8 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
   SimulationFrames simulation;
   std::string animation;
   if (!o.simulation_dir.empty()) {
-    HR_ASSIGN_OR_RETURN(simulation,
-                        ReadSimulation(o.simulation_dir, o.display_strands, o.display_points));
+    HR_ASSIGN_OR_RETURN(simulation, ReadSimulation(o.simulation_dir, o.animation_strands,
+                                                   o.display_points, ResolveThreads(o.threads)));
     animation = fs::path(o.simulation_dir).filename().string();
     if (animation.empty()) animation = "simulation";
   }
@@ -176,9 +250,12 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
                                                    simulation.fps)));
   }
   const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points);
+  HR_ASSIGN_OR_RETURN(const DisplayExtras extras, ReadDisplayExtras(o));
+  summary.cloud_points = static_cast<int64_t>(extras.points_mm.size());
+  if (extras.truth) summary.truth_strands = static_cast<int64_t>(extras.truth->point_counts.size());
   HR_ASSIGN_OR_RETURN(summary.display,
                       WriteGlb(DisplayPath(out_file), SceneOf(display, head_mesh, simulation.frames,
-                                                              animation, simulation.fps)));
+                                                              animation, simulation.fps, &extras)));
   return summary;
 }
 

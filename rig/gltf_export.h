@@ -11,7 +11,13 @@
 //   <out>.display.glb  the same scene with the strands decimated for display:
 //                      at most display_strands strands (every k-th) of at most
 //                      display_points points each (every j-th point, the tip
-//                      kept)
+//                      kept); and, for the console's 3D view, the
+//                      reconstruction's oriented points (reconstruction/
+//                      points.ply, every k-th, at most display_cloud) as the
+//                      node "points" coloured by direction (DirectionColour),
+//                      and a simulated capture's true strands (ground_truth/
+//                      ground_truth_strands.ply, decimated as the strands) as
+//                      "truth"; each only when its file exists
 //
 // Units: the files are in metres, +y up; the capture's turntable frame
 // (mm, +z up) is rotated into it. The head is, in order: head_file, the
@@ -24,6 +30,9 @@
 // IoError naming the output that cannot be written.
 #pragma once
 
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 
@@ -33,13 +42,16 @@
 namespace hairrig {
 
 struct GltfExportOptions {
-  std::string dir;             // a capture folder with reconstruction/strands/strands.ply
-  std::string out_file;        // <out>.glb; empty: <dir>/reconstruction/strands/hair.glb
-  std::string head_file;       // empty: the capture's (see above)
-  std::string simulation_dir;  // a `hairrig simulate` output folder; empty: no animation
-  int display_strands = 2000;  // 1 .. 1,000,000
-  int display_points = 32;     // 2 .. 10,000
-  bool display_only = false;   // write <out>.display.glb alone (the reconstruction does)
+  std::string dir;              // a capture folder with reconstruction/strands/strands.ply
+  std::string out_file;         // <out>.glb; empty: <dir>/reconstruction/strands/hair.glb
+  std::string head_file;        // empty: the capture's (see above)
+  std::string simulation_dir;   // a `hairrig simulate` output folder; empty: no animation
+  int display_strands = 2000;   // 1 .. 1,000,000
+  int display_points = 32;      // 2 .. 10,000
+  int display_cloud = 50000;    // 0 (no points) .. 10,000,000
+  int animation_strands = 500;  // strands per animation frame, 1 .. 1,000,000
+  int threads = 0;              // simulation frames read at once; 0: one per core
+  bool display_only = false;    // write <out>.display.glb alone (the reconstruction does)
 
   // InvalidArgument naming the option.
   Status Check() const;
@@ -48,6 +60,8 @@ struct GltfExportOptions {
 struct GltfExportSummary {
   GltfWriteSummary full, display;  // full.path empty when display_only
   std::string head_source;         // where the head came from; empty: no head
+  int64_t truth_strands = 0;       // in the display level (counted in display.strands)
+  int64_t cloud_points = 0;        // in the display level (counted in display.vertices)
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };
@@ -58,5 +72,9 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& options);
 // each with at most `max_points` points (every j-th, the tip kept); colours
 // follow their points. max_strands >= 1 and max_points >= 2.
 StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points);
+
+// A unit direction (turntable frame, unsigned) as a colour: red |x|, green
+// |y|, blue |z| (vertical hair is blue), each 0..255.
+std::array<uint8_t, 3> DirectionColour(const Eigen::Vector3f& direction);
 
 }  // namespace hairrig

@@ -34,20 +34,48 @@ TEST(GltfExport, StrandsHeadAndAnimationAtTwoLevels) {
   o.simulation_dir = dir + "/simulation/head-shake";
   o.display_strands = 20;
   o.display_points = 8;
+  o.animation_strands = 10;
   const auto s = ExportCaptureGltf(o);
   ASSERT_TRUE(s.ok()) << s.status().ToString();
   std::printf("%s", s->BriefReport().c_str());
   EXPECT_EQ(s->full.path, dir + "/reconstruction/strands/hair.glb");
   EXPECT_EQ(s->display.path, dir + "/reconstruction/strands/hair.display.glb");
   EXPECT_EQ(s->head_source, "etc/heads/mannequin.yaml");
-  // The full level: 100 strands, then the 20 animated (decimated) strands.
-  EXPECT_EQ(s->full.strands, 120);
+  // The full level: 100 strands, then the 10 animated (decimated) strands.
+  EXPECT_EQ(s->full.strands, 110);
   EXPECT_EQ(s->full.frames, 4);
-  EXPECT_EQ(s->display.strands, 40);
+  EXPECT_EQ(s->display.strands, 30);
   EXPECT_LT(s->display.bytes, s->full.bytes);
   EXPECT_EQ(static_cast<int64_t>(fs::file_size(s->full.path)), s->full.bytes);
   EXPECT_TRUE(fs::exists(s->display.path));
   EXPECT_EQ(s->ToJson()["full"]["frames"], 4);
+}
+
+TEST(GltfExport, TheDisplayLevelCarriesThePointsAndTheTruth) {
+  const std::string dir = MakeStrandCapture("gltf_export_display", 0);
+  hairrig_test::AddPointsAndTruth(dir, 1000);
+  GltfExportOptions o;
+  o.dir = dir;
+  o.display_only = true;
+  o.display_strands = 20;
+  o.display_cloud = 300;
+  const auto s = ExportCaptureGltf(o);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_TRUE(s->full.path.empty());
+  EXPECT_EQ(s->cloud_points, 250);  // every 4th of 1,000
+  EXPECT_EQ(s->truth_strands, 17);  // every 3rd of 50
+  EXPECT_EQ(s->display.strands, 20 + 17);
+  EXPECT_NE(s->BriefReport().find("250 oriented points"), std::string::npos) << s->BriefReport();
+  EXPECT_EQ(DirectionColour(Eigen::Vector3f(0, 0, -1)), (std::array<uint8_t, 3>{0, 0, 255}));
+  EXPECT_EQ(DirectionColour(Eigen::Vector3f(0.6f, -0.8f, 0)),
+            (std::array<uint8_t, 3>{153, 204, 0}));
+
+  o.display_cloud = 0;  // no points asked for
+  const auto without = ExportCaptureGltf(o);
+  ASSERT_TRUE(without.ok()) << without.status().ToString();
+  EXPECT_EQ(without->cloud_points, 0);
+  o.display_cloud = -1;
+  EXPECT_NE(ExportCaptureGltf(o).status().message().find("--display-cloud"), std::string::npos);
 }
 
 TEST(GltfExport, MissingInputIsNamed) {

@@ -43,9 +43,11 @@ TEST(GltfValidator, ExportedFilesAreValidAsWritten) {
     GTEST_SKIP() << "gltf-validator is not installed in " << kValidatorDir
                  << " (scripts/install-deps --tests runs npm ci there)";
   const std::string dir = hairrig_test::MakeStrandCapture("gltf_validator", 10);
+  hairrig_test::AddPointsAndTruth(dir, 400);
   const auto exported = Hairrig("export " + dir + " --simulation " + dir +
                                 "/simulation/head-shake --head etc/heads/mannequin.yaml "
-                                "--display-strands 30 --json");
+                                "--display-strands 30 --animation-strands 30 "
+                                "--display-cloud 100 --json");
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
   const nlohmann::json summary = LastLineJson(exported.output);
   for (const char* level : {"full", "display"}) {
@@ -67,8 +69,11 @@ TEST(GltfValidator, ExportedFilesAreValidAsWritten) {
     EXPECT_NEAR(doc["accessors"][input]["max"][0].get<double>(), 0.9, 1e-6) << level;
     EXPECT_EQ(doc["animations"][0]["channels"].size(), 10u) << level;
   }
-  EXPECT_EQ(summary["full"]["strands"], 100 + 25);    // every strand, and the 25 animated
-  EXPECT_EQ(summary["display"]["strands"], 25 + 25);  // every 4th of 100 (30 at most)
+  EXPECT_EQ(summary["full"]["strands"], 100 + 25);  // every strand, and the 25 animated
+  // Every 4th of 100 (30 at most), the truth's every 2nd of 50, the 25 animated.
+  EXPECT_EQ(summary["display"]["strands"], 25 + 25 + 25);
+  EXPECT_EQ(summary["truth_strands"], 25);
+  EXPECT_EQ(summary["cloud_points"], 100);
 }
 
 }  // namespace

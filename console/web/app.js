@@ -468,6 +468,8 @@ function showResult(capture) {
   $('#reconstruction-verdict').dataset.verdict = rec?.verdict ?? '';
   $('#reconstruction-reasons').replaceChildren(
     ...(rec?.reasons ?? []).map((reason) => el('li', { textContent: reason })));
+  showFigures(capture.reconstruction_figures);
+  attempt(() => showModel(capture.files?.model ?? null));
   fillImages('#reconstruction', capture.files?.reconstruction ?? [], 'reconstruction preview');
   const downloads = (capture.files?.downloads ?? []).map((url) => {
     const name = url.split('/files/').pop();
@@ -477,6 +479,71 @@ function showResult(capture) {
   });
   $('#downloads').replaceChildren(
     ...(downloads.length ? downloads : [el('li', { className: 'none', textContent: 'none' })]));
+}
+
+function showFigures(f) {
+  const rows = [
+    ['oriented points', f?.points, (x) => x.toLocaleString('en')],
+    ['directions agree where depths agree', f?.direction_agreement, (x) => `${(100 * x).toFixed(1)} %`],
+    ['strands', f?.strands, (x) => x.toLocaleString('en')],
+    ['mean strand length', f?.strand_mean_length_mm, (x) => `${x.toFixed(0)} mm`],
+  ].filter(([, value]) => Number.isFinite(value));
+  $('#reconstruction-figures').replaceChildren(...rows.map(([name, value, format]) =>
+    el('div', {}, el('dt', { textContent: name }), el('dd', { textContent: format(value) }))));
+}
+
+// ---------- 3D view (viewer.js, loaded with three.js when a capture has a model) ----------
+
+const view3d = { viewer: null, url: null, holds: null };
+
+async function showModel(url) {
+  $('#viewer').hidden = !url;
+  if (!url) {
+    view3d.viewer?.clear();
+    view3d.url = null;
+    return;
+  }
+  if (url === view3d.url) return;
+  view3d.url = url;
+  setText('#viewer-status', 'loading…');
+  if (!view3d.viewer) {
+    const { HairViewer } = await import('./viewer.js');
+    view3d.viewer = new HairViewer($('#viewer-canvas'));
+    window.hairrigViewer = view3d.viewer;  // for the browser test and bench/console_viewer_bench
+  }
+  let holds;
+  try {
+    holds = await view3d.viewer.load(withToken(url));
+  } catch (err) {
+    setText('#viewer-status', err.message);
+    view3d.url = null;
+    throw err;
+  }
+  view3d.holds = holds;
+  for (const part of ['strands', 'points', 'head', 'truth']) {
+    const box = $(`#show-${part}`);
+    box.disabled = !holds[part];
+    box.checked = holds[part] && (part === 'strands' || part === 'head');
+    box.parentElement.title = holds[part] ? '' : `this capture's model has no ${part}`;
+  }
+  $('#play-simulation').disabled = !holds.animation;
+  $('#play-simulation').textContent = 'Play simulation';
+  view3d.viewer.setColourBy($('#colour-by').value);
+  setText('#viewer-status', holds.animation
+    ? `simulation "${holds.animation}", ${holds.duration.toFixed(1)} s` : 'no simulation in this model');
+}
+
+function wireViewer() {
+  for (const part of ['strands', 'points', 'head', 'truth']) {
+    $(`#show-${part}`).addEventListener('change', (e) => view3d.viewer?.setVisible(part, e.target.checked));
+  }
+  $('#colour-by').addEventListener('change', (e) => view3d.viewer?.setColourBy(e.target.value));
+  onClick('#play-simulation', () => {
+    const viewer = view3d.viewer;
+    if (!viewer) return;
+    if (viewer.playing) viewer.pause(); else viewer.play();
+    $('#play-simulation').textContent = viewer.playing ? 'Stop simulation' : 'Play simulation';
+  });
 }
 
 function fillImages(selector, urls, what) {
@@ -624,6 +691,7 @@ function wire() {
     e.preventDefault();
     attempt(startCapture);
   });
+  wireViewer();
 }
 
 async function start() {

@@ -1,7 +1,8 @@
 // Test helper: a capture folder holding only what `hairrig export` reads: a
 // comb of straight strands as reconstruction/strands/strands.ply, and a
 // `hairrig simulate`-like output under simulation/head-shake/ (frames that
-// sway further each frame, and a summary.json at 10 fps).
+// sway further each frame, and a summary.json at 10 fps); AddPointsAndTruth
+// adds oriented points and a ground truth's strands.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 
 #include "core/file_util.h"
 #include "core/strand_io.h"
+#include "reconstruction/point_cloud.h"
 
 namespace hairrig_test {
 
@@ -49,6 +51,22 @@ inline std::string MakeStrandCapture(const std::string& name, int frames) {
   }
   EXPECT_TRUE(hairrig::WriteFileAtomic(simulation + "/summary.json", R"({"fps": 10})").ok());
   return dir;
+}
+
+// Writes <dir>/reconstruction/points.ply (`points` points along x at z = 100
+// mm, pointing down) and <dir>/ground_truth/ground_truth_strands.ply (a comb
+// of 50 strands of 20 points).
+inline void AddPointsAndTruth(const std::string& dir, int points) {
+  std::filesystem::create_directories(dir + "/ground_truth");
+  EXPECT_TRUE(
+      hairrig::WriteStrands(dir + "/ground_truth/ground_truth_strands.ply", Comb(50, 20)).ok());
+  std::vector<hairrig::OrientedPoint> cloud(static_cast<size_t>(points));
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    cloud[i].position_mm = Eigen::Vector3f(static_cast<float>(i), 0, 100);
+    cloud[i].direction = Eigen::Vector3f(0, 0, -1);
+    cloud[i].confidence = 1;
+  }
+  EXPECT_TRUE(hairrig::WritePointCloudPly(dir + "/reconstruction/points.ply", cloud).ok());
 }
 
 }  // namespace hairrig_test
