@@ -8,6 +8,7 @@
 #include "console/preview_image.h"
 #include "core/file_util.h"
 #include "core/json_file.h"
+#include "core/log.h"
 #include "rig/safe_names.h"
 
 namespace hairrig {
@@ -116,7 +117,10 @@ nlohmann::json ReconstructionFigures(const fs::path& dir) {
     if (fusion.Has("points")) out["points"] = fusion.Integer("points", {.min = 0});
     if (depth_pairs > 0)
       out["direction_agreement"] = fusion.NumberOr("direction_pairs", 0, {.min = 0}) / depth_pairs;
-    if (!fusion.ok()) out["points"] = out["direction_agreement"] = nullptr;
+    if (!fusion.ok()) {
+      LogWarning("console: " + fusion.status().ToString());
+      out["points"] = out["direction_agreement"] = nullptr;
+    }
   }
   if (Result<nlohmann::json> strands =
           ReadJsonFile((dir / "reconstruction/strands/summary.json").string());
@@ -128,6 +132,8 @@ nlohmann::json ReconstructionFigures(const fs::path& dir) {
     if (s.ok()) {
       out["strands"] = count;
       out["strand_mean_length_mm"] = length;
+    } else {
+      LogWarning("console: " + s.status().ToString());
     }
   }
   return out;

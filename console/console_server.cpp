@@ -265,7 +265,8 @@ void ConsoleServer::Impl::StaticRoutes() {
   http_.Route("GET", R"(/([a-z]+\.(html|js|css)))", [serve](const Request& req, Response& res) {
     serve(ConsoleWebAssets(), req.matches[1], res);
   });
-  http_.Route("GET", R"(/vendor/(three/[a-z/]*[A-Za-z]+(\.module)?\.js))",
+  // Looked up by exact name among the embedded files (nothing is read from disk).
+  http_.Route("GET", R"(/vendor/(three/[A-Za-z/.]{1,120}))",
               [serve](const Request& req, Response& res) {
                 serve(ConsoleVendorAssets(), req.matches[1], res);
               });

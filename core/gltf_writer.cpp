@@ -254,8 +254,10 @@ int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* 
   const int indices = b->AddIndices(SegmentIndices(first));
   const int ids = b->AddScalars(StrandIds(first), kArrayBuffer);
   const size_t n = a.frames.size();
-  std::vector<float> times(n);
-  for (size_t k = 0; k < n; ++k) times[k] = static_cast<float>(static_cast<double>(k) / a.fps);
+  // A key per frame and one at n / fps closing the last frame's interval, so
+  // that the animation lasts n / fps and a player looping it shows every frame.
+  std::vector<float> times(n + 1);
+  for (size_t k = 0; k <= n; ++k) times[k] = static_cast<float>(static_cast<double>(k) / a.fps);
   const int input = b->AddScalars(times, 0, {{"min", {times.front()}}, {"max", {times.back()}}});
   nlohmann::json children = nlohmann::json::array(), samplers = nlohmann::json::array(),
                  channels = nlohmann::json::array();
@@ -263,8 +265,9 @@ int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* 
     const int node = AddStrandNode(b, a.name + "_frame_" + std::to_string(f), *a.frames[f],
                                    material, indices, ids, summary);
     if (f != 0) b->doc["nodes"][node]["scale"] = {0.0, 0.0, 0.0};
-    std::vector<Eigen::Vector3f> scales(n, Eigen::Vector3f::Zero());
+    std::vector<Eigen::Vector3f> scales(n + 1, Eigen::Vector3f::Zero());
     scales[f] = Eigen::Vector3f::Ones();
+    scales[n] = scales[n - 1];
     samplers.push_back(
         {{"input", input}, {"output", b->AddVec3(scales, 0)}, {"interpolation", "STEP"}});
     channels.push_back({{"sampler", f}, {"target", {{"node", node}, {"path", "scale"}}}});

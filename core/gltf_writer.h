@@ -14,7 +14,8 @@
 //     same topology) is a node whose children are the frames, each a LINES
 //     node sharing one index buffer; an animation named like the node shows
 //     each frame at its time (k / fps) by a STEP animation of the frames'
-//     scale (1 on its frame, 0 elsewhere); without the animation the first
+//     scale (1 on its frame, 0 elsewhere), with a last key at n / fps so
+//     that the animation lasts n / fps; without the animation the first
 //     frame shows.
 //
 // Units and frames: the input is in mm in the turntable (or object) frame,
@@ -58,7 +59,7 @@ struct GltfTriangleMesh {
 struct GltfPointCloud {
   std::string name;
   const std::vector<Eigen::Vector3f>* points_mm = nullptr;       // mm, +z up
-  const std::vector<std::array<uint8_t, 3>>* colours = nullptr;  // sRGB per point, or null
+  const std::vector<std::array<uint8_t, 3>>* colours = nullptr;  // per point (COLOR_0), or null
   std::array<float, 4> colour{0.9f, 0.9f, 0.9f, 1.0f};           // linear RGBA, the material's
 };
 

@@ -129,8 +129,12 @@ TEST(GltfWriter, AnAnimationShowsOneFrameAtATime) {
   ASSERT_EQ(animation["channels"].size(), 3u);
   const nlohmann::json& sampler = animation["samplers"][1];
   EXPECT_EQ(sampler["interpolation"], "STEP");
-  EXPECT_EQ(Floats(glb, sampler["input"]), std::vector<float>({0.0f, 0.1f, 0.2f}));
-  EXPECT_EQ(Floats(glb, sampler["output"]), std::vector<float>({0, 0, 0, 1, 1, 1, 0, 0, 0}));
+  // A key per frame and one closing the last frame's interval (the animation lasts 0.3 s).
+  EXPECT_EQ(Floats(glb, sampler["input"]), std::vector<float>({0.0f, 0.1f, 0.2f, 0.3f}));
+  EXPECT_EQ(Floats(glb, sampler["output"]),
+            std::vector<float>({0, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(Floats(glb, animation["samplers"][2]["output"]),
+            std::vector<float>({0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1}));
   const nlohmann::json& parent = glb.doc["nodes"][glb.doc["scenes"][0]["nodes"][0].get<int>()];
   ASSERT_EQ(parent["children"].size(), 3u);
   EXPECT_FALSE(glb.doc["nodes"][parent["children"][0].get<int>()].contains("scale"));

@@ -1,6 +1,7 @@
 #include "rig/gltf_export.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -9,6 +10,7 @@
 #include "core/head_config.h"
 #include "core/head_model.h"
 #include "core/json_file.h"
+#include "core/log.h"
 #include "core/parallel.h"
 #include "core/strand_io.h"
 #include "core/string_format.h"
@@ -89,6 +91,17 @@ Result<SimulationFrames> ReadSimulation(const std::string& dir, int max_strands,
   return out;
 }
 
+// The simulation folder's name with every character but letters, digits, '_'
+// and '-' made '_' (three.js and Blender rewrite other characters in node
+// names, and the animation finds its node by name); "simulation" when empty.
+std::string AnimationName(const std::string& simulation_dir) {
+  std::string name = fs::path(simulation_dir).filename().string();
+  if (name.empty()) name = fs::path(simulation_dir).parent_path().filename().string();
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-') c = '_';
+  return name.empty() ? "simulation" : name;
+}
+
 std::string DisplayPath(const std::string& out_file) {
   const fs::path path(out_file);
   return (path.parent_path() / (path.stem().string() + ".display.glb")).string();
@@ -101,21 +114,39 @@ struct DisplayExtras {
   std::optional<StrandSet> truth;
 };
 
-Result<DisplayExtras> ReadDisplayExtras(const GltfExportOptions& o) {
+// Whether the reconstruction's points are in the turntable frame (the frame
+// the ground truth's strands are in), from reconstruction/summary.json.
+bool ReconstructedInTurntableFrame(const std::string& dir) {
+  Result<nlohmann::json> summary = ReadJsonFile(dir + "/reconstruction/summary.json");
+  if (!summary.ok()) return false;
+  const JsonObject s(*summary, dir + "/reconstruction/summary.json");
+  return s.StringOr("object_frame", "") == "turntable" && s.ok();
+}
+
+// What the display adds is optional: a file that cannot be read is left out
+// with a warning naming it, and the export goes on.
+DisplayExtras ReadDisplayExtras(const GltfExportOptions& o) {
   DisplayExtras extras;
   if (o.display_cloud > 0 && IsFile(o.dir + kPointsFile)) {
-    HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
-                        ReadPointCloudPly(o.dir + kPointsFile));
+    Result<std::vector<OrientedPoint>> points = ReadPointCloudPly(o.dir + kPointsFile);
+    if (!points.ok()) LogWarning("export: the points are left out: " + points.status().ToString());
     const size_t cap = static_cast<size_t>(o.display_cloud);
-    const size_t stride = std::max<size_t>(1, (points.size() + cap - 1) / cap);
-    for (size_t i = 0; i < points.size(); i += stride) {
-      extras.points_mm.push_back(points[i].position_mm);
-      extras.point_colours.push_back(DirectionColour(points[i].direction));
+    const size_t n = points.ok() ? points->size() : 0;
+    const size_t stride = std::max<size_t>(1, (n + cap - 1) / cap);
+    for (size_t i = 0; i < n; i += stride) {
+      extras.points_mm.push_back((*points)[i].position_mm);
+      extras.point_colours.push_back(DirectionColour((*points)[i].direction));
     }
   }
-  if (IsFile(o.dir + kTruthStrandsFile)) {
-    HR_ASSIGN_OR_RETURN(const StrandSet truth, ReadStrands(o.dir + kTruthStrandsFile));
-    extras.truth = DecimateStrands(truth, o.display_strands, o.display_points);
+  // The truth is in the true turntable frame; the reconstruction in the
+  // turntable frame its calibration found (the two differ by the calibration's
+  // error, which the picture then shows) or in another frame altogether.
+  if (IsFile(o.dir + kTruthStrandsFile) && ReconstructedInTurntableFrame(o.dir)) {
+    Result<StrandSet> truth = ReadStrands(o.dir + kTruthStrandsFile);
+    if (truth.ok())
+      extras.truth = DecimateStrands(*truth, o.display_strands, o.display_points);
+    else
+      LogWarning("export: the ground truth is left out: " + truth.status().ToString());
   }
   return extras;
 }
@@ -241,8 +272,7 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
   if (!o.simulation_dir.empty()) {
     HR_ASSIGN_OR_RETURN(simulation, ReadSimulation(o.simulation_dir, o.animation_strands,
                                                    o.display_points, ResolveThreads(o.threads)));
-    animation = fs::path(o.simulation_dir).filename().string();
-    if (animation.empty()) animation = "simulation";
+    animation = AnimationName(o.simulation_dir);
   }
   if (!o.display_only) {
     HR_ASSIGN_OR_RETURN(summary.full,
@@ -250,7 +280,7 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
                                                    simulation.fps)));
   }
   const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points);
-  HR_ASSIGN_OR_RETURN(const DisplayExtras extras, ReadDisplayExtras(o));
+  const DisplayExtras extras = ReadDisplayExtras(o);
   summary.cloud_points = static_cast<int64_t>(extras.points_mm.size());
   if (extras.truth) summary.truth_strands = static_cast<int64_t>(extras.truth->point_counts.size());
   HR_ASSIGN_OR_RETURN(summary.display,

@@ -4,7 +4,8 @@
 //   <out>.glb          every reconstructed strand (reconstruction/strands/
 //                      strands.ply) as the node "strands", the subject's head
 //                      as "head", and, with a simulation folder, its frames
-//                      as an animated node named after the folder, each frame
+//                      as an animated node named after the folder (characters
+//                      other than letters, digits, '_' and '-' made '_'), each frame
 //                      decimated as below (the frames' strand files are the
 //                      simulation's data; 31 frames of 20,000 strands would
 //                      be 1.8 GB)
@@ -17,7 +18,9 @@
 //                      node "points" coloured by direction (DirectionColour),
 //                      and a simulated capture's true strands (ground_truth/
 //                      ground_truth_strands.ply, decimated as the strands) as
-//                      "truth"; each only when its file exists
+//                      "truth" when the reconstruction is in the turntable
+//                      frame; each only when its file exists and reads (else
+//                      left out with a warning naming the file)
 //
 // Units: the files are in metres, +y up; the capture's turntable frame
 // (mm, +z up) is rotated into it. The head is, in order: head_file, the
@@ -50,7 +53,8 @@ struct GltfExportOptions {
   int display_points = 32;      // 2 .. 10,000
   int display_cloud = 50000;    // 0 (no points) .. 10,000,000
   int animation_strands = 500;  // strands per animation frame, 1 .. 1,000,000
-  int threads = 0;              // simulation frames read at once; 0: one per core
+  int threads = 0;              // simulation frames read at once (each about 60 MB
+                                // while read); 0: one per core
   bool display_only = false;    // write <out>.display.glb alone (the reconstruction does)
 
   // InvalidArgument naming the option.
@@ -73,7 +77,7 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& options);
 // follow their points. max_strands >= 1 and max_points >= 2.
 StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points);
 
-// A unit direction (turntable frame, unsigned) as a colour: red |x|, green
+// A unit direction (the points' object frame, unsigned) as a colour: red |x|, green
 // |y|, blue |z| (vertical hair is blue), each 0..255.
 std::array<uint8_t, 3> DirectionColour(const Eigen::Vector3f& direction);
 

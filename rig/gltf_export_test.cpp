@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "core/file_util.h"
 #include "tests/support/strand_capture.h"
 
 namespace hairrig {
@@ -69,6 +70,14 @@ TEST(GltfExport, TheDisplayLevelCarriesThePointsAndTheTruth) {
   EXPECT_EQ(DirectionColour(Eigen::Vector3f(0, 0, -1)), (std::array<uint8_t, 3>{0, 0, 255}));
   EXPECT_EQ(DirectionColour(Eigen::Vector3f(0.6f, -0.8f, 0)),
             (std::array<uint8_t, 3>{153, 204, 0}));
+
+  // A reconstruction in another frame than the truth's: the truth is left out.
+  ASSERT_TRUE(
+      WriteFileAtomic(dir + "/reconstruction/summary.json", R"({"object_frame": "colmap world"})")
+          .ok());
+  const auto other_frame = ExportCaptureGltf(o);
+  ASSERT_TRUE(other_frame.ok()) << other_frame.status().ToString();
+  EXPECT_EQ(other_frame->truth_strands, 0);
 
   o.display_cloud = 0;  // no points asked for
   const auto without = ExportCaptureGltf(o);

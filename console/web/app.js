@@ -494,7 +494,9 @@ function showFigures(f) {
 
 // ---------- 3D view (viewer.js, loaded with three.js when a capture has a model) ----------
 
-const view3d = { viewer: null, url: null, holds: null };
+// `generation` counts the models asked for: a load that finishes after a
+// newer one was asked for is dropped.
+const view3d = { viewer: null, url: null, holds: null, generation: 0, creating: null };
 
 async function showModel(url) {
   $('#viewer').hidden = !url;
@@ -505,20 +507,27 @@ async function showModel(url) {
   }
   if (url === view3d.url) return;
   view3d.url = url;
+  const generation = ++view3d.generation;
   setText('#viewer-status', 'loading…');
-  if (!view3d.viewer) {
-    const { HairViewer } = await import('./viewer.js');
-    view3d.viewer = new HairViewer($('#viewer-canvas'));
-    window.hairrigViewer = view3d.viewer;  // for the browser test and bench/console_viewer_bench
-  }
   let holds;
   try {
+    if (!view3d.viewer) {
+      view3d.creating ??= import('./viewer.js').then(({ HairViewer }) => new HairViewer($('#viewer-canvas')));
+      view3d.viewer = await view3d.creating;
+      window.hairrigViewer = view3d.viewer;  // for the browser test and bench/console_viewer_bench
+    }
+    if (generation !== view3d.generation) return;
     holds = await view3d.viewer.load(withToken(url));
+    if (!holds) return;  // a newer model was asked for
   } catch (err) {
-    setText('#viewer-status', err.message);
-    view3d.url = null;
+    if (generation === view3d.generation) {
+      setText('#viewer-status', err.message);
+      view3d.url = null;
+    }
+    view3d.creating = null;
     throw err;
   }
+  if (generation !== view3d.generation) return;
   view3d.holds = holds;
   for (const part of ['strands', 'points', 'head', 'truth']) {
     const box = $(`#show-${part}`);
@@ -528,7 +537,7 @@ async function showModel(url) {
   }
   $('#play-simulation').disabled = !holds.animation;
   $('#play-simulation').textContent = 'Play simulation';
-  view3d.viewer.setColourBy($('#colour-by').value);
+  if ($('#colour-by').value !== view3d.viewer.colourMode) view3d.viewer.setColourBy($('#colour-by').value);
   setText('#viewer-status', holds.animation
     ? `simulation "${holds.animation}", ${holds.duration.toFixed(1)} s` : 'no simulation in this model');
 }

@@ -125,6 +125,7 @@ export class HairViewer {
     this.mixer = null;
     this.action = null;
     this.playing = false;
+    this.loads = 0;
     this.colourMode = 'direction';
     this.framesDrawn = 0;
     this.firstFrameAt = null;  // performance.now() of the first frame of a loaded model
@@ -143,16 +144,22 @@ export class HairViewer {
   }
 
   // Loads `url`; resolves to what the file holds: {strands, truth, points,
-  // head, animation (its name or null)}. Rejects naming the URL when the file
-  // cannot be read or is not glTF.
+  // head, animation (its name or null), duration (s)}, or to null when a newer
+  // load was asked for meanwhile. Rejects naming the URL when the file cannot
+  // be read or is not glTF.
   async load(url) {
     this.clear();
+    const token = ++this.loads;
     this.loadStartedAt = performance.now();
     this.firstFrameAt = null;
     const gltf = await new Promise((resolve, reject) => {
-      new GLTFLoader().load(url, resolve, undefined,
-        (err) => reject(new Error(`3D view: ${url.split('?')[0]}: ${err.message ?? err}`)));
+      new GLTFLoader().load(url, resolve, undefined, (err) => {
+        const status = err?.target?.status;  // an HTTP error comes as the request's ProgressEvent
+        const why = status ? `HTTP ${status} ${err.target.statusText}` : (err?.message ?? String(err));
+        reject(new Error(`3D view: ${url.split('?')[0]}: ${why}`));
+      });
     });
+    if (token !== this.loads) return null;  // superseded: the newer load shows its model
     this.model = gltf.scene;
     this.scene.add(this.model);
     const clip = gltf.animations[0] ?? null;
@@ -161,10 +168,13 @@ export class HairViewer {
       truth: this.model.getObjectByName('truth') ?? null,
       points: this.model.getObjectByName('points') ?? null,
       head: this.model.getObjectByName('head') ?? null,
-      simulation: clip ? this.model.getObjectByName(clip.name) ?? null : null,
+      simulation: null,
     };
+    // The animated node: named as its clip, its children the frames.
+    const animated = clip ? this.model.getObjectByName(clip.name) : null;
+    if (animated && animated.children.length > 0) this.parts.simulation = animated;
     this.styleParts();
-    if (clip && this.parts.simulation) {
+    if (this.parts.simulation) {
       this.mixer = new THREE.AnimationMixer(this.model);
       this.action = this.mixer.clipAction(clip);
     }
@@ -174,8 +184,8 @@ export class HairViewer {
     this.requestDraw();
     return {
       strands: !!this.parts.strands, truth: !!this.parts.truth, points: !!this.parts.points,
-      head: !!this.parts.head, animation: clip ? clip.name : null,
-      duration: clip ? clip.duration : 0,
+      head: !!this.parts.head, animation: this.action ? clip.name : null,
+      duration: this.action ? clip.duration : 0,
     };
   }
 
@@ -235,9 +245,13 @@ export class HairViewer {
     this.setColourBy(this.colourMode);
   }
 
-  // The camera at the whole model (strands, truth, points, head), looking at the front.
+  // The camera at the strands, truth, points and head (not the animation's
+  // frames: those not showing are scaled to 0 at the origin), looking at the front.
   frame() {
-    const box = new THREE.Box3().setFromObject(this.model);
+    const box = new THREE.Box3();
+    for (const part of ['strands', 'truth', 'points', 'head']) {
+      if (this.parts[part]) box.expandByObject(this.parts[part]);
+    }
     if (box.isEmpty()) return;
     const centre = box.getCenter(new THREE.Vector3());
     const radius = box.getSize(new THREE.Vector3()).length() / 2;

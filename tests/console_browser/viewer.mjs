@@ -104,6 +104,12 @@ try {
     await page.mouse.up();
     const turned = await canvasPixels();
     if (!differs(turned, shown)) throw new Error('the picture did not change when dragged');
+    // Once the drag ends, every strand is drawn again (the coarse set only while moving).
+    const parts = await page.evaluate(() => ({
+      full: window.hairrigViewer.parts.strands.visible,
+      coarse: window.hairrigViewer.coarse?.visible ?? false,
+    }));
+    if (!parts.full || parts.coarse) throw new Error(`after the drag: ${JSON.stringify(parts)}`);
     if (turned.drawn / turned.total < 0.03) throw new Error('the hair left the view when turned');
     shown = turned;
   });
@@ -122,11 +128,13 @@ try {
   });
 
   await step('points-by-strand', async () => {
-    await page.check('#show-points');
     await page.selectOption('#colour-by', 'strand');
-    const now = await canvasPixels();
-    if (!differs(now, shown)) throw new Error('points and colours did not change the picture');
-    shown = now;
+    const recoloured = await canvasPixels();
+    if (!differs(recoloured, shown)) throw new Error('colouring by strand did not change the picture');
+    await page.check('#show-points');
+    const withPoints = await canvasPixels();
+    if (!differs(withPoints, recoloured)) throw new Error('the points did not change the picture');
+    shown = withPoints;
   });
 
   await step('simulation', async () => {
@@ -145,8 +153,13 @@ try {
 
   await step('stopped', async () => {
     await page.click('#play-simulation');
-    if (await page.evaluate(() => window.hairrigViewer.shownFrame()) !== -1)
-      throw new Error('the simulation still plays');
+    const parts = await page.evaluate(() => ({
+      playing: window.hairrigViewer.playing,
+      strands: window.hairrigViewer.parts.strands.visible,
+      simulation: window.hairrigViewer.parts.simulation.visible,
+    }));
+    if (parts.playing || !parts.strands || parts.simulation)
+      throw new Error(`after stopping: ${JSON.stringify(parts)}`);
   });
 
   if (pageErrors.length) throw new Error(`errors in the page: ${pageErrors.join('; ')}`);

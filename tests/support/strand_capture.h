@@ -54,8 +54,9 @@ inline std::string MakeStrandCapture(const std::string& name, int frames) {
 }
 
 // Writes <dir>/reconstruction/points.ply (`points` points along x at z = 100
-// mm, pointing down) and <dir>/ground_truth/ground_truth_strands.ply (a comb
-// of 50 strands of 20 points).
+// mm, pointing down), a reconstruction/summary.json naming the turntable
+// frame, and <dir>/ground_truth/ground_truth_strands.ply (a comb of 50
+// strands of 20 points).
 inline void AddPointsAndTruth(const std::string& dir, int points) {
   std::filesystem::create_directories(dir + "/ground_truth");
   EXPECT_TRUE(
@@ -67,6 +68,9 @@ inline void AddPointsAndTruth(const std::string& dir, int points) {
     cloud[i].confidence = 1;
   }
   EXPECT_TRUE(hairrig::WritePointCloudPly(dir + "/reconstruction/points.ply", cloud).ok());
+  EXPECT_TRUE(hairrig::WriteFileAtomic(dir + "/reconstruction/summary.json",
+                                       R"({"object_frame": "turntable"})")
+                  .ok());
 }
 
 }  // namespace hairrig_test

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# A hairrig glTF in Blender: Blender's own importer reads the file, the
+# strands (a mesh of edges) are converted to curves, and the splines are
+# counted against the strands `hairrig export` says it wrote.
+# Usage: bench/blender_import_bench.sh [CAPTURE] (default: the newest out/demo/capture-*)
+# Prints "SKIPPED: ..." and exits 0 where Blender is absent (Debian package blender).
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+hairrig="$root/build/cli/hairrig"
+if ! command -v blender >/dev/null 2>&1; then
+  echo "SKIPPED: blender is absent (apt-get install blender: Debian 12 has 3.4)"
+  exit 0
+fi
+capture="${1:-$(ls -d "$root"/out/demo/capture-*/reconstruction/strands 2>/dev/null | sort | tail -n 1 || true)}"
+capture="${capture%/reconstruction/strands}"
+if [ -z "$capture" ] || [ ! -f "$capture/reconstruction/strands/strands.ply" ]; then
+  echo "blender_import_bench: no reconstructed capture: run scripts/demo first, or give CAPTURE" >&2
+  exit 2
+fi
+out="$root/out/blender-bench"
+rm -rf "$out"
+mkdir -p "$out"
+sim=()
+if [ -d "$capture/simulation/head-shake/frames" ]; then sim=(--simulation "$capture/simulation/head-shake"); fi
+"$hairrig" --log-level warning export "$capture" "${sim[@]}" --out "$out/hair.glb" --json > "$out/export.json"
+for level in hair hair.display; do
+  blender -b --factory-startup --python-exit-code 1 -P "$root/bench/blender_import.py" -- \
+    "$out/$level.glb" 2>&1 | grep '^{' > "$out/$level.json"
+done
+python3 - "$out" "$capture" <<'PY'
+import json, sys
+out = sys.argv[1]
+capture = sys.argv[2]
+n = json.load(open(f"{capture}/reconstruction/strands/summary.json"))["strands"]["count"]
+stride = -(-n // 2000)  # the display copy keeps every stride-th strand (--display-strands 2000)
+for level, expected in (("hair", n), ("hair.display", -(-n // stride))):
+    b = json.load(open(f"{out}/{level}.json"))
+    verdict = "as written" if b["splines"] == expected else f"EXPECTED {expected:,}"
+    print(f"{level}.glb: {b['splines']:,} curves in Blender ({verdict}; {b['spline_points']:,} points), "
+          f"strands {b['size_m'][0]:.3f} x {b['size_m'][1]:.3f} x {b['size_m'][2]:.3f} m, "
+          f"z {b['z_m'][0]:.3f} .. {b['z_m'][1]:.3f} m, head {'yes' if b['head'] else 'no'}, "
+          f"{b['actions']} action(s) {b['frame_range']}; import {b['import_s']:.1f} s, "
+          f"to curves {b['convert_s']:.1f} s")
+PY
