@@ -12,6 +12,13 @@ import sys
 import time
 
 import bpy
+import numpy
+
+# Debian 12's Blender 3.4 glTF importer still uses numpy.bool, an alias
+# NumPy 1.24 (Debian 12's) removed: without it every mesh import fails with
+# "module 'numpy' has no attribute 'bool'". The alias meant the builtin bool.
+if not hasattr(numpy, "bool"):
+    numpy.bool = bool
 
 
 def main():
