@@ -4,21 +4,13 @@
 // strands while moving), then 5 s more drawing every strand; screenshots of the view opened,
 // orbited, and with the ground truth shown.
 //   node console_viewer_bench.mjs URL CAPTURE_ID SCREENSHOT_PREFIX
-import { createRequire } from 'node:module';
-import path from 'node:path';
-
-const here = path.dirname(new URL(import.meta.url).pathname);
-const require = createRequire(path.join(here, '../tests/console_browser/package.json'));
-const { chromium } = require('playwright-core');
+// chromium as the console's browser tests start it (playwright-core as
+// scripts/install-deps --tests installs it in tests/console_browser).
+import { launchChromium } from '../tests/console_browser/browser.mjs';
 
 const [url, captureId, shot] = process.argv.slice(2);
 const ORBIT_MS = 5000;
-const browser = await chromium.launch({
-  executablePath: '/usr/bin/chromium',
-  args: ['--no-sandbox', '--use-gl=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist',
-         '--no-first-run', '--disable-background-networking', '--disable-component-update',
-         '--disable-sync'],
-});
+const browser = await launchChromium({ webgl: true });
 try {
   const page = await browser.newPage({ viewport: { width: 1440, height: 1100 } });
   await page.goto(url);

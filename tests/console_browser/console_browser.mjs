@@ -2,37 +2,22 @@
 // playwright-core): the steps a lab operator takes on the default simulated
 // rig, each checked on the page and saved as a screenshot.
 //   node console_browser.mjs URL SCREENSHOT_DIR
-import { chromium } from 'playwright-core';
-import path from 'node:path';
+import { launchChromium, stepper } from './browser.mjs';
 
 const [url, shots] = process.argv.slice(2);
 const CAPTURE_TIMEOUT_MS = 15 * 60 * 1000;  // a liveness bound: sanitizer builds render slowly
 
-const browser = await chromium.launch({
-  executablePath: '/usr/bin/chromium',
-  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-         '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-});
+const browser = await launchChromium();
 const page = await browser.newPage({ viewport: { width: 1440, height: 1100 } });
 page.on('dialog', (dialog) => dialog.accept());
 const consoleErrors = [];
 page.on('pageerror', (err) => consoleErrors.push(String(err)));
 
-let stepNumber = 0;
-async function step(name, action) {
-  stepNumber += 1;
-  const file = path.join(shots, `${String(stepNumber).padStart(2, '0')}-${name}.png`);
-  const started = Date.now();
-  try {
-    await action();
-  } catch (err) {
-    await page.screenshot({ path: file.replace('.png', '-FAILED.png'), fullPage: true });
-    throw new Error(`step ${stepNumber} (${name}) failed: ${err.message}`);
-  }
-  await page.evaluate(() => window.scrollTo(0, 0));  // the sticky header at the top of the picture
-  await page.screenshot({ path: file, fullPage: true });
-  console.log(`ok ${stepNumber} ${name} (${((Date.now() - started) / 1000).toFixed(1)} s)`);
-}
+const step = stepper(page, shots, {
+  // The sticky header at the top of the picture.
+  beforeShot: () => page.evaluate(() => window.scrollTo(0, 0)),
+  screenshot: (file) => page.screenshot({ path: file, fullPage: true }),
+});
 
 const text = (selector) => page.locator(selector).innerText();
 const waitText = (selector, expected, timeout = 60_000) =>

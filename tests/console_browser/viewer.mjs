@@ -5,46 +5,29 @@
 // simulation. Each step is checked on the canvas's pixels and saved as a
 // screenshot.
 //   node viewer.mjs URL SCREENSHOT_DIR CAPTURE_ID
-import { chromium } from 'playwright-core';
-import path from 'node:path';
+import { launchChromium, stepper } from './browser.mjs';
 
 const [url, shots, captureId] = process.argv.slice(2);
 const BACKGROUND = [0x15, 0x18, 0x1d];  // viewer.js
 const LOAD_TIMEOUT_MS = 5 * 60 * 1000;  // a liveness bound: software WebGL under sanitizers is slow
 
-const browser = await chromium.launch({
-  executablePath: '/usr/bin/chromium',
-  // No GPU here: chromium draws WebGL with its software renderer (SwiftShader).
-  args: ['--no-sandbox', '--use-gl=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist',
-         '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync'],
-});
+const browser = await launchChromium({ webgl: true });  // no GPU here: SwiftShader
 const page = await browser.newPage({ viewport: { width: 1440, height: 1100 } });
 const pageErrors = [];
 page.on('pageerror', (err) => pageErrors.push(String(err)));
 
-// The 3D view's box in the viewport, scrolled into it (a clip is taken from the viewport).
+// The 3D view's box in the viewport, scrolled into it (a clip is taken from
+// the viewport; an element screenshot would wait for the element to be still,
+// which a playing simulation never is).
 async function viewerBox() {
   await page.locator('#viewer').scrollIntoViewIfNeeded();
   return page.locator('#viewer').boundingBox();
 }
 
-let stepNumber = 0;
-async function step(name, action) {
-  stepNumber += 1;
-  const file = path.join(shots, `viewer-${String(stepNumber).padStart(2, '0')}-${name}.png`);
-  const started = Date.now();
-  try {
-    await action();
-  } catch (err) {
-    await page.screenshot({ path: file.replace('.png', '-FAILED.png'), fullPage: true });
-    throw new Error(`step ${stepNumber} (${name}) failed: ${err.message}`);
-  }
-  // Clipped from the page: an element screenshot waits for the element to be
-  // still, which a playing simulation never is.
-  await page.screenshot({ path: file, clip: await viewerBox() });
-  console.log(`ok ${stepNumber} ${name} (${((Date.now() - started) / 1000).toFixed(1)} s)`);
-}
+const step = stepper(page, shots, {
+  prefix: 'viewer-',
+  screenshot: async (file) => page.screenshot({ path: file, clip: await viewerBox() }),
+});
 
 // The canvas's pixels after the next drawn frame: how many differ from the
 // background, how many are mostly green (the truth's colour), and a digest

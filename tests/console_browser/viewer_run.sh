@@ -11,16 +11,8 @@ hairrig="$1"
 out="$2"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-for need in /usr/bin/chromium "$(command -v node || echo node)"; do
-  if [ ! -x "$need" ]; then
-    echo "SKIPPED: $need is absent (scripts/install-deps --tests installs chromium and nodejs)"
-    exit 77
-  fi
-done
-if [ ! -d "$here/node_modules/playwright-core" ]; then
-  echo "SKIPPED: playwright-core is not installed in $here (scripts/install-deps --tests runs npm ci there)"
-  exit 77
-fi
+source "$here/../support/browser_test_tools.sh"
+require_browser_test_tools "$here"
 rm -rf "$out"
 mkdir -p "$out/captures" "$out/screenshots"
 capture="$out/captures/wig-viewer"
