@@ -13,12 +13,8 @@ if ! command -v blender >/dev/null 2>&1; then
   echo "SKIPPED: blender is absent (apt-get install blender python3-numpy: Debian 12 has 3.4)"
   exit 0
 fi
-capture="${1:-$(ls -d "$root"/out/demo/capture-*/reconstruction/strands 2>/dev/null | sort | tail -n 1 || true)}"
-capture="${capture%/reconstruction/strands}"
-if [ -z "$capture" ] || [ ! -f "$capture/reconstruction/strands/strands.ply" ]; then
-  echo "blender_import_bench: no reconstructed capture: run scripts/demo first, or give CAPTURE" >&2
-  exit 2
-fi
+source "$root/bench/demo_capture.sh"
+capture=$(demo_capture blender_import_bench "$root" "${1:-}" reconstruction/strands/strands.ply)
 out="$root/out/blender-bench"
 rm -rf "$out"
 mkdir -p "$out"

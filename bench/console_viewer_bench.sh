@@ -24,14 +24,8 @@ while [ $# -gt 0 ]; do
     *) if [ -z "$capture" ] && [ -d "$1" ]; then capture="$1"; else runs="$1"; fi; shift ;;
   esac
 done
-if [ -z "$capture" ]; then
-  capture=$(ls -d "$root"/out/demo/capture-*/simulation/head-shake 2>/dev/null | sort | tail -n 1 || true)
-  capture="${capture%/simulation/head-shake}"
-fi
-if [ -z "$capture" ] || [ ! -d "$capture/simulation/head-shake/frames" ]; then
-  echo "console_viewer_bench: no capture with a simulation: run scripts/demo first, or give CAPTURE" >&2
-  exit 2
-fi
+source "$root/bench/demo_capture.sh"
+capture=$(demo_capture console_viewer_bench "$root" "$capture" simulation/head-shake/frames)
 out="$root/out/console-viewer-bench"
 rm -rf "$out"
 mkdir -p "$out/screenshots"
