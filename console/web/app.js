@@ -496,7 +496,7 @@ function showFigures(f) {
 
 // `generation` counts the models asked for: a load that finishes after a
 // newer one was asked for is dropped.
-const view3d = { viewer: null, url: null, holds: null, generation: 0, creating: null };
+const view3d = { viewer: null, url: null, generation: 0, creating: null };
 
 async function showModel(url) {
   $('#viewer').hidden = !url;
@@ -528,7 +528,6 @@ async function showModel(url) {
     throw err;
   }
   if (generation !== view3d.generation) return;
-  view3d.holds = holds;
   for (const part of ['strands', 'points', 'head', 'truth']) {
     const box = $(`#show-${part}`);
     box.disabled = !holds[part];

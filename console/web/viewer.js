@@ -150,7 +150,6 @@ export class HairViewer {
   async load(url) {
     this.clear();
     const token = ++this.loads;
-    this.loadStartedAt = performance.now();
     this.firstFrameAt = null;
     const gltf = await new Promise((resolve, reject) => {
       new GLTFLoader().load(url, resolve, undefined, (err) => {
