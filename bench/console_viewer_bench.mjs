@@ -33,6 +33,7 @@ try {
   const fullIntervals = await page.evaluate(
     (ms) => window.hairrigViewer.orbitFor(ms, { fullDetail: true }), ORBIT_MS);
   const fps = (iv) => (1000 * iv.length) / iv.reduce((a, b) => a + b, 0);
+  const playIntervals = await page.evaluate((ms) => window.hairrigViewer.playFor(ms), ORBIT_MS);
   await page.check('#show-truth');
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   await shoot('truth');
@@ -42,6 +43,7 @@ try {
     orbit_frames: intervals.length,
     orbit_fps: fps(intervals),
     orbit_fps_full_detail: fps(fullIntervals),
+    play_fps: playIntervals.length > 0 ? fps(playIntervals) : null,
     software_renderer: await page.evaluate(() => window.hairrigViewer.software),
     interval_ms_p95: sorted[Math.floor(0.95 * (sorted.length - 1))],
   }));

@@ -8,7 +8,8 @@
 #     time from "Open" in the archive to the first frame of the model, and the
 #     frames per second while the camera orbits for 5 s (chromium's own
 #     requestAnimationFrame timing), as a drag draws it (every k-th strand
-#     while the camera moves) and with every strand drawn.
+#     while the camera moves) and with every strand drawn, and while the
+#     simulation plays for 5 s.
 # Usage: bench/console_viewer_bench.sh [CAPTURE] [RUNS] [--json FILE]
 #   CAPTURE: default the newest out/demo/capture-* with a simulation.
 # Needs chromium and tests/console_browser/node_modules (scripts/install-deps --tests).
@@ -60,13 +61,14 @@ result = {
     "first_frame_ms": [v["first_frame_ms"] for v in views],
     "orbit_fps": [v["orbit_fps"] for v in views],
     "orbit_fps_full_detail": [v["orbit_fps_full_detail"] for v in views],
+    "play_fps": [v["play_fps"] for v in views if v["play_fps"] is not None],
     "software_renderer": all(v["software_renderer"] for v in views),
     "orbit_interval_ms_p95": [v["interval_ms_p95"] for v in views],
     "display_vertices": summary["display"]["vertices"],
     "strands": json.load(open(f"{capture}/reconstruction/strands/summary.json"))["strands"]["count"],
 }
 full, display = summary["full"], summary["display"]
-print(f"export of {result['strands']:,} strands ({full['frames']} animation frames): "
+print(f"export of {result['strands']:,} strands ({display['frames']} animation frames): "
       f"median {statistics.median(export_s):.2f} s {['%.2f' % s for s in export_s]}; "
       f"hair.glb {full['bytes'] / 1e6:.1f} MB, hair.display.glb {display['bytes'] / 1e6:.1f} MB "
       f"({display['vertices']:,} vertices)")
@@ -77,6 +79,9 @@ print(f"3D view while orbiting: median {statistics.median(result['orbit_fps']):.
       f"{statistics.median(result['orbit_interval_ms_p95']):.1f} ms; every strand drawn: "
       f"{statistics.median(result['orbit_fps_full_detail']):.1f} frames/s "
       f"(software WebGL: {result['software_renderer']})")
+if result["play_fps"]:
+    print(f"3D view playing the simulation: median {statistics.median(result['play_fps']):.1f} "
+          f"frames/s {[round(x, 1) for x in result['play_fps']]}")
 if json_out:
     json.dump(result, open(json_out, "w"), indent=1)
 PY

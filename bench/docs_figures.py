@@ -79,7 +79,7 @@ def console_viewer_table(record):
     export_s, first, fps = sorted(r["export_s"]), sorted(r["first_frame_ms"]), sorted(r["orbit_fps"])
     rows = [
         ("`hairrig export` of %s strands with %d simulated frames, median (runs)"
-         % ("{:,}".format(r["strands"]), full["frames"]),
+         % ("{:,}".format(r["strands"]), display["frames"]),
          "%.2f s (%s)" % (statistics.median(export_s), ", ".join("%.2f" % s for s in export_s))),
         ("files written: every strand / display copy",
          "%.1f MB / %.1f MB (%s vertices)" % (full["bytes"] / 1e6, display["bytes"] / 1e6,
@@ -93,13 +93,37 @@ def console_viewer_table(record):
         ("95th-percentile frame interval while orbiting, median of runs",
          "%.0f ms" % statistics.median(r["orbit_interval_ms_p95"])),
     ]
+    if r.get("play_fps"):
+        play = sorted(r["play_fps"])
+        rows.append(("3D view playing the simulation, median (runs)",
+                     "%.1f frames/s (%s)" % (statistics.median(play),
+                                             ", ".join("%.1f" % x for x in play))))
     lines = ["| what | figure | commit, date |", "| --- | --- | --- |"]
     lines += ["| %s | %s | %s |" % (what, figure, provenance(record)) for what, figure in rows]
     return lines
 
 
+def gltf_animation_table(record):
+    r = record["result"]
+    lines = ["| encoding | the animation adds | export | Blender: import, objects, actions, "
+             "shape keys | Blender: evaluation a frame, largest move | commit, date |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for encoding, e in r["encodings"].items():
+        b = e["blender"]
+        made = ("%.2f s, %d, %d, %d" % (b["import_s"], b["objects"], b["actions"], b["shape_keys"])
+                if b else "not run (no Blender)")
+        played = "%.2f ms, %.0f mm" % (1e3 * b["frame_s"], 1e3 * b["largest_move_m"]) if b else ""
+        lines.append("| %s | %.2f MB | %.2f s | %s | %s | %s |"
+                     % (encoding, e["animation_bytes"] / 1e6, e["export_s"], made, played,
+                        provenance(record)))
+    first = next(iter(r["encodings"].values()))
+    lines += ["", "%d frames of %s strands and %d guides." % (
+        first["frames"], "{:,}".format(r["animation_strands"]), first["guides"])]
+    return lines
+
+
 RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table,
-             "console_viewer": console_viewer_table}
+             "console_viewer": console_viewer_table, "gltf_animation": gltf_animation_table}
 
 
 def load_record(name):

@@ -1,4 +1,6 @@
 #include <CLI/CLI.hpp>
+#include <map>
+#include <string>
 
 #include "cli/cli.h"
 #include "rig/gltf_export.h"
@@ -37,6 +39,15 @@ void AddExportCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) 
   cmd->add_option("--display-cloud", options->display_cloud,
                   "oriented points in the display copy (0: none)")
       ->check(CLI::Range(0, 10000000))
+      ->capture_default_str();
+  cmd->add_option("--animation-encoding", options->animation_encoding,
+                  "the full file's animation: nodes (a node per frame, stepped) or morph (frame "
+                  "0 and a morph target per frame, blended); the display copy's is nodes")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, GltfAnimationEncoding>{
+              {"nodes", GltfAnimationEncoding::kFrameNodes},
+              {"morph", GltfAnimationEncoding::kMorphTargets}},
+          CLI::ignore_case))
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "simulation frames read at once (0: one per core)")
       ->check(CLI::NonNegativeNumber)

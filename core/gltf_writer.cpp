@@ -1,6 +1,7 @@
 #include "core/gltf_writer.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -279,6 +280,51 @@ int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* 
   return b->Append("nodes", {{"name", a.name}, {"children", children}});
 }
 
+// Frame k's positions minus frame 0's, in glTF's frame, with the bounds glTF
+// requires of a morph target's POSITION.
+int AddOffsets(GlbBuilder* b, const StrandSet& frame, const StrandSet& first) {
+  std::vector<Eigen::Vector3f> offsets;
+  offsets.reserve(frame.points_mm.size());
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+  for (size_t i = 0; i < frame.points_mm.size(); ++i) {
+    offsets.push_back(ToGltf(frame.points_mm[i]) - ToGltf(first.points_mm[i]));
+    lo = lo.cwiseMin(offsets.back());
+    hi = hi.cwiseMax(offsets.back());
+  }
+  return b->AddVec3(offsets, kArrayBuffer, {{"min", Vec3Json(lo)}, {"max", Vec3Json(hi)}});
+}
+
+// Frame 0 as one node, frame k (k >= 1) as its morph target k - 1, whose
+// weight LINEAR keys raise to 1 at k / fps.
+int AddMorphAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* summary) {
+  const StrandSet& first = *a.frames[0];
+  const size_t n = a.frames.size();
+  const int node = AddStrandNode(b, a.name, first, b->AddMaterial(a.colour, true), -1, -1, summary);
+  summary->frames += static_cast<int>(n);
+  summary->segments += SegmentCount(first);
+  if (n == 1) return node;
+  nlohmann::json targets = nlohmann::json::array();
+  for (size_t f = 1; f < n; ++f)
+    targets.push_back({{"POSITION", AddOffsets(b, *a.frames[f], first)}});
+  const int mesh = b->doc["nodes"][node]["mesh"];
+  b->doc["meshes"][mesh]["primitives"][0]["targets"] = targets;
+  b->doc["meshes"][mesh]["weights"] = std::vector<float>(n - 1, 0.0f);
+  std::vector<float> times(n + 1), weights((n + 1) * (n - 1), 0.0f);
+  for (size_t k = 0; k <= n; ++k) {
+    times[k] = static_cast<float>(static_cast<double>(k) / a.fps);
+    const size_t shown = std::min(k, n - 1);  // the closing key holds the last frame
+    if (shown > 0) weights[k * (n - 1) + shown - 1] = 1.0f;
+  }
+  const int input = b->AddScalars(times, 0, {{"min", {times.front()}}, {"max", {times.back()}}});
+  b->Append(
+      "animations",
+      {{"name", a.name},
+       {"samplers",
+        {{{"input", input}, {"output", b->AddScalars(weights, 0)}, {"interpolation", "LINEAR"}}}},
+       {"channels", {{{"sampler", 0}, {"target", {{"node", node}, {"path", "weights"}}}}}}});
+  return node;
+}
+
 void AppendU32(std::vector<uint8_t>* out, uint32_t v) {
   for (int i = 0; i < 4; ++i) out->push_back(static_cast<uint8_t>(v >> (8 * i)));
 }
@@ -309,7 +355,9 @@ Result<std::vector<uint8_t>> EncodeGlb(const GltfScene& scene, GltfWriteSummary*
   }
   for (const GltfStrandAnimation& animation : scene.animations) {
     HR_RETURN_IF_ERROR(CheckAnimation(animation));
-    roots.push_back(AddAnimation(&b, animation, &summary));
+    roots.push_back(animation.encoding == GltfAnimationEncoding::kMorphTargets
+                        ? AddMorphAnimation(&b, animation, &summary)
+                        : AddAnimation(&b, animation, &summary));
     summary.strands += static_cast<int64_t>(animation.frames[0]->point_counts.size());
   }
   if (roots.empty())

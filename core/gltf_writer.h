@@ -11,12 +11,18 @@
 //   - every point cloud is one node holding one POINTS primitive: POSITION
 //     and COLOR_0 where the points carry colours;
 //   - an animation (simulated strands, one StrandSet per frame, all of the
-//     same topology) is a node whose children are the frames, each a LINES
-//     node sharing one index buffer; an animation named like the node shows
-//     each frame at its time (k / fps) by a STEP animation of the frames'
-//     scale (1 on its frame, 0 elsewhere), with a last key at n / fps so
-//     that the animation lasts n / fps; without the animation the first
-//     frame shows.
+//     same topology) is a node named like the animation, in one of two
+//     encodings (GltfAnimationEncoding):
+//       frame nodes: the node's children are the frames, each a LINES node
+//       sharing one index buffer; the animation shows each frame at its time
+//       (k / fps) by a STEP animation of the frames' scale (1 on its frame,
+//       0 elsewhere), with a last key at n / fps so that the animation lasts
+//       n / fps; without the animation the first frame shows;
+//       morph targets: the node holds frame 0 as one LINES primitive whose
+//       morph target k - 1 is frame k's offset from frame 0; the animation
+//       sets target k - 1's weight to 1 at k / fps (LINEAR: a player blends
+//       between frames), a last key at n / fps; a player without morph
+//       targets on lines (three.js r111) shows frame 0.
 //
 // Units and frames: the input is in mm in the turntable (or object) frame,
 // +z up; the file is in metres with +y up as glTF requires:
@@ -63,11 +69,14 @@ struct GltfPointCloud {
   std::array<float, 4> colour{0.9f, 0.9f, 0.9f, 1.0f};           // linear RGBA, the material's
 };
 
+enum class GltfAnimationEncoding { kFrameNodes, kMorphTargets };
+
 struct GltfStrandAnimation {
   std::string name;                      // the node's and the animation's name
   std::vector<const StrandSet*> frames;  // mm, +z up, every frame the same point counts
   double fps = 30;
   std::array<float, 4> colour{0.35f, 0.22f, 0.12f, 1.0f};
+  GltfAnimationEncoding encoding = GltfAnimationEncoding::kFrameNodes;
 };
 
 struct GltfScene {
@@ -83,7 +92,8 @@ struct GltfWriteSummary {
   int64_t bytes = 0;
   int nodes = 0;
   int64_t strands = 0;   // over the strand sets (an animation's strands counted once)
-  int64_t vertices = 0;  // strand, mesh and point vertices, every animation frame included
+  int64_t vertices = 0;  // strand, mesh and point vertices, every frame of frame-node
+                         // animations, frame 0 of morph-target ones (glTF's count)
   int64_t segments = 0;  // over the strand sets and one frame of each animation
   int frames = 0;        // over the animations
 };

@@ -145,6 +145,44 @@ TEST(GltfWriter, AnAnimationShowsOneFrameAtATime) {
             glb.doc["meshes"][2]["primitives"][0]["indices"]);
 }
 
+TEST(GltfWriter, AMorphTargetAnimationBlendsFromFrameZero) {
+  StrandSet frame0 = TwoStrands(), frame1 = TwoStrands(), frame2 = TwoStrands();
+  frame1.points_mm[2].x() = 10;
+  frame2.points_mm[2].y() = 20;  // glTF's -z
+  GltfScene scene;
+  scene.animations.push_back({.name = "head-shake",
+                              .frames = {&frame0, &frame1, &frame2},
+                              .fps = 10,
+                              .encoding = GltfAnimationEncoding::kMorphTargets});
+  GltfWriteSummary summary;
+  auto bytes = EncodeGlb(scene, &summary);
+  ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+  EXPECT_EQ(summary.frames, 3);
+  EXPECT_EQ(summary.vertices, 5) << "frame 0's vertices; the others are offsets";
+  EXPECT_EQ(summary.segments, 3);
+  const Glb glb = Parse(*bytes);
+  ASSERT_EQ(glb.doc["nodes"].size(), 1u);
+  EXPECT_EQ(glb.doc["nodes"][0]["name"], "head-shake");
+  const nlohmann::json& mesh = glb.doc["meshes"][0];
+  EXPECT_EQ(mesh["weights"], nlohmann::json({0.0, 0.0}));
+  const nlohmann::json& targets = mesh["primitives"][0]["targets"];
+  ASSERT_EQ(targets.size(), 2u);
+  const std::vector<float> offsets1 = Floats(glb, targets[0]["POSITION"]);
+  const std::vector<float> offsets2 = Floats(glb, targets[1]["POSITION"]);
+  ASSERT_EQ(offsets1.size(), 15u);
+  EXPECT_FLOAT_EQ(offsets1[6], 0.01f);   // point 2's x, 10 mm
+  EXPECT_FLOAT_EQ(offsets2[8], -0.02f);  // point 2's glTF z from +20 mm y
+  const nlohmann::json& bound = glb.doc["accessors"][targets[1]["POSITION"].get<int>()]["min"];
+  EXPECT_NEAR(bound[2].get<double>(), -0.02, 1e-7) << "morph targets carry their bounds";
+  const nlohmann::json& animation = glb.doc["animations"][0];
+  const nlohmann::json& sampler = animation["samplers"][0];
+  EXPECT_EQ(sampler["interpolation"], "LINEAR");
+  EXPECT_EQ(animation["channels"][0]["target"]["path"], "weights");
+  EXPECT_EQ(Floats(glb, sampler["input"]), std::vector<float>({0.0f, 0.1f, 0.2f, 0.3f}));
+  // Two weights per key: frame 0 (none), frame 1, frame 2, and frame 2 held to the end.
+  EXPECT_EQ(Floats(glb, sampler["output"]), std::vector<float>({0, 0, 1, 0, 0, 1, 0, 1}));
+}
+
 TEST(GltfWriter, APointCloudIsPointsInMetresWithYUp) {
   const std::vector<Eigen::Vector3f> points = {{10, 20, 30}, {-10, 0, 5}};
   const std::vector<std::array<uint8_t, 3>> colours = {{255, 0, 0}, {0, 255, 0}};

@@ -26,6 +26,8 @@ namespace fs = std::filesystem;
 constexpr const char* kStrandsFile = "/reconstruction/strands/strands.ply";
 constexpr const char* kPointsFile = "/reconstruction/points.ply";
 constexpr const char* kTruthStrandsFile = "/ground_truth/ground_truth_strands.ply";
+constexpr int kMaxGuides = 1000000;
+constexpr std::array<float, 4> kGuideColour{0.9f, 0.45f, 0.1f, 1.0f};
 
 bool IsFile(const std::string& path) {
   std::error_code ec;
@@ -50,22 +52,22 @@ Result<std::pair<std::optional<HeadSpec>, std::string>> FindHead(const GltfExpor
   return std::make_pair(std::optional<HeadSpec>(), std::string());
 }
 
-// A simulation folder's frames (frames/frame_NNNN.*, in order) and its fps.
+// A simulation folder's frames (<sub>/frame_NNNN.*, in order) and its fps.
 struct SimulationFrames {
   std::vector<StrandSet> frames;
   double fps = 30;
 };
 
 // Each frame decimated as it is read (a frame of 20,000 strands is about 60 MB).
-Result<SimulationFrames> ReadSimulation(const std::string& dir, int max_strands, int max_points,
-                                        int threads) {
+Result<SimulationFrames> ReadSimulation(const std::string& dir, const std::string& sub,
+                                        int max_strands, int max_points, int threads) {
   std::vector<std::string> files;
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir + "/frames", ec))
+  for (const auto& e : fs::directory_iterator(dir + "/" + sub, ec))
     if (e.is_regular_file(ec) && e.path().filename().string().rfind("frame_", 0) == 0)
       files.push_back(e.path().string());
   if (ec || files.empty())
-    return NotFound(dir + "/frames: no frame_NNNN strand files (a `hairrig simulate` output)");
+    return NotFound(dir + "/" + sub + ": no frame_NNNN strand files (a `hairrig simulate` output)");
   std::sort(files.begin(), files.end());
   SimulationFrames out;
   if (Result<nlohmann::json> summary = ReadJsonFile(dir + "/summary.json"); summary.ok()) {
@@ -151,9 +153,51 @@ DisplayExtras ReadDisplayExtras(const GltfExportOptions& o) {
   return extras;
 }
 
-// The scene of one level: `strands`, the head, the frames, and the display's extras.
+// The simulation's animated strands and, where it wrote them, its guides.
+struct Simulation {
+  std::string name;  // the animation's; the guides' is name + "_guides"
+  SimulationFrames strands, guides;
+};
+
+Result<Simulation> ReadSimulationFolder(const GltfExportOptions& o) {
+  Simulation sim;
+  if (o.simulation_dir.empty()) return sim;
+  const int threads = ResolveThreads(o.threads);
+  sim.name = AnimationName(o.simulation_dir);
+  HR_ASSIGN_OR_RETURN(sim.strands, ReadSimulation(o.simulation_dir, "frames", o.animation_strands,
+                                                  o.display_points, threads));
+  if (fs::is_directory(o.simulation_dir + "/guides")) {
+    HR_ASSIGN_OR_RETURN(sim.guides,
+                        ReadSimulation(o.simulation_dir, "guides", kMaxGuides, 10000, threads));
+    if (sim.guides.frames.size() != sim.strands.frames.size())
+      return CorruptData(o.simulation_dir + ": " + std::to_string(sim.guides.frames.size()) +
+                         " guide frames for " + std::to_string(sim.strands.frames.size()) +
+                         " strand frames (an interrupted `hairrig simulate`? run it again)");
+  }
+  return sim;
+}
+
+// The animations of one level: the strands and, with `guides`, the guides,
+// each `encoding`.
+std::vector<GltfStrandAnimation> AnimationsOf(const Simulation& sim, GltfAnimationEncoding encoding,
+                                              bool guides) {
+  std::vector<GltfStrandAnimation> animations;
+  auto add = [&](const std::string& name, const SimulationFrames& frames,
+                 std::array<float, 4> colour) {
+    if (frames.frames.empty()) return;
+    GltfStrandAnimation a{
+        .name = name, .frames = {}, .fps = frames.fps, .colour = colour, .encoding = encoding};
+    for (const StrandSet& f : frames.frames) a.frames.push_back(&f);
+    animations.push_back(std::move(a));
+  };
+  add(sim.name, sim.strands, GltfStrandAnimation{}.colour);
+  if (guides) add(sim.name + "_guides", sim.guides, kGuideColour);
+  return animations;
+}
+
+// The scene of one level: `strands`, the head, the animations, and the display's extras.
 GltfScene SceneOf(const StrandSet& strands, const TriangleMesh* head,
-                  const std::vector<StrandSet>& frames, const std::string& animation, double fps,
+                  std::vector<GltfStrandAnimation> animations,
                   const DisplayExtras* extras = nullptr) {
   GltfScene scene;
   scene.strand_sets.push_back({.name = "strands", .strands = &strands});
@@ -164,11 +208,7 @@ GltfScene SceneOf(const StrandSet& strands, const TriangleMesh* head,
     scene.point_clouds.push_back(
         {.name = "points", .points_mm = &extras->points_mm, .colours = &extras->point_colours});
   if (head != nullptr) scene.meshes.push_back({.name = "head", .mesh = head});
-  if (!frames.empty()) {
-    GltfStrandAnimation a{.name = animation, .frames = {}, .fps = fps};
-    for (const StrandSet& f : frames) a.frames.push_back(&f);
-    scene.animations.push_back(std::move(a));
-  }
+  scene.animations = std::move(animations);
   return scene;
 }
 
@@ -228,11 +268,9 @@ nlohmann::json GltfExportSummary::ToJson() const {
                           {"strands", s.strands},   {"vertices", s.vertices},
                           {"segments", s.segments}, {"frames", s.frames}};
   };
-  return {{"full", level(full)},
-          {"display", level(display)},
-          {"head", head_source},
-          {"truth_strands", truth_strands},
-          {"cloud_points", cloud_points}};
+  return {{"full", level(full)},          {"display", level(display)},
+          {"head", head_source},          {"truth_strands", truth_strands},
+          {"cloud_points", cloud_points}, {"guides", guides}};
 }
 
 std::string GltfExportSummary::BriefReport() const {
@@ -245,6 +283,8 @@ std::string GltfExportSummary::BriefReport() const {
                          static_cast<double>(s->bytes) / 1e6);
   }
   text += head_source.empty() ? "  no head (give --head FILE)\n" : "  head: " + head_source + "\n";
+  if (guides > 0)
+    text += StringPrintf("  full: %lld animated guides\n", static_cast<long long>(guides));
   if (cloud_points > 0)
     text += StringPrintf("  display: %lld oriented points\n", static_cast<long long>(cloud_points));
   if (truth_strands > 0)
@@ -267,25 +307,26 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
   }
   const TriangleMesh* head_mesh = head_model ? &head_model->mesh() : nullptr;
 
-  SimulationFrames simulation;
-  std::string animation;
-  if (!o.simulation_dir.empty()) {
-    HR_ASSIGN_OR_RETURN(simulation, ReadSimulation(o.simulation_dir, o.animation_strands,
-                                                   o.display_points, ResolveThreads(o.threads)));
-    animation = AnimationName(o.simulation_dir);
-  }
+  HR_ASSIGN_OR_RETURN(const Simulation simulation, ReadSimulationFolder(o));
+  summary.guides = simulation.guides.frames.empty()
+                       ? 0
+                       : static_cast<int64_t>(simulation.guides.frames[0].num_strands());
   if (!o.display_only) {
-    HR_ASSIGN_OR_RETURN(summary.full,
-                        WriteGlb(out_file, SceneOf(strands, head_mesh, simulation.frames, animation,
-                                                   simulation.fps)));
+    HR_ASSIGN_OR_RETURN(
+        summary.full,
+        WriteGlb(out_file, SceneOf(strands, head_mesh,
+                                   AnimationsOf(simulation, o.animation_encoding, true))));
   }
   const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points);
   const DisplayExtras extras = ReadDisplayExtras(o);
   summary.cloud_points = static_cast<int64_t>(extras.points_mm.size());
   if (extras.truth) summary.truth_strands = static_cast<int64_t>(extras.truth->point_counts.size());
-  HR_ASSIGN_OR_RETURN(summary.display,
-                      WriteGlb(DisplayPath(out_file), SceneOf(display, head_mesh, simulation.frames,
-                                                              animation, simulation.fps, &extras)));
+  HR_ASSIGN_OR_RETURN(
+      summary.display,
+      WriteGlb(
+          DisplayPath(out_file),
+          SceneOf(display, head_mesh,
+                  AnimationsOf(simulation, GltfAnimationEncoding::kFrameNodes, false), &extras)));
   return summary;
 }
 

@@ -8,7 +8,10 @@
 //                      other than letters, digits, '_' and '-' made '_'), each frame
 //                      decimated as below (the frames' strand files are the
 //                      simulation's data; 31 frames of 20,000 strands would
-//                      be 1.8 GB)
+//                      be 1.8 GB), and the guides that drive them (the
+//                      folder's guides/, every guide and point) as a second
+//                      animated node, <name>_guides; both in
+//                      animation_encoding (core/gltf_writer.h)
 //   <out>.display.glb  the same scene with the strands decimated for display:
 //                      at most display_strands strands (every k-th) of at most
 //                      display_points points each (every j-th point, the tip
@@ -20,7 +23,10 @@
 //                      ground_truth_strands.ply, decimated as the strands) as
 //                      "truth" when the reconstruction is in the turntable
 //                      frame; each only when its file exists and reads (else
-//                      left out with a warning naming the file)
+//                      left out with a warning naming the file); the
+//                      animation as frame nodes whatever animation_encoding
+//                      (three.js r111, the console's, does not morph lines),
+//                      without the guides
 //
 // Units: the files are in metres, +y up; the capture's turntable frame
 // (mm, +z up) is rotated into it. The head is, in order: head_file, the
@@ -29,7 +35,8 @@
 //
 // Errors: InvalidArgument for bad options; NotFound naming the strand file
 // when the capture has no strands (run `hairrig reconstruct` first) or a
-// simulation folder without frames; the readers' errors naming the file; an
+// simulation folder without frames; CorruptData when its guides/ holds
+// another number of frames than frames/; the readers' errors naming the file; an
 // IoError naming the output that cannot be written.
 #pragma once
 
@@ -53,9 +60,11 @@ struct GltfExportOptions {
   int display_points = 32;      // 2 .. 10,000
   int display_cloud = 50000;    // 0 (no points) .. 10,000,000
   int animation_strands = 500;  // strands per animation frame, 1 .. 1,000,000
-  int threads = 0;              // simulation frames read at once (each about 60 MB
-                                // while read); 0: one per core
-  bool display_only = false;    // write <out>.display.glb alone (the reconstruction does)
+  // The full file's animations (the display copy's are frame nodes).
+  GltfAnimationEncoding animation_encoding = GltfAnimationEncoding::kFrameNodes;
+  int threads = 0;            // simulation frames read at once (each about 60 MB
+                              // while read); 0: one per core
+  bool display_only = false;  // write <out>.display.glb alone (the reconstruction does)
 
   // InvalidArgument naming the option.
   Status Check() const;
@@ -66,6 +75,7 @@ struct GltfExportSummary {
   std::string head_source;         // where the head came from; empty: no head
   int64_t truth_strands = 0;       // in the display level (counted in display.strands)
   int64_t cloud_points = 0;        // in the display level (counted in display.vertices)
+  int64_t guides = 0;              // animated guides in the full level (counted in full.strands)
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };

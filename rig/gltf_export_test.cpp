@@ -50,6 +50,33 @@ TEST(GltfExport, StrandsHeadAndAnimationAtTwoLevels) {
   EXPECT_EQ(static_cast<int64_t>(fs::file_size(s->full.path)), s->full.bytes);
   EXPECT_TRUE(fs::exists(s->display.path));
   EXPECT_EQ(s->ToJson()["full"]["frames"], 4);
+  EXPECT_EQ(s->guides, 0);
+}
+
+TEST(GltfExport, TheGuidesAreASecondAnimationInTheFullLevelOnly) {
+  const std::string dir = MakeStrandCapture("gltf_export_guides", 4, /*guides=*/true);
+  GltfExportOptions o;
+  o.dir = dir;
+  o.simulation_dir = dir + "/simulation/head-shake";
+  o.animation_strands = 10;
+  o.animation_encoding = GltfAnimationEncoding::kMorphTargets;
+  const auto s = ExportCaptureGltf(o);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_EQ(s->guides, 5);
+  EXPECT_EQ(s->full.strands, 100 + 10 + 5);
+  EXPECT_EQ(s->full.frames, 8) << "4 frames of the strands and 4 of the guides";
+  // Morph targets: each animation's frame 0 holds the vertices (10 strands of
+  // 26 points: every 2nd of 50 and the tip; 5 guides of 10), not every frame.
+  EXPECT_EQ(s->full.vertices, 100 * 50 + 10 * 26 + 5 * 10);
+  EXPECT_EQ(s->display.frames, 4) << "the display level has the strands' animation only";
+  EXPECT_EQ(s->display.strands, 100 + 10);
+
+  // A guides/ folder that stops short is named.
+  fs::remove(o.simulation_dir + "/guides/frame_0003.hair");
+  const auto short_guides = ExportCaptureGltf(o);
+  ASSERT_FALSE(short_guides.ok());
+  EXPECT_NE(short_guides.status().message().find("3 guide frames for 4"), std::string::npos)
+      << short_guides.status().ToString();
 }
 
 TEST(GltfExport, TheDisplayLevelCarriesThePointsAndTheTruth) {

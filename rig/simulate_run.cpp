@@ -87,8 +87,9 @@ Status WritePreview(StrandPreviewer& previewer, const StrandSet& strands, const 
   return WriteImageAtomic(path, image);
 }
 
-Status CreateOutputFolders(const std::string& out_dir) {
-  for (const char* sub : {"frames", "previews"}) {
+// frames/, previews/ and, for interpolated strands, guides/.
+Status CreateOutputFolders(const std::string& out_dir, bool interpolated) {
+  for (const char* sub : {"frames", "previews", interpolated ? "guides" : "frames"}) {
     std::error_code ec;
     fs::create_directories(fs::path(out_dir) / sub, ec);
     if (ec) return IoError(out_dir + "/" + sub + ": cannot create (" + ec.message() + ")");
@@ -152,13 +153,14 @@ Status WriteFrame(const SimulateRunOptions& o, SimulateSetup& setup,
                   const std::vector<std::vector<Eigen::Vector3d>>& guides, int f,
                   SimulateRunSummary* s) {
   StrandSet strands;
+  const std::string name = StringPrintf("frame_%04d", f);
   if (setup.interpolation) {
     HR_ASSIGN_OR_RETURN(strands, setup.interpolation->Apply(guides));
+    HR_RETURN_IF_ERROR(WriteStrands(o.out_dir + "/guides/" + name + ".hair", ToStrandSet(guides)));
   } else {
     strands = ToStrandSet(guides);
   }
   TrackStretch(setup.rest_lengths_mm, strands, s);
-  const std::string name = StringPrintf("frame_%04d", f);
   HR_RETURN_IF_ERROR(WriteStrands(o.out_dir + "/frames/" + name + ".hair", strands));
   if (setup.previewer && f % o.preview_every == 0) {
     HR_RETURN_IF_ERROR(
@@ -231,7 +233,7 @@ Result<SimulateRunSummary> SimulateRun(const SimulateRunOptions& o) {
                               " already exists and is not empty: choose a new --out folder");
   }
   HR_ASSIGN_OR_RETURN(SimulateSetup setup, Setup(o));
-  HR_RETURN_IF_ERROR(CreateOutputFolders(o.out_dir));
+  HR_RETURN_IF_ERROR(CreateOutputFolders(o.out_dir, setup.interpolation != nullptr));
   SimulateRunSummary s;
   s.frames = static_cast<int>(std::lround(o.seconds * o.fps)) + 1;
   for (int f = 0; f < s.frames; ++f) {

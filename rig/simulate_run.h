@@ -4,6 +4,9 @@
 // as a strand file per frame and a preview image every few frames, with a
 // summary. Output folder:
 //   frames/frame_NNNN.hair     the strands of frame N, model frame, mm
+//   guides/frame_NNNN.hair     the guides of frame N (the dynamics' curves,
+//                              4 points per helix element), when frames/
+//                              holds strands interpolated from them
 //   previews/frame_NNNN.png    the strands drawn by the registered previewer
 //                              (rig/strand_preview.h: the scene's first camera),
 //                              the head as the scene (or head_file) gives it

@@ -63,10 +63,14 @@ TEST(SimulateRun, WritesEveryFrameAPreviewEveryNAndTheSummary) {
   EXPECT_NEAR(summary->strand_stretch_p99, 1.0, 1e-4);
   for (const char* f :
        {"frames/frame_0000.hair", "frames/frame_0001.hair", "frames/frame_0002.hair",
-        "previews/frame_0000.png", "previews/frame_0002.png"}) {
+        "guides/frame_0000.hair", "guides/frame_0002.hair", "previews/frame_0000.png",
+        "previews/frame_0002.png"}) {
     EXPECT_TRUE(fs::exists(o.out_dir + "/" + f)) << f;
   }
   EXPECT_FALSE(fs::exists(o.out_dir + "/previews/frame_0001.png"));
+  const auto guides = ReadStrands(o.out_dir + "/guides/frame_0002.hair");
+  ASSERT_TRUE(guides.ok()) << guides.status().ToString();
+  EXPECT_EQ(guides->num_strands(), 4u);
   const auto written = ReadJsonFile(o.out_dir + "/summary.json");
   ASSERT_TRUE(written.ok()) << written.status().ToString();
   EXPECT_EQ(*written, summary->ToJson());
@@ -89,6 +93,7 @@ TEST(SimulateRun, GuidesOnlyWritesTheGuides) {
   EXPECT_EQ(summary->strands, 4u);
   const auto frame = ReadStrands(o.out_dir + "/frames/frame_0002.hair");
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
+  EXPECT_FALSE(fs::exists(o.out_dir + "/guides")) << "the frames are the guides";
   EXPECT_EQ(frame->num_strands(), 4u);
   EXPECT_TRUE(fs::is_empty(o.out_dir + "/previews"));
 }

@@ -1,8 +1,9 @@
 // `hairrig export` checked by Khronos' glTF validator (the npm package that
 // scripts/install-deps installs in tests/gltf_validator/): a small capture's
-// strands with the mannequin's head and a 10-frame simulation, at both
-// levels. Each file: no errors and no warnings, the vertex count and the
-// animation the summary states, and the animation as long as its frames.
+// strands with the mannequin's head and a 10-frame simulation with its
+// guides, at both levels, the animation as frame nodes and as morph targets.
+// Each file: no errors and no warnings, the vertex count and the animations
+// the summary states, and each animation as long as its frames.
 // Skipped (exit 77) with the reason where node or the package is absent.
 #include <gtest/gtest.h>
 
@@ -36,44 +37,67 @@ nlohmann::json GlbJson(const std::string& path) {
   return nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + length);
 }
 
-TEST(GltfValidator, ExportedFilesAreValidAsWritten) {
-  if (RunCommand("node --version").exit_code != 0)
-    GTEST_SKIP() << "node is absent (scripts/install-deps --tests installs nodejs)";
-  if (!fs::exists(std::string(kValidatorDir) + "/node_modules/gltf-validator"))
-    GTEST_SKIP() << "gltf-validator is not installed in " << kValidatorDir
-                 << " (scripts/install-deps --tests runs npm ci there)";
-  const std::string dir = hairrig_test::MakeStrandCapture("gltf_validator", 10);
-  hairrig_test::AddPointsAndTruth(dir, 400);
+// Exports `dir` with its animation in `encoding`, validates both levels and
+// checks them against the summary; the summary.
+nlohmann::json ExportAndValidate(const std::string& dir, const std::string& encoding) {
   const auto exported = Hairrig("export " + dir + " --simulation " + dir +
                                 "/simulation/head-shake --head etc/heads/mannequin.yaml "
                                 "--display-strands 30 --animation-strands 30 "
-                                "--display-cloud 100 --json");
-  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+                                "--display-cloud 100 --animation-encoding " +
+                                encoding + " --out " + dir + "/" + encoding + ".glb --json");
+  EXPECT_EQ(exported.exit_code, 0) << exported.output;
   const nlohmann::json summary = LastLineJson(exported.output);
   for (const char* level : {"full", "display"}) {
     const nlohmann::json& written = summary[level];
     const std::string path = written["path"];
     const auto validated =
         RunCommand("node " + std::string(kValidatorDir) + "/validate.mjs " + path);
-    ASSERT_EQ(validated.exit_code, 0) << validated.output;
+    EXPECT_EQ(validated.exit_code, 0) << validated.output;
     const nlohmann::json report = LastLineJson(validated.output);
+    SCOPED_TRACE(encoding + " " + level);
     EXPECT_EQ(report["errors"], 0) << report["issues"].dump(1);
     EXPECT_EQ(report["warnings"], 0) << report["issues"].dump(1);
-    EXPECT_EQ(report["info"]["totalVertexCount"], written["vertices"]) << level;
-    EXPECT_EQ(report["info"]["animationCount"], 1) << level;
-    EXPECT_EQ(written["frames"], 10) << level;
+    EXPECT_EQ(report["info"]["totalVertexCount"], written["vertices"]);
+    // The full level animates the strands and the guides; the display level the strands.
+    const bool full = std::string(level) == "full";
+    EXPECT_EQ(report["info"]["animationCount"], full ? 2 : 1);
+    EXPECT_EQ(written["frames"], full ? 20 : 10);
     // 10 frames at 10 fps: the last shown from 0.9 s to the animation's end at 1.0 s.
     const nlohmann::json doc = GlbJson(path);
-    ASSERT_FALSE(doc.is_null()) << path;
-    const int input = doc["animations"][0]["samplers"][0]["input"];
-    EXPECT_NEAR(doc["accessors"][input]["max"][0].get<double>(), 1.0, 1e-6) << level;
-    EXPECT_EQ(doc["animations"][0]["channels"].size(), 10u) << level;
+    EXPECT_FALSE(doc.is_null()) << path;
+    if (doc.is_null()) continue;
+    for (const nlohmann::json& animation : doc["animations"]) {
+      const int input = animation["samplers"][0]["input"];
+      EXPECT_NEAR(doc["accessors"][input]["max"][0].get<double>(), 1.0, 1e-6);
+      const bool morph = full && encoding == "morph";
+      EXPECT_EQ(animation["channels"].size(), morph ? 1u : 10u);
+    }
   }
-  EXPECT_EQ(summary["full"]["strands"], 100 + 25);  // every strand, and the 25 animated
+  return summary;
+}
+
+TEST(GltfValidator, ExportedFilesAreValidAsWritten) {
+  if (RunCommand("node --version").exit_code != 0)
+    GTEST_SKIP() << "node is absent (scripts/install-deps --tests installs nodejs)";
+  if (!fs::exists(std::string(kValidatorDir) + "/node_modules/gltf-validator"))
+    GTEST_SKIP() << "gltf-validator is not installed in " << kValidatorDir
+                 << " (scripts/install-deps --tests runs npm ci there)";
+  const std::string dir = hairrig_test::MakeStrandCapture("gltf_validator", 10, /*guides=*/true);
+  hairrig_test::AddPointsAndTruth(dir, 400);
+  const nlohmann::json nodes = ExportAndValidate(dir, "nodes");
+  const nlohmann::json morph = ExportAndValidate(dir, "morph");
+  // Every strand, the 25 animated and the 5 guides.
+  EXPECT_EQ(nodes["full"]["strands"], 100 + 25 + 5);
+  EXPECT_EQ(nodes["guides"], 5);
   // Every 4th of 100 (30 at most), the truth's every 2nd of 50, the 25 animated.
-  EXPECT_EQ(summary["display"]["strands"], 25 + 25 + 25);
-  EXPECT_EQ(summary["truth_strands"], 25);
-  EXPECT_EQ(summary["cloud_points"], 100);
+  EXPECT_EQ(nodes["display"]["strands"], 25 + 25 + 25);
+  EXPECT_EQ(nodes["truth_strands"], 25);
+  EXPECT_EQ(nodes["cloud_points"], 100);
+  // Morph targets count one frame's vertices (frame nodes ten); the display
+  // level is frame nodes either way.
+  EXPECT_LT(morph["full"]["vertices"], nodes["full"]["vertices"]);
+  EXPECT_EQ(morph["display"]["bytes"], nodes["display"]["bytes"]);
+  EXPECT_EQ(morph["display"]["vertices"], nodes["display"]["vertices"]);
 }
 
 }  // namespace

@@ -320,11 +320,36 @@ export class HairViewer {
   draw() {
     if (this.playing && this.mixer) {
       this.mixer.update(this.clock.getDelta());
+      // A frame scaled to 0 still costs its vertices: only the shown one is drawn.
+      for (const f of this.parts.simulation.children) f.visible = f.scale.x > 0;
       this.requestDraw();
     }
     this.renderer.render(this.scene, this.camera);
     this.framesDrawn += 1;
     if (this.model && this.firstFrameAt === null) this.firstFrameAt = performance.now();
+  }
+
+  // Plays the simulation for `ms`, then pauses it; resolves to the frames'
+  // intervals (ms) as the browser timed them (none without a simulation).
+  // For tests and bench/console_viewer_bench.
+  playFor(ms) {
+    if (!this.play()) return Promise.resolve([]);
+    return new Promise((resolve) => {
+      const intervals = [];
+      let last = null;
+      const started = performance.now();
+      const step = (now) => {
+        if (last !== null) intervals.push(now - last);
+        last = now;
+        if (now - started < ms) {
+          requestAnimationFrame(step);
+        } else {
+          this.pause();
+          resolve(intervals);
+        }
+      };
+      requestAnimationFrame(step);
+    });
   }
 
   // Turns the camera about the model by `degreesPerFrame` each animation

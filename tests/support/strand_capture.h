@@ -31,9 +31,10 @@ inline hairrig::StrandSet Comb(int count, int points, float sway_mm = 0) {
   return s;
 }
 
-// <TempDir>/<name> (made afresh) with a comb of 100 strands of 50 points and
-// `frames` simulated frames of it; the folder's path.
-inline std::string MakeStrandCapture(const std::string& name, int frames) {
+// <TempDir>/<name> (made afresh) with a comb of 100 strands of 50 points,
+// `frames` simulated frames of it and, with `guides`, as many frames of 5
+// guides of 10 points in guides/; the folder's path.
+inline std::string MakeStrandCapture(const std::string& name, int frames, bool guides = false) {
   namespace fs = std::filesystem;
   const std::string dir = ::testing::TempDir() + "/" + name;
   fs::remove_all(dir);
@@ -42,12 +43,15 @@ inline std::string MakeStrandCapture(const std::string& name, int frames) {
       hairrig::WriteStrands(dir + "/reconstruction/strands/strands.ply", Comb(100, 50)).ok());
   const std::string simulation = dir + "/simulation/head-shake";
   fs::create_directories(simulation + "/frames");
+  if (guides) fs::create_directories(simulation + "/guides");
   for (int f = 0; f < frames; ++f) {
     char file[32];
     std::snprintf(file, sizeof file, "/frame_%04d.hair", f);
-    EXPECT_TRUE(hairrig::WriteStrands(simulation + "/frames" + file,
-                                      Comb(100, 50, 0.1f * static_cast<float>(f)))
-                    .ok());
+    const float sway = 0.1f * static_cast<float>(f);
+    EXPECT_TRUE(hairrig::WriteStrands(simulation + "/frames" + file, Comb(100, 50, sway)).ok());
+    if (guides) {
+      EXPECT_TRUE(hairrig::WriteStrands(simulation + "/guides" + file, Comb(5, 10, sway)).ok());
+    }
   }
   EXPECT_TRUE(hairrig::WriteFileAtomic(simulation + "/summary.json", R"({"fps": 10})").ok());
   return dir;
