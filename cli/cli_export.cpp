@@ -25,6 +25,10 @@ void AddExportCommand(CLI::App& app, CommonOptions& common, Dispatch& dispatch) 
   cmd->add_option("--simulation", options->simulation_dir,
                   "a `hairrig simulate` output folder to add as an animation")
       ->check(CLI::ExistingDirectory);
+  cmd->add_option("--model", options->model_file,
+                  "the fitted model (`hairrig fit`) naming each strand's wisp (default: "
+                  "DIR/simulation/model.json where it exists)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--display-strands", options->display_strands, "strands in the display copy")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();

@@ -146,27 +146,54 @@ int64_t SegmentCount(const StrandSet& strands) {
   return segments;
 }
 
-std::vector<float> StrandIds(const StrandSet& strands) {
+// Per vertex, its strand's index (`per_strand` null) or its strand's value.
+std::vector<float> PerStrand(const StrandSet& strands,
+                             const std::vector<uint32_t>* per_strand = nullptr) {
   std::vector<float> ids;
   ids.reserve(strands.points_mm.size());
-  for (size_t s = 0; s < strands.point_counts.size(); ++s)
-    ids.insert(ids.end(), strands.point_counts[s], static_cast<float>(s));
+  for (size_t s = 0; s < strands.point_counts.size(); ++s) {
+    const size_t value = per_strand != nullptr ? (*per_strand)[s] : s;
+    ids.insert(ids.end(), strands.point_counts[s], static_cast<float>(value));
+  }
   return ids;
 }
 
-// A LINES node for `strands`; `indices` and `ids` are accessors shared by
-// an animation's frames (-1: made here).
+Status CheckWisps(const std::string& name, const StrandSet& strands,
+                  const std::vector<uint32_t>* wisps) {
+  if (wisps == nullptr) return Status::Ok();
+  const std::string what = "glTF strand set '" + name + "'";
+  if (wisps->size() != strands.point_counts.size())
+    return InvalidArgument(what + ": " + std::to_string(wisps->size()) + " wisp ids for " +
+                           std::to_string(strands.point_counts.size()) + " strands");
+  for (const uint32_t wisp : *wisps)
+    if (wisp >= kMaxStrands)
+      return InvalidArgument(what + ": wisp id " + std::to_string(wisp) + " is 2^24 or more");
+  return Status::Ok();
+}
+
+// Accessors an animation's frames share (-1: each node makes its own).
+struct SharedAccessors {
+  int indices = -1, ids = -1, wisps = -1;
+};
+
+// A LINES node for `strands`, with _WISP_ID from `wisps` (or `shared`) when given.
 int AddStrandNode(GlbBuilder* b, const std::string& name, const StrandSet& strands, int material,
-                  int indices, int ids, GltfWriteSummary* summary) {
+                  SharedAccessors shared, GltfWriteSummary* summary,
+                  const std::vector<uint32_t>* wisps = nullptr) {
   nlohmann::json attributes = {{"POSITION", b->AddPositions(strands.points_mm)}};
-  attributes["_STRAND_ID"] = ids >= 0 ? ids : b->AddScalars(StrandIds(strands), kArrayBuffer);
+  attributes["_STRAND_ID"] =
+      shared.ids >= 0 ? shared.ids : b->AddScalars(PerStrand(strands), kArrayBuffer);
+  if (shared.wisps >= 0) attributes["_WISP_ID"] = shared.wisps;
+  if (shared.wisps < 0 && wisps != nullptr)
+    attributes["_WISP_ID"] = b->AddScalars(PerStrand(strands, wisps), kArrayBuffer);
   if (!strands.colors.empty()) attributes["COLOR_0"] = b->AddColours(strands.colors);
   summary->vertices += static_cast<int64_t>(strands.points_mm.size());
   return b->AddMeshNode(
-      name, {{"attributes", attributes},
-             {"indices", indices >= 0 ? indices : b->AddIndices(SegmentIndices(strands))},
-             {"mode", kLinesMode},
-             {"material", material}});
+      name,
+      {{"attributes", attributes},
+       {"indices", shared.indices >= 0 ? shared.indices : b->AddIndices(SegmentIndices(strands))},
+       {"mode", kLinesMode},
+       {"material", material}});
 }
 
 // Area-weighted vertex normals, in glTF's frame.
@@ -245,15 +272,16 @@ Status CheckAnimation(const GltfStrandAnimation& a) {
           what + ": frame " + std::to_string(f) +
           " has other strands than frame 0 (every frame needs the same point counts)");
   }
-  return Status::Ok();
+  return CheckWisps(a.name, *a.frames[0], a.wisps);
 }
 
 // The frames as children of one node, shown in turn by STEP scale channels.
 int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* summary) {
   const StrandSet& first = *a.frames[0];
   const int material = b->AddMaterial(a.colour, true);
-  const int indices = b->AddIndices(SegmentIndices(first));
-  const int ids = b->AddScalars(StrandIds(first), kArrayBuffer);
+  SharedAccessors shared{.indices = b->AddIndices(SegmentIndices(first)),
+                         .ids = b->AddScalars(PerStrand(first), kArrayBuffer)};
+  if (a.wisps != nullptr) shared.wisps = b->AddScalars(PerStrand(first, a.wisps), kArrayBuffer);
   const size_t n = a.frames.size();
   // A key per frame and one at n / fps closing the last frame's interval, so
   // that the animation lasts n / fps and a player looping it shows every frame.
@@ -264,7 +292,7 @@ int AddAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* 
                  channels = nlohmann::json::array();
   for (size_t f = 0; f < n; ++f) {
     const int node = AddStrandNode(b, a.name + "_frame_" + std::to_string(f), *a.frames[f],
-                                   material, indices, ids, summary);
+                                   material, shared, summary);
     if (f != 0) b->doc["nodes"][node]["scale"] = {0.0, 0.0, 0.0};
     std::vector<Eigen::Vector3f> scales(n + 1, Eigen::Vector3f::Zero());
     scales[f] = Eigen::Vector3f::Ones();
@@ -299,7 +327,8 @@ int AddOffsets(GlbBuilder* b, const StrandSet& frame, const StrandSet& first) {
 int AddMorphAnimation(GlbBuilder* b, const GltfStrandAnimation& a, GltfWriteSummary* summary) {
   const StrandSet& first = *a.frames[0];
   const size_t n = a.frames.size();
-  const int node = AddStrandNode(b, a.name, first, b->AddMaterial(a.colour, true), -1, -1, summary);
+  const int node =
+      AddStrandNode(b, a.name, first, b->AddMaterial(a.colour, true), {}, summary, a.wisps);
   summary->frames += static_cast<int>(n);
   summary->segments += SegmentCount(first);
   if (n == 1) return node;
@@ -340,8 +369,9 @@ Result<std::vector<uint8_t>> EncodeGlb(const GltfScene& scene, GltfWriteSummary*
     if (set.strands == nullptr)
       return InvalidArgument("glTF strand set '" + set.name + "' is missing");
     HR_RETURN_IF_ERROR(CheckStrands(set.name, *set.strands));
-    roots.push_back(AddStrandNode(&b, set.name, *set.strands, b.AddMaterial(set.colour, true), -1,
-                                  -1, &summary));
+    HR_RETURN_IF_ERROR(CheckWisps(set.name, *set.strands, set.wisps));
+    roots.push_back(AddStrandNode(&b, set.name, *set.strands, b.AddMaterial(set.colour, true), {},
+                                  &summary, set.wisps));
     summary.strands += static_cast<int64_t>(set.strands->point_counts.size());
     summary.segments += SegmentCount(*set.strands);
   }

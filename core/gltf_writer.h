@@ -4,8 +4,10 @@
 //   - every strand set is one node holding one LINES primitive (an index
 //     pair per segment, so the strands of a set share one draw call; a
 //     strand is a connected run of segments): POSITION, COLOR_0 where the
-//     strands carry colours (RGBA8, normalised), and _STRAND_ID (FLOAT, the
-//     strand's index in its set) for tools that split the strands again;
+//     strands carry colours (RGBA8, normalised), _STRAND_ID (FLOAT, the
+//     strand's index in its set) for tools that split the strands again, and
+//     _WISP_ID (FLOAT) where the set names each strand's wisp (the guide it
+//     follows);
 //   - every triangle mesh (the head) is one node with POSITION, NORMAL and
 //     TRIANGLES;
 //   - every point cloud is one node holding one POINTS primitive: POSITION
@@ -29,7 +31,8 @@
 // (x, y, z) mm -> (x, z, -y) / 1000 m, a rotation, so handedness is kept.
 //
 // Failure modes: InvalidArgument for a set with no strands or more than
-// 2^24 (the strand id is a float), a StrandSet whose counts do not sum to
+// 2^24 (the strand id is a float), wisps of another count than its strands
+// or at 2^24 or more, a StrandSet whose counts do not sum to
 // its points, colours of another count than its points, a non-finite
 // coordinate (naming the set and the point), a triangle that indexes past
 // its mesh's vertices, an empty point cloud or one whose colours are of
@@ -54,6 +57,7 @@ struct GltfStrandSet {
   std::string name;                                        // the node's and the mesh's name
   const StrandSet* strands = nullptr;                      // mm, +z up
   std::array<float, 4> colour{0.35f, 0.22f, 0.12f, 1.0f};  // linear RGBA, the material's
+  const std::vector<uint32_t>* wisps = nullptr;            // per strand (< 2^24), or null
 };
 
 struct GltfTriangleMesh {
@@ -77,6 +81,7 @@ struct GltfStrandAnimation {
   double fps = 30;
   std::array<float, 4> colour{0.35f, 0.22f, 0.12f, 1.0f};
   GltfAnimationEncoding encoding = GltfAnimationEncoding::kFrameNodes;
+  const std::vector<uint32_t>* wisps = nullptr;  // per strand of a frame, or null
 };
 
 struct GltfScene {

@@ -183,6 +183,26 @@ TEST(GltfWriter, AMorphTargetAnimationBlendsFromFrameZero) {
   EXPECT_EQ(Floats(glb, sampler["output"]), std::vector<float>({0, 0, 1, 0, 0, 1, 0, 1}));
 }
 
+TEST(GltfWriter, WispIdsArePerVertexWhereGiven) {
+  const StrandSet strands = TwoStrands();
+  const std::vector<uint32_t> wisps = {7, 3};
+  GltfScene scene;
+  scene.strand_sets.push_back({.name = "strands", .strands = &strands, .wisps = &wisps});
+  scene.animations.push_back(
+      {.name = "sim", .frames = {&strands, &strands}, .fps = 10, .wisps = &wisps});
+  auto bytes = EncodeGlb(scene);
+  ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+  const Glb glb = Parse(*bytes);
+  for (const nlohmann::json& mesh : glb.doc["meshes"]) {
+    const nlohmann::json& attributes = mesh["primitives"][0]["attributes"];
+    ASSERT_TRUE(attributes.contains("_WISP_ID")) << mesh["name"];
+    EXPECT_EQ(Floats(glb, attributes["_WISP_ID"]), std::vector<float>({7, 7, 7, 3, 3}));
+  }
+  // The frames share one wisp accessor.
+  EXPECT_EQ(glb.doc["meshes"][1]["primitives"][0]["attributes"]["_WISP_ID"],
+            glb.doc["meshes"][2]["primitives"][0]["attributes"]["_WISP_ID"]);
+}
+
 TEST(GltfWriter, APointCloudIsPointsInMetresWithYUp) {
   const std::vector<Eigen::Vector3f> points = {{10, 20, 30}, {-10, 0, 5}};
   const std::vector<std::array<uint8_t, 3>> colours = {{255, 0, 0}, {0, 255, 0}};
@@ -224,6 +244,12 @@ TEST(GltfWriter, BadInputIsNamed) {
   strands = TwoStrands();
   strands.colors.assign(2, {0, 0, 0});
   EXPECT_NE(message().find("2 colours for 5 points"), std::string::npos) << message();
+  strands = TwoStrands();
+  const std::vector<uint32_t> one_wisp = {0}, huge_wisp = {0, 1u << 24};
+  scene.strand_sets[0].wisps = &one_wisp;
+  EXPECT_NE(message().find("'wig': 1 wisp ids for 2 strands"), std::string::npos) << message();
+  scene.strand_sets[0].wisps = &huge_wisp;
+  EXPECT_NE(message().find("wisp id 16777216 is 2^24 or more"), std::string::npos) << message();
 
   StrandSet other = TwoStrands();
   other.point_counts = {2, 3};

@@ -26,6 +26,7 @@ namespace fs = std::filesystem;
 constexpr const char* kStrandsFile = "/reconstruction/strands/strands.ply";
 constexpr const char* kPointsFile = "/reconstruction/points.ply";
 constexpr const char* kTruthStrandsFile = "/ground_truth/ground_truth_strands.ply";
+constexpr const char* kModelFile = "/simulation/model.json";
 constexpr int kMaxGuides = 1000000;
 constexpr std::array<float, 4> kGuideColour{0.9f, 0.45f, 0.1f, 1.0f};
 
@@ -56,6 +57,8 @@ Result<std::pair<std::optional<HeadSpec>, std::string>> FindHead(const GltfExpor
 struct SimulationFrames {
   std::vector<StrandSet> frames;
   double fps = 30;
+  size_t source_strands = 0;   // frame 0's before decimation
+  std::vector<uint32_t> kept;  // frame 0's strands the decimation kept
 };
 
 // Each frame decimated as it is read (a frame of 20,000 strands is about 60 MB).
@@ -86,7 +89,9 @@ Result<SimulationFrames> ReadSimulation(const std::string& dir, const std::strin
         errors[i] = frame.status();
         return;
       }
-      out.frames[i] = DecimateStrands(*frame, max_strands, max_points);
+      if (i == 0) out.source_strands = frame->num_strands();
+      out.frames[i] =
+          DecimateStrands(*frame, max_strands, max_points, i == 0 ? &out.kept : nullptr);
     };
   });
   for (const Status& e : errors) HR_RETURN_IF_ERROR(e);
@@ -153,19 +158,60 @@ DisplayExtras ReadDisplayExtras(const GltfExportOptions& o) {
   return extras;
 }
 
+// Each strand's wisp (the guide it follows: the fitted model's
+// cluster_of_strand), or none when the model is absent, unreadable or of other
+// strands (a warning says which).
+std::vector<uint32_t> ReadWisps(const GltfExportOptions& o, size_t strands) {
+  const std::string path = o.model_file.empty() ? o.dir + kModelFile : o.model_file;
+  if (o.model_file.empty() && !IsFile(path)) return {};
+  Result<nlohmann::json> model = ReadJsonFile(path);
+  std::vector<uint32_t> wisps;
+  if (model.ok()) {
+    const nlohmann::json clusters = model->value("cluster_of_strand", nlohmann::json());
+    for (const nlohmann::json& c : clusters.is_array() ? clusters : nlohmann::json::array()) {
+      if (!c.is_number_integer() || c.get<int64_t>() < 0 || c.get<int64_t>() >= (1 << 24)) break;
+      wisps.push_back(c.get<uint32_t>());
+    }
+  }
+  if (wisps.size() != strands || strands == 0) {
+    LogWarning("export: no wisp ids: " +
+               (model.ok() ? path + " gives " + std::to_string(wisps.size()) +
+                                 " valid cluster_of_strand entries for the capture's " +
+                                 std::to_string(strands) + " strands (fit from another file?)"
+                           : model.status().ToString()));
+    return {};
+  }
+  return wisps;
+}
+
+// wisps[kept[i]] for every i; empty when there are no wisps.
+std::vector<uint32_t> WispsOf(const std::vector<uint32_t>& wisps,
+                              const std::vector<uint32_t>& kept) {
+  std::vector<uint32_t> out;
+  if (wisps.empty()) return out;
+  out.reserve(kept.size());
+  for (const uint32_t k : kept) out.push_back(wisps[k]);
+  return out;
+}
+
 // The simulation's animated strands and, where it wrote them, its guides.
 struct Simulation {
   std::string name;  // the animation's; the guides' is name + "_guides"
   SimulationFrames strands, guides;
+  std::vector<uint32_t> wisps;  // per strand of a frame, or empty
 };
 
-Result<Simulation> ReadSimulationFolder(const GltfExportOptions& o) {
+// `wisps`: the reconstruction's strands' (or empty); the frames take them
+// when they hold as many strands (the simulation interpolated those).
+Result<Simulation> ReadSimulationFolder(const GltfExportOptions& o,
+                                        const std::vector<uint32_t>& wisps) {
   Simulation sim;
   if (o.simulation_dir.empty()) return sim;
   const int threads = ResolveThreads(o.threads);
   sim.name = AnimationName(o.simulation_dir);
   HR_ASSIGN_OR_RETURN(sim.strands, ReadSimulation(o.simulation_dir, "frames", o.animation_strands,
                                                   o.display_points, threads));
+  if (sim.strands.source_strands == wisps.size()) sim.wisps = WispsOf(wisps, sim.strands.kept);
   if (fs::is_directory(o.simulation_dir + "/guides")) {
     HR_ASSIGN_OR_RETURN(sim.guides,
                         ReadSimulation(o.simulation_dir, "guides", kMaxGuides, 10000, threads));
@@ -183,24 +229,30 @@ std::vector<GltfStrandAnimation> AnimationsOf(const Simulation& sim, GltfAnimati
                                               bool guides) {
   std::vector<GltfStrandAnimation> animations;
   auto add = [&](const std::string& name, const SimulationFrames& frames,
-                 std::array<float, 4> colour) {
+                 std::array<float, 4> colour, const std::vector<uint32_t>* wisps) {
     if (frames.frames.empty()) return;
-    GltfStrandAnimation a{
-        .name = name, .frames = {}, .fps = frames.fps, .colour = colour, .encoding = encoding};
+    GltfStrandAnimation a{.name = name,
+                          .frames = {},
+                          .fps = frames.fps,
+                          .colour = colour,
+                          .encoding = encoding,
+                          .wisps = wisps};
     for (const StrandSet& f : frames.frames) a.frames.push_back(&f);
     animations.push_back(std::move(a));
   };
-  add(sim.name, sim.strands, GltfStrandAnimation{}.colour);
-  if (guides) add(sim.name + "_guides", sim.guides, kGuideColour);
+  add(sim.name, sim.strands, GltfStrandAnimation{}.colour,
+      sim.wisps.empty() ? nullptr : &sim.wisps);
+  if (guides) add(sim.name + "_guides", sim.guides, kGuideColour, nullptr);
   return animations;
 }
 
 // The scene of one level: `strands`, the head, the animations, and the display's extras.
-GltfScene SceneOf(const StrandSet& strands, const TriangleMesh* head,
-                  std::vector<GltfStrandAnimation> animations,
+GltfScene SceneOf(const StrandSet& strands, const std::vector<uint32_t>& wisps,
+                  const TriangleMesh* head, std::vector<GltfStrandAnimation> animations,
                   const DisplayExtras* extras = nullptr) {
   GltfScene scene;
-  scene.strand_sets.push_back({.name = "strands", .strands = &strands});
+  scene.strand_sets.push_back(
+      {.name = "strands", .strands = &strands, .wisps = wisps.empty() ? nullptr : &wisps});
   if (extras != nullptr && extras->truth && !extras->truth->point_counts.empty())
     scene.strand_sets.push_back(
         {.name = "truth", .strands = &*extras->truth, .colour = {0.1f, 0.6f, 0.2f, 1.0f}});
@@ -228,7 +280,9 @@ Status GltfExportOptions::Check() const {
   return Status::Ok();
 }
 
-StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points) {
+StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points,
+                          std::vector<uint32_t>* kept_strands) {
+  if (kept_strands != nullptr) kept_strands->clear();
   const size_t n = strands.point_counts.size();
   const size_t stride = std::max<size_t>(
       1, (n + static_cast<size_t>(max_strands) - 1) / static_cast<size_t>(max_strands));
@@ -250,6 +304,7 @@ StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_poi
         ++kept;
       }
       out.point_counts.push_back(kept);
+      if (kept_strands != nullptr) kept_strands->push_back(static_cast<uint32_t>(s));
     }
     first += count;
   }
@@ -268,9 +323,13 @@ nlohmann::json GltfExportSummary::ToJson() const {
                           {"strands", s.strands},   {"vertices", s.vertices},
                           {"segments", s.segments}, {"frames", s.frames}};
   };
-  return {{"full", level(full)},          {"display", level(display)},
-          {"head", head_source},          {"truth_strands", truth_strands},
-          {"cloud_points", cloud_points}, {"guides", guides}};
+  return {{"full", level(full)},
+          {"display", level(display)},
+          {"head", head_source},
+          {"truth_strands", truth_strands},
+          {"cloud_points", cloud_points},
+          {"guides", guides},
+          {"wisps", wisps}};
 }
 
 std::string GltfExportSummary::BriefReport() const {
@@ -283,6 +342,7 @@ std::string GltfExportSummary::BriefReport() const {
                          static_cast<double>(s->bytes) / 1e6);
   }
   text += head_source.empty() ? "  no head (give --head FILE)\n" : "  head: " + head_source + "\n";
+  if (wisps > 0) text += StringPrintf("  wisp ids of %lld wisps\n", static_cast<long long>(wisps));
   if (guides > 0)
     text += StringPrintf("  full: %lld animated guides\n", static_cast<long long>(guides));
   if (cloud_points > 0)
@@ -307,17 +367,20 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
   }
   const TriangleMesh* head_mesh = head_model ? &head_model->mesh() : nullptr;
 
-  HR_ASSIGN_OR_RETURN(const Simulation simulation, ReadSimulationFolder(o));
+  const std::vector<uint32_t> wisps = ReadWisps(o, strands.num_strands());
+  HR_ASSIGN_OR_RETURN(const Simulation simulation, ReadSimulationFolder(o, wisps));
+  summary.wisps = wisps.empty() ? 0 : *std::max_element(wisps.begin(), wisps.end()) + 1;
   summary.guides = simulation.guides.frames.empty()
                        ? 0
                        : static_cast<int64_t>(simulation.guides.frames[0].num_strands());
   if (!o.display_only) {
     HR_ASSIGN_OR_RETURN(
         summary.full,
-        WriteGlb(out_file, SceneOf(strands, head_mesh,
+        WriteGlb(out_file, SceneOf(strands, wisps, head_mesh,
                                    AnimationsOf(simulation, o.animation_encoding, true))));
   }
-  const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points);
+  std::vector<uint32_t> kept;
+  const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points, &kept);
   const DisplayExtras extras = ReadDisplayExtras(o);
   summary.cloud_points = static_cast<int64_t>(extras.points_mm.size());
   if (extras.truth) summary.truth_strands = static_cast<int64_t>(extras.truth->point_counts.size());
@@ -325,7 +388,7 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
       summary.display,
       WriteGlb(
           DisplayPath(out_file),
-          SceneOf(display, head_mesh,
+          SceneOf(display, WispsOf(wisps, kept), head_mesh,
                   AnimationsOf(simulation, GltfAnimationEncoding::kFrameNodes, false), &extras)));
   return summary;
 }

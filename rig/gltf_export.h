@@ -28,6 +28,11 @@
 //                      (three.js r111, the console's, does not morph lines),
 //                      without the guides
 //
+// Wisps: every strand set and the simulation's strands carry _WISP_ID, the
+// guide each strand follows (cluster_of_strand of model_file, the output of
+// `hairrig fit` on the reconstruction's strands), where that model has as
+// many strands as the reconstruction (else none, with a warning).
+//
 // Units: the files are in metres, +y up; the capture's turntable frame
 // (mm, +z up) is rotated into it. The head is, in order: head_file, the
 // fitted reconstruction/head.yaml, the capture's rig.yaml head; none when the
@@ -45,6 +50,7 @@
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
+#include <vector>
 
 #include "core/gltf_writer.h"
 #include "core/status.h"
@@ -56,6 +62,8 @@ struct GltfExportOptions {
   std::string out_file;         // <out>.glb; empty: <dir>/reconstruction/strands/hair.glb
   std::string head_file;        // empty: the capture's (see above)
   std::string simulation_dir;   // a `hairrig simulate` output folder; empty: no animation
+  std::string model_file;       // the fitted model naming each strand's wisp; empty:
+                                // <dir>/simulation/model.json where it exists
   int display_strands = 2000;   // 1 .. 1,000,000
   int display_points = 32;      // 2 .. 10,000
   int display_cloud = 50000;    // 0 (no points) .. 10,000,000
@@ -76,6 +84,7 @@ struct GltfExportSummary {
   int64_t truth_strands = 0;       // in the display level (counted in display.strands)
   int64_t cloud_points = 0;        // in the display level (counted in display.vertices)
   int64_t guides = 0;              // animated guides in the full level (counted in full.strands)
+  int64_t wisps = 0;               // wisps the strands' _WISP_ID names; 0: none
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };
@@ -84,8 +93,10 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& options);
 
 // At most `max_strands` strands (every k-th, k = ceil(strands / max_strands)),
 // each with at most `max_points` points (every j-th, the tip kept); colours
-// follow their points. max_strands >= 1 and max_points >= 2.
-StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points);
+// follow their points; `kept_strands`, when given, receives the kept strands'
+// indices. max_strands >= 1 and max_points >= 2.
+StrandSet DecimateStrands(const StrandSet& strands, int max_strands, int max_points,
+                          std::vector<uint32_t>* kept_strands = nullptr);
 
 // A unit direction (the points' object frame, unsigned) as a colour: red |x|, green
 // |y|, blue |z| (vertical hair is blue), each 0..255.

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -77,6 +78,57 @@ TEST(GltfExport, TheGuidesAreASecondAnimationInTheFullLevelOnly) {
   ASSERT_FALSE(short_guides.ok());
   EXPECT_NE(short_guides.status().message().find("3 guide frames for 4"), std::string::npos)
       << short_guides.status().ToString();
+}
+
+// The JSON chunk of a GLB file's bytes.
+nlohmann::json GlbJson(const std::string& path) {
+  const auto bytes = ReadFileBytes(path, 1 << 26);
+  EXPECT_TRUE(bytes.ok()) << path;
+  uint32_t length = 0;
+  std::memcpy(&length, bytes->data() + 12, 4);
+  return nlohmann::json::parse(bytes->begin() + 20, bytes->begin() + 20 + length);
+}
+
+// The _WISP_ID accessor's count on the mesh named `name`, or -1 without one.
+int WispCount(const nlohmann::json& doc, const std::string& name) {
+  for (const nlohmann::json& mesh : doc["meshes"]) {
+    if (mesh["name"] != name) continue;
+    const nlohmann::json& attributes = mesh["primitives"][0]["attributes"];
+    if (!attributes.contains("_WISP_ID")) return -1;
+    return doc["accessors"][attributes["_WISP_ID"].get<int>()]["count"];
+  }
+  return -1;
+}
+
+TEST(GltfExport, WispIdsComeFromTheFittedModel) {
+  const std::string dir = MakeStrandCapture("gltf_export_wisps", 2);
+  nlohmann::json clusters = nlohmann::json::array();
+  for (int s = 0; s < 100; ++s) clusters.push_back(s / 20);  // 5 wisps of 20 strands
+  ASSERT_TRUE(WriteFileAtomic(dir + "/simulation/model.json",
+                              nlohmann::json{{"cluster_of_strand", clusters}}.dump())
+                  .ok());
+  GltfExportOptions o;
+  o.dir = dir;
+  o.simulation_dir = dir + "/simulation/head-shake";
+  o.display_strands = 20;
+  o.animation_strands = 10;
+  const auto s = ExportCaptureGltf(o);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_EQ(s->wisps, 5);
+  const nlohmann::json full = GlbJson(s->full.path), display = GlbJson(s->display.path);
+  EXPECT_EQ(WispCount(full, "strands"), 100 * 50);
+  EXPECT_EQ(WispCount(full, "head-shake_frame_0"), 10 * 26);
+  EXPECT_EQ(WispCount(display, "strands"), 20 * 26);
+
+  // A model of other strands gives no wisps, and the export goes on.
+  clusters.erase(clusters.begin());
+  ASSERT_TRUE(WriteFileAtomic(dir + "/simulation/model.json",
+                              nlohmann::json{{"cluster_of_strand", clusters}}.dump())
+                  .ok());
+  const auto other = ExportCaptureGltf(o);
+  ASSERT_TRUE(other.ok()) << other.status().ToString();
+  EXPECT_EQ(other->wisps, 0);
+  EXPECT_EQ(WispCount(GlbJson(other->full.path), "strands"), -1);
 }
 
 TEST(GltfExport, TheDisplayLevelCarriesThePointsAndTheTruth) {

@@ -1,7 +1,8 @@
 // `hairrig export` checked by Khronos' glTF validator (the npm package that
 // scripts/install-deps installs in tests/gltf_validator/): a small capture's
 // strands with the mannequin's head and a 10-frame simulation with its
-// guides, at both levels, the animation as frame nodes and as morph targets.
+// guides and its strands' wisp ids, at both levels, the animation as frame
+// nodes and as morph targets.
 // Each file: no errors and no warnings, the vertex count and the animations
 // the summary states, and each animation as long as its frames.
 // Skipped (exit 77) with the reason where node or the package is absent.
@@ -84,11 +85,15 @@ TEST(GltfValidator, ExportedFilesAreValidAsWritten) {
                  << " (scripts/install-deps --tests runs npm ci there)";
   const std::string dir = hairrig_test::MakeStrandCapture("gltf_validator", 10, /*guides=*/true);
   hairrig_test::AddPointsAndTruth(dir, 400);
+  nlohmann::json clusters = nlohmann::json::array();
+  for (int s = 0; s < 100; ++s) clusters.push_back(s % 7);  // the strands' wisps
+  std::ofstream(dir + "/simulation/model.json") << nlohmann::json{{"cluster_of_strand", clusters}};
   const nlohmann::json nodes = ExportAndValidate(dir, "nodes");
   const nlohmann::json morph = ExportAndValidate(dir, "morph");
   // Every strand, the 25 animated and the 5 guides.
   EXPECT_EQ(nodes["full"]["strands"], 100 + 25 + 5);
   EXPECT_EQ(nodes["guides"], 5);
+  EXPECT_EQ(nodes["wisps"], 7);
   // Every 4th of 100 (30 at most), the truth's every 2nd of 50, the 25 animated.
   EXPECT_EQ(nodes["display"]["strands"], 25 + 25 + 25);
   EXPECT_EQ(nodes["truth_strands"], 25);

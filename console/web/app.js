@@ -534,6 +534,10 @@ async function showModel(url) {
     box.checked = holds[part] && (part === 'strands' || part === 'head');
     box.parentElement.title = holds[part] ? '' : `this capture's model has no ${part}`;
   }
+  const byWisp = $('#colour-by option[value="wisp"]');
+  byWisp.disabled = !holds.wisps;
+  byWisp.title = holds.wisps ? '' : 'no fitted model names the wisps (hairrig fit, then hairrig export)';
+  if (!holds.wisps && $('#colour-by').value === 'wisp') $('#colour-by').value = 'direction';
   $('#play-simulation').disabled = !holds.animation;
   $('#play-simulation').textContent = 'Play simulation';
   if ($('#colour-by').value !== view3d.viewer.colourMode) view3d.viewer.setColourBy($('#colour-by').value);

@@ -33,12 +33,13 @@ function directionColour(dx, dy, dz, out, at) {
 }
 
 // Per-vertex colours of a LINES geometry: each vertex takes its segment's
-// direction ('direction') or its strand's own hue ('strand').
+// direction ('direction'), its strand's own hue ('strand') or its wisp's
+// ('wisp': the guide it follows, where the export wrote _WISP_ID).
 function strandColours(geometry, mode) {
   const position = geometry.attributes.position.array;
   const colours = new Float32Array(position.length);
-  if (mode === 'strand') {
-    const ids = geometry.attributes._strand_id?.array;
+  if (mode === 'strand' || mode === 'wisp') {
+    const ids = (mode === 'wisp' ? geometry.attributes._wisp_id : geometry.attributes._strand_id)?.array;
     const colour = new THREE.Color();
     for (let v = 0; v < position.length / 3; v += 1) {
       const id = ids ? ids[v] : 0;
@@ -184,6 +185,7 @@ export class HairViewer {
     return {
       strands: !!this.parts.strands, truth: !!this.parts.truth, points: !!this.parts.points,
       head: !!this.parts.head, animation: this.action ? clip.name : null,
+      wisps: linesUnder(this.parts.strands).some((l) => l.geometry.attributes._wisp_id),
       duration: this.action ? clip.duration : 0,
     };
   }
@@ -272,7 +274,7 @@ export class HairViewer {
     return true;
   }
 
-  // 'direction' or 'strand' (each strand its own hue).
+  // 'direction', 'strand' (each strand its own hue) or 'wisp' (each wisp its own hue).
   setColourBy(mode) {
     this.colourMode = mode;
     for (const lines of [...linesUnder(this.parts.strands), ...linesUnder(this.parts.simulation)]) {

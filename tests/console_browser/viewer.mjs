@@ -114,6 +114,10 @@ try {
     await page.selectOption('#colour-by', 'strand');
     const recoloured = await canvasPixels();
     if (!differs(recoloured, shown)) throw new Error('colouring by strand did not change the picture');
+    await page.selectOption('#colour-by', 'wisp');
+    const byWisp = await canvasPixels();
+    if (!differs(byWisp, recoloured)) throw new Error('colouring by wisp did not change the picture');
+    await page.selectOption('#colour-by', 'strand');
     await page.check('#show-points');
     const withPoints = await canvasPixels();
     if (!differs(withPoints, recoloured)) throw new Error('the points did not change the picture');
