@@ -131,16 +131,22 @@ bool ReconstructedInTurntableFrame(const std::string& dir) {
 }
 
 // What the display adds is optional: a file that cannot be read is left out
-// with a warning naming it, and the export goes on.
-DisplayExtras ReadDisplayExtras(const GltfExportOptions& o) {
+// with a warning naming it, and the export goes on. `given_points`: the points
+// when the caller holds them, else null.
+DisplayExtras ReadDisplayExtras(const GltfExportOptions& o,
+                                const std::vector<OrientedPoint>* given_points) {
   DisplayExtras extras;
-  if (o.display_cloud > 0 && IsFile(o.dir + kPointsFile)) {
-    Result<std::vector<OrientedPoint>> points = ReadPointCloudPly(o.dir + kPointsFile);
-    if (!points.ok()) LogWarning("export: the points are left out: " + points.status().ToString());
+  Result<std::vector<OrientedPoint>> read = std::vector<OrientedPoint>();
+  if (o.display_cloud > 0 && given_points == nullptr && IsFile(o.dir + kPointsFile)) {
+    read = ReadPointCloudPly(o.dir + kPointsFile);
+    if (!read.ok()) LogWarning("export: the points are left out: " + read.status().ToString());
+  }
+  const std::vector<OrientedPoint>* points =
+      given_points != nullptr ? given_points : (read.ok() ? &*read : nullptr);
+  if (o.display_cloud > 0 && points != nullptr) {
     const size_t cap = static_cast<size_t>(o.display_cloud);
-    const size_t n = points.ok() ? points->size() : 0;
-    const size_t stride = std::max<size_t>(1, (n + cap - 1) / cap);
-    for (size_t i = 0; i < n; i += stride) {
+    const size_t stride = std::max<size_t>(1, (points->size() + cap - 1) / cap);
+    for (size_t i = 0; i < points->size(); i += stride) {
       extras.points_mm.push_back((*points)[i].position_mm);
       extras.point_colours.push_back(DirectionColour((*points)[i].direction));
     }
@@ -353,11 +359,16 @@ std::string GltfExportSummary::BriefReport() const {
   return text;
 }
 
-Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
+Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o,
+                                            const GltfExportInputs& inputs) {
   HR_RETURN_IF_ERROR(o.Check());
   const std::string out_file =
       o.out_file.empty() ? o.dir + "/reconstruction/strands/hair.glb" : o.out_file;
-  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(o.dir + kStrandsFile));
+  StrandSet read_strands;
+  if (inputs.strands == nullptr) {
+    HR_ASSIGN_OR_RETURN(read_strands, ReadStrands(o.dir + kStrandsFile));
+  }
+  const StrandSet& strands = inputs.strands != nullptr ? *inputs.strands : read_strands;
   HR_ASSIGN_OR_RETURN(const auto head, FindHead(o));
   GltfExportSummary summary;
   summary.head_source = head.second;
@@ -381,7 +392,7 @@ Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& o) {
   }
   std::vector<uint32_t> kept;
   const StrandSet display = DecimateStrands(strands, o.display_strands, o.display_points, &kept);
-  const DisplayExtras extras = ReadDisplayExtras(o);
+  const DisplayExtras extras = ReadDisplayExtras(o, inputs.points);
   summary.cloud_points = static_cast<int64_t>(extras.points_mm.size());
   if (extras.truth) summary.truth_strands = static_cast<int64_t>(extras.truth->point_counts.size());
   HR_ASSIGN_OR_RETURN(

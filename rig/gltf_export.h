@@ -89,7 +89,17 @@ struct GltfExportSummary {
   std::string BriefReport() const;
 };
 
-Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& options);
+struct OrientedPoint;
+
+// What a caller holds in memory already (the reconstruction, which has just
+// written them); null: read from the capture folder.
+struct GltfExportInputs {
+  const StrandSet* strands = nullptr;                  // as reconstruction/strands/strands.ply
+  const std::vector<OrientedPoint>* points = nullptr;  // as reconstruction/points.ply
+};
+
+Result<GltfExportSummary> ExportCaptureGltf(const GltfExportOptions& options,
+                                            const GltfExportInputs& inputs = {});
 
 // At most `max_strands` strands (every k-th, k = ceil(strands / max_strands)),
 // each with at most `max_points` points (every j-th, the tip kept); colours

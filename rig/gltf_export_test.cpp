@@ -131,6 +131,25 @@ TEST(GltfExport, WispIdsComeFromTheFittedModel) {
   EXPECT_EQ(WispCount(GlbJson(other->full.path), "strands"), -1);
 }
 
+TEST(GltfExport, StrandsAndPointsHeldInMemoryAreNotReadAgain) {
+  const std::string dir = MakeStrandCapture("gltf_export_inputs", 0);
+  hairrig_test::AddPointsAndTruth(dir, 1000);
+  const StrandSet strands = Comb(40, 10);
+  OrientedPoint point;
+  point.position_mm = {0, 0, 100};
+  point.direction = {0, 0, 1};
+  const std::vector<OrientedPoint> points(30, point);
+  // The files say otherwise: the export must take what it is given.
+  fs::remove(dir + "/reconstruction/strands/strands.ply");
+  GltfExportOptions o;
+  o.dir = dir;
+  o.display_only = true;
+  const auto s = ExportCaptureGltf(o, {.strands = &strands, .points = &points});
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  EXPECT_EQ(s->cloud_points, 30);
+  EXPECT_EQ(s->display.strands, 40 + s->truth_strands);
+}
+
 TEST(GltfExport, TheDisplayLevelCarriesThePointsAndTheTruth) {
   const std::string dir = MakeStrandCapture("gltf_export_display", 0);
   hairrig_test::AddPointsAndTruth(dir, 1000);

@@ -52,14 +52,13 @@ Result<std::string> WriteOverViews(const ReconstructionInput& input, const Stran
   return path;
 }
 
-// The strands' over-views picture and plausibility (reconstruction_verdict.h).
+// The strands' over-views picture and plausibility (reconstruction_verdict.h),
+// from the strands and points as written.
 Status CheckStrands(const ReconstructionInput& input, const Eigen::Vector3d& head_centre_mm,
-                    const std::string& reconstruction_dir, ReconstructCaptureSummary* summary) {
-  const std::string& strands_dir = summary->strands->output_dir;
-  HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(strands_dir + "/strands.ply"));
-  HR_ASSIGN_OR_RETURN(summary->over_views_picture, WriteOverViews(input, strands, strands_dir));
-  HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
-                      ReadPointCloudPly(reconstruction_dir + "/points.ply"));
+                    const std::string& reconstruction_dir, const StrandSet& strands,
+                    const std::vector<OrientedPoint>& points, ReconstructCaptureSummary* summary) {
+  HR_ASSIGN_OR_RETURN(summary->over_views_picture,
+                      WriteOverViews(input, strands, summary->strands->output_dir));
   HR_ASSIGN_OR_RETURN(summary->plausibility,
                       MeasureStrandPlausibility(strands, points, input.views,
                                                 reconstruction_dir + "/masks", head_centre_mm));
@@ -80,14 +79,20 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
           o.dir + "/reconstruction/points.ply, head " + head.source);
   HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
                                                            head.source, o.strands));
-  HR_RETURN_IF_ERROR(
-      CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir, summary));
+  // The strands and points as written, read once for the checks and the display copy.
+  HR_ASSIGN_OR_RETURN(const StrandSet strands,
+                      ReadStrands(summary->strands->output_dir + "/strands.ply"));
+  HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
+                      ReadPointCloudPly(request.reconstruction_dir + "/points.ply"));
+  HR_RETURN_IF_ERROR(CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir,
+                                  strands, points, summary));
   // The display copy as glTF, for the console's 3D view and for download.
   GltfExportOptions gltf;
   gltf.dir = o.dir;
   gltf.head_file = o.head_file == kFittedHead ? "" : o.head_file;
   gltf.display_only = true;
-  HR_ASSIGN_OR_RETURN(const GltfExportSummary exported, ExportCaptureGltf(gltf));
+  HR_ASSIGN_OR_RETURN(const GltfExportSummary exported,
+                      ExportCaptureGltf(gltf, {.strands = &strands, .points = &points}));
   summary->display_glb = exported.display.path;
   return Status::Ok();
 }
