@@ -29,7 +29,11 @@ struct Variant {
 
 std::vector<Variant> Variants() {
   std::vector<Variant> v;
+  v.push_back({"the default (quadrature, 3 scales, smoothing 2 px)", OrientationOptions()});
+  // The bank's own variants, on the image alone and unsmoothed.
   OrientationOptions o;
+  o.scales = 1;
+  o.smoothing_px = 0;
   o.refinement_passes = 0;
   o.quadrature = false;
   v.push_back({"even, no refinement", o});

@@ -31,6 +31,8 @@ struct ReconstructArgs {
   std::string cost = "both";
   int stride = LineMvsOptions{}.stride_px;
   int iterations = LineMvsOptions{}.iterations;
+  int orientation_scales = OrientationOptions{}.scales;
+  double orientation_smoothing_px = OrientationOptions{}.smoothing_px;
 };
 
 // One line per stage on a terminal (rewritten in place), with the stage's ETA.
@@ -77,6 +79,8 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.points.threads = a.threads;
   options.points.mvs.stride_px = a.stride;
   options.points.mvs.iterations = a.iterations;
+  options.points.orientation.scales = a.orientation_scales;
+  options.points.orientation.smoothing_px = a.orientation_smoothing_px;
   options.points.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
                             : a.cost == "photometric" ? MvsCost::kPhotometric
                                                       : MvsCost::kBoth;
@@ -152,6 +156,16 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
       ->capture_default_str();
   cmd->add_option("--iterations", args->iterations, "stereo PatchMatch iterations")
       ->check(CLI::Range(1, 50))
+      ->capture_default_str();
+  cmd->add_option("--orientation-scales", args->orientation_scales,
+                  "2D orientation maps: image pyramid levels the filter bank runs on, each pixel "
+                  "keeping its most confident (1 = the image alone, as Luo et al. 2013)")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
+  cmd->add_option("--orientation-smoothing", args->orientation_smoothing_px,
+                  "2D orientation maps: sigma (px) of the confidence-weighted average of the "
+                  "directions after the bank (0 = none, as Luo et al. 2013)")
+      ->check(CLI::Range(0.0, 20.0))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {

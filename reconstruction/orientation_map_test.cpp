@@ -89,8 +89,17 @@ double CentreMedianErrorDeg(const OrientationMap& map, double truth_deg) {
 
 // The pyramid finds the flow the fine bank alone cannot see, and keeps the
 // fine bank's answer where fibres are sharp.
+// Luo et al.'s filter: the image alone, unsmoothed.
+OrientationOptions LuoFilter() {
+  OrientationOptions o;
+  o.scales = 1;
+  o.smoothing_px = 0;
+  return o;
+}
+
 TEST(OrientationMap, ScalesFindFlowAtTheScaleOfWisps) {
-  OrientationOptions fine, pyramid;
+  const OrientationOptions fine = LuoFilter();
+  OrientationOptions pyramid = LuoFilter();
   pyramid.scales = 3;
   double fine_error = 0, pyramid_error = 0, lines_error = 0;
   for (int i = 0; i < 4; ++i) {
@@ -114,7 +123,8 @@ TEST(OrientationMap, ScalesFindFlowAtTheScaleOfWisps) {
 // Smoothing keeps a straight flow that glints along the fibres scatter pixel
 // by pixel, and leaves clean lines as they were.
 TEST(OrientationMap, SmoothingRecoversFlowUnderFibreGlints) {
-  OrientationOptions plain, smoothed;
+  const OrientationOptions plain = LuoFilter();
+  OrientationOptions smoothed = LuoFilter();
   smoothed.smoothing_px = 3;
   double plain_error = 0, smoothed_error = 0, clean_error = 0;
   for (int i = 0; i < 4; ++i) {
@@ -141,6 +151,26 @@ TEST(OrientationMap, SmoothingRecoversFlowUnderFibreGlints) {
       plain_error, smoothed_error, clean_error);
   EXPECT_LT(smoothed_error, 0.7 * plain_error);
   EXPECT_LT(clean_error, 1.0);
+}
+
+// The default (three scales, smoothing 2 px) on both kinds of image: wisps
+// under pixel-scale grain and sharp lines.
+TEST(OrientationMap, TheDefaultHoldsOnWispsAndOnLines) {
+  const OrientationOptions options;
+  double wisps_error = 0, lines_error = 0;
+  for (int i = 0; i < 4; ++i) {
+    const double truth = 12.5 + 45.0 * i;
+    auto wisps =
+        ComputeOrientationMap(Wisps(truth, static_cast<uint32_t>(i + 1)), cv::Mat(), options);
+    auto lines = ComputeOrientationMap(Lines(truth, static_cast<uint32_t>(i)), cv::Mat(), options);
+    ASSERT_TRUE(wisps.ok() && lines.ok());
+    wisps_error += CentreMedianErrorDeg(*wisps, truth) / 4;
+    lines_error += CentreMedianErrorDeg(*lines, truth) / 4;
+  }
+  std::printf("the default's median error: wisps %.2f deg, thin lines %.2f deg\n", wisps_error,
+              lines_error);
+  EXPECT_LT(wisps_error, 5.0);
+  EXPECT_LT(lines_error, 1.0);
 }
 
 TEST(OrientationMap, LinesAreConfidentAndNoiseIsNot) {

@@ -232,32 +232,34 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
                           {"median_cost", v.median_cost},
                           {"points_seen", v.points_seen}});
   }
-  nlohmann::json out = {{"format", "hairrig-reconstruction-points"},
-                        {"version", 1},
-                        {"object_frame", object_frame},
-                        {"stride_px", stride_px},
-                        {"min_orientation_confidence", min_orientation_confidence},
-                        {"points_file", points_file},
-                        {"views_used", views.size()},
-                        {"left_out", left_out},
-                        {"hull", {{"voxels", hull_voxels}, {"voxel_mm", hull_voxel_mm}}},
-                        {"fusion",
-                         {{"candidates", fusion.candidates},
-                          {"consistent", fusion.consistent},
-                          {"points", fusion.points},
-                          {"depth_pairs", fusion.depth_pairs},
-                          {"direction_pairs", fusion.direction_pairs},
-                          {"depth_confirmed", fusion.depth_confirmed},
-                          {"mls", fusion.mls},
-                          {"smoothed_directions", fusion.smoothed_directions}}},
-                        {"seconds",
-                         {{"segmentation", segmentation_s},
-                          {"hull", hull_s},
-                          {"stereo", stereo_s},
-                          {"fusion", fusion_s},
-                          {"writing", writing_s},
-                          {"total", total_s}}},
-                        {"views", views_json}};
+  nlohmann::json out = {
+      {"format", "hairrig-reconstruction-points"},
+      {"version", 1},
+      {"object_frame", object_frame},
+      {"stride_px", stride_px},
+      {"min_orientation_confidence", min_orientation_confidence},
+      {"orientation", {{"scales", orientation_scales}, {"smoothing_px", orientation_smoothing_px}}},
+      {"points_file", points_file},
+      {"views_used", views.size()},
+      {"left_out", left_out},
+      {"hull", {{"voxels", hull_voxels}, {"voxel_mm", hull_voxel_mm}}},
+      {"fusion",
+       {{"candidates", fusion.candidates},
+        {"consistent", fusion.consistent},
+        {"points", fusion.points},
+        {"depth_pairs", fusion.depth_pairs},
+        {"direction_pairs", fusion.direction_pairs},
+        {"depth_confirmed", fusion.depth_confirmed},
+        {"mls", fusion.mls},
+        {"smoothed_directions", fusion.smoothed_directions}}},
+      {"seconds",
+       {{"segmentation", segmentation_s},
+        {"hull", hull_s},
+        {"stereo", stereo_s},
+        {"fusion", fusion_s},
+        {"writing", writing_s},
+        {"total", total_s}}},
+      {"views", views_json}};
   if (object_from_box) out["object_from_box"] = PoseToJson(*object_from_box);
   return out;
 }
@@ -317,6 +319,8 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   summary.object_from_box = input.object_from_box;
   summary.stride_px = options.mvs.stride_px;
   summary.min_orientation_confidence = options.min_orientation_confidence;
+  summary.orientation_scales = options.orientation.scales;
+  summary.orientation_smoothing_px = options.orientation.smoothing_px;
   summary.left_out = input.left_out;
 
   // Segmentation and orientation, a view per thread.

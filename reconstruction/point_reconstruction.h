@@ -72,7 +72,9 @@ struct PointReconstructionSummary {
   std::optional<Rigid3d> object_from_box;  // ReconstructionInput's
   int stride_px = 0;                       // the depth maps' grid step
   double min_orientation_confidence = 0;
-  std::vector<std::string> left_out;  // "view: why"
+  int orientation_scales = 0;           // OrientationOptions::scales used
+  double orientation_smoothing_px = 0;  // OrientationOptions::smoothing_px used
+  std::vector<std::string> left_out;    // "view: why"
   std::vector<ViewPointsSummary> views;
   int64_t hull_voxels = 0;
   double hull_voxel_mm = 0;

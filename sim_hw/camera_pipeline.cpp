@@ -13,7 +13,8 @@ namespace hairrig {
 
 bool CameraPipeline::Identity() const {
   return iso == 100 && exposure_ev == 0 && white_balance == Eigen::Vector3d(1, 1, 1) && !bayer &&
-         tone == Tone::kLinear && jpeg_quality == 0 && f_number == 0 && lens_blur_px == 0;
+         tone == Tone::kLinear && jpeg_quality == 0 && f_number == 0 && lens_blur_px == 0 &&
+         render_grain_sd == 0;
 }
 
 Status CameraPipeline::Check() const {
@@ -30,6 +31,7 @@ Status CameraPipeline::Check() const {
   HR_RETURN_IF_ERROR(range("focus_mm", focus_mm, 0, 1e6));
   HR_RETURN_IF_ERROR(range("pixel_um", pixel_um, 0.5, 100));
   HR_RETURN_IF_ERROR(range("lens_blur_px", lens_blur_px, 0, 20));
+  HR_RETURN_IF_ERROR(range("render_grain_sd", render_grain_sd, 0, 2));
   return Status::Ok();
 }
 

@@ -43,6 +43,12 @@ struct CameraPipeline {
   double focus_mm = 0;  // distance in focus along the optical axis; 0 = the camera's target
   double pixel_um = 16;
   double lens_blur_px = 0;  // Gaussian sigma of a soft lens, everywhere in the image
+  // Not a camera's: the Monte Carlo grain of a path tracer's image at few
+  // samples per pixel, which images from another renderer carry. Each pixel's
+  // radiance (its channels alike) is multiplied by a log-normal factor of mean
+  // 1 and this sd of its log, independent per pixel, before the sensor (with
+  // the noise: off where a render asks for none). 0 = none.
+  double render_grain_sd = 0;
 
   bool Identity() const;
   // InvalidArgument naming the field (camera_pipeline.iso, ...): a value out

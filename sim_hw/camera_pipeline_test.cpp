@@ -147,6 +147,31 @@ TEST(CameraPipeline, DefocusSpreadsAPointByItsCircleOfConfusion) {
   EXPECT_EQ(DefocusRadiance(radiance, in_focus, pipeline, focal, focus)(50, 50)[1], 1.0f);
 }
 
+// A path tracer's grain: a log-normal factor per pixel of mean 1 (the field
+// stays as bright), the same on every channel, none in a render without noise.
+TEST(CameraPipeline, RenderGrainIsALogNormalFactorPerPixel) {
+  CameraPipeline pipeline;
+  pipeline.render_grain_sd = 0.5;
+  SceneCamera camera = FlatCamera(pipeline);
+  camera.read_noise_dn = 0;
+  camera.shot_noise_gain = 0;
+  const cv::Mat image = Expose(camera, {60, 60, 60}, true);
+  cv::Scalar mean, sd;
+  cv::meanStdDev(image.reshape(1), mean, sd);
+  const double expected_sd = 60.0 * std::sqrt(std::exp(0.25) - 1.0);  // 32 DN
+  EXPECT_NEAR(mean[0], 60.0, 1.0);
+  EXPECT_NEAR(sd[0], expected_sd, 0.05 * expected_sd);
+  int channels_apart = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const cv::Vec3b v = image.at<cv::Vec3b>(y, x);
+      channels_apart += v[0] != v[1] || v[1] != v[2];
+    }
+  }
+  EXPECT_EQ(channels_apart, 0);
+  EXPECT_EQ(Expose(camera, {60, 60, 60}, false).at<cv::Vec3b>(5, 5), cv::Vec3b(60, 60, 60));
+}
+
 TEST(CameraPipeline, CheckNamesTheField) {
   CameraPipeline pipeline;
   EXPECT_TRUE(pipeline.Check().ok());
@@ -158,6 +183,9 @@ TEST(CameraPipeline, CheckNamesTheField) {
   pipeline = CameraPipeline();
   pipeline.white_balance.x() = 0;
   EXPECT_TRUE(IsInvalidNaming(pipeline.Check(), "camera_pipeline.white_balance"));
+  pipeline = CameraPipeline();
+  pipeline.render_grain_sd = -0.1;
+  EXPECT_TRUE(IsInvalidNaming(pipeline.Check(), "camera_pipeline.render_grain_sd"));
 }
 
 }  // namespace

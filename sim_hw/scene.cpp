@@ -149,7 +149,7 @@ struct AsBuiltBox {
 // its file (sim_hw/camera_pipeline.h).
 CameraPipeline ReadCameraPipeline(const ConfigNode& n) {
   n.AllowOnlyKeys({"iso", "exposure_ev", "white_balance", "bayer", "tone", "jpeg_quality",
-                   "f_number", "focus_mm", "pixel_um", "lens_blur_px"});
+                   "f_number", "focus_mm", "pixel_um", "lens_blur_px", "render_grain_sd"});
   CameraPipeline p;
   p.iso = n.Number("iso", p.iso, {.min = 25, .max = 102400});
   p.exposure_ev = n.Number("exposure_ev", p.exposure_ev, {.min = -6, .max = 6});
@@ -162,6 +162,7 @@ CameraPipeline ReadCameraPipeline(const ConfigNode& n) {
   p.focus_mm = n.Number("focus_mm", p.focus_mm, {.min = 0, .max = 1e6});
   p.pixel_um = n.Number("pixel_um", p.pixel_um, {.min = 0.5, .max = 100});
   p.lens_blur_px = n.Number("lens_blur_px", p.lens_blur_px, {.min = 0, .max = 20});
+  p.render_grain_sd = n.Number("render_grain_sd", p.render_grain_sd, {.min = 0, .max = 2});
   return p;
 }
 

@@ -62,6 +62,21 @@ void FibreSparkle(Scene* s) {
   s->hair_shading.fibre_grain_sd = 0.7;
   s->hair_shading.fibre_grain_mm = 0.4;
 }
+// Images from another renderer: a path tracer at few samples per pixel (its
+// grain), fibres with strong glints of their own, a white mannequin and other
+// light (more of the room's, the lower panel dimmer).
+void PathTraced(Scene* s) {
+  ForEachCamera(s, [](CameraPipeline& p) {
+    p.render_grain_sd = 0.5;
+    p.tone = CameraPipeline::Tone::kSrgb;
+  });
+  s->hair_shading.fibre_albedo_sd = 0.35;
+  s->hair_shading.fibre_grain_sd = 1.0;
+  s->hair_shading.fibre_grain_mm = 0.3;
+  s->ambient = 0.25;
+  if (s->lights.size() > 1) s->lights.back().intensity *= 0.5;
+  WhiteMannequin(s);
+}
 void Photograph(Scene* s) {
   ForEachCamera(s, [](CameraPipeline& p) {
     p.iso = 800;
@@ -103,6 +118,10 @@ const std::vector<SceneVariation>& SceneVariations() {
       {"blue_backdrop", "a blue backdrop", BlueBackdrop},
       {"fibre_sparkle", "fibres of their own shade with glints and dull stretches of 0.4 mm",
        FibreSparkle},
+      {"path_traced",
+       "another renderer's image: a path tracer's grain at few samples per pixel, strong "
+       "fibre glints, room light, the lower panel at half, a white mannequin",
+       PathTraced},
       {"photograph",
        "ISO 800, Bayer, sRGB JPEG 85, f/4, warm balance, sparkle, grey backdrop, white mannequin",
        Photograph},

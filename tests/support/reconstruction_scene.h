@@ -10,11 +10,13 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/calib_box.h"
 #include "core/truth_maps.h"
 #include "reconstruction/hair_segmentation.h"
 #include "reconstruction/views.h"
+#include "sim_hw/scene_variations.h"
 #include "sim_hw/view_set.h"
 #include "tests/support/default_scene.h"
 
@@ -24,6 +26,8 @@ struct ReducedCaptureOptions {
   double scale = 0.5;
   int strands = 10000;
   int stops = 12;
+  // sim_hw/scene_variations.h names, applied after the reductions.
+  std::vector<std::string> variations;
 
   // InvalidArgument naming the field: scale outside (0, 1], strands or stops below 1.
   hairrig::Status Check() const {
@@ -47,6 +51,8 @@ inline hairrig::Scene ReducedScene(const ReducedCaptureOptions& o) {
     k.cx_px = (k.cx_px + 0.5) * o.scale - 0.5;
     k.cy_px = (k.cy_px + 0.5) * o.scale - 0.5;
   }
+  const hairrig::Status varied = hairrig::ApplySceneVariations(o.variations, &scene);
+  EXPECT_TRUE(varied.ok()) << varied.ToString();
   return scene;
 }
 
