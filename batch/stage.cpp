@@ -127,7 +127,9 @@ Result<HashedInputs> HashInputs(const StageOptions& o) {
     if (options.value(key, nlohmann::json()) != kFittedHead)
       options.erase(key);  // "fit" is no file
   }
+  HR_ASSIGN_OR_RETURN(const std::string build, HairrigBuildSha256());
   const nlohmann::json identity{{"hairrig_version", HairrigVersion()},
+                                {"hairrig_build", build},
                                 {"stage", StageName(o.stage)},
                                 {"options", options},
                                 {"inputs", hashed.files}};
@@ -365,6 +367,8 @@ Result<StageResult> RunStage(const StageOptions& o) {
   StageRecord record;
   record.stage = StageName(o.stage);
   record.hairrig_version = HairrigVersion();
+  if (const Result<std::string> build = HairrigBuildSha256(); build.ok())
+    record.hairrig_build = *build;
   record.options = o.settings.StageJson(o.stage);
   record.run_id = o.run_id;
   record.host = HostName();

@@ -24,6 +24,7 @@ nlohmann::json StageRecord::ToJson() const {
       {"run_id", run_id},         {"host", host},        {"pid", pid},
       {"start_utc", start_utc},   {"end_utc", end_utc},  {"seconds", seconds},
       {"summary", summary}};
+  if (!hairrig_build.empty()) j["hairrig_build"] = hairrig_build;
   if (!checked_utc.empty()) j["checked_utc"] = checked_utc;
   if (!error.empty()) j["error"] = error;
   if (injected_fault) j["injected_fault"] = true;
@@ -53,6 +54,7 @@ Result<StageRecord> ReadStageRecord(const std::string& capture_dir, Stage stage)
   r.skipped = o.BoolOr("skipped", false);
   r.injected_fault = o.BoolOr("injected_fault", false);
   r.hairrig_version = o.StringOr("hairrig_version", "");
+  r.hairrig_build = o.StringOr("hairrig_build", "");
   r.input_hash = o.StringOr("input_hash", "");
   r.inputs = o.Raw("inputs").is_object() ? o.Raw("inputs") : nlohmann::json::object();
   r.options = o.Raw("options").is_object() ? o.Raw("options") : nlohmann::json::object();

@@ -6,7 +6,8 @@
 //    "stage": "reconstruct", "status": "ok" | "failed" | "running",
 //    "skipped": false,            // true: inputs unchanged since this success; nothing ran
 //    "hairrig_version": "0.1.0",
-//    "input_hash": "<sha256>",    // over the version, stage, options and inputs' contents
+//    "hairrig_build": "<sha256>", // of the executable that wrote the record (core/version.h)
+//    "input_hash": "<sha256>",    // over the version, build, stage, options and inputs' contents
 //    "inputs": {"frames/000_SIM-CAM-UPPER.png": "<sha256>", ...},   // the inputs' own hashes
 //    "options": {...},            // the stage's options (batch/stages.h StageSettings::StageJson)
 //    "run_id": "r1-...",          // the batch submission that ran or skipped it; "" outside one
@@ -35,6 +36,7 @@ struct StageRecord {
   bool skipped = false;
   bool injected_fault = false;
   std::string hairrig_version;
+  std::string hairrig_build;
   std::string input_hash;
   nlohmann::json inputs = nlohmann::json::object();
   nlohmann::json options = nlohmann::json::object();

@@ -17,6 +17,7 @@
 #include "batch/process.h"
 #include "batch/stage_record.h"
 #include "core/strand_io.h"
+#include "core/version.h"
 #include "tests/support/status_testing.h"
 
 namespace hairrig {
@@ -81,6 +82,7 @@ TEST(Stage, FitWritesItsOutputAndResult) {
   EXPECT_EQ(record->input_hash, r->input_hash);
   EXPECT_EQ(record->input_hash.size(), 64u);
   EXPECT_FALSE(record->hairrig_version.empty());
+  EXPECT_EQ(record->hairrig_build, *HairrigBuildSha256());
   EXPECT_TRUE(record->inputs.contains("reconstruction/strands/strands.ply"));
   EXPECT_EQ(record->summary["guides"], 2);
   EXPECT_FALSE(record->start_utc.empty());

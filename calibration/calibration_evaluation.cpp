@@ -38,6 +38,30 @@ std::vector<std::pair<const StoredCalibration::View*, const CaptureTruth::View*>
   return compared;
 }
 
+// The ids of the tags the solved views' detections saw.
+std::vector<int> TagIdsUsed(const StoredCalibration& calibration) {
+  std::vector<int> ids;
+  for (const StoredCalibration::View& view : calibration.views)
+    if (view.solved)
+      for (const StoredCalibration::Tag& tag : view.tags) ids.push_back(tag.id);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+// `calibration` with its poses moved from its box frame to the true one. The
+// rotation between the frames is a few thousandths of a degree at most, so
+// the stated uncertainties are kept as they are.
+StoredCalibration InTrueBoxFrame(StoredCalibration calibration,
+                                 const Rigid3d& truth_from_estimated) {
+  const Rigid3d estimated_from_truth = truth_from_estimated.Inverse();
+  for (StoredCalibration::View& view : calibration.views) {
+    view.cam_from_box = view.cam_from_box * estimated_from_truth;
+    view.cam_from_box_initial = view.cam_from_box_initial * estimated_from_truth;
+  }
+  return calibration;
+}
+
 // Intrinsics are compared once per camera, at its first compared view.
 PoseErrors ComparePoses(const StoredCalibration& calibration, const TruthViews& truth,
                         bool initial) {
@@ -135,6 +159,8 @@ nlohmann::json CalibrationEvaluation::ToJson() const {
                                             {"centre_mahalanobis_ratio", u.centre_mahalanobis}};
   out["views_compared"] = views_compared;
   out["views"] = views;
+  out["box_alignment"] = {{"rotation_deg", box_alignment_deg},
+                          {"translation_mm", box_alignment_mm}};
   return out;
 }
 
@@ -145,6 +171,12 @@ std::string CalibrationEvaluation::BriefReport() const {
   text += "  bundle adjustment:\n" + PoseErrorRows(solved) +
           ErrorRow("reprojection RMS", reprojection_rms_px, "px");
   text += "  initial (" + initial_source + "):\n" + PoseErrorRows(initial);
+  if (box_alignment_mm > 1e-6 || box_alignment_deg > 1e-6) {
+    text += StringPrintf(
+        "  poses compared in the true tags' frame (the calibration's box frame is %.4f mm, %.4f "
+        "deg from it)\n",
+        box_alignment_mm, box_alignment_deg);
+  }
   if (corner_noise_px) {
     text += StringPrintf(
         "  reprojection RMS %.4f px against corner noise %.4f px (detections vs truth): %.2fx\n",
@@ -161,23 +193,29 @@ std::string CalibrationEvaluation::BriefReport() const {
 }
 
 Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calibration,
-                                                  const CaptureTruth& truth, const CalibBox& box) {
+                                                  const CaptureTruth& truth,
+                                                  const EvaluationBoxes& boxes) {
+  const Rigid3d truth_from_estimated =
+      TruthFromEstimatedBox(boxes.estimated, boxes.truth, TagIdsUsed(calibration));
+  const StoredCalibration aligned = InTrueBoxFrame(calibration, truth_from_estimated);
   CalibrationEvaluation e;
   e.mode = calibration.mode;
   e.views = static_cast<int>(calibration.views.size());
-  e.views_compared = static_cast<int>(ComparedViews(calibration, truth.views).size());
+  e.views_compared = static_cast<int>(ComparedViews(aligned, truth.views).size());
   if (e.views_compared == 0)
     return FailedPrecondition("no solved view has a ground truth to compare with");
-  e.solved = ComparePoses(calibration, truth.views, false);
-  e.initial = ComparePoses(calibration, truth.views, true);
+  e.solved = ComparePoses(aligned, truth.views, false);
+  e.initial = ComparePoses(aligned, truth.views, true);
   const bool from_views = std::any_of(calibration.cameras.begin(), calibration.cameras.end(),
                                       [](const auto& c) { return c.intrinsics_source == "views"; });
   e.initial_source = from_views ? "Zhang per camera + per-view IPPE" : "nominal intrinsics";
   for (const StoredCalibration::View& view : calibration.views)
     if (view.solved) e.reprojection_rms_px.values.push_back(view.rms_px);
   e.overall_rms_px = calibration.rms_px;
-  e.corner_noise_px = CornerNoise(calibration, truth.views, box);
-  e.uncertainty = CompareUncertainty(calibration, truth.views);
+  e.corner_noise_px = CornerNoise(calibration, truth.views, boxes.truth);
+  e.uncertainty = CompareUncertainty(aligned, truth.views);
+  e.box_alignment_deg = RotationDifferenceDeg(truth_from_estimated, Rigid3d());
+  e.box_alignment_mm = truth_from_estimated.translation.norm();
   return e;
 }
 

@@ -69,6 +69,10 @@ struct CalibrationEvaluation {
   // known tag was compared.
   std::optional<double> corner_noise_px;
   UncertaintyRatios uncertainty;  // over the solved views
+  // The move from the calibration's box frame to the true tags' frame the
+  // poses were compared in (0 when the box is exactly as drawn).
+  double box_alignment_deg = 0;
+  double box_alignment_mm = 0;
 
   // "stage": "calibration"; "solved" holds reprojection_rms_px too;
   // "rms_over_corner_noise" only with a corner noise.
@@ -76,10 +80,21 @@ struct CalibrationEvaluation {
   std::string BriefReport() const;
 };
 
+// The two boxes an evaluation needs: the one the calibration's poses are in
+// (its refined box, else the box it was given) and the one the images show (a
+// simulated box as built, else the same). The poses are compared in the frame
+// of the true tags (TruthFromEstimatedBox over the tags the calibration used),
+// the detections with the true tags' projections.
+struct EvaluationBoxes {
+  CalibBox estimated;
+  CalibBox truth;
+};
+
 // Solved views without a true pose are skipped. FailedPrecondition when no
-// solved view has one. `box` is the box the capture was calibrated with.
+// solved view has one.
 Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calibration,
-                                                  const CaptureTruth& truth, const CalibBox& box);
+                                                  const CaptureTruth& truth,
+                                                  const EvaluationBoxes& boxes);
 
 // The rigid transform from the box frame `estimated` defines to the one
 // `truth` defines, fitted over the corners of the tags both have (least

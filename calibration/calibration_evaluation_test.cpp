@@ -73,7 +73,7 @@ StoredCalibration SmallCalibration(const CaptureTruth& truth, const CalibBox& bo
 TEST(CalibrationEvaluation, ErrorsOfASmallCalibrationAgainstItsTruth) {
   const CaptureTruth truth = SmallTruth();
   const CalibBox box = OneTagBox();
-  const auto e = EvaluateCalibration(SmallCalibration(truth, box), truth, box);
+  const auto e = EvaluateCalibration(SmallCalibration(truth, box), truth, {box, box});
   ASSERT_TRUE(e.ok()) << e.status().ToString();
   EXPECT_EQ(e->views, 2);
   EXPECT_EQ(e->views_compared, 1);
@@ -98,12 +98,37 @@ TEST(CalibrationEvaluation, ErrorsOfASmallCalibrationAgainstItsTruth) {
   EXPECT_NE(brief.find("against corner noise 0.5000 px"), std::string::npos) << brief;
 }
 
+TEST(CalibrationEvaluation, PosesAreComparedInTheTrueTagsFrame) {
+  // The calibration's box has its tag 2 mm along x from where the images show
+  // it; its pose is exact in that box's frame, 2 mm off in the true one.
+  const CaptureTruth truth = SmallTruth();
+  const CalibBox true_box = OneTagBox();
+  CalibBox estimated_box = true_box;
+  const Eigen::Vector3d shift(2, 0, 0);
+  for (Eigen::Vector3d& corner : estimated_box.tags[0].corners_box_mm) corner += shift;
+  StoredCalibration calibration = SmallCalibration(truth, true_box);
+  calibration.views[0].cam_from_box =
+      truth.views.at(0).cam_from_box * Rigid3d(Eigen::Quaterniond::Identity(), -shift);
+
+  const auto aligned = EvaluateCalibration(calibration, truth, {estimated_box, true_box});
+  ASSERT_TRUE(aligned.ok()) << aligned.status().ToString();
+  EXPECT_NEAR(aligned->solved.camera_centre_mm.values.at(0), 0, 1e-9);
+  EXPECT_NEAR(aligned->solved.rotation_deg.values.at(0), 0, 1e-6);
+  EXPECT_NEAR(aligned->box_alignment_mm, 2, 1e-9);
+  EXPECT_NE(aligned->BriefReport().find("true tags' frame"), std::string::npos);
+
+  const auto unaligned = EvaluateCalibration(calibration, truth, {true_box, true_box});
+  ASSERT_TRUE(unaligned.ok());
+  EXPECT_NEAR(unaligned->solved.camera_centre_mm.values.at(0), 2, 1e-9);
+  EXPECT_EQ(unaligned->BriefReport().find("true tags' frame"), std::string::npos);
+}
+
 TEST(CalibrationEvaluation, NoSolvedViewInTheTruthIsAnError) {
   CaptureTruth truth = SmallTruth();
   const CalibBox box = OneTagBox();
   const StoredCalibration calibration = SmallCalibration(truth, box);
   truth.views.erase(0);
-  const auto e = EvaluateCalibration(calibration, truth, box);
+  const auto e = EvaluateCalibration(calibration, truth, {box, box});
   ASSERT_FALSE(e.ok());
   EXPECT_EQ(e.status().code(), StatusCode::kFailedPrecondition);
 }

@@ -313,6 +313,11 @@ Result<StoredCalibration> ReadCalibration(const std::string& calibration_json) {
   out.mode = root.StringOr("mode", "");
   out.rms_px = root.NumberOr("rms_px", 0.0, {.min = 0});
   if (out.mode == "turntable") out.turntable_from_box = PoseField(root, "turntable_from_box");
+  if (root.Has("box")) {
+    const JsonObject box = root.Object("box");
+    out.box_file = box.StringOr("file", "");
+    out.box_refined = box.BoolOr("refined", false);
+  }
   for (const JsonObject& camera : root.Objects("cameras"))
     out.cameras.push_back(CameraFromJson(camera));
   for (const JsonObject& view : root.Objects("views")) {

@@ -67,6 +67,11 @@ struct StoredCalibration {
   std::vector<Camera> cameras;
   std::vector<View> views;
   double rms_px = 0;
+  // calibration.json's "box": the file of the box it was given (as the user
+  // named it, relative to the folder the calibration ran in) and whether it
+  // refined that box (then calibration/box_as_built.yaml holds the result).
+  std::string box_file;
+  bool box_refined = false;
 };
 
 // CorruptData names the file and field for anything missing, mistyped or not finite.

@@ -403,6 +403,36 @@ Status CaptureCalibrationEvalOptions::Check() const {
   return Status::Ok();
 }
 
+namespace {
+
+// The box a capture's calibration solved against: its refined box, else the
+// file it was given when that file is still there, else the rig config's; and
+// the box the simulated rig drew: ground_truth/box_as_built.yaml, else the
+// same as the calibration's.
+Result<EvaluationBoxes> EvaluationBoxesOf(const std::string& dir,
+                                          const StoredCalibration& calibration) {
+  const fs::path refined = fs::path(dir) / "calibration" / "box_as_built.yaml";
+  const fs::path true_box = fs::path(dir) / "ground_truth" / "box_as_built.yaml";
+  EvaluationBoxes boxes;
+  if (calibration.box_refined && fs::exists(refined)) {
+    HR_ASSIGN_OR_RETURN(boxes.estimated, LoadCalibBox(refined.string()));
+  } else if (!calibration.box_file.empty() && fs::exists(calibration.box_file)) {
+    HR_ASSIGN_OR_RETURN(boxes.estimated, LoadCalibBox(calibration.box_file));
+  } else {
+    HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(dir));
+    HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
+    boxes.estimated = section.box;
+  }
+  if (fs::exists(true_box)) {
+    HR_ASSIGN_OR_RETURN(boxes.truth, LoadCalibBox(true_box.string()));
+  } else {
+    boxes.truth = boxes.estimated;
+  }
+  return boxes;
+}
+
+}  // namespace
+
 Result<CalibrationEvaluation> EvaluateCaptureCalibration(
     const CaptureCalibrationEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
@@ -411,9 +441,8 @@ Result<CalibrationEvaluation> EvaluateCaptureCalibration(
       const StoredCalibration calibration,
       ReadCalibration((fs::path(dir) / "calibration" / "calibration.json").string()));
   HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(dir));
-  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(dir));
-  HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
-  Result<CalibrationEvaluation> evaluation = EvaluateCalibration(calibration, truth, section.box);
+  HR_ASSIGN_OR_RETURN(const EvaluationBoxes boxes, EvaluationBoxesOf(dir, calibration));
+  Result<CalibrationEvaluation> evaluation = EvaluateCalibration(calibration, truth, boxes);
   if (!evaluation.ok()) return evaluation.status().WithContext(dir);
   evaluation->dir = dir;
   return evaluation;
