@@ -231,7 +231,7 @@ def main():
         resource.setrlimit(resource.RLIMIT_NOFILE, (min(wanted, hard), hard))
     captures = tempfile.mkdtemp(prefix="console_load_")
     proc, port = start_console(args.hairrig, captures, live_fps=args.live_fps)
-    result = {"idle": args.idle, "slow": args.slow}
+    result = {"idle": args.idle, "slow": args.slow, "live_fps": float(args.live_fps)}
     try:
         time.sleep(2)
         result["cpu_no_load"] = cpu_share(proc.pid, args.window)

@@ -49,7 +49,7 @@ def console_load_table(record):
         ("e-stop latency, median / max",
          "%.1f ms / %.1f ms" % (statistics.median(estop), estop[-1])),
         ("state read, median / max", "%.1f ms / %.1f ms" % (statistics.median(state), state[-1])),
-        ("console CPU, load held / no load",
+        ("console CPU with its live view at %g frame/s, load held / no load" % r["live_fps"],
          "%.1f %% / %.1f %% of a core" % (100 * r["cpu_under_load"], 100 * r["cpu_no_load"])),
     ]
     if cap.get("started"):
