@@ -1,7 +1,10 @@
 // The Sequencer's bookkeeping (rig/capture_sequencer.h): faults and storage
 // stops, progress and ETA, the summary and the session's end.
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -10,6 +13,7 @@
 
 #include "core/log.h"
 #include "core/status.h"
+
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/capture_sequencer.h"
@@ -44,11 +48,31 @@ void Sequencer::StopRun(const std::string& why) {
 
 // The run stops before the fault is journalled, so that no position_reached
 // record follows it (ShootStop journals those under mutex_ unless stopping).
+namespace {
+
+// What the operator does after storage fault `status` in `dir`: free space
+// when the write ran out of it (ENOSPC, EDQUOT) or the disk has less than a
+// few frames' room left, else mend what the error names (a folder or a
+// read-only file where a file is written, permissions).
+std::string StorageRemedy(const Status& status, const std::string& dir) {
+  constexpr std::uintmax_t kFewFramesBytes = std::uintmax_t{256} << 20;
+  const std::string& message = status.message();
+  const bool out_of_space = message.find(std::strerror(ENOSPC)) != std::string::npos ||
+                            message.find(std::strerror(EDQUOT)) != std::string::npos;
+  std::error_code ec;
+  const std::filesystem::space_info space = std::filesystem::space(dir, ec);
+  if (out_of_space || ec || space.available < kFewFramesBytes)
+    return "free space on the disk of " + dir;
+  return "mend what the error names (the disk of " + dir + " has " +
+         std::to_string(space.available >> 20) + " MB free)";
+}
+
+}  // namespace
+
 void Sequencer::StopForStorage(const Status& status, const Device* device, int view) {
   if (storage_failed_.exchange(true)) return;
-  StopRun("storage: " + status.ToString() +
-          ". The frames stored so far are kept; free space on the disk of " + dataset_.dir() +
-          ", then continue with --resume");
+  StopRun("storage: " + status.ToString() + ". The frames stored so far are kept; " +
+          StorageRemedy(status, dataset_.dir()) + ", then continue with --resume");
   RecordFault(device, status, "stop the run", view);
 }
 

@@ -691,6 +691,27 @@ TEST(CaptureFaults, FullDiskStopsTheRunAndResumeFinishesIt) {
   EXPECT_TRUE(fs::exists(s.dir + "/contact_sheet.png"));
 }
 
+// A folder stands where the manifest is written: the run stops naming the
+// file, and does not send the operator to free disk space there is.
+TEST(CaptureFaults, AFolderWhereTheManifestGoesIsNamedNotTakenForAFullDisk) {
+  const std::string dir = FreshDir("manifest_folder");
+  const CaptureSummary s = Capture(WriteSmallRig(dir), dir + "/c");
+  ASSERT_EQ(s.status, "complete") << s.message;
+  fs::remove(s.dir + "/manifest.json");
+  fs::create_directories(s.dir + "/manifest.json/in_the_way");
+  CaptureOptions o;
+  o.out_dir = s.dir;
+  o.resume = true;
+  const auto resumed = RunCapture(o);
+  ASSERT_TRUE(resumed.ok()) << resumed.status().ToString();
+  EXPECT_EQ(resumed->status, "stopped");
+  EXPECT_NE(resumed->message.find("manifest.json"), std::string::npos) << resumed->message;
+  EXPECT_NE(resumed->message.find("mend what the error names"), std::string::npos)
+      << resumed->message;
+  EXPECT_EQ(resumed->message.find("free space"), std::string::npos) << resumed->message;
+  EXPECT_EQ(VerifiedFramesOnDisk(s.dir).size(), 38u);
+}
+
 // The plan, devices and policies of a rig config, as RunCapture reads them.
 struct PlanOfRig {
   std::unique_ptr<Rig> rig;
