@@ -13,7 +13,6 @@
 
 #include "core/log.h"
 #include "core/status.h"
-
 #include "rig/capture_dataset.h"
 #include "rig/capture_plan.h"
 #include "rig/capture_sequencer.h"
