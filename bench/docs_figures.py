@@ -151,10 +151,71 @@ def reconstruction_robustness_table(record):
     return lines
 
 
+def google_benchmark_times(record):
+    """{benchmark name: [real time of each repetition]} from Google Benchmark's JSON output."""
+    times = {}
+    for b in record["result"]["benchmarks"]:
+        if b.get("run_type", "iteration") != "iteration":
+            continue
+        name = b.get("run_name", b["name"]).replace("/real_time", "")
+        times.setdefault(name, []).append(b["real_time"] / {"ms": 1e3, "us": 1e6, "ns": 1e9,
+                                                            "s": 1.0}[b["time_unit"]])
+    return times
+
+
+RENDER_SUBJECTS = [
+    ("BM_RenderView/0/2", "default scene: 40,000-strand wig"),
+    ("BM_RenderView/0/1", "the same on one thread"),
+    ("BM_RenderView/3/2", "the same style with 50,000 strands"),
+    ("BM_RenderView/1/2", "curly_blond: 50,000 strands, 78 points per strand, the densest"),
+    ("BM_RenderView/2/2", "the former subject: an ellipsoid under 10,000 unshadowed strands"),
+    ("BM_RenderNoHair/0/2", "the default view without its hair"),
+]
+
+
+MODBUS_EXCHANGES = [
+    ("BM_ModbusStatusRead/0", "round trip of one status read (17 registers), TCP loopback"),
+    ("BM_ModbusStatusRead/1",
+     "the same over a pseudo-terminal (which does not pace bytes at the baud rate)"),
+    ("BM_ModbusWriteMoveParameters/0", "writing a move's parameters (6 registers), TCP loopback"),
+    ("BM_ModbusWriteMoveParameters/1", "the same over a pseudo-terminal"),
+]
+
+
+def google_benchmark_table(record, rows, what, unit):
+    """One row per (benchmark, label) present: the median and each repetition, in `unit`."""
+    times = google_benchmark_times(record)
+    scale = {"s": 1.0, "ms": 1e3, "us": 1e6}[unit]
+    lines = ["| %s (benchmark) | median (repetitions) | commit, date |" % what, "| --- | --- | --- |"]
+    for name, label in rows:
+        if name not in times:
+            continue
+        t = sorted(x * scale for x in times[name])
+        digits = 2 if unit == "s" else 0
+        lines.append("| %s (`%s`) | %.*f %s (%s) | %s |"
+                     % (label, name, digits, statistics.median(t), unit,
+                        ", ".join("%.*f" % (digits, x) for x in t), provenance(record)))
+    return lines, times
+
+
+def render_view_table(record):
+    lines, times = google_benchmark_table(record, RENDER_SUBJECTS, "subject, time per view", "s")
+    wig, old = times.get("BM_RenderView/0/2"), times.get("BM_RenderView/2/2")
+    if wig and old:
+        lines += ["", "In the same run, the default wig costs %.1f times the former subject."
+                  % (statistics.median(wig) / statistics.median(old))]
+    return lines
+
+
+def modbus_table(record):
+    return google_benchmark_table(record, MODBUS_EXCHANGES, "exchange", "us")[0]
+
+
 RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table,
              "console_viewer": console_viewer_table, "gltf_animation": gltf_animation_table,
              "reconstruction_robustness": reconstruction_robustness_table,
-             "reconstruction_robustness_luo_filter": reconstruction_robustness_table}
+             "reconstruction_robustness_luo_filter": reconstruction_robustness_table,
+             "render_view": render_view_table, "modbus": modbus_table}
 
 
 def load_record(name):
