@@ -18,7 +18,7 @@
 #include "core/sha256.h"
 #include "core/strand_io.h"
 #include "core/version.h"
-#include "rig/capture_calibration_input.h"
+#include "rig/calibrate_capture.h"
 #include "rig/capture_dataset.h"
 #include "rig/manifest_frames.h"
 #include "rig/reconstruct_capture.h"

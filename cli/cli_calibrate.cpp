@@ -2,7 +2,7 @@
 
 #include "calibration/intrinsics_folder.h"
 #include "cli/cli.h"
-#include "rig/capture_calibration_input.h"
+#include "rig/calibrate_capture.h"
 
 namespace hairrig {
 namespace {

@@ -6,7 +6,7 @@
 #include "calibration/calibration_evaluation.h"
 #include "cli/cli.h"
 #include "reconstruction/reconstruction_evaluation.h"
-#include "rig/capture_calibration_input.h"
+#include "rig/calibrate_capture.h"
 
 namespace hairrig {
 

@@ -1,6 +1,6 @@
 // `hairrig capture` as one library call: a capture (rig/capture.h), and with
 // `calibrate` its calibration (tags detected as the frames land, the capture
-// calibrated once it completes, rig/capture_calibration_input.h), and with
+// calibrated once it completes, rig/calibrate_capture.h), and with
 // `reconstruct` its reconstruction (rig/reconstruct_capture.h) when the
 // calibration has not failed.
 #pragma once
@@ -13,7 +13,7 @@
 
 #include "core/status.h"
 #include "rig/capture.h"
-#include "rig/capture_calibration_input.h"
+#include "rig/calibrate_capture.h"
 #include "rig/reconstruct_capture.h"
 
 namespace hairrig {
