@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "core/status.h"
-#include "rig/capture.h"
 #include "rig/calibrate_capture.h"
+#include "rig/capture.h"
 #include "rig/reconstruct_capture.h"
 
 namespace hairrig {
