@@ -16,7 +16,7 @@
 #include "core/strand_io.h"
 #include "core/string_format.h"
 #include "rig/rig_config.h"
-#include "rig/strand_preview.h"
+#include "rig/simulation_preview.h"
 #include "simulation/guide_interpolation.h"
 
 namespace hairrig {

@@ -8,7 +8,7 @@
 //                              4 points per helix element), when frames/
 //                              holds strands interpolated from them
 //   previews/frame_NNNN.png    the strands drawn by the registered previewer
-//                              (rig/strand_preview.h: the scene's first camera),
+//                              (rig/simulation_preview.h: the scene's first camera),
 //                              the head as the scene (or head_file) gives it
 //   summary.json               SimulateRunSummary::ToJson()
 #pragma once

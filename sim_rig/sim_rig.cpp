@@ -9,7 +9,7 @@
 #include "drivers/v4l2_camera.h"
 #include "rig/capture.h"
 #include "rig/rig_extension.h"
-#include "rig/strand_preview.h"
+#include "rig/simulation_preview.h"
 #include "sim_hw/capture_truth.h"
 #include "sim_hw/modbus_turntable_server.h"
 #include "sim_hw/renderer.h"

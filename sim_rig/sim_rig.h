@@ -32,7 +32,7 @@
 //     scene light `light` (default: the device's name).
 // Those values in a config without a `sim` section are refused, naming the field.
 // RegisterSimRig also registers the scene renderer as the strand previewer
-// (rig/strand_preview.h) of `hairrig simulate`.
+// (rig/simulation_preview.h) of `hairrig simulate`.
 #pragma once
 
 #include <memory>

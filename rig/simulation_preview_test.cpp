@@ -1,4 +1,4 @@
-#include "rig/strand_preview.h"
+#include "rig/simulation_preview.h"
 
 #include <gtest/gtest.h>
 
