@@ -127,7 +127,7 @@ Result<HashedInputs> HashInputs(const StageOptions& o) {
     if (options.value(key, nlohmann::json()) != kFittedHead)
       options.erase(key);  // "fit" is no file
   }
-  HR_ASSIGN_OR_RETURN(const std::string build, HairrigBuildSha256());
+  HR_ASSIGN_OR_RETURN(const std::string build, HairrigBuildId());
   const nlohmann::json identity{{"hairrig_version", HairrigVersion()},
                                 {"hairrig_build", build},
                                 {"stage", StageName(o.stage)},
@@ -367,8 +367,7 @@ Result<StageResult> RunStage(const StageOptions& o) {
   StageRecord record;
   record.stage = StageName(o.stage);
   record.hairrig_version = HairrigVersion();
-  if (const Result<std::string> build = HairrigBuildSha256(); build.ok())
-    record.hairrig_build = *build;
+  if (const Result<std::string> build = HairrigBuildId(); build.ok()) record.hairrig_build = *build;
   record.options = o.settings.StageJson(o.stage);
   record.run_id = o.run_id;
   record.host = HostName();

@@ -5,7 +5,7 @@
 // stage fails.
 //
 // Inputs and skipping: the stage's input hash is a SHA-256 over the hairrig
-// version, the stage's name, its options (without `threads` and the file
+// version and build (core/version.h), the stage's name, its options (without `threads` and the file
 // names) and the SHA-256 of every input file, named by its path inside the
 // capture (or by the option that names it), so it does not depend on where
 // the capture or the option files lie:

@@ -6,7 +6,7 @@
 //    "stage": "reconstruct", "status": "ok" | "failed" | "running",
 //    "skipped": false,            // true: inputs unchanged since this success; nothing ran
 //    "hairrig_version": "0.1.0",
-//    "hairrig_build": "<sha256>", // of the executable that wrote the record (core/version.h)
+//    "hairrig_build": "<id>",     // the executable's build (core/version.h HairrigBuildId)
 //    "input_hash": "<sha256>",    // over the version, build, stage, options and inputs' contents
 //    "inputs": {"frames/000_SIM-CAM-UPPER.png": "<sha256>", ...},   // the inputs' own hashes
 //    "options": {...},            // the stage's options (batch/stages.h StageSettings::StageJson)

@@ -82,7 +82,9 @@ TEST(Stage, FitWritesItsOutputAndResult) {
   EXPECT_EQ(record->input_hash, r->input_hash);
   EXPECT_EQ(record->input_hash.size(), 64u);
   EXPECT_FALSE(record->hairrig_version.empty());
-  EXPECT_EQ(record->hairrig_build, *HairrigBuildSha256());
+  const Result<std::string> build = HairrigBuildId();
+  ASSERT_TRUE(build.ok()) << build.status().ToString();
+  EXPECT_EQ(record->hairrig_build, *build);
   EXPECT_TRUE(record->inputs.contains("reconstruction/strands/strands.ply"));
   EXPECT_EQ(record->summary["guides"], 2);
   EXPECT_FALSE(record->start_utc.empty());

@@ -49,7 +49,7 @@ def console_load_table(record):
         ("e-stop latency, median / max",
          "%.1f ms / %.1f ms" % (statistics.median(estop), estop[-1])),
         ("state read, median / max", "%.1f ms / %.1f ms" % (statistics.median(state), state[-1])),
-        ("console CPU with its live view at %g frame/s, load held / no load" % r["live_fps"],
+        ("console CPU with its live view at %g frame/s, load held / no load" % r.get("live_fps", 1),
          "%.1f %% / %.1f %% of a core" % (100 * r["cpu_under_load"], 100 * r["cpu_no_load"])),
     ]
     if cap.get("started"):
@@ -176,7 +176,7 @@ RENDER_SUBJECTS = [
 MODBUS_EXCHANGES = [
     ("BM_ModbusStatusRead/0", "round trip of one status read (17 registers), TCP loopback"),
     ("BM_ModbusStatusRead/1",
-     "the same over a pseudo-terminal (which does not pace bytes at the baud rate)"),
+     "the same over a pseudo-terminal, which does not pace bytes at the baud rate"),
     ("BM_ModbusWriteMoveParameters/0", "writing a move's parameters (6 registers), TCP loopback"),
     ("BM_ModbusWriteMoveParameters/1", "the same over a pseudo-terminal"),
 ]
@@ -189,7 +189,8 @@ def google_benchmark_table(record, rows, what, unit):
     lines = ["| %s (benchmark) | median (repetitions) | commit, date |" % what, "| --- | --- | --- |"]
     for name, label in rows:
         if name not in times:
-            continue
+            raise SystemExit("docs_figures: the record has no benchmark %s (run every one the "
+                             "table lists)" % name)
         t = sorted(x * scale for x in times[name])
         digits = 2 if unit == "s" else 0
         lines.append("| %s (`%s`) | %.*f %s (%s) | %s |"
@@ -215,6 +216,7 @@ RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_cam
              "console_viewer": console_viewer_table, "gltf_animation": gltf_animation_table,
              "reconstruction_robustness": reconstruction_robustness_table,
              "reconstruction_robustness_luo_filter": reconstruction_robustness_table,
+             "reconstruction_robustness_curly_blond": reconstruction_robustness_table,
              "render_view": render_view_table, "modbus": modbus_table}
 
 

@@ -4,7 +4,8 @@
 //   calibration  a capture's calibration.json (calibration/calibration_io.h)
 //                against its ground_truth/ (core/truth_maps.h): per solved view
 //                the rotation error of cam_from_box (deg) and the error of the
-//                camera centre in the box frame (mm); per camera the focal
+//                camera centre (mm), both in the frame of the true tags
+//                (EvaluationBoxes); per camera the focal
 //                length error (%, the worse of fx and fy) and the principal
 //                point's (px); for the bundle adjustment's result and for the
 //                initial poses and intrinsics before it. Besides: the corner
@@ -46,7 +47,7 @@ struct ErrorSpread {
 // ones) against the truth.
 struct PoseErrors {
   ErrorSpread rotation_deg;        // per view
-  ErrorSpread camera_centre_mm;    // per view, box frame
+  ErrorSpread camera_centre_mm;    // per view, the true tags' frame
   ErrorSpread focal_percent;       // per camera: 100 max(|fx / fx_true - 1|, |fy / fy_true - 1|)
   ErrorSpread principal_point_px;  // per camera
   nlohmann::json ToJson() const;
@@ -70,12 +71,13 @@ struct CalibrationEvaluation {
   std::optional<double> corner_noise_px;
   UncertaintyRatios uncertainty;  // over the solved views
   // The move from the calibration's box frame to the true tags' frame the
-  // poses were compared in (0 when the box is exactly as drawn).
+  // poses were compared in (0 when the calibration's box is the true one).
   double box_alignment_deg = 0;
   double box_alignment_mm = 0;
 
   // "stage": "calibration"; "solved" holds reprojection_rms_px too;
-  // "rms_over_corner_noise" only with a corner noise.
+  // "rms_over_corner_noise" only with a corner noise; "box_alignment":
+  // {"rotation_deg", "translation_mm"}.
   nlohmann::json ToJson() const;
   std::string BriefReport() const;
 };
@@ -91,7 +93,7 @@ struct EvaluationBoxes {
 };
 
 // Solved views without a true pose are skipped. FailedPrecondition when no
-// solved view has one.
+// solved view has one, or when the two boxes have no tag in common.
 Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calibration,
                                                   const CaptureTruth& truth,
                                                   const EvaluationBoxes& boxes);
@@ -101,8 +103,8 @@ Result<CalibrationEvaluation> EvaluateCalibration(const StoredCalibration& calib
 // squares without scale, Umeyama 1991). A box's frame is fixed by its tags
 // alone, so a calibration against a box as built compares with the truth in
 // the frame of the true tags. `tag_ids`: the tags to fit over (the observed
-// ones; the others keep their drawn place); empty: every tag. Identity with
-// fewer than 3 corners in common.
+// ones; the others keep their drawn place); empty: every tag. Identity when
+// the boxes have no chosen tag in common (one tag's 4 corners fix the fit).
 Rigid3d TruthFromEstimatedBox(const CalibBox& estimated, const CalibBox& truth,
                               const std::vector<int>& tag_ids = {});
 

@@ -123,6 +123,18 @@ TEST(CalibrationEvaluation, PosesAreComparedInTheTrueTagsFrame) {
   EXPECT_EQ(unaligned->BriefReport().find("true tags' frame"), std::string::npos);
 }
 
+TEST(CalibrationEvaluation, BoxesWithNoTagInCommonAreAnError) {
+  const CaptureTruth truth = SmallTruth();
+  const CalibBox true_box = OneTagBox();
+  CalibBox other_box = true_box;
+  other_box.tags[0].id = 7;
+  const auto e =
+      EvaluateCalibration(SmallCalibration(truth, true_box), truth, {other_box, true_box});
+  ASSERT_FALSE(e.ok());
+  EXPECT_EQ(e.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(e.status().message().find("no tag in common"), std::string::npos);
+}
+
 TEST(CalibrationEvaluation, NoSolvedViewInTheTruthIsAnError) {
   CaptureTruth truth = SmallTruth();
   const CalibBox box = OneTagBox();

@@ -281,9 +281,13 @@ Status WriteCalibration(const std::string& dir, const CaptureCalibrationInput& i
   }
   const fs::path box_file = root / "box_as_built.yaml";
   if (!result.box_refined) {
-    std::error_code ec;  // an earlier calibration's box is not this one's
-    fs::remove(box_file, ec);
-    if (ec) return IoError(box_file.string() + ": cannot remove (" + ec.message() + ")");
+    // An earlier calibration's box is not this one's, unless it is the box
+    // this calibration was given (`--exact-box --box` that file): kept.
+    std::error_code ec;
+    const bool given = !input.box_source.empty() && fs::equivalent(box_file, input.box_source, ec);
+    if (!given) fs::remove(box_file, ec);
+    if (ec && fs::exists(box_file))
+      return IoError(box_file.string() + ": cannot remove (" + ec.message() + ")");
   } else {
     HR_RETURN_IF_ERROR(WriteCalibBox(
         result.box_as_built, box_file.string(),

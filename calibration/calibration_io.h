@@ -13,7 +13,9 @@
 //                           accept the capture
 //   box_as_built.yaml       the box as refined with the cameras (core/calib_box.h
 //                           format, with standard deviations), when it was refined:
-//                           the box to give a later capture's calibration (--box)
+//                           the box to give a later capture's calibration (--box);
+//                           a calibration that does not refine removes an earlier
+//                           one's, unless it is the box it was given
 //
 // Frames as in core/transform.h; mm and px.
 #pragma once

@@ -18,7 +18,9 @@ int Run(int argc, char** argv) {
       "hairrig: capture rig control and hair pipeline.\n"
       "With no --config, the rig is the simulated one in etc/ (etc/sim-rig.yaml)."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", HairrigVersion());
+  const Result<std::string> build = HairrigBuildId();
+  app.set_version_flag("--version", std::string(HairrigVersion()) + " (build " +
+                                        (build.ok() ? *build : "unknown") + ")");
   CommonOptions common;
   app.add_option("--log-level", common.log_level, "debug, info, warning, error or off")
       ->capture_default_str();

@@ -12,10 +12,12 @@ namespace hairrig {
 // "MAJOR.MINOR.PATCH".
 const char* HairrigVersion();
 
-// The SHA-256 (hex) of the running executable's file (/proc/self/exe), read
-// once per process: a rebuild after a code change, or a build by another
-// compiler, has another one under the same version. IoError naming the file
-// when it cannot be read.
-Result<std::string> HairrigBuildSha256();
+// The running executable's build: its GNU build ID (hex; the linker's hash of
+// the linked program, read from the loaded program's notes, no file read),
+// else the SHA-256 of its file (/proc/self/exe) for a toolchain that writes
+// no build ID. A rebuild after a code change, or a build by another
+// compiler, has another one under the same version; copies of one build have
+// the same. IoError naming the file when the fallback cannot read it.
+Result<std::string> HairrigBuildId();
 
 }  // namespace hairrig

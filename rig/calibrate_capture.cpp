@@ -1,5 +1,6 @@
 #include "rig/calibrate_capture.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -99,7 +100,7 @@ Result<CalibratedFolder> CalibrateCaptureFolder(const std::string& capture_dir,
   }
   if (!options.box_file.empty()) {
     HR_ASSIGN_OR_RETURN(done.input.box, LoadCalibBox(options.box_file));
-    done.input.box_source = options.box_file;
+    done.input.box_source = fs::absolute(options.box_file).string();
   }
   if (options.detected != nullptr) {
     for (CalibrationFrame& frame : done.input.frames) {
@@ -236,29 +237,47 @@ Status CaptureCalibrationEvalOptions::Check() const {
 
 namespace {
 
-// The box a capture's calibration solved against: its refined box, else the
-// file it was given when that file is still there, else the rig config's; and
-// the box the simulated rig drew: ground_truth/box_as_built.yaml, else the
-// same as the calibration's.
-Result<EvaluationBoxes> EvaluationBoxesOf(const std::string& dir,
+// The box a capture's calibration solved against: its refined box when it
+// refined one, else the box file it was given (the rig config's when that is
+// the one named). FailedPrecondition names the file calibration.json needs
+// and cannot find.
+Result<CalibBox> CalibratedBoxOf(const std::string& dir, const StoredCalibration& calibration,
+                                 const CalibrationSection& section) {
+  const fs::path calibration_json = fs::path(dir) / "calibration" / "calibration.json";
+  if (calibration.box_refined) {
+    const fs::path refined = fs::path(dir) / "calibration" / "box_as_built.yaml";
+    if (!fs::exists(refined))
+      return FailedPrecondition(refined.string() +
+                                ": missing, though calibration.json says the calibration refined "
+                                "the box; calibrate the capture again");
+    return LoadCalibBox(refined.string());
+  }
+  if (calibration.box_file.empty() || calibration.box_file == section.box_file) return section.box;
+  if (!fs::exists(calibration.box_file))
+    return FailedPrecondition(calibration_json.string() +
+                              ": field 'box.file': " + calibration.box_file +
+                              " (the box the calibration was given) is not there; calibrate "
+                              "again with the box at hand");
+  return LoadCalibBox(calibration.box_file);
+}
+
+// The boxes an evaluation compares: the calibration's (CalibratedBoxOf) and
+// the one the simulated rig drew, ground_truth/box_as_built.yaml (verified
+// against the ground truth's checksums), else the rig config's box (captures
+// whose ground truth predates the box as built show the drawn box).
+Result<EvaluationBoxes> EvaluationBoxesOf(const std::string& dir, const CaptureTruth& truth,
                                           const StoredCalibration& calibration) {
-  const fs::path refined = fs::path(dir) / "calibration" / "box_as_built.yaml";
-  const fs::path true_box = fs::path(dir) / "ground_truth" / "box_as_built.yaml";
+  HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(dir));
+  HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
   EvaluationBoxes boxes;
-  if (calibration.box_refined && fs::exists(refined)) {
-    HR_ASSIGN_OR_RETURN(boxes.estimated, LoadCalibBox(refined.string()));
-  } else if (!calibration.box_file.empty() && fs::exists(calibration.box_file)) {
-    HR_ASSIGN_OR_RETURN(boxes.estimated, LoadCalibBox(calibration.box_file));
-  } else {
-    HR_ASSIGN_OR_RETURN(const RigConfig config, LoadCaptureRigConfig(dir));
-    HR_ASSIGN_OR_RETURN(const CalibrationSection section, ReadCalibrationSection(config));
-    boxes.estimated = section.box;
+  HR_ASSIGN_OR_RETURN(boxes.estimated, CalibratedBoxOf(dir, calibration, section));
+  const fs::path true_box = fs::path(truth.dir) / "box_as_built.yaml";
+  if (!fs::exists(true_box)) {
+    boxes.truth = section.box;
+    return boxes;
   }
-  if (fs::exists(true_box)) {
-    HR_ASSIGN_OR_RETURN(boxes.truth, LoadCalibBox(true_box.string()));
-  } else {
-    boxes.truth = boxes.estimated;
-  }
+  HR_RETURN_IF_ERROR(VerifyTruthFile(truth, true_box.string()));
+  HR_ASSIGN_OR_RETURN(boxes.truth, LoadCalibBox(true_box.string()));
   return boxes;
 }
 
@@ -272,7 +291,7 @@ Result<CalibrationEvaluation> EvaluateCaptureCalibration(
       const StoredCalibration calibration,
       ReadCalibration((fs::path(dir) / "calibration" / "calibration.json").string()));
   HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(dir));
-  HR_ASSIGN_OR_RETURN(const EvaluationBoxes boxes, EvaluationBoxesOf(dir, calibration));
+  HR_ASSIGN_OR_RETURN(const EvaluationBoxes boxes, EvaluationBoxesOf(dir, truth, calibration));
   Result<CalibrationEvaluation> evaluation = EvaluateCalibration(calibration, truth, boxes);
   if (!evaluation.ok()) return evaluation.status().WithContext(dir);
   evaluation->dir = dir;

@@ -98,10 +98,16 @@ struct CaptureCalibrationEvalOptions {
 };
 
 // `hairrig eval calibration`: <capture>/calibration/calibration.json against
-// <capture>/ground_truth/ (calibration/calibration_evaluation.h), with the box
-// of the capture's rig.yaml. Errors: no calibration (run `hairrig calibrate`),
-// no ground truth (not a simulated capture), a broken rig.yaml, no solved view
-// in the ground truth (named by the capture folder).
+// <capture>/ground_truth/ (calibration/calibration_evaluation.h), in the frame
+// of the true tags: the calibration's box (calibration/box_as_built.yaml when
+// it refined the box, else the box file it was given, else the rig.yaml's)
+// fitted to the box the simulated rig drew (ground_truth/box_as_built.yaml,
+// checksummed; the rig.yaml's box for a ground truth without one). Errors: no
+// calibration (run `hairrig calibrate`), no ground truth (not a simulated
+// capture), a broken rig.yaml, a box file calibration.json names that is gone
+// (FailedPrecondition naming it), a true box that fails its checksum, boxes
+// with no tag in common, no solved view in the ground truth (named by the
+// capture folder).
 Result<CalibrationEvaluation> EvaluateCaptureCalibration(
     const CaptureCalibrationEvalOptions& options);
 

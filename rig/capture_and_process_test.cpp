@@ -9,6 +9,7 @@
 #include <string>
 
 #include "rig/capture.h"
+#include "rig/calibrate_capture.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_dataset.h"
 #include "rig/device_check.h"

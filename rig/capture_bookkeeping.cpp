@@ -4,7 +4,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <filesystem>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -45,33 +44,31 @@ void Sequencer::StopRun(const std::string& why) {
   cv_.notify_all();
 }
 
-// The run stops before the fault is journalled, so that no position_reached
-// record follows it (ShootStop journals those under mutex_ unless stopping).
 namespace {
 
-// What the operator does after storage fault `status` in `dir`: free space
-// when the write ran out of it (ENOSPC, EDQUOT) or the disk has less than a
-// few frames' room left, else mend what the error names (a folder or a
-// read-only file where a file is written, permissions).
-std::string StorageRemedy(const Status& status, const std::string& dir) {
-  constexpr std::uintmax_t kFewFramesBytes = std::uintmax_t{256} << 20;
+// What the operator does after storage fault `status`: free space when the
+// write ran out of it (ENOSPC, EDQUOT) or the capture's disk, as its storage
+// reports it, has no room for a few more frames above storage.min_free_mb;
+// else mend what the error names (a folder or a read-only file where a file
+// is written, permissions).
+std::string StorageRemedy(const Status& status, const CaptureDataset& dataset) {
+  constexpr uint64_t kFewFramesBytes = uint64_t{64} << 20;
   const std::string& message = status.message();
   const bool out_of_space = message.find(std::strerror(ENOSPC)) != std::string::npos ||
                             message.find(std::strerror(EDQUOT)) != std::string::npos;
-  std::error_code ec;
-  const std::filesystem::space_info space = std::filesystem::space(dir, ec);
-  if (out_of_space || ec || space.available < kFewFramesBytes)
-    return "free space on the disk of " + dir;
-  return "mend what the error names (the disk of " + dir + " has " +
-         std::to_string(space.available >> 20) + " MB free)";
+  if (out_of_space || !dataset.CheckFreeSpace(kFewFramesBytes).ok())
+    return "free space on the disk of " + dataset.dir();
+  return "mend what the error names (the disk of " + dataset.dir() + " has room)";
 }
 
 }  // namespace
 
+// The run stops before the fault is journalled, so that no position_reached
+// record follows it (ShootStop journals those under mutex_ unless stopping).
 void Sequencer::StopForStorage(const Status& status, const Device* device, int view) {
   if (storage_failed_.exchange(true)) return;
   StopRun("storage: " + status.ToString() + ". The frames stored so far are kept; " +
-          StorageRemedy(status, dataset_.dir()) + ", then continue with --resume");
+          StorageRemedy(status, dataset_) + ", then continue with --resume");
   RecordFault(device, status, "stop the run", view);
 }
 

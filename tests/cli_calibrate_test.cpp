@@ -182,6 +182,39 @@ TEST_F(CliCalibrate, TheBoxAsBuiltIsWrittenTakenBackAndRefinedFromSeveralCapture
   EXPECT_FALSE(fs::exists(capture_ + "/calibration/box_as_built.yaml"));
 }
 
+// `eval calibration` compares in the frame of the box the calibration was
+// given (here the drawn box with tag 0 moved by 2 mm, taken as exact) fitted
+// to the true tags, and names that box's file in calibration.json once it is
+// gone.
+TEST_F(CliCalibrate, EvalAlignsTheGivenBoxToTheTrueTagsAndNamesItWhenGone) {
+  std::ifstream drawn("etc/calib-box.yaml");
+  std::string text((std::istreambuf_iterator<char>(drawn)), std::istreambuf_iterator<char>());
+  const std::string tag0 = "{id: 0, center_mm: [-48, -48]}";
+  const size_t at = text.find(tag0);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, tag0.size(), "{id: 0, center_mm: [-46, -48]}");
+  const std::string moved = ::testing::TempDir() + "/cli_calibrate_box_tag0_moved.yaml";
+  std::ofstream(moved) << text;
+
+  CommandRun r =
+      Hairrig("--log-level warning calibrate " + capture_ + " --exact-box --box " + moved);
+  ASSERT_NE(r.exit_code, 1) << r.output;
+  r = Hairrig("eval calibration " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json alignment = LastLineJson(r.output)["box_alignment"];
+  EXPECT_GT(alignment["translation_mm"].get<double>(), 0.01) << alignment.dump();
+  EXPECT_LT(alignment["translation_mm"].get<double>(), 1.0) << alignment.dump();
+
+  fs::remove(moved);
+  r = Hairrig("eval calibration " + capture_);
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("box.file"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(moved), std::string::npos) << r.output;
+
+  r = Hairrig("--log-level warning calibrate " + capture_ + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+}
+
 // The COLMAP export read back by the reconstruction's COLMAP reader gives the
 // same views as calibration.json does: names, lens models and poses.
 TEST_F(CliCalibrate, TheColmapExportReadsBackAsTheCalibratedViews) {

@@ -1,11 +1,13 @@
 // `hairrig stage` skips a stage only for the build that ran it: a copy of the
-// hairrig binary skips what the original ran, a copy whose bytes differ (a
+// hairrig binary skips what the original ran, a copy with another build ID (a
 // rebuild under the same version) runs the stage again.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include "core/strand_io.h"
 #include "tests/support/command_run.h"
@@ -31,13 +33,27 @@ std::string StrandsCapture(const std::string& dir) {
   return dir;
 }
 
-// The binary copied to `path`, with `extra` bytes appended (an ELF file runs
-// the same with bytes after its last section).
-std::string CopyOfHairrig(const std::string& path, const std::string& extra) {
+// The binary copied to `path`; with `other_build`, one byte of its GNU build
+// ID (which `hairrig --version` prints) changed, as a rebuild changes it.
+std::string CopyOfHairrig(const std::string& path, bool other_build) {
   fs::create_directories(fs::path(path).parent_path());
-  fs::copy_file(HAIRRIG_BIN, path, fs::copy_options::overwrite_existing);
-  std::ofstream(path, std::ios::app | std::ios::binary) << extra;
-  fs::permissions(path, fs::perms::owner_exec, fs::perm_options::add);
+  std::ifstream in(HAIRRIG_BIN, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (other_build) {
+    const std::string version = RunCommand(std::string(HAIRRIG_BIN) + " --version").output;
+    const size_t at = version.find("(build ");
+    EXPECT_NE(at, std::string::npos) << version;
+    const std::string hex = version.substr(at + 7, version.find(')', at) - at - 7);
+    EXPECT_EQ(hex.size(), 40u) << "not a GNU build ID: " << hex;
+    std::string id;
+    for (size_t k = 0; k + 1 < hex.size(); k += 2)
+      id += static_cast<char>(std::stoi(hex.substr(k, 2), nullptr, 16));
+    const size_t note = bytes.find(id);
+    EXPECT_NE(note, std::string::npos) << "the build ID is not in the file";
+    if (note != std::string::npos) bytes[note] = static_cast<char>(bytes[note] ^ 1);
+  }
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  fs::permissions(path, fs::perms::owner_all);
   return path;
 }
 
@@ -56,8 +72,8 @@ nlohmann::json FitStage(const std::string& binary, const std::string& capture) {
 TEST(StageRebuild, AnotherBuildOfTheSameVersionRunsTheStageAgain) {
   const std::string work = ::testing::TempDir() + "/stage_rebuild";
   const std::string capture = StrandsCapture(work + "/capture");
-  const std::string same = CopyOfHairrig(work + "/same/hairrig", "");
-  const std::string rebuilt = CopyOfHairrig(work + "/rebuilt/hairrig", "another build");
+  const std::string same = CopyOfHairrig(work + "/same/hairrig", false);
+  const std::string rebuilt = CopyOfHairrig(work + "/rebuilt/hairrig", true);
 
   const nlohmann::json first = FitStage(HAIRRIG_BIN, capture);
   EXPECT_FALSE(first.value("skipped", true)) << first.dump();
@@ -70,6 +86,8 @@ TEST(StageRebuild, AnotherBuildOfTheSameVersionRunsTheStageAgain) {
   EXPECT_NE(by_rebuilt.value("input_hash", ""), first.value("input_hash", ""));
   const nlohmann::json again = FitStage(rebuilt, capture);
   EXPECT_TRUE(again.value("skipped", false)) << again.dump();
+  fs::remove_all(work + "/same");  // two copies of the binary
+  fs::remove_all(work + "/rebuilt");
 }
 
 }  // namespace
