@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "rig/capture.h"
 #include "rig/calibrate_capture.h"
+#include "rig/capture.h"
 #include "rig/capture_calibration_input.h"
 #include "rig/capture_dataset.h"
 #include "rig/device_check.h"
