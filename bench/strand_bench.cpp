@@ -6,6 +6,7 @@
 //       [--alpha-close W] [--share-link-ends yes|no] [--share-overlaps yes|no]
 //       [--whole-head-in-volume yes|no] [--max-off-hair MM] [--off-hair MM]
 //       [--merge-run MM] [--merge-distance MM] [--voxel MM] [--follow-radius MM]
+//       [--end-over-skin yes|no]
 //       [--follow-weight W]
 //       [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM] [--out-suffix S]
 //       [--score yes|no]
@@ -25,6 +26,7 @@
 
 #include "core/strand_io.h"
 #include "reconstruction/reconstruction_evaluation.h"
+#include "reconstruction/skin_views.h"
 #include "reconstruction/strand_evaluation.h"
 #include "reconstruction/strand_reconstruction.h"
 #include "rig/reconstruction_input.h"
@@ -39,7 +41,8 @@ int main(int argc, char** argv) {
         "[--volume-bound B] [--root-elevation DEG] [--alpha-link W] [--alpha-close W] "
         "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
-        "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--overlap-stride K] "
+        "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
+        "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
         "[--score yes|no]\n",
@@ -90,6 +93,8 @@ int main(int argc, char** argv) {
       options.growth.max_off_hair_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--off-hair") == 0) {
       options.growth.off_hair_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--end-over-skin") == 0) {
+      options.growth.end_over_skin = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--whole-head-in-volume") == 0) {
       options.field.whole_head_in_volume = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {
@@ -117,6 +122,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", (!head.ok() ? head.status() : truth.status()).ToString().c_str());
     return 1;
   }
+  // The views' skin from the capture's own points stage (its label masks).
+  const Result<SkinViews> skin = SkinViews::Load(input->views, capture + "/reconstruction/masks",
+                                                 head->spec.center_turntable_mm);
+  if (!skin.ok()) std::fprintf(stderr, "no skin test: %s\n", skin.status().ToString().c_str());
   for (const std::string& name : methods) {
     auto method = ParseStrandMethod(name);
     if (!method.ok()) {
@@ -128,7 +137,8 @@ int main(int argc, char** argv) {
     fs::create_directories(dir);
     fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply",
                   fs::copy_options::overwrite_existing);
-    auto summary = ReconstructStrands(dir, head->spec, head->source, options);
+    auto summary =
+        ReconstructStrands(dir, head->spec, head->source, options, skin.ok() ? &*skin : nullptr);
     if (!summary.ok()) {
       std::fprintf(stderr, "%s: %s\n", name.c_str(), summary.status().ToString().c_str());
       return 1;

@@ -25,6 +25,7 @@ struct ReconstructArgs {
   int strands = StrandReconstructionOptions{}.strands;
   double root_elevation_deg = StrandReconstructionOptions{}.root_elevation_deg;
   double max_off_hair_mm = StrandGrowthOptions{}.max_off_hair_mm;
+  std::string end_over_skin = StrandGrowthOptions{}.end_over_skin ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -88,6 +89,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.strands = a.strands;
   options.strands.root_elevation_deg = a.root_elevation_deg;
   options.strands.growth.max_off_hair_mm = a.max_off_hair_mm;
+  options.strands.growth.end_over_skin = a.end_over_skin == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -131,6 +133,11 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "bao-qi: stop a strand once it has run this far (mm) off the seen hair, for "
                   "short hair (0: off, as Bao and Qi)")
       ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  cmd->add_option("--end-over-skin", args->end_over_skin,
+                  "bao-qi: end a strand where it runs in front of skin the views see (yes), or "
+                  "grow it on as Bao and Qi (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,
                   "a COLMAP text model folder (cameras.txt, images.txt) instead of a capture")

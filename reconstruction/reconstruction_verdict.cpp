@@ -6,11 +6,11 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/camera_model.h"
 #include "core/image_file.h"
 #include "core/statistics.h"
 #include "core/string_format.h"
 #include "reconstruction/hair_segmentation.h"
+#include "reconstruction/skin_views.h"
 
 namespace hairrig {
 
@@ -55,14 +55,10 @@ void CountOverSkin(const StrandSet& strands, const ReconstructionView& view, con
                    StrandPlausibility* out) {
   const double centre_depth = (view.cam_from_object * head_centre_mm).z();
   for (size_t i = 0; i < strands.points_mm.size(); i += static_cast<size_t>(sample_step)) {
-    const Eigen::Vector3d p_cam = view.cam_from_object * strands.points_mm[i].cast<double>();
-    if (!(p_cam.z() < centre_depth)) continue;
-    Eigen::Vector2d uv;
-    if (!ProjectChecked(view.camera, p_cam, &uv)) continue;
-    // Pixel (0, 0)'s centre is at (0, 0) (core/camera_model.h): the nearest pixel.
-    const double u = std::round(uv.x()), v = std::round(uv.y());
-    if (!(u >= 0 && v >= 0 && u < label.cols && v < label.rows)) continue;
-    const int x = static_cast<int>(u), y = static_cast<int>(v);
+    int x = 0, y = 0;
+    if (!FacingPixel(view, centre_depth, strands.points_mm[i].cast<double>(), label.cols,
+                     label.rows, &x, &y))
+      continue;
     ++out->samples_facing;
     out->samples_over_skin += label(y, x) == kSegHead;
   }

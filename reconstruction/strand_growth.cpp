@@ -10,7 +10,7 @@ namespace hairrig {
 
 namespace {
 
-enum class End { kVolume, kLength, kOffHair };
+enum class End { kVolume, kLength, kOffHair, kOverSkin };
 
 // What a step decided besides the next direction.
 struct StepStop {
@@ -56,9 +56,10 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
       ++s.dropped_short;
       continue;
     }
-    ++(ends[r] == End::kVolume    ? s.stopped_volume
-       : ends[r] == End::kOffHair ? s.stopped_off_hair
-                                  : s.stopped_length);
+    ++(ends[r] == End::kVolume     ? s.stopped_volume
+       : ends[r] == End::kOffHair  ? s.stopped_off_hair
+       : ends[r] == End::kOverSkin ? s.stopped_over_skin
+                                   : s.stopped_length);
     set.AddStrand(strands[r]);
     s.vertices += static_cast<int64_t>(strands[r].size());
     length += static_cast<double>(strands[r].size() - 1) * o.step_mm;
@@ -136,12 +137,14 @@ Status StrandGrowthOptions::Check() const {
   if (!(follow_radius_mm >= 0 && follow_radius_mm <= 10))
     return InvalidArgument("strand follow_radius_mm must lie in [0, 10] (0 turns it off)");
   if (!(follow_weight >= 0)) return InvalidArgument("strand follow_weight must be non-negative");
-  return Status::Ok();
+  return skin.Check();
 }
 
 StrandSet GrowStrandsInField(const HybridOrientationField& field,
                              const std::vector<DirectedRoot>& roots, const HeadModel* head,
-                             const StrandGrowthOptions& o, StrandGrowthSummary* summary) {
+                             const StrandGrowthOptions& o, StrandGrowthSummary* summary,
+                             const SkinViews* skin) {
+  const bool skin_test = o.end_over_skin && skin != nullptr;
   const auto make_step = [&] {
     return [&, off_hair = OffHairRun(o)](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
                                          Eigen::Vector3f* next, StepStop* stop) mutable {
@@ -151,6 +154,11 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
       }
       if (o.max_off_hair_mm > 0 && off_hair.Ended(field.SegmentDistance(p), &stop->drop_last)) {
         stop->end = End::kOffHair;
+        return false;
+      }
+      if (skin_test && skin->OverSkin(p.cast<double>(), o.skin)) {
+        stop->end = End::kOverSkin;
+        stop->drop_last = 1;
         return false;
       }
       // Eq. 1 with the paper's dynamic weights (Sec. IV-B).

@@ -12,7 +12,11 @@
 //     max_off_hair_mm) where the hair the cameras saw ends: I_d's Laplace
 //     solve stays low over a head covered in hair, so a strand that has run
 //     past the end of short hair would go on along its surface. Beside Eq. 1's
-//     terms, H follows the nearest seen strand (follow_radius_mm).
+//     terms, H follows the nearest seen strand (follow_radius_mm). Where the
+//     views are given (SkinViews), a strand also ends where it runs in front
+//     of skin the cameras see (skin_views.h): bangs and strands past the
+//     hair's end would otherwise slide down over the face and neck, where
+//     I_d, fed by the seen segments alone, does not stop them.
 //   - the naive baseline: the direction of the nearest points (Luo Eq. 2
 //     over the oriented points within 2 sigma of the field, signed to
 //     continue the strand), no structure
@@ -28,6 +32,7 @@
 #include "core/status.h"
 #include "core/strands.h"
 #include "reconstruction/hybrid_field.h"
+#include "reconstruction/skin_views.h"
 #include "reconstruction/strand_segments.h"
 
 namespace hairrig {
@@ -74,6 +79,11 @@ struct StrandGrowthOptions {
   // over 2 mm voxels. 0 turns it off (the paper's Eq. 1).
   double follow_radius_mm = 1.0;
   double follow_weight = 100;
+  // Bao & Qi growth with views given: a strand ends at its first vertex
+  // over skin (SkinViews::OverSkin), which is dropped. false turns it off
+  // (the paper: I_d and the length only).
+  bool end_over_skin = true;
+  SkinViewOptions skin;
   int threads = 2;
 
   Status Check() const;
@@ -81,15 +91,18 @@ struct StrandGrowthOptions {
 
 struct StrandGrowthSummary {
   int64_t strands = 0, vertices = 0;
-  int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, dropped_short = 0;
+  int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, stopped_over_skin = 0,
+          dropped_short = 0;
   double mean_length_mm = 0;
 };
 
 // Bao & Qi Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
+// `skin` (may be null: no skin test) in the field's frame.
 StrandSet GrowStrandsInField(const HybridOrientationField& field,
                              const std::vector<DirectedRoot>& roots, const HeadModel* head,
                              const StrandGrowthOptions& options,
-                             StrandGrowthSummary* summary = nullptr);
+                             StrandGrowthSummary* summary = nullptr,
+                             const SkinViews* skin = nullptr);
 
 // The naive baseline from each root along the points' orientation.
 StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,

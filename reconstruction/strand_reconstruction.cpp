@@ -131,7 +131,7 @@ Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points,
 // Bao & Qi 2017 on the segments directed by the MRF.
 Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadModel& head,
                              const std::vector<DirectedRoot>& roots,
-                             const StrandReconstructionOptions& o,
+                             const StrandReconstructionOptions& o, const SkinViews* skin,
                              StrandReconstructionSummary* summary) {
   int64_t t = SteadyNowNs();
   DirectionOptions direction = o.direction;
@@ -148,7 +148,7 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   StrandGrowthOptions growth = o.growth;
   growth.threads = o.threads;
   StrandModel model;
-  model.strands = GrowStrandsInField(field, roots, &head, growth, &summary->growth);
+  model.strands = GrowStrandsInField(field, roots, &head, growth, &summary->growth, skin);
   summary->seconds_growth = SecondsSince(t);
   if (o.merging.run_mm > 0) {
     t = SteadyNowNs();
@@ -286,6 +286,7 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"stopped_at_volume", growth.stopped_volume},
                         {"stopped_at_max_length", growth.stopped_length},
                         {"stopped_where_hair_ends", growth.stopped_off_hair},
+                        {"stopped_over_skin", growth.stopped_over_skin},
                         {"dropped_short", growth.dropped_short}}},
                       // EndMergedStrands after growth: "strands" counts what was grown.
                       {"merging",
@@ -331,6 +332,9 @@ std::string StrandReconstructionSummary::BriefReport() const {
     return s.str();
   }
   s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
+  if (growth.stopped_over_skin > 0) {
+    s << "  ended in front of skin the views see: " << growth.stopped_over_skin << " strands\n";
+  }
   if (merging.strands_ended + merging.strands_dropped > 0) {
     s << "  merged: " << merging.strands_ended
       << " strands ended where they joined an earlier one, " << merging.strands_dropped
@@ -347,7 +351,8 @@ std::string StrandReconstructionSummary::BriefReport() const {
 Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir,
                                                        const HeadSpec& head_spec,
                                                        const std::string& head_source,
-                                                       const StrandReconstructionOptions& o) {
+                                                       const StrandReconstructionOptions& o,
+                                                       const SkinViews* skin) {
   HR_RETURN_IF_ERROR(o.Check());
   const int64_t start = SteadyNowNs();
   StrandReconstructionSummary summary;
@@ -372,8 +377,8 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
-      HR_ASSIGN_OR_RETURN(model,
-                          RunBaoQi(std::move(segments), *head, ScalpRoots(*head, o), o, &summary));
+      HR_ASSIGN_OR_RETURN(
+          model, RunBaoQi(std::move(segments), *head, ScalpRoots(*head, o), o, skin, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);

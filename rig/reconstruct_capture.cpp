@@ -10,6 +10,7 @@
 #include "core/string_format.h"
 #include "reconstruction/colmap_model.h"
 #include "reconstruction/point_cloud.h"
+#include "reconstruction/skin_views.h"
 #include "reconstruction/strand_preview.h"
 #include "rig/gltf_export.h"
 #include "rig/reconstruction_input.h"
@@ -77,8 +78,16 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
   summary->head_fit = head.fit;
   LogInfo("reconstruct: strands (" + std::string(StrandMethodName(o.strands.method)) + ") from " +
           o.dir + "/reconstruction/points.ply, head " + head.source);
-  HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
-                                                           head.source, o.strands));
+  // The views' skin (the points stage's label masks): strands end in front of it.
+  const Result<SkinViews> skin = SkinViews::Load(input.views, request.reconstruction_dir + "/masks",
+                                                 head.spec.center_turntable_mm);
+  if (!skin.ok() && o.strands.growth.end_over_skin) {
+    LogWarning("reconstruct: strands are not stopped in front of skin: " +
+               skin.status().ToString());
+  }
+  HR_ASSIGN_OR_RETURN(summary->strands,
+                      ReconstructStrands(request.reconstruction_dir, head.spec, head.source,
+                                         o.strands, skin.ok() ? &*skin : nullptr));
   // The strands and points as written, read once for the checks and the display copy.
   HR_ASSIGN_OR_RETURN(const StrandSet strands,
                       ReadStrands(summary->strands->output_dir + "/strands.ply"));
