@@ -6,7 +6,7 @@
 //       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-behind MM]
 //       [--min-confidence C] [--min-agreeing N] [--multiview-direction yes|no]
 //       [--direction-sigma MM] [--orientation-scales S] [--orientation-smoothing PX]
-//       [--tag SUFFIX]
+//       [--max-cost C] [--orientation-truncation DEG] [--tag SUFFIX]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
 // reconstructions go to CAPTURE/bench-reconstruction-<cost>[-mls]<SUFFIX>/
 // (the capture's own reconstruction/ is left alone). The last line compares
@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
                  "[--mls SIGMA_MM] [--views 0,1,...] [--neighbours N] [--views-in-cost N] "
                  "[--samples N] [--prior-behind MM] [--min-confidence C] [--min-agreeing N] "
                  "[--multiview-direction yes|no] [--direction-sigma MM] [--orientation-scales S] "
-                 "[--orientation-smoothing PX] [--tag SUFFIX]\n",
+                 "[--orientation-smoothing PX] [--max-cost C] [--orientation-truncation DEG] "
+                 "[--tag SUFFIX]\n",
                  argv[0]);
     return 2;
   }
@@ -89,6 +90,10 @@ int main(int argc, char** argv) {
       options.orientation.scales = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--orientation-smoothing") == 0) {
       options.orientation.smoothing_px = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--max-cost") == 0) {
+      options.fusion.max_cost = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--orientation-truncation") == 0) {
+      options.mvs.orientation_truncation_deg = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--min-confidence") == 0) {
       options.min_orientation_confidence = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--views") == 0) {

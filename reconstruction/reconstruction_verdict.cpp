@@ -4,12 +4,9 @@
 #include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
-#include "core/image_file.h"
 #include "core/statistics.h"
 #include "core/string_format.h"
-#include "reconstruction/hair_segmentation.h"
 #include "reconstruction/skin_views.h"
 
 namespace hairrig {
@@ -46,22 +43,6 @@ double HairExtentMm(const std::vector<OrientedPoint>& points) {
     extent = std::max(extent, Quantile(values, 0.98) - Quantile(values, 0.02));
   }
   return extent;
-}
-
-// Adds one view's (facing, over skin) counts for every sample_step-th point
-// of the set (the strands' points in one list).
-void CountOverSkin(const StrandSet& strands, const ReconstructionView& view, const cv::Mat1b& label,
-                   const Eigen::Vector3d& head_centre_mm, int sample_step,
-                   StrandPlausibility* out) {
-  const double centre_depth = (view.cam_from_object * head_centre_mm).z();
-  for (size_t i = 0; i < strands.points_mm.size(); i += static_cast<size_t>(sample_step)) {
-    int x = 0, y = 0;
-    if (!FacingPixel(view, centre_depth, strands.points_mm[i].cast<double>(), label.cols,
-                     label.rows, &x, &y))
-      continue;
-    ++out->samples_facing;
-    out->samples_over_skin += label(y, x) == kSegHead;
-  }
 }
 
 void Raise(ReconstructionVerdict::Level level, ReconstructionVerdict* verdict) {
@@ -223,21 +204,19 @@ nlohmann::json ReconstructionVerdict::ToJson() const {
 
 Result<StrandPlausibility> MeasureStrandPlausibility(const StrandSet& strands,
                                                      const std::vector<OrientedPoint>& points,
-                                                     const std::vector<ReconstructionView>& views,
-                                                     const std::string& masks_dir,
-                                                     const Eigen::Vector3d& head_centre_mm,
-                                                     int sample_step) {
+                                                     const SkinViews* skin, int sample_step) {
   if (sample_step < 1) return InvalidArgument("strand plausibility: sample_step must be >= 1");
   StrandPlausibility s;
   s.strands = static_cast<int64_t>(strands.point_counts.size());
   s.median_length_mm = MedianStrandLengthMm(strands);
   s.hair_extent_mm = points.empty() ? 0.0 : HairExtentMm(points);
-  for (const ReconstructionView& view : views) {
-    const Result<cv::Mat> label =
-        ReadImageFile(masks_dir + "/" + view.name + "_label.png", cv::IMREAD_GRAYSCALE);
-    if (!label.ok()) continue;
-    ++s.views_measured;
-    CountOverSkin(strands, view, cv::Mat1b(*label), head_centre_mm, sample_step, &s);
+  if (skin == nullptr) return s;
+  s.views_measured = skin->views_loaded();
+  for (size_t i = 0; i < strands.points_mm.size(); i += static_cast<size_t>(sample_step)) {
+    int facing = 0, over_skin = 0;
+    skin->Count(strands.points_mm[i].cast<double>(), &facing, &over_skin);
+    s.samples_facing += facing;
+    s.samples_over_skin += over_skin;
   }
   return s;
 }

@@ -27,7 +27,6 @@
 // the figures they were set from.
 #pragma once
 
-#include <Eigen/Core>
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
@@ -37,9 +36,10 @@
 #include "core/strands.h"
 #include "reconstruction/point_cloud.h"
 #include "reconstruction/point_reconstruction.h"
-#include "reconstruction/views.h"
 
 namespace hairrig {
+
+class SkinViews;  // skin_views.h
 
 struct ReconstructionVerdictOptions {
   // A view whose median orientation confidence over the hair is below this
@@ -86,18 +86,14 @@ struct ReconstructionVerdict {
   nlohmann::json ToJson() const;            // {"verdict", "reasons", "views_to_check"}
 };
 
-// Measures `strands` (the object frame, mm) against the fused `points`, the
-// views' label masks written by the points stage under `masks_dir`
-// (<name>_label.png; a view without one is not measured) and the head's
-// centre (the object frame). Every `sample_step`-th point of the set (the
-// strands' points taken as one list) is projected. InvalidArgument for
+// Measures `strands` (the object frame, mm) against the fused `points` and
+// the views' skin (skin_views.h; null: over skin not measured, views_measured
+// 0). Every `sample_step`-th point of the set (the strands' points taken as
+// one list) is projected into every view. InvalidArgument for
 // sample_step < 1.
 Result<StrandPlausibility> MeasureStrandPlausibility(const StrandSet& strands,
                                                      const std::vector<OrientedPoint>& points,
-                                                     const std::vector<ReconstructionView>& views,
-                                                     const std::string& masks_dir,
-                                                     const Eigen::Vector3d& head_centre_mm,
-                                                     int sample_step = 4);
+                                                     const SkinViews* skin, int sample_step = 4);
 
 // Either argument may be null (a stage that did not run is not judged).
 ReconstructionVerdict JudgeReconstruction(const PointReconstructionSummary* points,

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
+#include "reconstruction/hair_segmentation.h"
+#include "reconstruction/skin_views.h"
 #include "tests/support/verdict_reasons.h"
 
 namespace hairrig {
@@ -161,7 +163,9 @@ TEST(StrandPlausibility, CountsSamplesInFrontOfTheHeadOverSkin) {
   for (size_t i = 0; i < points.size(); ++i)
     points[i].position_mm = Eigen::Vector3f(0, 0, static_cast<float>(i) * 2.0f);  // 0..200 mm
 
-  auto s = MeasureStrandPlausibility(strands, points, {view}, dir, Eigen::Vector3d::Zero(), 1);
+  auto skin = SkinViews::Load({view}, dir, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(skin.ok()) << skin.status().ToString();
+  auto s = MeasureStrandPlausibility(strands, points, &*skin, 1);
   ASSERT_TRUE(s.ok()) << s.status().ToString();
   EXPECT_EQ(s->strands, 4);
   EXPECT_DOUBLE_EQ(s->median_length_mm, 20.0);
@@ -170,14 +174,13 @@ TEST(StrandPlausibility, CountsSamplesInFrontOfTheHeadOverSkin) {
   EXPECT_EQ(s->samples_facing, 7);
   EXPECT_EQ(s->samples_over_skin, 3);
 
-  // A view without a label mask is not measured.
-  view.name = "001_CAM";
-  s = MeasureStrandPlausibility(strands, points, {view}, dir, Eigen::Vector3d::Zero(), 1);
+  // Without the views' skin nothing is counted over skin, and the verdict says so.
+  s = MeasureStrandPlausibility(strands, points, nullptr, 1);
   ASSERT_TRUE(s.ok());
   EXPECT_EQ(s->views_measured, 0);
   EXPECT_EQ(s->samples_facing, 0);
-  EXPECT_FALSE(
-      MeasureStrandPlausibility(strands, points, {view}, dir, Eigen::Vector3d::Zero(), 0).ok());
+  EXPECT_TRUE(HasReasonWith(JudgeReconstruction(nullptr, &*s), "strands over skin not checked"));
+  EXPECT_FALSE(MeasureStrandPlausibility(strands, points, &*skin, 0).ok());
 }
 
 }  // namespace

@@ -10,19 +10,6 @@
 
 namespace hairrig {
 
-bool FacingPixel(const ReconstructionView& view, double centre_depth_mm,
-                 const Eigen::Vector3d& p_object, int cols, int rows, int* x, int* y) {
-  const Eigen::Vector3d p_cam = view.cam_from_object * p_object;
-  if (!(p_cam.z() < centre_depth_mm)) return false;
-  Eigen::Vector2d uv;
-  if (!ProjectChecked(view.camera, p_cam, &uv)) return false;
-  const double u = std::round(uv.x()), v = std::round(uv.y());
-  if (!(u >= 0 && v >= 0 && u < cols && v < rows)) return false;
-  *x = static_cast<int>(u);
-  *y = static_cast<int>(v);
-  return true;
-}
-
 Status SkinViewOptions::Check() const {
   if (min_views < 1) return InvalidArgument("skin views: min_views must be at least 1");
   if (!(min_share > 0 && min_share <= 1))
@@ -45,7 +32,8 @@ Result<SkinViews> SkinViews::FromLabels(const std::vector<ReconstructionView>& v
       continue;
     }
     View v;
-    v.view = view;
+    v.camera = view.camera;
+    v.cam_from_object = view.cam_from_object;
     v.centre_depth_mm = (view.cam_from_object * head_centre_mm).z();
     v.skin = labels[i] == kSegHead;
     skin.views_.push_back(std::move(v));
@@ -72,17 +60,55 @@ Result<SkinViews> SkinViews::Load(const std::vector<ReconstructionView>& views,
   return skin;
 }
 
+void SkinViews::Count(const Eigen::Vector3d& p_object, int* facing, int* over_skin) const {
+  *facing = 0;
+  *over_skin = 0;
+  for (const View& v : views_) {
+    const Eigen::Vector3d p_cam = v.cam_from_object * p_object;
+    if (!(p_cam.z() < v.centre_depth_mm)) continue;
+    Eigen::Vector2d uv;
+    if (!ProjectChecked(v.camera, p_cam, &uv)) continue;
+    const double x = std::round(uv.x()), y = std::round(uv.y());
+    if (!(x >= 0 && y >= 0 && x < v.skin.cols && y < v.skin.rows)) continue;
+    ++*facing;
+    *over_skin += v.skin(static_cast<int>(y), static_cast<int>(x)) != 0;
+  }
+}
+
 bool SkinViews::OverSkin(const Eigen::Vector3d& p_object, const SkinViewOptions& o) const {
   int facing = 0, over_skin = 0;
-  for (const View& v : views_) {
-    int x = 0, y = 0;
-    if (!FacingPixel(v.view, v.centre_depth_mm, p_object, v.skin.cols, v.skin.rows, &x, &y))
-      continue;
-    ++facing;
-    over_skin += v.skin(y, x) != 0;
-  }
+  Count(p_object, &facing, &over_skin);
   return over_skin >= o.min_views &&
          static_cast<double>(over_skin) >= o.min_share * static_cast<double>(facing);
+}
+
+SkinGrid::SkinGrid(const SkinViews& views, const SkinViewOptions& options,
+                   const Eigen::Vector3f& origin_mm, const Eigen::Vector3i& size, double cell_mm)
+    : views_(views),
+      options_(options),
+      origin_mm_(origin_mm),
+      size_(size.cwiseMax(0)),
+      cell_mm_(static_cast<float>(cell_mm)),
+      cells_(new std::atomic<uint8_t>[static_cast<size_t>(size_.prod())]) {
+  for (int64_t i = 0; i < static_cast<int64_t>(size_.prod()); ++i)
+    cells_[i].store(kUnknown, std::memory_order_relaxed);
+}
+
+bool SkinGrid::OverSkin(const Eigen::Vector3f& p_object) const {
+  const Eigen::Vector3f u = (p_object - origin_mm_) / cell_mm_ + Eigen::Vector3f::Constant(0.5f);
+  if (!(u.allFinite() && (u.array() >= 0).all() && (u.array() < size_.cast<float>().array()).all()))
+    return views_.OverSkin(p_object.cast<double>(), options_);
+  const Eigen::Vector3i c = u.array().floor().cast<int>();
+  std::atomic<uint8_t>& cell =
+      cells_[c.x() +
+             static_cast<int64_t>(size_.x()) * (c.y() + static_cast<int64_t>(size_.y()) * c.z())];
+  uint8_t known = cell.load(std::memory_order_relaxed);
+  if (known == kUnknown) {
+    const Eigen::Vector3f centre = origin_mm_ + c.cast<float>() * cell_mm_;
+    known = views_.OverSkin(centre.cast<double>(), options_) ? kSkin : kNotSkin;
+    cell.store(known, std::memory_order_relaxed);
+  }
+  return known == kSkin;
 }
 
 }  // namespace hairrig

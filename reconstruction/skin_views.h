@@ -3,8 +3,9 @@
 // stage). A point of the object frame that a view faces and that projects
 // onto that view's skin cannot be hair: hair there would hide the skin from
 // that camera. Strand growth ends a strand where it runs in front of skin
-// (strand_growth.h); the reconstruction's verdict counts strand samples over
-// skin (reconstruction_verdict.h). Both use the same test, FacingPixel.
+// (strand_growth.h, through SkinGrid); the reconstruction's verdict counts
+// strand samples over skin (reconstruction_verdict.h). Both use the same
+// test, SkinViews::Count.
 //
 // "Facing" is judged against the head's centre: the point lies nearer the
 // camera than the centre does, so the head does not hide it from the view
@@ -16,20 +17,19 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <atomic>
+#include <cstdint>
+#include <memory>
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
 
+#include "core/camera_model.h"
 #include "core/status.h"
+#include "core/transform.h"
 #include "reconstruction/views.h"
 
 namespace hairrig {
-
-// The pixel (x, y) of `p_object` in `view` when the view faces it (nearer the
-// camera than `centre_depth_mm`, the head centre's depth in that camera) and
-// it falls inside a cols x rows image; false otherwise.
-bool FacingPixel(const ReconstructionView& view, double centre_depth_mm,
-                 const Eigen::Vector3d& p_object, int cols, int rows, int* x, int* y);
 
 struct SkinViewOptions {
   // A point is over skin when at least min_views of the views facing it see
@@ -62,6 +62,10 @@ class SkinViews {
                                       const std::vector<cv::Mat1b>& labels,
                                       const Eigen::Vector3d& head_centre_mm);
 
+  // The views that face `p_object` (it lies nearer their camera than the
+  // head's centre and projects inside the image; the nearest pixel is read)
+  // and, of those, the ones that see skin there.
+  void Count(const Eigen::Vector3d& p_object, int* facing, int* over_skin) const;
   // True when `p_object` is over skin by `options` (see SkinViewOptions).
   bool OverSkin(const Eigen::Vector3d& p_object, const SkinViewOptions& options) const;
 
@@ -70,12 +74,34 @@ class SkinViews {
 
  private:
   struct View {
-    ReconstructionView view;
-    double centre_depth_mm = 0;
-    cv::Mat1b skin;  // non-zero where the segmentation labels the head's skin
+    CameraIntrinsics camera;
+    Rigid3d cam_from_object;
+    double centre_depth_mm = 0;  // the head centre's depth in this camera
+    cv::Mat1b skin;              // non-zero where the segmentation labels the head's skin
   };
   std::vector<View> views_;
   int missing_ = 0;
+};
+
+// SkinViews::OverSkin answered once per cell of a regular grid, at the cell's
+// centre, for hot loops such as strand growth (a strand's every step). The
+// grid spans origin_mm + [0, size) * cell_mm in the object frame; a point
+// outside it is answered exactly. `views` must outlive the grid. Thread-safe:
+// concurrent callers may compute one cell twice, with the same answer.
+class SkinGrid {
+ public:
+  SkinGrid(const SkinViews& views, const SkinViewOptions& options, const Eigen::Vector3f& origin_mm,
+           const Eigen::Vector3i& size, double cell_mm);
+  bool OverSkin(const Eigen::Vector3f& p_object) const;
+
+ private:
+  enum : uint8_t { kUnknown = 0, kNotSkin = 1, kSkin = 2 };
+  const SkinViews& views_;
+  SkinViewOptions options_;
+  Eigen::Vector3f origin_mm_;
+  Eigen::Vector3i size_;
+  float cell_mm_;
+  std::unique_ptr<std::atomic<uint8_t>[]> cells_;
 };
 
 }  // namespace hairrig

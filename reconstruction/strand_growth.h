@@ -80,7 +80,8 @@ struct StrandGrowthOptions {
   double follow_radius_mm = 1.0;
   double follow_weight = 100;
   // Bao & Qi growth with views given: a strand ends at its first vertex
-  // over skin (SkinViews::OverSkin), which is dropped. false turns it off
+  // over skin (SkinViews::OverSkin, judged at the centre of the field voxel
+  // it lies in: SkinGrid), which is dropped. false turns it off
   // (the paper: I_d and the length only).
   bool end_over_skin = true;
   SkinViewOptions skin;

@@ -55,14 +55,12 @@ Result<std::string> WriteOverViews(const ReconstructionInput& input, const Stran
 
 // The strands' over-views picture and plausibility (reconstruction_verdict.h),
 // from the strands and points as written.
-Status CheckStrands(const ReconstructionInput& input, const Eigen::Vector3d& head_centre_mm,
-                    const std::string& reconstruction_dir, const StrandSet& strands,
-                    const std::vector<OrientedPoint>& points, ReconstructCaptureSummary* summary) {
+Status CheckStrands(const ReconstructionInput& input, const SkinViews* skin,
+                    const StrandSet& strands, const std::vector<OrientedPoint>& points,
+                    ReconstructCaptureSummary* summary) {
   HR_ASSIGN_OR_RETURN(summary->over_views_picture,
                       WriteOverViews(input, strands, summary->strands->output_dir));
-  HR_ASSIGN_OR_RETURN(summary->plausibility,
-                      MeasureStrandPlausibility(strands, points, input.views,
-                                                reconstruction_dir + "/masks", head_centre_mm));
+  HR_ASSIGN_OR_RETURN(summary->plausibility, MeasureStrandPlausibility(strands, points, skin));
   return Status::Ok();
 }
 
@@ -78,23 +76,23 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
   summary->head_fit = head.fit;
   LogInfo("reconstruct: strands (" + std::string(StrandMethodName(o.strands.method)) + ") from " +
           o.dir + "/reconstruction/points.ply, head " + head.source);
-  // The views' skin (the points stage's label masks): strands end in front of it.
+  // The views' skin (the points stage's label masks): strands end in front of
+  // it, and the plausibility counts the strand samples over it.
   const Result<SkinViews> skin = SkinViews::Load(input.views, request.reconstruction_dir + "/masks",
                                                  head.spec.center_turntable_mm);
   if (!skin.ok() && o.strands.growth.end_over_skin) {
     LogWarning("reconstruct: strands are not stopped in front of skin: " +
                skin.status().ToString());
   }
-  HR_ASSIGN_OR_RETURN(summary->strands,
-                      ReconstructStrands(request.reconstruction_dir, head.spec, head.source,
-                                         o.strands, skin.ok() ? &*skin : nullptr));
+  const SkinViews* skin_views = skin.ok() ? &*skin : nullptr;
+  HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
+                                                           head.source, o.strands, skin_views));
   // The strands and points as written, read once for the checks and the display copy.
   HR_ASSIGN_OR_RETURN(const StrandSet strands,
                       ReadStrands(summary->strands->output_dir + "/strands.ply"));
   HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
                       ReadPointCloudPly(request.reconstruction_dir + "/points.ply"));
-  HR_RETURN_IF_ERROR(CheckStrands(input, head.spec.center_turntable_mm, request.reconstruction_dir,
-                                  strands, points, summary));
+  HR_RETURN_IF_ERROR(CheckStrands(input, skin_views, strands, points, summary));
   // The display copy as glTF, for the console's 3D view and for download.
   GltfExportOptions gltf;
   gltf.dir = o.dir;

@@ -146,7 +146,7 @@ TEST(Scene, CameraPipelineAndVariations) {
   const auto refused = LoadScene(path);
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
-  for (const std::string part :
+  for (const std::string& part :
        {path, std::string("'variations'"), std::string("'nope'"), std::string("photograph")})
     EXPECT_NE(refused.status().message().find(part), std::string::npos)
         << refused.status().ToString();
