@@ -3,8 +3,9 @@
 // truth. Run from the repository root:
 //   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric]
 //       [--stride N] [--iterations N] [--mls SIGMA_MM] [--views 0,1,2,...]
-//       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-behind MM]
-//       [--min-confidence C] [--min-agreeing N] [--multiview-direction yes|no]
+//       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-front MM]
+//       [--prior-behind MM] [--hull-tolerance SHARE] [--min-confidence C] [--min-agreeing N]
+//       [--multiview-direction yes|no]
 //       [--direction-sigma MM] [--orientation-scales S] [--orientation-smoothing PX]
 //       [--max-cost C] [--orientation-truncation DEG] [--tag SUFFIX]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
@@ -45,7 +46,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] "
                  "[--mls SIGMA_MM] [--views 0,1,...] [--neighbours N] [--views-in-cost N] "
-                 "[--samples N] [--prior-behind MM] [--min-confidence C] [--min-agreeing N] "
+                 "[--samples N] [--prior-front MM] [--prior-behind MM] [--hull-tolerance SHARE] "
+                 "[--min-confidence C] "
+                 "[--min-agreeing N] "
                  "[--multiview-direction yes|no] [--direction-sigma MM] [--orientation-scales S] "
                  "[--orientation-smoothing PX] [--max-cost C] [--orientation-truncation DEG] "
                  "[--tag SUFFIX]\n",
@@ -84,6 +87,10 @@ int main(int argc, char** argv) {
       options.fusion.min_agreeing_views = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--direction-sigma") == 0) {
       options.fusion.direction_sigma_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--hull-tolerance") == 0) {
+      options.hull.max_empty_share = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--prior-front") == 0) {
+      options.mvs.prior_front_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--prior-behind") == 0) {
       options.mvs.prior_behind_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--orientation-scales") == 0) {

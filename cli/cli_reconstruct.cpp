@@ -34,6 +34,7 @@ struct ReconstructArgs {
   int iterations = LineMvsOptions{}.iterations;
   int orientation_scales = OrientationOptions{}.scales;
   double orientation_smoothing_px = OrientationOptions{}.smoothing_px;
+  double hull_tolerance = VisualHullOptions{}.max_empty_share;
 };
 
 // One line per stage on a terminal (rewritten in place), with the stage's ETA.
@@ -82,6 +83,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.points.mvs.iterations = a.iterations;
   options.points.orientation.scales = a.orientation_scales;
   options.points.orientation.smoothing_px = a.orientation_smoothing_px;
+  options.points.hull.max_empty_share = a.hull_tolerance;
   options.points.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
                             : a.cost == "photometric" ? MvsCost::kPhotometric
                                                       : MvsCost::kBoth;
@@ -173,6 +175,11 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "2D orientation maps: sigma (px) of the confidence-weighted average of the "
                   "directions after the bank (0 = none, as Luo et al. 2013)")
       ->check(CLI::Range(0.0, 20.0))
+      ->capture_default_str();
+  cmd->add_option("--hull-tolerance", args->hull_tolerance,
+                  "visual hull: the share of the views that may see the backdrop where a voxel "
+                  "still stays (a segmentation misses thin wisps; 0 = every view carves)")
+      ->check(CLI::Range(0.0, 0.5))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {

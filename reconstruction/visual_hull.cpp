@@ -122,10 +122,17 @@ Status VisualHullOptions::Check() const {
   if (!(search_radius_mm > search_voxel_mm && search_radius_mm <= 5000))
     return InvalidArgument("hull search_radius_mm must be in (search_voxel_mm, 5000]");
   if (max_empty_views < 0) return InvalidArgument("hull max_empty_views must not be negative");
+  if (!(max_empty_share >= 0 && max_empty_share <= 0.5))
+    return InvalidArgument("hull max_empty_share must be in [0, 0.5]");
   if (!(min_in_frame_share >= 0 && min_in_frame_share <= 1))
     return InvalidArgument("hull min_in_frame_share must be in [0, 1]");
   if (threads < 1) return InvalidArgument("hull threads must be at least 1");
   return Status::Ok();
+}
+
+int MaxEmptyViews(const VisualHullOptions& options, int views) {
+  return std::max(options.max_empty_views,
+                  static_cast<int>(std::floor(options.max_empty_share * views + 1e-9)));
 }
 
 bool VisualHull::OccupiedAt(const Eigen::Vector3d& p_object) const {
@@ -164,8 +171,9 @@ Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views,
   const int min_in_frame = std::max(
       1,
       static_cast<int>(std::ceil(options.min_in_frame_share * static_cast<double>(views.size()))));
-  Carve(carving, coarse.voxel_mm * std::sqrt(3.0) / 2, options.max_empty_views, min_in_frame,
-        options.threads, &coarse);
+  const int max_empty = MaxEmptyViews(options, static_cast<int>(views.size()));
+  Carve(carving, coarse.voxel_mm * std::sqrt(3.0) / 2, max_empty, min_in_frame, options.threads,
+        &coarse);
   Eigen::Vector3i lo, hi;
   if (!OccupiedBounds(coarse, &lo, &hi))
     return FailedPrecondition(
@@ -191,7 +199,7 @@ Result<VisualHull> CarveVisualHull(const std::vector<SilhouetteView>& views,
         if (coarse.OccupiedAt(p))
           fine.occupied[(static_cast<size_t>(z) * fine.ny + y) * fine.nx + x] = 1;
       }
-  Carve(carving, 0.0, options.max_empty_views, min_in_frame, options.threads, &fine);
+  Carve(carving, 0.0, max_empty, min_in_frame, options.threads, &fine);
   if (fine.OccupiedCount() == 0)
     return FailedPrecondition(
         "no voxel survives carving: the calibration or the segmentation is wrong");
