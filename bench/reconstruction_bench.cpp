@@ -4,7 +4,8 @@
 //   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric]
 //       [--stride N] [--iterations N] [--mls SIGMA_MM] [--views 0,1,2,...]
 //       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-front MM]
-//       [--prior-behind MM] [--hull-tolerance SHARE] [--min-confidence C] [--min-agreeing N]
+//       [--prior-behind MM] [--hull-tolerance SHARE] [--hull-uncertain-alpha A] [--min-confidence
+//       C] [--min-agreeing N]
 //       [--multiview-direction yes|no]
 //       [--direction-sigma MM] [--orientation-scales S] [--orientation-smoothing PX]
 //       [--max-cost C] [--orientation-truncation DEG] [--tag SUFFIX]
@@ -47,6 +48,7 @@ int main(int argc, char** argv) {
                  "usage: %s CAPTURE [--costs both,photometric] [--stride N] [--iterations N] "
                  "[--mls SIGMA_MM] [--views 0,1,...] [--neighbours N] [--views-in-cost N] "
                  "[--samples N] [--prior-front MM] [--prior-behind MM] [--hull-tolerance SHARE] "
+                 "[--hull-uncertain-alpha A] "
                  "[--min-confidence C] "
                  "[--min-agreeing N] "
                  "[--multiview-direction yes|no] [--direction-sigma MM] [--orientation-scales S] "
@@ -87,6 +89,8 @@ int main(int argc, char** argv) {
       options.fusion.min_agreeing_views = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--direction-sigma") == 0) {
       options.fusion.direction_sigma_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--hull-uncertain-alpha") == 0) {
+      options.hull_uncertain_alpha = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--hull-tolerance") == 0) {
       options.hull.max_empty_share = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--prior-front") == 0) {

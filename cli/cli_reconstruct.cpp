@@ -178,7 +178,7 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
       ->capture_default_str();
   cmd->add_option("--hull-tolerance", args->hull_tolerance,
                   "visual hull: the share of the views that may see the backdrop where a voxel "
-                  "still stays (a segmentation misses thin wisps; 0 = every view carves)")
+                  "still stays, for a segmentation that misses thin wisps (0 = every view carves)")
       ->check(CLI::Range(0.0, 0.5))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");

@@ -117,9 +117,7 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
     p.why_not = map.status().message();
     return p;
   }
-  p.silhouette = cv::Mat1b(hair.size(), kSilhouetteEmpty);
-  p.silhouette.setTo(kSilhouetteSubject, (seg->label == kSegHair) | (seg->label == kSegHead));
-  p.silhouette.setTo(kSilhouetteUnknown, seg->label == kSegBox);
+  p.silhouette = SilhouetteOf(*seg, options.hull_uncertain_alpha);
   p.mvs.camera = view.camera;
   p.mvs.cam_from_object = view.cam_from_object;
   cv::Mat grey;
@@ -210,10 +208,24 @@ PointReconstructionOptions WithThreads(PointReconstructionOptions o) {
 
 }  // namespace
 
+cv::Mat1b SilhouetteOf(const HairSegmentation& segmentation, double uncertain_alpha) {
+  const cv::Mat1b& label = segmentation.label;
+  cv::Mat1b silhouette(label.size(), kSilhouetteEmpty);
+  silhouette.setTo(kSilhouetteSubject, (label == kSegHair) | (label == kSegHead));
+  silhouette.setTo(kSilhouetteUnknown, label == kSegBox);
+  if (segmentation.hair_alpha.size() == label.size()) {
+    silhouette.setTo(kSilhouetteUnknown, (silhouette == kSilhouetteEmpty) &
+                                             (segmentation.hair_alpha >= uncertain_alpha));
+  }
+  return silhouette;
+}
+
 Status PointReconstructionOptions::Check() const {
   if (threads < 1) return InvalidArgument("reconstruction threads must be at least 1");
   if (!(min_orientation_confidence >= 0 && min_orientation_confidence < 1))
     return InvalidArgument("reconstruction min_orientation_confidence must be in [0, 1)");
+  if (!(hull_uncertain_alpha > 0 && hull_uncertain_alpha <= 1))
+    return InvalidArgument("reconstruction hull_uncertain_alpha must be in (0, 1]");
   HR_RETURN_IF_ERROR(segmentation.Check().WithContext("segmentation"));
   HR_RETURN_IF_ERROR(orientation.Check().WithContext("orientation"));
   HR_RETURN_IF_ERROR(hull.Check().WithContext("hull"));

@@ -46,6 +46,13 @@ struct PointReconstructionOptions {
   // Hair pixels whose orientation confidence is below this take no part in
   // the stereo (their direction is noise).
   double min_orientation_confidence = 0.0;
+  // Backdrop pixels whose hair coverage (HairSegmentation::hair_alpha) is at
+  // least this carve nothing from the visual hull: the segmentation is
+  // unsure there. Thin wisps it misses lie in that band (curly_blond: the
+  // true hair pixels labelled backdrop have a coverage of 0.39-0.41 at the
+  // median), so they do not put the hull's surface behind the hair. 1 lets
+  // every backdrop pixel carve.
+  double hull_uncertain_alpha = 0.25;
   VisualHullOptions hull;
   LineMvsOptions mvs;
   FusionOptions fusion;
@@ -85,6 +92,12 @@ struct PointReconstructionSummary {
   nlohmann::json ToJson() const;
   std::string BriefReport() const;  // a few lines for a person
 };
+
+// The visual hull's silhouette of one view from its segmentation: hair and
+// head are the subject; the calibration box, and backdrop whose hair
+// coverage is at least `uncertain_alpha`, carve nothing (kSilhouetteUnknown);
+// the rest is backdrop.
+cv::Mat1b SilhouetteOf(const HairSegmentation& segmentation, double uncertain_alpha);
 
 // The figures of a points stage's summary.json that the reconstruction's
 // verdict reads (reconstruction_verdict.h): each view's name and median

@@ -41,17 +41,16 @@ struct VisualHullOptions {
       700;  // the coarse grid spans this far around the cameras' common target
   // A voxel is carved when more views than MaxEmptyViews() see it on the
   // backdrop: max_empty_views, or max_empty_share of the views if that is
-  // more. The segmentation misses thin wisps at the hair's edge in some
-  // views (curly_blond: 4-11 % of the true hair pixels); with every view
-  // carving, the hull's surface lies behind the hair there and the stereo's
-  // search, which starts 3 mm in front of it, cannot reach the hair. The
-  // more views, the more of them miss a given wisp, so the tolerance is a
-  // share: 0.06 lets 2 of 38 views see the backdrop (curly_blond's points
-  // F1 at (2 mm, 20 deg) 0.53 -> 0.64, depth median 8.5 -> 3.4 mm; the
-  // default scene's 0.764 -> 0.750; docs/accuracy.md, "Options of the points
-  // stage, compared") and none of 16 or fewer.
+  // more (a share, as the more views there are, the more of them a
+  // segmentation error reaches). The points stage leaves the pixels its
+  // segmentation is unsure of out of the carving instead
+  // (PointReconstructionOptions::hull_uncertain_alpha), which loses less on
+  // hair the segmentation gets right; a share of 0.06 (2 of 38 views) gave
+  // curly_blond's points F1 at (2 mm, 20 deg) 0.53 -> 0.64 and the default
+  // scene's 0.764 -> 0.750 (docs/accuracy.md, "Options of the points stage,
+  // compared").
   int max_empty_views = 0;
-  double max_empty_share = 0.06;
+  double max_empty_share = 0;
   // A voxel is kept only when at least this share of the views has it in
   // their frame (in front of the camera and inside the image). Every view
   // frames the subject, so space that few views see is not the subject's;

@@ -127,20 +127,22 @@ void MissWisp(const Eigen::Vector3d& p, int radius_px, SilhouetteView* view) {
              radius_px, cv::Scalar(kSilhouetteEmpty), cv::FILLED);
 }
 
-// A segmentation misses thin wisps in some views: on a ring of 34 views the
-// default tolerance lets 2 of them miss a wisp on the subject's surface
+// A segmentation misses thin wisps in some views: on a ring of 34 views a
+// tolerance of 6 % lets 2 of them miss a wisp on the subject's surface
 // without carving it; a third view carves it, as every view does with no
 // tolerance, and on a ring of 12 views every view carves.
 TEST(VisualHull, AFewViewsMissingAWispDoNotCarveIt) {
-  const VisualHullOptions defaults;
-  ASSERT_EQ(MaxEmptyViews(defaults, 34), 2);
-  ASSERT_EQ(MaxEmptyViews(defaults, 12), 0);
+  VisualHullOptions tolerant;
+  tolerant.max_empty_share = 0.06;
+  tolerant.voxel_mm = 4;
+  ASSERT_EQ(MaxEmptyViews(tolerant, 34), 2);
+  ASSERT_EQ(MaxEmptyViews(tolerant, 12), 0);
+  ASSERT_EQ(MaxEmptyViews(VisualHullOptions{}, 34), 0);
   std::vector<SilhouetteView> views = Ring(0, 360.0 * 33 / 34, 34);
   const Eigen::Vector3d eye1 = views[1].cam_from_object.Inverse().translation;
   const Eigen::Vector3d wisp = kCentre + 70 * (eye1 - kCentre).normalized();
   for (size_t v : {1, 2}) MissWisp(wisp, 6, &views[v]);
-  VisualHullOptions options;
-  options.voxel_mm = 4;
+  VisualHullOptions options = tolerant;
   Result<VisualHull> hull = CarveVisualHull(views, options);
   ASSERT_TRUE(hull.ok()) << hull.status().ToString();
   EXPECT_TRUE(hull->OccupiedAt(wisp));
@@ -148,7 +150,7 @@ TEST(VisualHull, AFewViewsMissingAWispDoNotCarveIt) {
   hull = CarveVisualHull(views, options);
   ASSERT_TRUE(hull.ok()) << hull.status().ToString();
   EXPECT_FALSE(hull->OccupiedAt(wisp)) << "every view carves without the tolerance";
-  options.max_empty_share = defaults.max_empty_share;
+  options.max_empty_share = tolerant.max_empty_share;
   MissWisp(wisp, 6, &views[3]);
   hull = CarveVisualHull(views, options);
   ASSERT_TRUE(hull.ok()) << hull.status().ToString();
