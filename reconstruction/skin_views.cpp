@@ -82,6 +82,13 @@ bool SkinViews::OverSkin(const Eigen::Vector3d& p_object, const SkinViewOptions&
          static_cast<double>(over_skin) >= o.min_share * static_cast<double>(facing);
 }
 
+namespace {
+size_t CellCount(const Eigen::Vector3i& size) {
+  return static_cast<size_t>(size.x()) * static_cast<size_t>(size.y()) *
+         static_cast<size_t>(size.z());
+}
+}  // namespace
+
 SkinGrid::SkinGrid(const SkinViews& views, const SkinViewOptions& options,
                    const Eigen::Vector3f& origin_mm, const Eigen::Vector3i& size, double cell_mm)
     : views_(views),
@@ -89,8 +96,8 @@ SkinGrid::SkinGrid(const SkinViews& views, const SkinViewOptions& options,
       origin_mm_(origin_mm),
       size_(size.cwiseMax(0)),
       cell_mm_(static_cast<float>(cell_mm)),
-      cells_(new std::atomic<uint8_t>[static_cast<size_t>(size_.prod())]) {
-  for (int64_t i = 0; i < static_cast<int64_t>(size_.prod()); ++i)
+      cells_(new std::atomic<uint8_t>[CellCount(size_)]) {
+  for (size_t i = 0; i < CellCount(size_); ++i)
     cells_[i].store(kUnknown, std::memory_order_relaxed);
 }
 
