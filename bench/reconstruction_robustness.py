@@ -112,6 +112,8 @@ def summarise(evaluation, verdict):
         "consistency": strands["consistency"]["mean"],
         "median_length_mm": strands["lengths_mm"]["reconstructed"]["median"],
         "truth_median_length_mm": strands["lengths_mm"]["truth"]["median"],
+        # Absent in evaluations made before `eval reconstruction` measured it.
+        "over_true_skin_share": strands.get("over_true_skin_share"),
         "verdict": verdict.get("verdict", "?"),
         "reasons": verdict.get("reasons", []),
     }

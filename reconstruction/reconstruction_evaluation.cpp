@@ -72,6 +72,7 @@ struct ViewResult {
   ViewReconstructionAccuracy accuracy;
   std::vector<double> depth_errors;
   cv::Mat1f true_depth;
+  cv::Mat1b true_bare_skin;  // the true head label with no fibre over it
 };
 
 ViewResult EvaluateView(const std::string& dir, const std::string& name,
@@ -121,45 +122,99 @@ ViewResult EvaluateView(const std::string& dir, const std::string& name,
         r.depth_errors.empty() ? 0 : sum / static_cast<double>(r.depth_errors.size());
     r.accuracy.depth_median_mm = Median(r.depth_errors);
     r.true_depth = maps.depth_mm;
+    // A fibre covers about a tenth of a pixel at the rig's resolution.
+    constexpr double kBareAlpha = 0.02;
+    r.true_bare_skin = (maps.label == ViewTruthMaps::kHead) & (maps.hair_alpha < kBareAlpha);
     return Status::Ok();
   };
   r.status = run();
   return r;
 }
 
-// How many true cameras see each sample: within tolerance of their true depth maps.
-std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples,
-                               const CaptureTruth& truth,
-                               const std::map<int, cv::Mat1f>& depth_maps, double tolerance_mm,
-                               int threads) {
-  struct Camera {
-    std::array<double, CameraIntrinsics::kNumParams> params;
-    Rigid3d cam_from_turntable;
-    const cv::Mat1f* depth;
-  };
-  std::vector<Camera> cameras;
+// A true camera with its view's true depth and label maps.
+struct TrueCamera {
+  std::array<double, CameraIntrinsics::kNumParams> params;
+  Rigid3d cam_from_turntable;
+  const cv::Mat1f* depth;
+  const cv::Mat1b* bare_skin;
+};
+
+std::vector<TrueCamera> TrueCameras(const CaptureTruth& truth,
+                                    const std::map<int, cv::Mat1f>& depth_maps,
+                                    const std::map<int, cv::Mat1b>& bare_skin) {
+  std::vector<TrueCamera> cameras;
   const Rigid3d box_from_turntable = truth.turntable_from_box.Inverse();
   for (const auto& [view, depth] : depth_maps) {
     const CaptureTruth::View& v = truth.views.at(view);
-    cameras.push_back({v.intrinsics.ToParams(), v.cam_from_box * box_from_turntable, &depth});
+    cameras.push_back({v.intrinsics.ToParams(), v.cam_from_box * box_from_turntable, &depth,
+                       &bare_skin.at(view)});
   }
+  return cameras;
+}
+
+// Where p (true turntable frame) falls in a camera: its depth (mm) and the
+// nearest pixel; false behind the camera or outside the image.
+bool ProjectToPixel(const TrueCamera& c, const Eigen::Vector3d& p, double* depth_mm, int* x,
+                    int* y) {
+  const Eigen::Vector3d q = c.cam_from_turntable * p;
+  if (q.z() <= 1) return false;
+  double uv[2];
+  ProjectCamPoint(c.params.data(), q.data(), uv);
+  *x = static_cast<int>(std::lround(uv[0]));
+  *y = static_cast<int>(std::lround(uv[1]));
+  *depth_mm = q.z();
+  return *x >= 0 && *y >= 0 && *x < c.depth->cols && *y < c.depth->rows;
+}
+
+// How many true cameras see each sample: within tolerance of their true depth maps.
+std::vector<int> VisibleCounts(const std::vector<OrientedSample>& samples,
+                               const std::vector<TrueCamera>& cameras, double tolerance_mm,
+                               int threads) {
   std::vector<int> counts(samples.size(), 0);
   ParallelFor(samples.size(), threads, [&] {
     return [&](size_t i) {
       const Eigen::Vector3d p = samples[i].position_mm.cast<double>();
-      for (const Camera& c : cameras) {
-        const Eigen::Vector3d q = c.cam_from_turntable * p;
-        if (q.z() <= 1) continue;
-        double uv[2];
-        ProjectCamPoint(c.params.data(), q.data(), uv);
-        const int x = static_cast<int>(std::lround(uv[0])),
-                  y = static_cast<int>(std::lround(uv[1]));
-        if (x < 0 || y < 0 || x >= c.depth->cols || y >= c.depth->rows) continue;
-        if (std::abs((*c.depth)(y, x) - q.z()) <= tolerance_mm) ++counts[i];
+      for (const TrueCamera& c : cameras) {
+        double depth;
+        int x, y;
+        if (ProjectToPixel(c, p, &depth, &x, &y) &&
+            std::abs((*c.depth)(y, x) - depth) <= tolerance_mm)
+          ++counts[i];
       }
     };
   });
   return counts;
+}
+
+// Of the (strand point, camera) pairs where the point lies in the image and
+// not behind the true front surface by more than tolerance_mm (seen, or in
+// front of what is seen), the share whose pixel shows the true head's bare
+// skin, the point lying below the true head's hairline (`head` may be null:
+// anywhere): strand points in front of the bare face, ears and neck, where
+// the truth has no hair. Above the hairline the roots stand on the scalp
+// where it shows between them. Every `step`-th point of the set.
+double InFrontOfTrueSkinShare(const StrandSet& strands, const std::vector<TrueCamera>& cameras,
+                              const HeadModel* head, double tolerance_mm, size_t step,
+                              int threads) {
+  const size_t n = (strands.points_mm.size() + step - 1) / step;
+  std::vector<int> seen(n, 0), over_skin(n, 0);
+  ParallelFor(n, threads, [&] {
+    return [&](size_t i) {
+      const Eigen::Vector3d p = strands.points_mm[i * step].cast<double>();
+      const bool below_hairline = head == nullptr || !head->AboveHairline(p);
+      for (const TrueCamera& c : cameras) {
+        double depth;
+        int x, y;
+        if (!ProjectToPixel(c, p, &depth, &x, &y) || depth > (*c.depth)(y, x) + tolerance_mm)
+          continue;
+        ++seen[i];
+        over_skin[i] += below_hairline && (*c.bare_skin)(y, x) != 0;
+      }
+    };
+  });
+  int64_t seen_sum = 0, skin_sum = 0;
+  for (size_t i = 0; i < n; ++i) seen_sum += seen[i], skin_sum += over_skin[i];
+  return seen_sum > 0 ? static_cast<double>(skin_sum) / static_cast<double>(seen_sum) : 0.0;
 }
 
 // The reconstruction's points as samples in the true turntable frame.
@@ -184,17 +239,21 @@ StrandSet TransformedStrands(const StrandSet& strands, const Rigid3d& to_from_st
   return out;
 }
 
-// The reconstruction's strands against the true ones, if it has any, and
-// their turntable preview beside the truth's written to *preview_path.
-Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
-    const std::string& dir, const std::string& capture_dir, const CaptureTruth& truth,
-    const Rigid3d& truth_from_estimate, const StrandSet& true_strands,
-    const std::vector<OrientedSample>& truth_samples,
-    const std::vector<uint32_t>& truth_sample_strand, const std::vector<uint8_t>& visible,
-    const ReconstructionEvalOptions& options, std::string* preview_path) {
+// The reconstruction's strands against the true ones, if it has any, into
+// out->strands, their turntable preview beside the truth's (out->
+// strands_preview) and, with the truth's skin, their share over it.
+Status EvaluateStrandsFile(const std::string& dir, const std::string& capture_dir,
+                           const CaptureTruth& truth, const Rigid3d& truth_from_estimate,
+                           const StrandSet& true_strands,
+                           const std::vector<OrientedSample>& truth_samples,
+                           const std::vector<uint32_t>& truth_sample_strand,
+                           const std::vector<uint8_t>& visible,
+                           const std::vector<TrueCamera>& cameras,
+                           const ReconstructionEvalOptions& options,
+                           ReconstructionEvaluation* out) {
   const std::string path = (fs::path(dir) / "strands" / "strands.ply").string();
   std::error_code ec;
-  if (!fs::exists(path, ec)) return std::optional<StrandEvaluation>();
+  if (!fs::exists(path, ec)) return Status::Ok();
   HR_ASSIGN_OR_RETURN(const StrandSet strands, ReadStrands(path));
   std::unique_ptr<HeadModel> head;
   if (truth.head) {
@@ -216,11 +275,19 @@ Result<std::optional<StrandEvaluation>> EvaluateStrandsFile(
   const std::string preview_file = (fs::path(dir) / "strands" / "preview_truth.jpg").string();
   const Status written = WriteImageAtomic(preview_file, preview);
   if (written.ok()) {
-    *preview_path = preview_file;
+    out->strands_preview = preview_file;
   } else {
     LogWarning("eval reconstruction: no preview beside the truth: " + written.ToString());
   }
-  return std::optional<StrandEvaluation>(std::move(evaluation).value());
+  out->strands = std::move(evaluation).value();
+  constexpr size_t kSkinSampleStep = 2;
+  out->strands_over_true_skin =
+      InFrontOfTrueSkinShare(in_truth_frame, cameras, head.get(), options.visibility_tolerance_mm,
+                             kSkinSampleStep, options.threads);
+  out->truth_over_true_skin =
+      InFrontOfTrueSkinShare(true_strands, cameras, head.get(), options.visibility_tolerance_mm,
+                             kSkinSampleStep, options.threads);
+  return Status::Ok();
 }
 
 }  // namespace
@@ -251,6 +318,7 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   std::vector<double> ious, orientation_medians, orientation_p90s, depth_errors;
   int64_t hair = 0, kept = 0;
   std::map<int, cv::Mat1f> depth_maps;
+  std::map<int, cv::Mat1b> bare_skin;
   for (ViewResult& r : per_view) {
     HR_RETURN_IF_ERROR(r.status);
     out.views.push_back(r.accuracy);
@@ -261,6 +329,7 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
     kept += r.accuracy.orientation.kept_pixels;
     depth_errors.insert(depth_errors.end(), r.depth_errors.begin(), r.depth_errors.end());
     depth_maps[r.accuracy.view] = r.true_depth;
+    bare_skin[r.accuracy.view] = r.true_bare_skin;
   }
   if (!ious.empty()) {
     out.mask_iou_median = Median(ious);
@@ -285,8 +354,9 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   std::vector<uint32_t> truth_sample_strand;
   const std::vector<OrientedSample> all_truth =
       SampleStrands(true_strands, options.truth_step_mm, &truth_sample_strand);
+  const std::vector<TrueCamera> cameras = TrueCameras(truth, depth_maps, bare_skin);
   const std::vector<int> counts =
-      VisibleCounts(all_truth, truth, depth_maps, options.visibility_tolerance_mm, options.threads);
+      VisibleCounts(all_truth, cameras, options.visibility_tolerance_mm, options.threads);
   std::vector<uint8_t> visible(all_truth.size(), 0);
   for (size_t i = 0; i < all_truth.size(); ++i)
     visible[i] = static_cast<uint8_t>(counts[i] >= options.min_visible_views);
@@ -299,11 +369,10 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
   out.visible_truth_samples = scores.subset_size;
   out.all = std::move(scores.all);
   out.visible = std::move(scores.subset);
-  HR_ASSIGN_OR_RETURN(
-      out.strands,
-      EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir, capture_dir,
-                          truth, truth_from_estimate, true_strands, all_truth, truth_sample_strand,
-                          visible, options, &out.strands_preview));
+  HR_RETURN_IF_ERROR(EvaluateStrandsFile(options.strands_dir.empty() ? dir : options.strands_dir,
+                                         capture_dir, truth, truth_from_estimate, true_strands,
+                                         all_truth, truth_sample_strand, visible, cameras, options,
+                                         &out));
   return out;
 }
 
@@ -337,6 +406,10 @@ nlohmann::json ReconstructionEvaluation::ToJson() const {
   if (strands) {
     j["strands"] = strands->ToJson();
     j["strands"]["preview"] = strands_preview;
+    if (strands_over_true_skin) {
+      j["strands"]["over_true_skin_share"] = *strands_over_true_skin;
+      j["strands"]["truth_over_true_skin_share"] = truth_over_true_skin.value_or(0);
+    }
   }
   return j;
 }
@@ -363,6 +436,12 @@ std::string ReconstructionEvaluation::BriefReport() const {
       << "\n";
   }
   if (strands) s << strands->BriefReport();
+  if (strands_over_true_skin) {
+    s.precision(2);
+    s << "  over skin: " << 100 * *strands_over_true_skin
+      << " % of strand points seen by a camera lie in front of the true skin (the true strands: "
+      << 100 * truth_over_true_skin.value_or(0) << " %)\n";
+  }
   if (!strands_preview.empty()) s << "wrote: " << strands_preview << "\n";
   return s.str();
 }

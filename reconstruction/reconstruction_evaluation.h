@@ -66,6 +66,14 @@ struct ReconstructionEvaluation {
   // The strands' scores (true samples every truth_step_mm, as for the points);
   // nullopt when the reconstruction has no strands/strands.ply.
   std::optional<StrandEvaluation> strands;
+  // With strands: of the (strand point, true camera) pairs where the point
+  // lies in the image and is seen or in front of what is seen (not behind the
+  // true depth map by more than visibility_tolerance_mm), the share whose
+  // pixel shows bare skin (the true head label with under 2 % hair coverage)
+  // while the point lies below the true head's hairline: strands in front of
+  // the bare face, ears and neck. For the reconstruction and for the true
+  // strands themselves (near 0: stray fibres). Every 2nd point.
+  std::optional<double> strands_over_true_skin, truth_over_true_skin;
   // With strands: the turntable preview of the reconstruction (in the true
   // frame) above the truth's, <strands dir>/strands/preview_truth.jpg; empty
   // when it could not be written (a warning is logged, the scores stand).

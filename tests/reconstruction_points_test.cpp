@@ -223,6 +223,36 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   EXPECT_GT(*st.rooted_on_scalp_fraction, 0.9) << "the wig's roots lie on the scalp";
   EXPECT_NEAR(st.lengths.median_mm, st.truth_lengths.median_mm, 0.01);
   EXPECT_TRUE(with_strands->ToJson().contains("strands"));
+  // In front of the true bare skin: the truth as the reconstruction scores
+  // the truth's own share (near 0); a curtain hung in front of the face
+  // scores mostly skin, from the views that see it over the face.
+  ASSERT_TRUE(with_strands->strands_over_true_skin && with_strands->truth_over_true_skin);
+  std::printf("in front of the true skin: %.2f %% (the truth's own %.2f %%)\n",
+              100 * *with_strands->strands_over_true_skin,
+              100 * *with_strands->truth_over_true_skin);
+  EXPECT_NEAR(*with_strands->strands_over_true_skin, *with_strands->truth_over_true_skin, 1e-9);
+  EXPECT_LT(*with_strands->truth_over_true_skin, 0.01);
+  ASSERT_TRUE(truth->head.has_value());
+  const HeadSpec& head = *truth->head;
+  StrandSet face_curtain;
+  for (int k = -20; k <= 20; ++k) {
+    const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(head.scalp.face_dir);
+    std::vector<Eigen::Vector3f> strand;
+    for (double dz = 10; dz >= -60; dz -= 1) {
+      const Eigen::Vector3d p = head.center_turntable_mm +
+                                (head.radii_mm.maxCoeff() + 15) * head.scalp.face_dir +
+                                1.5 * k * side + dz * Eigen::Vector3d::UnitZ();
+      strand.push_back(p.cast<float>());
+    }
+    face_curtain.AddStrand(strand);
+  }
+  ASSERT_TRUE(WriteStrands(dir + "/reconstruction/strands/strands.ply", face_curtain).ok());
+  auto with_curtain = EvaluateReconstruction(dir, {});
+  ASSERT_TRUE(with_curtain.ok()) << with_curtain.status().ToString();
+  ASSERT_TRUE(with_curtain->strands_over_true_skin.has_value());
+  std::printf("a curtain in front of the face: %.1f %% in front of the true skin\n",
+              100 * *with_curtain->strands_over_true_skin);
+  EXPECT_GT(*with_curtain->strands_over_true_skin, 0.3);
 }
 
 }  // namespace
