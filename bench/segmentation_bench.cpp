@@ -2,7 +2,8 @@
 // a simulated capture, against the renderer's labels. Run from the repository
 // root:
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
-//       [--texture-feature yes|no] [--views 0,1,...] [--threads T] [--pictures DIR]
+//       [--texture-feature yes|no] [--skin-chromaticity SIGMAS] [--views 0,1,...]
+//       [--threads T] [--pictures DIR]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
 // each view's hair IoU and which true labels the errors fall on (skin taken
 // for hair, hair taken for backdrop or skin), the median and worst IoU, and
@@ -67,7 +68,8 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
-                 "[--views 0,1,...] [--threads T] [--pictures DIR]\n",
+                 "[--skin-chromaticity SIGMAS] [--views 0,1,...] [--threads T] "
+                 "[--pictures DIR]\n",
                  argv[0]);
     return 2;
   }
@@ -89,6 +91,8 @@ int main(int argc, char** argv) {
         return 2;
       }
       options.texture_feature = std::strcmp(argv[i + 1], "yes") == 0;
+    } else if (std::strcmp(argv[i], "--skin-chromaticity") == 0) {
+      options.skin_chromaticity_sigmas = std::atof(argv[i + 1]);  // 0: off
     } else if (std::strcmp(argv[i], "--views") == 0) {
       std::stringstream list(argv[i + 1]);
       for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));

@@ -245,6 +245,80 @@ class MaterialModel {
   bool texture_ = true;
 };
 
+// A 2D Gaussian over chromaticity (r, g) = (R, G) / (R + G + B).
+struct ChromaGaussian {
+  cv::Vec2d mean;
+  cv::Matx22d inverse;
+  double log_norm = 0;  // -log det(covariance) / 2
+  // Half the squared Mahalanobis distance, negated: log density up to log_norm.
+  double Exponent(const cv::Vec2d& c) const {
+    const cv::Vec2d d = c - mean;
+    return -0.5 * (d.t() * inverse * d)(0);
+  }
+  double LogDensity(const cv::Vec2d& c) const { return log_norm + Exponent(c); }
+};
+
+cv::Vec2d Chromaticity(const cv::Vec3f& bgr) {
+  const double sum = bgr[0] + bgr[1] + bgr[2] + 3.0;  // +1 a channel: black stays defined
+  return cv::Vec2d((bgr[2] + 1.0) / sum, (bgr[1] + 1.0) / sum);
+}
+
+// False for fewer than 50 samples.
+bool FitChromaticity(const std::vector<cv::Vec2d>& samples, ChromaGaussian* g) {
+  if (samples.size() < 50) return false;
+  cv::Vec2d mean(0, 0);
+  for (const cv::Vec2d& c : samples) mean += c;
+  mean *= 1.0 / static_cast<double>(samples.size());
+  // A floor of 0.001 in standard deviation: about a grey level on skin.
+  cv::Matx22d covariance = cv::Matx22d::eye() * 1e-6;
+  for (const cv::Vec2d& c : samples) {
+    const cv::Vec2d d = c - mean;
+    covariance += d * d.t() * (1.0 / static_cast<double>(samples.size()));
+  }
+  g->mean = mean;
+  g->inverse = covariance.inv();
+  g->log_norm = -0.5 * std::log(cv::determinant(covariance));
+  return true;
+}
+
+// Skin keeps its chromaticity in shadow, where the hair's shadows give it a
+// hair-like texture that the material model takes for hair. The skin's
+// chromaticity is fitted on what the model calls skin (its core, within 2.5
+// sigma), the hair's on what it calls hair; a hair pixel whose chromaticity
+// (over a few pixels, against sensor noise) lies within `sigmas` of the skin's
+// and is e^log_ratio times likelier under it than under the hair's becomes
+// skin. Unchanged when either has fewer than 50 samples.
+cv::Mat1b SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
+                             const cv::Mat1b& hair, double log_ratio, double sigmas) {
+  cv::Mat3f smooth;
+  bgr.convertTo(smooth, CV_32F);
+  cv::GaussianBlur(smooth, smooth, cv::Size(), 1.5);
+  std::vector<cv::Vec2d> skin_samples, hair_samples;
+  for (int y = 0; y < bgr.rows; y += 2) {
+    for (int x = 0; x < bgr.cols; x += 2) {
+      if (candidates(y, x))
+        (hair(y, x) ? hair_samples : skin_samples).push_back(Chromaticity(smooth(y, x)));
+    }
+  }
+  ChromaGaussian skin, hair_model;
+  if (!FitChromaticity(skin_samples, &skin) || !FitChromaticity(hair_samples, &hair_model))
+    return hair;
+  constexpr double kCoreSigmas = 2.5;
+  std::vector<cv::Vec2d> core;
+  for (const cv::Vec2d& c : skin_samples)
+    if (skin.Exponent(c) > -0.5 * kCoreSigmas * kCoreSigmas) core.push_back(c);
+  if (!FitChromaticity(core, &skin)) return hair;
+  cv::Mat1b out = hair.clone();
+  out.forEach([&](uint8_t& h, const int* pos) {
+    if (!h) return;
+    const cv::Vec2d c = Chromaticity(smooth(pos[0], pos[1]));
+    if (skin.Exponent(c) > -0.5 * sigmas * sigmas &&
+        skin.LogDensity(c) - hair_model.LogDensity(c) > log_ratio)
+      h = 0;
+  });
+  return out;
+}
+
 // Hair against skin on the foreground (non-zero in `candidates`): the
 // material model's likelihood ratio, smoothed over a few pixels. Returns a
 // mask of hair, same size as `bgr`.
@@ -297,6 +371,10 @@ Status SegmentationOptions::Check() const {
   if (!(skin_texture_ratio > 0 && skin_texture_ratio < 1)) {
     return InvalidArgument("segmentation skin_texture_ratio must be in (0, 1)");
   }
+  if (!(skin_chromaticity_sigmas >= 0))
+    return InvalidArgument("segmentation skin_chromaticity_sigmas must be non-negative (0: off)");
+  if (!(skin_chromaticity_log_ratio >= 0))
+    return InvalidArgument("segmentation skin_chromaticity_log_ratio must be non-negative");
   if (colour_components < 1 || colour_components > 8) {
     return InvalidArgument("segmentation colour_components must be in 1..8");
   }
@@ -360,8 +438,13 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   small_candidates = Mask(small_candidates >= 128);
   cv::resize(TextureEnergy(bgr, candidates, options.texture_sigma_px), small_energy,
              small_bgr.size(), 0, 0, cv::INTER_AREA);
-  HR_ASSIGN_OR_RETURN(const cv::Mat1b small_hair,
+  HR_ASSIGN_OR_RETURN(const cv::Mat1b contrast_hair,
                       HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
+  const cv::Mat1b small_hair = options.skin_chromaticity_sigmas > 0
+                                   ? SkinByChromaticity(small_bgr, small_candidates, contrast_hair,
+                                                        options.skin_chromaticity_log_ratio,
+                                                        options.skin_chromaticity_sigmas)
+                                   : contrast_hair;
   cv::Mat1b hair_side;
   cv::resize(small_hair, hair_side, bgr.size(), 0, 0, cv::INTER_LINEAR);
   hair_side = Mask(hair_side >= 128);

@@ -16,7 +16,8 @@
 //     smoothed over a few pixels, labels every pixel. Texture in the mixture
 //     keeps smooth skin in shadow out of dark hair's components; without it
 //     (`texture_feature` false) the mixture is over colour alone, as Bao &
-//     Qi's.
+//     Qi's. Skin in shadow keeps its chromaticity: hair pixels whose
+//     chromaticity the skin's explains far better become skin.
 // Labels use the simulated ground truth's numbering (core/truth_maps.h) so that
 // they compare directly.
 #pragma once
@@ -45,6 +46,14 @@ struct SegmentationOptions {
   // least a quarter of the foreground; on a view with less hair than that,
   // textured skin may be taken for hair).
   double skin_texture_ratio = 0.35;
+  // Skin in shadow under hair carries the hair's shadows, a fine texture
+  // that the mixture takes for hair, but it keeps the skin's chromaticity:
+  // a pixel named hair whose chromaticity lies within skin_chromaticity_sigmas
+  // of the skin's, and is e^skin_chromaticity_log_ratio times likelier under
+  // the skin's than under the hair's, is skin (2D Gaussians fitted per view
+  // to what the mixture named each). 0 sigmas turns it off.
+  double skin_chromaticity_sigmas = 3.0;
+  double skin_chromaticity_log_ratio = 3.0;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.
