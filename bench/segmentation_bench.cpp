@@ -2,7 +2,8 @@
 // a simulated capture, against the renderer's labels. Run from the repository
 // root:
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
-//       [--texture-feature yes|no] [--skin-chromaticity SIGMAS] [--views 0,1,...]
+//       [--texture-feature yes|no] [--skin-chromaticity SIGMAS]
+//       [--skin-chromaticity-log-ratio R] [--views 0,1,...]
 //       [--threads T] [--pictures DIR]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
 // each view's hair IoU and which true labels the errors fall on (skin taken
@@ -68,7 +69,8 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
-                 "[--skin-chromaticity SIGMAS] [--views 0,1,...] [--threads T] "
+                 "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] [--views 0,1,...] "
+                 "[--threads T] "
                  "[--pictures DIR]\n",
                  argv[0]);
     return 2;
@@ -93,6 +95,8 @@ int main(int argc, char** argv) {
       options.texture_feature = std::strcmp(argv[i + 1], "yes") == 0;
     } else if (std::strcmp(argv[i], "--skin-chromaticity") == 0) {
       options.skin_chromaticity_sigmas = std::atof(argv[i + 1]);  // 0: off
+    } else if (std::strcmp(argv[i], "--skin-chromaticity-log-ratio") == 0) {
+      options.skin_chromaticity_log_ratio = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--views") == 0) {
       std::stringstream list(argv[i + 1]);
       for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));

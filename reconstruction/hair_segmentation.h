@@ -53,7 +53,7 @@ struct SegmentationOptions {
   // the skin's than under the hair's, is skin (2D Gaussians fitted per view
   // to what the mixture named each). 0 sigmas turns it off.
   double skin_chromaticity_sigmas = 3.0;
-  double skin_chromaticity_log_ratio = 3.0;
+  double skin_chromaticity_log_ratio = 5.0;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.

@@ -65,7 +65,7 @@ TEST(SegmentHair, TextureKeepsShadedSkinOutOfTheHair) {
   const double iou = *iou_or;
   const double skin_as_hair =
       cv::countNonZero(hair & true_skin) / static_cast<double>(cv::countNonZero(true_skin));
-  // Measured: IoU 0.95, 2 % of the skin taken for hair (a band along the
+  // Measured: IoU 0.84, 11 % of the skin taken for hair (a band along the
   // hair's edge, where the texture window reaches over it and the skin is
   // darkest).
   EXPECT_GT(iou, 0.8);
@@ -82,7 +82,7 @@ TEST(SegmentHair, TextureKeepsShadedSkinOutOfTheHair) {
   ASSERT_TRUE(colour_iou.ok()) << colour_iou.status().ToString();
   std::printf("hair IoU %.3f with texture, %.3f colour only; skin taken for hair %.3f, %.3f\n", iou,
               *colour_iou, skin_as_hair, colour_skin_as_hair);
-  // Measured: colour alone takes 5.5 % of the skin for hair.
+  // Measured: colour alone takes 20 % of the skin for hair.
   EXPECT_GT(colour_skin_as_hair, 1.5 * skin_as_hair)
       << "colour alone takes more of the shaded skin for hair: the case this scene is built for";
 }
@@ -146,8 +146,8 @@ TEST(SegmentHair, ChromaticityKeepsSkinUnderTheHairsShadowOutOfTheHair) {
       "skin in the hair's shadow taken for hair: %.3f with chromaticity, %.3f without; "
       "hair IoU %.3f, %.3f\n",
       with_chromaticity, without_chromaticity, iou, iou_without);
-  // Measured: all of it without, 10 % with (along the shadow's and the
-  // hair's edges, where the smoothing mixes them); hair IoU 0.79 against 0.31.
+  // Measured: all of it without, 12 % with (along the shadow's and the
+  // hair's edges, where the smoothing mixes them); hair IoU 0.78 against 0.31.
   EXPECT_GT(without_chromaticity, 0.5) << "the case this scene is built for";
   EXPECT_LT(with_chromaticity, 0.2);
   EXPECT_GT(iou, 0.7);
