@@ -3,13 +3,15 @@
 // root:
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
 //       [--texture-feature yes|no] [--skin-chromaticity SIGMAS]
-//       [--skin-chromaticity-log-ratio R] [--views 0,1,...]
+//       [--skin-chromaticity-log-ratio R] [--capture-skin yes|no] [--views 0,1,...]
 //       [--threads T] [--pictures DIR]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
 // each view's hair IoU and which true labels the errors fall on (skin taken
 // for hair, hair taken for backdrop or skin), the median and worst IoU, and
-// the time per view. --pictures writes each view with its errors painted:
-// red where skin or backdrop is taken for hair, blue where hair is missed.
+// the time per view. The views are segmented as the points stage does
+// (SegmentCaptureViews: views with too little skin of their own borrow the
+// capture's skin model); --capture-skin no segments each view alone. --pictures writes each view
+// with its errors painted: red where skin or backdrop is taken for hair, blue where hair is missed.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -39,12 +41,13 @@ struct ViewRow {
   std::string name;
   double iou = 0;
   int skin_as_hair = 0, backdrop_as_hair = 0, hair_as_skin = 0, hair_as_backdrop = 0;
+  bool capture_skin = false;
+  int64_t capture_skin_pixels = 0;
 };
 
-Result<ViewRow> ScoreView(const ReconstructionView& view, const CaptureTruth& truth,
-                          const SegmentationOptions& options, const std::string& pictures) {
-  HR_ASSIGN_OR_RETURN(const cv::Mat image, ReadImageFile(view.image_path, cv::IMREAD_COLOR));
-  HR_ASSIGN_OR_RETURN(const HairSegmentation seg, SegmentHair(image, view.not_hair_px, options));
+Result<ViewRow> ScoreView(const ReconstructionView& view, const cv::Mat& image,
+                          const HairSegmentation& seg, const CaptureTruth& truth,
+                          const std::string& pictures) {
   HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps, ReadViewTruthMaps(truth.views_dir, view.id));
   const cv::Mat hair = seg.label == kSegHair, true_hair = maps.label == ViewTruthMaps::kHair;
   ViewRow row;
@@ -54,6 +57,8 @@ Result<ViewRow> ScoreView(const ReconstructionView& view, const CaptureTruth& tr
   row.backdrop_as_hair = cv::countNonZero(hair & (maps.label == ViewTruthMaps::kBackdrop));
   row.hair_as_skin = cv::countNonZero(true_hair & (seg.label == kSegHead));
   row.hair_as_backdrop = cv::countNonZero(true_hair & (seg.label == kSegBackdrop));
+  row.capture_skin = seg.used_capture_skin;
+  row.capture_skin_pixels = seg.capture_skin_pixels;
   if (!pictures.empty()) {
     cv::Mat painted = image.clone();
     painted.setTo(cv::Scalar(0, 0, 255), hair & ~true_hair);
@@ -69,7 +74,8 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
-                 "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] [--views 0,1,...] "
+                 "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] "
+                 "[--capture-skin yes|no] [--views 0,1,...] "
                  "[--threads T] "
                  "[--pictures DIR]\n",
                  argv[0]);
@@ -97,6 +103,12 @@ int main(int argc, char** argv) {
       options.skin_chromaticity_sigmas = std::atof(argv[i + 1]);  // 0: off
     } else if (std::strcmp(argv[i], "--skin-chromaticity-log-ratio") == 0) {
       options.skin_chromaticity_log_ratio = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--capture-skin") == 0) {
+      if (std::strcmp(argv[i + 1], "yes") != 0 && std::strcmp(argv[i + 1], "no") != 0) {
+        std::fprintf(stderr, "--capture-skin takes yes or no\n");
+        return 2;
+      }
+      options.capture_skin = std::strcmp(argv[i + 1], "yes") == 0;
     } else if (std::strcmp(argv[i], "--views") == 0) {
       std::stringstream list(argv[i + 1]);
       for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));
@@ -125,31 +137,55 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: no view to segment\n", capture.c_str());
     return 1;
   }
-  std::vector<ViewRow> rows(input->views.size());
+  const size_t count = input->views.size();
+  std::vector<ViewRow> rows(count);
   std::vector<std::string> errors;
   std::mutex mutex;
-  const auto start = std::chrono::steady_clock::now();
-  ParallelFor(rows.size(), threads, [&] {
+  const auto report = [&](size_t k, const Status& status) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    errors.push_back(input->views[k].name + ": " + status.ToString());
+  };
+  std::vector<cv::Mat> images(count);
+  ParallelFor(count, threads, [&] {
     return [&](size_t k) {
-      auto row = ScoreView(input->views[k], *truth, options, pictures);
-      if (row.ok()) {
-        rows[k] = *row;
-      } else {
-        const std::lock_guard<std::mutex> lock(mutex);
-        errors.push_back(input->views[k].name + ": " + row.status().ToString());
-      }
+      Result<cv::Mat> image = ReadImageFile(input->views[k].image_path, cv::IMREAD_COLOR);
+      if (image.ok())
+        images[k] = *std::move(image);
+      else
+        report(k, image.status());
     };
   });
+  if (!errors.empty()) {
+    for (const std::string& e : errors) std::fprintf(stderr, "%s\n", e.c_str());
+    return 1;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<Result<HairSegmentation>> segmented =
+      SegmentCaptureViews(count, options, threads, [&](size_t k, const SkinChromaticity* skin) {
+        return SegmentHair(images[k], input->views[k].not_hair_px, options, skin);
+      });
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ParallelFor(count, threads, [&] {
+    return [&](size_t k) {
+      Result<ViewRow> row =
+          segmented[k].ok() ? ScoreView(input->views[k], images[k], *segmented[k], *truth, pictures)
+                            : Result<ViewRow>(segmented[k].status());
+      if (row.ok())
+        rows[k] = *row;
+      else
+        report(k, row.status());
+    };
+  });
   for (const std::string& e : errors) std::fprintf(stderr, "%s\n", e.c_str());
   if (!errors.empty()) return 1;
-  std::printf("%-22s %6s %12s %14s %12s %14s\n", "view", "IoU", "skin->hair", "backdrop->hair",
-              "hair->skin", "hair->backdrop");
+  std::printf("%-22s %6s %12s %14s %12s %14s %14s\n", "view", "IoU", "skin->hair", "backdrop->hair",
+              "hair->skin", "hair->backdrop", "capture skin");
   std::vector<double> ious;
   for (const ViewRow& r : rows) {
-    std::printf("%-22s %6.3f %12d %14d %12d %14d\n", r.name.c_str(), r.iou, r.skin_as_hair,
-                r.backdrop_as_hair, r.hair_as_skin, r.hair_as_backdrop);
+    std::printf("%-22s %6.3f %12d %14d %12d %14d %14s\n", r.name.c_str(), r.iou, r.skin_as_hair,
+                r.backdrop_as_hair, r.hair_as_skin, r.hair_as_backdrop,
+                r.capture_skin ? std::to_string(r.capture_skin_pixels).c_str() : "-");
     ious.push_back(r.iou);
   }
   std::sort(ious.begin(), ious.end());

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "core/parallel.h"
 #include "core/statistics.h"
 #include "reconstruction/gaussian_mixture.h"
 
@@ -245,8 +246,13 @@ class MaterialModel {
   bool texture_ = true;
 };
 
-// A 2D Gaussian over chromaticity (r, g) = (R, G) / (R + G + B).
+// A 2D Gaussian over chromaticity (r, g) = (R, G) / (R + G + B), ready to
+// evaluate.
 struct ChromaGaussian {
+  explicit ChromaGaussian(const SkinChromaticity& model)
+      : mean(model.mean),
+        inverse(model.covariance.inv()),
+        log_norm(-0.5 * std::log(cv::determinant(model.covariance))) {}
   cv::Vec2d mean;
   cv::Matx22d inverse;
   double log_norm = 0;  // -log det(covariance) / 2
@@ -263,23 +269,59 @@ cv::Vec2d Chromaticity(const cv::Vec3f& bgr) {
   return cv::Vec2d((bgr[2] + 1.0) / sum, (bgr[1] + 1.0) / sum);
 }
 
-// False for fewer than 50 samples.
-bool FitChromaticity(const std::vector<cv::Vec2d>& samples, ChromaGaussian* g) {
-  if (samples.size() < 50) return false;
-  cv::Vec2d mean(0, 0);
-  for (const cv::Vec2d& c : samples) mean += c;
-  mean *= 1.0 / static_cast<double>(samples.size());
+// No model (0 samples) for fewer than 50 samples.
+SkinChromaticity FitChromaticity(const std::vector<cv::Vec2d>& samples) {
+  SkinChromaticity model;
+  if (samples.size() < 50) return model;
+  model.samples = static_cast<int64_t>(samples.size());
+  for (const cv::Vec2d& c : samples) model.mean += c;
+  model.mean *= 1.0 / static_cast<double>(samples.size());
   // A floor of 0.001 in standard deviation: about a grey level on skin.
-  cv::Matx22d covariance = cv::Matx22d::eye() * 1e-6;
+  model.covariance = cv::Matx22d::eye() * 1e-6;
   for (const cv::Vec2d& c : samples) {
-    const cv::Vec2d d = c - mean;
-    covariance += d * d.t() * (1.0 / static_cast<double>(samples.size()));
+    const cv::Vec2d d = c - model.mean;
+    model.covariance += d * d.t() * (1.0 / static_cast<double>(samples.size()));
   }
-  g->mean = mean;
-  g->inverse = covariance.inv();
-  g->log_norm = -0.5 * std::log(cv::determinant(covariance));
-  return true;
+  return model;
 }
+
+// The skin model fitted to what the mixture called skin, refitted to its core
+// (within 2.5 sigma).
+SkinChromaticity FitSkinCore(const std::vector<cv::Vec2d>& skin_samples) {
+  const SkinChromaticity all = FitChromaticity(skin_samples);
+  if (all.samples == 0) return all;
+  const ChromaGaussian skin(all);
+  constexpr double kCoreSigmas = 2.5;
+  std::vector<cv::Vec2d> core;
+  for (const cv::Vec2d& c : skin_samples)
+    if (skin.Exponent(c) > -0.5 * kCoreSigmas * kCoreSigmas) core.push_back(c);
+  return FitChromaticity(core);
+}
+
+// The pieces of `flips` that hold a region: an opening over 5 px, then
+// connected pieces of at least `min_area` px.
+cv::Mat1b CoherentPieces(const cv::Mat1b& flips, double min_area) {
+  cv::Mat1b opened;
+  cv::morphologyEx(flips, opened, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+  cv::Mat1i labels;
+  cv::Mat stats, centroids;
+  const int n = cv::connectedComponentsWithStats(opened, labels, stats, centroids, 8, CV_32S);
+  std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
+  for (int k = 1; k < n; ++k)
+    keep[static_cast<size_t>(k)] = stats.at<int>(k, cv::CC_STAT_AREA) >= min_area ? 255 : 0;
+  cv::Mat1b out(flips.size(), uint8_t{0});
+  out.forEach(
+      [&](uint8_t& o, const int* pos) { o = keep[static_cast<size_t>(labels(pos[0], pos[1]))]; });
+  return out;
+}
+
+struct ChromaticityStep {
+  cv::Mat1b hair;
+  SkinChromaticity own_skin;
+  bool used_capture_skin = false;
+  int64_t capture_skin_pixels = 0;  // at the working scale
+};
 
 // Skin keeps its chromaticity in shadow, where the hair's shadows give it a
 // hair-like texture that the material model takes for hair. The skin's
@@ -287,9 +329,12 @@ bool FitChromaticity(const std::vector<cv::Vec2d>& samples, ChromaGaussian* g) {
 // sigma), the hair's on what it calls hair; a hair pixel whose chromaticity
 // (over a few pixels, against sensor noise) lies within `sigmas` of the skin's
 // and is e^log_ratio times likelier under it than under the hair's becomes
-// skin. Unchanged when either has fewer than 50 samples.
-cv::Mat1b SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
-                             const cv::Mat1b& hair, double log_ratio, double sigmas) {
+// skin. A view with too little skin of its own takes `capture_skin` (may be
+// null), and keeps only the regions it turns to skin (CoherentPieces).
+// Unchanged when the hair or the skin used has fewer than 50 samples.
+ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
+                                    const cv::Mat1b& hair, const SegmentationOptions& options,
+                                    const SkinChromaticity* capture_skin) {
   cv::Mat3f smooth;
   bgr.convertTo(smooth, CV_32F);
   cv::GaussianBlur(smooth, smooth, cv::Size(), 1.5);
@@ -300,23 +345,31 @@ cv::Mat1b SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
         (hair(y, x) ? hair_samples : skin_samples).push_back(Chromaticity(smooth(y, x)));
     }
   }
-  ChromaGaussian skin, hair_model;
-  if (!FitChromaticity(skin_samples, &skin) || !FitChromaticity(hair_samples, &hair_model))
-    return hair;
-  constexpr double kCoreSigmas = 2.5;
-  std::vector<cv::Vec2d> core;
-  for (const cv::Vec2d& c : skin_samples)
-    if (skin.Exponent(c) > -0.5 * kCoreSigmas * kCoreSigmas) core.push_back(c);
-  if (!FitChromaticity(core, &skin)) return hair;
-  cv::Mat1b out = hair.clone();
-  out.forEach([&](uint8_t& h, const int* pos) {
-    if (!h) return;
+  ChromaticityStep step;
+  step.hair = hair;
+  step.own_skin = FitSkinCore(skin_samples);
+  const SkinChromaticity hair_fit = FitChromaticity(hair_samples);
+  step.used_capture_skin = capture_skin != nullptr && capture_skin->samples > 0 &&
+                           step.own_skin.samples < options.skin_chromaticity_min_view_samples;
+  const SkinChromaticity& skin_fit = step.used_capture_skin ? *capture_skin : step.own_skin;
+  if (hair_fit.samples == 0 || skin_fit.samples == 0) return step;
+  const ChromaGaussian skin(skin_fit), hair_model(hair_fit);
+  const double sigmas = options.skin_chromaticity_sigmas;
+  cv::Mat1b flips(hair.size(), uint8_t{0});
+  flips.forEach([&](uint8_t& f, const int* pos) {
+    if (!hair(pos[0], pos[1])) return;
     const cv::Vec2d c = Chromaticity(smooth(pos[0], pos[1]));
     if (skin.Exponent(c) > -0.5 * sigmas * sigmas &&
-        skin.LogDensity(c) - hair_model.LogDensity(c) > log_ratio)
-      h = 0;
+        skin.LogDensity(c) - hair_model.LogDensity(c) > options.skin_chromaticity_log_ratio)
+      f = 255;
   });
-  return out;
+  if (step.used_capture_skin) {
+    const double scale = options.work_scale;
+    flips = CoherentPieces(flips, options.capture_skin_min_area_px * scale * scale);
+    step.capture_skin_pixels = cv::countNonZero(flips);
+  }
+  step.hair = Mask(hair & ~flips);
+  return step;
 }
 
 // Hair against skin on the foreground (non-zero in `candidates`): the
@@ -375,6 +428,10 @@ Status SegmentationOptions::Check() const {
     return InvalidArgument("segmentation skin_chromaticity_sigmas must be non-negative (0: off)");
   if (!(skin_chromaticity_log_ratio >= 0))
     return InvalidArgument("segmentation skin_chromaticity_log_ratio must be non-negative");
+  if (skin_chromaticity_min_view_samples < 50)
+    return InvalidArgument("segmentation skin_chromaticity_min_view_samples must be at least 50");
+  if (!(capture_skin_min_area_px >= 0))
+    return InvalidArgument("segmentation capture_skin_min_area_px must be non-negative");
   if (colour_components < 1 || colour_components > 8) {
     return InvalidArgument("segmentation colour_components must be in 1..8");
   }
@@ -383,6 +440,50 @@ Status SegmentationOptions::Check() const {
   if (!(work_scale > 0.1 && work_scale <= 1))
     return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
   return Status::Ok();
+}
+
+SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views) {
+  SkinChromaticity pooled;
+  for (const SkinChromaticity& v : views) {
+    pooled.samples += v.samples;
+    pooled.mean += v.mean * static_cast<double>(v.samples);
+  }
+  if (pooled.samples == 0) return pooled;
+  const double total = static_cast<double>(pooled.samples);
+  pooled.mean *= 1.0 / total;
+  pooled.covariance = cv::Matx22d::zeros();
+  for (const SkinChromaticity& v : views) {
+    const cv::Vec2d d = v.mean - pooled.mean;
+    pooled.covariance += (v.covariance + d * d.t()) * (static_cast<double>(v.samples) / total);
+  }
+  return pooled;
+}
+
+std::vector<Result<HairSegmentation>> SegmentCaptureViews(
+    size_t views, const SegmentationOptions& options, int threads,
+    const std::function<Result<HairSegmentation>(size_t, const SkinChromaticity*)>& segment) {
+  std::vector<Result<HairSegmentation>> out(
+      views, Result<HairSegmentation>(FailedPrecondition("not segmented")));
+  ParallelFor(views, threads, [&] { return [&](size_t v) { out[v] = segment(v, nullptr); }; });
+  std::vector<SkinChromaticity> own;
+  std::vector<size_t> again;
+  for (size_t v = 0; v < views; ++v) {
+    if (!out[v].ok()) continue;
+    if (out[v]->skin_chromaticity.samples >= options.skin_chromaticity_min_view_samples)
+      own.push_back(out[v]->skin_chromaticity);
+    else
+      again.push_back(v);
+  }
+  const SkinChromaticity capture_skin = PoolSkinChromaticity(own);
+  if (capture_skin.samples == 0 || options.skin_chromaticity_sigmas <= 0 || !options.capture_skin)
+    return out;
+  ParallelFor(again.size(), threads, [&] {
+    return [&](size_t k) {
+      Result<HairSegmentation> second = segment(again[k], &capture_skin);
+      if (second.ok()) out[again[k]] = std::move(second);
+    };
+  });
+  return out;
 }
 
 std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
@@ -401,7 +502,8 @@ std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
 
 Result<HairSegmentation> SegmentHair(const cv::Mat& image,
                                      const std::vector<std::vector<cv::Point2f>>& not_hair_px,
-                                     const SegmentationOptions& options) {
+                                     const SegmentationOptions& options,
+                                     const SkinChromaticity* capture_skin) {
   HR_RETURN_IF_ERROR(options.Check());
   if (image.empty() || image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
     return InvalidArgument("segmentation needs an 8-bit grey or BGR image");
@@ -440,11 +542,12 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
              small_bgr.size(), 0, 0, cv::INTER_AREA);
   HR_ASSIGN_OR_RETURN(const cv::Mat1b contrast_hair,
                       HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
-  const cv::Mat1b small_hair = options.skin_chromaticity_sigmas > 0
-                                   ? SkinByChromaticity(small_bgr, small_candidates, contrast_hair,
-                                                        options.skin_chromaticity_log_ratio,
-                                                        options.skin_chromaticity_sigmas)
-                                   : contrast_hair;
+  ChromaticityStep chromaticity;
+  chromaticity.hair = contrast_hair;
+  if (options.skin_chromaticity_sigmas > 0)
+    chromaticity =
+        SkinByChromaticity(small_bgr, small_candidates, contrast_hair, options, capture_skin);
+  const cv::Mat1b& small_hair = chromaticity.hair;
   cv::Mat1b hair_side;
   cv::resize(small_hair, hair_side, bgr.size(), 0, 0, cv::INTER_LINEAR);
   hair_side = Mask(hair_side >= 128);
@@ -472,6 +575,10 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   const cv::Mat1b stray = StrayComponents(hair_region, options.min_hair_component_share);
   HairSegmentation out;
   out.backdrop_sigma = backdrop.sigma;
+  out.skin_chromaticity = chromaticity.own_skin;
+  out.used_capture_skin = chromaticity.used_capture_skin;
+  out.capture_skin_pixels = static_cast<int64_t>(
+      std::lround(static_cast<double>(chromaticity.capture_skin_pixels) / (s * s)));
   out.label = cv::Mat1b(bgr.size(), uint8_t{kSegBackdrop});
   out.hair_alpha = cv::Mat1f(bgr.size(), 0.f);
   for (int y = 0; y < bgr.rows; ++y) {

@@ -17,12 +17,19 @@
 //     keeps smooth skin in shadow out of dark hair's components; without it
 //     (`texture_feature` false) the mixture is over colour alone, as Bao &
 //     Qi's. Skin in shadow keeps its chromaticity: hair pixels whose
-//     chromaticity the skin's explains far better become skin.
+//     chromaticity the skin's explains far better become skin. A view that
+//     shows too little lit skin to model it (the back of the head, where the
+//     neck lies in the hair's shadow) borrows the capture's: the models of
+//     the views that have one, pooled (SegmentCaptureViews runs the two
+//     passes).
 // Labels use the simulated ground truth's numbering (core/truth_maps.h) so that
 // they compare directly.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <opencv2/core/mat.hpp>
+#include <opencv2/core/matx.hpp>
 #include <opencv2/core/types.hpp>
 #include <vector>
 
@@ -54,6 +61,17 @@ struct SegmentationOptions {
   // to what the mixture named each). 0 sigmas turns it off.
   double skin_chromaticity_sigmas = 3.0;
   double skin_chromaticity_log_ratio = 5.0;
+  // A view whose own skin model rests on fewer pixels than this (at
+  // work_scale, every 2nd row and column) uses the capture's pooled model
+  // when one is given. capture_skin false: SegmentCaptureViews segments each
+  // view alone.
+  int skin_chromaticity_min_view_samples = 500;
+  bool capture_skin = true;
+  // Pixels turned to skin by the capture's model count only in pieces of at
+  // least this area (px at full size, after an opening over 5 px at
+  // work_scale): the skin under the hair's shadow is a region, where hair
+  // whose glints happen to match the skin's chromaticity is scattered.
+  double capture_skin_min_area_px = 600;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.
@@ -63,10 +81,27 @@ struct SegmentationOptions {
   Status Check() const;
 };
 
+// Skin as a 2D Gaussian over chromaticity (r, g) = (R, G) / (R + G + B).
+struct SkinChromaticity {
+  cv::Vec2d mean{0, 0};
+  cv::Matx22d covariance = cv::Matx22d::eye();
+  int64_t samples = 0;  // pixels it was fitted to; 0: no model
+};
+
+// The models of several views as one: the Gaussian of their samples taken
+// together (means and covariances combined by sample count). No model (0
+// samples) when none of them has one.
+SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views);
+
 struct HairSegmentation {
   cv::Mat1b label;       // SegmentLabel per pixel, full size
   cv::Mat1f hair_alpha;  // hair coverage 0..1 (0 off the hair); label is hair where alpha >= 0.5
   double backdrop_sigma = 0;  // the backdrop's colour spread (grey levels, mean of the channels)
+  // The view's own skin model (its core), 0 samples when the view shows too
+  // little skin; whether the capture's pooled model was used instead.
+  SkinChromaticity skin_chromaticity;
+  bool used_capture_skin = false;
+  int64_t capture_skin_pixels = 0;  // pixels (full size) the capture's model turned to skin
 };
 
 // The outline (convex hull, px) of 3D points seen by a camera: how the rig
@@ -80,8 +115,24 @@ std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
 // empty). InvalidArgument for an empty image or bad options; FailedPrecondition
 // when the border is not a backdrop (too varied: the subject or box touches
 // the edge, or the frame is black) or no pixel looks like hair.
+// `capture_skin` (may be null) stands in for the view's own skin model when
+// that rests on fewer than options.skin_chromaticity_min_view_samples.
 Result<HairSegmentation> SegmentHair(const cv::Mat& image,
                                      const std::vector<std::vector<cv::Point2f>>& not_hair_px,
-                                     const SegmentationOptions& options);
+                                     const SegmentationOptions& options,
+                                     const SkinChromaticity* capture_skin = nullptr);
+
+// Segments the views of one capture in two passes: every view with its own
+// skin model, then the views whose own model rests on fewer than
+// options.skin_chromaticity_min_view_samples again with the others' pooled
+// (PoolSkinChromaticity). `segment(v, capture_skin)` segments view v
+// (capture_skin null in the first pass) with `options`, may be called from
+// `threads` threads at once and must not throw. Returns each view's result;
+// a view that fails in the first pass is not tried again, one that fails in
+// the second keeps its first.
+std::vector<Result<HairSegmentation>> SegmentCaptureViews(
+    size_t views, const SegmentationOptions& options, int threads,
+    const std::function<Result<HairSegmentation>(size_t view,
+                                                 const SkinChromaticity* capture_skin)>& segment);
 
 }  // namespace hairrig

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
+#include <vector>
 
 #include "reconstruction/evaluation.h"
 
@@ -87,11 +88,14 @@ TEST(SegmentHair, TextureKeepsShadedSkinOutOfTheHair) {
       << "colour alone takes more of the shaded skin for hair: the case this scene is built for";
 }
 
-// A synthetic view: a head (an ellipse of skin, lit evenly) whose upper third
-// is covered by brown hair (fine stripes, redder than the skin), and whose
-// lower half lies in the hair's shadow: the skin darkened to 25-40 % in
-// stripes as fine as the hair's, its chromaticity unchanged.
-cv::Mat3b HeadWithHairShadowOnSkin(cv::Mat1b* true_hair, cv::Mat1b* shadowed_skin) {
+// A synthetic view: a head (an ellipse of skin, lit evenly) covered by brown
+// hair (fine stripes, redder than the skin) down to `hair_to` (-1 top, 1
+// bottom; the upper third at -0.35), whose lower half lies in the hair's
+// shadow: the skin darkened to 25-40 % in stripes as fine as the hair's, its
+// chromaticity unchanged. Hair down to 0 leaves no lit skin: a view of the
+// back of the head and its neck.
+cv::Mat3b HeadWithHairShadowOnSkin(cv::Mat1b* true_hair, cv::Mat1b* shadowed_skin,
+                                   double hair_to = -0.35) {
   const cv::Size size(360, 440);
   cv::Mat3b image(size, cv::Vec3b(40, 120, 45));
   *true_hair = cv::Mat1b(size, uint8_t{0});
@@ -106,7 +110,7 @@ cv::Mat3b HeadWithHairShadowOnSkin(cv::Mat1b* true_hair, cv::Mat1b* shadowed_ski
         const double angle = 1.3 + 0.3 * u;
         const double stripe =
             0.5 + 0.5 * std::sin(2 * M_PI * (x * std::cos(angle) + y * std::sin(angle)) / 4.0);
-        if (v < -0.35) {
+        if (v < hair_to) {
           colour = cv::Vec3d(30, 45, 80) * (0.6 + 0.5 * stripe);
           (*true_hair)(y, x) = 255;
         } else {
@@ -152,6 +156,65 @@ TEST(SegmentHair, ChromaticityKeepsSkinUnderTheHairsShadowOutOfTheHair) {
   EXPECT_LT(with_chromaticity, 0.2);
   EXPECT_GT(iou, 0.7);
   EXPECT_GT(iou, 2 * iou_without);
+}
+
+double ShareOf(const cv::Mat& label_mask, const cv::Mat& region) {
+  return cv::countNonZero(label_mask & region) / static_cast<double>(cv::countNonZero(region));
+}
+
+TEST(SegmentCaptureViews, AViewWithoutLitSkinBorrowsTheCapturesSkin) {
+  cv::Mat1b front_hair, front_shadow, back_hair, back_shadow;
+  const std::vector<cv::Mat3b> images = {HeadWithHairShadowOnSkin(&front_hair, &front_shadow, -0.6),
+                                         HeadWithHairShadowOnSkin(&back_hair, &back_shadow, 0.0)};
+  const auto segment = [&](const SegmentationOptions& options) {
+    return SegmentCaptureViews(images.size(), options, 2,
+                               [&](size_t v, const SkinChromaticity* skin) {
+                                 return SegmentHair(images[v], {}, options, skin);
+                               });
+  };
+  SegmentationOptions alone;
+  alone.capture_skin = false;
+  const auto separate = segment(alone);
+  const auto together = segment(SegmentationOptions{});
+  for (const auto* views : {&separate, &together})
+    for (const auto& view : *views) ASSERT_TRUE(view.ok()) << view.status().ToString();
+  const double alone_share = ShareOf(separate[1]->label == kSegHair, back_shadow);
+  const double together_share = ShareOf(together[1]->label == kSegHair, back_shadow);
+  std::printf(
+      "back view's neck in the hair's shadow taken for hair: %.3f alone, %.3f with the capture's "
+      "skin (%lld px turned); its hair kept: %.3f, %.3f\n",
+      alone_share, together_share, static_cast<long long>(together[1]->capture_skin_pixels),
+      ShareOf(separate[1]->label == kSegHair, back_hair),
+      ShareOf(together[1]->label == kSegHair, back_hair));
+  EXPECT_FALSE(together[0]->used_capture_skin) << "the front view has skin of its own";
+  EXPECT_TRUE(together[1]->used_capture_skin);
+  EXPECT_LT(together[1]->skin_chromaticity.samples, alone.skin_chromaticity_min_view_samples);
+  // Measured: all of the neck alone, 15 % with the capture's skin (along the
+  // hair's edge); all of the hair kept either way.
+  EXPECT_GT(alone_share, 0.5) << "the case this scene is built for";
+  EXPECT_LT(together_share, 0.3);
+  EXPECT_GT(ShareOf(together[1]->label == kSegHair, back_hair), 0.9);
+  // The front view is segmented once, as alone.
+  EXPECT_EQ(cv::countNonZero(together[0]->label != separate[0]->label), 0);
+}
+
+TEST(PoolSkinChromaticity, PoolsAsTheSamplesTakenTogether) {
+  SkinChromaticity a, b;
+  a.mean = {0.40, 0.30};
+  a.covariance = cv::Matx22d(1e-4, 0, 0, 4e-4);
+  a.samples = 300;
+  b.mean = {0.44, 0.30};
+  b.covariance = cv::Matx22d(3e-4, 1e-4, 1e-4, 2e-4);
+  b.samples = 100;
+  const SkinChromaticity pooled = PoolSkinChromaticity({a, b, SkinChromaticity{}});
+  EXPECT_EQ(pooled.samples, 400);
+  EXPECT_NEAR(pooled.mean[0], 0.41, 1e-12);
+  EXPECT_NEAR(pooled.mean[1], 0.30, 1e-12);
+  // Within-view 0.75 a + 0.25 b, plus the means' spread 0.75 * 0.25 * 0.04^2 in r.
+  EXPECT_NEAR(pooled.covariance(0, 0), 0.75e-4 + 0.75e-4 + 3e-4, 1e-12);
+  EXPECT_NEAR(pooled.covariance(0, 1), 0.25e-4, 1e-12);
+  EXPECT_NEAR(pooled.covariance(1, 1), 3e-4 + 0.5e-4, 1e-12);
+  EXPECT_EQ(PoolSkinChromaticity({SkinChromaticity{}}).samples, 0);
 }
 
 TEST(SegmentHair, BadOptionsNameTheirField) {

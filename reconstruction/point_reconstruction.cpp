@@ -73,49 +73,62 @@ Status WriteOrientation(const std::string& dir, const std::string& name, const O
                           {cv::IMWRITE_JPEG_QUALITY, 90});
 }
 
-// Reads, segments and filters one view; a view that cannot be used says why.
-PreparedView PrepareView(const ReconstructionView& view, const PointReconstructionOptions& options,
-                         const std::string& out_dir) {
-  PreparedView p;
+// Reads a view's image (once) and segments it; a view that cannot be used
+// says why in p->why_not.
+Result<HairSegmentation> SegmentView(const ReconstructionView& view,
+                                     const PointReconstructionOptions& options,
+                                     const SkinChromaticity* capture_skin, PreparedView* p) {
+  try {
+    if (p->image.empty()) {
+      Result<cv::Mat> image = ReadImageFile(view.image_path, cv::IMREAD_COLOR);
+      if (!image.ok()) return image.status();
+      p->image = *std::move(image);
+    }
+    if (p->image.cols != view.camera.width_px || p->image.rows != view.camera.height_px) {
+      return FailedPrecondition(view.image_path + ": " + std::to_string(p->image.cols) + "x" +
+                                std::to_string(p->image.rows) + " px, its camera is " +
+                                std::to_string(view.camera.width_px) + "x" +
+                                std::to_string(view.camera.height_px));
+    }
+    return SegmentHair(p->image, view.not_hair_px, options.segmentation, capture_skin);
+  } catch (const std::exception& e) {  // OpenCV's on memory exhaustion, in a worker thread
+    return FailedPrecondition(view.image_path + ": " + e.what());
+  }
+}
+
+// Filters one segmented view and writes its masks and maps; a view that
+// cannot be used says why.
+void PrepareView(const ReconstructionView& view, const PointReconstructionOptions& options,
+                 const std::string& out_dir, Result<HairSegmentation> seg, PreparedView* out) {
+  PreparedView& p = *out;
   p.summary.name = view.name;
-  Result<cv::Mat> image = ReadImageFile(view.image_path, cv::IMREAD_COLOR);
-  if (!image.ok()) {
-    p.why_not = image.status().message();
-    return p;
-  }
-  p.image = *std::move(image);
-  if (p.image.cols != view.camera.width_px || p.image.rows != view.camera.height_px) {
-    p.why_not = view.image_path + ": " + std::to_string(p.image.cols) + "x" +
-                std::to_string(p.image.rows) + " px, its camera is " +
-                std::to_string(view.camera.width_px) + "x" + std::to_string(view.camera.height_px);
-    return p;
-  }
-  Result<HairSegmentation> seg = SegmentHair(p.image, view.not_hair_px, options.segmentation);
   if (!seg.ok()) {
     p.why_not = seg.status().message();
-    return p;
+    return;
   }
   if (!view.mask_path.empty()) {
     const Result<cv::Mat> given = ReadImageFile(view.mask_path, cv::IMREAD_GRAYSCALE);
     if (!given.ok() || given->size() != p.image.size()) {
       p.why_not = given.ok() ? view.mask_path + ": not the image's size" : given.status().message();
-      return p;
+      return;
     }
     seg->label.setTo(kSegHead, (seg->label == kSegHair) & (*given == 0));
     seg->label.setTo(kSegHair, *given != 0);
   }
+  p.summary.capture_skin = seg->used_capture_skin;
+  p.summary.capture_skin_pixels = seg->capture_skin_pixels;
   const cv::Mat1b hair(seg->label == kSegHair);
   p.summary.hair_pixels = cv::countNonZero(hair);
   if (p.summary.hair_pixels == 0) {
     p.why_not = "no hair is seen";
-    return p;
+    return;
   }
   OrientationOptions orientation = options.orientation;
   orientation.threads = 1;
   Result<OrientationMap> map = ComputeOrientationMap(p.image, hair, orientation);
   if (!map.ok()) {
     p.why_not = map.status().message();
-    return p;
+    return;
   }
   p.silhouette = SilhouetteOf(*seg, options.hull_uncertain_alpha);
   p.mvs.camera = view.camera;
@@ -133,7 +146,6 @@ PreparedView PrepareView(const ReconstructionView& view, const PointReconstructi
   p.written = WriteSegmentation(out_dir + "/masks", view.name, *seg);
   if (p.written.ok())
     p.written = WriteOrientation(out_dir + "/orientation", view.name, *map, options.write_pictures);
-  return p;
 }
 
 Status WriteDepth(const std::string& dir, const std::string& name, const LineDepthMap& map,
@@ -239,6 +251,8 @@ nlohmann::json PointReconstructionSummary::ToJson() const {
     views_json.push_back({{"name", v.name},
                           {"hair_pixels", v.hair_pixels},
                           {"stereo_pixels", v.stereo_pixels},
+                          {"capture_skin", v.capture_skin},
+                          {"capture_skin_pixels", v.capture_skin_pixels},
                           {"median_orientation_confidence", v.median_orientation_confidence},
                           {"depth_cells", v.depth_cells},
                           {"median_cost", v.median_cost},
@@ -335,13 +349,19 @@ Result<PointReconstructionSummary> ReconstructPoints(const ReconstructionInput& 
   summary.orientation_smoothing_px = options.orientation.smoothing_px;
   summary.left_out = input.left_out;
 
-  // Segmentation and orientation, a view per thread.
+  // Segmentation (the views with too little skin of their own again, with
+  // the capture's), then orientation, a view per thread.
   std::vector<PreparedView> prepared(input.views.size());
+  std::vector<Result<HairSegmentation>> segmented =
+      SegmentCaptureViews(input.views.size(), options.segmentation, options.threads,
+                          [&](size_t v, const SkinChromaticity* capture_skin) {
+                            return SegmentView(input.views[v], options, capture_skin, &prepared[v]);
+                          });
   std::atomic<int> done{0};
   ParallelFor(input.views.size(), options.threads, [&] {
     return [&](size_t v) {
       try {
-        prepared[v] = PrepareView(input.views[v], options, out_dir);
+        PrepareView(input.views[v], options, out_dir, std::move(segmented[v]), &prepared[v]);
       } catch (const std::exception& e) {  // OpenCV's on memory exhaustion, in a worker thread
         prepared[v].why_not = input.views[v].image_path + ": " + e.what();
       }

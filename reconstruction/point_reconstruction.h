@@ -26,6 +26,7 @@
 //   summary.json                   PointReconstructionSummary::ToJson()
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
@@ -66,8 +67,10 @@ struct PointReconstructionOptions {
 
 struct ViewPointsSummary {
   std::string name;
-  int hair_pixels = 0;                       // segmented as hair
-  int stereo_pixels = 0;                     // ... with a confident orientation: the stereo's input
+  int hair_pixels = 0;        // segmented as hair
+  int stereo_pixels = 0;      // ... with a confident orientation: the stereo's input
+  bool capture_skin = false;  // segmented with the capture's skin model (too little skin seen)
+  int64_t capture_skin_pixels = 0;           // pixels that model turned from hair to skin
   double median_orientation_confidence = 0;  // over the hair pixels, 0..1 (OrientationMap)
   int depth_cells = 0;                       // grid cells with a depth under the fusion's max_cost
   double median_cost = 0;                    // of those cells
