@@ -6,7 +6,8 @@
 //       [--alpha-close W] [--share-link-ends yes|no] [--share-overlaps yes|no]
 //       [--whole-head-in-volume yes|no] [--max-off-hair MM] [--off-hair MM]
 //       [--merge-run MM] [--merge-distance MM] [--voxel MM] [--follow-radius MM]
-//       [--end-over-skin yes|no]
+//       [--end-over-skin yes|no] [--segment-curvature-weight W] [--segment-sigma MM]
+//       [--segment-step MM]
 //       [--follow-weight W]
 //       [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM] [--out-suffix S]
 //       [--score yes|no]
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
         "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
+        "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -63,6 +65,12 @@ int main(int argc, char** argv) {
       options.strands = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--head") == 0) {
       head_file = argv[i + 1];
+    } else if (std::strcmp(argv[i], "--segment-curvature-weight") == 0) {
+      options.segments.smooth_curvature = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--segment-sigma") == 0) {
+      options.segments.sigma_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--segment-step") == 0) {
+      options.segments.step_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--volume-bound") == 0) {
       options.growth.volume_bound = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--root-elevation") == 0) {

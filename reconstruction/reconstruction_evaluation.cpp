@@ -197,23 +197,28 @@ double InFrontOfTrueSkinShare(const StrandSet& strands, const std::vector<TrueCa
                               const HeadModel* head, double tolerance_mm, size_t step,
                               int threads) {
   const size_t n = (strands.points_mm.size() + step - 1) / step;
-  std::vector<int> seen(n, 0), over_skin(n, 0);
-  ParallelFor(n, threads, [&] {
-    return [&](size_t i) {
-      const Eigen::Vector3d p = strands.points_mm[i * step].cast<double>();
-      const bool below_hairline = head == nullptr || !head->AboveHairline(p);
-      for (const TrueCamera& c : cameras) {
-        double depth;
-        int x, y;
-        if (!ProjectToPixel(c, p, &depth, &x, &y) || depth > (*c.depth)(y, x) + tolerance_mm)
-          continue;
-        ++seen[i];
-        over_skin[i] += below_hairline && (*c.bare_skin)(y, x) != 0;
+  // Sums per chunk of samples, added up after the parallel loop.
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<int64_t> seen(chunks, 0), over_skin(chunks, 0);
+  ParallelFor(chunks, threads, [&] {
+    return [&](size_t chunk) {
+      for (size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
+        const Eigen::Vector3d p = strands.points_mm[i * step].cast<double>();
+        const bool below_hairline = head == nullptr || !head->AboveHairline(p);
+        for (const TrueCamera& c : cameras) {
+          double depth;
+          int x, y;
+          if (!ProjectToPixel(c, p, &depth, &x, &y) || depth > (*c.depth)(y, x) + tolerance_mm)
+            continue;
+          ++seen[chunk];
+          over_skin[chunk] += below_hairline && (*c.bare_skin)(y, x) != 0;
+        }
       }
     };
   });
   int64_t seen_sum = 0, skin_sum = 0;
-  for (size_t i = 0; i < n; ++i) seen_sum += seen[i], skin_sum += over_skin[i];
+  for (size_t k = 0; k < chunks; ++k) seen_sum += seen[k], skin_sum += over_skin[k];
   return seen_sum > 0 ? static_cast<double>(skin_sum) / static_cast<double>(seen_sum) : 0.0;
 }
 
