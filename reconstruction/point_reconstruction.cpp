@@ -73,8 +73,9 @@ Status WriteOrientation(const std::string& dir, const std::string& name, const O
                           {cv::IMWRITE_JPEG_QUALITY, 90});
 }
 
-// Reads a view's image (once) and segments it; a view that cannot be used
-// says why in p->why_not.
+// Reads a view's image into p->image (once: the second pass of
+// SegmentCaptureViews reuses it) and segments it; the error says why a view
+// cannot be used.
 Result<HairSegmentation> SegmentView(const ReconstructionView& view,
                                      const PointReconstructionOptions& options,
                                      const SkinChromaticity* capture_skin, PreparedView* p) {
