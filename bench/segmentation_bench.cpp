@@ -68,6 +68,16 @@ Result<ViewRow> ScoreView(const ReconstructionView& view, const cv::Mat& image,
   return row;
 }
 
+// `value` of option `flag` as yes or no; false (with a message) for anything else.
+bool ParseYesNo(const char* flag, const char* value, bool* out) {
+  if (std::strcmp(value, "yes") != 0 && std::strcmp(value, "no") != 0) {
+    std::fprintf(stderr, "%s takes yes or no\n", flag);
+    return false;
+  }
+  *out = std::strcmp(value, "yes") == 0;
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -94,21 +104,13 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[i], "--colour-components") == 0) {
       options.colour_components = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--texture-feature") == 0) {
-      if (std::strcmp(argv[i + 1], "yes") != 0 && std::strcmp(argv[i + 1], "no") != 0) {
-        std::fprintf(stderr, "--texture-feature takes yes or no\n");
-        return 2;
-      }
-      options.texture_feature = std::strcmp(argv[i + 1], "yes") == 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.texture_feature)) return 2;
     } else if (std::strcmp(argv[i], "--skin-chromaticity") == 0) {
       options.skin_chromaticity_sigmas = std::atof(argv[i + 1]);  // 0: off
     } else if (std::strcmp(argv[i], "--skin-chromaticity-log-ratio") == 0) {
       options.skin_chromaticity_log_ratio = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--capture-skin") == 0) {
-      if (std::strcmp(argv[i + 1], "yes") != 0 && std::strcmp(argv[i + 1], "no") != 0) {
-        std::fprintf(stderr, "--capture-skin takes yes or no\n");
-        return 2;
-      }
-      options.capture_skin = std::strcmp(argv[i + 1], "yes") == 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.capture_skin)) return 2;
     } else if (std::strcmp(argv[i], "--views") == 0) {
       std::stringstream list(argv[i + 1]);
       for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));

@@ -34,9 +34,9 @@ struct SegmentGrowthOptions {
   double cover_mm = 1.5;       // Delta: seeds this close to a grown segment are covered
   // Eq. 3's weights: position, orientation, curvature. Position and
   // orientation are the paper's (for mm); its curvature weight is 5 (Sec. 8:
-  // 30 for straight hair, against PMVS's noise). The fused points here are smoother
-  // than PMVS's, and 5 straightens curls to a fifth of their curvature, so
-  // the default is 0.5 (docs/accuracy.md, "Options of the strand stage").
+  // 30 for straight hair, against PMVS's noise). On the fused points here 5
+  // straightens curls to a fifth of their curvature, so the default is 0.5
+  // (docs/accuracy.md, "Options of the strand stage").
   double smooth_position = 0.1, smooth_orientation = 1.0, smooth_curvature = 0.5;
   double split_height_mm = 50;  // T_H: the plausibility check's height between turning points
   Eigen::Vector3f down{0, 0,
