@@ -7,10 +7,15 @@
 //       [--whole-head-in-volume yes|no] [--max-off-hair MM] [--off-hair MM]
 //       [--merge-run MM] [--merge-distance MM] [--voxel MM] [--follow-radius MM]
 //       [--end-over-skin yes|no] [--segment-curvature-weight W] [--segment-sigma MM]
-//       [--segment-step MM]
+//       [--segment-step MM] [--points capture|truth|true-directions]
+//       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--follow-weight W]
 //       [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM] [--out-suffix S]
 //       [--score yes|no]
+// --points truth grows the strands from the true visible surface instead of the
+// capture's points (as many points, reconstruction_evaluation.h PointsFromTruth),
+// the strand stage's ceiling; true-directions keeps the capture's points with the
+// true strands' directions, what the points' directions cost.
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
@@ -21,6 +26,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -44,6 +50,8 @@ int main(int argc, char** argv) {
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
+        "[--points capture|truth|true-directions] "
+        "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -56,6 +64,7 @@ int main(int argc, char** argv) {
   StrandReconstructionOptions options;
   std::string head_file, out_suffix;
   bool score = true;
+  std::string points_from = "capture";
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--methods") == 0) {
       methods.clear();
@@ -101,6 +110,12 @@ int main(int argc, char** argv) {
       options.growth.max_off_hair_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--off-hair") == 0) {
       options.growth.off_hair_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--helix-continuation") == 0) {
+      options.growth.helix_continuation = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--helix-window") == 0) {
+      options.growth.helix.window_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--helix-min-curvature") == 0) {
+      options.growth.helix.min_curvature_per_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--end-over-skin") == 0) {
       options.growth.end_over_skin = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--whole-head-in-volume") == 0) {
@@ -111,6 +126,8 @@ int main(int argc, char** argv) {
       out_suffix = argv[i + 1];
     } else if (std::strcmp(argv[i], "--score") == 0) {
       score = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--points") == 0) {
+      points_from = argv[i + 1];
     }
   }
   auto input = LoadCaptureReconstructionInput(capture);
@@ -134,6 +151,25 @@ int main(int argc, char** argv) {
   const Result<SkinViews> skin = SkinViews::Load(input->views, capture + "/reconstruction/masks",
                                                  head->spec.center_turntable_mm);
   if (!skin.ok()) std::fprintf(stderr, "no skin test: %s\n", skin.status().ToString().c_str());
+  // The strand stage's input: the capture's points, or points made from the truth.
+  std::optional<std::vector<OrientedPoint>> truth_points;
+  if (points_from != "capture") {
+    if (points_from != "truth" && points_from != "true-directions") {
+      std::fprintf(stderr, "--points: 'capture', 'truth' or 'true-directions', not '%s'\n",
+                   points_from.c_str());
+      return 2;
+    }
+    auto made = PointsFromTruth(capture,
+                                points_from == "truth" ? TruthPointsKind::kVisibleSurface
+                                                       : TruthPointsKind::kTrueDirections,
+                                ReconstructionEvalOptions{});
+    if (!made.ok()) {
+      std::fprintf(stderr, "%s\n", made.status().ToString().c_str());
+      return 1;
+    }
+    std::printf("points from the truth (%s): %zu\n", points_from.c_str(), made->size());
+    truth_points = std::move(made).value();
+  }
   for (const std::string& name : methods) {
     auto method = ParseStrandMethod(name);
     if (!method.ok()) {
@@ -143,8 +179,16 @@ int main(int argc, char** argv) {
     options.method = *method;
     const std::string dir = capture + "/bench-strands-" + name + out_suffix;
     fs::create_directories(dir);
-    fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply",
-                  fs::copy_options::overwrite_existing);
+    if (truth_points) {
+      const Status written = WritePointCloudPly(dir + "/points.ply", *truth_points);
+      if (!written.ok()) {
+        std::fprintf(stderr, "%s\n", written.ToString().c_str());
+        return 1;
+      }
+    } else {
+      fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply",
+                    fs::copy_options::overwrite_existing);
+    }
     auto summary =
         ReconstructStrands(dir, head->spec, head->source, options, skin.ok() ? &*skin : nullptr);
     if (!summary.ok()) {
@@ -163,6 +207,10 @@ int main(int argc, char** argv) {
     }
     std::printf("%s scored as `hairrig eval reconstruction` does:\n%s", name.c_str(),
                 scored->strands->BriefReport().c_str());
+    if (scored->strands_over_true_skin && scored->truth_over_true_skin)
+      std::printf(
+          "  in front of the true bare skin: %.2f %% of samples (the truth's own %.2f %%)\n",
+          100 * *scored->strands_over_true_skin, 100 * *scored->truth_over_true_skin);
   }
   if (score) {
     const auto reference = ConsistencyOfTruthSubset(*truth, options.strands, StrandEvalOptions{});

@@ -26,6 +26,7 @@ struct ReconstructArgs {
   double root_elevation_deg = StrandReconstructionOptions{}.root_elevation_deg;
   double max_off_hair_mm = StrandGrowthOptions{}.max_off_hair_mm;
   std::string end_over_skin = StrandGrowthOptions{}.end_over_skin ? "yes" : "no";
+  std::string helix_continuation = StrandGrowthOptions{}.helix_continuation ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -92,6 +93,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.root_elevation_deg = a.root_elevation_deg;
   options.strands.growth.max_off_hair_mm = a.max_off_hair_mm;
   options.strands.growth.end_over_skin = a.end_over_skin == "yes";
+  options.strands.growth.helix_continuation = a.helix_continuation == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -139,6 +141,11 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_option("--end-over-skin", args->end_over_skin,
                   "bao-qi: end a strand where it runs in front of skin the views see (yes), or "
                   "grow it on as Bao and Qi (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--helix-continuation", args->helix_continuation,
+                  "bao-qi: past the seen strands, carry a curly strand's curl on as a helix about "
+                  "the field (yes), or grow it along the field alone as Bao and Qi (no)")
       ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
 #include <sstream>
 #include <utility>
 
@@ -378,6 +380,80 @@ Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& captu
                                          capture_dir, truth, truth_from_estimate, true_strands,
                                          all_truth, truth_sample_strand, visible, cameras, options,
                                          &out));
+  return out;
+}
+
+namespace {
+
+// The true samples on the visible surface, in the true turntable frame.
+Result<std::vector<OrientedSample>> VisibleTruthSamples(const CaptureTruth& truth,
+                                                        const ReconstructionEvalOptions& options) {
+  std::map<int, cv::Mat1f> depth_maps;
+  std::map<int, cv::Mat1b> no_skin;
+  for (const auto& [view, unused] : truth.views) {
+    HR_ASSIGN_OR_RETURN(const ViewTruthMaps maps, ReadVerifiedViewTruthMaps(truth, view));
+    depth_maps[view] = maps.depth_mm;
+    no_skin[view] = cv::Mat1b();
+  }
+  HR_RETURN_IF_ERROR(VerifyTruthFile(truth, truth.strands_file));
+  HR_ASSIGN_OR_RETURN(const StrandSet true_strands, ReadStrands(truth.strands_file));
+  const std::vector<OrientedSample> all = SampleStrands(true_strands, options.truth_step_mm);
+  const std::vector<int> counts = VisibleCounts(all, TrueCameras(truth, depth_maps, no_skin),
+                                                options.visibility_tolerance_mm, options.threads);
+  std::vector<OrientedSample> visible;
+  for (size_t i = 0; i < all.size(); ++i)
+    if (counts[i] >= options.min_visible_views) visible.push_back(all[i]);
+  return visible;
+}
+
+// Each point's direction replaced by the nearest visible true sample's within 2 mm.
+void TakeTrueDirections(const std::vector<OrientedSample>& visible_in_estimate,
+                        std::vector<OrientedPoint>* points, int threads) {
+  std::vector<OrientedSample> own;
+  own.reserve(points->size());
+  for (const OrientedPoint& p : *points) own.push_back({p.position_mm, p.direction});
+  SampleMatchOptions match;
+  match.threads = threads;
+  constexpr MatchThreshold kAnyDirectionWithin2mm{2.0, 181};
+  const std::vector<int64_t> nearest =
+      NearestMatches(visible_in_estimate, own, kAnyDirectionWithin2mm, match);
+  for (size_t i = 0; i < points->size(); ++i)
+    if (nearest[i] >= 0) (*points)[i].direction = visible_in_estimate[nearest[i]].direction;
+}
+
+}  // namespace
+
+Result<std::vector<OrientedPoint>> PointsFromTruth(const std::string& capture_dir,
+                                                   TruthPointsKind kind,
+                                                   const ReconstructionEvalOptions& options) {
+  HR_RETURN_IF_ERROR(options.Check());
+  const std::string dir = options.reconstruction_dir.empty()
+                              ? (fs::path(capture_dir) / "reconstruction").string()
+                              : options.reconstruction_dir;
+  HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(capture_dir));
+  HR_ASSIGN_OR_RETURN(const ReconstructedViews recon, ReadSummary(dir));
+  HR_ASSIGN_OR_RETURN(std::vector<OrientedPoint> points, ReadPointCloudPly(dir + "/points.ply"));
+  HR_ASSIGN_OR_RETURN(std::vector<OrientedSample> visible, VisibleTruthSamples(truth, options));
+  const Rigid3d estimate_from_truth =
+      (truth.turntable_from_box * recon.object_from_box.Inverse()).Inverse();
+  const Eigen::Matrix3f rotation = estimate_from_truth.RotationMatrix().cast<float>();
+  for (OrientedSample& s : visible) {
+    s.position_mm = (estimate_from_truth * s.position_mm.cast<double>()).cast<float>();
+    s.direction = rotation * s.direction;
+  }
+  if (kind == TruthPointsKind::kTrueDirections) {
+    TakeTrueDirections(visible, &points, options.threads);
+    return points;
+  }
+  const double keep =
+      visible.empty()
+          ? 0
+          : std::min(1.0, static_cast<double>(points.size()) / static_cast<double>(visible.size()));
+  std::mt19937_64 random(1);
+  std::bernoulli_distribution kept(keep);
+  std::vector<OrientedPoint> out;
+  for (const OrientedSample& s : visible)
+    if (kept(random)) out.push_back({s.position_mm, s.direction, 1.0f, {}});
   return out;
 }
 

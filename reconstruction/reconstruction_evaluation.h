@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "reconstruction/evaluation.h"
+#include "reconstruction/point_cloud.h"
 #include "reconstruction/point_evaluation.h"
 #include "reconstruction/strand_evaluation.h"
 
@@ -89,5 +90,24 @@ struct ReconstructionEvaluation {
 // the true head's error (e.g. its mesh unreadable) when it cannot be built.
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options);
+
+// Oriented points made from the ground truth, in the reconstruction's object
+// frame: what a points stage with perfect input would hand the strand stage,
+// to measure the strand stage's ceiling and what each of the points' faults
+// costs it (bench/strand_bench.cpp --points).
+enum class TruthPointsKind {
+  // True samples on the visible surface (every truth_step_mm along the true
+  // strands, seen by >= min_visible_views cameras), a random subset (fixed
+  // seed) as large as the reconstruction's own point cloud; confidence 1.
+  kVisibleSurface,
+  // The reconstruction's own points, each with the direction of the nearest
+  // visible true sample within 2 mm; points with none keep their own.
+  kTrueDirections,
+};
+// Reads <reconstruction>/points.ply and summary.json and the ground truth as
+// EvaluateReconstruction does, with its errors.
+Result<std::vector<OrientedPoint>> PointsFromTruth(const std::string& capture_dir,
+                                                   TruthPointsKind kind,
+                                                   const ReconstructionEvalOptions& options);
 
 }  // namespace hairrig

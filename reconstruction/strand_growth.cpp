@@ -152,8 +152,10 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
     skin_grid = std::make_unique<const SkinGrid>(*skin, o.skin, field.origin(), field.size(),
                                                  field.voxel_mm());
   const auto make_step = [&] {
-    return [&, off_hair = OffHairRun(o)](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
-                                         Eigen::Vector3f* next, StepStop* stop) mutable {
+    return [&, off_hair = OffHairRun(o), helix = HelixContinuation(o.helix, o.step_mm),
+            axis = Eigen::Vector3f(),
+            continuing = false](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
+                                Eigen::Vector3f* next, StepStop* stop) mutable {
       if (!field.Contains(p) || field.Distance(p) > o.volume_bound) {
         stop->end = End::kVolume;
         return false;
@@ -167,23 +169,34 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
         stop->drop_last = 1;
         return false;
       }
-      // Eq. 1 with the paper's dynamic weights (Sec. IV-B).
+      // Eq. 1 with the paper's dynamic weights (Sec. IV-B); on a helix carried
+      // on, about the axis the field gave the step before.
+      const Eigen::Vector3f& way = continuing ? axis : previous;
       const double d_s = field.RibbonDistance(p);
       double a_s = 0, a_i = 100 * d_s;
       if (d_s < o.surface_threshold_mm) a_s = 100 - d_s, a_i = 0.1;
       const double a_d = 0.1 * a_i, a_g = 10;
-      Eigen::Vector3f h = static_cast<float>(a_i) * field.Interior(p, previous) -
+      Eigen::Vector3f h = static_cast<float>(a_i) * field.Interior(p, way) -
                           static_cast<float>(a_d) * field.DistanceGradient(p) +
-                          static_cast<float>(a_g) * previous;
-      if (a_s > 0) h += static_cast<float>(a_s) * field.Surface(p, previous);
+                          static_cast<float>(a_g) * way;
+      if (a_s > 0) h += static_cast<float>(a_s) * field.Surface(p, way);
       // The seen strand at p itself, where one runs within follow_radius_mm
       // in about the strand's direction (StrandGrowthOptions).
       Eigen::Vector3f seen;
-      if (o.follow_radius_mm > 0 && field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
-          seen.dot(previous) > 0.5f)
-        h += static_cast<float>(o.follow_weight) * seen;
+      const bool following = o.follow_radius_mm > 0 &&
+                             field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
+                             seen.dot(previous) > 0.5f;
+      if (following) h += static_cast<float>(o.follow_weight) * seen;
       if (h.norm() < 1e-6f) return true;  // keeps the previous direction
       *next = h.normalized();
+      if (!o.helix_continuation) return true;
+      continuing = false;
+      if (following) {
+        helix.Follow(*next);
+      } else {
+        axis = *next;
+        continuing = helix.Continue(previous, axis, next);
+      }
       return true;
     };
   };

@@ -12,7 +12,9 @@
 //     max_off_hair_mm) where the hair the cameras saw ends: I_d's Laplace
 //     solve stays low over a head covered in hair, so a strand that has run
 //     past the end of short hair would go on along its surface. Beside Eq. 1's
-//     terms, H follows the nearest seen strand (follow_radius_mm). Where the
+//     terms, H follows the nearest seen strand (follow_radius_mm), and past
+//     the seen strands a curly strand goes on as a helix about H
+//     (helix_continuation.h). Where the
 //     views are given (SkinViews), a strand also ends where it runs in front
 //     of skin the cameras see (skin_views.h): bangs and strands past the
 //     hair's end would otherwise slide down over the face and neck, where
@@ -31,6 +33,7 @@
 #include "core/head_model.h"
 #include "core/status.h"
 #include "core/strands.h"
+#include "reconstruction/helix_continuation.h"
 #include "reconstruction/hybrid_field.h"
 #include "reconstruction/skin_views.h"
 #include "reconstruction/strand_segments.h"
@@ -85,6 +88,12 @@ struct StrandGrowthOptions {
   // (the paper: I_d and the length only).
   bool end_over_skin = true;
   SkinViewOptions skin;
+  // Bao & Qi growth only: past the seen strands a curly strand carries its
+  // curl on as a helix about the field's direction (helix_continuation.h);
+  // false grows it along the field alone (the paper; docs/accuracy.md
+  // compares the two).
+  bool helix_continuation = true;
+  HelixContinuationOptions helix;
   int threads = 2;
 
   Status Check() const;

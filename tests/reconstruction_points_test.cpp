@@ -87,6 +87,31 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   EXPECT_FALSE(e.strands.has_value()) << "no strands/strands.ply: no strand scores";
   EXPECT_FALSE(e.ToJson().contains("strands"));
 
+  // Points made from the truth (the strand stage's ceiling input), scored as the points are: the
+  // true visible surface matches at the tightest threshold, and the true directions at the
+  // points' own places match more often than the points' own directions.
+  const std::string points_file = dir + "/reconstruction/points.ply";
+  fs::copy_file(points_file, dir + "/points_as_reconstructed.ply");
+  for (const TruthPointsKind kind :
+       {TruthPointsKind::kVisibleSurface, TruthPointsKind::kTrueDirections}) {
+    fs::copy_file(dir + "/points_as_reconstructed.ply", points_file,
+                  fs::copy_options::overwrite_existing);
+    auto from_truth = PointsFromTruth(dir, kind, {});
+    ASSERT_TRUE(from_truth.ok()) << from_truth.status().ToString();
+    ASSERT_TRUE(WritePointCloudPly(points_file, *from_truth).ok());
+    auto scored = EvaluateReconstruction(dir, {});
+    ASSERT_TRUE(scored.ok()) << scored.status().ToString();
+    if (kind == TruthPointsKind::kVisibleSurface) {
+      EXPECT_NEAR(static_cast<double>(from_truth->size()), static_cast<double>(e.points),
+                  0.05 * static_cast<double>(e.points));
+      EXPECT_GT(scored->visible[0].precision, 0.99);
+    } else {
+      EXPECT_EQ(static_cast<int64_t>(from_truth->size()), e.points);
+      EXPECT_GT(scored->visible[1].precision, e.visible[1].precision + 0.05);
+    }
+  }
+  fs::rename(dir + "/points_as_reconstructed.ply", points_file);
+
   // The ground truth records the true head: the scene's mannequin, its mesh copied beside it.
   auto truth = ReadCaptureTruth(dir);
   ASSERT_TRUE(truth.ok()) << truth.status().ToString();

@@ -1,0 +1,92 @@
+#include "reconstruction/helix_continuation.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace hairrig {
+
+HelixContinuation::HelixContinuation(const HelixContinuationOptions& options, double step_mm)
+    : options_(options),
+      step_mm_(step_mm),
+      window_steps_(static_cast<size_t>(std::max(3.0, std::round(options.window_mm / step_mm)))) {
+  window_.reserve(window_steps_);
+}
+
+void HelixContinuation::Follow(const Eigen::Vector3f& tangent) {
+  if (continued_) {  // a window across an unseen stretch would mix two curls
+    window_.clear();
+    next_slot_ = 0;
+    filled_ = false;
+    continued_ = false;
+  }
+  if (window_.size() < window_steps_) {
+    window_.push_back(tangent);
+  } else {
+    window_[next_slot_] = tangent;
+  }
+  next_slot_ = (next_slot_ + 1) % window_steps_;
+  filled_ = window_.size() == window_steps_;
+  fitted_ = false;
+}
+
+bool HelixContinuation::Fit() {
+  // Oldest first: the ring starts at the next slot to be written.
+  std::vector<Eigen::Vector3d> t(window_steps_);
+  for (size_t k = 0; k < window_steps_; ++k)
+    t[k] = window_[(next_slot_ + k) % window_steps_].cast<double>().normalized();
+  // Least squares for dT/ds = Omega x T over the window's steps:
+  // sum (I - T T^T) Omega = sum T x dT/ds.
+  Eigen::Matrix3d a = Eigen::Matrix3d::Identity() * 1e-9;
+  Eigen::Vector3d b = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
+  double curvature = 0;
+  for (size_t k = 0; k + 1 < t.size(); ++k) {
+    const Eigen::Vector3d d = (t[k + 1] - t[k]) / step_mm_;
+    a += Eigen::Matrix3d::Identity() - t[k] * t[k].transpose();
+    b += t[k].cross(d);
+    curvature += d.norm();
+    mean += t[k];
+  }
+  curvature /= static_cast<double>(t.size() - 1);
+  const Eigen::Vector3d omega = a.ldlt().solve(b);
+  if (curvature < options_.min_curvature_per_mm || !omega.allFinite() || omega.norm() < 1e-9)
+    return false;
+  // Only a helix turns about one axis: a planar wave's curvature changes
+  // sign, and no constant Omega explains it.
+  double residual = 0, bending = 0;
+  for (size_t k = 0; k + 1 < t.size(); ++k) {
+    const Eigen::Vector3d d = (t[k + 1] - t[k]) / step_mm_;
+    residual += (omega.cross(t[k]) - d).squaredNorm();
+    bending += d.squaredNorm();
+  }
+  if (residual > options_.max_residual * bending) return false;
+  handedness_ = omega.dot(mean) >= 0 ? 1.0f : -1.0f;
+  const Eigen::Vector3d along = omega.normalized() * handedness_;  // the strand's way
+  double angle = 0;
+  for (const Eigen::Vector3d& tk : t) angle += std::acos(std::clamp(tk.dot(along), -1.0, 1.0));
+  helix_angle_ = std::min(angle / static_cast<double>(t.size()), M_PI / 2);
+  rate_ = std::min(omega.norm(), options_.max_rate_per_mm);
+  return true;
+}
+
+bool HelixContinuation::Continue(const Eigen::Vector3f& previous, const Eigen::Vector3f& axis,
+                                 Eigen::Vector3f* next) {
+  if (!filled_) return false;
+  if (!fitted_) {
+    curly_ = Fit();
+    fitted_ = true;
+  }
+  if (!curly_) return false;
+  const Eigen::Vector3d a = axis.cast<double>().normalized();
+  Eigen::Vector3d across = previous.cast<double>() - previous.cast<double>().dot(a) * a;
+  if (across.norm() < 1e-3) across = a.unitOrthogonal();
+  across.normalize();
+  // Turn about the axis by one step of the helix (dT/ds = Omega x T, Omega along the axis).
+  const double turn = handedness_ * rate_ * step_mm_;
+  across = std::cos(turn) * across + std::sin(turn) * a.cross(across);
+  *next = (std::cos(helix_angle_) * a + std::sin(helix_angle_) * across).normalized().cast<float>();
+  continued_ = true;
+  return true;
+}
+
+}  // namespace hairrig

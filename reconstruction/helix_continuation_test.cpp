@@ -1,0 +1,87 @@
+#include "reconstruction/helix_continuation.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hairrig {
+namespace {
+
+// The unit tangent of a helix about +z at arc length s (mm): radius r, rise c per radian,
+// handedness +1 (right-handed) or -1.
+Eigen::Vector3f HelixTangent(double s, double r, double c, double handedness) {
+  const double l = std::sqrt(r * r + c * c), t = s / l;
+  return Eigen::Vector3d(-r * std::sin(t), handedness * r * std::cos(t), c)
+      .normalized()
+      .cast<float>();
+}
+
+double AngleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+  return std::acos(std::clamp(static_cast<double>(a.normalized().dot(b.normalized())), -1.0, 1.0)) *
+         180 / M_PI;
+}
+
+// Followed along a curl for the window, then carried on about the true axis:
+// the tangents stay on the curl for a whole turn, whichever its handedness.
+TEST(HelixContinuation, CarriesACurlOnForAWholeTurn) {
+  for (const double handedness : {1.0, -1.0}) {
+    const double r = 5, c = 3;  // a ringlet: radius 5 mm, pitch 19 mm, 59 deg off its axis
+    const double step = 1.0;
+    HelixContinuation helix({}, step);
+    double s = 0;
+    for (; s < 20; s += step) helix.Follow(HelixTangent(s, r, c, handedness));
+    Eigen::Vector3f previous = HelixTangent(s - step, r, c, handedness), next;
+    double worst = 0;
+    const double turn = 2 * M_PI * std::sqrt(r * r + c * c);
+    for (double t = s; t < s + turn; t += step) {
+      ASSERT_TRUE(helix.Continue(previous, Eigen::Vector3f::UnitZ(), &next));
+      worst = std::max(worst, AngleDeg(next, HelixTangent(t, r, c, handedness)));
+      previous = next;
+    }
+    EXPECT_LT(worst, 10.0) << "handedness " << handedness;
+    // Along the axis alone (the field) the strand is the helix angle off everywhere.
+    EXPECT_GT(AngleDeg(Eigen::Vector3f::UnitZ(), HelixTangent(s, r, c, handedness)), 50.0);
+  }
+}
+
+TEST(HelixContinuation, LeavesAStraightStrandToTheField) {
+  HelixContinuation helix({}, 1.0);
+  Eigen::Vector3f next = Eigen::Vector3f::Zero();
+  // A gentle bend (0.01 /mm, as straight hair's seen strands) is not a curl.
+  for (int k = 0; k < 30; ++k)
+    helix.Follow(Eigen::Vector3f(std::sin(0.01f * static_cast<float>(k)), 0,
+                                 -std::cos(0.01f * static_cast<float>(k))));
+  EXPECT_FALSE(helix.Continue(Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(0, 0, -1), &next));
+  EXPECT_EQ(next, Eigen::Vector3f::Zero());
+}
+
+// A wave in one plane (amplitude 1 mm, period 16 mm) bends as much as a curl, but about an
+// axis that flips: it is no helix.
+TEST(HelixContinuation, LeavesAPlanarWaveToTheField) {
+  for (const double period : {16.0, 24.0, 40.0}) {
+    HelixContinuation helix({}, 1.0);
+    Eigen::Vector3f next = Eigen::Vector3f::Zero();
+    const double k = 2 * M_PI / period;
+    for (int s = 0; s < 30; ++s)
+      helix.Follow(Eigen::Vector3f(static_cast<float>(k * std::cos(k * s)), 0, -1).normalized());
+    EXPECT_FALSE(helix.Continue(Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(0, 0, -1), &next))
+        << "period " << period << " mm";
+  }
+}
+
+TEST(HelixContinuation, NeedsAFullWindowAndStartsAgainAfterAGap) {
+  HelixContinuation helix({}, 1.0);
+  Eigen::Vector3f next;
+  for (int k = 0; k < 8; ++k) helix.Follow(HelixTangent(k, 5, 3, 1));
+  EXPECT_FALSE(helix.Continue(HelixTangent(8, 5, 3, 1), Eigen::Vector3f::UnitZ(), &next))
+      << "half a window";
+  for (int k = 8; k < 20; ++k) helix.Follow(HelixTangent(k, 5, 3, 1));
+  ASSERT_TRUE(helix.Continue(HelixTangent(20, 5, 3, 1), Eigen::Vector3f::UnitZ(), &next));
+  // Followed again after the unseen stretch: the old window is gone.
+  helix.Follow(HelixTangent(40, 5, 3, 1));
+  EXPECT_FALSE(helix.Continue(HelixTangent(41, 5, 3, 1), Eigen::Vector3f::UnitZ(), &next));
+}
+
+}  // namespace
+}  // namespace hairrig
