@@ -30,6 +30,27 @@ void HelixContinuation::Follow(const Eigen::Vector3f& tangent) {
   fitted_ = false;
 }
 
+namespace {
+
+// The angle between a window's tangents `t` and its helix's axis: their mean
+// angle to Omega's axis, unless Omega lies nearly across the strand (within
+// 15 deg of square to the `mean` tangent), as for a wave in one plane, whose
+// Omega flips from bend to bend: then the spread of the tangents about their
+// mean, so that such a strand turns gently about the field instead of
+// circling it.
+double HelixAngle(const std::vector<Eigen::Vector3d>& t, const Eigen::Vector3d& omega,
+                  const Eigen::Vector3d& mean) {
+  const double across = std::cos(75 * M_PI / 180);
+  const Eigen::Vector3d axis = omega.normalized() * (omega.dot(mean) >= 0 ? 1.0 : -1.0);
+  if (axis.dot(mean.normalized()) < across) return std::acos(std::clamp(mean.norm(), 0.0, 1.0));
+  double to_axis = 0;
+  for (size_t k = 0; k + 1 < t.size(); ++k)
+    to_axis += std::acos(std::clamp(t[k].dot(axis), -1.0, 1.0));
+  return std::min(to_axis / static_cast<double>(t.size() - 1), M_PI / 2);
+}
+
+}  // namespace
+
 bool HelixContinuation::Fit() {
   // Oldest first: the ring starts at the next slot to be written.
   std::vector<Eigen::Vector3d> t(window_steps_);
@@ -51,20 +72,8 @@ bool HelixContinuation::Fit() {
   const Eigen::Vector3d omega = a.ldlt().solve(b);
   if (curvature < options_.min_curvature_per_mm || !omega.allFinite() || omega.norm() < 1e-9)
     return false;
-  // Only a helix turns about one axis: a planar wave's curvature changes
-  // sign, and no constant Omega explains it.
-  double residual = 0, bending = 0;
-  for (size_t k = 0; k + 1 < t.size(); ++k) {
-    const Eigen::Vector3d d = (t[k + 1] - t[k]) / step_mm_;
-    residual += (omega.cross(t[k]) - d).squaredNorm();
-    bending += d.squaredNorm();
-  }
-  if (residual > options_.max_residual * bending) return false;
   handedness_ = omega.dot(mean) >= 0 ? 1.0f : -1.0f;
-  const Eigen::Vector3d along = omega.normalized() * handedness_;  // the strand's way
-  double angle = 0;
-  for (const Eigen::Vector3d& tk : t) angle += std::acos(std::clamp(tk.dot(along), -1.0, 1.0));
-  helix_angle_ = std::min(angle / static_cast<double>(t.size()), M_PI / 2);
+  helix_angle_ = HelixAngle(t, omega, mean / static_cast<double>(t.size() - 1));
   rate_ = std::min(omega.norm(), options_.max_rate_per_mm);
   return true;
 }

@@ -9,8 +9,11 @@
 // fits the Darboux vector Omega of that stretch (dT/ds = Omega x T, constant on
 // a helix; least squares over the window), and past the seen strands turns
 // the tangent about the field's direction at the rate |Omega|, in Omega's
-// sense, at the angle to the axis the window had: a helix whose axis follows
-// the field, as Bao & Qi's strands are piecewise helices (Sec. III).
+// sense, at the window's mean angle to Omega's axis: a helix whose axis
+// follows the field, as Bao & Qi fit strands with piecewise helices (Sec. V).
+// A window whose Omega lies nearly across the strand (a wave in one plane)
+// keeps the tangents' spread about their mean instead: it wiggles about the
+// field rather than circling it.
 //
 // Units: mm and radians; tangents unit vectors in the points' frame.
 #pragma once
@@ -26,10 +29,6 @@ struct HelixContinuationOptions {
   // straight and nothing is carried on (curly_blond's segments bend at a
   // median 0.061 /mm, its true strands at 0.158; docs/accuracy.md).
   double min_curvature_per_mm = 0.04;
-  // The window is a helix when a constant Omega explains its bending: the
-  // squared residual of dT/ds = Omega x T at most this share of |dT/ds|^2
-  // (a planar wave over a whole period leaves about all of it).
-  double max_residual = 0.5;
   double max_rate_per_mm = 0.5;  // |Omega| is clamped to this (curls of radius >= 2 mm)
 };
 

@@ -308,12 +308,21 @@ Status ReconstructionEvalOptions::Check() const {
   return Status::Ok();
 }
 
+namespace {
+
+// The folder scored: options.reconstruction_dir, or <capture>/reconstruction.
+std::string ReconstructionDir(const std::string& capture_dir,
+                              const ReconstructionEvalOptions& options) {
+  return options.reconstruction_dir.empty() ? (fs::path(capture_dir) / "reconstruction").string()
+                                            : options.reconstruction_dir;
+}
+
+}  // namespace
+
 Result<ReconstructionEvaluation> EvaluateReconstruction(const std::string& capture_dir,
                                                         const ReconstructionEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
-  const std::string dir = options.reconstruction_dir.empty()
-                              ? (fs::path(capture_dir) / "reconstruction").string()
-                              : options.reconstruction_dir;
+  const std::string dir = ReconstructionDir(capture_dir, options);
   HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(capture_dir));
   HR_ASSIGN_OR_RETURN(const ReconstructedViews recon, ReadSummary(dir));
 
@@ -427,9 +436,7 @@ Result<std::vector<OrientedPoint>> PointsFromTruth(const std::string& capture_di
                                                    TruthPointsKind kind,
                                                    const ReconstructionEvalOptions& options) {
   HR_RETURN_IF_ERROR(options.Check());
-  const std::string dir = options.reconstruction_dir.empty()
-                              ? (fs::path(capture_dir) / "reconstruction").string()
-                              : options.reconstruction_dir;
+  const std::string dir = ReconstructionDir(capture_dir, options);
   HR_ASSIGN_OR_RETURN(const CaptureTruth truth, ReadCaptureTruth(capture_dir));
   HR_ASSIGN_OR_RETURN(const ReconstructedViews recon, ReadSummary(dir));
   HR_ASSIGN_OR_RETURN(std::vector<OrientedPoint> points, ReadPointCloudPly(dir + "/points.ply"));
