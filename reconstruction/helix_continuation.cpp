@@ -49,6 +49,19 @@ double HelixAngle(const std::vector<Eigen::Vector3d>& t, const Eigen::Vector3d& 
   return std::min(to_axis / static_cast<double>(t.size() - 1), M_PI / 2);
 }
 
+// How far a path with tangents `t` (steps of step_mm) strays from the line
+// through its start along `direction` (unit), at most.
+double Straying(const std::vector<Eigen::Vector3d>& t, const Eigen::Vector3d& direction,
+                double step_mm) {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  double most = 0;
+  for (const Eigen::Vector3d& tk : t) {
+    p += tk * step_mm;
+    most = std::max(most, (p - p.dot(direction) * direction).norm());
+  }
+  return most;
+}
+
 }  // namespace
 
 bool HelixContinuation::Fit() {
@@ -73,8 +86,13 @@ bool HelixContinuation::Fit() {
   if (curvature < options_.min_curvature_per_mm || !omega.allFinite() || omega.norm() < 1e-9)
     return false;
   handedness_ = omega.dot(mean) >= 0 ? 1.0f : -1.0f;
-  helix_angle_ = HelixAngle(t, omega, mean / static_cast<double>(t.size() - 1));
   rate_ = std::min(omega.norm(), options_.max_rate_per_mm);
+  // The helix's radius sin(angle) / rate at most twice what the seen window
+  // strays from its mean direction (under a turn strays less than the curl's
+  // diameter): a loose fit does not loop wider than the hair curled.
+  const double straying = Straying(t, mean.normalized(), step_mm_);
+  helix_angle_ = std::min(HelixAngle(t, omega, mean / static_cast<double>(t.size() - 1)),
+                          std::asin(std::min(1.0, 2 * rate_ * straying)));
   return true;
 }
 

@@ -13,7 +13,8 @@
 // follows the field, as Bao & Qi fit strands with piecewise helices (Sec. V).
 // A window whose Omega lies nearly across the strand (a wave in one plane)
 // keeps the tangents' spread about their mean instead: it wiggles about the
-// field rather than circling it.
+// field rather than circling it. The helix's radius is held to twice what the
+// window strays from its mean direction.
 //
 // Units: mm and radians; tangents unit vectors in the points' frame.
 #pragma once
