@@ -126,17 +126,18 @@ def reconstruction_robustness_table(record):
     r = record["result"]
     lines = ["| scene | variation | hair IoU | orientation median | points P / visible R (2 mm) "
              "| strands P / visible R (2 mm) | strands all R (3 mm) | strands F1 (3 mm, 30 deg), "
-             "loss | consistency | median length (truth) | verdict |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "loss | consistency | median length (truth) | over bare skin | verdict |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for row in r["rows"]:
         if "error" in row:
-            lines.append("| %s | %s | failed: %s |  |  |  |  |  |  |  |  |"
+            lines.append("| %s | %s | failed: %s |  |  |  |  |  |  |  |  |  |"
                          % (row["scene"], row["variation"], row["error"]))
             continue
         loss = row.get("f1_loss")
+        skin = row.get("over_true_skin_share")
         lines.append(
             "| %s | %s | %.2f | %.1f deg | %.2f / %.2f | %.2f / %.2f | %.2f | %.3f, %s | %.2f "
-            "| %.0f (%.0f) mm | %s |"
+            "| %.0f (%.0f) mm | %s | %s |"
             % (row["scene"], row["variation"].replace("+", " + "), row["mask_iou"],
                row["orientation_median_deg"], row["points_precision_2mm"],
                row["points_visible_recall_2mm"], row["strands_precision_2mm"],
@@ -145,7 +146,7 @@ def reconstruction_robustness_table(record):
                "baseline" if row["variation"] == "none" else
                "-" if loss is None else "%+.0f %%" % (-100 * loss),
                row["consistency"], row["median_length_mm"], row["truth_median_length_mm"],
-               row["verdict"]))
+               "-" if skin is None else "%.1f %%" % (100 * skin), row["verdict"]))
     options = " ".join(r.get("options", [])) or "none (the defaults)"
     lines += ["", "Reconstruction options: %s. Measured at %s." % (options, provenance(record))]
     return lines

@@ -2,7 +2,7 @@
 // a simulated capture, against the renderer's labels. Run from the repository
 // root:
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
-//       [--texture-feature yes|no] [--skin-chromaticity SIGMAS]
+//       [--texture-feature yes|no] [--texture-less-noise yes|no] [--skin-chromaticity SIGMAS]
 //       [--skin-chromaticity-log-ratio R] [--capture-skin yes|no] [--views 0,1,...]
 //       [--threads T] [--pictures DIR]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
@@ -105,6 +105,8 @@ int main(int argc, char** argv) {
       options.colour_components = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--texture-feature") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.texture_feature)) return 2;
+    } else if (std::strcmp(argv[i], "--texture-less-noise") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.texture_less_noise)) return 2;
     } else if (std::strcmp(argv[i], "--skin-chromaticity") == 0) {
       options.skin_chromaticity_sigmas = std::atof(argv[i + 1]);  // 0: off
     } else if (std::strcmp(argv[i], "--skin-chromaticity-log-ratio") == 0) {

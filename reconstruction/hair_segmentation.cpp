@@ -82,11 +82,11 @@ cv::Mat1f BlurWithin(const cv::Mat1f& values, const cv::Mat1f& weights, double s
   return blurred;
 }
 
-// Fine-scale texture: a band-pass of the grey image, its energy averaged over
-// a window, all within the foreground (`within`), so that the step from the
-// subject to the backdrop does not count as texture. Fibres give a high value,
-// skin little more than the sensor noise.
-cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
+// The texture band within `within` (a band-pass of the grey image, blurred
+// within the mask so that the step at its outline does not count), squared
+// and averaged over a window of `sigma`, relative to the squared local
+// brightness (+ 8 grey levels), so that hair in shadow stays textured.
+cv::Mat1f RelativeBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
   cv::Mat1f grey, weights;
   cv::Mat grey8;
   cv::cvtColor(bgr, grey8, cv::COLOR_BGR2GRAY);
@@ -96,12 +96,43 @@ cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double si
   cv::Mat1f band, band_squared;
   cv::subtract(fine, coarse, band);
   cv::multiply(band, band, band_squared);
-  cv::Mat1f energy = BlurWithin(band_squared, weights, sigma);
-  cv::sqrt(energy, energy);
-  // Relative to the local brightness, so that hair in shadow stays textured.
-  const cv::Mat1f brightness = BlurWithin(coarse, weights, sigma);
-  cv::divide(energy, brightness + 8.0, energy);
+  cv::Mat1f energy = BlurWithin(band_squared, weights, sigma), brightness;
+  cv::add(BlurWithin(coarse, weights, sigma), 8.0, brightness);
+  cv::multiply(brightness, brightness, brightness);
+  cv::divide(energy, brightness, energy);
   return energy;
+}
+
+// The image noise's share of RelativeBandEnergy: its median over the backdrop
+// (`backdrop`, eroded so that no subject's edge counts), where the rig shows
+// nothing but noise. 0 when too little backdrop is left.
+double NoiseBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& backdrop, double sigma) {
+  cv::Mat1b plain;
+  cv::erode(backdrop, plain, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(17, 17)));
+  const cv::Mat1f energy = RelativeBandEnergy(bgr, plain, sigma);
+  std::vector<float> values;
+  for (int y = 0; y < plain.rows; y += 4)
+    for (int x = 0; x < plain.cols; x += 4)
+      if (plain(y, x)) values.push_back(energy(y, x));
+  if (values.size() < 100) return 0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// Fine-scale texture within the foreground (`within`): the root of
+// RelativeBandEnergy. Fibres give a high value, skin little more than the
+// image's noise.
+cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
+  cv::Mat1f energy = RelativeBandEnergy(bgr, within, sigma);
+  cv::sqrt(energy, energy);
+  return energy;
+}
+
+// A TextureEnergy value less the image noise's share (`noise_energy`,
+// NoiseBandEnergy, in RelativeBandEnergy's units): what the subject's own
+// texture contributes.
+double TextureLessNoise(double texture, double noise_energy) {
+  return std::sqrt(std::max(0.0, texture * texture - noise_energy));
 }
 
 // A pixel's features in the material model: its colour (BGR) and, when the
@@ -144,7 +175,8 @@ cv::Mat1f FeatureSamples(const cv::Mat3b& bgr, const cv::Mat1f& energy, const cv
 class MaterialModel {
  public:
   static Result<MaterialModel> Fit(const cv::Mat3b& bgr, const cv::Mat1b& where,
-                                   const cv::Mat1f& energy, const SegmentationOptions& options) {
+                                   const cv::Mat1f& energy, double noise_energy,
+                                   const SegmentationOptions& options) {
     const int components = options.colour_components;
     MaterialModel model;
     model.texture_ = options.texture_feature;
@@ -172,7 +204,7 @@ class MaterialModel {
           std::log(std::max(1e-12, component.weight)) - 0.5 * std::log(cv::determinant(cov));
       model.gaussians_.push_back(g);
     }
-    model.NameComponentsByTexture(bgr, where, energy, options.skin_texture_ratio);
+    model.NameComponentsByTexture(bgr, where, energy, noise_energy, options.skin_texture_ratio);
     return model;
   }
 
@@ -203,16 +235,19 @@ class MaterialModel {
   // whenever hair covers a quarter of the foreground (the median would be
   // skin's on a face-on view and hair's own on a back view). Where hair
   // covers less, the reference is skin's texture and textured skin may be
-  // named hair.
+  // named hair. The energies are taken less the image noise's
+  // (`noise_energy`, TextureLessNoise): in a grainy image noise alone would
+  // make every component as textured as hair.
   void NameComponentsByTexture(const cv::Mat3b& bgr, const cv::Mat1b& where,
-                               const cv::Mat1f& energy, double ratio) {
+                               const cv::Mat1f& energy, double noise_energy, double ratio) {
     std::vector<std::vector<float>> energies(gaussians_.size());
     std::vector<float> all;
     for (int y = 0; y < bgr.rows; y += 2) {
       for (int x = 0; x < bgr.cols; x += 2) {
         if (!where(y, x)) continue;
-        energies[static_cast<size_t>(Best(At(bgr, energy, y, x)))].push_back(energy(y, x));
-        all.push_back(energy(y, x));
+        const auto own = static_cast<float>(TextureLessNoise(energy(y, x), noise_energy));
+        energies[static_cast<size_t>(Best(At(bgr, energy, y, x)))].push_back(own);
+        all.push_back(own);
       }
     }
     if (all.empty()) return;  // every component stays hair
@@ -220,10 +255,12 @@ class MaterialModel {
     for (size_t k = 0; k < energies.size(); ++k) {
       // A component that wins no sampled pixel is named by its mean texture
       // (with texture in the model), else it stays hair.
+      const double mean_texture =
+          std::max(0.0, std::exp(gaussians_[k].mean[3] / kTextureScale) - kTextureFloor);
       gaussians_[k].hair =
-          energies[k].empty() ? !texture_ || gaussians_[k].mean[3] >
-                                                 kTextureScale * std::log(threshold + kTextureFloor)
-                              : Quantile(energies[k], 0.5) > threshold;
+          energies[k].empty()
+              ? !texture_ || TextureLessNoise(mean_texture, noise_energy) > threshold
+              : Quantile(energies[k], 0.5) > threshold;
     }
   }
   static double Term(const Gaussian& g, const cv::Vec4d& f) {
@@ -376,9 +413,10 @@ ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candi
 // material model's likelihood ratio, smoothed over a few pixels. Returns a
 // mask of hair, same size as `bgr`.
 Result<cv::Mat1b> HairBySkinContrast(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
-                                     const cv::Mat1f& energy, const SegmentationOptions& options) {
+                                     const cv::Mat1f& energy, double noise_energy,
+                                     const SegmentationOptions& options) {
   HR_ASSIGN_OR_RETURN(const MaterialModel model,
-                      MaterialModel::Fit(bgr, candidates, energy, options));
+                      MaterialModel::Fit(bgr, candidates, energy, noise_energy, options));
   cv::Mat1f ratio(bgr.size(), 0.f);
   ratio.forEach([&](float& r, const int* pos) {
     if (candidates(pos[0], pos[1]))
@@ -538,10 +576,15 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   cv::resize(bgr, small_bgr, cv::Size(), s, s, cv::INTER_AREA);
   cv::resize(candidates, small_candidates, small_bgr.size(), 0, 0, cv::INTER_AREA);
   small_candidates = Mask(small_candidates >= 128);
+  const double noise_energy = options.texture_less_noise
+                                  ? NoiseBandEnergy(bgr, Mask(distance < options.backdrop_distance),
+                                                    options.texture_sigma_px)
+                                  : 0.0;
   cv::resize(TextureEnergy(bgr, candidates, options.texture_sigma_px), small_energy,
              small_bgr.size(), 0, 0, cv::INTER_AREA);
-  HR_ASSIGN_OR_RETURN(const cv::Mat1b contrast_hair,
-                      HairBySkinContrast(small_bgr, small_candidates, small_energy, options));
+  HR_ASSIGN_OR_RETURN(
+      const cv::Mat1b contrast_hair,
+      HairBySkinContrast(small_bgr, small_candidates, small_energy, noise_energy, options));
   ChromaticityStep chromaticity;
   chromaticity.hair = contrast_hair;
   if (options.skin_chromaticity_sigmas > 0)

@@ -48,6 +48,11 @@ struct SegmentationOptions {
   double texture_sigma_px = 4.0;  // window over which the fine-scale energy is averaged
   int colour_components = 6;      // Gaussians in the foreground's colour (and texture) model
   bool texture_feature = true;    // the mixture models texture beside colour
+  // Components are named hair or skin by their texture less the image
+  // noise's, measured over the backdrop: in a grainy image (high ISO, a path
+  // tracer's few samples) noise alone makes smooth skin as textured as hair.
+  // false keeps the noise in.
+  bool texture_less_noise = true;
   // A component is skin when its pixels' median texture is below this share
   // of the foreground's 75th percentile (hair's texture when hair covers at
   // least a quarter of the foreground; on a view with less hair than that,
