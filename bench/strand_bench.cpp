@@ -49,6 +49,8 @@ int main(int argc, char** argv) {
         "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
+        "[--skin-min-share S] [--skin-min-views N] [--trim-tip-over-skin yes|no] "
+        "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
@@ -118,6 +120,16 @@ int main(int argc, char** argv) {
       options.growth.helix.min_curvature_per_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--end-over-skin") == 0) {
       options.growth.end_over_skin = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--skin-min-share") == 0) {
+      options.growth.skin.min_share = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--skin-min-views") == 0) {
+      options.growth.skin.min_views = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--tip-skin-min-share") == 0) {
+      options.growth.tip_skin.min_share = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--tip-skin-min-views") == 0) {
+      options.growth.tip_skin.min_views = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--trim-tip-over-skin") == 0) {
+      options.growth.trim_tip_over_skin = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--whole-head-in-volume") == 0) {
       options.field.whole_head_in_volume = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {

@@ -26,6 +26,7 @@ struct ReconstructArgs {
   double root_elevation_deg = StrandReconstructionOptions{}.root_elevation_deg;
   double max_off_hair_mm = StrandGrowthOptions{}.max_off_hair_mm;
   std::string end_over_skin = StrandGrowthOptions{}.end_over_skin ? "yes" : "no";
+  std::string trim_tips_over_skin = StrandGrowthOptions{}.trim_tip_over_skin ? "yes" : "no";
   std::string helix_continuation = StrandGrowthOptions{}.helix_continuation ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
@@ -93,6 +94,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.root_elevation_deg = a.root_elevation_deg;
   options.strands.growth.max_off_hair_mm = a.max_off_hair_mm;
   options.strands.growth.end_over_skin = a.end_over_skin == "yes";
+  options.strands.growth.trim_tip_over_skin = a.trim_tips_over_skin == "yes";
   options.strands.growth.helix_continuation = a.helix_continuation == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
@@ -141,6 +143,11 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_option("--end-over-skin", args->end_over_skin,
                   "bao-qi: end a strand where it runs in front of skin the views see (yes), or "
                   "grow it on as Bao and Qi (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--trim-tips-over-skin", args->trim_tips_over_skin,
+                  "bao-qi: trim each strand's tip back while 2 views see skin behind it (yes), "
+                  "or keep the tips as grown (no)")
       ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--helix-continuation", args->helix_continuation,

@@ -205,8 +205,17 @@ TEST(GrowStrandsInField, StrandsEndInFrontOfTheSkinTheViewsSee) {
   EXPECT_GT(ended, fringe_end - 10) << "a strand slid down the face";
   EXPECT_LT(slid, ended - 40) << "without the views nothing stops them";
   options.end_over_skin = false;
+  options.trim_tip_over_skin = false;
   StrandGrowthSummary off;
-  EXPECT_LT(lowest_end(&skin, &off), ended - 40) << "end_over_skin = false turns the test off";
+  EXPECT_LT(lowest_end(&skin, &off), ended - 40) << "both skin tests off";
+  // Grown down the face unhindered, each strand's tip is then trimmed back
+  // to where the views no longer see skin behind it: near the seen hair's end.
+  options.trim_tip_over_skin = true;
+  StrandGrowthSummary trimmed;
+  const double trimmed_end = lowest_end(&skin, &trimmed);
+  std::printf("lowest strand end with the tips trimmed alone: %.1f mm\n", trimmed_end);
+  EXPECT_GT(trimmed_end, fringe_end - 10) << "a tip over the face was kept";
+  EXPECT_EQ(trimmed.tips_trimmed_over_skin, static_cast<int64_t>(roots.size()));
 }
 
 }  // namespace

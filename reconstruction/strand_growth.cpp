@@ -20,12 +20,15 @@ struct StepStop {
 };
 
 // Grows every root's strand with `step(previous vertex, previous direction,
-// &next direction, &stop) -> false to stop`, in parallel, in root order.
-template <typename MakeStep>
+// &next direction, &stop) -> false to stop`, in parallel, in root order; then
+// `trim_tip(strand) -> vertices dropped` shortens each grown strand at its tip.
+template <typename MakeStep, typename TrimTip>
 StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
-                  const StrandGrowthOptions& o, MakeStep make_step, StrandGrowthSummary* summary) {
+                  const StrandGrowthOptions& o, MakeStep make_step, TrimTip trim_tip,
+                  StrandGrowthSummary* summary) {
   std::vector<std::vector<Eigen::Vector3f>> strands(roots.size());
   std::vector<End> ends(roots.size(), End::kLength);
+  std::vector<uint8_t> trimmed(roots.size(), 0);
   const int max_steps = static_cast<int>(o.max_length_mm / o.step_mm);
   ParallelFor(roots.size(), o.threads, [&] {
     return [&](size_t r) {
@@ -47,6 +50,7 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
         strand.push_back(p);
         direction = next;
       }
+      trimmed[r] = trim_tip(strand) > 0;
     };
   });
   StrandSet set;
@@ -61,6 +65,7 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
        : ends[r] == End::kOffHair  ? s.stopped_off_hair
        : ends[r] == End::kOverSkin ? s.stopped_over_skin
                                    : s.stopped_length);
+    s.tips_trimmed_over_skin += trimmed[r];
     set.AddStrand(strands[r]);
     s.vertices += static_cast<int64_t>(strands[r].size());
     length += static_cast<double>(strands[r].size() - 1) * o.step_mm;
@@ -138,7 +143,8 @@ Status StrandGrowthOptions::Check() const {
   if (!(follow_radius_mm >= 0 && follow_radius_mm <= 10))
     return InvalidArgument("strand follow_radius_mm must lie in [0, 10] (0 turns it off)");
   if (!(follow_weight >= 0)) return InvalidArgument("strand follow_weight must be non-negative");
-  return skin.Check();
+  HR_RETURN_IF_ERROR(skin.Check());
+  return tip_skin.Check();
 }
 
 StrandSet GrowStrandsInField(const HybridOrientationField& field,
@@ -147,10 +153,20 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
                              const SkinViews* skin) {
   // The skin test once per voxel of the field's grid: a strand's every step
   // asks it, and projecting into every view each time doubles the growth's time.
-  std::unique_ptr<const SkinGrid> skin_grid;
+  std::unique_ptr<const SkinGrid> skin_grid, tip_skin_grid;
   if (o.end_over_skin && skin != nullptr)
     skin_grid = std::make_unique<const SkinGrid>(*skin, o.skin, field.origin(), field.size(),
                                                  field.voxel_mm());
+  if (o.trim_tip_over_skin && skin != nullptr)
+    tip_skin_grid = std::make_unique<const SkinGrid>(*skin, o.tip_skin, field.origin(),
+                                                     field.size(), field.voxel_mm());
+  const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) {
+    size_t keep = strand.size();
+    while (tip_skin_grid && keep > 1 && tip_skin_grid->OverSkin(strand[keep - 1])) --keep;
+    const size_t dropped = strand.size() - keep;
+    strand.resize(keep);
+    return dropped;
+  };
   const auto make_step = [&] {
     return [&, off_hair = OffHairRun(o), helix = HelixContinuation(o.helix, o.step_mm),
             axis = Eigen::Vector3f(),
@@ -200,7 +216,7 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
       return true;
     };
   };
-  return GrowAll(roots, head, o, make_step, summary);
+  return GrowAll(roots, head, o, make_step, trim_tip, summary);
 }
 
 StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,
@@ -218,7 +234,8 @@ StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,
       return true;
     };
   };
-  return GrowAll(roots, head, o, make_step, summary);
+  const auto keep_tip = [](const std::vector<Eigen::Vector3f>&) { return size_t{0}; };
+  return GrowAll(roots, head, o, make_step, keep_tip, summary);
 }
 
 }  // namespace hairrig

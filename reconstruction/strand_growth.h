@@ -88,6 +88,15 @@ struct StrandGrowthOptions {
   // (the paper: I_d and the length only).
   bool end_over_skin = true;
   SkinViewOptions skin;
+  // Bao & Qi growth with views given: once a strand has stopped, the
+  // vertices at its tip that lie over skin by the looser tip_skin test are
+  // dropped (back to the last one that is not). A tip that hangs past the
+  // hair's end is seen over skin by few of the views facing it (the others
+  // see it against the hair around it), too few to end the growth (`skin`),
+  // while a strand that crosses a gap between locks goes on over hair and
+  // keeps its length. false turns it off.
+  bool trim_tip_over_skin = true;
+  SkinViewOptions tip_skin{2, 0.1};
   // Bao & Qi growth only: past the seen strands a curly strand carries its
   // curl on as a helix about the field's direction (helix_continuation.h);
   // false grows it along the field alone (the paper; docs/accuracy.md
@@ -103,6 +112,7 @@ struct StrandGrowthSummary {
   int64_t strands = 0, vertices = 0;
   int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, stopped_over_skin = 0,
           dropped_short = 0;
+  int64_t tips_trimmed_over_skin = 0;  // kept strands whose tip trim_tip_over_skin shortened
   double mean_length_mm = 0;
 };
 

@@ -287,6 +287,7 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"stopped_at_max_length", growth.stopped_length},
                         {"stopped_where_hair_ends", growth.stopped_off_hair},
                         {"stopped_over_skin", growth.stopped_over_skin},
+                        {"tips_trimmed_over_skin", growth.tips_trimmed_over_skin},
                         {"dropped_short", growth.dropped_short}}},
                       // EndMergedStrands after growth: "strands" counts what was grown.
                       {"merging",
@@ -332,8 +333,9 @@ std::string StrandReconstructionSummary::BriefReport() const {
     return s.str();
   }
   s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
-  if (growth.stopped_over_skin > 0) {
-    s << "  ended in front of skin the views see: " << growth.stopped_over_skin << " strands\n";
+  if (growth.stopped_over_skin + growth.tips_trimmed_over_skin > 0) {
+    s << "  ended in front of skin the views see: " << growth.stopped_over_skin
+      << " strands; tips trimmed back from skin: " << growth.tips_trimmed_over_skin << "\n";
   }
   if (merging.strands_ended + merging.strands_dropped > 0) {
     s << "  merged: " << merging.strands_ended
