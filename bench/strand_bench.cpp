@@ -9,13 +9,18 @@
 //       [--end-over-skin yes|no] [--segment-curvature-weight W] [--segment-sigma MM]
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
-//       [--follow-weight W]
-//       [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM] [--out-suffix S]
+//       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
+//       [--trim-tip-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
+//       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
+//       [--out-suffix S]
 //       [--score yes|no]
 // --points truth grows the strands from the true visible surface instead of the
 // capture's points (as many points, reconstruction_evaluation.h PointsFromTruth),
 // the strand stage's ceiling; true-directions keeps the capture's points with the
 // true strands' directions, what the points' directions cost.
+// --skin-labels truth gives the growth's skin tests (end over skin, tips trimmed
+// back) the simulated rig's true labels in place of the segmentation's: their
+// ceiling.
 // --head fit roots the strands on a head fitted to the capture's labels
 // (rig/reconstruction_input.h; it writes CAPTURE/reconstruction/head.yaml).
 // The strands go to CAPTURE/bench-strands-<method><S>/strands/ (the capture's own
@@ -26,6 +31,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -37,6 +43,25 @@
 #include "reconstruction/strand_evaluation.h"
 #include "reconstruction/strand_reconstruction.h"
 #include "rig/reconstruction_input.h"
+
+namespace {
+
+// The simulated rig's true label of each view (ground_truth/views/NNN_label.png,
+// NNN the view's number, the first three characters of its name); an empty
+// label where there is none, which leaves that view out of the skin test.
+std::vector<cv::Mat1b> TrueLabels(const std::string& capture,
+                                  const std::vector<hairrig::ReconstructionView>& views) {
+  std::vector<cv::Mat1b> labels;
+  for (const hairrig::ReconstructionView& view : views) {
+    const cv::Mat label =
+        cv::imread(capture + "/ground_truth/views/" + view.name.substr(0, 3) + "_label.png",
+                   cv::IMREAD_GRAYSCALE);
+    labels.push_back(label.empty() ? cv::Mat1b() : cv::Mat1b(label));
+  }
+  return labels;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace hairrig;
@@ -52,7 +77,7 @@ int main(int argc, char** argv) {
         "[--skin-min-share S] [--skin-min-views N] [--trim-tip-over-skin yes|no] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
-        "[--points capture|truth|true-directions] "
+        "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
@@ -67,6 +92,7 @@ int main(int argc, char** argv) {
   std::string head_file, out_suffix;
   bool score = true;
   std::string points_from = "capture";
+  std::string skin_labels = "capture";
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--methods") == 0) {
       methods.clear();
@@ -138,6 +164,8 @@ int main(int argc, char** argv) {
       out_suffix = argv[i + 1];
     } else if (std::strcmp(argv[i], "--score") == 0) {
       score = std::strcmp(argv[i + 1], "no") != 0;
+    } else if (std::strcmp(argv[i], "--skin-labels") == 0) {
+      skin_labels = argv[i + 1];
     } else if (std::strcmp(argv[i], "--points") == 0) {
       points_from = argv[i + 1];
     }
@@ -159,9 +187,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", (!head.ok() ? head.status() : truth.status()).ToString().c_str());
     return 1;
   }
-  // The views' skin from the capture's own points stage (its label masks).
-  const Result<SkinViews> skin = SkinViews::Load(input->views, capture + "/reconstruction/masks",
-                                                 head->spec.center_turntable_mm);
+  // The views' skin from the capture's own points stage (its label masks), or
+  // from the simulated rig's true labels: the skin tests' ceiling.
+  if (skin_labels != "capture" && skin_labels != "truth") {
+    std::fprintf(stderr, "--skin-labels: 'capture' or 'truth', not '%s'\n", skin_labels.c_str());
+    return 2;
+  }
+  const Result<SkinViews> skin =
+      skin_labels == "truth"
+          ? SkinViews::FromLabels(input->views, TrueLabels(capture, input->views),
+                                  head->spec.center_turntable_mm)
+          : SkinViews::Load(input->views, capture + "/reconstruction/masks",
+                            head->spec.center_turntable_mm);
   if (!skin.ok()) std::fprintf(stderr, "no skin test: %s\n", skin.status().ToString().c_str());
   // The strand stage's input: the capture's points, or points made from the truth.
   std::optional<std::vector<OrientedPoint>> truth_points;
