@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image_file.h"
 #include "core/strand_io.h"
 #include "reconstruction/reconstruction_evaluation.h"
 #include "reconstruction/skin_views.h"
@@ -53,10 +54,10 @@ std::vector<cv::Mat1b> TrueLabels(const std::string& capture,
                                   const std::vector<hairrig::ReconstructionView>& views) {
   std::vector<cv::Mat1b> labels;
   for (const hairrig::ReconstructionView& view : views) {
-    const cv::Mat label =
-        cv::imread(capture + "/ground_truth/views/" + view.name.substr(0, 3) + "_label.png",
-                   cv::IMREAD_GRAYSCALE);
-    labels.push_back(label.empty() ? cv::Mat1b() : cv::Mat1b(label));
+    const hairrig::Result<cv::Mat> label = hairrig::ReadImageFile(
+        capture + "/ground_truth/views/" + view.name.substr(0, 3) + "_label.png",
+        cv::IMREAD_GRAYSCALE);
+    labels.push_back(label.ok() ? cv::Mat1b(*label) : cv::Mat1b());
   }
   return labels;
 }
