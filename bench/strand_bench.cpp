@@ -10,7 +10,7 @@
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
-//       [--trim-tip-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
+//       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
         "[--share-link-ends yes|no] [--share-overlaps yes|no] [--whole-head-in-volume yes|no] "
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
-        "[--skin-min-share S] [--skin-min-views N] [--trim-tip-over-skin yes|no] "
+        "[--skin-min-share S] [--skin-min-views N] [--trim-tips-over-skin yes|no] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
       options.growth.tip_skin.min_share = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--tip-skin-min-views") == 0) {
       options.growth.tip_skin.min_views = std::atoi(argv[i + 1]);
-    } else if (std::strcmp(argv[i], "--trim-tip-over-skin") == 0) {
+    } else if (std::strcmp(argv[i], "--trim-tips-over-skin") == 0) {
       options.growth.trim_tip_over_skin = std::strcmp(argv[i + 1], "no") != 0;
     } else if (std::strcmp(argv[i], "--whole-head-in-volume") == 0) {
       options.field.whole_head_in_volume = std::strcmp(argv[i + 1], "no") != 0;
@@ -170,6 +170,10 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--points") == 0) {
       points_from = argv[i + 1];
     }
+  }
+  if (skin_labels != "capture" && skin_labels != "truth") {
+    std::fprintf(stderr, "--skin-labels: 'capture' or 'truth', not '%s'\n", skin_labels.c_str());
+    return 2;
   }
   auto input = LoadCaptureReconstructionInput(capture);
   if (!input.ok()) {
@@ -190,10 +194,6 @@ int main(int argc, char** argv) {
   }
   // The views' skin from the capture's own points stage (its label masks), or
   // from the simulated rig's true labels: the skin tests' ceiling.
-  if (skin_labels != "capture" && skin_labels != "truth") {
-    std::fprintf(stderr, "--skin-labels: 'capture' or 'truth', not '%s'\n", skin_labels.c_str());
-    return 2;
-  }
   const Result<SkinViews> skin =
       skin_labels == "truth"
           ? SkinViews::FromLabels(input->views, TrueLabels(capture, input->views),
