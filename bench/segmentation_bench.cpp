@@ -4,14 +4,15 @@
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
 //       [--texture-feature yes|no] [--texture-less-noise yes|no] [--skin-chromaticity SIGMAS]
 //       [--skin-chromaticity-log-ratio R] [--capture-skin yes|no] [--views 0,1,...]
-//       [--threads T] [--pictures DIR]
+//       [--texture-sigma PX] [--threads T] [--pictures DIR]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
 // each view's hair IoU and which true labels the errors fall on (skin taken
 // for hair, hair taken for backdrop or skin), the median and worst IoU, and
-// the time per view. The views are segmented as the points stage does
-// (SegmentCaptureViews: views with too little skin of their own borrow the
-// capture's skin model); --capture-skin no segments each view alone. --pictures writes each view
-// with its errors painted: red where skin or backdrop is taken for hair, blue where hair is missed.
+// the time per view, and what the true bare skin was labelled over all views
+// (the growth's skin tests see only what is labelled skin). The views are segmented as the points
+// stage does (SegmentCaptureViews: views with too little skin of their own borrow the capture's
+// skin model); --capture-skin no segments each view alone. --pictures writes each view with its
+// errors painted: red where skin or backdrop is taken for hair, blue where hair is missed.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -41,6 +42,7 @@ struct ViewRow {
   std::string name;
   double iou = 0;
   int skin_as_hair = 0, backdrop_as_hair = 0, hair_as_skin = 0, hair_as_backdrop = 0;
+  int skin = 0, skin_as_skin = 0, skin_as_backdrop = 0;  // the true bare skin and what it got
   bool capture_skin = false;
   int64_t capture_skin_pixels = 0;
 };
@@ -57,6 +59,10 @@ Result<ViewRow> ScoreView(const ReconstructionView& view, const cv::Mat& image,
   row.backdrop_as_hair = cv::countNonZero(hair & (maps.label == ViewTruthMaps::kBackdrop));
   row.hair_as_skin = cv::countNonZero(true_hair & (seg.label == kSegHead));
   row.hair_as_backdrop = cv::countNonZero(true_hair & (seg.label == kSegBackdrop));
+  const cv::Mat true_skin = maps.label == ViewTruthMaps::kHead;
+  row.skin = cv::countNonZero(true_skin);
+  row.skin_as_skin = cv::countNonZero(true_skin & (seg.label == kSegHead));
+  row.skin_as_backdrop = cv::countNonZero(true_skin & (seg.label == kSegBackdrop));
   row.capture_skin = seg.used_capture_skin;
   row.capture_skin_pixels = seg.capture_skin_pixels;
   if (!pictures.empty()) {
@@ -86,7 +92,7 @@ int main(int argc, char** argv) {
                  "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
                  "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] "
                  "[--capture-skin yes|no] [--views 0,1,...] "
-                 "[--threads T] "
+                 "[--texture-sigma PX] [--threads T] "
                  "[--pictures DIR]\n",
                  argv[0]);
     return 2;
@@ -113,6 +119,8 @@ int main(int argc, char** argv) {
       options.skin_chromaticity_log_ratio = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--capture-skin") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.capture_skin)) return 2;
+    } else if (std::strcmp(argv[i], "--texture-sigma") == 0) {
+      options.texture_sigma_px = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--views") == 0) {
       std::stringstream list(argv[i + 1]);
       for (std::string id; std::getline(list, id, ',');) views.push_back(std::atoi(id.c_str()));
@@ -186,7 +194,12 @@ int main(int argc, char** argv) {
   std::printf("%-22s %6s %12s %14s %12s %14s %14s\n", "view", "IoU", "skin->hair", "backdrop->hair",
               "hair->skin", "hair->backdrop", "capture skin");
   std::vector<double> ious;
+  int64_t skin = 0, skin_as_skin = 0, skin_as_hair = 0, skin_as_backdrop = 0;
   for (const ViewRow& r : rows) {
+    skin += r.skin;
+    skin_as_skin += r.skin_as_skin;
+    skin_as_hair += r.skin_as_hair;
+    skin_as_backdrop += r.skin_as_backdrop;
     std::printf("%-22s %6.3f %12d %14d %12d %14d %14s\n", r.name.c_str(), r.iou, r.skin_as_hair,
                 r.backdrop_as_hair, r.hair_as_skin, r.hair_as_backdrop,
                 r.capture_skin ? std::to_string(r.capture_skin_pixels).c_str() : "-");
@@ -199,5 +212,11 @@ int main(int argc, char** argv) {
       ious.size(), ious[ious.size() / 2], ious.front(),
       std::accumulate(ious.begin(), ious.end(), 0.0) / static_cast<double>(ious.size()),
       seconds / static_cast<double>(ious.size()), threads);
+  const auto share = [&](int64_t n) {
+    return 100.0 * static_cast<double>(n) / static_cast<double>(std::max<int64_t>(1, skin));
+  };
+  std::printf("true bare skin (%lld px): labelled skin %.1f %%, hair %.1f %%, backdrop %.1f %%\n",
+              static_cast<long long>(skin), share(skin_as_skin), share(skin_as_hair),
+              share(skin_as_backdrop));
   return 0;
 }
