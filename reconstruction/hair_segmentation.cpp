@@ -24,7 +24,8 @@ cv::Mat1b Mask(const cv::MatExpr& expression) {
 struct BackdropModel {
   cv::Vec3d mean;
   cv::Matx33d inverse_covariance;
-  double sigma = 0;  // mean standard deviation of the channels
+  cv::Vec3d channel_sigma;  // standard deviation of each channel
+  double sigma = 0;         // mean standard deviation of the channels
 };
 
 Result<BackdropModel> FitBackdrop(const cv::Mat3b& bgr, int border) {
@@ -47,6 +48,7 @@ Result<BackdropModel> FitBackdrop(const cv::Mat3b& bgr, int border) {
   }
   cov *= 1.0 / static_cast<double>(samples.size());
   model.sigma = std::sqrt((cov(0, 0) + cov(1, 1) + cov(2, 2)) / 3.0);
+  model.channel_sigma = cv::Vec3d(std::sqrt(cov(0, 0)), std::sqrt(cov(1, 1)), std::sqrt(cov(2, 2)));
   if (model.sigma > 30.0) {
     return FailedPrecondition("the image's border is not a plain backdrop (its colour varies by " +
                               std::to_string(static_cast<int>(model.sigma)) +
@@ -67,6 +69,23 @@ cv::Mat1f BackdropDistance(const cv::Mat3b& bgr, const BackdropModel& model) {
     d = static_cast<float>(std::sqrt(std::max(0.0, (v.t() * model.inverse_covariance * v)(0))));
   });
   return distance;
+}
+
+// The least share of the backdrop's light that pixel `p` must hide: no
+// colour is negative, so a pixel darker than the backdrop in a channel covers
+// at least 1 - p / backdrop of it, whatever covers it. Each channel is taken
+// 3 of the backdrop's standard deviations brighter (its noise); the largest
+// share over the channels, 0 when the pixel is nowhere darker. A blend of
+// hair over the backdrop never exceeds its true coverage here.
+double HiddenBackdropShare(const cv::Vec3b& p, const BackdropModel& backdrop) {
+  constexpr double kNoiseSigmas = 3.0;
+  double share = 0;
+  for (int c = 0; c < 3; ++c) {
+    if (backdrop.mean[c] < 1.0) continue;
+    share =
+        std::max(share, 1.0 - (p[c] + kNoiseSigmas * backdrop.channel_sigma[c]) / backdrop.mean[c]);
+  }
+  return share;
 }
 
 // A Gaussian blur of `values` over the pixels in `weights` only (normalised
@@ -636,6 +655,11 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
         continue;
       }
       const float alpha = std::min(1.f, distance(y, x) / full_coverage);
+      if (alpha < 0.5f && options.opaque_shadow_as_skin &&
+          HiddenBackdropShare(bgr(y, x), backdrop) >= 0.5) {
+        out.label(y, x) = kSegHead;
+        continue;
+      }
       out.hair_alpha(y, x) = alpha;
       out.label(y, x) = alpha >= 0.5f ? kSegHair : kSegBackdrop;
     }

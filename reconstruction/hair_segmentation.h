@@ -6,7 +6,10 @@
 //  1. backdrop: the colour of the image's border band (the rig's backdrop
 //     fills it) as a Gaussian in BGR; a pixel's Mahalanobis distance to it
 //     gives the backdrop, and the hair's coverage where hair is seen against it
-//     (alpha = distance / the distance of the hair's own colour);
+//     (alpha = distance / the distance of the hair's own colour); a pixel of
+//     the hair's region too dark to be a blend of hair over the backdrop
+//     (SegmentationOptions::opaque_shadow_as_skin) is skin in the hair's
+//     shadow, not backdrop;
 //  2. box: the polygons the caller knows hold no hair (the calibration box's
 //     projected outline) are box wherever they are not backdrop;
 //  3. hair against skin: the foreground's colours and fine texture (a
@@ -77,6 +80,14 @@ struct SegmentationOptions {
   // work_scale): the skin under the hair's shadow is a region, where hair
   // whose glints happen to match the skin's chromaticity is scattered.
   double capture_skin_min_area_px = 600;
+  // A pixel of the hair's region whose colour lies nearer the backdrop than
+  // half the hair's (coverage under 0.5, a blend) yet is too dark to be a
+  // blend (it hides at least half of the backdrop's light in some channel):
+  // opaque and darker than the hair, skin in shadow under the hair (the
+  // neck beneath the jaw) or a shadowed gap between curls. true: labelled
+  // skin, so that the strands' skin tests see the shadowed neck (a gap taken
+  // for skin costs a curl some length); false: backdrop, as a blend's.
+  bool opaque_shadow_as_skin = true;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.
