@@ -165,8 +165,9 @@ double ShareOf(const cv::Mat& label_mask, const cv::Mat& region) {
 // A synthetic view: a green backdrop; a head (an ellipse) whose upper part is
 // blond hair (fine bright stripes), its middle lit skin and its lower part skin
 // deep in the hair's shadow: near black, striped by the strands' shadows (a
-// neck under the jaw); left of the head, thin wisps (blond hair over a third
-// of each pixel, the rest the backdrop).
+// neck under the jaw); left of the head, thin wisps: blond hair over the
+// backdrop, covering 0 to 45 % of each pixel in stripes 8 px apart (the
+// mixture names part of them hair, and their coverage labels them backdrop).
 cv::Mat3b HeadWithNeckInDeepShadow(cv::Mat1b* neck, cv::Mat1b* wisps) {
   const cv::Size size(360, 440);
   const cv::Vec3d backdrop(23, 82, 16), blond(80, 130, 170), noise(2, 5, 2);
@@ -190,7 +191,8 @@ cv::Mat3b HeadWithNeckInDeepShadow(cv::Mat1b* neck, cv::Mat1b* wisps) {
           (*neck)(y, x) = 255;
         }
       } else if (x >= 40 && x < 70 && y >= 120 && y < 300) {
-        colour = blond * (0.33 * (0.6 + 0.5 * stripe)) + backdrop * 0.67;
+        const double coverage = 0.45 * (0.5 + 0.5 * std::sin(2 * M_PI * x / 8.0));
+        colour = blond * coverage + backdrop * (1 - coverage);
         (*wisps)(y, x) = 255;
       }
       for (int c = 0; c < 3; ++c)
@@ -219,6 +221,9 @@ TEST(SegmentHair, SkinInDeepShadowIsNotTakenForBackdrop) {
       "neck in deep shadow labelled skin %.3f (backdrop without the step %.3f); "
       "wisps turned to skin %.3f\n",
       neck_skin, neck_backdrop_without, wisps_skin);
+  // Measured: 0.898 of the neck skin with the step, 0.969 backdrop without;
+  // no wisp turned to skin (0.27 of them when the step ignores how dark a
+  // pixel is).
   EXPECT_GT(neck_backdrop_without, 0.5) << "the case this scene is built for";
   EXPECT_GT(neck_skin, 0.8);
   EXPECT_LT(wisps_skin, 0.02) << "a blend of hair over the backdrop is not opaque";
