@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_args.h"
 #include "reconstruction/point_reconstruction.h"
 #include "reconstruction/reconstruction_evaluation.h"
 #include "rig/reconstruction_input.h"
@@ -80,11 +81,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--samples") == 0) {
       options.mvs.samples = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--multiview-direction") == 0) {
-      if (std::strcmp(argv[i + 1], "yes") != 0 && std::strcmp(argv[i + 1], "no") != 0) {
-        std::fprintf(stderr, "--multiview-direction takes yes or no\n");
-        return 2;
-      }
-      options.fusion.multiview_direction = std::strcmp(argv[i + 1], "yes") == 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.fusion.multiview_direction)) return 2;
     } else if (std::strcmp(argv[i], "--min-agreeing") == 0) {
       options.fusion.min_agreeing_views = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--direction-sigma") == 0) {

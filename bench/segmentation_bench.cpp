@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_args.h"
 #include "core/image_file.h"
 #include "core/parallel.h"
 #include "core/truth_maps.h"
@@ -72,16 +73,6 @@ Result<ViewRow> ScoreView(const ReconstructionView& view, const cv::Mat& image,
     HR_RETURN_IF_ERROR(WriteImageAtomic(pictures + "/" + view.name + "_errors.jpg", painted));
   }
   return row;
-}
-
-// `value` of option `flag` as yes or no; false (with a message) for anything else.
-bool ParseYesNo(const char* flag, const char* value, bool* out) {
-  if (std::strcmp(value, "yes") != 0 && std::strcmp(value, "no") != 0) {
-    std::fprintf(stderr, "%s takes yes or no\n", flag);
-    return false;
-  }
-  *out = std::strcmp(value, "yes") == 0;
-  return true;
 }
 
 }  // namespace

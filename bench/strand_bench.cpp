@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_args.h"
 #include "core/image_file.h"
 #include "core/strand_io.h"
 #include "reconstruction/reconstruction_evaluation.h"
@@ -124,7 +125,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--alpha-close") == 0) {
       options.direction.alpha_close = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--share-overlaps") == 0) {
-      options.direction.share_overlaps = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.direction.share_overlaps)) return 2;
     } else if (std::strcmp(argv[i], "--follow-radius") == 0) {
       options.growth.follow_radius_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--follow-weight") == 0) {
@@ -140,13 +141,13 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--off-hair") == 0) {
       options.growth.off_hair_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--helix-continuation") == 0) {
-      options.growth.helix_continuation = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.helix_continuation)) return 2;
     } else if (std::strcmp(argv[i], "--helix-window") == 0) {
       options.growth.helix.window_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--helix-min-curvature") == 0) {
       options.growth.helix.min_curvature_per_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--end-over-skin") == 0) {
-      options.growth.end_over_skin = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.end_over_skin)) return 2;
     } else if (std::strcmp(argv[i], "--skin-min-share") == 0) {
       options.growth.skin.min_share = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--skin-min-views") == 0) {
@@ -156,15 +157,15 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--tip-skin-min-views") == 0) {
       options.growth.tip_skin.min_views = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--trim-tips-over-skin") == 0) {
-      options.growth.trim_tip_over_skin = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.trim_tip_over_skin)) return 2;
     } else if (std::strcmp(argv[i], "--whole-head-in-volume") == 0) {
-      options.field.whole_head_in_volume = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.field.whole_head_in_volume)) return 2;
     } else if (std::strcmp(argv[i], "--share-link-ends") == 0) {
-      options.direction.share_link_ends = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.direction.share_link_ends)) return 2;
     } else if (std::strcmp(argv[i], "--out-suffix") == 0) {
       out_suffix = argv[i + 1];
     } else if (std::strcmp(argv[i], "--score") == 0) {
-      score = std::strcmp(argv[i + 1], "no") != 0;
+      if (!ParseYesNo(argv[i], argv[i + 1], &score)) return 2;
     } else if (std::strcmp(argv[i], "--skin-labels") == 0) {
       skin_labels = argv[i + 1];
     } else if (std::strcmp(argv[i], "--points") == 0) {

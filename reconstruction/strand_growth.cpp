@@ -160,9 +160,10 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
   if (o.trim_tip_over_skin && skin != nullptr)
     tip_skin_grid = std::make_unique<const SkinGrid>(*skin, o.tip_skin, field.origin(),
                                                      field.size(), field.voxel_mm());
-  const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) {
+  const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) -> size_t {
+    if (!tip_skin_grid) return 0;
     size_t keep = strand.size();
-    while (tip_skin_grid && keep > 1 && tip_skin_grid->OverSkin(strand[keep - 1])) --keep;
+    while (keep > 1 && tip_skin_grid->OverSkin(strand[keep - 1])) --keep;
     const size_t dropped = strand.size() - keep;
     strand.resize(keep);
     return dropped;
