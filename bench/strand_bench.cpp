@@ -11,6 +11,7 @@
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
+//       [--scalp-skin-band MM]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -18,6 +19,9 @@
 // capture's points (as many points, reconstruction_evaluation.h PointsFromTruth),
 // the strand stage's ceiling; true-directions keeps the capture's points with the
 // true strands' directions, what the points' directions cost.
+// --scalp-skin-band MM: skin seen behind a vertex above the hairline and within
+// MM of the head is the scalp showing through the hair, not bare skin
+// (SkinViews::ExcludeScalp; 12 as the reconstruction, 0 counts it as skin).
 // --skin-labels truth gives the growth's skin tests (end over skin, tips trimmed
 // back) the simulated rig's true labels in place of the segmentation's: their
 // ceiling.
@@ -38,6 +42,7 @@
 #include <vector>
 
 #include "bench/bench_args.h"
+#include "core/head_model.h"
 #include "core/image_file.h"
 #include "core/strand_io.h"
 #include "reconstruction/reconstruction_evaluation.h"
@@ -77,6 +82,7 @@ int main(int argc, char** argv) {
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
         "[--skin-min-share S] [--skin-min-views N] [--trim-tips-over-skin yes|no] "
+        "[--scalp-skin-band MM] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -95,6 +101,7 @@ int main(int argc, char** argv) {
   bool score = true;
   std::string points_from = "capture";
   std::string skin_labels = "capture";
+  double scalp_band_mm = kScalpSkinBandMm;
   for (int i = 2; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--methods") == 0) {
       methods.clear();
@@ -148,6 +155,8 @@ int main(int argc, char** argv) {
       options.growth.helix.min_curvature_per_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--end-over-skin") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.end_over_skin)) return 2;
+    } else if (std::strcmp(argv[i], "--scalp-skin-band") == 0) {
+      scalp_band_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--skin-min-share") == 0) {
       options.growth.skin.min_share = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--skin-min-views") == 0) {
@@ -195,13 +204,19 @@ int main(int argc, char** argv) {
   }
   // The views' skin from the capture's own points stage (its label masks), or
   // from the simulated rig's true labels: the skin tests' ceiling.
-  const Result<SkinViews> skin =
+  Result<SkinViews> skin =
       skin_labels == "truth"
           ? SkinViews::FromLabels(input->views, TrueLabels(capture, input->views),
                                   head->spec.center_turntable_mm)
           : SkinViews::Load(input->views, capture + "/reconstruction/masks",
                             head->spec.center_turntable_mm);
   if (!skin.ok()) std::fprintf(stderr, "no skin test: %s\n", skin.status().ToString().c_str());
+  auto head_model = HeadModel::Build(head->spec);
+  if (!head_model.ok()) {
+    std::fprintf(stderr, "%s\n", head_model.status().ToString().c_str());
+    return 1;
+  }
+  if (skin.ok()) skin->ExcludeScalp(head_model->get(), scalp_band_mm);
   // The strand stage's input: the capture's points, or points made from the truth.
   std::optional<std::vector<OrientedPoint>> truth_points;
   if (points_from != "capture") {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/camera_model.h"
+#include "core/head_model.h"
 #include "core/image_file.h"
 #include "reconstruction/hair_segmentation.h"
 
@@ -60,9 +61,21 @@ Result<SkinViews> SkinViews::Load(const std::vector<ReconstructionView>& views,
   return skin;
 }
 
+void SkinViews::ExcludeScalp(const HeadModel* head, double band_mm) {
+  const bool scalp = head != nullptr && head->head().scalp.defined && band_mm > 0;
+  scalp_head_ = scalp ? head : nullptr;
+  scalp_band_mm_ = scalp ? band_mm : 0;
+}
+
+bool SkinViews::OverScalp(const Eigen::Vector3d& p_object) const {
+  return scalp_head_ != nullptr && scalp_head_->AboveHairline(p_object) &&
+         scalp_head_->SignedDistance(p_object, nullptr) < scalp_band_mm_;
+}
+
 void SkinViews::Count(const Eigen::Vector3d& p_object, int* facing, int* over_skin) const {
   *facing = 0;
   *over_skin = 0;
+  const bool scalp = OverScalp(p_object);
   for (const View& v : views_) {
     const Eigen::Vector3d p_cam = v.cam_from_object * p_object;
     if (!(p_cam.z() < v.centre_depth_mm)) continue;
@@ -71,7 +84,7 @@ void SkinViews::Count(const Eigen::Vector3d& p_object, int* facing, int* over_sk
     const double x = std::round(uv.x()), y = std::round(uv.y());
     if (!(x >= 0 && y >= 0 && x < v.skin.cols && y < v.skin.rows)) continue;
     ++*facing;
-    *over_skin += v.skin(static_cast<int>(y), static_cast<int>(x)) != 0;
+    *over_skin += !scalp && v.skin(static_cast<int>(y), static_cast<int>(x)) != 0;
   }
 }
 

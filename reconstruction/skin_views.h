@@ -31,6 +31,12 @@
 
 namespace hairrig {
 
+class HeadModel;  // core/head_model.h
+
+// Skin seen behind a point above the head's hairline and within this
+// distance (mm) of the head is the scalp (SkinViews::ExcludeScalp).
+inline constexpr double kScalpSkinBandMm = 12;
+
 struct SkinViewOptions {
   // A point is over skin when at least min_views of the views facing it see
   // skin there, and they are at least min_share of those views (one view's
@@ -69,6 +75,16 @@ class SkinViews {
   // True when `p_object` is over skin by `options` (see SkinViewOptions).
   bool OverSkin(const Eigen::Vector3d& p_object, const SkinViewOptions& options) const;
 
+  // From now on a point above `head`'s hairline and within `band_mm` of its
+  // surface is over no skin (Count's over_skin 0): the skin seen behind it is
+  // the scalp, which shows between the hair at a parting, a whorl or wherever
+  // hair is thin, and hair there does not hide it. Without this, a strand
+  // rooted where the scalp shows ends at its root. `head` (in the object
+  // frame; it must outlive this) needs a scalp region (HeadSpec::scalp.defined,
+  // else nothing is excluded); null or a band of 0 turns it off, the default.
+  void ExcludeScalp(const HeadModel* head, double band_mm);
+  bool OverScalp(const Eigen::Vector3d& p_object) const;
+
   int views_loaded() const { return static_cast<int>(views_.size()); }
   int views_missing() const { return missing_; }
 
@@ -81,6 +97,8 @@ class SkinViews {
   };
   std::vector<View> views_;
   int missing_ = 0;
+  const HeadModel* scalp_head_ = nullptr;
+  double scalp_band_mm_ = 0;
 };
 
 // SkinViews::OverSkin answered once per cell of a regular grid, at the cell's

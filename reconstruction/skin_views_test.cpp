@@ -83,6 +83,46 @@ TEST(SkinViews, OneViewsSkinDoesNotDecide) {
   EXPECT_TRUE(one.OverSkin(crown, alone));
 }
 
+// Every view sees skin everywhere (a scalp that shows through thin hair, in
+// the extreme): with the scalp excluded, points in the band over the scalp
+// are over no skin, while points in front of the face, or beyond the band,
+// still are; a head without a scalp region excludes nothing.
+TEST(SkinViews, TheScalpShowingThroughTheHairIsNotBareSkin) {
+  LabelledViews s = SubjectViews();
+  for (cv::Mat1b& label : s.labels) label.setTo(kSegHead);
+  auto skin_result = SkinViews::FromLabels(s.views, s.labels, s.head.center_turntable_mm);
+  ASSERT_TRUE(skin_result.ok()) << skin_result.status().ToString();
+  SkinViews& skin = *skin_result;
+  const SkinViewOptions options;
+  const Eigen::Vector3d crown = OutsideTheHead(s.head, Eigen::Vector3d(0, 0, 1), 6);
+  const Eigen::Vector3d back = OutsideTheHead(s.head, Eigen::Vector3d(0, 1, 0.4), 6);
+  const Eigen::Vector3d face = OutsideTheHead(s.head, Eigen::Vector3d(0, -1, -0.2), 5);
+  const Eigen::Vector3d above_band = OutsideTheHead(s.head, Eigen::Vector3d(0, 0, 1), 20);
+  EXPECT_TRUE(skin.OverSkin(crown, options));
+  EXPECT_TRUE(skin.OverSkin(back, options));
+
+  auto head = HeadModel::Build(s.head);
+  ASSERT_TRUE(head.ok()) << head.status().ToString();
+  skin.ExcludeScalp(head->get(), kScalpSkinBandMm);
+  EXPECT_FALSE(skin.OverSkin(crown, options));
+  EXPECT_FALSE(skin.OverSkin(back, options));
+  int facing = 0, over_skin = 0;
+  skin.Count(crown, &facing, &over_skin);
+  EXPECT_GT(facing, 2);  // the views still face it; none sees bare skin
+  EXPECT_EQ(over_skin, 0);
+  EXPECT_TRUE(skin.OverSkin(face, options));
+  EXPECT_TRUE(skin.OverSkin(above_band, options));
+
+  HeadSpec bald = s.head;
+  bald.scalp.defined = false;
+  auto bald_head = HeadModel::Build(bald);
+  ASSERT_TRUE(bald_head.ok()) << bald_head.status().ToString();
+  skin.ExcludeScalp(bald_head->get(), kScalpSkinBandMm);
+  EXPECT_TRUE(skin.OverSkin(crown, options));
+  skin.ExcludeScalp(head->get(), 0);
+  EXPECT_TRUE(skin.OverSkin(crown, options));
+}
+
 TEST(SkinViews, ViewsWithoutALabelAreLeftOutAndNoneIsAnError) {
   LabelledViews s = SubjectViews();
   s.labels[0] = cv::Mat1b();

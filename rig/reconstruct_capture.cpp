@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"
+#include "core/head_model.h"
 #include "core/image_file.h"
 #include "core/log.h"
 #include "core/strand_io.h"
@@ -78,8 +79,11 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
           o.dir + "/reconstruction/points.ply, head " + head.source);
   // The views' skin (the points stage's label masks): strands end in front of
   // it, and the plausibility counts the strand samples over it.
-  const Result<SkinViews> skin = SkinViews::Load(input.views, request.reconstruction_dir + "/masks",
-                                                 head.spec.center_turntable_mm);
+  // The scalp that shows between the hair is not bare skin (SkinViews::ExcludeScalp).
+  HR_ASSIGN_OR_RETURN(const std::unique_ptr<HeadModel> head_model, HeadModel::Build(head.spec));
+  Result<SkinViews> skin = SkinViews::Load(input.views, request.reconstruction_dir + "/masks",
+                                           head.spec.center_turntable_mm);
+  if (skin.ok()) skin->ExcludeScalp(head_model.get(), kScalpSkinBandMm);
   if (!skin.ok() && o.strands.growth.end_over_skin) {
     LogWarning("reconstruct: strands are not stopped in front of skin: " +
                skin.status().ToString());
