@@ -7,7 +7,8 @@ For each file (hairrig's strand PLY, core/strand_io.h: vertices x y z in mm,
 then one ushort segment count per strand), prints the median length along the
 strand, the median drop (root height minus tip height, z up), the median
 length over the root-to-tip chord (1 for a straight strand, about 2 for
-curls) and the 10th / 50th / 90th percentile of the tips' height. Give a
+curls) and the 10th / 50th / 90th percentile of the tips' height, and the median length of the strands rooted in
+the top, middle and bottom third of the roots' height span. Give a
 reconstruction's strands.ply and the capture's
 ground_truth/ground_truth_strands.ply to see whether strands end where the
 true ones do.
@@ -43,7 +44,7 @@ def percentile(sorted_values, q):
 
 def describe(path):
     xyz, segments = read_strands(path)
-    lengths, drops, ratios, tips = [], [], [], []
+    lengths, drops, ratios, tips, roots = [], [], [], [], []
     first = 0
     for count in segments:
         last = first + count  # count segments: count + 1 vertices
@@ -56,6 +57,7 @@ def describe(path):
         drops.append(root[2] - tip[2])
         ratios.append(length / max(math.dist(root, tip), 1.0))
         tips.append(tip[2])
+        roots.append(root[2])
         first = last + 1
     tips.sort()
     print("%s: %d strands; length median %.0f mm, drop median %.0f mm, length / chord median %.2f, "
@@ -63,6 +65,20 @@ def describe(path):
           % (path, len(segments), statistics.median(lengths), statistics.median(drops),
              statistics.median(ratios), percentile(tips, 0.1), percentile(tips, 0.5),
              percentile(tips, 0.9)))
+    print("  length median by root height (top / middle / bottom third of %.0f..%.0f mm): %s mm"
+          % (min(roots), max(roots), " / ".join(
+              "%.0f" % statistics.median(third) if third else "-"
+              for third in by_root_height_third(roots, lengths))))
+
+
+def by_root_height_third(roots, values):
+    """values split by their strand's root height: top, middle, bottom third of the span."""
+    low, high = min(roots), max(roots)
+    span = max(high - low, 1e-9)
+    thirds = [[], [], []]
+    for root, value in zip(roots, values):
+        thirds[min(2, int(3 * (high - root) / span))].append(value)
+    return thirds
 
 
 if __name__ == "__main__":
