@@ -11,7 +11,7 @@
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
-//       [--scalp-skin-band MM]
+//       [--scalp-skin-band MM] [--tip-skin-margin PX]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
         "[--max-off-hair MM] [--off-hair MM] [--merge-run MM] [--merge-distance MM] "
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
         "[--skin-min-share S] [--skin-min-views N] [--trim-tips-over-skin yes|no] "
-        "[--scalp-skin-band MM] "
+        "[--scalp-skin-band MM] [--tip-skin-margin PX] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -163,6 +163,8 @@ int main(int argc, char** argv) {
       options.growth.skin.min_views = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--tip-skin-min-share") == 0) {
       options.growth.tip_skin.min_share = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--tip-skin-margin") == 0) {
+      options.growth.tip_skin_margin_px = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--tip-skin-min-views") == 0) {
       options.growth.tip_skin.min_views = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--trim-tips-over-skin") == 0) {

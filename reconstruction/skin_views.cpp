@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 
 #include "core/camera_model.h"
@@ -65,6 +66,19 @@ void SkinViews::ExcludeScalp(const HeadModel* head, double band_mm) {
   const bool scalp = head != nullptr && head->head().scalp.defined && band_mm > 0;
   scalp_head_ = scalp ? head : nullptr;
   scalp_band_mm_ = scalp ? band_mm : 0;
+}
+
+SkinViews SkinViews::Grown(int px) const {
+  SkinViews grown = *this;
+  if (px <= 0) return grown;
+  const cv::Mat kernel =
+      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * px + 1, 2 * px + 1));
+  for (View& v : grown.views_) {
+    cv::Mat1b dilated;
+    cv::dilate(v.skin, dilated, kernel);
+    v.skin = dilated;
+  }
+  return grown;
 }
 
 bool SkinViews::OverScalp(const Eigen::Vector3d& p_object) const {

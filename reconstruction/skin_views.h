@@ -83,6 +83,9 @@ class SkinViews {
   // frame; it must outlive this) needs a scalp region (HeadSpec::scalp.defined,
   // else nothing is excluded); null or a band of 0 turns it off, the default.
   void ExcludeScalp(const HeadModel* head, double band_mm);
+  // A copy whose skin masks are grown by `px` pixels (a (2 px + 1) square):
+  // a point that projects within px of a view's skin counts as over it.
+  SkinViews Grown(int px) const;
   bool OverScalp(const Eigen::Vector3d& p_object) const;
 
   int views_loaded() const { return static_cast<int>(views_.size()); }

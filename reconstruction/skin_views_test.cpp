@@ -123,6 +123,33 @@ TEST(SkinViews, TheScalpShowingThroughTheHairIsNotBareSkin) {
   EXPECT_TRUE(skin.OverSkin(crown, options));
 }
 
+// One view sees skin everywhere but a 5 x 5 px patch of hair around where a
+// point projects: the point is over no skin, nor once the skin is grown by
+// 1 px; grown by 3 px, the skin reaches it. The views it was grown from stay
+// as they were.
+TEST(SkinViews, GrownSkinReachesPointsWithinItsMargin) {
+  LabelledViews s = SubjectViews();
+  const Eigen::Vector3d point = OutsideTheHead(s.head, Eigen::Vector3d(0, -1, 0), 5);
+  const ReconstructionView& view = s.views[0];
+  Eigen::Vector2d uv;
+  ASSERT_TRUE(ProjectChecked(view.camera, view.cam_from_object * point, &uv));
+  const int u = static_cast<int>(std::round(uv.x())), v = static_cast<int>(std::round(uv.y()));
+  cv::Mat1b label(s.labels[0].size(), uint8_t{kSegHead});
+  label(cv::Rect(u - 2, v - 2, 5, 5)).setTo(kSegHair);
+  std::vector<cv::Mat1b> labels(s.views.size());
+  labels[0] = label;
+  auto skin_result = SkinViews::FromLabels(s.views, labels, s.head.center_turntable_mm);
+  ASSERT_TRUE(skin_result.ok()) << skin_result.status().ToString();
+  const SkinViewOptions one_view{1, 0.01};
+  int facing = 0, over_skin = 0;
+  skin_result->Count(point, &facing, &over_skin);
+  ASSERT_EQ(facing, 1) << "the point must face the view";
+  EXPECT_FALSE(skin_result->OverSkin(point, one_view));
+  EXPECT_FALSE(skin_result->Grown(1).OverSkin(point, one_view));
+  EXPECT_TRUE(skin_result->Grown(3).OverSkin(point, one_view));
+  EXPECT_FALSE(skin_result->OverSkin(point, one_view));
+}
+
 TEST(SkinViews, ViewsWithoutALabelAreLeftOutAndNoneIsAnError) {
   LabelledViews s = SubjectViews();
   s.labels[0] = cv::Mat1b();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <random>
 
 #include "core/parallel.h"
@@ -143,6 +144,9 @@ Status StrandGrowthOptions::Check() const {
   if (!(follow_radius_mm >= 0 && follow_radius_mm <= 10))
     return InvalidArgument("strand follow_radius_mm must lie in [0, 10] (0 turns it off)");
   if (!(follow_weight >= 0)) return InvalidArgument("strand follow_weight must be non-negative");
+  if (tip_skin_margin_px < 0 || tip_skin_margin_px > 20)
+    return InvalidArgument(
+        "strand tip_skin_margin_px must lie in 0..20 (0 tests the skin as labelled)");
   HR_RETURN_IF_ERROR(skin.Check());
   return tip_skin.Check();
 }
@@ -157,9 +161,12 @@ StrandSet GrowStrandsInField(const HybridOrientationField& field,
   if (o.end_over_skin && skin != nullptr)
     skin_grid = std::make_unique<const SkinGrid>(*skin, o.skin, field.origin(), field.size(),
                                                  field.voxel_mm());
-  if (o.trim_tip_over_skin && skin != nullptr)
-    tip_skin_grid = std::make_unique<const SkinGrid>(*skin, o.tip_skin, field.origin(),
+  std::optional<SkinViews> tip_views;
+  if (o.trim_tip_over_skin && skin != nullptr) {
+    tip_views = skin->Grown(o.tip_skin_margin_px);
+    tip_skin_grid = std::make_unique<const SkinGrid>(*tip_views, o.tip_skin, field.origin(),
                                                      field.size(), field.voxel_mm());
+  }
   const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) -> size_t {
     if (!tip_skin_grid) return 0;
     size_t keep = strand.size();

@@ -97,6 +97,12 @@ struct StrandGrowthOptions {
   // keeps its length. false turns it off.
   bool trim_tip_over_skin = true;
   SkinViewOptions tip_skin{2, 0.1};
+  // The tip test counts a view's skin grown by this many pixels
+  // (SkinViews::Grown): the segmentation's hair reaches a few pixels past the
+  // hair's edge where its texture window straddles it, and a tip that ran on
+  // along that edge, or past the end of sparse hair, is seen against hair
+  // there. 0 tests the skin as labelled.
+  int tip_skin_margin_px = 2;
   // Bao & Qi growth only: past the seen strands a curly strand carries its
   // curl on as a helix about the field's direction (helix_continuation.h);
   // false grows it along the field alone (the paper; docs/accuracy.md

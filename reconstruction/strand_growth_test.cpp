@@ -398,6 +398,9 @@ TEST(ReconstructionOptions, CheckNamesTheBadField) {
     o.growth.step_mm = 0;
     EXPECT_TRUE(IsInvalidNaming(o.Check(), "growth: strand step_mm"));
     o = StrandReconstructionOptions{};
+    o.growth.tip_skin_margin_px = -1;
+    EXPECT_TRUE(IsInvalidNaming(o.Check(), "tip_skin_margin_px"));
+    o = StrandReconstructionOptions{};
     o.wisps.spacing_mm = -1;
     EXPECT_TRUE(IsInvalidNaming(o.Check(), "wisps: wisp spacing_mm"));
   }
