@@ -86,7 +86,6 @@ class SkinViews {
   // A copy whose skin masks are grown by `px` pixels (a (2 px + 1) square):
   // a point that projects within px of a view's skin counts as over it.
   SkinViews Grown(int px) const;
-  bool OverScalp(const Eigen::Vector3d& p_object) const;
 
   int views_loaded() const { return static_cast<int>(views_.size()); }
   int views_missing() const { return missing_; }
@@ -102,6 +101,8 @@ class SkinViews {
   int missing_ = 0;
   const HeadModel* scalp_head_ = nullptr;
   double scalp_band_mm_ = 0;
+  // Above scalp_head_'s hairline and within scalp_band_mm_ of it (ExcludeScalp).
+  bool OverScalp(const Eigen::Vector3d& p_object) const;
 };
 
 // SkinViews::OverSkin answered once per cell of a regular grid, at the cell's
