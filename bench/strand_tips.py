@@ -7,9 +7,9 @@ For each file (hairrig's strand PLY, core/strand_io.h: vertices x y z in mm,
 then one ushort segment count per strand), prints the median length along the
 strand, the median drop (root height minus tip height, z up), the median
 length over the root-to-tip chord (1 for a straight strand, about 2 for
-curls) and the 10th / 50th / 90th percentile of the tips' height, and the median length of the strands rooted in
-the top, middle and bottom third of the roots' height span. Give a
-reconstruction's strands.ply and the capture's
+curls), the 10th / 50th / 90th percentile of the tips' height, and the median
+length of the strands rooted in the top, middle and bottom third of the
+roots' height span. Give a reconstruction's strands.ply and the capture's
 ground_truth/ground_truth_strands.ply to see whether strands end where the
 true ones do.
 """

@@ -283,6 +283,16 @@ TEST(GrowStrandsInField, StrandsEndInFrontOfTheSkinTheViewsSee) {
   std::printf("lowest strand end with the tips trimmed alone: %.1f mm\n", trimmed_end);
   EXPECT_GT(trimmed_end, fringe_end - 10) << "a tip over the face was kept";
   EXPECT_EQ(trimmed.tips_trimmed_over_skin, static_cast<int64_t>(roots.size()));
+  // The tip test's margin (the views' skin grown by 2 px by default,
+  // StrandGrowthOptions::tip_skin_margin_px) trims the tips further back, up
+  // into the fringe, than the labels as they are.
+  options.tip_skin_margin_px = 0;
+  StrandGrowthSummary at_labels_summary;
+  const double at_labels = lowest_end(&skin, &at_labels_summary);
+  std::printf("lowest strand end with the tips trimmed alone, the labels as they are: %.1f mm\n",
+              at_labels);
+  // Measured: 353.6 mm at the labels, 359.6 mm with the 2 px margin.
+  EXPECT_GT(trimmed_end, at_labels + 3) << "the margin did not reach the tip test";
 }
 
 }  // namespace
