@@ -12,6 +12,8 @@
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
+//       [--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM]
+//       [--cover-graft-radius MM]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -22,6 +24,9 @@
 // --scalp-skin-band MM: skin seen behind a vertex above the hairline and within
 // MM of the head is the scalp showing through the hair, not bare skin
 // (SkinViews::ExcludeScalp; 12 as the reconstruction, 0 counts it as skin).
+// --cover-segments no grows the strands from the scalp's roots alone (Bao &
+// Qi), without the strands through the seen strands they leave uncovered
+// (SegmentCoverOptions in strand_growth.h).
 // --skin-labels truth gives the growth's skin tests (end over skin, tips trimmed
 // back) the simulated rig's true labels in place of the segmentation's: their
 // ceiling.
@@ -83,6 +88,8 @@ int main(int argc, char** argv) {
         "[--voxel MM] [--follow-radius MM] [--follow-weight W] [--end-over-skin yes|no] "
         "[--skin-min-share S] [--skin-min-views N] [--trim-tips-over-skin yes|no] "
         "[--scalp-skin-band MM] [--tip-skin-margin PX] "
+        "[--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM] "
+        "[--cover-graft-radius MM] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -135,6 +142,14 @@ int main(int argc, char** argv) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.direction.share_overlaps)) return 2;
     } else if (std::strcmp(argv[i], "--follow-radius") == 0) {
       options.growth.follow_radius_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--cover-segments") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.cover.enabled)) return 2;
+    } else if (std::strcmp(argv[i], "--cover-min-uncovered") == 0) {
+      options.growth.cover.min_uncovered_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--cover-graft-radius") == 0) {
+      options.growth.cover.graft_radius_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--cover-radius") == 0) {
+      options.growth.cover.coverage.radius_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--follow-weight") == 0) {
       options.growth.follow_weight = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--voxel") == 0) {

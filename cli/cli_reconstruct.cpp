@@ -28,6 +28,7 @@ struct ReconstructArgs {
   std::string end_over_skin = StrandGrowthOptions{}.end_over_skin ? "yes" : "no";
   std::string trim_tips_over_skin = StrandGrowthOptions{}.trim_tip_over_skin ? "yes" : "no";
   std::string helix_continuation = StrandGrowthOptions{}.helix_continuation ? "yes" : "no";
+  std::string cover_segments = SegmentCoverOptions{}.enabled ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -96,6 +97,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.growth.end_over_skin = a.end_over_skin == "yes";
   options.strands.growth.trim_tip_over_skin = a.trim_tips_over_skin == "yes";
   options.strands.growth.helix_continuation = a.helix_continuation == "yes";
+  options.strands.growth.cover.enabled = a.cover_segments == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -153,6 +155,12 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_option("--helix-continuation", args->helix_continuation,
                   "bao-qi: past the seen strands, carry a curly strand's curl on as a helix about "
                   "the field (yes), or grow it along the field alone as Bao and Qi (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--cover-segments", args->cover_segments,
+                  "bao-qi: give the seen strands no strand from the roots passes along a strand "
+                  "of their own, traced back to the scalp (yes), or grow from the roots alone as "
+                  "Bao and Qi (no)")
       ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,

@@ -3,16 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <random>
 
 #include "core/parallel.h"
+#include "reconstruction/segment_coverage.h"
 
 namespace hairrig {
 
 namespace {
 
-enum class End { kVolume, kLength, kOffHair, kOverSkin };
+enum class End { kVolume, kLength, kOffHair, kOverSkin, kRoot };
 
 // What a step decided besides the next direction.
 struct StepStop {
@@ -20,8 +22,34 @@ struct StepStop {
   int drop_last = 0;       // vertices at the strand's end to drop when it stops
 };
 
-// Grows every root's strand with `step(previous vertex, previous direction,
-// &next direction, &stop) -> false to stop`, in parallel, in root order; then
+// Grows one strand from `p` (already its last vertex) in `direction` with
+// `step(previous vertex, previous direction, &next direction, &stop) -> false
+// to stop`, for at most `max_steps` steps; returns why it stopped.
+template <typename Step>
+End GrowFrom(Eigen::Vector3f p, Eigen::Vector3f direction, int max_steps, Step& step,
+             const HeadModel* head, const StrandGrowthOptions& o,
+             std::vector<Eigen::Vector3f>* strand) {
+  for (int i = 0; i < max_steps; ++i) {
+    Eigen::Vector3f next = direction;
+    StepStop stop;
+    if (!step(p, direction, &next, &stop)) {
+      strand->resize(strand->size() - std::min<size_t>(strand->size() - 1, stop.drop_last));
+      return stop.end;
+    }
+    p += next * static_cast<float>(o.step_mm);
+    if (head != nullptr) p = head->KeepOutside(p.cast<double>(), o.head_clearance_mm).cast<float>();
+    strand->push_back(p);
+    direction = next;
+  }
+  return End::kLength;
+}
+
+int MaxSteps(const StrandGrowthOptions& o, double length_mm) {
+  return static_cast<int>(length_mm / o.step_mm);
+}
+
+// Grows every root's strand with a fresh `make_step()` (a step may keep state
+// along its strand; see GrowFrom), in parallel, in root order; then
 // `trim_tip(strand) -> vertices dropped` shortens each grown strand at its tip.
 template <typename MakeStep, typename TrimTip>
 StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
@@ -30,27 +58,13 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
   std::vector<std::vector<Eigen::Vector3f>> strands(roots.size());
   std::vector<End> ends(roots.size(), End::kLength);
   std::vector<uint8_t> trimmed(roots.size(), 0);
-  const int max_steps = static_cast<int>(o.max_length_mm / o.step_mm);
   ParallelFor(roots.size(), o.threads, [&] {
     return [&](size_t r) {
-      auto step = make_step();  // per strand: a step may keep state along its strand
+      auto step = make_step();
       std::vector<Eigen::Vector3f>& strand = strands[r];
-      Eigen::Vector3f p = roots[r].position_mm, direction = roots[r].direction;
-      strand.push_back(p);
-      for (int i = 0; i < max_steps; ++i) {
-        Eigen::Vector3f next = direction;
-        StepStop stop;
-        if (!step(p, direction, &next, &stop)) {
-          ends[r] = stop.end;
-          strand.resize(strand.size() - std::min<size_t>(strand.size() - 1, stop.drop_last));
-          break;
-        }
-        p += next * static_cast<float>(o.step_mm);
-        if (head != nullptr)
-          p = head->KeepOutside(p.cast<double>(), o.head_clearance_mm).cast<float>();
-        strand.push_back(p);
-        direction = next;
-      }
+      strand.push_back(roots[r].position_mm);
+      ends[r] = GrowFrom(roots[r].position_mm, roots[r].direction, MaxSteps(o, o.max_length_mm),
+                         step, head, o, &strand);
       trimmed[r] = trim_tip(strand) > 0;
     };
   });
@@ -148,83 +162,284 @@ Status StrandGrowthOptions::Check() const {
     return InvalidArgument(
         "strand tip_skin_margin_px must lie in 0..20 (0 tests the skin as labelled)");
   HR_RETURN_IF_ERROR(skin.Check());
+  HR_RETURN_IF_ERROR(cover.Check());
   return tip_skin.Check();
+}
+
+Status SegmentCoverOptions::Check() const {
+  if (!(coverage.radius_mm > 0 && coverage.radius_mm <= 10))
+    return InvalidArgument("strand cover radius_mm must lie in (0, 10]");
+  if (!(coverage.max_angle_deg > 0 && coverage.max_angle_deg <= 90))
+    return InvalidArgument("strand cover max_angle_deg must lie in (0, 90]");
+  if (!(min_uncovered_mm > 0))
+    return InvalidArgument("strand cover min_uncovered_mm must be positive");
+  if (!(root_reach_mm > 0)) return InvalidArgument("strand cover root_reach_mm must be positive");
+  if (!(graft_radius_mm >= 0 && graft_radius_mm <= 20))
+    return InvalidArgument("strand cover graft_radius_mm must lie in [0, 20] (0: no graft)");
+  if (!(graft_max_angle_deg > 0 && graft_max_angle_deg <= 90))
+    return InvalidArgument("strand cover graft_max_angle_deg must lie in (0, 90]");
+  return Status::Ok();
+}
+
+// The skin tests of a growth in the field, once per voxel of the field's
+// grid: a strand's every step asks them, and projecting into every view each
+// time doubles the growth's time.
+struct FieldGrowth::Skin {
+  std::unique_ptr<const SkinGrid> ends;  // end_over_skin
+  std::optional<SkinViews> tip_views;    // the views' skin grown by tip_skin_margin_px
+  std::unique_ptr<const SkinGrid> tips;  // trim_tip_over_skin
+};
+
+// Eq. 2's step in the hybrid field for one strand (it keeps the strand's
+// off-hair run and helix), walking root to tip, or tip to root with
+// `towards_root` (every directed term of H reversed; the strand then stops at
+// the scalp: End::kRoot).
+class FieldGrowth::Step {
+ public:
+  Step(const FieldGrowth& growth, bool towards_root)
+      : g_(growth),
+        sign_(towards_root ? -1.f : 1.f),
+        off_hair_(growth.o_),
+        helix_(growth.o_.helix, growth.o_.step_mm) {}
+
+  bool operator()(const Eigen::Vector3f& p, const Eigen::Vector3f& previous, Eigen::Vector3f* next,
+                  StepStop* stop) {
+    const StrandGrowthOptions& o = g_.o_;
+    const HybridOrientationField& field = g_.field_;
+    if (sign_ < 0 && AtScalp(p)) {
+      stop->end = End::kRoot;
+      return false;
+    }
+    if (!field.Contains(p) || field.Distance(p) > o.volume_bound) {
+      stop->end = End::kVolume;
+      return false;
+    }
+    if (o.max_off_hair_mm > 0 && off_hair_.Ended(field.SegmentDistance(p), &stop->drop_last)) {
+      stop->end = End::kOffHair;
+      return false;
+    }
+    if (g_.skin_->ends && g_.skin_->ends->OverSkin(p)) {
+      stop->end = End::kOverSkin;
+      stop->drop_last = 1;
+      return false;
+    }
+    // Eq. 1 with the paper's dynamic weights (Sec. IV-B); on a helix carried
+    // on, about the axis the field gave the step before.
+    const Eigen::Vector3f& way = continuing_ ? axis_ : previous;
+    const Eigen::Vector3f field_way = sign_ * way;  // the field's own (root to tip) sense
+    const double d_s = field.RibbonDistance(p);
+    double a_s = 0, a_i = 100 * d_s;
+    if (d_s < o.surface_threshold_mm) a_s = 100 - d_s, a_i = 0.1;
+    const double a_d = 0.1 * a_i, a_g = 10;
+    Eigen::Vector3f h = sign_ * static_cast<float>(a_i) * field.Interior(p, field_way) -
+                        static_cast<float>(a_d) * field.DistanceGradient(p) +
+                        static_cast<float>(a_g) * way;
+    if (a_s > 0) h += sign_ * static_cast<float>(a_s) * field.Surface(p, field_way);
+    // The seen strand at p itself, where one runs within follow_radius_mm
+    // in about the strand's direction (StrandGrowthOptions).
+    Eigen::Vector3f seen;
+    const bool following = o.follow_radius_mm > 0 &&
+                           field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
+                           sign_ * seen.dot(previous) > 0.5f;
+    if (following) h += sign_ * static_cast<float>(o.follow_weight) * seen;
+    if (h.norm() < 1e-6f) return true;  // keeps the previous direction
+    *next = h.normalized();
+    if (!o.helix_continuation) return true;
+    continuing_ = false;
+    if (following) {
+      helix_.Follow(*next);
+    } else {
+      axis_ = *next;
+      continuing_ = helix_.Continue(previous, axis_, next);
+    }
+    return true;
+  }
+
+ private:
+  bool AtScalp(const Eigen::Vector3f& p) const {
+    if (g_.head_ == nullptr) return false;
+    const Eigen::Vector3d q = p.cast<double>();
+    Eigen::Vector3d outward;
+    return g_.head_->SignedDistance(q, &outward) <= g_.o_.cover.root_reach_mm &&
+           g_.head_->OnScalp(q);
+  }
+
+  const FieldGrowth& g_;
+  float sign_;
+  OffHairRun off_hair_;
+  HelixContinuation helix_;
+  Eigen::Vector3f axis_ = Eigen::Vector3f::Zero();
+  bool continuing_ = false;
+};
+
+FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
+                         const StrandGrowthOptions& options, const SkinViews* skin)
+    : field_(field), head_(head), o_(options), skin_(std::make_unique<Skin>()) {
+  if (o_.end_over_skin && skin != nullptr)
+    skin_->ends = std::make_unique<const SkinGrid>(*skin, o_.skin, field.origin(), field.size(),
+                                                   field.voxel_mm());
+  if (o_.trim_tip_over_skin && skin != nullptr) {
+    skin_->tip_views = skin->Grown(o_.tip_skin_margin_px);
+    skin_->tips = std::make_unique<const SkinGrid>(*skin_->tip_views, o_.tip_skin, field.origin(),
+                                                   field.size(), field.voxel_mm());
+  }
+}
+
+FieldGrowth::~FieldGrowth() = default;
+
+size_t FieldGrowth::TrimTip(std::vector<Eigen::Vector3f>* strand) const {
+  if (!skin_->tips) return 0;
+  size_t keep = strand->size();
+  while (keep > 1 && skin_->tips->OverSkin((*strand)[keep - 1])) --keep;
+  const size_t dropped = strand->size() - keep;
+  strand->resize(keep);
+  return dropped;
+}
+
+StrandSet FieldGrowth::FromRoots(const std::vector<DirectedRoot>& roots,
+                                 StrandGrowthSummary* summary) const {
+  const auto make_step = [&] { return Step(*this, false); };
+  const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) { return TrimTip(&strand); };
+  return GrowAll(roots, head_, o_, make_step, trim_tip, summary);
+}
+
+std::optional<std::vector<Eigen::Vector3f>> FieldGrowth::FromScalpTo(
+    const StrandSegment& segment, const StrandSet& strands, const std::vector<size_t>& offsets,
+    const StrandCoverage& coverage, bool* grafted) const {
+  const std::vector<Eigen::Vector3f>& seen = segment.points_mm;
+  const Eigen::Vector3f tangent = PolylineTangent(seen.data(), seen.size(), 0);
+  if (skin_->ends && skin_->ends->OverSkin(seen.front())) return std::nullopt;
+  std::vector<Eigen::Vector3f> back = {seen.front()};
+  Step to_root(*this, true);
+  if (GrowFrom(seen.front(), -tangent, MaxSteps(o_, o_.max_length_mm - segment.Length()), to_root,
+               head_, o_, &back) == End::kRoot) {
+    *grafted = false;
+    return std::vector<Eigen::Vector3f>(back.rbegin(), back.rend());
+  }
+  const SegmentCoverOptions& c = o_.cover;
+  if (c.graft_radius_mm <= 0) return std::nullopt;
+  const StrandCoverage::Vertex graft = coverage.Nearest(
+      seen.front(), tangent, c.graft_radius_mm, std::cos(c.graft_max_angle_deg * M_PI / 180.0));
+  if (graft.strand < 0) return std::nullopt;
+  *grafted = true;
+  // The strand is left as far before its nearest vertex as that lies from the
+  // segment, so the bridge turns by about 45 deg at most over a gap square to the hair.
+  const auto first = strands.points_mm.begin() + static_cast<ptrdiff_t>(offsets[graft.strand]);
+  const float gap_beside = (first[graft.vertex] - seen.front()).norm();
+  const int leave = std::max(
+      0, graft.vertex - static_cast<int>(std::ceil(gap_beside / static_cast<float>(o_.step_mm))));
+  std::vector<Eigen::Vector3f> path(first, first + leave + 1);
+  // A cubic Hermite bridge from there, in its strand's direction, to the
+  // segment's first vertex, in the segment's: no kink at either end.
+  const Eigen::Vector3f from = path.back(), to = seen.front();
+  const float gap = (to - from).norm();
+  const Eigen::Vector3f from_tangent =
+      gap * PolylineTangent(&*first, offsets[graft.strand + 1] - offsets[graft.strand],
+                            static_cast<size_t>(leave));
+  const Eigen::Vector3f to_tangent = gap * tangent;
+  if (gap < 1e-3f) path.pop_back();  // the segment starts there
+  const int pieces = static_cast<int>(std::ceil(gap / o_.step_mm));
+  for (int i = 1; i < pieces; ++i) {
+    const float t = static_cast<float>(i) / static_cast<float>(pieces), t2 = t * t, t3 = t2 * t;
+    path.push_back((2 * t3 - 3 * t2 + 1) * from + (t3 - 2 * t2 + t) * from_tangent +
+                   (-2 * t3 + 3 * t2) * to + (t3 - t2) * to_tangent);
+    // The bridge crosses no skin the views see, as no grown strand does.
+    if (skin_->ends && skin_->ends->OverSkin(path.back())) return std::nullopt;
+  }
+  return path;
+}
+
+std::optional<std::vector<Eigen::Vector3f>> FieldGrowth::ThroughSegment(
+    const StrandSegment& segment, const StrandSet& strands, const std::vector<size_t>& offsets,
+    const StrandCoverage& coverage, bool* grafted) const {
+  auto strand = FromScalpTo(segment, strands, offsets, coverage, grafted);
+  if (!strand) return std::nullopt;
+  const std::vector<Eigen::Vector3f>& seen = segment.points_mm;
+  strand->insert(strand->end(), seen.begin() + (*grafted ? 0 : 1), seen.end());
+  // On from the segment's tip end as any strand grows.
+  const double length_mm = StrandSegment{*strand}.Length();
+  Step to_tip(*this, false);
+  GrowFrom(seen.back(), PolylineTangent(seen.data(), seen.size(), seen.size() - 1),
+           MaxSteps(o_, o_.max_length_mm - length_mm), to_tip, head_, o_, &*strand);
+  TrimTip(&*strand);
+  return strand;
+}
+
+void FieldGrowth::ThroughUncoveredSegments(const std::vector<StrandSegment>& segments,
+                                           StrandSet* strands, StrandGrowthSummary* summary) const {
+  const SegmentCoverOptions& c = o_.cover;
+  if (!c.enabled || head_ == nullptr) return;
+  StrandCoverage coverage(c.coverage);
+  coverage.Add(*strands);
+  // The candidates, most uncovered first; a strand added for one may cover the next.
+  std::vector<double> uncovered(segments.size());
+  ParallelFor(segments.size(), o_.threads, [&] {
+    return [&](size_t k) { uncovered[k] = coverage.UncoveredLengthMm(segments[k]); };
+  });
+  std::vector<size_t> order;
+  for (size_t k = 0; k < segments.size(); ++k)
+    if (uncovered[k] >= c.min_uncovered_mm) order.push_back(k);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return uncovered[a] > uncovered[b]; });
+  StrandGrowthSummary local;
+  StrandGrowthSummary& s = summary != nullptr ? *summary : local;
+  s.cover_candidates = static_cast<int64_t>(order.size());
+  std::vector<size_t> offsets = strands->Offsets();
+  const auto still_uncovered = [&](size_t k) {
+    return coverage.UncoveredLengthMm(segments[k]) >= c.min_uncovered_mm;
+  };
+  // Batches of candidates grow in parallel against the cover as it stood
+  // before the batch, then are added in order, each only if the strands added
+  // before it still leave it uncovered: the same strands on any thread count.
+  constexpr size_t kBatch = 64;
+  for (size_t begin = 0; begin < order.size(); begin += kBatch) {
+    const size_t count = std::min(kBatch, order.size() - begin);
+    std::vector<std::optional<std::vector<Eigen::Vector3f>>> grown(count);
+    std::vector<uint8_t> tried(count, 0), grafted(count, 0);
+    ParallelFor(count, o_.threads, [&] {
+      return [&](size_t i) {
+        const size_t k = order[begin + i];
+        if (!still_uncovered(k)) return;
+        tried[i] = 1;
+        bool g = false;
+        grown[i] = ThroughSegment(segments[k], *strands, offsets, coverage, &g);
+        grafted[i] = g;
+      };
+    });
+    bool added = false;
+    for (size_t i = 0; i < count; ++i) {
+      const size_t k = order[begin + i];
+      if (!tried[i] || (added && !still_uncovered(k))) continue;
+      if (!grown[i] && added) {  // a strand added since may be near enough to graft on
+        bool g = false;
+        grown[i] = ThroughSegment(segments[k], *strands, offsets, coverage, &g);
+        grafted[i] = g;
+      }
+      if (!grown[i]) {
+        ++s.cover_no_root;
+        continue;
+      }
+      added = true;
+      coverage.Add(*grown[i]);
+      strands->AddStrand(*grown[i]);
+      offsets.push_back(strands->num_points());
+      ++s.cover_strands;
+      s.cover_grafted += grafted[i];
+    }
+  }
+  const std::vector<double> lengths = strands->StrandLengths();
+  s.strands = static_cast<int64_t>(strands->num_strands());
+  s.vertices = static_cast<int64_t>(strands->num_points());
+  s.mean_length_mm = lengths.empty() ? 0
+                                     : std::accumulate(lengths.begin(), lengths.end(), 0.0) /
+                                           static_cast<double>(lengths.size());
 }
 
 StrandSet GrowStrandsInField(const HybridOrientationField& field,
                              const std::vector<DirectedRoot>& roots, const HeadModel* head,
                              const StrandGrowthOptions& o, StrandGrowthSummary* summary,
                              const SkinViews* skin) {
-  // The skin test once per voxel of the field's grid: a strand's every step
-  // asks it, and projecting into every view each time doubles the growth's time.
-  std::unique_ptr<const SkinGrid> skin_grid, tip_skin_grid;
-  if (o.end_over_skin && skin != nullptr)
-    skin_grid = std::make_unique<const SkinGrid>(*skin, o.skin, field.origin(), field.size(),
-                                                 field.voxel_mm());
-  std::optional<SkinViews> tip_views;
-  if (o.trim_tip_over_skin && skin != nullptr) {
-    tip_views = skin->Grown(o.tip_skin_margin_px);
-    tip_skin_grid = std::make_unique<const SkinGrid>(*tip_views, o.tip_skin, field.origin(),
-                                                     field.size(), field.voxel_mm());
-  }
-  const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) -> size_t {
-    if (!tip_skin_grid) return 0;
-    size_t keep = strand.size();
-    while (keep > 1 && tip_skin_grid->OverSkin(strand[keep - 1])) --keep;
-    const size_t dropped = strand.size() - keep;
-    strand.resize(keep);
-    return dropped;
-  };
-  const auto make_step = [&] {
-    return [&, off_hair = OffHairRun(o), helix = HelixContinuation(o.helix, o.step_mm),
-            axis = Eigen::Vector3f(),
-            continuing = false](const Eigen::Vector3f& p, const Eigen::Vector3f& previous,
-                                Eigen::Vector3f* next, StepStop* stop) mutable {
-      if (!field.Contains(p) || field.Distance(p) > o.volume_bound) {
-        stop->end = End::kVolume;
-        return false;
-      }
-      if (o.max_off_hair_mm > 0 && off_hair.Ended(field.SegmentDistance(p), &stop->drop_last)) {
-        stop->end = End::kOffHair;
-        return false;
-      }
-      if (skin_grid && skin_grid->OverSkin(p)) {
-        stop->end = End::kOverSkin;
-        stop->drop_last = 1;
-        return false;
-      }
-      // Eq. 1 with the paper's dynamic weights (Sec. IV-B); on a helix carried
-      // on, about the axis the field gave the step before.
-      const Eigen::Vector3f& way = continuing ? axis : previous;
-      const double d_s = field.RibbonDistance(p);
-      double a_s = 0, a_i = 100 * d_s;
-      if (d_s < o.surface_threshold_mm) a_s = 100 - d_s, a_i = 0.1;
-      const double a_d = 0.1 * a_i, a_g = 10;
-      Eigen::Vector3f h = static_cast<float>(a_i) * field.Interior(p, way) -
-                          static_cast<float>(a_d) * field.DistanceGradient(p) +
-                          static_cast<float>(a_g) * way;
-      if (a_s > 0) h += static_cast<float>(a_s) * field.Surface(p, way);
-      // The seen strand at p itself, where one runs within follow_radius_mm
-      // in about the strand's direction (StrandGrowthOptions).
-      Eigen::Vector3f seen;
-      const bool following = o.follow_radius_mm > 0 &&
-                             field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
-                             seen.dot(previous) > 0.5f;
-      if (following) h += static_cast<float>(o.follow_weight) * seen;
-      if (h.norm() < 1e-6f) return true;  // keeps the previous direction
-      *next = h.normalized();
-      if (!o.helix_continuation) return true;
-      continuing = false;
-      if (following) {
-        helix.Follow(*next);
-      } else {
-        axis = *next;
-        continuing = helix.Continue(previous, axis, next);
-      }
-      return true;
-    };
-  };
-  return GrowAll(roots, head, o, make_step, trim_tip, summary);
+  return FieldGrowth(field, head, o, skin).FromRoots(roots, summary);
 }
 
 StrandSet GrowStrandsAlongPoints(const PointOrientationField& points,

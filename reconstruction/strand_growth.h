@@ -28,6 +28,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/head_model.h"
@@ -35,6 +37,7 @@
 #include "core/strands.h"
 #include "reconstruction/helix_continuation.h"
 #include "reconstruction/hybrid_field.h"
+#include "reconstruction/segment_coverage.h"
 #include "reconstruction/skin_views.h"
 #include "reconstruction/strand_segments.h"
 
@@ -59,6 +62,33 @@ Eigen::Vector3d RootDirection(const Eigen::Vector3d& normal, const Eigen::Vector
 // at its normal; deterministic for a seed.
 std::vector<DirectedRoot> SampleScalpRoots(const HeadModel& head, int count, uint64_t seed,
                                            double elevation_deg, const Eigen::Vector3d& down);
+
+// Strands through the seen strands that the strands grown from the scalp
+// leave uncovered (FieldGrowth::ThroughUncoveredSegments). Roots spread
+// uniformly over the scalp follow the field and the seen strands near them,
+// and neighbouring strands gather on the same seen strands: on tight curls the
+// strands grown from 20,000 roots pass along about two thirds of what the
+// segments themselves recover of the visible hair. A segment with at least
+// min_uncovered_mm uncovered (segment_coverage.h) gets a strand of its own:
+// traced from the segment's root end back through the field to the scalp
+// (a scalp point within root_reach_mm), then the segment, then grown on from
+// its tip end as every strand is. A segment the trace does not bring back to
+// the scalp (on curls most such traces reach the face or temples below the
+// hairline, where the views see skin) is grafted instead on the strand whose
+// vertex lies nearest its root end, within graft_radius_mm and
+// graft_max_angle_deg of its direction: the strand comes the way its
+// neighbour came, then bends smoothly onto the seen strand. A segment that starts in front
+// of skin the views see, or whose bridge would cross it, gets none. Not in Bao & Qi; `enabled =
+// false` is the paper's growth.
+struct SegmentCoverOptions {
+  bool enabled = true;
+  CoverageOptions coverage;
+  double min_uncovered_mm = 5;
+  double root_reach_mm = 1.5;
+  double graft_radius_mm = 8;
+  double graft_max_angle_deg = 60;
+  Status Check() const;
+};
 
 struct StrandGrowthOptions {
   double step_mm = 1.0;  // delta of Eq. 2
@@ -109,6 +139,7 @@ struct StrandGrowthOptions {
   // compares the two).
   bool helix_continuation = true;
   HelixContinuationOptions helix;
+  SegmentCoverOptions cover;  // Bao & Qi growth only
   int threads = 2;
 
   Status Check() const;
@@ -119,11 +150,64 @@ struct StrandGrowthSummary {
   int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, stopped_over_skin = 0,
           dropped_short = 0;
   int64_t tips_trimmed_over_skin = 0;  // kept strands whose tip trim_tip_over_skin shortened
+  // SegmentCoverOptions: segments uncovered after the growth from the roots;
+  // strands added through them (counted in `strands`); segments whose trace
+  // back did not reach the scalp and that no strand passed near; of the strands
+  // added, those grafted on another strand.
+  int64_t cover_candidates = 0, cover_strands = 0, cover_no_root = 0, cover_grafted = 0;
   double mean_length_mm = 0;
 };
 
-// Bao & Qi Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
-// `skin` (may be null: no skin test) in the field's frame.
+// Bao & Qi's growth in a hybrid field. `head` (may be null: no head, no
+// strands through segments) and `skin` (may be null: no skin test) in the
+// field's frame; all three and `options` must outlive the object.
+class FieldGrowth {
+ public:
+  FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
+              const StrandGrowthOptions& options, const SkinViews* skin);
+  ~FieldGrowth();
+
+  // Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
+  StrandSet FromRoots(const std::vector<DirectedRoot>& roots, StrandGrowthSummary* summary) const;
+  // Appends to *strands a strand through every segment (root to tip, as
+  // strand_direction.h directs them) that *strands leave uncovered
+  // (SegmentCoverOptions), most uncovered first, and updates the summary's
+  // counts and mean length for the whole set. Nothing without a head or with
+  // the option off.
+  void ThroughUncoveredSegments(const std::vector<StrandSegment>& segments, StrandSet* strands,
+                                StrandGrowthSummary* summary) const;
+
+ private:
+  struct Skin;
+  class Step;
+  // The strand through one segment (see SegmentCoverOptions); nullopt when
+  // it has none. `strands` with their `offsets` (StrandSet::Offsets) are the
+  // strands `coverage` holds.
+  std::optional<std::vector<Eigen::Vector3f>> ThroughSegment(const StrandSegment& segment,
+                                                             const StrandSet& strands,
+                                                             const std::vector<size_t>& offsets,
+                                                             const StrandCoverage& coverage,
+                                                             bool* grafted) const;
+  // The strand's path from the scalp to the segment's root end (root first),
+  // traced back through the field or else grafted on a strand; *grafted says
+  // which. The traced path ends at the segment's first vertex; the grafted
+  // one is the strand up to the vertex it leaves, then a cubic Hermite bridge
+  // (step_mm apart) up to, not including, the segment's first vertex.
+  std::optional<std::vector<Eigen::Vector3f>> FromScalpTo(const StrandSegment& segment,
+                                                          const StrandSet& strands,
+                                                          const std::vector<size_t>& offsets,
+                                                          const StrandCoverage& coverage,
+                                                          bool* grafted) const;
+  // Drops the tip's vertices over skin (trim_tip_over_skin); returns how many.
+  size_t TrimTip(std::vector<Eigen::Vector3f>* strand) const;
+
+  const HybridOrientationField& field_;
+  const HeadModel* head_;
+  const StrandGrowthOptions& o_;
+  std::unique_ptr<Skin> skin_;
+};
+
+// FieldGrowth(field, head, options, skin).FromRoots(roots, summary).
 StrandSet GrowStrandsInField(const HybridOrientationField& field,
                              const std::vector<DirectedRoot>& roots, const HeadModel* head,
                              const StrandGrowthOptions& options,

@@ -333,6 +333,137 @@ TEST(GrowStrandsInField, StrandsFollowASeenStrandCloserThanTheGridAlone) {
   EXPECT_LT(following, 0.8 * field_only);
 }
 
+// Seen strands down the side of the default ellipsoid head (x > 0), 3 mm
+// apart, 1 mm off the skin: at y = -15 .. -3 from near the crown (z = 362) down to
+// z = 300, grown from roots at their tops; at y = 0 .. 12 from z = 334, below
+// the hairline (near z = 338 there), down, where no root is and no root's
+// strand passes.
+struct SideHairScene {
+  std::unique_ptr<HeadModel> head;
+  std::vector<StrandSegment> hair;  // the rooted half, then the other
+  std::vector<DirectedRoot> roots;
+  HybridOrientationField field;
+  std::vector<StrandSegment> Unrooted() const {
+    return std::vector<StrandSegment>(hair.begin() + static_cast<ptrdiff_t>(roots.size()),
+                                      hair.end());
+  }
+};
+
+StrandSegment DownTheSide(const HeadModel& head, double y, double z_top, double off_skin_mm) {
+  StrandSegment s;
+  for (double z = z_top; z >= 300; z -= 2) {
+    const double x = 78 * std::sqrt(std::max(0.0, 1 - std::pow((z - 250) / 115, 2)));
+    s.points_mm.push_back(head.KeepOutside({x, y, z}, off_skin_mm).cast<float>());
+  }
+  return s;
+}
+
+SideHairScene BuildSideHairScene() {
+  HeadSpec spec;
+  spec.scalp.defined = true;
+  SideHairScene scene;
+  scene.head = HeadModel::Build(spec).value();
+  for (double y = -15; y <= -3; y += 3) {
+    scene.hair.push_back(DownTheSide(*scene.head, y, 362, 1));
+    const std::vector<Eigen::Vector3f>& p = scene.hair.back().points_mm;
+    scene.roots.push_back({p[0], (p[1] - p[0]).normalized()});
+  }
+  for (double y = 0; y <= 12; y += 3) scene.hair.push_back(DownTheSide(*scene.head, y, 334, 1));
+  scene.field =
+      HybridOrientationField::Build(scene.hair, scene.roots, scene.head.get(), HybridFieldOptions{})
+          .value();
+  return scene;
+}
+
+// The farthest a vertex of `segment` lies from the nearest vertex of `strands` (mm).
+double FarthestMiss(const StrandSegment& segment, const StrandSet& strands) {
+  double farthest = 0;
+  for (const Eigen::Vector3f& v : segment.points_mm) {
+    double nearest = 1e9;
+    for (const Eigen::Vector3f& p : strands.points_mm)
+      nearest = std::min(nearest, double((p - v).norm()));
+    farthest = std::max(farthest, nearest);
+  }
+  return farthest;
+}
+
+StrandSet GrowAndCover(const SideHairScene& scene, const StrandGrowthOptions& options,
+                       StrandGrowthSummary* summary) {
+  const FieldGrowth growth(scene.field, scene.head.get(), options, nullptr);
+  StrandSet strands = growth.FromRoots(scene.roots, summary);
+  EXPECT_EQ(strands.num_strands(), scene.roots.size());
+  growth.ThroughUncoveredSegments(scene.hair, &strands, summary);
+  return strands;
+}
+
+TEST(FieldGrowth, SeenStrandsNoRootsStrandPassesAlongGetStrandsFromTheScalp) {
+  const SideHairScene scene = BuildSideHairScene();
+  StrandGrowthOptions options;
+  options.cover.enabled = false;
+  StrandGrowthSummary paper;
+  const StrandSet from_roots = GrowAndCover(scene, options, &paper);
+  EXPECT_EQ(paper.cover_strands, 0);
+  for (const StrandSegment& seen : scene.Unrooted())
+    EXPECT_GT(FarthestMiss(seen, from_roots), 2) << "not covered by the roots' strands";
+
+  options.cover.enabled = true;
+  StrandGrowthSummary covered;
+  const StrandSet strands = GrowAndCover(scene, options, &covered);
+  EXPECT_GE(covered.cover_strands - covered.cover_grafted, 3) << "most traced back to the scalp";
+  EXPECT_EQ(covered.cover_no_root, 0);
+  EXPECT_EQ(covered.strands, static_cast<int64_t>(strands.num_strands()));
+  for (const StrandSegment& seen : scene.Unrooted()) EXPECT_LT(FarthestMiss(seen, strands), 2);
+  options.threads = 1;
+  StrandGrowthSummary one_thread;
+  const StrandSet same = GrowAndCover(scene, options, &one_thread);
+  EXPECT_EQ(same.point_counts, strands.point_counts) << "the same strands on any thread count";
+  EXPECT_EQ(same.points_mm, strands.points_mm);
+  const std::vector<size_t> offsets = strands.Offsets();
+  for (size_t s = scene.roots.size(); s < strands.num_strands(); ++s) {
+    const Eigen::Vector3d root = strands.points_mm[offsets[s]].cast<double>();
+    Eigen::Vector3d outward;
+    EXPECT_LT(scene.head->SignedDistance(root, &outward), options.cover.root_reach_mm + 0.01)
+        << "strand " << s;
+    EXPECT_TRUE(scene.head->OnScalp(root)) << "strand " << s;
+    EXPECT_GT(root.z(), 336) << "strand " << s << " comes from above its seen strand's top";
+  }
+}
+
+TEST(FieldGrowth, ASeenStrandNoTraceBringsBackIsGraftedOnTheStrandBesideIt) {
+  const SideHairScene scene = BuildSideHairScene();
+  StrandGrowthOptions options;
+  // Nearer the head than the growth keeps vertices from it: no trace ends at the scalp.
+  options.cover.root_reach_mm = 0.5 * options.head_clearance_mm;
+  StrandGrowthSummary summary;
+  const StrandSet strands = GrowAndCover(scene, options, &summary);
+  EXPECT_GE(summary.cover_strands, 1);
+  EXPECT_EQ(summary.cover_grafted, summary.cover_strands);
+  for (const StrandSegment& seen : scene.Unrooted()) EXPECT_LT(FarthestMiss(seen, strands), 2);
+  double longest_seen_edge = 0;
+  for (const StrandSegment& seen : scene.hair)
+    for (size_t i = 1; i < seen.points_mm.size(); ++i)
+      longest_seen_edge =
+          std::max(longest_seen_edge, double((seen.points_mm[i] - seen.points_mm[i - 1]).norm()));
+  // Each leaves the scalp where a strand grown from a root does.
+  const std::vector<size_t> offsets = strands.Offsets();
+  for (size_t s = scene.roots.size(); s < strands.num_strands(); ++s) {
+    const Eigen::Vector3f& root = strands.points_mm[offsets[s]];
+    EXPECT_TRUE(std::any_of(scene.roots.begin(), scene.roots.end(),
+                            [&](const DirectedRoot& r) { return r.position_mm == root; }))
+        << "strand " << s;
+    // The bridge onto the seen strand, 3 mm beside the one grafted on, is
+    // no coarser than the seen strands' vertices and bends gently.
+    for (size_t i = offsets[s] + 1; i + 1 < offsets[s + 1]; ++i) {
+      const Eigen::Vector3f in = strands.points_mm[i] - strands.points_mm[i - 1],
+                            out = strands.points_mm[i + 1] - strands.points_mm[i];
+      EXPECT_LT(in.norm(), longest_seen_edge + 0.01)
+          << "strand " << s << " vertex " << i - offsets[s];
+      EXPECT_GT(in.normalized().dot(out.normalized()), std::cos(45 * M_PI / 180))
+          << "strand " << s << " vertex " << i - offsets[s];
+    }
+  }
+}
+
 TEST(StrandReconstructionOptions, RootElevationOutsideItsRangeIsRefused) {
   StrandReconstructionOptions options;
   for (const double elevation : {0.0, -10.0, 95.0, std::nan("")}) {

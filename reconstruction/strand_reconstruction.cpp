@@ -148,7 +148,9 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   StrandGrowthOptions growth = o.growth;
   growth.threads = o.threads;
   StrandModel model;
-  model.strands = GrowStrandsInField(field, roots, &head, growth, &summary->growth, skin);
+  const FieldGrowth grow(field, &head, growth, skin);
+  model.strands = grow.FromRoots(roots, &summary->growth);
+  grow.ThroughUncoveredSegments(segments, &model.strands, &summary->growth);
   summary->seconds_growth = SecondsSince(t);
   if (o.merging.run_mm > 0) {
     t = SteadyNowNs();
@@ -288,6 +290,11 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"stopped_where_hair_ends", growth.stopped_off_hair},
                         {"stopped_over_skin", growth.stopped_over_skin},
                         {"tips_trimmed_over_skin", growth.tips_trimmed_over_skin},
+                        {"through_uncovered_segments",
+                         {{"segments", growth.cover_candidates},
+                          {"strands", growth.cover_strands},
+                          {"grafted", growth.cover_grafted},
+                          {"no_root", growth.cover_no_root}}},
                         {"dropped_short", growth.dropped_short}}},
                       // EndMergedStrands after growth: "strands" counts what was grown.
                       {"merging",
@@ -336,6 +343,11 @@ std::string StrandReconstructionSummary::BriefReport() const {
   if (growth.stopped_over_skin + growth.tips_trimmed_over_skin > 0) {
     s << "  ended in front of skin the views see: " << growth.stopped_over_skin
       << " strands; tips trimmed back from skin: " << growth.tips_trimmed_over_skin << "\n";
+  }
+  if (growth.cover_candidates > 0) {
+    s << "  through seen strands the others missed: " << growth.cover_strands << " strands for "
+      << growth.cover_candidates << " uncovered segments (" << growth.cover_grafted
+      << " grafted on a strand nearby; " << growth.cover_no_root << " with no way to the scalp)\n";
   }
   if (merging.strands_ended + merging.strands_dropped > 0) {
     s << "  merged: " << merging.strands_ended
