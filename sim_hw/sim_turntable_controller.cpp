@@ -117,7 +117,8 @@ TurntableControllerStatus SimTurntableController::Poll() {
   s.target_deg = target_deg_;
   s.fault = fault_;
   const bool ok = fault_ == TurntableFaultCode::kNone;
-  s.in_position = ok && world_.SecondsToInPosition() <= 0;
+  // A safety event drawn for the move happens before it ends (SafetyEventPending).
+  s.in_position = ok && !world_.SafetyEventPending() && world_.SecondsToInPosition() <= 0;
   s.moving = ok && world_.MotionSecondsLeft() > 0;
   if (homing_ && s.in_position) {
     homed_ = true;

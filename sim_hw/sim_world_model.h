@@ -18,6 +18,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -166,9 +167,13 @@ class SimWorld {
   }
   // `after_s` device seconds from now, from another thread: presses the e-stop
   // (kEstop) or breaks the inputs' wiring (kInputLost), telling the lines'
-  // callbacks `true` either way.
+  // callbacks `true` either way. Until the callbacks have been told,
+  // SafetyEventPending() is true: the turntable's move it belongs to does not
+  // end before it (on a loaded machine the thread may wake well after
+  // `after_s`, while the rig would otherwise go on to the next stop's views).
   void ScheduleSafetyEvent(SimFaultKind kind, double after_s) {
     if (estop_timer_.joinable()) estop_timer_.join();
+    safety_event_pending_ = true;
     estop_timer_ = std::thread([this, kind, after_s] {
       SleepSim(after_s);
       if (kind == SimFaultKind::kInputLost) {
@@ -176,8 +181,10 @@ class SimWorld {
         inputs_lost_ = true;
       }
       NotifyInputs(true);
+      safety_event_pending_ = false;
     });
   }
+  bool SafetyEventPending() const { return safety_event_pending_; }
 
   // --- lights -----------------------------------------------------------
   Status SetLightLevel(const std::string& name, double level) {
@@ -266,6 +273,7 @@ class SimWorld {
   bool inputs_lost_ = false;
   bool input_active_ = false;
   std::thread estop_timer_;
+  std::atomic<bool> safety_event_pending_{false};
   std::unique_ptr<SimTurntableController> turntable_controller_;
   std::shared_ptr<const WorldTruthRecorder> truth_recorder_;
   mutable std::map<int, std::shared_ptr<const CachedRadiance>> radiance_cache_;
