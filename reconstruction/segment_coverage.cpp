@@ -42,7 +42,8 @@ void StrandCoverage::ForEachNear(const Eigen::Vector3f& p, double radius_mm, Vis
                                     static_cast<float>(dz));
         const auto cell = cells_.find(CellKey(q));
         if (cell == cells_.end()) continue;
-        for (const Entry& e : cell->second) visit(e);
+        for (const Entry& e : cell->second)
+          if (visit(e)) return;
       }
 }
 
@@ -57,7 +58,14 @@ void StrandCoverage::Add(const StrandSet& strands) {
 }
 
 bool StrandCoverage::Covers(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent) const {
-  return Nearest(p, tangent, radius_mm_, min_cos_).strand >= 0;
+  // Any vertex within reach will do: the first one found ends the search.
+  const float radius2 = static_cast<float>(radius_mm_ * radius_mm_);
+  bool covered = false;
+  ForEachNear(p, radius_mm_, [&](const Entry& e) {
+    covered = (e.position - p).squaredNorm() <= radius2 && e.tangent.dot(tangent) >= min_cos_;
+    return covered;
+  });
+  return covered;
 }
 
 StrandCoverage::Vertex StrandCoverage::Nearest(const Eigen::Vector3f& p,
@@ -68,6 +76,7 @@ StrandCoverage::Vertex StrandCoverage::Nearest(const Eigen::Vector3f& p,
   ForEachNear(p, radius_mm, [&](const Entry& e) {
     const float d2 = (e.position - p).squaredNorm();
     if (d2 <= best2 && e.tangent.dot(tangent) >= min_cos) best2 = d2, best = e.where;
+    return false;
   });
   return best;
 }

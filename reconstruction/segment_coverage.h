@@ -54,7 +54,8 @@ class StrandCoverage {
     Eigen::Vector3f position, tangent;
     Vertex where;
   };
-  // Calls visit(entry) for the entries in the cells within radius_mm of p.
+  // Calls visit(entry) for the entries in the cells within radius_mm of p,
+  // until it returns true.
   template <typename Visit>
   void ForEachNear(const Eigen::Vector3f& p, double radius_mm, Visit&& visit) const;
   void Add(const Eigen::Vector3f* points, size_t count);
