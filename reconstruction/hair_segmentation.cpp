@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -428,6 +429,76 @@ ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candi
   return step;
 }
 
+// The distance (grey levels) from colour `p` to the nearest non-negative mix
+// a c + b backdrop with a + b <= 1: `c` blended with the backdrop over a
+// pixel, in shade or not.
+double DistanceToBlend(const cv::Vec3d& p, const cv::Vec3d& c, const cv::Vec3d& backdrop) {
+  const auto residual = [&](double a, double b) { return cv::norm(p - a * c - b * backdrop); };
+  const auto unit = [](double t) { return std::clamp(t, 0.0, 1.0); };
+  // The least-squares mix, then the three edges of the allowed triangle.
+  const double cc = c.dot(c), bb = backdrop.dot(backdrop), cb = c.dot(backdrop);
+  const double pc = p.dot(c), pb = p.dot(backdrop), det = cc * bb - cb * cb;
+  double best = std::numeric_limits<double>::infinity();
+  if (det > 1e-9) {
+    const double a = (pc * bb - pb * cb) / det, b = (pb * cc - pc * cb) / det;
+    if (a >= 0 && b >= 0 && a + b <= 1) best = residual(a, b);
+  }
+  if (cc > 0) best = std::min(best, residual(unit(pc / cc), 0));
+  if (bb > 0) best = std::min(best, residual(0, unit(pb / bb)));
+  const cv::Vec3d d = c - backdrop;
+  const double dd = d.dot(d);
+  const double t = dd > 0 ? unit((p - backdrop).dot(d) / dd) : 0;
+  return std::min(best, residual(t, 1 - t));
+}
+
+// The colour of the pixels in `where` around each pixel (a Gaussian of
+// `sigma` px over them only) and their weight there (0 where none is near).
+struct LocalColour {
+  cv::Mat3f colour;
+  cv::Mat1f weight;
+};
+
+LocalColour LocalColourOf(const cv::Mat3f& bgr, const cv::Mat1b& where, double sigma) {
+  LocalColour out;
+  cv::Mat1f w;
+  where.convertTo(w, CV_32F, 1.0 / 255.0);
+  std::vector<cv::Mat1f> channels;
+  cv::split(bgr, channels);
+  for (cv::Mat1f& channel : channels) channel = BlurWithin(channel, w, sigma);
+  cv::merge(channels, out.colour);
+  cv::GaussianBlur(w, out.weight, cv::Size(), sigma);
+  return out;
+}
+
+// The hair pixels (working scale) that SegmentationOptions::outline_blend_sigmas
+// calls blends of skin with the backdrop along the foreground's outline.
+cv::Mat1b OutlineBlendsOfSkin(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
+                              const cv::Mat1b& hair, const BackdropModel& backdrop, double sigmas) {
+  constexpr double kLocalSigmaPx = 3, kMinWeight = 0.05;
+  const cv::Mat ellipse5 = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
+  cv::Mat1b near_backdrop, hair_core;
+  cv::dilate(Mask(candidates == 0), near_backdrop, ellipse5);
+  cv::erode(hair, hair_core, ellipse5);
+  cv::Mat3f colours;
+  bgr.convertTo(colours, CV_32F);
+  const LocalColour skin = LocalColourOf(colours, Mask(candidates & ~hair), kLocalSigmaPx);
+  const LocalColour hair_beside = LocalColourOf(colours, hair_core, kLocalSigmaPx);
+  const double tolerance = sigmas * std::max(backdrop.sigma, 2.0);
+  cv::Mat1b blends(hair.size(), uint8_t{0});
+  blends.forEach([&](uint8_t& out, const int* pos) {
+    const int y = pos[0], x = pos[1];
+    if (!hair(y, x) || !near_backdrop(y, x) || skin.weight(y, x) < kMinWeight) return;
+    const cv::Vec3d p(bgr(y, x)[0], bgr(y, x)[1], bgr(y, x)[2]);
+    const double to_skin = DistanceToBlend(p, cv::Vec3d(skin.colour(y, x)), backdrop.mean);
+    if (to_skin > tolerance) return;
+    if (hair_beside.weight(y, x) >= kMinWeight &&
+        DistanceToBlend(p, cv::Vec3d(hair_beside.colour(y, x)), backdrop.mean) <= to_skin)
+      return;
+    out = 255;
+  });
+  return blends;
+}
+
 // Hair against skin on the foreground (non-zero in `candidates`): the
 // material model's likelihood ratio, smoothed over a few pixels. Returns a
 // mask of hair, same size as `bgr`.
@@ -494,6 +565,8 @@ Status SegmentationOptions::Check() const {
   }
   if (!(min_hair_component_share >= 0 && min_hair_component_share < 1))
     return InvalidArgument("segmentation min_hair_component_share must be in [0, 1)");
+  if (!(outline_blend_sigmas >= 0))
+    return InvalidArgument("segmentation outline_blend_sigmas must be non-negative (0: off)");
   if (!(work_scale > 0.1 && work_scale <= 1))
     return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
   return Status::Ok();
@@ -609,7 +682,10 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   if (options.skin_chromaticity_sigmas > 0)
     chromaticity =
         SkinByChromaticity(small_bgr, small_candidates, contrast_hair, options, capture_skin);
-  const cv::Mat1b& small_hair = chromaticity.hair;
+  cv::Mat1b small_hair = chromaticity.hair;
+  if (options.outline_blend_sigmas > 0)
+    small_hair = Mask(small_hair & ~OutlineBlendsOfSkin(small_bgr, small_candidates, small_hair,
+                                                        backdrop, options.outline_blend_sigmas));
   cv::Mat1b hair_side;
   cv::resize(small_hair, hair_side, bgr.size(), 0, 0, cv::INTER_LINEAR);
   hair_side = Mask(hair_side >= 128);

@@ -88,6 +88,18 @@ struct SegmentationOptions {
   // skin, so that the strands' skin tests see the shadowed neck (a gap taken
   // for skin costs a curl some length); false: backdrop, as a blend's.
   bool opaque_shadow_as_skin = true;
+  // Along the foreground's outline a pixel blends the subject with the
+  // backdrop (the lens, the sensor's pixel, defocus), and a blend of skin in
+  // shade with the backdrop can look like hair to the material model: a rim
+  // of "hair" along the neck's or the face's outline, which several views
+  // agree on where the outline is a sharp edge (a mannequin's neck cut). A
+  // hair pixel at the working scale within 2 px of the backdrop, with skin
+  // beside it, whose colour is a non-negative mix of the skin's beside it
+  // and the backdrop's (total weight at most 1, shade allowed) to within
+  // outline_blend_sigmas of the backdrop's noise, and nearer such a mix than
+  // a mix of the hair's beside it (where there is hair), is skin. 0 turns
+  // it off.
+  double outline_blend_sigmas = 3.0;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.
