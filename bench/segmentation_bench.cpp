@@ -13,7 +13,8 @@
 // (the growth's skin tests see only what is labelled skin). The views are segmented as the points
 // stage does (SegmentCaptureViews: views with too little skin of their own borrow the capture's
 // skin model); --capture-skin no segments each view alone. --pictures writes each view with its
-// errors painted: red where skin or backdrop is taken for hair, blue where hair is missed.
+// errors painted: red where skin or backdrop is taken for hair, blue where hair is missed, and
+// its labels (reconstruction/hair_segmentation.h, kSeg*) as a PNG.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -72,6 +73,7 @@ Result<ViewRow> ScoreView(const ReconstructionView& view, const cv::Mat& image,
     painted.setTo(cv::Scalar(0, 0, 255), hair & ~true_hair);
     painted.setTo(cv::Scalar(255, 0, 0), true_hair & ~hair);
     HR_RETURN_IF_ERROR(WriteImageAtomic(pictures + "/" + view.name + "_errors.jpg", painted));
+    HR_RETURN_IF_ERROR(WriteImageAtomic(pictures + "/" + view.name + "_labels.png", seg.label));
   }
   return row;
 }
