@@ -3,7 +3,8 @@
 // truth. Run from the repository root:
 //   build/bench/hairrig_reconstruction_bench CAPTURE [--costs both,photometric]
 //       [--stride N] [--iterations N] [--mls SIGMA_MM] [--views 0,1,2,...]
-//       [--neighbours N] [--views-in-cost N] [--samples N] [--prior-front MM]
+//       [--neighbours N] [--views-in-cost N] [--samples N] [--follow-orientation yes|no]
+//       [--prior-front MM]
 //       [--prior-behind MM] [--hull-tolerance SHARE] [--hull-uncertain-alpha A] [--min-confidence
 //       C] [--min-agreeing N]
 //       [--multiview-direction yes|no]
@@ -80,6 +81,8 @@ int main(int argc, char** argv) {
       options.mvs.views_in_cost = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--samples") == 0) {
       options.mvs.samples = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--follow-orientation") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.mvs.follow_orientation)) return 2;
     } else if (std::strcmp(argv[i], "--multiview-direction") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.fusion.multiview_direction)) return 2;
     } else if (std::strcmp(argv[i], "--min-agreeing") == 0) {

@@ -106,11 +106,61 @@ class ReferenceSolver {
     Eigen::Vector3d ray;     // (x, y, 1): normalised coordinates
     Eigen::Vector3d across;  // unit, perpendicular to the ray, along the image direction
     DepthRange range;
-    float prior_mm = 0;  // the prior depth, 0 = none
+    float prior_mm = 0;    // the prior depth, 0 = none
+    size_t first_ray = 0;  // its samples' rays (follow_orientation): sample_rays_[first_ray + k]
   };
+
+  // The reference pixels of the samples through pixel (u, v), sample_step_px
+  // apart in the image: along the streamline of the reference orientation map
+  // through it (each step takes the map's orientation halfway along it, kept
+  // pointing the way the last step went; a step where the map has none goes
+  // straight on). Sample k of `along` is pixels[k], the middle one (u, v).
+  void TraceStreamline(int u, int v, int along, std::array<Eigen::Vector2d, 31>* pixels) const {
+    const int half = along / 2;
+    const double step = options_.sample_step_px;
+    const double a = DegToRad(ref_.orientation_deg(v, u));
+    (*pixels)[static_cast<size_t>(half)] = Eigen::Vector2d(u, v);
+    for (const int sign : {-1, 1}) {
+      Eigen::Vector2d at(u, v), heading = sign * Eigen::Vector2d(std::cos(a), std::sin(a));
+      for (int k = 1; k <= half; ++k) {
+        const Eigen::Vector2d mid = at + 0.5 * step * heading;
+        const int x = static_cast<int>(std::lround(mid.x())),
+                  y = static_cast<int>(std::lround(mid.y()));
+        if (x >= 0 && y >= 0 && x < ref_.orientation_deg.cols && y < ref_.orientation_deg.rows &&
+            std::isfinite(ref_.orientation_deg(y, x))) {
+          const double b = DegToRad(ref_.orientation_deg(y, x));
+          const Eigen::Vector2d d(std::cos(b), std::sin(b));
+          heading = d.dot(heading) >= 0 ? d : Eigen::Vector2d(-d);
+        }
+        at += step * heading;
+        (*pixels)[static_cast<size_t>(half + sign * k)] = at;
+      }
+    }
+  }
+
+  // The rays (x, y, 1) of cell (u, v)'s samples appended to sample_rays_
+  // (TraceStreamline); false, with nothing appended, when a sample leaves the
+  // image or cannot be undistorted.
+  bool AppendSampleRays(int u, int v) {
+    std::array<Eigen::Vector2d, 31> pixels;
+    const int along = options_.samples;
+    TraceStreamline(u, v, along, &pixels);
+    std::array<Eigen::Vector3d, 31> rays;
+    for (int k = 0; k < along; ++k) {
+      const Eigen::Vector2d& q = pixels[static_cast<size_t>(k)];
+      if (!(q.x() >= 0 && q.y() >= 0 && q.x() <= ref_.grey.cols - 1 && q.y() <= ref_.grey.rows - 1))
+        return false;
+      const Result<Eigen::Vector2d> n = UndistortPixel(ref_.camera, q);
+      if (!n.ok()) return false;
+      rays[static_cast<size_t>(k)] = Eigen::Vector3d(n->x(), n->y(), 1.0);
+    }
+    sample_rays_.insert(sample_rays_.end(), rays.begin(), rays.begin() + along);
+    return true;
+  }
 
   void PrepareCells(int rows, int cols) {
     index_ = cv::Mat1i(rows, cols, -1);
+    sample_rays_.clear();
     for (int gy = 0; gy < rows; ++gy) {
       for (int gx = 0; gx < cols; ++gx) {
         const int u = gx * options_.stride_px, v = gy * options_.stride_px;
@@ -132,6 +182,8 @@ class ReferenceSolver {
         c.across = (along - along.dot(r) * r).normalized();
         c.prior_mm = ref_.prior_depth_mm.empty() ? 0.f : std::max(0.f, ref_.prior_depth_mm(v, u));
         c.range = RangeAt(c.prior_mm);
+        c.first_ray = sample_rays_.size();
+        if (options_.follow_orientation && !AppendSampleRays(u, v)) continue;
         index_(gy, gx) = static_cast<int>(cells_.size());
         cells_.push_back(c);
       }
@@ -237,26 +289,36 @@ class ReferenceSolver {
   struct Samples {
     int along = 0, strip = 0;
     std::array<Eigen::Vector3d, 31> on_line;
-    Eigen::Vector3d ahead;
+    Eigen::Vector3d ahead;  // only for a single sample
     std::array<Eigen::Vector3d, 93> strip_points;
     std::array<float, 93> ref_grey{};
     bool strip_ok = true;
   };
 
-  void MakeSamples(const Cell& c, const Eigen::Vector3d& centre, const Eigen::Vector3d& t,
-                   double step_mm, Samples* s) const {
+  // The samples of a segment through the cell's ray at `depth` with `tilt`,
+  // `step_mm` apart: on the straight line along `t` (Direction), or with
+  // follow_orientation on the rays of the streamline's pixels, their depth
+  // rising by tan(tilt) for each mm across the image, so that a straight
+  // streamline gives the straight line of the same direction.
+  void MakeSamples(const Cell& c, double depth, double tilt, double step_mm, Samples* s) const {
     const int half = options_.samples / 2;
     s->along = 2 * half + 1;
+    const Eigen::Vector3d centre = c.ray * depth, t = Direction(c, tilt);
+    const Eigen::Vector3d rise = std::tan(tilt) * step_mm * c.ray.normalized();
     for (int k = -half; k <= half; ++k) {
-      const Eigen::Vector3d p = centre + (k * step_mm) * t;
-      s->on_line[static_cast<size_t>(k + half)] = p;
+      s->on_line[static_cast<size_t>(k + half)] =
+          options_.follow_orientation
+              ? Eigen::Vector3d(sample_rays_[c.first_ray + static_cast<size_t>(k + half)] * depth +
+                                static_cast<double>(k) * rise)
+              : Eigen::Vector3d(centre + (k * step_mm) * t);
     }
     s->ahead = centre + 0.25 * step_mm * t;
     s->strip = 0;
     s->strip_ok = true;
     if (options_.cost == MvsCost::kOrientation) return;
-    const Eigen::Vector3d side = t.cross(c.ray.normalized()).normalized() * step_mm;
     for (int k = 0; k < s->along && s->strip_ok; ++k) {
+      const Eigen::Vector3d side =
+          Tangent(*s, k, t).cross(c.ray.normalized()).normalized() * step_mm;
       for (int j = -1; j <= 1; ++j) {
         const Eigen::Vector3d p =
             s->on_line[static_cast<size_t>(k)] + static_cast<double>(j) * side;
@@ -273,14 +335,20 @@ class ReferenceSolver {
     }
   }
 
+  // Sample k's direction along the samples (from its neighbours), `fallback`
+  // for a single sample.
+  static Eigen::Vector3d Tangent(const Samples& s, int k, const Eigen::Vector3d& fallback) {
+    if (s.along < 2) return fallback;
+    const int from = std::max(0, k - 1), to = std::min(s.along - 1, k + 1);
+    return s.on_line[static_cast<size_t>(to)] - s.on_line[static_cast<size_t>(from)];
+  }
+
   // The cost of a segment through the cell's ray at `depth` with `tilt`.
   float Cost(const Cell& c, double depth, double tilt) const {
-    const Eigen::Vector3d centre = c.ray * depth;
-    const Eigen::Vector3d t = Direction(c, tilt);
     // Samples spaced `sample_step_px` as the reference view sees them.
     const double step_mm = options_.sample_step_px * depth / ref_.camera.fx_px;
     Samples samples;
-    MakeSamples(c, centre, t, step_mm, &samples);
+    MakeSamples(c, depth, tilt, step_mm, &samples);
     std::array<float, 16> view_costs{};
     ProjectedLine line;
     for (size_t v = 0; v < neighbours_.size(); ++v) {
@@ -311,16 +379,21 @@ class ReferenceSolver {
   }
 
   // The segment's samples as a neighbour sees them, and the direction of
-  // their line there, in degrees in [0, 180) (NaN when it cannot be told).
-  // The projection of a straight segment is straight up to the lens
-  // distortion, which turns it by a negligible angle over a few pixels, so
-  // one direction serves every sample.
+  // their line at each, in degrees in [0, 180) (NaN when it cannot be told):
+  // from the sample before to the sample after it (one side at the ends).
   struct ProjectedLine {
     std::array<Eigen::Vector2d, 31> uv;
     std::array<bool, 31> ok{};
+    std::array<double, 31> direction_deg{};
     int along = 0;
-    double direction_deg = 0;
   };
+
+  static double LineAngleDeg(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
+    const Eigen::Vector2d d = to - from;
+    double angle = RadToDeg(std::atan2(d.y(), d.x()));
+    if (angle < 0) angle += 180;
+    return angle;
+  }
 
   void ProjectLine(const Neighbour& nb, const Samples& s, ProjectedLine* line) const {
     line->along = s.along;
@@ -328,32 +401,29 @@ class ReferenceSolver {
       const size_t i = static_cast<size_t>(k);
       line->ok[i] = ProjectInto(nb, s.on_line[i], &line->uv[i]);
     }
-    Eigen::Vector2d from, to;
-    bool ok = false;
-    if (s.along > 1) {
-      const size_t last = static_cast<size_t>(s.along - 1);
-      ok = line->ok[0] && line->ok[last];
-      from = line->uv[0];
-      to = line->uv[last];
-    } else {
-      from = line->uv[0];
-      ok = line->ok[0] && ProjectInto(nb, s.ahead, &to);
+    constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
+    if (s.along == 1) {
+      Eigen::Vector2d ahead;
+      line->direction_deg[0] = line->ok[0] && ProjectInto(nb, s.ahead, &ahead)
+                                   ? LineAngleDeg(line->uv[0], ahead)
+                                   : kUnknown;
+      return;
     }
-    line->direction_deg = std::numeric_limits<double>::quiet_NaN();
-    if (!ok) return;
-    const Eigen::Vector2d d = to - from;
-    double angle = RadToDeg(std::atan2(d.y(), d.x()));
-    if (angle < 0) angle += 180;
-    line->direction_deg = angle;
+    for (int k = 0; k < s.along; ++k) {
+      const size_t from = static_cast<size_t>(std::max(0, k - 1)),
+                   to = static_cast<size_t>(std::min(s.along - 1, k + 1));
+      line->direction_deg[static_cast<size_t>(k)] =
+          line->ok[from] && line->ok[to] ? LineAngleDeg(line->uv[from], line->uv[to]) : kUnknown;
+    }
   }
 
   float OrientationCost(const Neighbour& nb, const ProjectedLine& line) const {
     const int along = line.along;
-    if (!std::isfinite(line.direction_deg)) return 1.0f;
     float sum = 0;
     const double truncation = options_.orientation_truncation_deg;
     for (int k = 0; k < along; ++k) {
-      if (!line.ok[static_cast<size_t>(k)]) {
+      if (!line.ok[static_cast<size_t>(k)] ||
+          !std::isfinite(line.direction_deg[static_cast<size_t>(k)])) {
         sum += 1;
         continue;
       }
@@ -369,7 +439,8 @@ class ReferenceSolver {
         sum += 1;
         continue;
       }
-      const double diff = OrientationDifferenceDeg(line.direction_deg, seen);
+      const double diff =
+          OrientationDifferenceDeg(line.direction_deg[static_cast<size_t>(k)], seen);
       sum += static_cast<float>(std::min(diff, truncation) / truncation);
     }
     return sum / static_cast<float>(along);
@@ -410,6 +481,7 @@ class ReferenceSolver {
   std::vector<Neighbour> neighbours_;
   Eigen::Matrix3d object_from_ref_rotation_;
   std::vector<Cell> cells_;
+  std::vector<Eigen::Vector3d> sample_rays_;  // follow_orientation: options_.samples a cell
   std::vector<Hypothesis> best_;
   cv::Mat1i index_;
 };

@@ -7,7 +7,10 @@
 // Parametrisation: the segment passes through the reference pixel's ray at
 // depth z (mm along the optical axis), and its projection in the reference
 // view follows the reference orientation map (as Nam et al.), so one angle is
-// left: the tilt phi out of the image plane, in (-max_tilt, max_tilt). The
+// left: the tilt phi out of the image plane, in (-max_tilt, max_tilt). Where
+// Nam et al.'s segment is straight along the pixel's orientation, here its
+// samples by default follow the map's streamline through the pixel
+// (LineMvsOptions::follow_orientation), so that it bends with a curl. The
 // search is PatchMatch (Barnes et al. 2009; Bleyer et al. 2011): random
 // hypotheses in the depth range, propagation from the scan's previous
 // neighbours in alternating directions, and random refinement with a range
@@ -50,6 +53,11 @@ struct LineMvsOptions {
   int iterations = 4;            // with the hull's prior 4 find the depth 6 do (docs/accuracy.md)
   int samples = 7;               // along the segment (odd)
   double sample_step_px = 2.0;   // their spacing, as seen in the reference view
+  // The samples follow the streamline of the reference view's orientation map
+  // through the pixel, so that a hypothesis bends with a curl in the image
+  // (its tilt sets how its depth changes along it); false: a straight
+  // segment along the pixel's orientation, as Nam et al.
+  bool follow_orientation = true;
   double orientation_truncation_deg = 25;
   double max_tilt_deg = 75;
   double depth_margin_mm =

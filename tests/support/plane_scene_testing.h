@@ -17,6 +17,15 @@ inline constexpr int kSceneWidth = 240, kSceneHeight = 200;
 // Strand direction on the plane z = 0 (object frame) at (x, y) mm.
 inline double StrandAngle(double x, double y) { return 0.03 * x + 0.02 * y + 0.0004 * x * y; }
 
+// Wavy strands instead, y = c + 6 sin(2 pi x / 40) mm: the direction swings
+// by up to 43 deg either way within a 40 mm wave (27 px in the views).
+inline double WavyStrandAngle(double x, double /*y*/) {
+  constexpr double kAmplitudeMm = 6, kWaveNumber = 2 * 3.14159265358979 / 40;
+  return std::atan(kAmplitudeMm * kWaveNumber * std::cos(kWaveNumber * x));
+}
+
+using StrandAngleFn = double (*)(double x, double y);
+
 struct PlaneScene {
   std::vector<MvsView> views;
   std::vector<cv::Mat1f> true_depth;
@@ -33,7 +42,8 @@ inline CameraIntrinsics CentredCamera(int width_px, int height_px, double focal_
   return camera;
 }
 
-inline MvsView RenderPlane(double azimuth_deg, cv::Mat1f* true_depth) {
+inline MvsView RenderPlane(double azimuth_deg, cv::Mat1f* true_depth,
+                           StrandAngleFn strand_angle = StrandAngle) {
   MvsView v;
   v.camera = CentredCamera(kSceneWidth, kSceneHeight, 400);
   v.camera.k1 = -0.02;
@@ -54,7 +64,7 @@ inline MvsView RenderPlane(double azimuth_deg, cv::Mat1f* true_depth) {
       const double s = -origin.z() / dir.z();
       const Eigen::Vector3d p = origin + s * dir;
       if (std::abs(p.x()) > 90 || std::abs(p.y()) > 90) continue;
-      const double psi = StrandAngle(p.x(), p.y());
+      const double psi = strand_angle(p.x(), p.y());
       const Eigen::Vector3d t(std::cos(psi), std::sin(psi), 0);
       const Eigen::Vector2d uv0 = Project(v.camera, v.cam_from_object * p);
       const Eigen::Vector2d uv1 = Project(v.camera, v.cam_from_object * (p + 0.1 * t));
@@ -73,11 +83,11 @@ inline MvsView RenderPlane(double azimuth_deg, cv::Mat1f* true_depth) {
   return v;
 }
 
-inline PlaneScene MakeScene() {
+inline PlaneScene MakeScene(StrandAngleFn strand_angle = StrandAngle) {
   PlaneScene scene;
   for (double azimuth : {-20.0, 0.0, 20.0, 40.0}) {
     cv::Mat1f depth;
-    scene.views.push_back(RenderPlane(azimuth, &depth));
+    scene.views.push_back(RenderPlane(azimuth, &depth, strand_angle));
     scene.true_depth.push_back(depth);
   }
   return scene;
