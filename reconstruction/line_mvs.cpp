@@ -317,8 +317,8 @@ class ReferenceSolver {
     s->strip_ok = true;
     if (options_.cost == MvsCost::kOrientation) return;
     for (int k = 0; k < s->along && s->strip_ok; ++k) {
-      const Eigen::Vector3d side =
-          Tangent(*s, k, t).cross(c.ray.normalized()).normalized() * step_mm;
+      const Eigen::Vector3d tangent = options_.follow_orientation ? Tangent(*s, k, t) : t;
+      const Eigen::Vector3d side = tangent.cross(c.ray.normalized()).normalized() * step_mm;
       for (int j = -1; j <= 1; ++j) {
         const Eigen::Vector3d p =
             s->on_line[static_cast<size_t>(k)] + static_cast<double>(j) * side;
@@ -378,9 +378,13 @@ class ReferenceSolver {
     return true;
   }
 
-  // The segment's samples as a neighbour sees them, and the direction of
-  // their line at each, in degrees in [0, 180) (NaN when it cannot be told):
-  // from the sample before to the sample after it (one side at the ends).
+  // The segment's samples as a neighbour sees them, and, for the orientation
+  // cost, the direction of their line at each, in degrees in [0, 180) (NaN
+  // when it cannot be told). With follow_orientation it runs from the sample
+  // before to the sample after (one side at the ends); the straight segment's
+  // projection is straight up to the lens distortion, which turns it by a
+  // negligible angle over a few pixels, so its end-to-end direction serves
+  // every sample.
   struct ProjectedLine {
     std::array<Eigen::Vector2d, 31> uv;
     std::array<bool, 31> ok{};
@@ -401,19 +405,25 @@ class ReferenceSolver {
       const size_t i = static_cast<size_t>(k);
       line->ok[i] = ProjectInto(nb, s.on_line[i], &line->uv[i]);
     }
+    if (options_.cost == MvsCost::kPhotometric) return;
     constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
     if (s.along == 1) {
       Eigen::Vector2d ahead;
       line->direction_deg[0] = line->ok[0] && ProjectInto(nb, s.ahead, &ahead)
                                    ? LineAngleDeg(line->uv[0], ahead)
                                    : kUnknown;
-      return;
-    }
-    for (int k = 0; k < s.along; ++k) {
-      const size_t from = static_cast<size_t>(std::max(0, k - 1)),
-                   to = static_cast<size_t>(std::min(s.along - 1, k + 1));
-      line->direction_deg[static_cast<size_t>(k)] =
-          line->ok[from] && line->ok[to] ? LineAngleDeg(line->uv[from], line->uv[to]) : kUnknown;
+    } else if (!options_.follow_orientation) {
+      const size_t last = static_cast<size_t>(s.along - 1);
+      const double chord =
+          line->ok[0] && line->ok[last] ? LineAngleDeg(line->uv[0], line->uv[last]) : kUnknown;
+      std::fill_n(line->direction_deg.begin(), s.along, chord);
+    } else {
+      for (int k = 0; k < s.along; ++k) {
+        const size_t from = static_cast<size_t>(std::max(0, k - 1)),
+                     to = static_cast<size_t>(std::min(s.along - 1, k + 1));
+        line->direction_deg[static_cast<size_t>(k)] =
+            line->ok[from] && line->ok[to] ? LineAngleDeg(line->uv[from], line->uv[to]) : kUnknown;
+      }
     }
   }
 
