@@ -10,6 +10,7 @@
 #include <random>
 
 #include "core/parallel.h"
+#include "reconstruction/line_angle.h"
 #include "reconstruction/orientation_map.h"
 
 namespace hairrig {
@@ -393,10 +394,7 @@ class ReferenceSolver {
   };
 
   static double LineAngleDeg(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
-    const Eigen::Vector2d d = to - from;
-    double angle = RadToDeg(std::atan2(d.y(), d.x()));
-    if (angle < 0) angle += 180;
-    return angle;
+    return hairrig::LineAngleDeg(to.x() - from.x(), to.y() - from.y());
   }
 
   void ProjectLine(const Neighbour& nb, const Samples& s, ProjectedLine* line) const {
@@ -438,9 +436,14 @@ class ReferenceSolver {
         continue;
       }
       const Eigen::Vector2d& a = line.uv[static_cast<size_t>(k)];
-      const int x = static_cast<int>(std::lround(a.x())), y = static_cast<int>(std::lround(a.y()));
-      if (x < 0 || y < 0 || x >= nb.view->hair.cols || y >= nb.view->hair.rows ||
-          !nb.view->hair(y, x)) {
+      // The nearest pixel (floor of x + 0.5: std::lround is a libm call).
+      const double fx = std::floor(a.x() + 0.5), fy = std::floor(a.y() + 0.5);
+      if (!(fx >= 0 && fy >= 0 && fx < nb.view->hair.cols && fy < nb.view->hair.rows)) {
+        sum += 1;
+        continue;
+      }
+      const int x = static_cast<int>(fx), y = static_cast<int>(fy);
+      if (!nb.view->hair(y, x)) {
         sum += 1;
         continue;
       }
@@ -449,8 +452,7 @@ class ReferenceSolver {
         sum += 1;
         continue;
       }
-      const double diff =
-          OrientationDifferenceDeg(line.direction_deg[static_cast<size_t>(k)], seen);
+      const double diff = LineAngleDifferenceDeg(line.direction_deg[static_cast<size_t>(k)], seen);
       sum += static_cast<float>(std::min(diff, truncation) / truncation);
     }
     return sum / static_cast<float>(along);
