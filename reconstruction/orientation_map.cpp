@@ -58,24 +58,57 @@ cv::Rect WorkingArea(const cv::Mat& region, cv::Size image_size, int reach) {
   return box;
 }
 
+// The bank's response per direction over `input`: the quadrature pair's
+// energy sqrt(even^2 + odd^2), or |even|. Both kernels filter at once by the
+// convolution theorem: the input's spectrum is taken once (the input extended
+// by its mirror image by the kernels' reach, as cv::filter2D's
+// BORDER_REFLECT), and each direction's complex kernel even + i odd,
+// multiplied with it and transformed back, gives the even response as the
+// real part and the odd as the imaginary part (a correlation, as cv::filter2D:
+// the kernel's tap at offset d sits at -d, wrapped).
+std::vector<cv::Mat1f> BankEnergy(const cv::Mat1f& input, const std::vector<GaborPair>& bank,
+                                  bool quadrature, int threads) {
+  const int reach = bank[0].even.rows / 2;
+  const cv::Size padded(cv::getOptimalDFTSize(input.cols + 2 * reach),
+                        cv::getOptimalDFTSize(input.rows + 2 * reach));
+  cv::Mat1f extended;
+  cv::copyMakeBorder(input, extended, reach, padded.height - input.rows - reach, reach,
+                     padded.width - input.cols - reach, cv::BORDER_REFLECT);
+  cv::Mat spectrum;
+  cv::dft(extended, spectrum, cv::DFT_COMPLEX_OUTPUT);
+  const cv::Rect inside(reach, reach, input.cols, input.rows);
+  std::vector<cv::Mat1f> energy(bank.size());
+  ParallelFor(bank.size(), threads, [&] {
+    return [&](size_t k) {
+      cv::Mat2f kernel(padded, cv::Vec2f(0, 0));
+      for (int y = -reach; y <= reach; ++y) {
+        for (int x = -reach; x <= reach; ++x) {
+          kernel((padded.height - y) % padded.height, (padded.width - x) % padded.width) =
+              cv::Vec2f(bank[k].even(y + reach, x + reach),
+                        quadrature ? bank[k].odd(y + reach, x + reach) : 0.f);
+        }
+      }
+      cv::Mat kernel_spectrum, product, response;
+      cv::dft(kernel, kernel_spectrum);
+      cv::mulSpectrums(spectrum, kernel_spectrum, product, 0);
+      cv::idft(product, response, cv::DFT_SCALE | cv::DFT_COMPLEX_OUTPUT);
+      cv::Mat1f parts[2];
+      cv::split(response(inside), parts);
+      if (quadrature)
+        cv::magnitude(parts[0], parts[1], energy[k]);
+      else
+        energy[k] = cv::abs(parts[0]);
+    };
+  });
+  return energy;
+}
+
 // One pass of the bank over `input` (already cropped): per pixel the peak
 // direction, its confidence and the peak response.
 OrientationMap FilterPass(const cv::Mat1f& input, const std::vector<GaborPair>& bank,
                           bool quadrature, int threads) {
   const int n = static_cast<int>(bank.size());
-  std::vector<cv::Mat1f> energy(bank.size());
-  ParallelFor(bank.size(), threads, [&] {
-    return [&](size_t k) {
-      cv::Mat1f even, odd;
-      cv::filter2D(input, even, CV_32F, bank[k].even, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
-      if (!quadrature) {
-        energy[k] = cv::abs(even);
-        return;
-      }
-      cv::filter2D(input, odd, CV_32F, bank[k].odd, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
-      cv::magnitude(even, odd, energy[k]);
-    };
-  });
+  const std::vector<cv::Mat1f> energy = BankEnergy(input, bank, quadrature, threads);
   OrientationMap out{cv::Mat1f(input.size()), cv::Mat1f(input.size()), cv::Mat1f(input.size())};
   const double step_deg = 180.0 / n;
   // Squared angular distance of every direction from the peak (radians^2), by offset.
