@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -89,38 +90,80 @@ double HiddenBackdropShare(const cv::Vec3b& p, const BackdropModel& backdrop) {
   return share;
 }
 
-// A Gaussian blur of `values` over the pixels in `weights` only (normalised
+// Gaussian blurs of values over the pixels in `weights` only (normalised
 // convolution): pixels outside take no part, so no step at the foreground's
-// outline enters the result.
-cv::Mat1f BlurWithin(const cv::Mat1f& values, const cv::Mat1f& weights, double sigma) {
-  cv::Mat1f product, weighted, norm, blurred;
-  cv::multiply(values, weights, product);
-  cv::GaussianBlur(product, weighted, cv::Size(), sigma);
-  cv::GaussianBlur(weights, norm, cv::Size(), sigma);
-  cv::max(norm, 1e-3, norm);
-  cv::divide(weighted, norm, blurred);
-  return blurred;
-}
+// outline enters the result. The weights' own blur is made once per sigma.
+class BlurWithin {
+ public:
+  explicit BlurWithin(cv::Mat1f weights) : weights_(std::move(weights)) {}
+
+  cv::Mat1f operator()(const cv::Mat1f& values, double sigma) {
+    cv::Mat1f product, weighted, blurred;
+    cv::multiply(values, weights_, product);
+    cv::GaussianBlur(product, weighted, cv::Size(), sigma);
+    cv::divide(weighted, Norm(sigma), blurred);
+    return blurred;
+  }
+
+  // The weights blurred with `sigma` (not clamped).
+  const cv::Mat1f& Weight(double sigma) {
+    for (const auto& [s, blurred] : weights_blurred_)
+      if (s == sigma) return blurred;
+    cv::Mat1f blurred;
+    cv::GaussianBlur(weights_, blurred, cv::Size(), sigma);
+    weights_blurred_.emplace_back(sigma, blurred);
+    return weights_blurred_.back().second;
+  }
+
+ private:
+  const cv::Mat1f& Norm(double sigma) {
+    for (const auto& [s, norm] : norms_)
+      if (s == sigma) return norm;
+    cv::Mat1f norm;
+    cv::max(Weight(sigma), 1e-3, norm);
+    norms_.emplace_back(sigma, norm);
+    return norms_.back().second;
+  }
+
+  cv::Mat1f weights_;
+  std::deque<std::pair<double, cv::Mat1f>> weights_blurred_, norms_;
+};
+
+// How far (px) OpenCV's Gaussian kernel of `sigma` reaches on float images.
+int GaussianReach(double sigma) { return cvRound(sigma * 8 + 1) / 2; }
 
 // The texture band within `within` (a band-pass of the grey image, blurred
 // within the mask so that the step at its outline does not count), squared
 // and averaged over a window of `sigma`, relative to the squared local
-// brightness (+ 8 grey levels), so that hair in shadow stays textured.
+// brightness (+ 8 grey levels), so that hair in shadow stays textured. Every
+// blur takes only pixels in `within`, so the result is 0 further than the
+// blurs reach from it: it is computed on the mask's bounding box grown by
+// that reach (the same values as over the whole image).
 cv::Mat1f RelativeBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
+  constexpr double kFine = 1.5, kCoarse = 4.0;
+  cv::Mat1f out(bgr.size(), 0.f);
+  const cv::Rect box = cv::boundingRect(within);
+  if (box.empty()) return out;
+  const int reach = GaussianReach(std::max({kFine, kCoarse, sigma})) + 1;
+  const cv::Rect area =
+      cv::Rect(box.x - reach, box.y - reach, box.width + 2 * reach, box.height + 2 * reach) &
+      cv::Rect(0, 0, bgr.cols, bgr.rows);
   cv::Mat1f grey, weights;
   cv::Mat grey8;
-  cv::cvtColor(bgr, grey8, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(bgr(area), grey8, cv::COLOR_BGR2GRAY);
   grey8.convertTo(grey, CV_32F);
-  within.convertTo(weights, CV_32F, 1.0 / 255.0);
-  const cv::Mat1f fine = BlurWithin(grey, weights, 1.5), coarse = BlurWithin(grey, weights, 4.0);
+  within(area).convertTo(weights, CV_32F, 1.0 / 255.0);
+  BlurWithin blur(weights);
+  const cv::Mat1f fine = blur(grey, kFine), coarse = blur(grey, kCoarse);
   cv::Mat1f band, band_squared;
   cv::subtract(fine, coarse, band);
   cv::multiply(band, band, band_squared);
-  cv::Mat1f energy = BlurWithin(band_squared, weights, sigma), brightness;
-  cv::add(BlurWithin(coarse, weights, sigma), 8.0, brightness);
+  cv::Mat1f energy = blur(band_squared, sigma), brightness;
+  cv::add(blur(coarse, sigma), 8.0, brightness);
   cv::multiply(brightness, brightness, brightness);
-  cv::divide(energy, brightness, energy);
-  return energy;
+  cv::Mat1f inside = out(area);
+  cv::divide(energy, brightness, inside);
+  return out;
 }
 
 // The image noise's share of RelativeBandEnergy: its median over the backdrop
@@ -464,9 +507,10 @@ LocalColour LocalColourOf(const cv::Mat3f& bgr, const cv::Mat1b& where, double s
   where.convertTo(w, CV_32F, 1.0 / 255.0);
   std::vector<cv::Mat1f> channels;
   cv::split(bgr, channels);
-  for (cv::Mat1f& channel : channels) channel = BlurWithin(channel, w, sigma);
+  BlurWithin blur(w);
+  for (cv::Mat1f& channel : channels) channel = blur(channel, sigma);
   cv::merge(channels, out.colour);
-  cv::GaussianBlur(w, out.weight, cv::Size(), sigma);
+  out.weight = blur.Weight(sigma);
   return out;
 }
 
