@@ -138,7 +138,7 @@ int GaussianReach(double sigma) { return cvRound(sigma * 8 + 1) / 2; }
 // brightness (+ 8 grey levels), so that hair in shadow stays textured. Every
 // blur takes only pixels in `within`, so the result is 0 further than the
 // blurs reach from it: it is computed on the mask's bounding box grown by
-// that reach (the same values as over the whole image).
+// that reach (the values over the whole image, up to float rounding).
 cv::Mat1f RelativeBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
   constexpr double kFine = 1.5, kCoarse = 4.0;
   cv::Mat1f out(bgr.size(), 0.f);

@@ -61,11 +61,13 @@ cv::Rect WorkingArea(const cv::Mat& region, cv::Size image_size, int reach) {
 // The bank's response per direction over `input`: the quadrature pair's
 // energy sqrt(even^2 + odd^2), or |even|. Both kernels filter at once by the
 // convolution theorem: the input's spectrum is taken once (the input extended
-// by its mirror image by the kernels' reach, as cv::filter2D's
-// BORDER_REFLECT), and each direction's complex kernel even + i odd,
-// multiplied with it and transformed back, gives the even response as the
-// real part and the odd as the imaginary part (a correlation, as cv::filter2D:
-// the kernel's tap at offset d sits at -d, wrapped).
+// by its mirror image, as cv::filter2D's BORDER_REFLECT, by at least the
+// kernels' reach on every side, up to a size the DFT handles fast), and each
+// direction's complex kernel even + i odd, multiplied with it and transformed
+// back, gives the even response as the real part and the odd as the imaginary
+// part (a correlation, as cv::filter2D: the kernel's tap at offset d sits at
+// -d, wrapped). The same responses as cv::filter2D up to float rounding; each
+// thread holds four complex images of the padded size while it works.
 std::vector<cv::Mat1f> BankEnergy(const cv::Mat1f& input, const std::vector<GaborPair>& bank,
                                   bool quadrature, int threads) {
   const int reach = bank[0].even.rows / 2;

@@ -187,6 +187,33 @@ TEST(OrientationMap, LinesAreConfidentAndNoiseIsNot) {
   EXPECT_LT(noise_confidence, 0.65);
 }
 
+// The responses sit where the fibres are: the even kernel's response to a
+// single bright vertical line peaks on the line, also next to the image's
+// border (where the filter sees the image's mirror image), and an image
+// smaller than the kernels is filtered too.
+TEST(OrientationMap, ResponsesPeakOnTheLineUpToTheBorder) {
+  OrientationOptions one_scale;
+  one_scale.scales = 1;
+  one_scale.smoothing_px = 0;
+  one_scale.quadrature = false;
+  for (const int line_x : {40, 3}) {
+    cv::Mat1b image(64, 80, uint8_t{40});
+    image.col(line_x).setTo(220);
+    auto map = ComputeOrientationMap(image, cv::Mat(), one_scale);
+    ASSERT_TRUE(map.ok());
+    cv::Point peak;
+    cv::minMaxLoc(map->response.row(32), nullptr, nullptr, nullptr, &peak);
+    EXPECT_LE(std::abs(peak.x - line_x), 1) << "line at x = " << line_x;
+    EXPECT_LT(OrientationDifferenceDeg(map->angle_deg(32, line_x), 90), 2.0);
+  }
+  cv::Mat1b tiny(6, 9, uint8_t{40});
+  tiny.col(4).setTo(220);
+  auto map = ComputeOrientationMap(tiny, cv::Mat(), OrientationOptions{});
+  ASSERT_TRUE(map.ok());
+  EXPECT_EQ(map->angle_deg.size(), tiny.size());
+  EXPECT_TRUE(std::isfinite(map->angle_deg(3, 4)));
+}
+
 TEST(OrientationMap, OutsideTheRegionIsUnknown) {
   cv::Mat1b region(96, 96, uint8_t{0});
   region(cv::Rect(30, 30, 20, 20)).setTo(255);
