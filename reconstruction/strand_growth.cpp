@@ -419,6 +419,10 @@ void FieldGrowth::ThroughUncoveredSegments(const std::vector<StrandSegment>& seg
         ++s.cover_no_root;
         continue;
       }
+      if (grown[i]->size() < 2) {  // TrimTip left the root alone: the whole strand lies over skin
+        ++s.cover_trimmed_away;
+        continue;
+      }
       added = true;
       coverage.Add(*grown[i]);
       strands->AddStrand(*grown[i]);

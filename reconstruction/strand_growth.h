@@ -152,9 +152,11 @@ struct StrandGrowthSummary {
   int64_t tips_trimmed_over_skin = 0;  // kept strands whose tip trim_tip_over_skin shortened
   // SegmentCoverOptions: segments uncovered after the growth from the roots;
   // strands added through them (counted in `strands`); segments whose trace
-  // back did not reach the scalp and that no strand passed near; of the strands
-  // added, those grafted on another strand.
-  int64_t cover_candidates = 0, cover_strands = 0, cover_no_root = 0, cover_grafted = 0;
+  // back did not reach the scalp and that no strand passed near; segments
+  // whose strand was trimmed back from skin to its root alone (not added); of
+  // the strands added, those grafted on another strand.
+  int64_t cover_candidates = 0, cover_strands = 0, cover_no_root = 0, cover_trimmed_away = 0,
+          cover_grafted = 0;
   double mean_length_mm = 0;
 };
 

@@ -294,7 +294,8 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                          {{"segments", growth.cover_candidates},
                           {"strands", growth.cover_strands},
                           {"grafted", growth.cover_grafted},
-                          {"no_root", growth.cover_no_root}}},
+                          {"no_root", growth.cover_no_root},
+                          {"trimmed_away", growth.cover_trimmed_away}}},
                         {"dropped_short", growth.dropped_short}}},
                       // EndMergedStrands after growth: "strands" counts what was grown.
                       {"merging",
@@ -347,7 +348,10 @@ std::string StrandReconstructionSummary::BriefReport() const {
   if (growth.cover_candidates > 0) {
     s << "  through seen strands the others missed: " << growth.cover_strands << " strands for "
       << growth.cover_candidates << " uncovered segments (" << growth.cover_grafted
-      << " grafted on a strand nearby; " << growth.cover_no_root << " with no way to the scalp)\n";
+      << " grafted on a strand nearby; " << growth.cover_no_root << " with no way to the scalp";
+    if (growth.cover_trimmed_away > 0)
+      s << "; " << growth.cover_trimmed_away << " over skin from root to tip";
+    s << ")\n";
   }
   if (merging.strands_ended + merging.strands_dropped > 0) {
     s << "  merged: " << merging.strands_ended

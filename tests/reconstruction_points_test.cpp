@@ -210,6 +210,8 @@ TEST(ReconstructionPoints, AReducedCaptureAgainstItsGroundTruth) {
   auto from_ply = ReadStrands(strands_dir + "/strands.ply");
   ASSERT_TRUE(from_ply.ok()) << from_ply.status().ToString();
   EXPECT_EQ(static_cast<int64_t>(from_ply->num_strands()), strands_read_back);
+  for (size_t s = 0; s < from_ply->num_strands(); ++s)
+    EXPECT_GE(from_ply->point_counts[s], 2) << "strand " << s << ": `fit` refuses a single point";
   for (const char* other : {"/strands.hair", "/strands.data"}) {
     auto read = ReadStrands(strands_dir + other);
     ASSERT_TRUE(read.ok()) << read.status().ToString();
