@@ -101,32 +101,31 @@ class BlurWithin {
     cv::Mat1f product, weighted, blurred;
     cv::multiply(values, weights_, product);
     cv::GaussianBlur(product, weighted, cv::Size(), sigma);
-    cv::divide(weighted, Norm(sigma), blurred);
+    cv::divide(weighted, Blurred(sigma).norm, blurred);
     return blurred;
   }
 
   // The weights blurred with `sigma` (not clamped).
-  const cv::Mat1f& Weight(double sigma) {
-    for (const auto& [s, blurred] : weights_blurred_)
-      if (s == sigma) return blurred;
-    cv::Mat1f blurred;
-    cv::GaussianBlur(weights_, blurred, cv::Size(), sigma);
-    weights_blurred_.emplace_back(sigma, blurred);
-    return weights_blurred_.back().second;
-  }
+  const cv::Mat1f& Weight(double sigma) { return Blurred(sigma).weight; }
 
  private:
-  const cv::Mat1f& Norm(double sigma) {
-    for (const auto& [s, norm] : norms_)
-      if (s == sigma) return norm;
-    cv::Mat1f norm;
-    cv::max(Weight(sigma), 1e-3, norm);
-    norms_.emplace_back(sigma, norm);
-    return norms_.back().second;
+  struct BlurredWeights {
+    double sigma;
+    cv::Mat1f weight, norm;  // norm: the weight clamped to at least 1e-3
+  };
+
+  const BlurredWeights& Blurred(double sigma) {
+    for (const BlurredWeights& b : blurred_)
+      if (b.sigma == sigma) return b;
+    BlurredWeights b{sigma, {}, {}};
+    cv::GaussianBlur(weights_, b.weight, cv::Size(), sigma);
+    cv::max(b.weight, 1e-3, b.norm);
+    blurred_.push_back(std::move(b));
+    return blurred_.back();
   }
 
   cv::Mat1f weights_;
-  std::deque<std::pair<double, cv::Mat1f>> weights_blurred_, norms_;
+  std::deque<BlurredWeights> blurred_;
 };
 
 // How far (px) OpenCV's Gaussian kernel of `sigma` reaches on float images.
