@@ -241,7 +241,7 @@ class ReferenceSolver {
     depth = cells_[i].range.Clamp(depth);
     if (tried->Contains(depth, tilt)) return;
     tried->Add(depth, tilt);
-    const float cost = Cost(cells_[i], depth, tilt);
+    const float cost = Cost(cells_[i], depth, tilt, best_[i].cost);
     if (cost < best_[i].cost) best_[i] = {depth, tilt, cost};
   }
 
@@ -316,7 +316,13 @@ class ReferenceSolver {
     s->ahead = centre + 0.25 * step_mm * t;
     s->strip = 0;
     s->strip_ok = true;
-    if (options_.cost == MvsCost::kOrientation) return;
+  }
+
+  // The photometric cost's strip of the samples made by MakeSamples (same
+  // arguments), with the reference view's grey values; strip_ok false when a
+  // strip point leaves the reference image.
+  void MakeStrip(const Cell& c, double tilt, double step_mm, Samples* s) const {
+    const Eigen::Vector3d t = Direction(c, tilt);
     for (int k = 0; k < s->along && s->strip_ok; ++k) {
       const Eigen::Vector3d tangent = options_.follow_orientation ? Tangent(*s, k, t) : t;
       const Eigen::Vector3d side = tangent.cross(c.ray.normalized()).normalized() * step_mm;
@@ -344,32 +350,59 @@ class ReferenceSolver {
     return s.on_line[static_cast<size_t>(to)] - s.on_line[static_cast<size_t>(from)];
   }
 
-  // The cost of a segment through the cell's ray at `depth` with `tilt`.
-  float Cost(const Cell& c, double depth, double tilt) const {
+  // The mean of the `used` smallest of `costs[0 .. count)`, summed smallest
+  // first.
+  static float MeanOfSmallest(std::array<float, 16> costs, size_t count, size_t used) {
+    std::partial_sort(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(used),
+                      costs.begin() + static_cast<std::ptrdiff_t>(count));
+    float sum = 0;
+    for (size_t k = 0; k < used; ++k) sum += costs[k];
+    return sum / static_cast<float>(used);
+  }
+
+  // The cost of a segment through the cell's ray at `depth` with `tilt`: the
+  // mean of the views_in_cost best neighbours' costs. A hypothesis that cannot
+  // cost less than `beat` may stop early and return a value >= beat: the
+  // orientation cost comes first, and a view's cost is at least half of it
+  // (the photometric cost is >= 0), so the mean of those lower bounds, with
+  // each view's exact cost put in as it is computed (cheapest bound first),
+  // rules a hypothesis out before all its photometric costs are made. A
+  // hypothesis that is not ruled out gets exactly the cost it gets without
+  // `beat`.
+  float Cost(const Cell& c, double depth, double tilt,
+             float beat = std::numeric_limits<float>::infinity()) const {
     // Samples spaced `sample_step_px` as the reference view sees them.
     const double step_mm = options_.sample_step_px * depth / ref_.camera.fx_px;
     Samples samples;
     MakeSamples(c, depth, tilt, step_mm, &samples);
-    std::array<float, 16> view_costs{};
-    ProjectedLine line;
-    for (size_t v = 0; v < neighbours_.size(); ++v) {
-      const Neighbour& nb = neighbours_[v];
-      ProjectLine(nb, samples, &line);
-      float orientation_cost = 0, photometric_cost = 0;
-      if (options_.cost != MvsCost::kPhotometric) orientation_cost = OrientationCost(nb, line);
-      if (options_.cost != MvsCost::kOrientation)
-        photometric_cost = PhotometricCost(nb, samples, line);
-      view_costs[v] = options_.cost == MvsCost::kOrientation ? orientation_cost
-                      : options_.cost == MvsCost::kPhotometric
-                          ? photometric_cost
-                          : 0.5f * (orientation_cost + photometric_cost);
+    const size_t count = neighbours_.size();
+    const size_t used = std::min(count, static_cast<size_t>(options_.views_in_cost));
+    std::array<ProjectedLine, 16> lines;
+    std::array<float, 16> orientation_costs{};
+    std::array<float, 16> view_costs{};  // a view's cost, or its lower bound until computed
+    for (size_t v = 0; v < count; ++v) {
+      ProjectLine(neighbours_[v], samples, &lines[v]);
+      if (options_.cost == MvsCost::kPhotometric) continue;
+      orientation_costs[v] = OrientationCost(neighbours_[v], lines[v]);
+      view_costs[v] = options_.cost == MvsCost::kOrientation ? orientation_costs[v]
+                                                             : 0.5f * orientation_costs[v];
     }
-    const size_t used = std::min(neighbours_.size(), static_cast<size_t>(options_.views_in_cost));
-    std::partial_sort(view_costs.begin(), view_costs.begin() + static_cast<std::ptrdiff_t>(used),
-                      view_costs.begin() + static_cast<std::ptrdiff_t>(neighbours_.size()));
-    float sum = 0;
-    for (size_t k = 0; k < used; ++k) sum += view_costs[k];
-    return sum / static_cast<float>(used);
+    if (options_.cost == MvsCost::kOrientation) return MeanOfSmallest(view_costs, count, used);
+    std::array<size_t, 16> order;
+    for (size_t v = 0; v < count; ++v) order[v] = v;
+    std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(count),
+              [&](size_t a, size_t b) { return view_costs[a] < view_costs[b]; });
+    for (size_t k = 0; k < count; ++k) {
+      const float bound = MeanOfSmallest(view_costs, count, used);
+      if (bound >= beat) return bound;
+      if (k == 0) MakeStrip(c, tilt, step_mm, &samples);
+      const size_t v = order[k];
+      const float photometric_cost = PhotometricCost(neighbours_[v], samples, lines[v]);
+      view_costs[v] = options_.cost == MvsCost::kPhotometric
+                          ? photometric_cost
+                          : 0.5f * (orientation_costs[v] + photometric_cost);
+    }
+    return MeanOfSmallest(view_costs, count, used);
   }
 
   bool ProjectInto(const Neighbour& nb, const Eigen::Vector3d& p_ref, Eigen::Vector2d* uv) const {
@@ -387,9 +420,11 @@ class ReferenceSolver {
   // negligible angle over a few pixels, so its end-to-end direction serves
   // every sample.
   struct ProjectedLine {
+    // Written by ProjectLine for the first `along` samples (left uninitialised:
+    // Cost keeps one per neighbour).
     std::array<Eigen::Vector2d, 31> uv;
-    std::array<bool, 31> ok{};
-    std::array<double, 31> direction_deg{};
+    std::array<bool, 31> ok;
+    std::array<double, 31> direction_deg;
     int along = 0;
   };
 
