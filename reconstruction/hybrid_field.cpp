@@ -25,33 +25,61 @@ struct Grid {
   int64_t count() const { return static_cast<int64_t>(size.x()) * size.y() * size.z(); }
 };
 
-void SorSweeps(const Grid& g, int channels, const std::vector<uint8_t>& fixed,
-               std::vector<float>* values, int sweeps) {
+// One SOR update of voxel i from its n neighbours nb[0 .. n), summed in
+// that order, for each of its `channels` values.
+template <int kChannels>
+inline void SorUpdate(float* v, int64_t i, const int64_t* nb, int n, int channels) {
   constexpr float kOmega = 1.7f;
+  const int count = kChannels > 0 ? kChannels : channels;
+  for (int c = 0; c < count; ++c) {
+    float sum = 0;
+    for (int k = 0; k < n; ++k) sum += v[nb[k] * count + c];
+    float& value = v[i * count + c];
+    value += kOmega * (sum / static_cast<float>(n) - value);
+  }
+}
+
+// Gauss-Seidel sweeps in x-fastest order. A voxel off the grid's faces has
+// all six neighbours (taken -x, +x, -y, +y, -z, +z, as at the faces, where
+// the missing ones are left out), so the arithmetic is the same everywhere.
+// kChannels: the channel count when known at compile time, 0 otherwise.
+template <int kChannels>
+void SorSweepsOf(const Grid& g, int channels, const std::vector<uint8_t>& fixed,
+                 std::vector<float>* values, int sweeps) {
   float* v = values->data();
-  const int64_t sx = 1, sy = g.size.x(), sz = static_cast<int64_t>(g.size.x()) * g.size.y();
+  const int nx = g.size.x(), ny = g.size.y(), nz = g.size.z();
+  const int64_t sx = 1, sy = nx, sz = static_cast<int64_t>(nx) * ny;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
-    for (int z = 0; z < g.size.z(); ++z)
-      for (int y = 0; y < g.size.y(); ++y)
-        for (int x = 0; x < g.size.x(); ++x) {
+    for (int z = 0; z < nz; ++z)
+      for (int y = 0; y < ny; ++y) {
+        const bool inner_row = y > 0 && y + 1 < ny && z > 0 && z + 1 < nz;
+        for (int x = 0; x < nx; ++x) {
           const int64_t i = g.Index(x, y, z);
           if (fixed[i]) continue;
           std::array<int64_t, 6> nb;
           int n = 0;
-          if (x > 0) nb[n++] = i - sx;
-          if (x + 1 < g.size.x()) nb[n++] = i + sx;
-          if (y > 0) nb[n++] = i - sy;
-          if (y + 1 < g.size.y()) nb[n++] = i + sy;
-          if (z > 0) nb[n++] = i - sz;
-          if (z + 1 < g.size.z()) nb[n++] = i + sz;
-          for (int c = 0; c < channels; ++c) {
-            float sum = 0;
-            for (int k = 0; k < n; ++k) sum += v[nb[k] * channels + c];
-            float& value = v[i * channels + c];
-            value += kOmega * (sum / static_cast<float>(n) - value);
+          if (inner_row && x > 0 && x + 1 < nx) {
+            nb = {i - sx, i + sx, i - sy, i + sy, i - sz, i + sz};
+            n = 6;
+          } else {
+            if (x > 0) nb[n++] = i - sx;
+            if (x + 1 < nx) nb[n++] = i + sx;
+            if (y > 0) nb[n++] = i - sy;
+            if (y + 1 < ny) nb[n++] = i + sy;
+            if (z > 0) nb[n++] = i - sz;
+            if (z + 1 < nz) nb[n++] = i + sz;
           }
+          SorUpdate<kChannels>(v, i, nb.data(), n, channels);
         }
+      }
   }
+}
+
+void SorSweeps(const Grid& g, int channels, const std::vector<uint8_t>& fixed,
+               std::vector<float>* values, int sweeps) {
+  if (channels == 1) return SorSweepsOf<1>(g, channels, fixed, values, sweeps);
+  if (channels == 3) return SorSweepsOf<3>(g, channels, fixed, values, sweeps);
+  SorSweepsOf<0>(g, channels, fixed, values, sweeps);
 }
 
 // Approximate Euclidean distance (voxels) to the nearest `source` voxel: a

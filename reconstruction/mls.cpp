@@ -25,8 +25,9 @@ bool PointSetSurface::Project(const Eigen::Vector3f& q, Eigen::Vector3f* project
   SymmetricOuterSum outer;  // the second moments
   int count = 0;
   const Eigen::Vector3d origin = q.cast<double>();
-  grid_.ForEachWithin(q, 2 * sigma_mm_, [&](uint32_t i, double d2) {
-    const Eigen::Vector3d d = grid_.positions()[i].cast<double>() - origin;
+  const std::vector<Eigen::Vector3f>& positions = grid_.slot_positions();
+  grid_.ForEachSlotWithin(q, 2 * sigma_mm_, [&](uint32_t slot, double d2) {
+    const Eigen::Vector3d d = positions[slot].cast<double>() - origin;
     const double w = std::exp(-d2 * inv_sigma2);
     weight += w;
     const Eigen::Vector3d wd = w * d;

@@ -65,6 +65,8 @@ class PointGrid {
 
   // The points' indices in slot order (see ForEachSlotWithin).
   const std::vector<uint32_t>& order() const { return order_; }
+  // The positions in slot order: slot_positions()[slot] == positions()[order()[slot]].
+  const std::vector<Eigen::Vector3f>& slot_positions() const { return sorted_; }
 
   // Whether some point within `radius_mm` of q (<=) satisfies
   // accept(index, squared distance); stops at the first, looking in q's own

@@ -43,8 +43,10 @@ void ExpectQueriesMatchBruteForce(const std::vector<Eigen::Vector3f>& points, do
       const std::vector<uint32_t> expected = BruteForceWithin(points, q, radius);
       EXPECT_EQ(found, expected) << "radius " << radius;
       std::vector<uint32_t> slots;
-      grid.ForEachSlotWithin(q, radius,
-                             [&](uint32_t slot, double) { slots.push_back(grid.order()[slot]); });
+      grid.ForEachSlotWithin(q, radius, [&](uint32_t slot, double) {
+        EXPECT_EQ(grid.slot_positions()[slot], points[grid.order()[slot]]);
+        slots.push_back(grid.order()[slot]);
+      });
       std::sort(slots.begin(), slots.end());
       EXPECT_EQ(slots, expected);
       EXPECT_EQ(grid.AnyWithin(q, radius, [](uint32_t, double) { return true; }),

@@ -23,7 +23,14 @@ PointOrientationField::PointOrientationField(const std::vector<OrientedPoint>& p
     : points_(points),
       positions_(Positions(points)),
       sigma_mm_(sigma_mm),
-      grid_(positions_, 2 * sigma_mm) {}
+      grid_(positions_, 2 * sigma_mm) {
+  slot_direction_.reserve(points.size());
+  slot_weight_.reserve(points.size());
+  for (const uint32_t i : grid_.order()) {
+    slot_direction_.push_back(points[i].direction);
+    slot_weight_.push_back(std::max(points[i].confidence, 1e-3f));
+  }
+}
 
 bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& reference,
                                double min_abs_cos, int min_neighbours, Eigen::Vector3f* orientation,
@@ -32,10 +39,10 @@ bool PointOrientationField::At(const Eigen::Vector3f& p, const Eigen::Vector3f& 
   const double inv_two_sigma2 = 1.0 / (2 * sigma_mm_ * sigma_mm_);
   SymmetricOuterSum tensor;
   int count = 0;
-  grid_.ForEachWithin(p, 2 * sigma_mm_, [&](uint32_t i, double d2) {
-    const Eigen::Vector3f& o = points_[i].direction;
+  grid_.ForEachSlotWithin(p, 2 * sigma_mm_, [&](uint32_t slot, double d2) {
+    const Eigen::Vector3f& o = slot_direction_[slot];
     if (filter && std::abs(o.dot(reference)) <= min_abs_cos) return;
-    const double w = std::exp(-d2 * inv_two_sigma2) * std::max(points_[i].confidence, 1e-3f);
+    const double w = std::exp(-d2 * inv_two_sigma2) * slot_weight_[slot];
     const Eigen::Vector3d od = o.cast<double>();
     tensor.Add(w * od, od);
     ++count;

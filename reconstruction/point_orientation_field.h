@@ -39,6 +39,10 @@ class PointOrientationField {
   std::vector<Eigen::Vector3f> positions_;
   double sigma_mm_;
   PointGrid grid_;
+  // Per grid slot (PointGrid::ForEachSlotWithin): the point's direction and
+  // max(confidence, 1e-3), read contiguously by At.
+  std::vector<Eigen::Vector3f> slot_direction_;
+  std::vector<float> slot_weight_;
 };
 
 // Every point's direction replaced by the field's at its position (Luo Eq. 2
