@@ -1,6 +1,7 @@
 #include "rig/reconstruct_capture.h"
 
 #include <algorithm>
+#include <future>
 #include <nlohmann/json.hpp>
 
 #include "core/file_util.h"
@@ -96,14 +97,18 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
                       ReadStrands(summary->strands->output_dir + "/strands.ply"));
   HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
                       ReadPointCloudPly(request.reconstruction_dir + "/points.ply"));
-  HR_RETURN_IF_ERROR(CheckStrands(input, skin_views, strands, points, summary));
-  // The display copy as glTF, for the console's 3D view and for download.
+  // The display copy as glTF, for the console's 3D view and for download,
+  // written on a second thread while the checks run (both only read).
   GltfExportOptions gltf;
   gltf.dir = o.dir;
   gltf.head_file = o.head_file == kFittedHead ? "" : o.head_file;
   gltf.display_only = true;
-  HR_ASSIGN_OR_RETURN(const GltfExportSummary exported,
-                      ExportCaptureGltf(gltf, {.strands = &strands, .points = &points}));
+  std::future<Result<GltfExportSummary>> display = std::async(std::launch::async, [&] {
+    return ExportCaptureGltf(gltf, {.strands = &strands, .points = &points});
+  });
+  const Status checked = CheckStrands(input, skin_views, strands, points, summary);
+  HR_ASSIGN_OR_RETURN(const GltfExportSummary exported, display.get());
+  HR_RETURN_IF_ERROR(checked);
   summary->display_glb = exported.display.path;
   return Status::Ok();
 }
