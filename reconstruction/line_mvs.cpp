@@ -283,10 +283,10 @@ class ReferenceSolver {
 
   // The segment's samples, computed once per hypothesis and shared by the
   // neighbours: points along it (and, for a single sample, a point a quarter
-  // step further that gives the projected direction) and, for the
-  // photometric cost, a strip of three lines (sample k's are strip points
-  // 3k .. 3k + 2, the middle one on the line) with the reference view's grey
-  // values.
+  // step further that gives the projected direction), made by MakeSamples;
+  // for the photometric cost, a strip of three lines (sample k's are strip
+  // points 3k .. 3k + 2, the middle one on the line) with the reference
+  // view's grey values, made by MakeStrip (strip 0 until then).
   struct Samples {
     int along = 0, strip = 0;
     std::array<Eigen::Vector3d, 31> on_line;
@@ -318,9 +318,9 @@ class ReferenceSolver {
     s->strip_ok = true;
   }
 
-  // The photometric cost's strip of the samples made by MakeSamples (same
-  // arguments), with the reference view's grey values; strip_ok false when a
-  // strip point leaves the reference image.
+  // The photometric cost's strip of the samples MakeSamples made (with the
+  // same cell, tilt and step), with the reference view's grey values;
+  // strip_ok false when a strip point leaves the reference image.
   void MakeStrip(const Cell& c, double tilt, double step_mm, Samples* s) const {
     const Eigen::Vector3d t = Direction(c, tilt);
     for (int k = 0; k < s->along && s->strip_ok; ++k) {

@@ -16,7 +16,8 @@ namespace hairrig {
 
 class PointOrientationField {
  public:
-  // `points` must outlive the field. sigma_mm > 0.
+  // `points` must outlive the field and not change while it lives (it keeps
+  // copies of their positions, directions and confidences). sigma_mm > 0.
   PointOrientationField(const std::vector<OrientedPoint>& points, double sigma_mm);
   // Not copied or moved: the grid refers to the field's own positions.
   PointOrientationField(const PointOrientationField&) = delete;

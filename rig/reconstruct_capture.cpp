@@ -98,7 +98,9 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
   HR_ASSIGN_OR_RETURN(const std::vector<OrientedPoint> points,
                       ReadPointCloudPly(request.reconstruction_dir + "/points.ply"));
   // The display copy as glTF, for the console's 3D view and for download,
-  // written on a second thread while the checks run (both only read).
+  // written on a second thread while the checks run: the two share only const
+  // inputs and each writes its own file; only the checks write *summary. The
+  // checks' error is reported before the export's.
   GltfExportOptions gltf;
   gltf.dir = o.dir;
   gltf.head_file = o.head_file == kFittedHead ? "" : o.head_file;
@@ -107,9 +109,10 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
     return ExportCaptureGltf(gltf, {.strands = &strands, .points = &points});
   });
   const Status checked = CheckStrands(input, skin_views, strands, points, summary);
-  HR_ASSIGN_OR_RETURN(const GltfExportSummary exported, display.get());
+  const Result<GltfExportSummary> exported = display.get();
   HR_RETURN_IF_ERROR(checked);
-  summary->display_glb = exported.display.path;
+  HR_RETURN_IF_ERROR(exported.status());
+  summary->display_glb = exported->display.path;
   return Status::Ok();
 }
 
