@@ -28,7 +28,7 @@ struct CornerStats {
   double RmsPx() const { return std::sqrt(sum_sq / corners); }
 };
 
-// Every view of a scene rendered (with its noise) and its tags detected.
+// Views of a scene rendered (with their noise) and their tags detected.
 struct TagSweep {
   CornerStats corrected;    // corners of unoccluded tags facing the camera by more than 25 deg
   CornerStats uncorrected;  // the same without the -0.5 px correction (with_uncorrected only)
@@ -36,7 +36,8 @@ struct TagSweep {
   std::vector<std::string> missed;  // expected tags that were not detected
 };
 
-void DetectOnAllViews(const Scene& scene, bool with_uncorrected, TagSweep* sweep) {
+// Every camera at every `stop_step`-th turntable stop (1: every view).
+void DetectOnViews(const Scene& scene, int stop_step, bool with_uncorrected, TagSweep* sweep) {
   auto renderer = Renderer::Create(scene);
   ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
   auto detector = TagDetector::Create({});
@@ -46,7 +47,7 @@ void DetectOnAllViews(const Scene& scene, bool with_uncorrected, TagSweep* sweep
   auto raw_detector = TagDetector::Create(raw_options);
   ASSERT_TRUE(raw_detector.ok());
   for (size_t cam = 0; cam < scene.cameras.size(); ++cam) {
-    for (int stop = 0; stop < scene.turntable_stops; ++stop) {
+    for (int stop = 0; stop < scene.turntable_stops; stop += stop_step) {
       RenderOptions options;
       options.noise_seed = 1000 * cam + static_cast<uint64_t>(stop);
       auto view = (*renderer)->Render(static_cast<int>(cam), scene.StopAngleDeg(stop), options);
@@ -118,7 +119,7 @@ TEST(RenderedTags, DetectedWithUnbiasedCornersOnAllDefaultViews) {
   auto scene = LoadScene("etc/scenes/default.yaml");
   ASSERT_TRUE(scene.ok()) << scene.status().ToString();
   TagSweep sweep;
-  ASSERT_NO_FATAL_FAILURE(DetectOnAllViews(*scene, true, &sweep));
+  ASSERT_NO_FATAL_FAILURE(DetectOnViews(*scene, 1, true, &sweep));
   std::printf("without the -0.5 px correction: bias %.4f px\n", sweep.uncorrected.BiasPx());
   EXPECT_GT(sweep.expected, 100);
   EXPECT_EQ(sweep.found_expected, sweep.expected);
@@ -133,17 +134,18 @@ TEST(RenderedTags, DetectedWithUnbiasedCornersOnAllDefaultViews) {
 
 // libapriltag fits straight tag edges, so lens distortion biases its corners:
 // docs/accuracy.md's 0.008 px with no distortion and 0.026 px with twice the default
-// lenses' (about 2 % at the image corners), each held within 2x.
+// lenses' (about 2 % at the image corners), each held within 2x. Every
+// other stop: the bias is a mean over hundreds of corners either way.
 TEST(RenderedTags, CornerBiasGrowsWithLensDistortion) {
   auto scene = LoadScene("etc/scenes/default.yaml");
   ASSERT_TRUE(scene.ok()) << scene.status().ToString();
   TagSweep none, doubled;
   std::printf("no lens distortion:\n");
-  ASSERT_NO_FATAL_FAILURE(DetectOnAllViews(WithDistortionScaled(*scene, 0), false, &none));
+  ASSERT_NO_FATAL_FAILURE(DetectOnViews(WithDistortionScaled(*scene, 0), 2, false, &none));
   std::printf("twice the default lens distortion:\n");
-  ASSERT_NO_FATAL_FAILURE(DetectOnAllViews(WithDistortionScaled(*scene, 2), false, &doubled));
-  EXPECT_GT(none.corrected.corners, 400);
-  EXPECT_GT(doubled.corrected.corners, 400);
+  ASSERT_NO_FATAL_FAILURE(DetectOnViews(WithDistortionScaled(*scene, 2), 2, false, &doubled));
+  EXPECT_GT(none.corrected.corners, 300);
+  EXPECT_GT(doubled.corrected.corners, 300);
   EXPECT_EQ(none.wrong_ids, 0);
   EXPECT_EQ(doubled.wrong_ids, 0);
   EXPECT_LT(none.corrected.BiasPx(), 0.016);
