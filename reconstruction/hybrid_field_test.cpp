@@ -10,14 +10,17 @@
 namespace hairrig {
 namespace {
 
+// Voxel (x, y, z)'s index, as SolveLaplace lays the grid out (x fastest).
+size_t VoxelIndex(const Eigen::Vector3i& size, int x, int y, int z) {
+  return static_cast<size_t>(x + size.x() * (y + size.y() * z));
+}
+
 // Fixed voxels on the faces x = 0 and x = nx - 1 hold a value linear in x
 // (per channel: a different slope); the other faces are mirrors, so the
 // harmonic interpolant is that linear function everywhere; enough sweeps
 // reach it. Returns channel 0's values.
 std::vector<float> ExpectLinearInX(const Eigen::Vector3i& size, int channels, int sweeps) {
-  const auto index = [&](int x, int y, int z) {
-    return static_cast<size_t>(x + size.x() * (y + size.y() * z));
-  };
+  const auto index = [&](int x, int y, int z) { return VoxelIndex(size, x, y, z); };
   const size_t voxels = static_cast<size_t>(size.x()) * size.y() * size.z();
   std::vector<uint8_t> fixed(voxels, 0);
   std::vector<float> values(voxels * static_cast<size_t>(channels), 0.f);
@@ -59,9 +62,7 @@ TEST(SolveLaplace, LinearBetweenFixedFacesForEveryChannelCount) {
 // ends at it, whichever axis it varies along.
 TEST(SolveLaplace, LinearFunctionThroughTheCoarseLevels) {
   const Eigen::Vector3i size(20, 12, 10);
-  const auto index = [&](int x, int y, int z) {
-    return static_cast<size_t>(x + size.x() * (y + size.y() * z));
-  };
+  const auto index = [&](int x, int y, int z) { return VoxelIndex(size, x, y, z); };
   const auto truth = [](int x, int y, int z) { return static_cast<float>(x + 2 * y - 3 * z); };
   std::vector<uint8_t> fixed(static_cast<size_t>(size.prod()), 0);
   std::vector<float> values(fixed.size(), 0.f);

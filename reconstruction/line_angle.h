@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "core/transform.h"
+
 namespace hairrig {
 
 // The angle of the line along (dx, dy), in degrees in [0, 180) (image axes:
@@ -15,7 +17,6 @@ namespace hairrig {
 // back by 0.0013 deg, harmless where angles are compared to a tolerance.
 // (0, 0) gives 0; NaN gives NaN.
 inline double LineAngleDeg(double dx, double dy) {
-  constexpr double kPiRad = 3.14159265358979323846;
   if (dy < 0 || (dy == 0 && dx < 0)) {  // the same line, pointing into y >= 0
     dx = -dx;
     dy = -dy;
@@ -27,9 +28,9 @@ inline double LineAngleDeg(double dx, double dy) {
   const double t2 = t * t;
   double rad = t * (0.99987873 +
                     t2 * (-0.33040532 + t2 * (0.18041155 + t2 * (-0.08540653 + t2 * 0.0209309))));
-  if (steep) rad = kPiRad / 2 - rad;
-  if (dx < 0) rad = kPiRad - rad;
-  const double deg = rad * (180.0 / kPiRad);
+  if (steep) rad = kPi / 2 - rad;
+  if (dx < 0) rad = kPi - rad;
+  const double deg = rad * (180.0 / kPi);
   return deg >= 180.0 ? 0.0 : deg;
 }
 
