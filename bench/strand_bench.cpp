@@ -9,6 +9,7 @@
 //       [--end-over-skin yes|no] [--segment-curvature-weight W] [--segment-sigma MM]
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
+//       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
@@ -21,6 +22,11 @@
 // capture's points (as many points, reconstruction_evaluation.h PointsFromTruth),
 // the strand stage's ceiling; true-directions keeps the capture's points with the
 // true strands' directions, what the points' directions cost.
+// --curl-field no leaves the curl field out (curl_field.h; the strands past the
+// seen strands then follow helix_continuation.h alone); --curl-oracle gives every
+// strand the curl given (radius, pitch, handedness: the simulated wig's
+// curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
+// the estimate.
 // --scalp-skin-band MM: skin seen behind a vertex above the hairline and within
 // MM of the head is the scalp showing through the hair, not bare skin
 // (SkinViews::ExcludeScalp; 12 as the reconstruction, 0 counts it as skin).
@@ -38,6 +44,7 @@
 // which writes preview_truth.jpg beside them (the model above the ground truth's strands),
 // then the consistency the truth's own strands score at the same count.
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -94,6 +101,7 @@ int main(int argc, char** argv) {
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
+        "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -164,6 +172,16 @@ int main(int argc, char** argv) {
       options.growth.off_hair_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--helix-continuation") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.helix_continuation)) return 2;
+    } else if (std::strcmp(argv[i], "--curl-oracle") == 0) {
+      Curl& curl = options.given_curl;
+      if (std::sscanf(argv[i + 1], "%lf,%lf,%d", &curl.radius_mm, &curl.pitch_mm,
+                      &curl.handedness) < 2 ||
+          std::abs(curl.handedness) != 1) {
+        std::fprintf(stderr, "--curl-oracle: RADIUS_MM,PITCH_MM[,+1|-1], not '%s'\n", argv[i + 1]);
+        return 2;
+      }
+    } else if (std::strcmp(argv[i], "--curl-field") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.enabled)) return 2;
     } else if (std::strcmp(argv[i], "--helix-window") == 0) {
       options.growth.helix.window_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--helix-min-curvature") == 0) {

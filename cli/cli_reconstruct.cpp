@@ -29,6 +29,7 @@ struct ReconstructArgs {
   std::string trim_tips_over_skin = StrandGrowthOptions{}.trim_tip_over_skin ? "yes" : "no";
   std::string helix_continuation = StrandGrowthOptions{}.helix_continuation ? "yes" : "no";
   std::string cover_segments = SegmentCoverOptions{}.enabled ? "yes" : "no";
+  std::string curls = CurlFieldOptions{}.enabled ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -98,6 +99,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.growth.trim_tip_over_skin = a.trim_tips_over_skin == "yes";
   options.strands.growth.helix_continuation = a.helix_continuation == "yes";
   options.strands.growth.cover.enabled = a.cover_segments == "yes";
+  options.strands.growth.curl.enabled = a.curls == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -155,6 +157,11 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
   cmd->add_option("--helix-continuation", args->helix_continuation,
                   "bao-qi: past the seen strands, carry a curly strand's curl on as a helix about "
                   "the field (yes), or grow it along the field alone as Bao and Qi (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--curls", args->curls,
+                  "bao-qi: estimate the curl from the seen strands and, where the hair is seen to "
+                  "curl, wind strands past the seen strands on that helix (yes), or not (no)")
       ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--cover-segments", args->cover_segments,

@@ -163,6 +163,7 @@ Status StrandGrowthOptions::Check() const {
         "strand tip_skin_margin_px must lie in 0..20 (0 tests the skin as labelled)");
   HR_RETURN_IF_ERROR(skin.Check());
   HR_RETURN_IF_ERROR(cover.Check());
+  HR_RETURN_IF_ERROR(curl.Check());
   return tip_skin.Check();
 }
 
@@ -200,7 +201,8 @@ class FieldGrowth::Step {
       : g_(growth),
         sign_(towards_root ? -1.f : 1.f),
         off_hair_(growth.o_),
-        helix_(growth.o_.helix, growth.o_.step_mm) {}
+        helix_(growth.o_.helix, growth.o_.step_mm),
+        guide_(growth.o_.step_mm) {}
 
   bool operator()(const Eigen::Vector3f& p, const Eigen::Vector3f& previous, Eigen::Vector3f* next,
                   StepStop* stop) {
@@ -210,7 +212,12 @@ class FieldGrowth::Step {
       stop->end = End::kRoot;
       return false;
     }
-    if (!field.Contains(p) || field.Distance(p) > o.volume_bound) {
+    // A strand winding on a curl's helix swings its radius about the curl's
+    // centre line: it leaves the hair when both have.
+    double out_of_hair = field.Distance(p);
+    if (guide_.active())
+      out_of_hair = std::min(out_of_hair, field.Distance(guide_.centre().cast<float>()));
+    if (!field.Contains(p) || out_of_hair > o.volume_bound) {
       stop->end = End::kVolume;
       return false;
     }
@@ -248,7 +255,14 @@ class FieldGrowth::Step {
     continuing_ = false;
     if (following) {
       helix_.Follow(*next);
+      guide_.Stop();
+    } else if (const Curl* curl = g_.curls_ ? g_.curls_->At(p) : nullptr) {
+      axis_ = *next;
+      if (!guide_.active()) guide_.Start(p, previous, axis_, *curl);
+      *next = guide_.Next(p, axis_);
+      continuing_ = true;
     } else {
+      guide_.Stop();
       axis_ = *next;
       continuing_ = helix_.Continue(previous, axis_, next);
     }
@@ -268,13 +282,15 @@ class FieldGrowth::Step {
   float sign_;
   OffHairRun off_hair_;
   HelixContinuation helix_;
+  HelixGuide guide_;
   Eigen::Vector3f axis_ = Eigen::Vector3f::Zero();
   bool continuing_ = false;
 };
 
 FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
-                         const StrandGrowthOptions& options, const SkinViews* skin)
-    : field_(field), head_(head), o_(options), skin_(std::make_unique<Skin>()) {
+                         const StrandGrowthOptions& options, const SkinViews* skin,
+                         const CurlField* curls)
+    : field_(field), head_(head), o_(options), skin_(std::make_unique<Skin>()), curls_(curls) {
   if (o_.end_over_skin && skin != nullptr)
     skin_->ends = std::make_unique<const SkinGrid>(*skin, o_.skin, field.origin(), field.size(),
                                                    field.voxel_mm());

@@ -35,6 +35,7 @@
 #include "core/head_model.h"
 #include "core/status.h"
 #include "core/strands.h"
+#include "reconstruction/curl_field.h"
 #include "reconstruction/helix_continuation.h"
 #include "reconstruction/hybrid_field.h"
 #include "reconstruction/segment_coverage.h"
@@ -134,11 +135,17 @@ struct StrandGrowthOptions {
   // there. 0 tests the skin as labelled.
   int tip_skin_margin_px = 2;
   // Bao & Qi growth only: past the seen strands a curly strand carries its
-  // curl on as a helix about the field's direction (helix_continuation.h);
-  // false grows it along the field alone (the paper; docs/accuracy.md
-  // compares the two).
+  // curl on as a helix about the field's direction (helix_continuation.h,
+  // or where the hair is seen to curl, the curl field's helix below); false
+  // grows it along the field alone (the paper; docs/accuracy.md compares
+  // them).
   bool helix_continuation = true;
   HelixContinuationOptions helix;
+  // Bao & Qi growth only: where the hair is seen to curl (curl_field.h),
+  // a strand past the seen strands winds on the estimated helix about the
+  // field's direction (helix_guide.h) in place of the continuation above.
+  // curl.enabled = false: the continuation everywhere.
+  CurlFieldOptions curl;
   SegmentCoverOptions cover;  // Bao & Qi growth only
   int threads = 2;
 
@@ -161,12 +168,14 @@ struct StrandGrowthSummary {
 };
 
 // Bao & Qi's growth in a hybrid field. `head` (may be null: no head, no
-// strands through segments) and `skin` (may be null: no skin test) in the
-// field's frame; all three and `options` must outlive the object.
+// strands through segments), `skin` (may be null: no skin test) and `curls`
+// (may be null: no curl field) in the field's frame; all four and `options`
+// must outlive the object.
 class FieldGrowth {
  public:
   FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
-              const StrandGrowthOptions& options, const SkinViews* skin);
+              const StrandGrowthOptions& options, const SkinViews* skin,
+              const CurlField* curls = nullptr);
   ~FieldGrowth();
 
   // Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
@@ -207,6 +216,7 @@ class FieldGrowth {
   const HeadModel* head_;
   const StrandGrowthOptions& o_;
   std::unique_ptr<Skin> skin_;
+  const CurlField* curls_;
 };
 
 // FieldGrowth(field, head, options, skin).FromRoots(roots, summary).

@@ -326,6 +326,56 @@ double MeanMissOfAWavyStrand(double follow_radius_mm) {
   return count > 0 ? sum / count : 1e9;
 }
 
+// Hair hanging down z from z = 200 to 100: seen strands 4 mm apart in x and
+// y, roots between them (no seen strand within the follow radius). Where a curl
+// is given, the strands wind on its helix about the field's direction: each
+// stays its radius from a vertical centre line and is longer than its drop
+// by 1 / cos(helix angle). Without one they hang straight.
+TEST(GrowStrandsInField, WhereTheHairCurlsStrandsWindOnItsHelix) {
+  std::vector<StrandSegment> hair;
+  for (float x = -24; x <= 24; x += 4) {
+    for (float y = -24; y <= 24; y += 4) {
+      StrandSegment s;
+      for (float z = 200; z >= 100; z -= 2) s.points_mm.emplace_back(x, y, z);
+      hair.push_back(std::move(s));
+    }
+  }
+  std::vector<DirectedRoot> roots;
+  for (float y = -14; y <= 10; y += 8) roots.push_back({{2, y, 198}, {0, 0, -1}});
+  const auto field = HybridOrientationField::Build(hair, roots, nullptr, HybridFieldOptions{});
+  ASSERT_TRUE(field.ok()) << field.status().ToString();
+  // 64 deg off the axis: more than the 60 deg within which a strand follows a seen one.
+  const Curl curl{4, 12, 1};
+  const CurlField curls = CurlField::Everywhere(curl);
+  const StrandGrowthOptions options;
+  for (const CurlField* given : {&curls, static_cast<const CurlField*>(nullptr)}) {
+    const StrandSet strands =
+        FieldGrowth(*field, nullptr, options, nullptr, given).FromRoots(roots, nullptr);
+    ASSERT_EQ(strands.num_strands(), roots.size());
+    const std::vector<double> lengths = strands.StrandLengths();
+    const std::vector<size_t> offsets = strands.Offsets();
+    for (size_t k = 0; k < roots.size(); ++k) {
+      const Eigen::Vector3f tip = strands.points_mm[offsets[k + 1] - 1];
+      const double drop = roots[k].position_mm.z() - tip.z();
+      ASSERT_GT(drop, 50) << "strand " << k;
+      if (given == nullptr) {
+        EXPECT_NEAR(lengths[k] / drop, 1.0, 0.02) << "strand " << k;
+        continue;
+      }
+      EXPECT_NEAR(lengths[k] / drop, 1 / std::cos(curl.HelixAngle()), 0.15) << "strand " << k;
+      // Away from the root, the strand keeps the radius about its mean line.
+      Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+      const size_t first = offsets[k] + 20, last = offsets[k + 1];
+      for (size_t i = first; i < last; ++i) mean += strands.points_mm[i].head<2>().cast<double>();
+      mean /= static_cast<double>(last - first);
+      for (size_t i = first; i < last; ++i)
+        EXPECT_NEAR((strands.points_mm[i].head<2>().cast<double>() - mean).norm(), curl.radius_mm,
+                    1.0)
+            << "strand " << k << " vertex " << i - offsets[k];
+    }
+  }
+}
+
 TEST(GrowStrandsInField, StrandsFollowASeenStrandCloserThanTheGridAlone) {
   const double following = MeanMissOfAWavyStrand(1.0);
   const double field_only = MeanMissOfAWavyStrand(0.0);

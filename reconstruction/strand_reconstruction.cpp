@@ -147,8 +147,11 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   t = SteadyNowNs();
   StrandGrowthOptions growth = o.growth;
   growth.threads = o.threads;
+  const CurlField curls = o.given_curl.curly() ? CurlField::Everywhere(o.given_curl)
+                                               : CurlField::Estimate(segments, growth.curl);
+  summary->curl = curls.estimate();
   StrandModel model;
-  const FieldGrowth grow(field, &head, growth, skin);
+  const FieldGrowth grow(field, &head, growth, skin, &curls);
   model.strands = grow.FromRoots(roots, &summary->growth);
   grow.ThroughUncoveredSegments(segments, &model.strands, &summary->growth);
   summary->seconds_growth = SecondsSince(t);
@@ -297,6 +300,7 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                           {"no_root", growth.cover_no_root},
                           {"trimmed_away", growth.cover_trimmed_away}}},
                         {"dropped_short", growth.dropped_short}}},
+                      {"curl", curl.ToJson()},
                       // EndMergedStrands after growth: "strands" counts what was grown.
                       {"merging",
                        {{"ended_where_merged", merging.strands_ended},
@@ -341,6 +345,16 @@ std::string StrandReconstructionSummary::BriefReport() const {
     return s.str();
   }
   s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
+  if (curl.curl.curly()) {
+    s << "  curls: radius " << curl.curl.radius_mm << " mm, pitch " << curl.curl.pitch_mm << " mm, "
+      << (curl.curl.handedness > 0 ? "right" : "left") << "-handed, from " << curl.arcs
+      << " seen arcs (" << 100 * curl.arc_share << " % of the seen length; "
+      << 100 * curl.handedness_agreement << " % of it turning that way)\n";
+  } else if (curl.arcs > 0) {
+    s << "  no curls: " << curl.arcs << " seen arcs, " << 100 * curl.arc_share
+      << " % of the seen length, " << 100 * curl.handedness_agreement
+      << " % of it turning one way\n";
+  }
   if (growth.stopped_over_skin + growth.tips_trimmed_over_skin > 0) {
     s << "  ended in front of skin the views see: " << growth.stopped_over_skin
       << " strands; tips trimmed back from skin: " << growth.tips_trimmed_over_skin << "\n";

@@ -57,9 +57,12 @@ struct StrandReconstructionOptions {
   // RootDirection in strand_growth.h). 90 is Bao & Qi's scalp normal.
   double root_elevation_deg = 45;
   SegmentGrowthOptions segments;
-  DirectionOptions direction;               // bao-qi
-  HybridFieldOptions field;                 // bao-qi
-  StrandGrowthOptions growth;               // bao-qi, naive
+  DirectionOptions direction;  // bao-qi
+  HybridFieldOptions field;    // bao-qi
+  StrandGrowthOptions growth;  // bao-qi, naive
+  // bao-qi: a curl known beforehand (curly()) in place of the one estimated
+  // from the seen strands (growth.curl), everywhere in the hair.
+  Curl given_curl;
   StrandMergeOptions merging;               // bao-qi
   RibbonOptions ribbons;                    // luo
   ConnectionOptions connections;            // luo
@@ -79,6 +82,7 @@ struct StrandReconstructionSummary {
   int64_t points = 0;
   SegmentGrowthSummary segments;
   DirectionSummary direction;
+  CurlEstimate curl;           // bao-qi: the curl the growth winds on
   StrandGrowthSummary growth;  // luo: the synthesised strands' count, vertices and mean length
   StrandMergeSummary merging;  // bao-qi, after growth (growth counts the strands grown)
   RibbonSummary ribbons;

@@ -1,0 +1,236 @@
+#include "reconstruction/curl_field.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace hairrig {
+
+namespace {
+
+// A cell of a sparse grid of `cell_mm` cubes, as one key.
+int64_t CellKey(const Eigen::Vector3i& c) {
+  constexpr int64_t kBias = 1 << 20, kSpan = 1 << 21;
+  return ((c.x() + kBias) * kSpan + (c.y() + kBias)) * kSpan + (c.z() + kBias);
+}
+
+Eigen::Vector3i CellOf(const Eigen::Vector3f& p, double cell_mm) {
+  return (p.cast<double>() / cell_mm).array().floor().cast<int>();
+}
+
+template <typename Visit>
+void ForNeighbourCells(const Eigen::Vector3i& c, Visit visit) {
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) visit(CellKey(c + Eigen::Vector3i(dx, dy, dz)));
+}
+
+// The seen strands' axis: the sum of their directed tangents over the 27
+// cells around a point's cell.
+class AxisGrid {
+ public:
+  AxisGrid(const std::vector<StrandSegment>& segments, double cell_mm) : cell_mm_(cell_mm) {
+    std::unordered_map<int64_t, Eigen::Vector3f> sums;
+    for (const StrandSegment& s : segments)
+      for (size_t k = 0; k + 1 < s.points_mm.size(); ++k)
+        sums.try_emplace(CellKey(CellOf(s.points_mm[k], cell_mm)), Eigen::Vector3f::Zero())
+            .first->second += s.points_mm[k + 1] - s.points_mm[k];
+    for (const auto& [key, sum] : sums) {
+      (void)sum;
+      Eigen::Vector3f total = Eigen::Vector3f::Zero();
+      const Eigen::Vector3i c = Unkey(key);
+      ForNeighbourCells(c, [&](int64_t k) {
+        const auto it = sums.find(k);
+        if (it != sums.end()) total += it->second;
+      });
+      if (total.norm() > 1e-6f) axes_[key] = total.normalized();
+    }
+  }
+
+  // Unit, or zero where the seen strands cancel out or are absent.
+  Eigen::Vector3f At(const Eigen::Vector3f& p) const {
+    const auto it = axes_.find(CellKey(CellOf(p, cell_mm_)));
+    return it != axes_.end() ? it->second : Eigen::Vector3f::Zero();
+  }
+
+ private:
+  static Eigen::Vector3i Unkey(int64_t key) {
+    constexpr int64_t kBias = 1 << 20, kSpan = 1 << 21;
+    const int z = static_cast<int>(key % kSpan - kBias);
+    key /= kSpan;
+    const int y = static_cast<int>(key % kSpan - kBias);
+    return {static_cast<int>(key / kSpan - kBias), y, z};
+  }
+
+  double cell_mm_;
+  std::unordered_map<int64_t, Eigen::Vector3f> axes_;
+};
+
+// What one segment says of the curl.
+struct SegmentTurn {
+  double length_mm = 0;
+  double helix_angle = 0;  // mean, rad
+  double rate = 0;         // signed turn of the tangent's part square to the axis, rad/mm
+  double consistency = 0;  // |sum of signed turns| / sum of their sizes
+};
+
+// sin of the least angle to the axis at which a step's turn is measured.
+constexpr double kMinAcross = 0.5;
+
+SegmentTurn TurnAlong(const StrandSegment& segment, const AxisGrid& axes) {
+  SegmentTurn out;
+  const std::vector<Eigen::Vector3f>& p = segment.points_mm;
+  double cos_sum = 0, turn_sum = 0, turn_size = 0, turn_length = 0;
+  int steps = 0;
+  Eigen::Vector3d previous_across = Eigen::Vector3d::Zero();
+  for (size_t k = 0; k + 1 < p.size(); ++k) {
+    const Eigen::Vector3d step = (p[k + 1] - p[k]).cast<double>();
+    const double length = step.norm();
+    const Eigen::Vector3d a = axes.At(p[k]).cast<double>();
+    if (length < 1e-9 || a.squaredNorm() < 0.5) {
+      previous_across.setZero();
+      continue;
+    }
+    const Eigen::Vector3d t = step / length;
+    out.length_mm += length;
+    cos_sum += std::clamp(t.dot(a), -1.0, 1.0);
+    ++steps;
+    Eigen::Vector3d across = t - t.dot(a) * a;
+    // Too close to the axis for its side to say which way it turns: on a
+    // ringlet, the stretches the views see along its outline.
+    if (across.norm() < kMinAcross) {
+      previous_across.setZero();
+      continue;
+    }
+    across.normalize();
+    if (previous_across.squaredNorm() > 0) {
+      const double turn =
+          std::atan2(previous_across.cross(across).dot(a), previous_across.dot(across));
+      turn_sum += turn;
+      turn_size += std::abs(turn);
+      turn_length += length;
+    }
+    previous_across = across;
+  }
+  if (steps == 0) return out;
+  // A segment that runs against its neighbours' mean direction winds about
+  // the same axis the other way along it: the angle is to the axis' line,
+  // and the turns, measured about the neighbours' way, change sign (a
+  // helix's handedness does not depend on the way it is run along).
+  const double sense = cos_sum >= 0 ? 1.0 : -1.0;
+  out.helix_angle = std::acos(std::clamp(std::abs(cos_sum) / steps, 0.0, 1.0));
+  out.rate = turn_length > 0 ? sense * turn_sum / turn_length : 0;
+  out.consistency = turn_size > 0 ? std::abs(turn_sum) / turn_size : 0;
+  return out;
+}
+
+// The value below which half the weight lies.
+double WeightedMedian(std::vector<std::pair<double, double>> value_weight) {
+  if (value_weight.empty()) return 0;
+  std::sort(value_weight.begin(), value_weight.end());
+  double total = 0;
+  for (const auto& vw : value_weight) total += vw.second;
+  double run = 0;
+  for (const auto& [value, weight] : value_weight) {
+    run += weight;
+    if (run >= total / 2) return value;
+  }
+  return value_weight.back().first;
+}
+
+}  // namespace
+
+Status CurlFieldOptions::Check() const {
+  if (!(axis_cell_mm > 0)) return InvalidArgument("curl axis_cell_mm must be positive");
+  if (!(min_arc_angle_deg > 0 && min_arc_angle_deg < 90))
+    return InvalidArgument("curl min_arc_angle_deg must lie in (0, 90)");
+  if (!(min_arc_length_mm > 0)) return InvalidArgument("curl min_arc_length_mm must be positive");
+  if (!(min_turn_consistency >= 0 && min_turn_consistency <= 1))
+    return InvalidArgument("curl min_turn_consistency must lie in [0, 1]");
+  if (min_arcs < 1) return InvalidArgument("curl min_arcs must be at least 1");
+  if (!(min_arc_share >= 0 && min_arc_share <= 1))
+    return InvalidArgument("curl min_arc_share must lie in [0, 1]");
+  if (!(min_handedness_agreement >= 0.5 && min_handedness_agreement <= 1))
+    return InvalidArgument("curl min_handedness_agreement must lie in [0.5, 1]");
+  if (!(region_mm > 0)) return InvalidArgument("curl region_mm must be positive");
+  if (!(min_radius_mm > 0 && max_radius_mm >= min_radius_mm))
+    return InvalidArgument("curl radii: 0 < min_radius_mm <= max_radius_mm");
+  return Status::Ok();
+}
+
+nlohmann::json CurlEstimate::ToJson() const {
+  return {{"curly", curl.curly()},
+          {"radius_mm", curl.radius_mm},
+          {"pitch_mm", curl.pitch_mm},
+          {"handedness", curl.handedness},
+          {"arcs", arcs},
+          {"arc_share", arc_share},
+          {"helix_angle_deg", helix_angle_deg},
+          {"rate_per_mm", rate_per_mm},
+          {"handedness_agreement", handedness_agreement}};
+}
+
+// The cells (region_mm) within one cell of a seen arc's.
+struct CurlField::Region {
+  double cell_mm = 20;
+  std::unordered_set<int64_t> cells;
+};
+
+CurlField CurlField::Everywhere(const Curl& curl) {
+  CurlField field;
+  field.estimate_.curl = curl;
+  return field;
+}
+
+CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
+                              const CurlFieldOptions& o) {
+  CurlField field;
+  if (!o.enabled || segments.empty()) return field;
+  const AxisGrid axes(segments, o.axis_cell_mm);
+  std::vector<std::pair<double, double>> angles, rates;
+  double seen_mm = 0, arc_mm = 0, right_mm = 0;
+  auto region = std::make_shared<Region>();
+  region->cell_mm = o.region_mm;
+  const double min_angle = o.min_arc_angle_deg * M_PI / 180;
+  for (const StrandSegment& s : segments) {
+    const SegmentTurn turn = TurnAlong(s, axes);
+    seen_mm += turn.length_mm;
+    if (turn.length_mm < o.min_arc_length_mm || turn.helix_angle < min_angle ||
+        turn.consistency < o.min_turn_consistency || turn.rate == 0)
+      continue;
+    ++field.estimate_.arcs;
+    arc_mm += turn.length_mm;
+    if (turn.rate > 0) right_mm += turn.length_mm;
+    angles.emplace_back(turn.helix_angle, turn.length_mm);
+    rates.emplace_back(std::abs(turn.rate), turn.length_mm);
+    for (const Eigen::Vector3f& p : s.points_mm)
+      ForNeighbourCells(CellOf(p, o.region_mm), [&](int64_t k) { region->cells.insert(k); });
+  }
+  CurlEstimate& e = field.estimate_;
+  e.arc_share = seen_mm > 0 ? arc_mm / seen_mm : 0;
+  if (e.arcs == 0) return field;
+  const double alpha = WeightedMedian(angles), rate = WeightedMedian(rates);
+  e.helix_angle_deg = alpha * 180 / M_PI;
+  e.rate_per_mm = rate;
+  e.handedness_agreement = std::max(right_mm, arc_mm - right_mm) / arc_mm;
+  const double radius = std::max(std::sin(alpha) / rate, o.min_radius_mm);
+  if (e.arcs < o.min_arcs || e.arc_share < o.min_arc_share ||
+      e.handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm))
+    return field;
+  e.curl.handedness = right_mm * 2 >= arc_mm ? 1 : -1;
+  e.curl.radius_mm = radius;
+  e.curl.pitch_mm = 2 * M_PI * radius / std::tan(alpha);
+  field.region_ = std::move(region);
+  return field;
+}
+
+const Curl* CurlField::At(const Eigen::Vector3f& p) const {
+  if (!estimate_.curl.curly()) return nullptr;
+  if (region_ && region_->cells.count(CellKey(CellOf(p, region_->cell_mm))) == 0) return nullptr;
+  return &estimate_.curl;
+}
+
+}  // namespace hairrig

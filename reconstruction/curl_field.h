@@ -1,0 +1,95 @@
+// Where the hair curls and how: a curl (helix radius, pitch, handedness)
+// estimated from the seen strands, and the region near the seen curls in
+// which strand growth winds on that helix (helix_guide.h, strand_growth.h).
+//
+// Inside ringlets no view sees the strands, and Bao & Qi's Laplace field
+// (Sec. IV-A, Eq. 1) there runs along the curls' axis: a strand grown along
+// it is straight, every true tangent its helix angle off. The seen strands
+// show the curl only in part (the views see the front arcs of each ringlet;
+// most seen stretches follow the ringlets' outline, along the axis), so the
+// estimate takes the arcs that clearly wind:
+//   - the axis at a point is the mean direction of the directed seen strands
+//     within a box about 3 axis_cell_mm wide (the sum over the 27 cells
+//     around the point's cell): over several ringlets it averages their turns
+//     away and leaves their common axis;
+//   - along a segment, each step's tangent t has the helix angle
+//     acos(t . a) to the axis a, and its part square to the axis turns about
+//     a at the rate sin(alpha) / r per mm, signed by the handedness (a
+//     helix of radius r, helix_guide.h);
+//   - an arc is a segment of at least min_arc_length_mm whose mean helix
+//     angle is at least min_arc_angle_deg and whose turns go mostly one way
+//     (the sum of the signed turns at least min_turn_consistency of the sum
+//     of their sizes);
+//   - the curl: alpha and the turn rate, each the median over the arcs
+//     (weighted by length), give r = sin(alpha) / rate and
+//     P = 2 pi cos(alpha) / rate; the handedness is the length-weighted
+//     majority's.
+// The hair counts as curly when at least min_arcs arcs hold at least
+// min_arc_share of the seen length, at least min_handedness_agreement of
+// their length turns the majority's way (a ringlet winds one way; the arcs of
+// waves and of stray bends turn either way about as often) and the radius is
+// at most max_radius_mm (wider is a wave, not a curl). Not in Bao & Qi, whose growth follows
+// the field alone.
+//
+// Units: mm and radians unless a name says deg; the segments' frame.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json_fwd.hpp>
+#include <vector>
+
+#include "core/status.h"
+#include "reconstruction/helix_guide.h"
+#include "reconstruction/strand_segments.h"
+
+namespace hairrig {
+
+struct CurlFieldOptions {
+  bool enabled = true;  // false: no curl (growth as without it)
+  double axis_cell_mm = 10;
+  double min_arc_angle_deg = 35;
+  double min_arc_length_mm = 15;
+  double min_turn_consistency = 0.5;
+  int min_arcs = 30;
+  double min_arc_share = 0.01;
+  double min_handedness_agreement = 0.7;
+  // Strands wind within about this of a seen arc (the cells of this size
+  // around the arcs' cells).
+  double region_mm = 20;
+  // A smaller estimated radius is raised to min_radius_mm; a larger one than
+  // max_radius_mm is no curl.
+  double min_radius_mm = 2, max_radius_mm = 20;
+  // InvalidArgument naming the field for a value out of range.
+  Status Check() const;
+};
+
+struct CurlEstimate {
+  Curl curl;  // not curly(): the hair does not curl (or too few arcs say so)
+  int64_t arcs = 0;
+  double arc_share = 0;  // of the directed segments' length
+  double helix_angle_deg = 0, rate_per_mm = 0;
+  double handedness_agreement = 0;  // the majority's share of the arcs' length, in [0.5, 1]
+  nlohmann::json ToJson() const;
+};
+
+class CurlField {
+ public:
+  // From the directed segments (root to tip, strand_direction.h).
+  static CurlField Estimate(const std::vector<StrandSegment>& segments,
+                            const CurlFieldOptions& options);
+  // One curl everywhere (a curl known beforehand, or the truth's in a bench).
+  static CurlField Everywhere(const Curl& curl);
+
+  const CurlEstimate& estimate() const { return estimate_; }
+  // The curl strands at p wind on; nullptr where the hair is not seen to curl.
+  const Curl* At(const Eigen::Vector3f& p) const;
+
+ private:
+  struct Region;
+  CurlEstimate estimate_;
+  std::shared_ptr<const Region> region_;  // null: everywhere (when curly)
+};
+
+}  // namespace hairrig

@@ -1,0 +1,144 @@
+#include "reconstruction/curl_field.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "reconstruction/helix_guide.h"
+
+namespace hairrig {
+namespace {
+
+// A point of a helix hanging down -z from `top` (mm): radius r, pitch P,
+// handedness h (right-handed: anticlockwise seen from its tip below, as it
+// runs down), at arc length s from the start at phase `phase`.
+Eigen::Vector3f HelixPoint(const Eigen::Vector3f& top, double r, double pitch, int h, double phase,
+                           double s) {
+  const double c = pitch / (2 * M_PI), l = std::hypot(r, c), t = s / l;
+  // Down -z, a right-handed turn about -z is clockwise seen from above.
+  const double angle = phase - h * t;
+  return top + Eigen::Vector3d(r * std::cos(angle), r * std::sin(angle), -c * t).cast<float>();
+}
+
+StrandSegment HelixSegment(const Eigen::Vector3f& top, double r, double pitch, int h, double phase,
+                           double from_mm, double length_mm) {
+  StrandSegment segment;
+  for (double s = from_mm; s <= from_mm + length_mm; s += 1.0)
+    segment.points_mm.push_back(HelixPoint(top, r, pitch, h, phase, s));
+  return segment;
+}
+
+// The distance from p to the helix's axis line, less the radius.
+double OffHelixMm(const Eigen::Vector3f& p, const Eigen::Vector3f& top, double r) {
+  return std::abs(std::hypot(p.x() - top.x(), p.y() - top.y()) - r);
+}
+
+TEST(HelixGuide, WindsOnTheHelixItStartsOn) {
+  for (const int h : {1, -1}) {
+    const Eigen::Vector3f top(0, 0, 0);
+    const double r = 6, pitch = 20, step = 1.0;
+    const Curl curl{r, pitch, h};
+    HelixGuide guide(step);
+    Eigen::Vector3f p = HelixPoint(top, r, pitch, h, 0.3, 0);
+    const Eigen::Vector3f tangent = (HelixPoint(top, r, pitch, h, 0.3, 0.01) - p).normalized();
+    guide.Start(p, tangent, -Eigen::Vector3f::UnitZ(), curl);
+    double worst = 0;
+    const double turn = std::hypot(2 * M_PI * r, pitch);
+    for (double s = 0; s < 3 * turn; s += step) {
+      p += guide.Next(p, -Eigen::Vector3f::UnitZ()) * static_cast<float>(step);
+      worst = std::max(worst, OffHelixMm(p, top, r));
+    }
+    EXPECT_LT(worst, 0.1) << "handedness " << h;
+    // Three turns down: the pitch held.
+    EXPECT_NEAR(-p.z(), 3 * pitch, 0.5) << "handedness " << h;
+  }
+}
+
+TEST(HelixGuide, DrawsAStrayStrandBack) {
+  const Curl curl{6, 20, 1};
+  HelixGuide guide(1.0);
+  const Eigen::Vector3f axis = -Eigen::Vector3f::UnitZ();
+  Eigen::Vector3f p(6, 0, 0);
+  guide.Start(p, Eigen::Vector3f(0, -1, -1).normalized(), axis, curl);
+  p.x() += 1.5f;  // pushed out (as the head's clearance does)
+  for (int k = 0; k < 20; ++k) p += guide.Next(p, axis);
+  const Eigen::Vector3d centre = guide.centre();
+  EXPECT_NEAR(std::hypot(p.x() - centre.x(), p.y() - centre.y()), 6.0, 0.3);
+}
+
+// Ringlets on an 8 mm grid (closer than their 12 mm width, as ringlets hang
+// on a head), each seen as a few arcs of about two thirds of a turn.
+std::vector<StrandSegment> Ringlets(double r, double pitch, int h) {
+  std::vector<StrandSegment> segments;
+  int k = 0;
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 12; ++j, ++k) {
+      const Eigen::Vector3f top(8.0f * static_cast<float>(i), 8.0f * static_cast<float>(j), 0);
+      const double phase = 0.7 * k;
+      for (double from = 0; from < 120; from += 40)
+        segments.push_back(HelixSegment(top, r, pitch, h, phase, from, 24));
+    }
+  }
+  return segments;
+}
+
+TEST(CurlField, EstimatesTheRingletsCurl) {
+  for (const int h : {1, -1}) {
+    const CurlField field = CurlField::Estimate(Ringlets(6, 20, h), CurlFieldOptions{});
+    const CurlEstimate& e = field.estimate();
+    ASSERT_TRUE(e.curl.curly()) << "handedness " << h;
+    EXPECT_EQ(e.curl.handedness, h);
+    EXPECT_NEAR(e.curl.radius_mm, 6, 1.2);
+    EXPECT_NEAR(e.curl.pitch_mm, 20, 4);
+    EXPECT_GT(e.handedness_agreement, 0.9);
+    // In the ringlets' region, and not far away from it.
+    EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
+    EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
+  }
+}
+
+TEST(CurlField, StraightAndWavyHairDoNotCurl) {
+  std::vector<StrandSegment> straight, wavy;
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 20; ++j) {
+      StrandSegment s, w;
+      for (int k = 0; k < 60; ++k) {
+        const float x = 4.0f * static_cast<float>(i), y = 4.0f * static_cast<float>(j);
+        const float z = -static_cast<float>(k);
+        s.points_mm.emplace_back(x + 0.05f * static_cast<float>(k), y, z);
+        // A wave in one plane: 3 mm amplitude, 30 mm period.
+        w.points_mm.emplace_back(x + 3.0f * std::sin(2 * static_cast<float>(M_PI) * z / 30), y, z);
+      }
+      straight.push_back(std::move(s));
+      wavy.push_back(std::move(w));
+    }
+  }
+  for (const auto* segments : {&straight, &wavy}) {
+    const CurlField field = CurlField::Estimate(*segments, CurlFieldOptions{});
+    EXPECT_FALSE(field.estimate().curl.curly());
+    EXPECT_EQ(field.At(Eigen::Vector3f(40, 40, -30)), nullptr);
+  }
+}
+
+TEST(CurlField, EverywhereAndOff) {
+  const CurlField given = CurlField::Everywhere(Curl{6, 20, -1});
+  ASSERT_NE(given.At(Eigen::Vector3f(1e4f, 0, 0)), nullptr);
+  EXPECT_EQ(given.At(Eigen::Vector3f::Zero())->handedness, -1);
+  CurlFieldOptions off;
+  off.enabled = false;
+  EXPECT_FALSE(CurlField::Estimate(Ringlets(6, 20, 1), off).estimate().curl.curly());
+}
+
+TEST(CurlField, OptionsNameTheirField) {
+  CurlFieldOptions o;
+  o.min_arc_angle_deg = 95;
+  EXPECT_NE(o.Check().message().find("min_arc_angle_deg"), std::string::npos);
+  o = CurlFieldOptions{};
+  o.max_radius_mm = 1;
+  EXPECT_NE(o.Check().message().find("radii"), std::string::npos);
+  EXPECT_TRUE(CurlFieldOptions{}.Check().ok());
+}
+
+}  // namespace
+}  // namespace hairrig

@@ -1,0 +1,56 @@
+#include "reconstruction/helix_guide.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace hairrig {
+
+double Curl::HelixAngle() const {
+  if (!curly()) return 0;
+  return std::atan2(2 * M_PI * radius_mm, pitch_mm);
+}
+
+namespace {
+
+// `v` made square to unit `a` and unit; `fallback` when it lies along `a`.
+Eigen::Vector3d SquareTo(const Eigen::Vector3d& v, const Eigen::Vector3d& a,
+                         const Eigen::Vector3d& fallback) {
+  const Eigen::Vector3d across = v - v.dot(a) * a;
+  const double n = across.norm();
+  return n > 1e-6 ? Eigen::Vector3d(across / n) : fallback;
+}
+
+}  // namespace
+
+void HelixGuide::Start(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent,
+                       const Eigen::Vector3f& axis, const Curl& curl) {
+  curl_ = curl;
+  const double alpha = curl.HelixAngle();
+  cos_alpha_ = std::cos(alpha);
+  sin_alpha_ = std::sin(alpha);
+  const Eigen::Vector3d t = tangent.cast<double>().normalized();
+  axis_ = axis.cast<double>().normalized();
+  if (t.dot(axis_) < 0) axis_ = -axis_;
+  // The tangent is cos(alpha) a + sin(alpha) b with b = h (a x e) its part
+  // square to the axis; so e = -h (a x b).
+  const Eigen::Vector3d b = SquareTo(t, axis_, axis_.unitOrthogonal());
+  radial_ = -static_cast<double>(curl.handedness) * axis_.cross(b);
+  centre_ = p.cast<double>() - curl.radius_mm * radial_;
+  active_ = true;
+}
+
+Eigen::Vector3f HelixGuide::Next(const Eigen::Vector3f& p, const Eigen::Vector3f& axis) {
+  Eigen::Vector3d a = axis.cast<double>().normalized();
+  if (!a.allFinite()) a = axis_;
+  if (a.dot(axis_) < 0) a = -a;
+  axis_ = a;
+  radial_ = SquareTo(radial_, a, a.unitOrthogonal());
+  centre_ += step_mm_ * cos_alpha_ * a;
+  const double turn = curl_.handedness * step_mm_ * sin_alpha_ / curl_.radius_mm;
+  radial_ = std::cos(turn) * radial_ + std::sin(turn) * a.cross(radial_);
+  const Eigen::Vector3d to_next = centre_ + curl_.radius_mm * radial_ - p.cast<double>();
+  const double n = to_next.norm();
+  return (n > 1e-9 ? Eigen::Vector3d(to_next / n) : a).cast<float>();
+}
+
+}  // namespace hairrig

@@ -1,0 +1,67 @@
+// A strand grown along a helix of known radius and pitch whose axis follows
+// a direction field: the curl a ringlet keeps where no view sees it.
+//
+// A helix of radius r and pitch P (one turn advances P along its axis a) is
+// the curve c(s) + r e(s): its centre c moves along a by ds cos(alpha) per
+// arc length ds, and the unit radial e (square to a) turns about a by
+// h ds sin(alpha) / r, with tan(alpha) = 2 pi r / P the helix angle between
+// the strand and its axis and h = +1 (right-handed: e turns anticlockwise
+// about a seen from the tip) or -1. Bao & Qi fit hair with such pieces
+// (Sec. V-A, the floating tangents' helical elements; their curvature
+// r / (r^2 + c^2) and torsion c / (r^2 + c^2) with c = P / 2 pi).
+//
+// HelixGuide starts the helix from a strand's point and tangent (the point
+// lies on it; the tangent's part square to the axis fixes where the centre
+// lies) and then gives, step by step, the direction towards the helix's next
+// point: a strand that strays from it (the head pushes it out) is drawn back,
+// and the centre moves along the axis given at each step, so the helix bends
+// as the field does.
+//
+// Units: mm and radians; directions unit vectors in the points' frame.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace hairrig {
+
+struct Curl {
+  double radius_mm = 0;  // 0: no curl (a straight strand)
+  double pitch_mm = 0;
+  int handedness = 1;  // +1 right-handed, -1 left-handed
+
+  bool curly() const { return radius_mm > 0 && pitch_mm > 0; }
+  // tan(alpha) = 2 pi r / P, in [0, pi / 2).
+  double HelixAngle() const;
+};
+
+class HelixGuide {
+ public:
+  explicit HelixGuide(double step_mm) : step_mm_(step_mm) {}
+
+  // Starts a helix through `p` with the strand's direction `tangent` about
+  // `axis` (unit; the strand's way along it is the sign of tangent . axis).
+  // A tangent along the axis leaves the centre's side undetermined: it is
+  // then taken square to the axis in a fixed way.
+  void Start(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent, const Eigen::Vector3f& axis,
+             const Curl& curl);
+  void Stop() { active_ = false; }
+  bool active() const { return active_; }
+
+  // The unit direction from `p` (the strand's last vertex) towards the
+  // helix's point one step on, its centre moved along `axis` (unit, oriented
+  // as at Start; flipped to it when given the other way).
+  Eigen::Vector3f Next(const Eigen::Vector3f& p, const Eigen::Vector3f& axis);
+
+  const Eigen::Vector3d& centre() const { return centre_; }
+
+ private:
+  double step_mm_;
+  bool active_ = false;
+  Curl curl_;
+  double cos_alpha_ = 1, sin_alpha_ = 0;
+  Eigen::Vector3d centre_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_ = Eigen::Vector3d::UnitZ();    // the strand's way along the axis
+  Eigen::Vector3d radial_ = Eigen::Vector3d::UnitX();  // e: from the centre to the strand
+};
+
+}  // namespace hairrig
