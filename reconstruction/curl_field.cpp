@@ -156,6 +156,8 @@ Status CurlFieldOptions::Check() const {
   if (!(min_handedness_agreement >= 0.5 && min_handedness_agreement <= 1))
     return InvalidArgument("curl min_handedness_agreement must lie in [0.5, 1]");
   if (!(region_mm > 0)) return InvalidArgument("curl region_mm must be positive");
+  if (!(max_helix_angle_deg > min_arc_angle_deg && max_helix_angle_deg < 90))
+    return InvalidArgument("curl max_helix_angle_deg must lie in (min_arc_angle_deg, 90)");
   if (!(min_radius_mm > 0 && max_radius_mm >= min_radius_mm))
     return InvalidArgument("curl radii: 0 < min_radius_mm <= max_radius_mm");
   return Status::Ok();
@@ -218,7 +220,8 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   e.handedness_agreement = std::max(right_mm, arc_mm - right_mm) / arc_mm;
   const double radius = std::max(std::sin(alpha) / rate, o.min_radius_mm);
   if (e.arcs < o.min_arcs || e.arc_share < o.min_arc_share ||
-      e.handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm))
+      e.handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
+      e.helix_angle_deg > o.max_helix_angle_deg)
     return field;
   e.curl.handedness = right_mm * 2 >= arc_mm ? 1 : -1;
   e.curl.radius_mm = radius;

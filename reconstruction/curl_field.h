@@ -16,19 +16,20 @@
 //     acos(t . a) to the axis a, and its part square to the axis turns about
 //     a at the rate sin(alpha) / r per mm, signed by the handedness (a
 //     helix of radius r, helix_guide.h);
-//   - an arc is a segment of at least min_arc_length_mm whose mean helix
-//     angle is at least min_arc_angle_deg and whose turns go mostly one way
+//   - an arc is a segment of at least min_arc_length_mm whose helix angle
+//     (acos of the mean |t . a|) is at least min_arc_angle_deg and whose turns go mostly one way
 //     (the sum of the signed turns at least min_turn_consistency of the sum
 //     of their sizes);
 //   - the curl: alpha and the turn rate, each the median over the arcs
-//     (weighted by length), give r = sin(alpha) / rate and
-//     P = 2 pi cos(alpha) / rate; the handedness is the length-weighted
-//     majority's.
+//     (weighted by length), give r = sin(alpha) / rate (raised to
+//     min_radius_mm if less) and the pitch P = 2 pi r / tan(alpha); the
+//     handedness is the length-weighted majority's.
 // The hair counts as curly when at least min_arcs arcs hold at least
 // min_arc_share of the seen length, at least min_handedness_agreement of
 // their length turns the majority's way (a ringlet winds one way; the arcs of
-// waves and of stray bends turn either way about as often) and the radius is
-// at most max_radius_mm (wider is a wave, not a curl). Not in Bao & Qi, whose growth follows
+// waves and of stray bends turn either way about as often), the radius is
+// at most max_radius_mm (wider is a wave, not a curl) and alpha at most
+// max_helix_angle_deg (a flatter coil has next to no pitch). Not in Bao & Qi, whose growth follows
 // the field alone.
 //
 // Units: mm and radians unless a name says deg; the segments' frame.
@@ -55,9 +56,10 @@ struct CurlFieldOptions {
   int min_arcs = 30;
   double min_arc_share = 0.01;
   double min_handedness_agreement = 0.7;
-  // Strands wind within about this of a seen arc (the cells of this size
-  // around the arcs' cells).
+  // Strands wind in the cells of this size next to (or holding) a cell
+  // with a seen arc: from region_mm to about 3.5 region_mm from it.
   double region_mm = 20;
+  double max_helix_angle_deg = 80;
   // A smaller estimated radius is raised to min_radius_mm; a larger one than
   // max_radius_mm is no curl.
   double min_radius_mm = 2, max_radius_mm = 20;
@@ -70,7 +72,8 @@ struct CurlEstimate {
   int64_t arcs = 0;
   double arc_share = 0;  // of the directed segments' length
   double helix_angle_deg = 0, rate_per_mm = 0;
-  double handedness_agreement = 0;  // the majority's share of the arcs' length, in [0.5, 1]
+  // The majority's share of the arcs' length, in [0.5, 1]; 0 without arcs.
+  double handedness_agreement = 0;
   nlohmann::json ToJson() const;
 };
 
@@ -79,6 +82,7 @@ class CurlField {
   // From the directed segments (root to tip, strand_direction.h).
   static CurlField Estimate(const std::vector<StrandSegment>& segments,
                             const CurlFieldOptions& options);
+  // CurlField() has no curl anywhere.
   // One curl everywhere (a curl known beforehand, or the truth's in a bench).
   static CurlField Everywhere(const Curl& curl);
 

@@ -43,13 +43,17 @@ TEST(HelixGuide, WindsOnTheHelixItStartsOn) {
     Eigen::Vector3f p = HelixPoint(top, r, pitch, h, 0.3, 0);
     const Eigen::Vector3f tangent = (HelixPoint(top, r, pitch, h, 0.3, 0.01) - p).normalized();
     guide.Start(p, tangent, -Eigen::Vector3f::UnitZ(), curl);
-    double worst = 0;
+    double worst = 0, worst_from_truth = 0;
     const double turn = std::hypot(2 * M_PI * r, pitch);
-    for (double s = 0; s < 3 * turn; s += step) {
+    for (double s = step; s < 3 * turn; s += step) {
       p += guide.Next(p, -Eigen::Vector3f::UnitZ()) * static_cast<float>(step);
       worst = std::max(worst, OffHelixMm(p, top, r));
+      // The same point of the true helix: the turn's sense and rate held.
+      worst_from_truth = std::max(
+          worst_from_truth, static_cast<double>((p - HelixPoint(top, r, pitch, h, 0.3, s)).norm()));
     }
     EXPECT_LT(worst, 0.1) << "handedness " << h;
+    EXPECT_LT(worst_from_truth, 0.5) << "handedness " << h;
     // Three turns down: the pitch held.
     EXPECT_NEAR(-p.z(), 3 * pitch, 0.5) << "handedness " << h;
   }
@@ -76,8 +80,13 @@ std::vector<StrandSegment> Ringlets(double r, double pitch, int h) {
     for (int j = 0; j < 12; ++j, ++k) {
       const Eigen::Vector3f top(8.0f * static_cast<float>(i), 8.0f * static_cast<float>(j), 0);
       const double phase = 0.7 * k;
-      for (double from = 0; from < 120; from += 40)
+      for (double from = 0; from < 120; from += 40) {
         segments.push_back(HelixSegment(top, r, pitch, h, phase, from, 24));
+        // One ringlet in eight seen the wrong way along (its segments run up):
+        // a helix winds the same way whichever way it is run along.
+        if (k % 8 == 0)
+          std::reverse(segments.back().points_mm.begin(), segments.back().points_mm.end());
+      }
     }
   }
   return segments;
@@ -128,6 +137,13 @@ TEST(CurlField, EverywhereAndOff) {
   CurlFieldOptions off;
   off.enabled = false;
   EXPECT_FALSE(CurlField::Estimate(Ringlets(6, 20, 1), off).estimate().curl.curly());
+}
+
+TEST(Curl, CheckNamesWhatIsWrong) {
+  EXPECT_TRUE(Curl{}.Check().ok());
+  EXPECT_TRUE((Curl{6, 20, -1}.Check().ok()));
+  EXPECT_NE(Curl({INFINITY, 20, 1}).Check().message().find("radius_mm"), std::string::npos);
+  EXPECT_NE(Curl({6, 20, 0}).Check().message().find("handedness"), std::string::npos);
 }
 
 TEST(CurlField, OptionsNameTheirField) {

@@ -5,6 +5,15 @@
 
 namespace hairrig {
 
+Status Curl::Check() const {
+  if (radius_mm == 0 && pitch_mm == 0) return Status::Ok();
+  if (!(std::isfinite(radius_mm) && radius_mm > 0 && std::isfinite(pitch_mm) && pitch_mm > 0))
+    return InvalidArgument("a curl's radius_mm and pitch_mm must be finite and positive");
+  if (handedness != 1 && handedness != -1)
+    return InvalidArgument("a curl's handedness must be +1 (right) or -1 (left)");
+  return Status::Ok();
+}
+
 double Curl::HelixAngle() const {
   if (!curly()) return 0;
   return std::atan2(2 * M_PI * radius_mm, pitch_mm);

@@ -22,6 +22,8 @@
 
 #include <Eigen/Core>
 
+#include "core/status.h"
+
 namespace hairrig {
 
 struct Curl {
@@ -30,6 +32,9 @@ struct Curl {
   int handedness = 1;  // +1 right-handed, -1 left-handed
 
   bool curly() const { return radius_mm > 0 && pitch_mm > 0; }
+  // Ok for no curl (both 0) or a finite positive radius and pitch with
+  // handedness +-1; else InvalidArgument naming the field.
+  Status Check() const;
   // tan(alpha) = 2 pi r / P, in [0, pi / 2).
   double HelixAngle() const;
 };
@@ -38,7 +43,7 @@ class HelixGuide {
  public:
   explicit HelixGuide(double step_mm) : step_mm_(step_mm) {}
 
-  // Starts a helix through `p` with the strand's direction `tangent` about
+  // Starts a helix (`curl` must be curly()) through `p` with the strand's direction `tangent` about
   // `axis` (unit; the strand's way along it is the sign of tangent . axis).
   // A tangent along the axis leaves the centre's side undetermined: it is
   // then taken square to the axis in a fixed way.

@@ -82,7 +82,8 @@ struct StrandReconstructionSummary {
   int64_t points = 0;
   SegmentGrowthSummary segments;
   DirectionSummary direction;
-  CurlEstimate curl;           // bao-qi: the curl the growth winds on
+  // bao-qi: the curl the growth winds on (none with growth.helix_continuation off).
+  CurlEstimate curl;
   StrandGrowthSummary growth;  // luo: the synthesised strands' count, vertices and mean length
   StrandMergeSummary merging;  // bao-qi, after growth (growth counts the strands grown)
   RibbonSummary ribbons;
