@@ -55,7 +55,7 @@ struct CurlFieldOptions {
   double min_turn_consistency = 0.5;
   int min_arcs = 30;
   double min_arc_share = 0.01;
-  double min_handedness_agreement = 0.7;
+  double min_handedness_agreement = 0.65;
   // Strands wind in the cells of this size next to (or holding) a cell
   // with a seen arc: from region_mm to about 3.5 region_mm from it.
   double region_mm = 20;
