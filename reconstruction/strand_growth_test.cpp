@@ -538,6 +538,14 @@ TEST(ReconstructionOptions, CheckNamesTheBadField) {
   EXPECT_TRUE(StrandReconstructionOptions{}.Check().ok());
   EXPECT_TRUE(PointReconstructionOptions{}.Check().ok());
   {
+    StrandReconstructionOptions o;
+    o.given_curl = Curl{6, 20, 0};
+    EXPECT_TRUE(IsInvalidNaming(o.Check(), "given_curl"));
+    o.growth.curl.min_handedness_agreement = 0.4;
+    o.given_curl = Curl{};
+    EXPECT_TRUE(IsInvalidNaming(o.Check(), "min_handedness_agreement"));
+  }
+  {
     MixtureFitOptions o;
     o.variance_floor = std::numeric_limits<double>::infinity();
     EXPECT_TRUE(IsInvalidNaming(o.Check(), "variance_floor"));

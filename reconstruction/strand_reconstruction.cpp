@@ -147,8 +147,10 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
   t = SteadyNowNs();
   StrandGrowthOptions growth = o.growth;
   growth.threads = o.threads;
-  const CurlField curls = o.given_curl.curly() ? CurlField::Everywhere(o.given_curl)
-                                               : CurlField::Estimate(segments, growth.curl);
+  // The curl is wound on only by the continuation past the seen strands.
+  const CurlField curls = !growth.helix_continuation ? CurlField()
+                          : o.given_curl.curly()     ? CurlField::Everywhere(o.given_curl)
+                                                     : CurlField::Estimate(segments, growth.curl);
   summary->curl = curls.estimate();
   StrandModel model;
   const FieldGrowth grow(field, &head, growth, skin, &curls);
@@ -251,6 +253,7 @@ Status StrandReconstructionOptions::Check() const {
   HR_RETURN_IF_ERROR(direction.Check().WithContext("direction"));
   HR_RETURN_IF_ERROR(field.Check().WithContext("field"));
   HR_RETURN_IF_ERROR(growth.Check().WithContext("growth"));
+  HR_RETURN_IF_ERROR(given_curl.Check().WithContext("given_curl"));
   HR_RETURN_IF_ERROR(merging.Check().WithContext("merging"));
   HR_RETURN_IF_ERROR(ribbons.Check().WithContext("ribbons"));
   HR_RETURN_IF_ERROR(connections.Check().WithContext("connections"));
@@ -347,9 +350,14 @@ std::string StrandReconstructionSummary::BriefReport() const {
   s << direction.reversed << " reversed by the direction MRF) of " << points << " points\n";
   if (curl.curl.curly()) {
     s << "  curls: radius " << curl.curl.radius_mm << " mm, pitch " << curl.curl.pitch_mm << " mm, "
-      << (curl.curl.handedness > 0 ? "right" : "left") << "-handed, from " << curl.arcs
-      << " seen arcs (" << 100 * curl.arc_share << " % of the seen length; "
-      << 100 * curl.handedness_agreement << " % of it turning that way)\n";
+      << (curl.curl.handedness > 0 ? "right" : "left") << "-handed, ";
+    if (curl.arcs == 0) {
+      s << "given\n";
+    } else {
+      s << "from " << curl.arcs << " seen arcs (" << 100 * curl.arc_share
+        << " % of the seen length; " << 100 * curl.handedness_agreement
+        << " % of it turning that way)\n";
+    }
   } else if (curl.arcs > 0) {
     s << "  no curls: " << curl.arcs << " seen arcs, " << 100 * curl.arc_share
       << " % of the seen length, " << 100 * curl.handedness_agreement
