@@ -11,9 +11,11 @@ namespace hairrig {
 
 namespace {
 
+// A cell's coordinates, each biased to [0, kSpan), packed into one key.
+constexpr int64_t kBias = 1 << 20, kSpan = 1 << 21;
+
 // A cell of a sparse grid of `cell_mm` cubes, as one key.
 int64_t CellKey(const Eigen::Vector3i& c) {
-  constexpr int64_t kBias = 1 << 20, kSpan = 1 << 21;
   return ((c.x() + kBias) * kSpan + (c.y() + kBias)) * kSpan + (c.z() + kBias);
 }
 
@@ -38,8 +40,8 @@ class AxisGrid {
       for (size_t k = 0; k + 1 < s.points_mm.size(); ++k)
         sums.try_emplace(CellKey(CellOf(s.points_mm[k], cell_mm)), Eigen::Vector3f::Zero())
             .first->second += s.points_mm[k + 1] - s.points_mm[k];
-    for (const auto& [key, sum] : sums) {
-      (void)sum;
+    for (const auto& cell : sums) {
+      const int64_t key = cell.first;
       Eigen::Vector3f total = Eigen::Vector3f::Zero();
       const Eigen::Vector3i c = Unkey(key);
       ForNeighbourCells(c, [&](int64_t k) {
@@ -58,7 +60,6 @@ class AxisGrid {
 
  private:
   static Eigen::Vector3i Unkey(int64_t key) {
-    constexpr int64_t kBias = 1 << 20, kSpan = 1 << 21;
     const int z = static_cast<int>(key % kSpan - kBias);
     key /= kSpan;
     const int y = static_cast<int>(key % kSpan - kBias);
