@@ -66,6 +66,10 @@ def write_rig(case_dir, scene, variations):
     with open(rig_file) as f:
         rig = absolutise_paths(f.read(), os.path.dirname(rig_file))
     rig = re.sub(r"^(\s*scene:\s*)\S+", lambda m: m.group(1) + case_scene, rig, count=1, flags=re.M)
+    # The bench measures the images, not the rig's timing: on a shared machine a path-traced
+    # frame can take longer than the rig's own limit, so its copy waits up to 5 minutes.
+    rig = re.sub(r"^(\s*frame_timeout_s:\s*)[0-9.]+", lambda m: m.group(1) + "300", rig,
+                 count=1, flags=re.M)
     case_rig = os.path.join(case_dir, "rig.yaml")
     with open(case_rig, "w") as f:
         f.write(rig)

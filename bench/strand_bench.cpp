@@ -9,7 +9,7 @@
 //       [--end-over-skin yes|no] [--segment-curvature-weight W] [--segment-sigma MM]
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
-//       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]]
+//       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
@@ -26,7 +26,8 @@
 // seen strands then follow helix_continuation.h alone); --curl-oracle gives every
 // strand the curl given (radius, pitch, handedness: the simulated wig's
 // curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
-// the estimate.
+// the estimate. --curl-min-depth MM: strands wind only MM or further from the
+// seen strands' ribbons (CurlFieldOptions::min_depth_mm; 0 by default).
 // --scalp-skin-band MM: skin seen behind a vertex above the hairline and within
 // MM of the head is the scalp showing through the hair, not bare skin
 // (SkinViews::ExcludeScalp; 12 as the reconstruction, 0 counts it as skin).
@@ -101,7 +102,7 @@ int main(int argc, char** argv) {
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
-        "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] "
+        "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -180,6 +181,8 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "--curl-oracle: RADIUS_MM,PITCH_MM[,+1|-1], not '%s'\n", argv[i + 1]);
         return 2;
       }
+    } else if (std::strcmp(argv[i], "--curl-min-depth") == 0) {
+      options.growth.curl.min_depth_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-field") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.enabled)) return 2;
     } else if (std::strcmp(argv[i], "--helix-window") == 0) {

@@ -157,6 +157,8 @@ Status CurlFieldOptions::Check() const {
   if (!(min_handedness_agreement >= 0.5 && min_handedness_agreement <= 1))
     return InvalidArgument("curl min_handedness_agreement must lie in [0.5, 1]");
   if (!(region_mm > 0)) return InvalidArgument("curl region_mm must be positive");
+  if (!(min_depth_mm >= 0 && std::isfinite(min_depth_mm)))
+    return InvalidArgument("curl min_depth_mm must be finite and not negative");
   if (!(max_helix_angle_deg > min_arc_angle_deg && max_helix_angle_deg < 90))
     return InvalidArgument("curl max_helix_angle_deg must lie in (min_arc_angle_deg, 90)");
   if (!(min_radius_mm > 0 && max_radius_mm >= min_radius_mm))

@@ -59,6 +59,9 @@ struct CurlFieldOptions {
   // Strands wind in the cells of this size next to (or holding) a cell
   // with a seen arc: from region_mm to about 3.5 region_mm from it.
   double region_mm = 20;
+  // Strands wind only this far or further from the seen strands' ribbons
+  // (the hybrid field's d_s): nearer, they follow the seen surface's field.
+  double min_depth_mm = 0;
   double max_helix_angle_deg = 80;
   // A smaller estimated radius is raised to min_radius_mm; a larger one than
   // max_radius_mm is no curl.

@@ -153,6 +153,9 @@ TEST(CurlField, OptionsNameTheirField) {
   o = CurlFieldOptions{};
   o.max_radius_mm = 1;
   EXPECT_NE(o.Check().message().find("radii"), std::string::npos);
+  o = CurlFieldOptions{};
+  o.min_depth_mm = -1;
+  EXPECT_NE(o.Check().message().find("min_depth_mm"), std::string::npos);
   EXPECT_TRUE(CurlFieldOptions{}.Check().ok());
 }
 

@@ -256,7 +256,8 @@ class FieldGrowth::Step {
     if (following) {
       helix_.Follow(*next);
       guide_.Stop();
-    } else if (const Curl* curl = g_.curls_ ? g_.curls_->At(p) : nullptr) {
+    } else if (const Curl* curl =
+                   d_s >= o.curl.min_depth_mm && g_.curls_ ? g_.curls_->At(p) : nullptr) {
       axis_ = *next;
       if (!guide_.active()) guide_.Start(p, previous, axis_, *curl);
       *next = guide_.Next(p, axis_);

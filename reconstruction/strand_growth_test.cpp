@@ -347,6 +347,18 @@ TEST(GrowStrandsInField, WhereTheHairCurlsStrandsWindOnItsHelix) {
   // 64 deg off the axis: more than the 60 deg within which a strand follows a seen one.
   const Curl curl{4, 12, 1};
   const CurlField curls = CurlField::Everywhere(curl);
+  // Strands wind only as deep in the hair as curl.min_depth_mm: past the
+  // field's grid, nowhere.
+  StrandGrowthOptions too_deep;
+  too_deep.curl.min_depth_mm = 1000;
+  const StrandSet straight =
+      FieldGrowth(*field, nullptr, too_deep, nullptr, &curls).FromRoots(roots, nullptr);
+  ASSERT_EQ(straight.num_strands(), roots.size());
+  for (size_t k = 0; k < roots.size(); ++k) {
+    const Eigen::Vector3f tip = straight.points_mm[straight.Offsets()[k + 1] - 1];
+    EXPECT_NEAR(straight.StrandLengths()[k] / (roots[k].position_mm.z() - tip.z()), 1.0, 0.02)
+        << "strand " << k;
+  }
   const StrandGrowthOptions options;
   for (const CurlField* given : {&curls, static_cast<const CurlField*>(nullptr)}) {
     const StrandSet strands =
