@@ -33,6 +33,7 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
                    "wave_period_mm",
                    "curl_radius_mm",
                    "curl_pitch_mm",
+                   "curl_left_share",
                    "wisps",
                    "clump",
                    "clump_profile",
@@ -77,6 +78,7 @@ void ReadWig(const ConfigNode& n, const std::string& scene_path, WigOptions* w) 
   w->wave_period_mm = n.Number("wave_period_mm", w->wave_period_mm, {.min = 1, .max = 2000});
   w->curl_radius_mm = n.Number("curl_radius_mm", w->curl_radius_mm, {.min = 0, .max = 200});
   w->curl_pitch_mm = n.Number("curl_pitch_mm", w->curl_pitch_mm, {.min = 0.5, .max = 2000});
+  w->curl_left_share = n.Number("curl_left_share", w->curl_left_share, {.min = 0, .max = 1});
   w->wisps = n.Integer("wisps", w->wisps, {.min = 0, .max = 1e5});
   w->clump = n.Number("clump", w->clump, {.min = 0, .max = 1});
   w->clump_profile = n.Choice("clump_profile", {"tip", "middle"}, "tip") == "middle"
@@ -221,6 +223,7 @@ Status WigOptions::Check() const {
   HR_RETURN_IF_ERROR(range("wave_period_mm", wave_period_mm, 1, 2000));
   HR_RETURN_IF_ERROR(range("curl_radius_mm", curl_radius_mm, 0, 200));
   HR_RETURN_IF_ERROR(range("curl_pitch_mm", curl_pitch_mm, 0.5, 2000));
+  HR_RETURN_IF_ERROR(range("curl_left_share", curl_left_share, 0, 1));
   HR_RETURN_IF_ERROR(range("wisps", wisps, 0, 1e5));
   HR_RETURN_IF_ERROR(range("clump", clump, 0, 1));
   HR_RETURN_IF_ERROR(range("frizz_mm", frizz_mm, 0, 50));

@@ -39,6 +39,9 @@ struct WigOptions {
   double wave_period_mm = 35;
   double curl_radius_mm = 5;  // curly: ringlets of twice this diameter
   double curl_pitch_mm = 14;
+  // The share of the strands (of the wisps, with wisps) whose curls wind
+  // left-handed; the others wind right-handed.
+  double curl_left_share = 0;
   // Wisps: strands clumped around `wisps` wisp centres (0: every strand on its
   // own). A member keeps its root's offset from the wisp's root in the wisp's
   // frame, shrunk by `clump` (0..1) where the profile is tightest: at the tip,

@@ -57,6 +57,7 @@ void DarkSkin(Scene* s) { s->head.albedo = {0.22, 0.13, 0.08}; }
 void GreyBackdrop(Scene* s) { s->backdrop_albedo = {0.30, 0.30, 0.30}; }
 void WhiteBackdrop(Scene* s) { s->backdrop_albedo = {0.85, 0.85, 0.85}; }
 void BlueBackdrop(Scene* s) { s->backdrop_albedo = {0.05, 0.12, 0.45}; }
+void CurlsBothWays(Scene* s) { s->wig.curl_left_share = 0.5; }
 void FibreSparkle(Scene* s) {
   s->hair_shading.fibre_albedo_sd = 0.25;
   s->hair_shading.fibre_grain_sd = 0.7;
@@ -118,6 +119,8 @@ const std::vector<SceneVariation>& SceneVariations() {
       {"blue_backdrop", "a blue backdrop", BlueBackdrop},
       {"fibre_sparkle", "fibres of their own shade with glints and dull stretches of 0.4 mm",
        FibreSparkle},
+      {"curls_both_ways", "half the curls (wisps) wind left-handed, half right-handed",
+       CurlsBothWays},
       {"path_traced",
        "another renderer's image: a path tracer's grain at few samples per pixel, strong "
        "fibre glints, room light, the lower panel at half, a white mannequin",

@@ -53,6 +53,7 @@ struct StrandSeed {
   double phase = 0, period_mm = 0;
   Eigen::Vector3d jitter = Eigen::Vector3d::Zero();
   WigStyle style = WigStyle::kStraight;
+  int curl_handedness = 1;  // +1 right-handed, -1 left-handed
 };
 
 // Draws the random parts of a strand in a fixed order (the generator's
@@ -65,6 +66,8 @@ void DrawStyle(const WigOptions& o, std::mt19937_64& rng, StrandSeed* s) {
   s->phase = 2.0 * kPi * uniform(rng);
   s->period_mm = o.wave_period_mm * (0.85 + 0.3 * uniform(rng));
   s->jitter = 0.08 * Eigen::Vector3d(gauss(rng), gauss(rng), 0.0);
+  // Drawn only when some curls wind left: a wig without any keeps its strands.
+  if (o.curl_left_share > 0) s->curl_handedness = uniform(rng) < o.curl_left_share ? -1 : 1;
 }
 
 // Grows a strand's points from its seed: the centreline bends from start_dir
@@ -107,7 +110,8 @@ std::vector<Eigen::Vector3f> Grow(const WigOptions& o, const HeadModel& head, co
           ramp * o.wave_amplitude_mm * std::sin(2.0 * kPi * arc / s.period_mm + s.phase) * side;
     } else if (s.style == WigStyle::kCurly) {
       const double angle = 2.0 * kPi * arc / o.curl_pitch_mm + s.phase;
-      offset = ramp * o.curl_radius_mm * (std::cos(angle) * side + std::sin(angle) * binormal);
+      offset = ramp * o.curl_radius_mm *
+               (std::cos(angle) * side + s.curl_handedness * std::sin(angle) * binormal);
     }
     Eigen::Vector3d point = head.KeepOutside(centre + offset, 0.5);
     const double chord = (point - last_point).norm();

@@ -108,6 +108,35 @@ TEST(Wig, StrandsHaveTheirFibreLengthAndCurlsAreSampledFinely) {
   }
 }
 
+// +1 where most of the strand's consecutive edge triples e1, e2, e3 have
+// (e1 x e2) . e3 > 0 (a right-handed helix's torsion), -1 where most have it
+// negative.
+int CurlHandedness(const StrandSet& s, size_t strand) {
+  const auto offsets = s.Offsets();
+  int sum = 0;
+  for (size_t i = offsets[strand] + 3; i < offsets[strand + 1]; ++i) {
+    const Eigen::Vector3f e1 = s.points_mm[i - 2] - s.points_mm[i - 3];
+    const Eigen::Vector3f e2 = s.points_mm[i - 1] - s.points_mm[i - 2];
+    const Eigen::Vector3f e3 = s.points_mm[i] - s.points_mm[i - 1];
+    sum += e1.cross(e2).dot(e3) > 0 ? 1 : -1;
+  }
+  return sum >= 0 ? 1 : -1;
+}
+
+TEST(Wig, CurlsWindLeftHandedInTheShareGiven) {
+  HeadSpec head;
+  WigOptions o = StyleOptions(WigStyle::kCurly, 300);
+  for (const double left_share : {0.0, 0.5, 1.0}) {
+    o.curl_left_share = left_share;
+    const auto s = GenerateWig(o, head);
+    ASSERT_TRUE(s.ok());
+    double left = 0;
+    for (size_t k = 0; k < s->num_strands(); ++k) left += CurlHandedness(*s, k) < 0 ? 1 : 0;
+    EXPECT_NEAR(left / static_cast<double>(s->num_strands()), left_share, 0.1)
+        << "curl_left_share " << left_share;
+  }
+}
+
 TEST(Wig, AMissingStrandFileNamesTheField) {
   WigOptions o;
   o.style = WigStyle::kFile;
