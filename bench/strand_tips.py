@@ -19,13 +19,21 @@ import statistics
 import sys
 
 
-def read_strands(path):
+def read_binary_ply(path, required, what):
+    """The file's bytes, its header and where the payload starts; exits naming the file and what
+    it should be unless the header is binary little-endian and holds every line of required."""
     with open(path, "rb") as f:
         data = f.read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
     header = data[:end].decode("ascii", "replace")
-    if "binary_little_endian" not in header or "property ushort nsegs" not in header:
-        sys.exit("%s: not a hairrig strand PLY (binary, per-strand ushort nsegs)" % path)
+    if "binary_little_endian" not in header or any(line not in header for line in required):
+        sys.exit("%s: not %s" % (path, what))
+    return data, header, end
+
+
+def read_strands(path):
+    data, header, end = read_binary_ply(path, ["property ushort nsegs"],
+                                        "a hairrig strand PLY (binary, per-strand ushort nsegs)")
     vertices = int(header.split("element vertex ")[1].split()[0])
     strands = int(header.split("element strand ")[1].split()[0])
     xyz = array.array("f")

@@ -19,6 +19,14 @@ int64_t CellKey(const Eigen::Vector3i& c) {
   return ((c.x() + kBias) * kSpan + (c.y() + kBias)) * kSpan + (c.z() + kBias);
 }
 
+// A cell's coordinates from its key.
+Eigen::Vector3i Unkey(int64_t key) {
+  const int z = static_cast<int>(key % kSpan - kBias);
+  key /= kSpan;
+  const int y = static_cast<int>(key % kSpan - kBias);
+  return {static_cast<int>(key / kSpan - kBias), y, z};
+}
+
 Eigen::Vector3i CellOf(const Eigen::Vector3f& p, double cell_mm) {
   return (p.cast<double>() / cell_mm).array().floor().cast<int>();
 }
@@ -59,13 +67,6 @@ class AxisGrid {
   }
 
  private:
-  static Eigen::Vector3i Unkey(int64_t key) {
-    const int z = static_cast<int>(key % kSpan - kBias);
-    key /= kSpan;
-    const int y = static_cast<int>(key % kSpan - kBias);
-    return {static_cast<int>(key / kSpan - kBias), y, z};
-  }
-
   double cell_mm_;
   std::unordered_map<int64_t, Eigen::Vector3f> axes_;
 };
@@ -175,14 +176,65 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"arc_share", arc_share},
           {"helix_angle_deg", helix_angle_deg},
           {"rate_per_mm", rate_per_mm},
-          {"handedness_agreement", handedness_agreement}};
+          {"handedness_agreement", handedness_agreement},
+          {"right_handed_share", right_handed_share},
+          {"local_handedness_agreement", local_handedness_agreement}};
 }
 
-// The cells (region_mm) within one cell of a seen arc's.
+// The cells (region_mm) within one cell of a seen arc's, and the way the
+// arcs about each axis cell turn.
 struct CurlField::Region {
   double cell_mm = 20;
   std::unordered_set<int64_t> cells;
+  double axis_cell_mm = 10;
+  // Per axis cell: the right-handed less the left-handed arcs' length (mm)
+  // over the 27 cells around it.
+  std::unordered_map<int64_t, double> turn_mm;
+  Curl mirrored;  // the estimate's curl, the other way round
 };
+
+namespace {
+
+// A seen arc: its length, the way it turns (+1 right-handed) and the axis
+// cells its points lie in.
+struct Arc {
+  double length_mm = 0;
+  int sense = 1;
+  std::vector<int64_t> cells;
+};
+
+std::vector<int64_t> AxisCells(const StrandSegment& s, double cell_mm) {
+  std::vector<int64_t> cells;
+  for (const Eigen::Vector3f& p : s.points_mm) cells.push_back(CellKey(CellOf(p, cell_mm)));
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
+}
+
+// Per axis cell, the signed length of the arcs with a point in it.
+std::unordered_map<int64_t, double> SignedLengthPerCell(const std::vector<Arc>& arcs) {
+  std::unordered_map<int64_t, double> per_cell;
+  for (const Arc& a : arcs)
+    for (int64_t c : a.cells) per_cell[c] += a.sense * a.length_mm;
+  return per_cell;
+}
+
+// The share of the arcs' length that turns the way the other arcs in its
+// cells turn (arcs alone in their cells left out); 0 when every arc is alone.
+double LocalAgreement(const std::vector<Arc>& arcs,
+                      const std::unordered_map<int64_t, double>& per_cell) {
+  double agreeing = 0, counted = 0;
+  for (const Arc& a : arcs) {
+    double others = 0;
+    for (int64_t c : a.cells) others += per_cell.at(c) - a.sense * a.length_mm;
+    if (std::abs(others) < 1e-9) continue;
+    counted += a.length_mm;
+    if (others * a.sense > 0) agreeing += a.length_mm;
+  }
+  return counted > 0 ? agreeing / counted : 0;
+}
+
+}  // namespace
 
 CurlField CurlField::Everywhere(const Curl& curl) {
   CurlField field;
@@ -196,9 +248,11 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   if (!o.enabled || segments.empty()) return field;
   const AxisGrid axes(segments, o.axis_cell_mm);
   std::vector<std::pair<double, double>> angles, rates;
+  std::vector<Arc> arcs;
   double seen_mm = 0, arc_mm = 0, right_mm = 0;
   auto region = std::make_shared<Region>();
   region->cell_mm = o.region_mm;
+  region->axis_cell_mm = o.axis_cell_mm;
   const double min_angle = o.min_arc_angle_deg * M_PI / 180;
   for (const StrandSegment& s : segments) {
     const SegmentTurn turn = TurnAlong(s, axes);
@@ -206,37 +260,49 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
     if (turn.length_mm < o.min_arc_length_mm || turn.helix_angle < min_angle ||
         turn.consistency < o.min_turn_consistency || turn.rate == 0)
       continue;
-    ++field.estimate_.arcs;
     arc_mm += turn.length_mm;
     if (turn.rate > 0) right_mm += turn.length_mm;
     angles.emplace_back(turn.helix_angle, turn.length_mm);
     rates.emplace_back(std::abs(turn.rate), turn.length_mm);
+    arcs.push_back({turn.length_mm, turn.rate > 0 ? 1 : -1, AxisCells(s, o.axis_cell_mm)});
     for (const Eigen::Vector3f& p : s.points_mm)
       ForNeighbourCells(CellOf(p, o.region_mm), [&](int64_t k) { region->cells.insert(k); });
   }
   CurlEstimate& e = field.estimate_;
+  e.arcs = static_cast<int64_t>(arcs.size());
   e.arc_share = seen_mm > 0 ? arc_mm / seen_mm : 0;
   if (e.arcs == 0) return field;
   const double alpha = WeightedMedian(angles), rate = WeightedMedian(rates);
   e.helix_angle_deg = alpha * 180 / M_PI;
   e.rate_per_mm = rate;
   e.handedness_agreement = std::max(right_mm, arc_mm - right_mm) / arc_mm;
+  e.right_handed_share = right_mm / arc_mm;
+  const std::unordered_map<int64_t, double> per_cell = SignedLengthPerCell(arcs);
+  e.local_handedness_agreement = LocalAgreement(arcs, per_cell);
   const double radius = std::max(std::sin(alpha) / rate, o.min_radius_mm);
   if (e.arcs < o.min_arcs || e.arc_share < o.min_arc_share ||
-      e.handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
+      e.local_handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
       e.helix_angle_deg > o.max_helix_angle_deg)
     return field;
   e.curl.handedness = right_mm * 2 >= arc_mm ? 1 : -1;
   e.curl.radius_mm = radius;
   e.curl.pitch_mm = 2 * M_PI * radius / std::tan(alpha);
+  for (const auto& [key, signed_mm] : per_cell)
+    ForNeighbourCells(Unkey(key), [&](int64_t k) { region->turn_mm[k] += signed_mm; });
+  region->mirrored = e.curl;
+  region->mirrored.handedness = -e.curl.handedness;
   field.region_ = std::move(region);
   return field;
 }
 
 const Curl* CurlField::At(const Eigen::Vector3f& p) const {
   if (!estimate_.curl.curly()) return nullptr;
-  if (region_ && region_->cells.count(CellKey(CellOf(p, region_->cell_mm))) == 0) return nullptr;
-  return &estimate_.curl;
+  if (!region_) return &estimate_.curl;
+  if (region_->cells.count(CellKey(CellOf(p, region_->cell_mm))) == 0) return nullptr;
+  const auto turn = region_->turn_mm.find(CellKey(CellOf(p, region_->axis_cell_mm)));
+  const bool mirrored =
+      turn != region_->turn_mm.end() && turn->second * estimate_.curl.handedness < 0;
+  return mirrored ? &region_->mirrored : &estimate_.curl;
 }
 
 }  // namespace hairrig

@@ -23,14 +23,18 @@
 //   - the curl: alpha and the turn rate, each the median over the arcs
 //     (weighted by length), give r = sin(alpha) / rate (raised to
 //     min_radius_mm if less) and the pitch P = 2 pi r / tan(alpha); the
-//     handedness is the length-weighted majority's.
+//     handedness is the length-weighted majority's;
+//   - a head's ringlets need not all wind one way: at a point the curl winds
+//     the way the arcs in the 27 axis cells around it turn (their length
+//     weighted majority), the majority's way where no arc is near.
 // The hair counts as curly when at least min_arcs arcs hold at least
 // min_arc_share of the seen length, at least min_handedness_agreement of
-// their length turns the majority's way (a ringlet winds one way; the arcs of
-// waves and of stray bends turn either way about as often), the radius is
+// their length turns the way of the other arcs in their axis cells (a
+// ringlet winds one way along its length; the arcs of waves and of stray
+// bends turn either way about as often, even side by side), the radius is
 // at most max_radius_mm (wider is a wave, not a curl) and alpha at most
-// max_helix_angle_deg (a flatter coil has next to no pitch). Not in Bao & Qi, whose growth follows
-// the field alone.
+// max_helix_angle_deg (a flatter coil has next to no pitch). Not in Bao & Qi,
+// whose growth follows the field alone.
 //
 // Units: mm and radians unless a name says deg; the segments' frame.
 #pragma once
@@ -55,7 +59,9 @@ struct CurlFieldOptions {
   double min_turn_consistency = 0.5;
   int min_arcs = 30;
   double min_arc_share = 0.01;
-  double min_handedness_agreement = 0.65;
+  // Of the arcs' length, the share that must turn the way of the other arcs
+  // in its axis cells (CurlEstimate::local_handedness_agreement).
+  double min_handedness_agreement = 0.75;
   // Strands wind in the cells of this size next to (or holding) a cell
   // with a seen arc: from region_mm to about 3.5 region_mm from it.
   double region_mm = 20;
@@ -77,6 +83,10 @@ struct CurlEstimate {
   double helix_angle_deg = 0, rate_per_mm = 0;
   // The majority's share of the arcs' length, in [0.5, 1]; 0 without arcs.
   double handedness_agreement = 0;
+  double right_handed_share = 0;  // of the arcs' length
+  // The share of the arcs' length that turns the way the other arcs in its
+  // axis cells turn (the curly test); 0 without two arcs in one cell.
+  double local_handedness_agreement = 0;
   nlohmann::json ToJson() const;
 };
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <random>
 
 #include "reconstruction/helix_guide.h"
 
@@ -72,16 +74,19 @@ TEST(HelixGuide, DrawsAStrayStrandBack) {
 }
 
 // Ringlets on an 8 mm grid (closer than their 12 mm width, as ringlets hang
-// on a head), each seen as a few arcs of about two thirds of a turn.
-std::vector<StrandSegment> Ringlets(double r, double pitch, int h) {
+// on a head), each seen as a few arcs of about two thirds of a turn; arc
+// `arc` of ringlet k (in column k / 12) winds handedness(k, arc).
+std::vector<StrandSegment> Ringlets(double r, double pitch,
+                                    const std::function<int(int, int)>& handedness) {
   std::vector<StrandSegment> segments;
   int k = 0;
   for (int i = 0; i < 12; ++i) {
     for (int j = 0; j < 12; ++j, ++k) {
       const Eigen::Vector3f top(8.0f * static_cast<float>(i), 8.0f * static_cast<float>(j), 0);
       const double phase = 0.7 * k;
-      for (double from = 0; from < 120; from += 40) {
-        segments.push_back(HelixSegment(top, r, pitch, h, phase, from, 24));
+      for (int arc = 0; arc < 3; ++arc) {
+        const double from = 40.0 * arc;
+        segments.push_back(HelixSegment(top, r, pitch, handedness(k, arc), phase, from, 24));
         // One ringlet in eight seen the wrong way along (its segments run up):
         // a helix winds the same way whichever way it is run along.
         if (k % 8 == 0)
@@ -90,6 +95,10 @@ std::vector<StrandSegment> Ringlets(double r, double pitch, int h) {
     }
   }
   return segments;
+}
+
+std::vector<StrandSegment> Ringlets(double r, double pitch, int h) {
+  return Ringlets(r, pitch, [h](int, int) { return h; });
 }
 
 TEST(CurlField, EstimatesTheRingletsCurl) {
@@ -105,6 +114,44 @@ TEST(CurlField, EstimatesTheRingletsCurl) {
     EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
     EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
   }
+}
+
+TEST(CurlField, RingletsWindEitherWayWhereTheySeenToWind) {
+  // The ringlets of columns 0-5 wind right-handed, those of 6-11 left.
+  const CurlField field = CurlField::Estimate(
+      Ringlets(6, 20, [](int k, int) { return k / 12 < 6 ? 1 : -1; }), CurlFieldOptions{});
+  const CurlEstimate& e = field.estimate();
+  ASSERT_TRUE(e.curl.curly());
+  EXPECT_NEAR(e.right_handed_share, 0.5, 0.05);
+  EXPECT_GT(e.local_handedness_agreement, 0.85);
+  EXPECT_NEAR(e.curl.radius_mm, 6, 1.2);
+  for (const float y : {10.0f, 50.0f, 80.0f}) {
+    for (const float z : {-10.0f, -30.0f, -50.0f}) {
+      const Curl* right = field.At(Eigen::Vector3f(8, y, z));
+      const Curl* left = field.At(Eigen::Vector3f(80, y, z));
+      ASSERT_NE(right, nullptr);
+      ASSERT_NE(left, nullptr);
+      EXPECT_EQ(right->handedness, 1) << "y " << y << " z " << z;
+      EXPECT_EQ(left->handedness, -1) << "y " << y << " z " << z;
+      EXPECT_EQ(left->radius_mm, right->radius_mm);
+    }
+  }
+}
+
+TEST(CurlField, ArcsTurningEitherWayAtRandomAreNoCurl) {
+  // Each arc of every ringlet winds a way of its own: stray bends, not a ringlet.
+  std::mt19937 rng(5);
+  std::vector<int> ways(3 * 144);
+  for (int& w : ways) w = rng() % 2 ? 1 : -1;
+  const CurlEstimate e =
+      CurlField::Estimate(Ringlets(6, 20, [&](int k, int arc) { return ways[3 * k + arc]; }),
+                          CurlFieldOptions{})
+          .estimate();
+  EXPECT_GT(e.arcs, 300);
+  EXPECT_LT(e.local_handedness_agreement, CurlFieldOptions{}.min_handedness_agreement);
+  std::printf("random arcs: %.3f of their length turning as the arcs beside them\n",
+              e.local_handedness_agreement);
+  EXPECT_FALSE(e.curl.curly());
 }
 
 TEST(CurlField, StraightAndWavyHairDoNotCurl) {

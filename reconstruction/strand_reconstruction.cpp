@@ -355,13 +355,13 @@ std::string StrandReconstructionSummary::BriefReport() const {
       s << "given\n";
     } else {
       s << "from " << curl.arcs << " seen arcs (" << 100 * curl.arc_share
-        << " % of the seen length; " << 100 * curl.handedness_agreement
-        << " % of it turning that way)\n";
+        << " % of the seen length; " << 100 * curl.right_handed_share << " % of it right-handed, "
+        << 100 * curl.local_handedness_agreement << " % turning as the arcs beside it)\n";
     }
   } else if (curl.arcs > 0) {
     s << "  no curls: " << curl.arcs << " seen arcs, " << 100 * curl.arc_share
-      << " % of the seen length, " << 100 * curl.handedness_agreement
-      << " % of it turning one way\n";
+      << " % of the seen length, " << 100 * curl.local_handedness_agreement
+      << " % of it turning as the arcs beside it\n";
   }
   if (growth.stopped_over_skin + growth.tips_trimmed_over_skin > 0) {
     s << "  ended in front of skin the views see: " << growth.stopped_over_skin
