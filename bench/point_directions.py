@@ -78,6 +78,7 @@ def main():
     for k, neighbours in enumerate(coarse.query_ball_point(points[pick, :3], args.axis_radius)):
         mean = tangents[::8][neighbours].sum(axis=0)
         axes[k] = mean / max(np.linalg.norm(mean), 1e-9)
+    has_axis = np.linalg.norm(axes, axis=1) > 0.5  # a point with no true sample near has none
     print("%s: %d points, %.1f %% within 2 mm of a true strand; %d of those drawn"
           % (args.points, len(points), 100.0 * len(near) / len(points), len(pick)))
     print("  direction against the nearest true tangent: median %.1f deg, 75th percentile %.1f deg"
@@ -85,8 +86,10 @@ def main():
              np.percentile(angle_deg(directions, truth), 75)))
     print("  off the local axis (true tangents within %.0f mm): points median %.1f deg, "
           "nearest true tangents %.1f deg" % (args.axis_radius,
-                                             np.median(angle_deg(directions, axes)),
-                                             np.median(angle_deg(truth, axes))))
+                                             np.median(angle_deg(directions[has_axis],
+                                                                 axes[has_axis])),
+                                             np.median(angle_deg(truth[has_axis],
+                                                                 axes[has_axis]))))
     return 0
 
 

@@ -24,12 +24,15 @@
 //     (weighted by length), give r = sin(alpha) / rate (raised to
 //     min_radius_mm if less) and the pitch P = 2 pi r / tan(alpha); the
 //     handedness is the length-weighted majority's;
-//   - a head's ringlets need not all wind one way: at a point the curl winds
-//     the way the arcs in the 27 axis cells around it turn (their length
-//     weighted majority), the majority's way where no arc is near.
+//   - a head's ringlets need not all wind one way: a strand that starts
+//     winding at a point winds the way the arcs in the 27 axis cells around
+//     it turn (the majority by length, each arc counted in every cell it
+//     touches), the whole head's majority's way where no arc is near; it
+//     keeps that way while it winds on.
 // The hair counts as curly when at least min_arcs arcs hold at least
 // min_arc_share of the seen length, at least min_handedness_agreement of
-// their length turns the way of the other arcs in their axis cells (a
+// their length turns the way of the other arcs in their axis cells (by
+// length, each counted in every cell it touches; a
 // ringlet winds one way along its length; the arcs of waves and of stray
 // bends turn either way about as often, even side by side), the radius is
 // at most max_radius_mm (wider is a wave, not a curl) and alpha at most

@@ -116,7 +116,7 @@ TEST(CurlField, EstimatesTheRingletsCurl) {
   }
 }
 
-TEST(CurlField, RingletsWindEitherWayWhereTheySeenToWind) {
+TEST(CurlField, RingletsWindEitherWayWhereTheyAreSeenToWind) {
   // The ringlets of columns 0-5 wind right-handed, those of 6-11 left.
   const CurlField field = CurlField::Estimate(
       Ringlets(6, 20, [](int k, int) { return k / 12 < 6 ? 1 : -1; }), CurlFieldOptions{});
@@ -136,6 +136,22 @@ TEST(CurlField, RingletsWindEitherWayWhereTheySeenToWind) {
       EXPECT_EQ(left->radius_mm, right->radius_mm);
     }
   }
+}
+
+TEST(CurlField, WhereNoArcIsNearTheHeadsMajorityWinds) {
+  // Columns 0-3 wind left-handed, 4-11 right: most of the arcs turn right.
+  const CurlField field = CurlField::Estimate(
+      Ringlets(6, 20, [](int k, int) { return k / 12 < 4 ? -1 : 1; }), CurlFieldOptions{});
+  ASSERT_TRUE(field.estimate().curl.curly());
+  EXPECT_EQ(field.estimate().curl.handedness, 1);
+  const Curl* near_left = field.At(Eigen::Vector3f(8, 40, -30));
+  // 19 mm beyond the left-handed ringlets (6 mm in radius about x = 0): in the
+  // region, with no arc in the axis cells around it.
+  const Curl* beyond_left = field.At(Eigen::Vector3f(-25, 40, -30));
+  ASSERT_NE(near_left, nullptr);
+  ASSERT_NE(beyond_left, nullptr);
+  EXPECT_EQ(near_left->handedness, -1);
+  EXPECT_EQ(beyond_left->handedness, 1);
 }
 
 TEST(CurlField, ArcsTurningEitherWayAtRandomAreNoCurl) {
