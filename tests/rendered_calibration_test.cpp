@@ -99,7 +99,7 @@ TEST(RenderedCalibration, TurntableAndFreeModesAgainstGroundTruth) {
   for (int stop = 0; stop < scene->turntable_stops; ++stop) {
     for (int cam = 0; cam < cameras; ++cam) {
       const int view = stop * cameras + cam;
-      auto observations = RenderedObservations(**renderer, **detector, cam, stop, false);
+      auto observations = RenderedObservations(**renderer, **detector, cam, stop);
       ASSERT_TRUE(observations.ok()) << observations.status().ToString();
       auto pose = EstimateViewPose(*observations, input.cameras[static_cast<size_t>(cam)]);
       if (!pose.ok()) continue;  // a view that sees too little is left to the others

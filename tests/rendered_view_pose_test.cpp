@@ -29,7 +29,7 @@ TEST(RenderedViewPose, EveryViewIsInitialisedCloseToTheTruth) {
     for (int cam = 0; cam < cameras; ++cam) {
       const int view = stop * cameras + cam;
       const ViewGroundTruth truth = MakeViewGroundTruth(*scene, view);
-      auto observations = RenderedObservations(**renderer, **detector, cam, stop, false);
+      auto observations = RenderedObservations(**renderer, **detector, cam, stop);
       ASSERT_TRUE(observations.ok()) << observations.status().ToString();
       auto pose = EstimateViewPose(*observations, truth.intrinsics);
       ASSERT_TRUE(pose.ok()) << "view " << view << ": " << pose.status().ToString();

@@ -7,14 +7,14 @@
 
 namespace hairrig {
 
-// The wig is drawn unless `draw_hair` is false: the box hangs above the head,
-// so no hair covers a tag, and the hair is most of a view's render time.
+// The wig is not drawn: the box hangs above the head, so no hair covers a tag
+// (the default scene's views give the same tags either way), and the hair is
+// most of a view's render time.
 inline Result<ViewObservations> RenderedObservations(const Renderer& renderer,
-                                                     TagDetector& detector, int camera, int stop,
-                                                     bool draw_hair = true) {
+                                                     TagDetector& detector, int camera, int stop) {
   const Scene& scene = renderer.scene();
   RenderOptions options;
-  options.draw_hair = draw_hair;
+  options.draw_hair = false;
   options.noise_seed =
       static_cast<uint64_t>(stop * static_cast<int>(scene.cameras.size()) + camera);
   HR_ASSIGN_OR_RETURN(RenderedView rendered,
