@@ -176,7 +176,7 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"arc_share", arc_share},
           {"helix_angle_deg", helix_angle_deg},
           {"rate_per_mm", rate_per_mm},
-          {"handedness_agreement", handedness_agreement},
+          {"handedness_agreement", HandednessAgreement()},
           {"right_handed_share", right_handed_share},
           {"local_handedness_agreement", local_handedness_agreement}};
 }
@@ -275,7 +275,6 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   const double alpha = WeightedMedian(angles), rate = WeightedMedian(rates);
   e.helix_angle_deg = alpha * 180 / M_PI;
   e.rate_per_mm = rate;
-  e.handedness_agreement = std::max(right_mm, arc_mm - right_mm) / arc_mm;
   e.right_handed_share = right_mm / arc_mm;
   const std::unordered_map<int64_t, double> per_cell = SignedLengthPerCell(arcs);
   e.local_handedness_agreement = LocalAgreement(arcs, per_cell);

@@ -43,6 +43,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
@@ -84,12 +85,14 @@ struct CurlEstimate {
   int64_t arcs = 0;
   double arc_share = 0;  // of the directed segments' length
   double helix_angle_deg = 0, rate_per_mm = 0;
-  // The majority's share of the arcs' length, in [0.5, 1]; 0 without arcs.
-  double handedness_agreement = 0;
   double right_handed_share = 0;  // of the arcs' length
   // The share of the arcs' length that turns the way the other arcs in its
   // axis cells turn (the curly test); 0 without two arcs in one cell.
   double local_handedness_agreement = 0;
+  // The majority's share of the arcs' length, in [0.5, 1]; 0 without arcs.
+  double HandednessAgreement() const {
+    return arcs > 0 ? std::max(right_handed_share, 1 - right_handed_share) : 0;
+  }
   nlohmann::json ToJson() const;
 };
 

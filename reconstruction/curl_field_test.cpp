@@ -109,7 +109,7 @@ TEST(CurlField, EstimatesTheRingletsCurl) {
     EXPECT_EQ(e.curl.handedness, h);
     EXPECT_NEAR(e.curl.radius_mm, 6, 1.2);
     EXPECT_NEAR(e.curl.pitch_mm, 20, 4);
-    EXPECT_GT(e.handedness_agreement, 0.9);
+    EXPECT_GT(e.HandednessAgreement(), 0.9);
     // In the ringlets' region, and not far away from it.
     EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
     EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
