@@ -66,9 +66,12 @@ struct SegmentationOptions {
   // a pixel named hair whose chromaticity lies within skin_chromaticity_sigmas
   // of the skin's, and is e^skin_chromaticity_log_ratio times likelier under
   // the skin's than under the hair's, is skin (2D Gaussians fitted per view
-  // to what the mixture named each). 0 sigmas turns it off.
+  // to what the mixture named each). 0 sigmas turns it off. The hair's
+  // Gaussian takes in the shadowed skin the mixture named hair, which pulls
+  // it towards the skin's: under a camera's tone curve and JPEG, where blond
+  // hair and pale skin lie close, a ratio of e^5 kept most of that skin.
   double skin_chromaticity_sigmas = 3.0;
-  double skin_chromaticity_log_ratio = 5.0;
+  double skin_chromaticity_log_ratio = 2.0;
   // A view whose own skin model rests on fewer pixels than this (at
   // work_scale, every 2nd row and column) uses the capture's pooled model
   // when one is given. capture_skin false: SegmentCaptureViews segments each
