@@ -68,8 +68,9 @@ struct SegmentationOptions {
   // the skin's than under the hair's, is skin (2D Gaussians fitted per view
   // to what the mixture named each). 0 sigmas turns it off. The hair's
   // Gaussian takes in the shadowed skin the mixture named hair, which pulls
-  // it towards the skin's: under a camera's tone curve and JPEG, where blond
-  // hair and pale skin lie close, a ratio of e^5 kept most of that skin.
+  // it towards the skin's; hence a low ratio: under a camera's tone curve,
+  // where blond hair and pale skin lie close, e^5 leaves most of that skin
+  // hair (docs/accuracy.md, "Strands in front of skin").
   double skin_chromaticity_sigmas = 3.0;
   double skin_chromaticity_log_ratio = 2.0;
   // A view whose own skin model rests on fewer pixels than this (at
