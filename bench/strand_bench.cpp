@@ -10,6 +10,7 @@
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
+//       [--curl-radius-from curvature-and-torsion|curvature|turn-rate]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
@@ -26,7 +27,9 @@
 // seen strands then follow helix_continuation.h alone); --curl-oracle gives every
 // strand the curl given (radius, pitch, handedness: the simulated wig's
 // curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
-// the estimate. --curl-min-depth MM: strands wind only MM or further from the
+// the estimate. --curl-radius-from picks what the estimate's radius and pitch
+// come from (CurlRadiusFrom; curvature-and-torsion by default).
+// --curl-min-depth MM: strands wind only MM or further from the
 // seen strands' ribbons (CurlFieldOptions::min_depth_mm; 0 by default).
 // --scalp-skin-band MM: skin seen behind a vertex above the hairline and within
 // MM of the head is the scalp showing through the hair, not bare skin
@@ -81,6 +84,22 @@ std::vector<cv::Mat1b> TrueLabels(const std::string& capture,
   return labels;
 }
 
+// The --curl-radius-from value; false (with a message) for an unknown one.
+bool ParseCurlRadiusFrom(const std::string& name, hairrig::CurlRadiusFrom* out) {
+  for (const hairrig::CurlRadiusFrom from :
+       {hairrig::CurlRadiusFrom::kCurvatureAndTorsion, hairrig::CurlRadiusFrom::kCurvature,
+        hairrig::CurlRadiusFrom::kTurnRate}) {
+    if (name == hairrig::CurlRadiusFromName(from)) {
+      *out = from;
+      return true;
+    }
+  }
+  std::fprintf(
+      stderr, "--curl-radius-from: 'curvature-and-torsion', 'curvature' or 'turn-rate', not '%s'\n",
+      name.c_str());
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -103,6 +122,7 @@ int main(int argc, char** argv) {
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
         "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
+        "[--curl-radius-from curvature-and-torsion|curvature|turn-rate] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -183,6 +203,8 @@ int main(int argc, char** argv) {
       }
     } else if (std::strcmp(argv[i], "--curl-min-depth") == 0) {
       options.growth.curl.min_depth_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--curl-radius-from") == 0) {
+      if (!ParseCurlRadiusFrom(argv[i + 1], &options.growth.curl.radius_from)) return 2;
     } else if (std::strcmp(argv[i], "--curl-field") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.enabled)) return 2;
     } else if (std::strcmp(argv[i], "--helix-window") == 0) {

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <unordered_map>
 #include <unordered_set>
@@ -77,7 +78,53 @@ struct SegmentTurn {
   double helix_angle = 0;  // mean, rad
   double rate = 0;         // signed turn of the tangent's part square to the axis, rad/mm
   double consistency = 0;  // |sum of signed turns| / sum of their sizes
+  double curvature = 0, torsion = 0;  // medians over its steps, 1/mm (Bending)
 };
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// The polyline's curvature and torsion (1/mm), each the median over its
+// steps, whatever axis it turns about: the angle between consecutive steps'
+// tangents over their mean length, and the signed angle between consecutive
+// binormals about the tangent between them over the step's length (positive
+// for a right-handed helix). 0 where there are too few steps.
+void Bending(const std::vector<Eigen::Vector3f>& p, double* curvature, double* torsion) {
+  std::vector<Eigen::Vector3d> tangents;
+  std::vector<double> lengths;
+  for (size_t k = 0; k + 1 < p.size(); ++k) {
+    const Eigen::Vector3d step = (p[k + 1] - p[k]).cast<double>();
+    if (step.norm() < 1e-9) continue;
+    tangents.push_back(step.normalized());
+    lengths.push_back(step.norm());
+  }
+  std::vector<double> curvatures, torsions;
+  Eigen::Vector3d previous_binormal = Eigen::Vector3d::Zero();
+  for (size_t k = 0; k + 1 < tangents.size(); ++k) {
+    const Eigen::Vector3d& a = tangents[k];
+    const Eigen::Vector3d& b = tangents[k + 1];
+    const Eigen::Vector3d cross = a.cross(b);
+    curvatures.push_back(std::atan2(cross.norm(), a.dot(b)) /
+                         (0.5 * (lengths[k] + lengths[k + 1])));
+    // Too straight for its plane to say where it bends.
+    if (cross.norm() < 1e-3) {
+      previous_binormal.setZero();
+      continue;
+    }
+    const Eigen::Vector3d binormal = cross.normalized();
+    if (previous_binormal.squaredNorm() > 0)
+      torsions.push_back(
+          std::atan2(previous_binormal.cross(binormal).dot(a), previous_binormal.dot(binormal)) /
+          lengths[k]);
+    previous_binormal = binormal;
+  }
+  *curvature = Median(std::move(curvatures));
+  *torsion = Median(std::move(torsions));
+}
 
 // sin of the least angle to the axis at which a step's turn is measured.
 constexpr double kMinAcross = 0.5;
@@ -126,6 +173,7 @@ SegmentTurn TurnAlong(const StrandSegment& segment, const AxisGrid& axes) {
   out.helix_angle = std::acos(std::clamp(std::abs(cos_sum) / steps, 0.0, 1.0));
   out.rate = turn_length > 0 ? sense * turn_sum / turn_length : 0;
   out.consistency = turn_size > 0 ? std::abs(turn_sum) / turn_size : 0;
+  Bending(p, &out.curvature, &out.torsion);
   return out;
 }
 
@@ -144,6 +192,18 @@ double WeightedMedian(std::vector<std::pair<double, double>> value_weight) {
 }
 
 }  // namespace
+
+const char* CurlRadiusFromName(CurlRadiusFrom from) {
+  switch (from) {
+    case CurlRadiusFrom::kCurvature:
+      return "curvature";
+    case CurlRadiusFrom::kTurnRate:
+      return "turn-rate";
+    case CurlRadiusFrom::kCurvatureAndTorsion:
+      return "curvature-and-torsion";
+  }
+  return "curvature";
+}
 
 Status CurlFieldOptions::Check() const {
   if (!(axis_cell_mm > 0)) return InvalidArgument("curl axis_cell_mm must be positive");
@@ -167,6 +227,22 @@ Status CurlFieldOptions::Check() const {
   return Status::Ok();
 }
 
+HelixShape CurlEstimate::RawShape() const {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  const double alpha = helix_angle_deg * M_PI / 180;
+  if (radius_from == CurlRadiusFrom::kCurvatureAndTorsion) {
+    const double k2t2 = curvature_per_mm * curvature_per_mm + torsion_per_mm * torsion_per_mm;
+    if (!(curvature_per_mm > 0)) return {kNone, kNone};
+    return {curvature_per_mm / k2t2, 2 * M_PI * torsion_per_mm / k2t2};
+  }
+  double radius = kNone;
+  if (radius_from == CurlRadiusFrom::kTurnRate && rate_per_mm > 0)
+    radius = std::sin(alpha) / rate_per_mm;
+  if (radius_from == CurlRadiusFrom::kCurvature && curvature_per_mm > 0)
+    radius = std::sin(alpha) * std::sin(alpha) / curvature_per_mm;
+  return {radius, 2 * M_PI * radius / std::tan(alpha)};
+}
+
 nlohmann::json CurlEstimate::ToJson() const {
   return {{"curly", curl.curly()},
           {"radius_mm", curl.radius_mm},
@@ -176,6 +252,9 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"arc_share", arc_share},
           {"helix_angle_deg", helix_angle_deg},
           {"rate_per_mm", rate_per_mm},
+          {"curvature_per_mm", curvature_per_mm},
+          {"torsion_per_mm", torsion_per_mm},
+          {"radius_from", CurlRadiusFromName(radius_from)},
           {"handedness_agreement", HandednessAgreement()},
           {"right_handed_share", right_handed_share},
           {"local_handedness_agreement", local_handedness_agreement}};
@@ -247,7 +326,7 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   CurlField field;
   if (!o.enabled || segments.empty()) return field;
   const AxisGrid axes(segments, o.axis_cell_mm);
-  std::vector<std::pair<double, double>> angles, rates;
+  std::vector<std::pair<double, double>> angles, rates, curvatures, torsions;
   std::vector<Arc> arcs;
   double seen_mm = 0, arc_mm = 0, right_mm = 0;
   auto region = std::make_shared<Region>();
@@ -264,6 +343,8 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
     if (turn.rate > 0) right_mm += turn.length_mm;
     angles.emplace_back(turn.helix_angle, turn.length_mm);
     rates.emplace_back(std::abs(turn.rate), turn.length_mm);
+    curvatures.emplace_back(turn.curvature, turn.length_mm);
+    torsions.emplace_back(std::abs(turn.torsion), turn.length_mm);
     arcs.push_back({turn.length_mm, turn.rate > 0 ? 1 : -1, AxisCells(s, o.axis_cell_mm)});
     for (const Eigen::Vector3f& p : s.points_mm)
       ForNeighbourCells(CellOf(p, o.region_mm), [&](int64_t k) { region->cells.insert(k); });
@@ -275,17 +356,24 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   const double alpha = WeightedMedian(angles), rate = WeightedMedian(rates);
   e.helix_angle_deg = alpha * 180 / M_PI;
   e.rate_per_mm = rate;
+  e.curvature_per_mm = WeightedMedian(curvatures);
+  e.torsion_per_mm = WeightedMedian(torsions);
+  e.radius_from = o.radius_from;
   e.right_handed_share = right_mm / arc_mm;
   const std::unordered_map<int64_t, double> per_cell = SignedLengthPerCell(arcs);
   e.local_handedness_agreement = LocalAgreement(arcs, per_cell);
-  const double radius = std::max(std::sin(alpha) / rate, o.min_radius_mm);
+  const HelixShape shape = e.RawShape();
+  const double radius = std::max(shape.radius_mm, o.min_radius_mm);
+  // A radius raised to the least takes the pitch of the helix angle.
+  const double pitch =
+      radius > shape.radius_mm ? 2 * M_PI * radius / std::tan(alpha) : shape.pitch_mm;
   if (e.arcs < o.min_arcs || e.arc_share < o.min_arc_share ||
       e.local_handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
-      e.helix_angle_deg > o.max_helix_angle_deg)
+      !(pitch > 0 && std::isfinite(pitch)) || e.helix_angle_deg > o.max_helix_angle_deg)
     return field;
   e.curl.handedness = right_mm * 2 >= arc_mm ? 1 : -1;
   e.curl.radius_mm = radius;
-  e.curl.pitch_mm = 2 * M_PI * radius / std::tan(alpha);
+  e.curl.pitch_mm = pitch;
   for (const auto& [key, signed_mm] : per_cell)
     ForNeighbourCells(Unkey(key), [&](int64_t k) { region->turn_mm[k] += signed_mm; });
   region->mirrored = e.curl;

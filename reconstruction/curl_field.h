@@ -20,10 +20,19 @@
 //     (acos of the mean |t . a|) is at least min_arc_angle_deg and whose turns go mostly one way
 //     (the sum of the signed turns at least min_turn_consistency of the sum
 //     of their sizes);
-//   - the curl: alpha and the turn rate, each the median over the arcs
-//     (weighted by length), give r = sin(alpha) / rate (raised to
-//     min_radius_mm if less) and the pitch P = 2 pi r / tan(alpha); the
-//     handedness is the length-weighted majority's;
+//   - the curl's shape from the arcs' curvature kappa and torsion tau (each
+//     arc's median over its steps, then the median over the arcs weighted
+//     by length), a helix's being kappa = r / (r^2 + c^2) and
+//     tau = c / (r^2 + c^2) with c = P / (2 pi): r = kappa / (kappa^2 +
+//     tau^2), P = 2 pi tau / (kappa^2 + tau^2) (raised to min_radius_mm if
+//     less, the pitch then 2 pi r / tan(alpha)); the handedness is the
+//     length-weighted majority's of the turns. Curvature and torsion do not
+//     depend on the axis. The seen arcs turn about the estimated axis at
+//     about half the rate their curvature implies (on the curly test scene,
+//     with the true strands' axis as well), so r = sin(alpha) / rate comes
+//     out about twice the true radius; CurlRadiusFrom keeps that estimate
+//     and r = sin^2(alpha) / kappa beside it (docs/accuracy.md, "Curls
+//     wound on a helix");
 //   - a head's ringlets need not all wind one way: a strand that starts
 //     winding at a point winds the way the arcs in the 27 axis cells around
 //     it turn (the majority by length, each arc counted in every cell it
@@ -55,8 +64,22 @@
 
 namespace hairrig {
 
+// What the curl's radius and pitch are taken from (see the file's comment;
+// alpha is the arcs' helix angle to the estimated axis).
+enum class CurlRadiusFrom {
+  kCurvatureAndTorsion,  // r = kappa / (kappa^2 + tau^2), P = 2 pi tau / (kappa^2 + tau^2)
+  kCurvature,            // r = sin^2(alpha) / kappa, P = 2 pi r / tan(alpha)
+  kTurnRate,             // r = sin(alpha) / rate, P = 2 pi r / tan(alpha)
+};
+const char* CurlRadiusFromName(CurlRadiusFrom from);  // "curvature-and-torsion", ...
+
+struct HelixShape {
+  double radius_mm = 0, pitch_mm = 0;
+};
+
 struct CurlFieldOptions {
   bool enabled = true;  // false: no curl (growth as without it)
+  CurlRadiusFrom radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
   double axis_cell_mm = 10;
   double min_arc_angle_deg = 35;
   double min_arc_length_mm = 15;
@@ -85,6 +108,11 @@ struct CurlEstimate {
   int64_t arcs = 0;
   double arc_share = 0;  // of the directed segments' length
   double helix_angle_deg = 0, rate_per_mm = 0;
+  double curvature_per_mm = 0, torsion_per_mm = 0;  // the arcs' medians, 1/mm (|torsion|)
+  CurlRadiusFrom radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
+  // The helix the arcs give by radius_from, before min_radius_mm and the
+  // curly test; infinite when they do not bend.
+  HelixShape RawShape() const;
   double right_handed_share = 0;  // of the arcs' length
   // The share of the arcs' length that turns the way the other arcs in its
   // axis cells turn (the curly test); 0 without two arcs in one cell.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <utility>
 
 #include "reconstruction/helix_guide.h"
 
@@ -113,6 +114,26 @@ TEST(CurlField, EstimatesTheRingletsCurl) {
     // In the ringlets' region, and not far away from it.
     EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
     EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
+  }
+}
+
+TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
+  // On ideal helices the arcs turn about their axis as their curvature says,
+  // so every estimate finds the curl; a looser, longer one too.
+  for (const auto& [r, pitch] : {std::pair{6.0, 20.0}, std::pair{10.0, 40.0}}) {
+    for (const CurlRadiusFrom from : {CurlRadiusFrom::kCurvatureAndTorsion,
+                                      CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate}) {
+      CurlFieldOptions o;
+      o.radius_from = from;
+      const CurlEstimate e = CurlField::Estimate(Ringlets(r, pitch, 1), o).estimate();
+      ASSERT_TRUE(e.curl.curly()) << "radius " << r;
+      EXPECT_NEAR(e.curl.radius_mm, r, 0.2 * r) << "radius " << r;
+      EXPECT_NEAR(e.curl.pitch_mm, pitch, 0.2 * pitch) << "radius " << r;
+      // A helix's curvature: r / (r^2 + (P / 2 pi)^2).
+      const double c = pitch / (2 * M_PI);
+      EXPECT_NEAR(e.curvature_per_mm, r / (r * r + c * c), 0.01) << "radius " << r;
+      EXPECT_NEAR(e.torsion_per_mm, c / (r * r + c * c), 0.01) << "radius " << r;
+    }
   }
 }
 
