@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/statistics.h"
+
 namespace hairrig {
 
 namespace {
@@ -80,13 +82,6 @@ struct SegmentTurn {
   double consistency = 0;  // |sum of signed turns| / sum of their sizes
   double curvature = 0, torsion = 0;  // medians over its steps, 1/mm (Bending)
 };
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
 
 // The polyline's curvature and torsion (1/mm), each the median over its
 // steps, whatever axis it turns about: the angle between consecutive steps'
