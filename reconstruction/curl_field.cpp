@@ -80,7 +80,6 @@ struct SegmentTurn {
   double helix_angle = 0;  // mean, rad
   double rate = 0;         // signed turn of the tangent's part square to the axis, rad/mm
   double consistency = 0;  // |sum of signed turns| / sum of their sizes
-  double curvature = 0, torsion = 0;  // medians over its steps, 1/mm (Bending)
 };
 
 // The polyline's curvature and torsion (1/mm), each the median over its
@@ -168,7 +167,6 @@ SegmentTurn TurnAlong(const StrandSegment& segment, const AxisGrid& axes) {
   out.helix_angle = std::acos(std::clamp(std::abs(cos_sum) / steps, 0.0, 1.0));
   out.rate = turn_length > 0 ? sense * turn_sum / turn_length : 0;
   out.consistency = turn_size > 0 ? std::abs(turn_sum) / turn_size : 0;
-  Bending(p, &out.curvature, &out.torsion);
   return out;
 }
 
@@ -338,8 +336,10 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
     if (turn.rate > 0) right_mm += turn.length_mm;
     angles.emplace_back(turn.helix_angle, turn.length_mm);
     rates.emplace_back(std::abs(turn.rate), turn.length_mm);
-    curvatures.emplace_back(turn.curvature, turn.length_mm);
-    torsions.emplace_back(std::abs(turn.torsion), turn.length_mm);
+    double curvature = 0, torsion = 0;
+    Bending(s.points_mm, &curvature, &torsion);
+    curvatures.emplace_back(curvature, turn.length_mm);
+    torsions.emplace_back(std::abs(torsion), turn.length_mm);
     arcs.push_back({turn.length_mm, turn.rate > 0 ? 1 : -1, AxisCells(s, o.axis_cell_mm)});
     for (const Eigen::Vector3f& p : s.points_mm)
       ForNeighbourCells(CellOf(p, o.region_mm), [&](int64_t k) { region->cells.insert(k); });

@@ -28,11 +28,11 @@
 //     less, the pitch then 2 pi r / tan(alpha)); the handedness is the
 //     length-weighted majority's of the turns. Curvature and torsion do not
 //     depend on the axis. The seen arcs turn about the estimated axis at
-//     about half the rate their curvature implies (on the curly test scene,
-//     with the true strands' axis as well), so r = sin(alpha) / rate comes
-//     out about twice the true radius; CurlRadiusFrom keeps that estimate
-//     and r = sin^2(alpha) / kappa beside it (docs/accuracy.md, "Curls
-//     wound on a helix");
+//     about half the rate their curvature implies (on curly_blond, with the
+//     true strands' axis as well), so r = sin(alpha) / rate comes out about
+//     twice the true radius; CurlRadiusFrom keeps that estimate and
+//     r = sin^2(alpha) / kappa beside it (docs/accuracy.md, "The curl's
+//     shape from the arcs' bending");
 //   - a head's ringlets need not all wind one way: a strand that starts
 //     winding at a point winds the way the arcs in the 27 axis cells around
 //     it turn (the majority by length, each arc counted in every cell it

@@ -137,6 +137,30 @@ TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
   }
 }
 
+TEST(CurlEstimate, EachShapeEstimateUsesItsOwnMeasures) {
+  // Measures that no one helix has, so each estimate gives its own shape.
+  CurlEstimate e;
+  e.helix_angle_deg = 60;
+  e.rate_per_mm = 0.1;
+  e.curvature_per_mm = 0.12;
+  e.torsion_per_mm = 0.05;
+  const double sin_alpha = std::sin(M_PI / 3), tan_alpha = std::tan(M_PI / 3);
+  e.radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
+  EXPECT_NEAR(e.RawShape().radius_mm, 0.12 / 0.0169, 1e-9);
+  EXPECT_NEAR(e.RawShape().pitch_mm, 2 * M_PI * 0.05 / 0.0169, 1e-9);
+  e.radius_from = CurlRadiusFrom::kCurvature;
+  EXPECT_NEAR(e.RawShape().radius_mm, sin_alpha * sin_alpha / 0.12, 1e-9);
+  EXPECT_NEAR(e.RawShape().pitch_mm, 2 * M_PI * e.RawShape().radius_mm / tan_alpha, 1e-9);
+  e.radius_from = CurlRadiusFrom::kTurnRate;
+  EXPECT_NEAR(e.RawShape().radius_mm, sin_alpha / 0.1, 1e-9);
+  // Arcs that do not bend give no shape.
+  e.rate_per_mm = 0;
+  EXPECT_TRUE(std::isinf(e.RawShape().radius_mm));
+  e.radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
+  e.curvature_per_mm = 0;
+  EXPECT_TRUE(std::isinf(e.RawShape().radius_mm));
+}
+
 TEST(CurlField, RingletsWindEitherWayWhereTheyAreSeenToWind) {
   // The ringlets of columns 0-5 wind right-handed, those of 6-11 left.
   const CurlField field = CurlField::Estimate(
