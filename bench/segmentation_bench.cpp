@@ -4,8 +4,9 @@
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
 //       [--texture-feature yes|no] [--texture-less-noise yes|no] [--skin-chromaticity SIGMAS]
 //       [--skin-chromaticity-log-ratio R] [--capture-skin yes|no] [--views 0,1,...]
-//       [--opaque-shadow-as-skin yes|no] [--outline-blend SIGMAS] [--texture-sigma PX] [--threads
-//       T] [--pictures DIR]
+//       [--opaque-shadow-as-skin yes|no] [--opaque-shadow-touching-skin-only yes|no]
+//       [--outline-blend SIGMAS] [--clipped-level L]
+//       [--texture-sigma PX] [--threads T] [--pictures DIR]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`. Prints
 // each view's hair IoU and which true labels the errors fall on (skin taken
 // for hair, hair taken for backdrop or skin), the median and worst IoU, and
@@ -86,7 +87,9 @@ int main(int argc, char** argv) {
                  "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
                  "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] "
                  "[--capture-skin yes|no] [--views 0,1,...] "
-                 "[--opaque-shadow-as-skin yes|no] [--texture-sigma PX] [--threads T] "
+                 "[--opaque-shadow-as-skin yes|no] [--opaque-shadow-touching-skin-only yes|no] "
+                 "[--outline-blend SIGMAS] [--clipped-level L] "
+                 "[--texture-sigma PX] [--threads T] "
                  "[--pictures DIR]\n",
                  argv[0]);
     return 2;
@@ -115,8 +118,12 @@ int main(int argc, char** argv) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.capture_skin)) return 2;
     } else if (std::strcmp(argv[i], "--opaque-shadow-as-skin") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.opaque_shadow_as_skin)) return 2;
+    } else if (std::strcmp(argv[i], "--opaque-shadow-touching-skin-only") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.opaque_shadow_touching_skin_only)) return 2;
     } else if (std::strcmp(argv[i], "--outline-blend") == 0) {
       options.outline_blend_sigmas = std::atof(argv[i + 1]);  // 0: off
+    } else if (std::strcmp(argv[i], "--clipped-level") == 0) {
+      options.clipped_level = std::atoi(argv[i + 1]);  // 0: off
     } else if (std::strcmp(argv[i], "--texture-sigma") == 0) {
       options.texture_sigma_px = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--views") == 0) {

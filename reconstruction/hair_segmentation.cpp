@@ -90,6 +90,41 @@ double HiddenBackdropShare(const cv::Vec3b& p, const BackdropModel& backdrop) {
   return share;
 }
 
+// The pixels of the hair's region (`hair_region`) that are skin in the hair's
+// shadow: their coverage (`distance` / `full_coverage`) is under 0.5, yet they
+// hide at least half of the backdrop's light in some channel
+// (HiddenBackdropShare), so they are opaque and darker than the hair. With
+// `touching_only`, only their pieces that touch the skin the material model
+// found (`skin`, within 3 px): skin in shadow continues lit skin (the neck
+// under the jaw); the dark gaps between locks, as opaque and as dark, lie
+// within the hair.
+cv::Mat1b OpaqueShadowOnSkin(const cv::Mat3b& bgr, const cv::Mat1b& hair_region,
+                             const cv::Mat1f& distance, float full_coverage,
+                             const BackdropModel& backdrop, const cv::Mat1b& skin,
+                             bool touching_only) {
+  cv::Mat1b opaque(bgr.size(), uint8_t{0});
+  opaque.forEach([&](uint8_t& o, const int* pos) {
+    const int y = pos[0], x = pos[1];
+    if (hair_region(y, x) && distance(y, x) < 0.5f * full_coverage &&
+        HiddenBackdropShare(bgr(y, x), backdrop) >= 0.5)
+      o = 255;
+  });
+  if (!touching_only) return opaque;
+  cv::Mat1b near_skin;
+  cv::dilate(skin, near_skin, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(7, 7)));
+  cv::Mat1i pieces;
+  const int n = cv::connectedComponents(opaque, pieces, 8, CV_32S);
+  std::vector<uint8_t> touches(static_cast<size_t>(n), 0);
+  for (int y = 0; y < opaque.rows; ++y)
+    for (int x = 0; x < opaque.cols; ++x)
+      if (opaque(y, x) && near_skin(y, x)) touches[static_cast<size_t>(pieces(y, x))] = 255;
+  touches[0] = 0;
+  opaque.forEach([&](uint8_t& o, const int* pos) {
+    o = touches[static_cast<size_t>(pieces(pos[0], pos[1]))];
+  });
+  return opaque;
+}
+
 // Gaussian blurs of values over the pixels in `weights` only (normalised
 // convolution): pixels outside take no part, so no step at the foreground's
 // outline enters the result. The weights' own blur is made once per sigma.
@@ -131,26 +166,24 @@ class BlurWithin {
 // How far (px) OpenCV's Gaussian kernel of `sigma` reaches on float images.
 int GaussianReach(double sigma) { return cvRound(sigma * 8 + 1) / 2; }
 
-// The texture band within `within` (a band-pass of the grey image, blurred
+// The texture band within `within` (a band-pass of one image plane, blurred
 // within the mask so that the step at its outline does not count), squared
 // and averaged over a window of `sigma`, relative to the squared local
 // brightness (+ 8 grey levels), so that hair in shadow stays textured. Every
 // blur takes only pixels in `within`, so the result is 0 further than the
 // blurs reach from it: it is computed on the mask's bounding box grown by
 // that reach (the values over the whole image, up to float rounding).
-cv::Mat1f RelativeBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
+cv::Mat1f RelativeBandEnergy(const cv::Mat1b& plane, const cv::Mat1b& within, double sigma) {
   constexpr double kFine = 1.5, kCoarse = 4.0;
-  cv::Mat1f out(bgr.size(), 0.f);
+  cv::Mat1f out(plane.size(), 0.f);
   const cv::Rect box = cv::boundingRect(within);
   if (box.empty()) return out;
   const int reach = GaussianReach(std::max({kFine, kCoarse, sigma})) + 1;
   const cv::Rect area =
       cv::Rect(box.x - reach, box.y - reach, box.width + 2 * reach, box.height + 2 * reach) &
-      cv::Rect(0, 0, bgr.cols, bgr.rows);
+      cv::Rect(0, 0, plane.cols, plane.rows);
   cv::Mat1f grey, weights;
-  cv::Mat grey8;
-  cv::cvtColor(bgr(area), grey8, cv::COLOR_BGR2GRAY);
-  grey8.convertTo(grey, CV_32F);
+  plane(area).convertTo(grey, CV_32F);
   within(area).convertTo(weights, CV_32F, 1.0 / 255.0);
   BlurWithin blur(weights);
   const cv::Mat1f fine = blur(grey, kFine), coarse = blur(grey, kCoarse);
@@ -168,10 +201,10 @@ cv::Mat1f RelativeBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, doub
 // The image noise's share of RelativeBandEnergy: its median over the backdrop
 // (`backdrop`, eroded so that no subject's edge counts), where the rig shows
 // nothing but noise. 0 when too little backdrop is left.
-double NoiseBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& backdrop, double sigma) {
+double NoiseBandEnergy(const cv::Mat1b& grey, const cv::Mat1b& backdrop, double sigma) {
   cv::Mat1b plain;
   cv::erode(backdrop, plain, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(17, 17)));
-  const cv::Mat1f energy = RelativeBandEnergy(bgr, plain, sigma);
+  const cv::Mat1f energy = RelativeBandEnergy(grey, plain, sigma);
   std::vector<float> values;
   for (int y = 0; y < plain.rows; y += 4)
     for (int x = 0; x < plain.cols; x += 4)
@@ -184,10 +217,34 @@ double NoiseBandEnergy(const cv::Mat3b& bgr, const cv::Mat1b& backdrop, double s
 // Fine-scale texture within the foreground (`within`): the root of
 // RelativeBandEnergy. Fibres give a high value, skin little more than the
 // image's noise.
-cv::Mat1f TextureEnergy(const cv::Mat3b& bgr, const cv::Mat1b& within, double sigma) {
-  cv::Mat1f energy = RelativeBandEnergy(bgr, within, sigma);
+cv::Mat1f TextureEnergy(const cv::Mat1b& plane, const cv::Mat1b& within, double sigma) {
+  cv::Mat1f energy = RelativeBandEnergy(plane, within, sigma);
   cv::sqrt(energy, energy);
   return energy;
+}
+
+// A channel clipped at `level` (SegmentationOptions::clipped_level) is flat
+// where the grey image still carries the other channels' texture, weakly: a
+// lock of blond hair clipped in red and green keeps its fibres in blue. At
+// each pixel with a clipped channel, `energy` (TextureEnergy of the grey
+// image) takes the most textured channel's (TextureEnergy of each channel
+// within `within`); skin clipped flat stays smooth in every channel.
+void TextureWhereClipped(const cv::Mat3b& bgr, const cv::Mat1b& within, int level, double sigma,
+                         cv::Mat1f& energy) {
+  std::vector<cv::Mat1b> channels;
+  cv::split(bgr, channels);
+  cv::Mat1b any_clipped(bgr.size(), uint8_t{0});
+  for (const cv::Mat1b& channel : channels) any_clipped |= Mask(channel >= level);
+  any_clipped &= within;
+  if (cv::countNonZero(any_clipped) == 0) return;
+  cv::Mat1f best(bgr.size(), 0.f);
+  for (const cv::Mat1b& channel : channels) {
+    const cv::Mat own = TextureEnergy(channel, within, sigma);
+    best = cv::max(cv::Mat(best), own);
+  }
+  energy.forEach([&](float& e, const int* pos) {
+    if (any_clipped(pos[0], pos[1])) e = best(pos[0], pos[1]);
+  });
 }
 
 // A TextureEnergy value less the image noise's share (`noise_energy`,
@@ -274,6 +331,15 @@ class MaterialModel {
     return Features(bgr(y, x), energy(y, x), texture_);
   }
 
+  // For a pixel whose colour is clipped: hair when its texture (less the
+  // noise's) exceeds the threshold the components are named by, skin below;
+  // 5 per factor e, clamped to +-20 as HairLogRatio.
+  double HairLogRatioByTexture(float energy) const {
+    const double own = TextureLessNoise(energy, noise_energy_);
+    if (!(texture_threshold_ > 0)) return 0.0;
+    return std::clamp(5.0 * std::log(std::max(own, 1e-9) / texture_threshold_), -20.0, 20.0);
+  }
+
   // log p(features, hair) - log p(features, skin), clamped to +-20.
   double HairLogRatio(const cv::Vec4d& f) const {
     double hair = -1e300, skin = -1e300;
@@ -314,6 +380,8 @@ class MaterialModel {
     }
     if (all.empty()) return;  // every component stays hair
     const double threshold = ratio * Quantile(all, 0.75);
+    texture_threshold_ = threshold;
+    noise_energy_ = noise_energy;
     for (size_t k = 0; k < energies.size(); ++k) {
       // A component that wins no sampled pixel is named by its mean texture
       // (with texture in the model), else it stays hair.
@@ -343,6 +411,7 @@ class MaterialModel {
   }
   std::vector<Gaussian> gaussians_;
   bool texture_ = true;
+  double texture_threshold_ = 0, noise_energy_ = 0;
 };
 
 // A 2D Gaussian over chromaticity (r, g) = (R, G) / (R + G + B), ready to
@@ -428,8 +497,10 @@ struct ChromaticityStep {
 // sigma), the hair's on what it calls hair; a hair pixel whose chromaticity
 // (over a few pixels, against sensor noise) lies within `sigmas` of the skin's
 // and is e^log_ratio times likelier under it than under the hair's becomes
-// skin. A view with too little skin of its own takes `capture_skin` (may be
-// null), and keeps only the regions it turns to skin (CoherentPieces).
+// skin. Only the pixels of `candidates` (the foreground whose colour is not
+// clipped) are fitted or turned. A view with too little skin of its own takes
+// `capture_skin` (may be null), and keeps only the regions it turns to skin
+// (CoherentPieces).
 // Unchanged when the hair or the skin used has fewer than 50 samples.
 ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
                                     const cv::Mat1b& hair, const SegmentationOptions& options,
@@ -456,7 +527,7 @@ ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candi
   const double sigmas = options.skin_chromaticity_sigmas;
   cv::Mat1b flips(hair.size(), uint8_t{0});
   flips.forEach([&](uint8_t& f, const int* pos) {
-    if (!hair(pos[0], pos[1])) return;
+    if (!hair(pos[0], pos[1]) || !candidates(pos[0], pos[1])) return;
     const cv::Vec2d c = Chromaticity(smooth(pos[0], pos[1]));
     if (skin.Exponent(c) > -0.5 * sigmas * sigmas &&
         skin.LogDensity(c) - hair_model.LogDensity(c) > options.skin_chromaticity_log_ratio)
@@ -542,18 +613,48 @@ cv::Mat1b OutlineBlendsOfSkin(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
   return blends;
 }
 
+// The foreground's pixels whose colour is clipped (SegmentationOptions::
+// clipped_level) at the working scale: those over which any full-size pixel
+// has a channel at the level, in patches (an opening over 3 px: a highlight
+// clips over a patch, grain on a bright surface clips single pixels).
+// `candidates`: the foreground at the working scale. None when the level is
+// 0, or when fewer than a quarter of the candidates are left unclipped (too
+// few to model the materials on).
+cv::Mat1b ClippedCandidates(const cv::Mat3b& full_bgr, const cv::Mat1b& candidates, int level) {
+  cv::Mat1b none(candidates.size(), uint8_t{0});
+  if (level <= 0) return none;
+  std::vector<cv::Mat1b> channels;
+  cv::split(full_bgr, channels);
+  cv::Mat1b full_clipped = Mask(channels[0] >= level);
+  for (size_t c = 1; c < channels.size(); ++c) full_clipped |= Mask(channels[c] >= level);
+  cv::morphologyEx(full_clipped, full_clipped, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  cv::Mat1b small;  // non-zero where any full-size pixel under the small one clips
+  cv::resize(full_clipped, small, candidates.size(), 0, 0, cv::INTER_AREA);
+  const cv::Mat1b clipped = Mask(candidates & (small > 0));
+  const int clipped_count = cv::countNonZero(clipped);
+  const int all = cv::countNonZero(candidates);
+  return 4 * (all - clipped_count) < all ? none : clipped;
+}
+
 // Hair against skin on the foreground (non-zero in `candidates`): the
-// material model's likelihood ratio, smoothed over a few pixels. Returns a
-// mask of hair, same size as `bgr`.
+// material model's likelihood ratio, smoothed over a few pixels. The model is
+// fitted on the pixels not `clipped`; a clipped pixel's colour says nothing of
+// its material, and it is hair or skin by its texture alone
+// (MaterialModel::HairLogRatioByTexture). Returns a mask of hair, same size
+// as `bgr`.
 Result<cv::Mat1b> HairBySkinContrast(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
-                                     const cv::Mat1f& energy, double noise_energy,
-                                     const SegmentationOptions& options) {
-  HR_ASSIGN_OR_RETURN(const MaterialModel model,
-                      MaterialModel::Fit(bgr, candidates, energy, noise_energy, options));
+                                     const cv::Mat1b& clipped, const cv::Mat1f& energy,
+                                     double noise_energy, const SegmentationOptions& options) {
+  HR_ASSIGN_OR_RETURN(
+      const MaterialModel model,
+      MaterialModel::Fit(bgr, Mask(candidates & ~clipped), energy, noise_energy, options));
   cv::Mat1f ratio(bgr.size(), 0.f);
   ratio.forEach([&](float& r, const int* pos) {
-    if (candidates(pos[0], pos[1]))
-      r = static_cast<float>(model.HairLogRatio(model.At(bgr, energy, pos[0], pos[1])));
+    if (!candidates(pos[0], pos[1])) return;
+    r = static_cast<float>(clipped(pos[0], pos[1])
+                               ? model.HairLogRatioByTexture(energy(pos[0], pos[1]))
+                               : model.HairLogRatio(model.At(bgr, energy, pos[0], pos[1])));
   });
   cv::GaussianBlur(ratio, ratio, cv::Size(), options.texture_sigma_px * options.work_scale);
   return Mask(candidates & (ratio > 0));
@@ -610,6 +711,8 @@ Status SegmentationOptions::Check() const {
     return InvalidArgument("segmentation min_hair_component_share must be in [0, 1)");
   if (!(outline_blend_sigmas >= 0))
     return InvalidArgument("segmentation outline_blend_sigmas must be non-negative (0: off)");
+  if (clipped_level < 0 || clipped_level > 255)
+    return InvalidArgument("segmentation clipped_level must be a grey level in 0..255 (0: off)");
   if (!(work_scale > 0.1 && work_scale <= 1))
     return InvalidArgument("segmentation work_scale must be in (0.1, 1]");
   return Status::Ok();
@@ -711,20 +814,25 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   cv::resize(bgr, small_bgr, cv::Size(), s, s, cv::INTER_AREA);
   cv::resize(candidates, small_candidates, small_bgr.size(), 0, 0, cv::INTER_AREA);
   small_candidates = Mask(small_candidates >= 128);
-  const double noise_energy = options.texture_less_noise
-                                  ? NoiseBandEnergy(bgr, Mask(distance < options.backdrop_distance),
-                                                    options.texture_sigma_px)
-                                  : 0.0;
-  cv::resize(TextureEnergy(bgr, candidates, options.texture_sigma_px), small_energy,
-             small_bgr.size(), 0, 0, cv::INTER_AREA);
-  HR_ASSIGN_OR_RETURN(
-      const cv::Mat1b contrast_hair,
-      HairBySkinContrast(small_bgr, small_candidates, small_energy, noise_energy, options));
+  cv::Mat1b grey;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  const double noise_energy =
+      options.texture_less_noise ? NoiseBandEnergy(grey, Mask(distance < options.backdrop_distance),
+                                                   options.texture_sigma_px)
+                                 : 0.0;
+  cv::Mat1f energy = TextureEnergy(grey, candidates, options.texture_sigma_px);
+  if (options.clipped_level > 0)
+    TextureWhereClipped(bgr, candidates, options.clipped_level, options.texture_sigma_px, energy);
+  cv::resize(energy, small_energy, small_bgr.size(), 0, 0, cv::INTER_AREA);
+  const cv::Mat1b clipped = ClippedCandidates(bgr, small_candidates, options.clipped_level);
+  HR_ASSIGN_OR_RETURN(const cv::Mat1b contrast_hair,
+                      HairBySkinContrast(small_bgr, small_candidates, clipped, small_energy,
+                                         noise_energy, options));
   ChromaticityStep chromaticity;
   chromaticity.hair = contrast_hair;
   if (options.skin_chromaticity_sigmas > 0)
-    chromaticity =
-        SkinByChromaticity(small_bgr, small_candidates, contrast_hair, options, capture_skin);
+    chromaticity = SkinByChromaticity(small_bgr, Mask(small_candidates & ~clipped), contrast_hair,
+                                      options, capture_skin);
   cv::Mat1b small_hair = chromaticity.hair;
   if (options.outline_blend_sigmas > 0)
     small_hair = Mask(small_hair & ~OutlineBlendsOfSkin(small_bgr, small_candidates, small_hair,
@@ -754,6 +862,11 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
                                        static_cast<float>(Quantile(hair_distances, 0.5)));
 
   const cv::Mat1b stray = StrayComponents(hair_region, options.min_hair_component_share);
+  const cv::Mat1b shadowed_skin =
+      options.opaque_shadow_as_skin ? OpaqueShadowOnSkin(bgr, hair_region, distance, full_coverage,
+                                                         backdrop, Mask(candidates & ~hair_region),
+                                                         options.opaque_shadow_touching_skin_only)
+                                    : cv::Mat1b(bgr.size(), uint8_t{0});
   HairSegmentation out;
   out.backdrop_sigma = backdrop.sigma;
   out.skin_chromaticity = chromaticity.own_skin;
@@ -774,8 +887,7 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
         continue;
       }
       const float alpha = std::min(1.f, distance(y, x) / full_coverage);
-      if (alpha < 0.5f && options.opaque_shadow_as_skin &&
-          HiddenBackdropShare(bgr(y, x), backdrop) >= 0.5) {
+      if (shadowed_skin(y, x)) {
         out.label(y, x) = kSegHead;
         continue;
       }

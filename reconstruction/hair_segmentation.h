@@ -19,8 +19,10 @@
 //     smoothed over a few pixels, labels every pixel. Texture in the mixture
 //     keeps smooth skin in shadow out of dark hair's components; without it
 //     (`texture_feature` false) the mixture is over colour alone, as Bao &
-//     Qi's. Skin in shadow keeps its chromaticity: hair pixels whose
-//     chromaticity the skin's explains far better become skin. A view that
+//     Qi's. A pixel with a clipped channel is named by its texture alone
+//     (SegmentationOptions::clipped_level). Skin in shadow keeps its
+//     chromaticity: hair pixels whose chromaticity the skin's explains far
+//     better become skin. A view that
 //     shows too little lit skin to model it (the back of the head, where the
 //     neck lies in the hair's shadow) borrows the capture's: the models of
 //     the views that have one, pooled (SegmentCaptureViews runs the two
@@ -88,10 +90,18 @@ struct SegmentationOptions {
   // half the hair's (coverage under 0.5, a blend) yet is too dark to be a
   // blend (it hides at least half of the backdrop's light in some channel):
   // opaque and darker than the hair, skin in shadow under the hair (the
-  // neck beneath the jaw) or a shadowed gap between curls. true: labelled
-  // skin, so that the strands' skin tests see the shadowed neck (a gap taken
-  // for skin costs a curl some length); false: backdrop, as a blend's.
+  // neck beneath the jaw) or a shadowed gap between locks. true: labelled
+  // skin, so that the strands' skin tests see the shadowed neck; false:
+  // backdrop, as a blend's.
   bool opaque_shadow_as_skin = true;
+  // With opaque_shadow_as_skin, only the pieces of such pixels that touch
+  // the skin the material model found (within 3 px) are skin: skin in
+  // shadow continues lit skin, while the gaps between locks, as opaque and
+  // as dark, lie within the hair and stay backdrop. A gap taken for skin
+  // ends the strands that cross it (most of all against a dark blue
+  // backdrop, which every shadowed blond pixel hides); skin seen through a
+  // gap, left backdrop, no longer ends them.
+  bool opaque_shadow_touching_skin_only = false;
   // Along the foreground's outline a pixel blends the subject with the
   // backdrop (the lens, the sensor's pixel, defocus), and a blend of skin in
   // shade with the backdrop can look like hair to the material model: a rim
@@ -104,6 +114,17 @@ struct SegmentationOptions {
   // a mix of the hair's beside it (where there is hair), is skin. 0 turns
   // it off.
   double outline_blend_sigmas = 3.0;
+  // A pixel with a channel at or above this grey level is clipped: an
+  // over-exposed highlight, whose colour says nothing of its material (blond
+  // hair's locks and pale skin both clip to near white). Clipped pixels, in
+  // patches of 3 px or more, are left out of the material model and of the
+  // chromaticity fits, and are hair or skin by their texture alone: the most
+  // textured channel's (a lock clipped in red and green keeps its fibres in
+  // blue; clipped skin is flat in every channel) against the threshold the
+  // model's components are named by. When fewer than a quarter of the
+  // foreground's pixels are unclipped, every pixel is modelled by its colour.
+  // 0 turns it off (docs/accuracy.md, "Hair segmentation").
+  int clipped_level = 250;
   double work_scale = 0.5;  // the colour model and graph cut run at this scale (1 = full size)
   // Hair pieces smaller than this share of the largest are not hair (specks,
   // thin lines of the rig apart from the subject): labelled backdrop.
