@@ -11,6 +11,7 @@
 
 #include "cli/cli.h"
 #include "core/log.h"
+#include "reconstruction/hair_segmentation.h"
 #include "rig/reconstruct_capture.h"
 #include "rig/reconstruction_input.h"
 
@@ -39,6 +40,8 @@ struct ReconstructArgs {
   int orientation_scales = OrientationOptions{}.scales;
   double orientation_smoothing_px = OrientationOptions{}.smoothing_px;
   double hull_tolerance = VisualHullOptions{}.max_empty_share;
+  std::string shadowed_skin =
+      SegmentationOptions{}.opaque_shadow_touching_skin_only ? "touching" : "all";
 };
 
 // One line per stage on a terminal (rewritten in place), with the stage's ETA.
@@ -88,6 +91,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.points.orientation.scales = a.orientation_scales;
   options.points.orientation.smoothing_px = a.orientation_smoothing_px;
   options.points.hull.max_empty_share = a.hull_tolerance;
+  options.points.segmentation.opaque_shadow_touching_skin_only = a.shadowed_skin == "touching";
   options.points.mvs.cost = a.cost == "orientation"   ? MvsCost::kOrientation
                             : a.cost == "photometric" ? MvsCost::kPhotometric
                                                       : MvsCost::kBoth;
@@ -209,6 +213,13 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "visual hull: the share of the views that may see the backdrop where a voxel "
                   "still stays, for a segmentation that misses thin wisps (0 = every view carves)")
       ->check(CLI::Range(0.0, 0.5))
+      ->capture_default_str();
+  cmd->add_option("--shadowed-skin", args->shadowed_skin,
+                  "segmentation: the hair's region's pixels too dark to be hair blended with "
+                  "the backdrop are skin in shadow everywhere (all), or only where they touch "
+                  "the lit skin (touching: for a backdrop the shadowed hair hides by its colour, "
+                  "as a dark blue one behind blond hair)")
+      ->check(CLI::IsMember({"all", "touching"}))
       ->capture_default_str();
   cmd->add_flag("--json", common.json, "print the summary as one JSON object");
   cmd->callback([args, &dispatch] {
