@@ -223,21 +223,26 @@ cv::Mat1f TextureEnergy(const cv::Mat1b& plane, const cv::Mat1b& within, double 
   return energy;
 }
 
-// A channel clipped at `level` (SegmentationOptions::clipped_level) is flat
-// where the grey image still carries the other channels' texture, weakly: a
-// lock of blond hair clipped in red and green keeps its fibres in blue. At
-// each pixel with a clipped channel, `energy` (TextureEnergy of the grey
-// image) takes the most textured channel's (TextureEnergy of each channel
+// The pixels with a channel at or above `level` (SegmentationOptions::
+// clipped_level; none when it is 0), full size.
+cv::Mat1b ClippedPixels(const std::vector<cv::Mat1b>& channels, int level) {
+  cv::Mat1b clipped(channels[0].size(), uint8_t{0});
+  if (level <= 0) return clipped;
+  for (const cv::Mat1b& channel : channels) clipped |= Mask(channel >= level);
+  return clipped;
+}
+
+// A clipped channel is flat where the grey image still carries the other
+// channels' texture, weakly: a lock of blond hair clipped in red and green
+// keeps its fibres in blue. At each pixel of `within` with a clipped channel
+// (`clipped`, ClippedPixels), `energy` (TextureEnergy of the grey image)
+// takes the most textured channel's (TextureEnergy of each of `channels`
 // within `within`); skin clipped flat stays smooth in every channel.
-void TextureWhereClipped(const cv::Mat3b& bgr, const cv::Mat1b& within, int level, double sigma,
-                         cv::Mat1f& energy) {
-  std::vector<cv::Mat1b> channels;
-  cv::split(bgr, channels);
-  cv::Mat1b any_clipped(bgr.size(), uint8_t{0});
-  for (const cv::Mat1b& channel : channels) any_clipped |= Mask(channel >= level);
-  any_clipped &= within;
+void TextureWhereClipped(const std::vector<cv::Mat1b>& channels, const cv::Mat1b& within,
+                         const cv::Mat1b& clipped, double sigma, cv::Mat1f& energy) {
+  const cv::Mat1b any_clipped = Mask(clipped & within);
   if (cv::countNonZero(any_clipped) == 0) return;
-  cv::Mat1f best(bgr.size(), 0.f);
+  cv::Mat1f best(within.size(), 0.f);
   for (const cv::Mat1b& channel : channels) {
     const cv::Mat own = TextureEnergy(channel, within, sigma);
     best = cv::max(cv::Mat(best), own);
@@ -613,28 +618,22 @@ cv::Mat1b OutlineBlendsOfSkin(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
   return blends;
 }
 
-// The foreground's pixels whose colour is clipped (SegmentationOptions::
-// clipped_level) at the working scale: those over which any full-size pixel
-// has a channel at the level, in patches (an opening over 3 px: a highlight
-// clips over a patch, grain on a bright surface clips single pixels).
-// `candidates`: the foreground at the working scale. None when the level is
-// 0, or when fewer than a quarter of the candidates are left unclipped (too
-// few to model the materials on).
-cv::Mat1b ClippedCandidates(const cv::Mat3b& full_bgr, const cv::Mat1b& candidates, int level) {
-  cv::Mat1b none(candidates.size(), uint8_t{0});
-  if (level <= 0) return none;
-  std::vector<cv::Mat1b> channels;
-  cv::split(full_bgr, channels);
-  cv::Mat1b full_clipped = Mask(channels[0] >= level);
-  for (size_t c = 1; c < channels.size(); ++c) full_clipped |= Mask(channels[c] >= level);
-  cv::morphologyEx(full_clipped, full_clipped, cv::MORPH_OPEN,
+// The foreground's pixels whose colour is clipped at the working scale: those
+// over which any full-size pixel of `full_clipped` (ClippedPixels) lies, in
+// patches (an opening over 3 px: a highlight clips over a patch, grain on a
+// bright surface clips single pixels). `candidates`: the foreground at the
+// working scale. None when fewer than a quarter of the candidates are left
+// unclipped (too few to model the materials on).
+cv::Mat1b ClippedCandidates(const cv::Mat1b& full_clipped, const cv::Mat1b& candidates) {
+  cv::Mat1b patches;
+  cv::morphologyEx(full_clipped, patches, cv::MORPH_OPEN,
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
   cv::Mat1b small;  // non-zero where any full-size pixel under the small one clips
-  cv::resize(full_clipped, small, candidates.size(), 0, 0, cv::INTER_AREA);
+  cv::resize(patches, small, candidates.size(), 0, 0, cv::INTER_AREA);
   const cv::Mat1b clipped = Mask(candidates & (small > 0));
   const int clipped_count = cv::countNonZero(clipped);
   const int all = cv::countNonZero(candidates);
-  return 4 * (all - clipped_count) < all ? none : clipped;
+  return 4 * (all - clipped_count) < all ? cv::Mat1b(candidates.size(), uint8_t{0}) : clipped;
 }
 
 // Hair against skin on the foreground (non-zero in `candidates`): the
@@ -820,11 +819,13 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
       options.texture_less_noise ? NoiseBandEnergy(grey, Mask(distance < options.backdrop_distance),
                                                    options.texture_sigma_px)
                                  : 0.0;
+  std::vector<cv::Mat1b> channels;
+  cv::split(bgr, channels);
+  const cv::Mat1b full_clipped = ClippedPixels(channels, options.clipped_level);
   cv::Mat1f energy = TextureEnergy(grey, candidates, options.texture_sigma_px);
-  if (options.clipped_level > 0)
-    TextureWhereClipped(bgr, candidates, options.clipped_level, options.texture_sigma_px, energy);
+  TextureWhereClipped(channels, candidates, full_clipped, options.texture_sigma_px, energy);
   cv::resize(energy, small_energy, small_bgr.size(), 0, 0, cv::INTER_AREA);
-  const cv::Mat1b clipped = ClippedCandidates(bgr, small_candidates, options.clipped_level);
+  const cv::Mat1b clipped = ClippedCandidates(full_clipped, small_candidates);
   HR_ASSIGN_OR_RETURN(const cv::Mat1b contrast_hair,
                       HairBySkinContrast(small_bgr, small_candidates, clipped, small_energy,
                                          noise_energy, options));
