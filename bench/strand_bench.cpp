@@ -15,7 +15,8 @@
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
 //       [--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM]
-//       [--cover-graft-radius MM]
+//       [--cover-graft-radius MM] [--seen-tips yes|no] [--seen-tip-reach MM]
+//       [--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -37,6 +38,10 @@
 // --cover-segments no grows the strands from the scalp's roots alone (Bao &
 // Qi), without the strands through the seen strands they leave uncovered
 // (SegmentCoverOptions in strand_growth.h).
+// --seen-tips no lets a strand that follows a seen strand to its tip end carry
+// on (seen_tips.h; the paper's growth); --seen-tip-reach sets
+// SeenTipOptions::reach_mm, --seen-tip-window its ahead_max_mm, lateral_mm and
+// max_angle_deg (the window a continuing seen strand is looked for in).
 // --skin-labels truth gives the growth's skin tests (end over skin, tips trimmed
 // back) the simulated rig's true labels in place of the segmentation's: their
 // ceiling.
@@ -116,7 +121,8 @@ int main(int argc, char** argv) {
         "[--skin-min-share S] [--skin-min-views N] [--trim-tips-over-skin yes|no] "
         "[--scalp-skin-band MM] [--tip-skin-margin PX] "
         "[--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM] "
-        "[--cover-graft-radius MM] "
+        "[--cover-graft-radius MM] [--seen-tips yes|no] [--seen-tip-reach MM] "
+        "[--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -173,6 +179,19 @@ int main(int argc, char** argv) {
       options.growth.follow_radius_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--cover-segments") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.cover.enabled)) return 2;
+    } else if (std::strcmp(argv[i], "--seen-tips") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.seen_tips.enabled)) return 2;
+    } else if (std::strcmp(argv[i], "--seen-tip-reach") == 0) {
+      options.growth.seen_tips.reach_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--seen-tip-window") == 0) {
+      SeenTipOptions& t = options.growth.seen_tips;
+      if (std::sscanf(argv[i + 1], "%lf,%lf,%lf", &t.ahead_max_mm, &t.lateral_mm,
+                      &t.max_angle_deg) != 3) {
+        std::fprintf(stderr,
+                     "--seen-tip-window: expected AHEAD_MM,LATERAL_MM,ANGLE_DEG, got '%s'\n",
+                     argv[i + 1]);
+        return 2;
+      }
     } else if (std::strcmp(argv[i], "--cover-min-uncovered") == 0) {
       options.growth.cover.min_uncovered_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--cover-graft-radius") == 0) {

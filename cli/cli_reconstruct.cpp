@@ -31,6 +31,7 @@ struct ReconstructArgs {
   std::string helix_continuation = StrandGrowthOptions{}.helix_continuation ? "yes" : "no";
   std::string cover_segments = SegmentCoverOptions{}.enabled ? "yes" : "no";
   std::string curls = CurlFieldOptions{}.enabled ? "yes" : "no";
+  std::string seen_tips = SeenTipOptions{}.enabled ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
   int threads = 2;
@@ -104,6 +105,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.growth.helix_continuation = a.helix_continuation == "yes";
   options.strands.growth.cover.enabled = a.cover_segments == "yes";
   options.strands.growth.curl.enabled = a.curls == "yes";
+  options.strands.growth.seen_tips.enabled = a.seen_tips == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
   return ReconstructCapture(options);
@@ -172,6 +174,13 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "bao-qi: give the seen strands no strand from the roots passes along a strand "
                   "of their own, traced back to the scalp (yes), or grow from the roots alone as "
                   "Bao and Qi (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--seen-tips", args->seen_tips,
+                  "bao-qi: a strand that follows a seen strand to a tip end no other seen strand "
+                  "carries on from ends there, where the hair is not seen to curl (yes), or runs "
+                  "on to the hair volume's edge as Bao and Qi (no: for hair cut to one line, "
+                  "whose upper layers reach as low as the outer one)")
       ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap,

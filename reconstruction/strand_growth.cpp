@@ -14,7 +14,7 @@ namespace hairrig {
 
 namespace {
 
-enum class End { kVolume, kLength, kOffHair, kOverSkin, kRoot };
+enum class End { kVolume, kLength, kOffHair, kOverSkin, kSeenTip, kRoot };
 
 // What a step decided besides the next direction.
 struct StepStop {
@@ -79,6 +79,7 @@ StrandSet GrowAll(const std::vector<DirectedRoot>& roots, const HeadModel* head,
     ++(ends[r] == End::kVolume     ? s.stopped_volume
        : ends[r] == End::kOffHair  ? s.stopped_off_hair
        : ends[r] == End::kOverSkin ? s.stopped_over_skin
+       : ends[r] == End::kSeenTip  ? s.stopped_seen_tip
                                    : s.stopped_length);
     s.tips_trimmed_over_skin += trimmed[r];
     set.AddStrand(strands[r]);
@@ -164,6 +165,7 @@ Status StrandGrowthOptions::Check() const {
   HR_RETURN_IF_ERROR(skin.Check());
   HR_RETURN_IF_ERROR(cover.Check());
   HR_RETURN_IF_ERROR(curl.Check());
+  HR_RETURN_IF_ERROR(seen_tips.Check());
   return tip_skin.Check();
 }
 
@@ -248,6 +250,10 @@ class FieldGrowth::Step {
     const bool following = o.follow_radius_mm > 0 &&
                            field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
                            sign_ * seen.dot(previous) > 0.5f;
+    if (following && sign_ > 0 && AtSeenTip(p, previous)) {
+      stop->end = End::kSeenTip;
+      return false;
+    }
     if (following) h += sign_ * static_cast<float>(o.follow_weight) * seen;
     if (h.norm() < 1e-6f) return true;  // keeps the previous direction
     *next = h.normalized();
@@ -271,6 +277,14 @@ class FieldGrowth::Step {
   }
 
  private:
+  // A seen tip (seen_tips.h) at p, in the strand's direction, where the hair
+  // is not seen to curl: there a seen strand ends where it turns out of the
+  // views' sight more often than where it ends (docs/accuracy.md, "Where
+  // strands end").
+  bool AtSeenTip(const Eigen::Vector3f& p, const Eigen::Vector3f& direction) const {
+    if (g_.seen_tips_ == nullptr || !g_.seen_tips_->Reached(p, direction)) return false;
+    return g_.curls_ == nullptr || g_.curls_->At(p) == nullptr;
+  }
   bool AtScalp(const Eigen::Vector3f& p) const {
     if (g_.head_ == nullptr) return false;
     const Eigen::Vector3d q = p.cast<double>();
@@ -290,8 +304,13 @@ class FieldGrowth::Step {
 
 FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
                          const StrandGrowthOptions& options, const SkinViews* skin,
-                         const CurlField* curls)
-    : field_(field), head_(head), o_(options), skin_(std::make_unique<Skin>()), curls_(curls) {
+                         const CurlField* curls, const SeenTips* seen_tips)
+    : field_(field),
+      head_(head),
+      o_(options),
+      skin_(std::make_unique<Skin>()),
+      curls_(curls),
+      seen_tips_(seen_tips) {
   if (o_.end_over_skin && skin != nullptr)
     skin_->ends = std::make_unique<const SkinGrid>(*skin, o_.skin, field.origin(), field.size(),
                                                    field.voxel_mm());

@@ -38,6 +38,7 @@
 #include "reconstruction/curl_field.h"
 #include "reconstruction/helix_continuation.h"
 #include "reconstruction/hybrid_field.h"
+#include "reconstruction/seen_tips.h"
 #include "reconstruction/segment_coverage.h"
 #include "reconstruction/skin_views.h"
 #include "reconstruction/strand_segments.h"
@@ -146,6 +147,11 @@ struct StrandGrowthOptions {
   // field's direction (helix_guide.h) in place of the continuation above.
   // curl.enabled = false: the continuation everywhere.
   CurlFieldOptions curl;
+  // Bao & Qi growth only: a strand that follows a seen strand to a tip end
+  // that no other seen strand continues ends there (seen_tips.h; the tips
+  // are found by the caller, SeenTips::Find). seen_tips.enabled = false: the
+  // paper's growth, to the volume's edge.
+  SeenTipOptions seen_tips;
   SegmentCoverOptions cover;  // Bao & Qi growth only
   int threads = 2;
 
@@ -155,8 +161,11 @@ struct StrandGrowthOptions {
 struct StrandGrowthSummary {
   int64_t strands = 0, vertices = 0;
   int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, stopped_over_skin = 0,
-          dropped_short = 0;
+          stopped_seen_tip = 0, dropped_short = 0;
   int64_t tips_trimmed_over_skin = 0;  // kept strands whose tip trim_tip_over_skin shortened
+  // The seen tips strands could end at (SeenTips::size; set by the caller that
+  // found them) of the seen strands' tip ends looked at.
+  int64_t seen_tips = 0, seen_tip_ends_examined = 0;
   // SegmentCoverOptions: segments uncovered after the growth from the roots;
   // strands added through them (counted in `strands`); segments whose trace
   // back did not reach the scalp and that no strand passed near; segments
@@ -168,14 +177,15 @@ struct StrandGrowthSummary {
 };
 
 // Bao & Qi's growth in a hybrid field. `head` (may be null: no head, no
-// strands through segments), `skin` (may be null: no skin test) and `curls`
-// (may be null: no curl field) in the field's frame; all four and `options`
-// must outlive the object.
+// strands through segments), `skin` (may be null: no skin test), `curls`
+// (may be null: no curl field) and `seen_tips` (may be null: strands do not
+// end at seen tips) in the field's frame; all five and `options` must
+// outlive the object.
 class FieldGrowth {
  public:
   FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
               const StrandGrowthOptions& options, const SkinViews* skin,
-              const CurlField* curls = nullptr);
+              const CurlField* curls = nullptr, const SeenTips* seen_tips = nullptr);
   ~FieldGrowth();
 
   // Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
@@ -217,6 +227,7 @@ class FieldGrowth {
   const StrandGrowthOptions& o_;
   std::unique_ptr<Skin> skin_;
   const CurlField* curls_;
+  const SeenTips* seen_tips_;
 };
 
 // FieldGrowth(field, head, options, skin).FromRoots(roots, summary).

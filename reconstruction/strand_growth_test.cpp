@@ -147,6 +147,41 @@ TEST(GrowStrandsInField, StrandsFollowACurtainOfDirectedSegmentsAndStopAtItsEnd)
   }
 }
 
+// The curtain above with, 4 mm beside it, two locks that end at z = 160, in
+// a hair volume that reaches far past them. A strand grown along a
+// lock ends at the lock's tip with the seen tips, and runs on down the
+// curtain's field without them.
+TEST(FieldGrowth, AStrandFollowingASeenStrandToItsTipEndsThere) {
+  std::vector<StrandSegment> hair = HangingCurtain();
+  for (const float y : {24.f, 26.f}) {
+    StrandSegment lock;
+    for (float z = 200; z >= 160; z -= 2) lock.points_mm.emplace_back(0, y, z);
+    hair.push_back(std::move(lock));
+  }
+  const std::vector<DirectedRoot> roots = {{{0, -10, 200}, {0, 0, -1}}, {{0, 25, 200}, {0, 0, -1}}};
+  const auto field = HybridOrientationField::Build(hair, roots, nullptr, HybridFieldOptions{});
+  ASSERT_TRUE(field.ok()) << field.status().ToString();
+  StrandGrowthOptions options;
+  options.volume_bound = 30;  // I_d stops no strand: only the seen tip (or the box) ends it
+  const auto lowest_z = [](const StrandSet& strands, size_t s) {
+    const std::vector<size_t> offsets = strands.Offsets();
+    return strands.points_mm[offsets[s + 1] - 1].z();
+  };
+  const SeenTips tips = SeenTips::Find(hair, options.seen_tips);
+  StrandGrowthSummary with_tips;
+  const StrandSet ended =
+      FieldGrowth(*field, nullptr, options, nullptr, nullptr, &tips).FromRoots(roots, &with_tips);
+  ASSERT_EQ(ended.num_strands(), 2u);
+  EXPECT_EQ(with_tips.stopped_seen_tip, 2) << "each at the tip of the seen strand it followed";
+  EXPECT_NEAR(lowest_z(ended, 1), 160, 2.5) << "the lock's strand ends at its tip";
+  EXPECT_NEAR(lowest_z(ended, 0), 100, 2.5) << "the curtain's runs to the curtain's end";
+  StrandGrowthSummary without_tips;
+  const StrandSet run_on =
+      FieldGrowth(*field, nullptr, options, nullptr).FromRoots(roots, &without_tips);
+  EXPECT_EQ(without_tips.stopped_seen_tip, 0);
+  EXPECT_LT(lowest_z(run_on, 1), 150) << "without them it runs on past the lock";
+}
+
 // Short hair lying on the side of the default ellipsoid head (scalp centre
 // z = 330, hairline 8 deg above it over the ear, so near z = 338 there):
 // segments 1 mm outside the head in the plane x > 0 from z = 360 down to

@@ -152,9 +152,12 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
                           : o.given_curl.curly()     ? CurlField::Everywhere(o.given_curl)
                                                      : CurlField::Estimate(segments, growth.curl);
   summary->curl = curls.estimate();
+  const SeenTips seen_tips = SeenTips::Find(segments, growth.seen_tips);
   StrandModel model;
-  const FieldGrowth grow(field, &head, growth, skin, &curls);
+  const FieldGrowth grow(field, &head, growth, skin, &curls, &seen_tips);
   model.strands = grow.FromRoots(roots, &summary->growth);
+  summary->growth.seen_tips = static_cast<int64_t>(seen_tips.size());
+  summary->growth.seen_tip_ends_examined = static_cast<int64_t>(seen_tips.examined());
   grow.ThroughUncoveredSegments(segments, &model.strands, &summary->growth);
   summary->seconds_growth = SecondsSince(t);
   if (o.merging.run_mm > 0) {
@@ -295,6 +298,9 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"stopped_at_max_length", growth.stopped_length},
                         {"stopped_where_hair_ends", growth.stopped_off_hair},
                         {"stopped_over_skin", growth.stopped_over_skin},
+                        {"stopped_at_seen_tip", growth.stopped_seen_tip},
+                        {"seen_tips", growth.seen_tips},
+                        {"seen_tip_ends_examined", growth.seen_tip_ends_examined},
                         {"tips_trimmed_over_skin", growth.tips_trimmed_over_skin},
                         {"through_uncovered_segments",
                          {{"segments", growth.cover_candidates},
@@ -366,6 +372,11 @@ std::string StrandReconstructionSummary::BriefReport() const {
   if (growth.stopped_over_skin + growth.tips_trimmed_over_skin > 0) {
     s << "  ended in front of skin the views see: " << growth.stopped_over_skin
       << " strands; tips trimmed back from skin: " << growth.tips_trimmed_over_skin << "\n";
+  }
+  if (growth.seen_tip_ends_examined > 0) {
+    s << "  ended where a seen strand ends: " << growth.stopped_seen_tip << " strands, at "
+      << growth.seen_tips << " of the " << growth.seen_tip_ends_examined
+      << " seen strands' tip ends (no other seen strand carries on from them)\n";
   }
   if (growth.cover_candidates > 0) {
     s << "  through seen strands the others missed: " << growth.cover_strands << " strands for "

@@ -1,0 +1,83 @@
+#include "reconstruction/seen_tips.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "tests/support/status_testing.h"
+
+namespace hairrig {
+namespace {
+
+// A straight seen strand at (x, y) from z_top down to z_bottom, 1 mm steps,
+// directed downward (or upward, as the direction MRF may have turned it).
+StrandSegment Vertical(float x, float y, float z_top, float z_bottom, bool upward = false) {
+  StrandSegment s;
+  for (float z = z_top; z >= z_bottom - 1e-3f; z -= 1) s.points_mm.emplace_back(x, y, z);
+  if (upward) std::reverse(s.points_mm.begin(), s.points_mm.end());
+  return s;
+}
+
+const Eigen::Vector3f kDown(0, 0, -1);
+
+TEST(SeenTips, ATipNoSeenStrandCarriesOnFromIsKept) {
+  // A lock that ends at z = 160, and one that ends at z = 150 with another
+  // seen strand starting 3 mm below it.
+  const std::vector<StrandSegment> segments = {Vertical(0, 0, 200, 160), Vertical(20, 0, 200, 150),
+                                               Vertical(20, 0.5f, 147, 100)};
+  const SeenTips tips = SeenTips::Find(segments, SeenTipOptions{});
+  EXPECT_EQ(tips.examined(), 3u);
+  EXPECT_EQ(tips.size(), 2u) << "the first lock's tip and the continuation's own tip";
+  EXPECT_TRUE(tips.Reached({0.5f, 0, 160.8f}, kDown));
+  EXPECT_FALSE(tips.Reached({20, 0, 150}, kDown)) << "continued 3 mm below";
+  EXPECT_TRUE(tips.Reached({20, 0.5f, 100}, kDown));
+  EXPECT_FALSE(tips.Reached({0, 0, 165}, kDown)) << "5 mm above the tip: out of reach";
+  EXPECT_FALSE(tips.Reached({0, 0, 160}, -kDown)) << "a strand growing the other way";
+}
+
+TEST(SeenTips, AContinuationTurnedTheOtherWayStillCarriesOn) {
+  const std::vector<StrandSegment> segments = {Vertical(0, 0, 200, 150),
+                                               Vertical(0, 1, 146, 100, /*upward=*/true)};
+  const SeenTips tips = SeenTips::Find(segments, SeenTipOptions{});
+  EXPECT_FALSE(tips.Reached({0, 0, 150}, kDown));
+}
+
+TEST(SeenTips, SeenStrandsBesideOrAcrossTheTipDoNotCarryItOn) {
+  // Beside the tip (3 mm off its line), and across it (square to it).
+  StrandSegment across;
+  for (float x = -10; x <= 10; x += 1) across.points_mm.emplace_back(x, 0, 155);
+  const std::vector<StrandSegment> segments = {Vertical(0, 0, 200, 160), Vertical(3, 0, 200, 100),
+                                               across};
+  const SeenTips tips = SeenTips::Find(segments, SeenTipOptions{});
+  EXPECT_TRUE(tips.Reached({0, 0, 160}, kDown));
+}
+
+TEST(SeenTips, OffFindsNone) {
+  SeenTipOptions options;
+  options.enabled = false;
+  const SeenTips tips = SeenTips::Find({Vertical(0, 0, 200, 160)}, options);
+  EXPECT_EQ(tips.size(), 0u);
+  EXPECT_FALSE(tips.Reached({0, 0, 160}, kDown));
+  EXPECT_FALSE(SeenTips().Reached({0, 0, 160}, kDown));
+}
+
+TEST(SeenTipOptions, CheckNamesTheBadField) {
+  SeenTipOptions o;
+  EXPECT_TRUE(o.Check().ok());
+  o.ahead_max_mm = 0.5;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "ahead_max_mm"));
+  o = SeenTipOptions{};
+  o.lateral_mm = 0;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "lateral_mm"));
+  o = SeenTipOptions{};
+  o.max_angle_deg = 120;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "max_angle_deg"));
+  o = SeenTipOptions{};
+  o.reach_mm = -1;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "reach_mm"));
+}
+
+}  // namespace
+}  // namespace hairrig
