@@ -2,13 +2,14 @@
 """Whether the seen strands' tip ends lie where true strands end.
 
     /usr/bin/python3 bench/seen_tip_truth.py GROUND_TRUTH_STRANDS.ply SEGMENTS.ply
-        [--window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--probes N]
+        [--window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--min-length MM] [--probes N]
 
 GROUND_TRUTH_STRANDS.ply is a simulated capture's ground_truth/ground_truth_strands.ply;
 SEGMENTS.ply the directed seen strands of its reconstruction
 (reconstruction/strands/segments.ply). Both are hairrig strand PLYs (bench/strand_tips.py).
 
-For a random sample of the seen strands (--probes, 4000 by default), it looks at each one's tip
+For a random sample of the seen strands at least --min-length long (0 by default; 40 mm is
+SeenTipOptions::min_seen_length_mm) (--probes, 4000 by default), it looks at each one's tip
 end and at its middle vertex. At each, the true strand samples within 2 mm whose tangent lies
 within 30 deg of the seen strand's give how much of their true strand is left beyond them (the
 median over those samples, mm along the strand). A tip end "at a true tip" has under 5 mm left.
@@ -106,6 +107,7 @@ def main():
     parser.add_argument("truth")
     parser.add_argument("segments")
     parser.add_argument("--window", default="9,2,45")
+    parser.add_argument("--min-length", type=float, default=0.0)
     parser.add_argument("--probes", type=int, default=4000)
     args = parser.parse_args()
     window = tuple(float(v) for v in args.window.split(","))
@@ -120,13 +122,17 @@ def main():
     tips, tip_directions = seen[last], unit(seen[last] - seen[last - back])
     middle = offsets[:-1] + (offsets[1:] - offsets[:-1]) // 2
     rng = np.random.default_rng(0)
-    probes = rng.choice(len(last), min(args.probes, len(last)), replace=False)
+    steps = np.append(np.linalg.norm(np.diff(seen, axis=0), axis=1), 0.0)
+    steps[last] = 0.0
+    lengths = np.add.reduceat(steps, offsets[:-1])
+    candidates = np.flatnonzero(lengths >= args.min_length)
+    probes = rng.choice(candidates, min(args.probes, len(candidates)), replace=False)
     tree = cKDTree(seen)
     is_continued = np.array([continued(seen, tree, owner, seen_tangents, k, tips[k], tip_directions[k],
                                        window) for k in probes])
     left_tip = truth.left_at(tips[probes], tip_directions[probes])
     left_middle = truth.left_at(seen[middle[probes]], seen_tangents[middle[probes]])
-    print(f"{len(last)} seen strands, {len(probes)} looked at; window {args.window}: "
+    print(f"{len(last)} seen strands, {len(candidates)} at least {args.min_length:g} mm long, {len(probes)} looked at; window {args.window}: "
           f"{np.mean(~is_continued):.3f} of the tips not continued")
     report("tips not continued", left_tip[~is_continued])
     report("tips continued", left_tip[is_continued])

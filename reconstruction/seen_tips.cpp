@@ -54,6 +54,10 @@ Status SeenTipOptions::Check() const {
     return InvalidArgument("seen tips: lateral_mm must lie in (0, 10]");
   if (!(max_angle_deg > 0 && max_angle_deg <= 90))
     return InvalidArgument("seen tips: max_angle_deg must lie in (0, 90]");
+  if (!(min_seen_length_mm >= 0))
+    return InvalidArgument("seen tips: min_seen_length_mm must be non-negative");
+  if (!(min_strand_mm >= 0))
+    return InvalidArgument("seen tips: min_strand_mm must be non-negative");
   if (!(reach_mm > 0 && reach_mm <= 10))
     return InvalidArgument("seen tips: reach_mm must lie in (0, 10]");
   return Status::Ok();
@@ -79,6 +83,7 @@ SeenTips SeenTips::Find(const std::vector<StrandSegment>& segments, const SeenTi
     const std::vector<Eigen::Vector3f>& points = segments[s].points_mm;
     if (points.size() < 2) continue;
     ++found.examined_;
+    if (segments[s].Length() < o.min_seen_length_mm) continue;
     const Eigen::Vector3f tip = points.back(), t = TipTangent(points);
     if (t.isZero()) continue;
     const Eigen::Vector3f centre = tip + static_cast<float>(mid) * t;

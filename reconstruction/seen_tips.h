@@ -5,14 +5,16 @@
 // seen strand to its end then carries on along the field, under the hair
 // beside it, to the volume's edge. Where a seen strand's tip end lies on the
 // hair's surface and no other seen strand carries on from it, the views saw
-// that strand end there more often than not: on the simulated rig's
-// captures, of the seen strands' tip ends that no other seen strand
-// continues, 73 % (default scene) and 85 % (bangs) lie within 5 mm of a true
-// strand's tip, against 5 % and 22 % of the seen strands' middle vertices
-// (`bench/seen_tip_truth.py`; docs/accuracy.md, "Where strands end").
+// that strand end there more often than not, if the seen strand is long: on
+// the simulated rig's default scene, of the tip ends of seen strands 40 mm
+// long or more that no other seen strand continues, 87 % lie within 5 mm of
+// a true strand's tip (63 % on the same scene path traced), against 5 % of
+// the seen strands' middle vertices; of all uncontinued tip ends, 73 % and
+// 34 % (`bench/seen_tip_truth.py`; docs/accuracy.md, "Where strands end").
 //
 // SeenTips::Find keeps the tip ends of the directed segments (root to tip,
-// strand_direction.h) that no other segment continues: no vertex of another
+// strand_direction.h) at least min_seen_length_mm long that no other segment
+// continues: no vertex of another
 // segment lies ahead_min_mm..ahead_max_mm ahead of the tip along its
 // tangent, within lateral_mm of that line, with its tangent within
 // max_angle_deg of the tip's (either sense: the direction MRF may have
@@ -36,6 +38,13 @@ namespace hairrig {
 
 struct SeenTipOptions {
   bool enabled = true;
+  // Only the tips of seen strands at least this long (arc length): on images
+  // unlike the simulated rig's the seen strands break into short pieces whose
+  // ends are mostly not the hair's (docs/accuracy.md, "Where strands end").
+  double min_seen_length_mm = 40;
+  // A strand shorter than this does not end at a seen tip (a seen tip at the
+  // scalp is a seen strand directed into it).
+  double min_strand_mm = 5;
   double ahead_min_mm = 1, ahead_max_mm = 9;  // where a continuing vertex lies, along the tangent
   double lateral_mm = 2;                      // ... and how far off the tangent's line at most
   double max_angle_deg = 45;                  // its tangent this close to the tip's, either sense

@@ -54,6 +54,17 @@ TEST(SeenTips, SeenStrandsBesideOrAcrossTheTipDoNotCarryItOn) {
   EXPECT_TRUE(tips.Reached({0, 0, 160}, kDown));
 }
 
+TEST(SeenTips, ShortSeenStrandsGiveNoTips) {
+  SeenTipOptions options;
+  options.min_seen_length_mm = 45;
+  const SeenTips tips =
+      SeenTips::Find({Vertical(0, 0, 200, 160), Vertical(20, 0, 200, 150)}, options);
+  EXPECT_EQ(tips.examined(), 2u);
+  EXPECT_EQ(tips.size(), 1u);
+  EXPECT_FALSE(tips.Reached({0, 0, 160}, kDown)) << "40 mm long";
+  EXPECT_TRUE(tips.Reached({20, 0, 150}, kDown)) << "50 mm long";
+}
+
 TEST(SeenTips, OffFindsNone) {
   SeenTipOptions options;
   options.enabled = false;
@@ -74,6 +85,12 @@ TEST(SeenTipOptions, CheckNamesTheBadField) {
   o = SeenTipOptions{};
   o.max_angle_deg = 120;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "max_angle_deg"));
+  o = SeenTipOptions{};
+  o.min_seen_length_mm = -1;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "min_seen_length_mm"));
+  o = SeenTipOptions{};
+  o.min_strand_mm = -1;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "min_strand_mm"));
   o = SeenTipOptions{};
   o.reach_mm = -1;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "reach_mm"));

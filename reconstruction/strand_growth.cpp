@@ -199,12 +199,14 @@ struct FieldGrowth::Skin {
 // the scalp: End::kRoot).
 class FieldGrowth::Step {
  public:
-  Step(const FieldGrowth& growth, bool towards_root)
+  // `grown_mm`: the strand's length before this Step's first step.
+  Step(const FieldGrowth& growth, bool towards_root, double grown_mm = 0)
       : g_(growth),
         sign_(towards_root ? -1.f : 1.f),
         off_hair_(growth.o_),
         helix_(growth.o_.helix, growth.o_.step_mm),
-        guide_(growth.o_.step_mm) {}
+        guide_(growth.o_.step_mm),
+        grown_mm_(grown_mm) {}
 
   bool operator()(const Eigen::Vector3f& p, const Eigen::Vector3f& previous, Eigen::Vector3f* next,
                   StepStop* stop) {
@@ -250,7 +252,8 @@ class FieldGrowth::Step {
     const bool following = o.follow_radius_mm > 0 &&
                            field.NearestSegmentTangent(p, o.follow_radius_mm, &seen) &&
                            sign_ * seen.dot(previous) > 0.5f;
-    if (following && sign_ > 0 && AtSeenTip(p, previous)) {
+    grown_mm_ += o.step_mm;
+    if (following && sign_ > 0 && grown_mm_ > o.seen_tips.min_strand_mm && AtSeenTip(p, previous)) {
       stop->end = End::kSeenTip;
       return false;
     }
@@ -300,6 +303,7 @@ class FieldGrowth::Step {
   HelixGuide guide_;
   Eigen::Vector3f axis_ = Eigen::Vector3f::Zero();
   bool continuing_ = false;
+  double grown_mm_;  // the strand's length so far (mm)
 };
 
 FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
@@ -394,7 +398,7 @@ std::optional<std::vector<Eigen::Vector3f>> FieldGrowth::ThroughSegment(
   strand->insert(strand->end(), seen.begin() + (*grafted ? 0 : 1), seen.end());
   // On from the segment's tip end as any strand grows.
   const double length_mm = StrandSegment{*strand}.Length();
-  Step to_tip(*this, false);
+  Step to_tip(*this, false, length_mm);
   GrowFrom(seen.back(), PolylineTangent(seen.data(), seen.size(), seen.size() - 1),
            MaxSteps(o_, o_.max_length_mm - length_mm), to_tip, head_, o_, &*strand);
   TrimTip(&*strand);

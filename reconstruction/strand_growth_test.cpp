@@ -147,7 +147,7 @@ TEST(GrowStrandsInField, StrandsFollowACurtainOfDirectedSegmentsAndStopAtItsEnd)
   }
 }
 
-// The curtain above with, 4 mm beside it, two locks that end at z = 160, in
+// The curtain above with, 4 mm beside it, two locks that end at z = 150, in
 // a hair volume that reaches far past them. A strand grown along a
 // lock ends at the lock's tip with the seen tips, and runs on down the
 // curtain's field without them.
@@ -155,7 +155,7 @@ TEST(FieldGrowth, AStrandFollowingASeenStrandToItsTipEndsThere) {
   std::vector<StrandSegment> hair = HangingCurtain();
   for (const float y : {24.f, 26.f}) {
     StrandSegment lock;
-    for (float z = 200; z >= 160; z -= 2) lock.points_mm.emplace_back(0, y, z);
+    for (float z = 200; z >= 150; z -= 2) lock.points_mm.emplace_back(0, y, z);
     hair.push_back(std::move(lock));
   }
   const std::vector<DirectedRoot> roots = {{{0, -10, 200}, {0, 0, -1}}, {{0, 25, 200}, {0, 0, -1}}};
@@ -173,13 +173,13 @@ TEST(FieldGrowth, AStrandFollowingASeenStrandToItsTipEndsThere) {
       FieldGrowth(*field, nullptr, options, nullptr, nullptr, &tips).FromRoots(roots, &with_tips);
   ASSERT_EQ(ended.num_strands(), 2u);
   EXPECT_EQ(with_tips.stopped_seen_tip, 2) << "each at the tip of the seen strand it followed";
-  EXPECT_NEAR(lowest_z(ended, 1), 160, 2.5) << "the lock's strand ends at its tip";
+  EXPECT_NEAR(lowest_z(ended, 1), 150, 2.5) << "the lock's strand ends at its tip";
   EXPECT_NEAR(lowest_z(ended, 0), 100, 2.5) << "the curtain's runs to the curtain's end";
   StrandGrowthSummary without_tips;
   const StrandSet run_on =
       FieldGrowth(*field, nullptr, options, nullptr).FromRoots(roots, &without_tips);
   EXPECT_EQ(without_tips.stopped_seen_tip, 0);
-  EXPECT_LT(lowest_z(run_on, 1), 150) << "without them it runs on past the lock";
+  EXPECT_LT(lowest_z(run_on, 1), 140) << "without them it runs on past the lock";
 }
 
 // Short hair lying on the side of the default ellipsoid head (scalp centre
