@@ -180,6 +180,17 @@ TEST(FieldGrowth, AStrandFollowingASeenStrandToItsTipEndsThere) {
       FieldGrowth(*field, nullptr, options, nullptr).FromRoots(roots, &without_tips);
   EXPECT_EQ(without_tips.stopped_seen_tip, 0);
   EXPECT_LT(lowest_z(run_on, 1), 140) << "without them it runs on past the lock";
+  // A root just above the lock's tip: its strand has not grown min_strand_mm
+  // when it passes the tip, so it runs on (with no minimum it is dropped).
+  const std::vector<DirectedRoot> at_tip = {{{0, 24, 151}, {0, 0, -1}}};
+  const FieldGrowth growth(*field, nullptr, options, nullptr, nullptr, &tips);
+  const StrandSet kept = growth.FromRoots(at_tip, nullptr);
+  ASSERT_EQ(kept.num_strands(), 1u);
+  EXPECT_LT(lowest_z(kept, 0), 140);
+  options.seen_tips.min_strand_mm = 0;
+  StrandGrowthSummary no_minimum;
+  EXPECT_EQ(growth.FromRoots(at_tip, &no_minimum).num_strands(), 0u);
+  EXPECT_EQ(no_minimum.dropped_short, 1);
 }
 
 // Short hair lying on the side of the default ellipsoid head (scalp centre
