@@ -2,7 +2,7 @@
 """Whether the seen strands' tip ends lie where true strands end.
 
     /usr/bin/python3 bench/seen_tip_truth.py GROUND_TRUTH_STRANDS.ply SEGMENTS.ply
-        [--window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--min-length MM] [--probes N]
+        [--window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--carry-on MM] [--min-length MM] [--probes N]
 
 GROUND_TRUTH_STRANDS.ply is a simulated capture's ground_truth/ground_truth_strands.ply;
 SEGMENTS.ply the directed seen strands of its reconstruction
@@ -15,8 +15,9 @@ within 30 deg of the seen strand's give how much of their true strand is left be
 median over those samples, mm along the strand). A tip end "at a true tip" has under 5 mm left.
 The tips are split as reconstruction/seen_tips.h splits them: continued where another seen
 strand has a vertex 1..AHEAD mm ahead along the tip's direction (the chord over its last three
-steps), within LATERAL mm of that line, its tangent within ANGLE deg either way (9,2,45: the
-defaults of SeenTipOptions). Prints, for the uncontinued tips, the continued ones and the
+steps), within LATERAL mm of that line, its tangent within ANGLE deg either way, and reaches
+--carry-on mm or more ahead of the tip (9,2,45 and 12: the defaults of SeenTipOptions; 0 lets
+any vertex in the window continue the tip). Prints, for the uncontinued tips, the continued ones and the
 middles, the share at a true tip and the share with more than 30 mm left.
 
 Needs Debian's python3-numpy and python3-scipy.
@@ -79,7 +80,7 @@ class Truth:
         return out
 
 
-def continued(seen, tree, owner, seen_tangents, k, tip, direction, window):
+def continued(seen, offsets, tree, owner, seen_tangents, k, tip, direction, window, carry_on):
     ahead_max, lateral, angle = window
     middle = tip + 0.5 * (1 + ahead_max) * direction
     for j in tree.query_ball_point(middle, np.hypot(0.5 * (ahead_max - 1), lateral)):
@@ -89,7 +90,9 @@ def continued(seen, tree, owner, seen_tangents, k, tip, direction, window):
         ahead = v @ direction
         if (1 <= ahead <= ahead_max and np.linalg.norm(v - ahead * direction) <= lateral
                 and abs(seen_tangents[j] @ direction) >= np.cos(np.radians(angle))):
-            return True
+            other = seen[offsets[owner[j]]:offsets[owner[j] + 1]]
+            if carry_on <= 0 or np.max((other - tip) @ direction) >= carry_on:
+                return True
     return False
 
 
@@ -107,6 +110,7 @@ def main():
     parser.add_argument("truth")
     parser.add_argument("segments")
     parser.add_argument("--window", default="9,2,45")
+    parser.add_argument("--carry-on", type=float, default=12.0)
     parser.add_argument("--min-length", type=float, default=0.0)
     parser.add_argument("--probes", type=int, default=4000)
     args = parser.parse_args()
@@ -128,11 +132,11 @@ def main():
     candidates = np.flatnonzero(lengths >= args.min_length)
     probes = rng.choice(candidates, min(args.probes, len(candidates)), replace=False)
     tree = cKDTree(seen)
-    is_continued = np.array([continued(seen, tree, owner, seen_tangents, k, tips[k], tip_directions[k],
-                                       window) for k in probes])
+    is_continued = np.array([continued(seen, offsets, tree, owner, seen_tangents, k, tips[k],
+                                       tip_directions[k], window, args.carry_on) for k in probes])
     left_tip = truth.left_at(tips[probes], tip_directions[probes])
     left_middle = truth.left_at(seen[middle[probes]], seen_tangents[middle[probes]])
-    print(f"{len(last)} seen strands, {len(candidates)} at least {args.min_length:g} mm long, {len(probes)} looked at; window {args.window}: "
+    print(f"{len(last)} seen strands, {len(candidates)} at least {args.min_length:g} mm long, {len(probes)} looked at; window {args.window}, carry-on {args.carry_on:g} mm: "
           f"{np.mean(~is_continued):.3f} of the tips not continued")
     report("tips not continued", left_tip[~is_continued])
     report("tips continued", left_tip[is_continued])

@@ -16,7 +16,7 @@
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
 //       [--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM]
 //       [--cover-graft-radius MM] [--seen-tips yes|no] [--seen-tip-reach MM]
-//       [--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG]
+//       [--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--seen-tip-carry-on MM]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -41,7 +41,9 @@
 // --seen-tips no lets a strand that follows a seen strand to its tip end carry
 // on (seen_tips.h; the paper's growth); --seen-tip-reach sets
 // SeenTipOptions::reach_mm, --seen-tip-window its ahead_max_mm, lateral_mm and
-// max_angle_deg (the window a continuing seen strand is looked for in).
+// max_angle_deg (the window a continuing seen strand is looked for in),
+// --seen-tip-carry-on MM its carry_on_mm (how far ahead of the tip the
+// continuing seen strand must reach; 0: any vertex in the window continues it).
 // --skin-labels truth gives the growth's skin tests (end over skin, tips trimmed
 // back) the simulated rig's true labels in place of the segmentation's: their
 // ceiling.
@@ -122,7 +124,7 @@ int main(int argc, char** argv) {
         "[--scalp-skin-band MM] [--tip-skin-margin PX] "
         "[--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM] "
         "[--cover-graft-radius MM] [--seen-tips yes|no] [--seen-tip-reach MM] "
-        "[--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG] "
+        "[--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--seen-tip-carry-on MM] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -183,6 +185,8 @@ int main(int argc, char** argv) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.seen_tips.enabled)) return 2;
     } else if (std::strcmp(argv[i], "--seen-tip-reach") == 0) {
       options.growth.seen_tips.reach_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--seen-tip-carry-on") == 0) {
+      options.growth.seen_tips.carry_on_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--seen-tip-window") == 0) {
       SeenTipOptions& t = options.growth.seen_tips;
       if (std::sscanf(argv[i + 1], "%lf,%lf,%lf", &t.ahead_max_mm, &t.lateral_mm,

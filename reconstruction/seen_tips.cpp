@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "reconstruction/point_grid.h"
 #include "reconstruction/segment_coverage.h"
@@ -39,6 +40,14 @@ SegmentVertices AllVertices(const std::vector<StrandSegment>& segments) {
   return v;
 }
 
+// How far ahead of `tip` along `t` the segment's furthest vertex lies.
+float Reach(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& tip,
+            const Eigen::Vector3f& t) {
+  float furthest = -std::numeric_limits<float>::infinity();
+  for (const Eigen::Vector3f& p : points) furthest = std::max(furthest, (p - tip).dot(t));
+  return furthest;
+}
+
 }  // namespace
 
 struct SeenTips::Index {
@@ -58,6 +67,8 @@ Status SeenTipOptions::Check() const {
     return InvalidArgument("seen tips: min_seen_length_mm must be non-negative");
   if (!(min_strand_mm >= 0))
     return InvalidArgument("seen tips: min_strand_mm must be non-negative");
+  if (!(carry_on_mm >= 0 && carry_on_mm <= 100))
+    return InvalidArgument("seen tips: carry_on_mm must lie in [0, 100]");
   if (!(reach_mm > 0 && reach_mm <= 10))
     return InvalidArgument("seen tips: reach_mm must lie in (0, 10]");
   return Status::Ok();
@@ -93,7 +104,10 @@ SeenTips SeenTips::Find(const std::vector<StrandSegment>& segments, const SeenTi
       const float ahead = v.dot(t);
       return ahead >= o.ahead_min_mm && ahead <= o.ahead_max_mm &&
              (v - ahead * t).norm() <= o.lateral_mm &&
-             std::abs(vertices.tangents[static_cast<size_t>(j)].dot(t)) >= min_cos;
+             std::abs(vertices.tangents[static_cast<size_t>(j)].dot(t)) >= min_cos &&
+             (o.carry_on_mm <= 0 ||
+              Reach(segments[vertices.segment[static_cast<size_t>(j)]].points_mm, tip, t) >=
+                  o.carry_on_mm);
     });
     if (continued) continue;
     index->tips.push_back(tip);

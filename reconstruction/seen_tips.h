@@ -7,10 +7,10 @@
 // hair's surface and no other seen strand carries on from it, the views saw
 // that strand end there more often than not, if the seen strand is long: on
 // the simulated rig's default scene, of the tip ends of seen strands 40 mm
-// long or more that no other seen strand continues, 87 % lie within 5 mm of
-// a true strand's tip (63 % on the same scene path traced), against 5 % of
-// the seen strands' middle vertices; of all uncontinued tip ends, 73 % and
-// 34 % (`bench/seen_tip_truth.py`; docs/accuracy.md, "Where strands end").
+// long or more that no other seen strand continues, 86 % lie within 5 mm of
+// a true strand's tip (56 % on the same scene as a photograph, 40 % path
+// traced), against 3 % of the seen strands' middle vertices
+// (`bench/seen_tip_truth.py`; docs/accuracy.md, "Where strands end").
 //
 // SeenTips::Find keeps the tip ends of the directed segments (root to tip,
 // strand_direction.h) at least min_seen_length_mm long that no other segment
@@ -18,8 +18,9 @@
 // segment lies ahead_min_mm..ahead_max_mm ahead of the tip along its
 // tangent, within lateral_mm of that line, with its tangent within
 // max_angle_deg of the tip's (either sense: the direction MRF may have
-// turned the continuing segment the other way). A segment's own vertices do
-// not continue it. Strand growth (strand_growth.h) ends a strand that, while
+// turned the continuing segment the other way), on a segment that reaches
+// carry_on_mm or more ahead of the tip. A segment's own vertices do not
+// continue it. Strand growth (strand_growth.h) ends a strand that, while
 // following a seen strand, comes within reach_mm of such a tip in about its
 // direction, except where the hair is seen to curl (curl_field.h): on
 // curly_blond 31 % of the uncontinued tip ends lie at a true tip, the rest
@@ -48,7 +49,12 @@ struct SeenTipOptions {
   double ahead_min_mm = 1, ahead_max_mm = 9;  // where a continuing vertex lies, along the tangent
   double lateral_mm = 2;                      // ... and how far off the tangent's line at most
   double max_angle_deg = 45;                  // its tangent this close to the tip's, either sense
-  double reach_mm = 1.5;                      // a strand this close to a seen tip has reached it
+  // ... on a segment that reaches at least this far ahead of the tip (along
+  // the tip's tangent): a neighbour that ends beside the tip, as the strands
+  // of one lock do, does not carry the hair on past it (0: any vertex in the
+  // window continues the tip, which keeps a quarter to a half as many tips).
+  double carry_on_mm = 12;
+  double reach_mm = 1.5;  // a strand this close to a seen tip has reached it
   Status Check() const;
 };
 

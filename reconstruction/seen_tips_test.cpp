@@ -54,6 +54,23 @@ TEST(SeenTips, SeenStrandsBesideOrAcrossTheTipDoNotCarryItOn) {
   EXPECT_TRUE(tips.Reached({0, 0, 160}, kDown));
 }
 
+TEST(SeenTips, ANeighbourThatEndsBesideTheTipDoesNotCarryItOn) {
+  // The strands of one lock end a few mm apart: the neighbour has a vertex
+  // 1..9 mm below the tip but ends 4 mm below it; a second lock's neighbour
+  // runs 20 mm past its tip.
+  const std::vector<StrandSegment> segments = {
+      Vertical(0, 0, 200, 150), Vertical(0.5f, 0, 200, 146), Vertical(20, 0, 200, 150),
+      Vertical(20.5f, 0, 200, 130)};
+  const SeenTips tips = SeenTips::Find(segments, SeenTipOptions{});
+  EXPECT_TRUE(tips.Reached({0, 0, 150}, kDown)) << "the neighbour reaches 4 mm past it, not 12";
+  EXPECT_TRUE(tips.Reached({0.5f, 0, 146}, kDown)) << "the neighbour's own tip";
+  EXPECT_FALSE(tips.Reached({20, 0, 150}, kDown)) << "carried on 20 mm past it";
+
+  SeenTipOptions any_vertex;
+  any_vertex.carry_on_mm = 0;
+  EXPECT_FALSE(SeenTips::Find(segments, any_vertex).Reached({0, 0, 150}, kDown));
+}
+
 TEST(SeenTips, ShortSeenStrandsGiveNoTips) {
   SeenTipOptions options;
   options.min_seen_length_mm = 45;
@@ -91,6 +108,9 @@ TEST(SeenTipOptions, CheckNamesTheBadField) {
   o = SeenTipOptions{};
   o.min_strand_mm = -1;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "min_strand_mm"));
+  o = SeenTipOptions{};
+  o.carry_on_mm = -1;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "carry_on_mm"));
   o = SeenTipOptions{};
   o.reach_mm = -1;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "reach_mm"));
