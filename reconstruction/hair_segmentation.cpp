@@ -7,7 +7,6 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <utility>
 #include <vector>
 
 #include "core/parallel.h"
@@ -504,9 +503,8 @@ struct ChromaticityStep {
 // (over a few pixels, against sensor noise) lies within `sigmas` of the skin's
 // and is e^log_ratio times likelier under it than under the hair's becomes
 // skin. Only the pixels of `candidates` (the foreground whose colour is not
-// clipped) are fitted or turned. A view with too little skin of its own, or
-// whose own does not agree with `capture_skin` (may be null), takes
-// `capture_skin`, and keeps only the regions it turns to skin
+// clipped) are fitted or turned. A view with too little skin of its own takes
+// `capture_skin` (may be null), and keeps only the regions it turns to skin
 // (CoherentPieces).
 // Unchanged when the hair or the skin used has fewer than 50 samples.
 ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
@@ -527,8 +525,7 @@ ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candi
   step.own_skin = FitSkinCore(skin_samples);
   const SkinChromaticity hair_fit = FitChromaticity(hair_samples);
   step.used_capture_skin = capture_skin != nullptr && capture_skin->samples > 0 &&
-                           (step.own_skin.samples < options.skin_chromaticity_min_view_samples ||
-                            !SkinModelAgrees(step.own_skin, *capture_skin));
+                           step.own_skin.samples < options.skin_chromaticity_min_view_samples;
   const SkinChromaticity& skin_fit = step.used_capture_skin ? *capture_skin : step.own_skin;
   if (hair_fit.samples == 0 || skin_fit.samples == 0) return step;
   const ChromaGaussian skin(skin_fit), hair_model(hair_fit);
@@ -737,76 +734,24 @@ SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views
   return pooled;
 }
 
-namespace {
-
-// The value below and above which half the weight lies (pairs of value and
-// weight; not empty).
-double WeightedMedian(std::vector<std::pair<double, double>> values) {
-  std::sort(values.begin(), values.end());
-  double total = 0;
-  for (const auto& [value, weight] : values) total += weight;
-  double below = 0;
-  for (const auto& [value, weight] : values) {
-    below += weight;
-    if (below >= 0.5 * total) return value;
-  }
-  return values.back().first;
-}
-
-double LargerDeviation(const SkinChromaticity& model) {
-  return std::sqrt(std::max(model.covariance(0, 0), model.covariance(1, 1)));
-}
-
-}  // namespace
-
-bool SkinModelAgrees(const SkinChromaticity& own, const SkinChromaticity& reference) {
-  if (own.samples == 0 || reference.samples == 0) return false;
-  constexpr double kMinTolerance = 0.01, kSigmas = 3;
-  const double tolerance = std::max(kMinTolerance, kSigmas * LargerDeviation(reference));
-  return cv::norm(own.mean - reference.mean) <= tolerance;
-}
-
-SkinChromaticity CaptureSkinChromaticity(const std::vector<SkinChromaticity>& views) {
-  std::vector<std::pair<double, double>> r, g, deviation;
-  for (const SkinChromaticity& v : views) {
-    if (v.samples == 0) continue;
-    const double weight = static_cast<double>(v.samples);
-    r.emplace_back(v.mean[0], weight);
-    g.emplace_back(v.mean[1], weight);
-    deviation.emplace_back(LargerDeviation(v), weight);
-  }
-  if (r.empty()) return SkinChromaticity{};
-  SkinChromaticity consensus;
-  consensus.samples = 1;
-  consensus.mean = cv::Vec2d(WeightedMedian(r), WeightedMedian(g));
-  const double sd = WeightedMedian(deviation);
-  consensus.covariance = cv::Matx22d::eye() * (sd * sd);
-  std::vector<SkinChromaticity> agreeing;
-  for (const SkinChromaticity& v : views)
-    if (SkinModelAgrees(v, consensus)) agreeing.push_back(v);
-  return PoolSkinChromaticity(agreeing);
-}
-
 std::vector<Result<HairSegmentation>> SegmentCaptureViews(
     size_t views, const SegmentationOptions& options, int threads,
     const std::function<Result<HairSegmentation>(size_t, const SkinChromaticity*)>& segment) {
   std::vector<Result<HairSegmentation>> out(
       views, Result<HairSegmentation>(FailedPrecondition("not segmented")));
   ParallelFor(views, threads, [&] { return [&](size_t v) { out[v] = segment(v, nullptr); }; });
-  const auto has_own = [&](size_t v) {
-    return out[v]->skin_chromaticity.samples >= options.skin_chromaticity_min_view_samples;
-  };
   std::vector<SkinChromaticity> own;
-  for (size_t v = 0; v < views; ++v)
-    if (out[v].ok() && has_own(v)) own.push_back(out[v]->skin_chromaticity);
-  const SkinChromaticity capture_skin = CaptureSkinChromaticity(own);
-  if (capture_skin.samples == 0 || options.skin_chromaticity_sigmas <= 0 || !options.capture_skin)
-    return out;
   std::vector<size_t> again;
   for (size_t v = 0; v < views; ++v) {
-    if (out[v].ok() && (!has_own(v) || !SkinModelAgrees(out[v]->skin_chromaticity, capture_skin)))
+    if (!out[v].ok()) continue;
+    if (out[v]->skin_chromaticity.samples >= options.skin_chromaticity_min_view_samples)
+      own.push_back(out[v]->skin_chromaticity);
+    else
       again.push_back(v);
   }
+  const SkinChromaticity capture_skin = PoolSkinChromaticity(own);
+  if (capture_skin.samples == 0 || options.skin_chromaticity_sigmas <= 0 || !options.capture_skin)
+    return out;
   ParallelFor(again.size(), threads, [&] {
     return [&](size_t k) {
       Result<HairSegmentation> second = segment(again[k], &capture_skin);

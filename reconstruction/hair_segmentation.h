@@ -146,19 +146,6 @@ struct SkinChromaticity {
 // samples) when none of them has one.
 SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views);
 
-// Whether a view's own skin model agrees with `reference`: their means lie
-// within 3 of the reference's standard deviations (its larger one) in
-// chromaticity, and at least 0.01. A view whose mixture named the backdrop or
-// hair its skin (an under-exposed back view, with no lit skin in sight) lies
-// far off. False when either has no model.
-bool SkinModelAgrees(const SkinChromaticity& own, const SkinChromaticity& reference);
-
-// The capture's skin from the views' own models: those that agree
-// (SkinModelAgrees) with the models' consensus (the sample-weighted median of
-// their means and of their standard deviations), pooled
-// (PoolSkinChromaticity). No model when none of them has one.
-SkinChromaticity CaptureSkinChromaticity(const std::vector<SkinChromaticity>& views);
-
 struct HairSegmentation {
   cv::Mat1b label;       // SegmentLabel per pixel, full size
   cv::Mat1f hair_alpha;  // hair coverage 0..1 (0 off the hair); label is hair where alpha >= 0.5
@@ -182,8 +169,7 @@ std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
 // when the border is not a backdrop (too varied: the subject or box touches
 // the edge, or the frame is black) or no pixel looks like hair.
 // `capture_skin` (may be null) stands in for the view's own skin model when
-// that rests on fewer than options.skin_chromaticity_min_view_samples or does
-// not agree with it (SkinModelAgrees).
+// that rests on fewer than options.skin_chromaticity_min_view_samples.
 Result<HairSegmentation> SegmentHair(const cv::Mat& image,
                                      const std::vector<std::vector<cv::Point2f>>& not_hair_px,
                                      const SegmentationOptions& options,
@@ -191,9 +177,9 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
 
 // Segments the views of one capture in two passes: every view with its own
 // skin model, then the views whose own model rests on fewer than
-// options.skin_chromaticity_min_view_samples, or does not agree with the
-// capture's, again with the capture's (CaptureSkinChromaticity). `segment(v, capture_skin)`
-// segments view v (capture_skin null in the first pass) with `options`, may be called from
+// options.skin_chromaticity_min_view_samples again with the others' pooled
+// (PoolSkinChromaticity). `segment(v, capture_skin)` segments view v
+// (capture_skin null in the first pass) with `options`, may be called from
 // `threads` threads at once and must not throw. Returns each view's result;
 // a view that fails in the first pass is not tried again, one that fails in
 // the second keeps its first.

@@ -384,45 +384,6 @@ TEST(PoolSkinChromaticity, PoolsAsTheSamplesTakenTogether) {
   EXPECT_EQ(PoolSkinChromaticity({SkinChromaticity{}}).samples, 0);
 }
 
-SkinChromaticity ChromaModel(double r, double g, double sd, int64_t samples) {
-  SkinChromaticity m;
-  m.mean = {r, g};
-  m.covariance = cv::Matx22d::eye() * (sd * sd);
-  m.samples = samples;
-  return m;
-}
-
-TEST(CaptureSkinChromaticity, LeavesOutAViewWhoseSkinIsTheBackdropOrHair) {
-  // Three views' skin, a view whose mixture named the dark green backdrop
-  // its skin (wide, with more samples than any one of the others), and one
-  // that named reddish hair its skin: as an under-exposed capture's views.
-  const std::vector<SkinChromaticity> views = {
-      ChromaModel(0.413, 0.320, 0.002, 1000), ChromaModel(0.414, 0.319, 0.002, 800),
-      ChromaModel(0.412, 0.321, 0.003, 600),  ChromaModel(0.330, 0.457, 0.044, 1200),
-      ChromaModel(0.520, 0.306, 0.012, 900),  SkinChromaticity{}};
-  const SkinChromaticity capture = CaptureSkinChromaticity(views);
-  EXPECT_EQ(capture.samples, 2400);
-  EXPECT_NEAR(capture.mean[0], 0.413, 0.001);
-  EXPECT_NEAR(capture.mean[1], 0.320, 0.001);
-  EXPECT_LT(std::sqrt(capture.covariance(1, 1)), 0.004);
-  EXPECT_TRUE(SkinModelAgrees(views[1], capture));
-  EXPECT_FALSE(SkinModelAgrees(views[3], capture));
-  EXPECT_FALSE(SkinModelAgrees(views[4], capture));
-  EXPECT_FALSE(SkinModelAgrees(views[5], capture)) << "no model";
-  // Moment pooling alone lets the backdrop's view pull the mean and spread.
-  const SkinChromaticity all = PoolSkinChromaticity(views);
-  EXPECT_GT(std::sqrt(all.covariance(1, 1)), 0.03);
-  EXPECT_EQ(CaptureSkinChromaticity({SkinChromaticity{}}).samples, 0);
-}
-
-TEST(SkinModelAgrees, WithinThreeDeviationsAndAtLeastAHundredth) {
-  const SkinChromaticity reference = ChromaModel(0.41, 0.32, 0.002, 100);
-  EXPECT_TRUE(SkinModelAgrees(ChromaModel(0.418, 0.32, 0.01, 10), reference)) << "0.008 off";
-  EXPECT_FALSE(SkinModelAgrees(ChromaModel(0.422, 0.32, 0.01, 10), reference)) << "0.012 off";
-  const SkinChromaticity wide = ChromaModel(0.41, 0.32, 0.006, 100);
-  EXPECT_TRUE(SkinModelAgrees(ChromaModel(0.427, 0.32, 0.01, 10), wide)) << "under 3 x 0.006";
-}
-
 // A synthetic view taken a stop over: a green backdrop; a head (an ellipse)
 // whose left part is blond hair (fine stripes) in locks whose lit middles clip
 // in red and green, and in blue on the stripes' bright half; its right part
