@@ -98,16 +98,22 @@ SeenTips SeenTips::Find(const std::vector<StrandSegment>& segments, const SeenTi
     const Eigen::Vector3f tip = points.back(), t = TipTangent(points);
     if (t.isZero()) continue;
     const Eigen::Vector3f centre = tip + static_cast<float>(mid) * t;
+    // A segment whose reach fell short cannot continue the tip through any of
+    // its vertices: its reach is not computed again for the next one.
+    size_t short_segment = s;
     const bool continued = grid.AnyWithin(centre, search, [&](int64_t j, double) {
-      if (vertices.segment[static_cast<size_t>(j)] == s) return false;
+      const size_t other = vertices.segment[static_cast<size_t>(j)];
+      if (other == s || other == short_segment) return false;
       const Eigen::Vector3f v = vertices.positions[static_cast<size_t>(j)] - tip;
       const float ahead = v.dot(t);
-      return ahead >= o.ahead_min_mm && ahead <= o.ahead_max_mm &&
-             (v - ahead * t).norm() <= o.lateral_mm &&
-             std::abs(vertices.tangents[static_cast<size_t>(j)].dot(t)) >= min_cos &&
-             (o.carry_on_mm <= 0 ||
-              Reach(segments[vertices.segment[static_cast<size_t>(j)]].points_mm, tip, t) >=
-                  o.carry_on_mm);
+      if (!(ahead >= o.ahead_min_mm && ahead <= o.ahead_max_mm &&
+            (v - ahead * t).norm() <= o.lateral_mm &&
+            std::abs(vertices.tangents[static_cast<size_t>(j)].dot(t)) >= min_cos))
+        return false;
+      if (o.carry_on_mm <= 0 || Reach(segments[other].points_mm, tip, t) >= o.carry_on_mm)
+        return true;
+      short_segment = other;
+      return false;
     });
     if (continued) continue;
     index->tips.push_back(tip);
