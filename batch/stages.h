@@ -15,7 +15,7 @@
 //
 //   {"calibrate":   {"mode": "turntable", "intrinsics": ["cam.json"], "hard_prior": false,
 //                    "threads": 2},
-//    "reconstruct": {"method": "bao-qi", "strands": 20000, "head": "", "stride_px": 3,
+//    "reconstruct": {"method": "bao-qi", "strands": 40000, "head": "", "stride_px": 3,
 //                    "iterations": 4, "hull_voxel_mm": 2.0, "threads": 2},
 //    "fit":         {"guides": 300, "target_error_mm": 0.05, "threads": 2},
 //    "simulate":    {"scenario": "head-shake", "seconds": 1, "fps": 30, "preview_every": 1,
