@@ -3,6 +3,7 @@
 
     /usr/bin/python3 bench/seen_tip_truth.py GROUND_TRUTH_STRANDS.ply SEGMENTS.ply
         [--window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--carry-on MM] [--min-length MM] [--probes N]
+        [--points POINTS.ply [--points-ahead SHARE]]
 
 GROUND_TRUTH_STRANDS.ply is a simulated capture's ground_truth/ground_truth_strands.ply;
 SEGMENTS.ply the directed seen strands of its reconstruction
@@ -17,7 +18,10 @@ The tips are split as reconstruction/seen_tips.h splits them: continued where an
 strand has a vertex 1..AHEAD mm ahead along the tip's direction (the chord over its last three
 steps), within LATERAL mm of that line, its tangent within ANGLE deg either way, and reaches
 --carry-on mm or more ahead of the tip (9,2,45 and 12: the defaults of SeenTipOptions; 0 lets
-any vertex in the window continue the tip). Prints, for the uncontinued tips, the continued ones and the
+any vertex in the window continue the tip). With --points (the reconstruction's points.ply) a
+tip the oriented points run on past counts as continued too: 2-12 mm ahead, within 3 mm of its
+line and 30 deg of its direction, at least --points-ahead (0.08, SeenTipOptions'
+points_ahead_max_share) times as many points as as far behind it. Prints, for the uncontinued tips, the continued ones and the
 middles, the share at a true tip and the share with more than 30 mm left.
 
 Needs Debian's python3-numpy and python3-scipy.
@@ -96,6 +100,32 @@ def continued(seen, offsets, tree, owner, seen_tangents, k, tip, direction, wind
     return False
 
 
+class PointsRunOn:
+    """SeenTipOptions::points_ahead_max_share: whether the oriented points run on past a tip."""
+
+    def __init__(self, path, share):
+        from point_directions import read_points
+        points = read_points(path).astype(np.float64)
+        self.positions, self.directions = points[:, :3], points[:, 3:6]
+        self.tree = cKDTree(self.positions)
+        self.share = share
+
+    def count(self, tip, direction, gap=2.0, length=10.0, lateral=3.0, angle=30.0):
+        centre = tip + (gap + 0.5 * length) * direction
+        near = np.asarray(self.tree.query_ball_point(centre, np.hypot(0.5 * length, lateral)), int)
+        if len(near) == 0:
+            return 0
+        v = self.positions[near] - tip
+        along = v @ direction
+        off = np.linalg.norm(v - np.outer(along, direction), axis=1)
+        aligned = np.abs(self.directions[near] @ direction) >= np.cos(np.radians(angle))
+        return int(np.sum((along >= gap) & (along <= gap + length) & (off <= lateral) & aligned))
+
+    def __call__(self, tip, direction):
+        ahead = self.count(tip, direction)
+        return ahead > 0 and ahead >= self.share * self.count(tip, -direction)
+
+
 def report(label, left):
     known = left[~np.isnan(left)]
     if len(known) == 0:
@@ -113,6 +143,9 @@ def main():
     parser.add_argument("--carry-on", type=float, default=12.0)
     parser.add_argument("--min-length", type=float, default=0.0)
     parser.add_argument("--probes", type=int, default=4000)
+    parser.add_argument("--points", help="the reconstruction's points.ply: also leave out the tips "
+                        "the oriented points run on past")
+    parser.add_argument("--points-ahead", type=float, default=0.08)
     args = parser.parse_args()
     window = tuple(float(v) for v in args.window.split(","))
     if len(window) != 3:
@@ -134,6 +167,9 @@ def main():
     tree = cKDTree(seen)
     is_continued = np.array([continued(seen, offsets, tree, owner, seen_tangents, k, tips[k],
                                        tip_directions[k], window, args.carry_on) for k in probes])
+    if args.points:
+        run_on = PointsRunOn(args.points, args.points_ahead)
+        is_continued |= np.array([run_on(tips[k], tip_directions[k]) for k in probes])
     left_tip = truth.left_at(tips[probes], tip_directions[probes])
     left_middle = truth.left_at(seen[middle[probes]], seen_tangents[middle[probes]])
     print(f"{len(last)} seen strands, {len(candidates)} at least {args.min_length:g} mm long, {len(probes)} looked at; window {args.window}, carry-on {args.carry_on:g} mm: "

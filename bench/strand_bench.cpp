@@ -17,6 +17,7 @@
 //       [--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM]
 //       [--cover-graft-radius MM] [--seen-tips yes|no] [--seen-tip-reach MM]
 //       [--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--seen-tip-carry-on MM]
+//       [--seen-tip-points-ahead SHARE]
 //       [--skin-labels capture|truth] [--overlap-stride K] [--max-overlaps K] [--overlap-mm MM]
 //       [--out-suffix S]
 //       [--score yes|no]
@@ -43,7 +44,10 @@
 // SeenTipOptions::reach_mm, --seen-tip-window its ahead_max_mm, lateral_mm and
 // max_angle_deg (the window a continuing seen strand is looked for in),
 // --seen-tip-carry-on MM its carry_on_mm (how far ahead of the tip the
-// continuing seen strand must reach; 0: any vertex in the window continues it).
+// continuing seen strand must reach; 0: any vertex in the window continues it),
+// --seen-tip-points-ahead its points_ahead_max_share (a tip is kept only where
+// the oriented points ahead of it number under this share of those behind it;
+// 0: the points are not asked).
 // --skin-labels truth gives the growth's skin tests (end over skin, tips trimmed
 // back) the simulated rig's true labels in place of the segmentation's: their
 // ceiling.
@@ -125,6 +129,7 @@ int main(int argc, char** argv) {
         "[--cover-segments yes|no] [--cover-min-uncovered MM] [--cover-radius MM] "
         "[--cover-graft-radius MM] [--seen-tips yes|no] [--seen-tip-reach MM] "
         "[--seen-tip-window AHEAD_MM,LATERAL_MM,ANGLE_DEG] [--seen-tip-carry-on MM] "
+        "[--seen-tip-points-ahead SHARE] "
         "[--tip-skin-min-share S] [--tip-skin-min-views N] "
         "[--segment-curvature-weight W] [--segment-sigma MM] [--segment-step MM] "
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
@@ -187,6 +192,8 @@ int main(int argc, char** argv) {
       options.growth.seen_tips.reach_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--seen-tip-carry-on") == 0) {
       options.growth.seen_tips.carry_on_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--seen-tip-points-ahead") == 0) {
+      options.growth.seen_tips.points_ahead_max_share = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--seen-tip-window") == 0) {
       SeenTipOptions& t = options.growth.seen_tips;
       if (std::sscanf(argv[i + 1], "%lf,%lf,%lf", &t.ahead_max_mm, &t.lateral_mm,

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 
 #include "reconstruction/point_grid.h"
 #include "reconstruction/segment_coverage.h"
@@ -48,6 +49,53 @@ float Reach(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& t
   return furthest;
 }
 
+// The oriented points within the window from `gap` to `gap + length` mm
+// along `t` from `tip` (t unit, either sign), within `lateral` of its line,
+// their direction within acos(min_cos) of it.
+int64_t PointsAlong(const PointGrid& grid, const std::vector<OrientedPoint>& points,
+                    const Eigen::Vector3f& tip, const Eigen::Vector3f& t, const SeenTipOptions& o,
+                    float min_cos) {
+  const double gap = o.points_gap_mm, length = o.points_window_mm, lateral = o.points_lateral_mm;
+  const Eigen::Vector3f centre = tip + static_cast<float>(gap + 0.5 * length) * t;
+  int64_t count = 0;
+  grid.ForEachWithin(centre, std::hypot(0.5 * length, lateral), [&](int64_t j, double) {
+    const OrientedPoint& p = points[static_cast<size_t>(j)];
+    const Eigen::Vector3f v = p.position_mm - tip;
+    const float along = v.dot(t);
+    if (along >= gap && along <= gap + length && (v - along * t).norm() <= lateral &&
+        std::abs(p.direction.dot(t)) >= min_cos)
+      ++count;
+  });
+  return count;
+}
+
+// Whether the points run on past the tip: those ahead of it number at least
+// points_ahead_max_share of those behind it.
+class PointsRunOn {
+ public:
+  PointsRunOn(const std::vector<OrientedPoint>* points, const SeenTipOptions& o) : o_(o) {
+    if (points == nullptr || o.points_ahead_max_share <= 0) return;
+    points_ = points;
+    for (const OrientedPoint& p : *points) positions_.push_back(p.position_mm);
+    grid_ = std::make_unique<PointGrid>(positions_, std::max(1.0, o.points_lateral_mm));
+    min_cos_ = static_cast<float>(std::cos(o.points_angle_deg * M_PI / 180.0));
+  }
+  bool operator()(const Eigen::Vector3f& tip, const Eigen::Vector3f& t) const {
+    if (!grid_) return false;
+    const int64_t ahead = PointsAlong(*grid_, *points_, tip, t, o_, min_cos_);
+    if (ahead == 0) return false;
+    const int64_t behind = PointsAlong(*grid_, *points_, tip, -t, o_, min_cos_);
+    return static_cast<double>(ahead) >= o_.points_ahead_max_share * static_cast<double>(behind);
+  }
+
+ private:
+  const SeenTipOptions& o_;
+  const std::vector<OrientedPoint>* points_ = nullptr;
+  std::vector<Eigen::Vector3f> positions_;
+  std::unique_ptr<PointGrid> grid_;
+  float min_cos_ = 1;
+};
+
 }  // namespace
 
 struct SeenTips::Index {
@@ -69,6 +117,15 @@ Status SeenTipOptions::Check() const {
     return InvalidArgument("seen tips: min_strand_mm must be non-negative");
   if (!(carry_on_mm >= 0 && carry_on_mm <= 100))
     return InvalidArgument("seen tips: carry_on_mm must lie in [0, 100]");
+  if (!(points_ahead_max_share >= 0 && points_ahead_max_share <= 1))
+    return InvalidArgument("seen tips: points_ahead_max_share must lie in [0, 1]");
+  if (!(points_gap_mm >= 0 && points_window_mm > 0 && points_gap_mm + points_window_mm <= 50))
+    return InvalidArgument(
+        "seen tips: need points_gap_mm >= 0, points_window_mm > 0 and their sum <= 50");
+  if (!(points_lateral_mm > 0 && points_lateral_mm <= 10))
+    return InvalidArgument("seen tips: points_lateral_mm must lie in (0, 10]");
+  if (!(points_angle_deg > 0 && points_angle_deg <= 90))
+    return InvalidArgument("seen tips: points_angle_deg must lie in (0, 90]");
   if (!(reach_mm > 0 && reach_mm <= 10))
     return InvalidArgument("seen tips: reach_mm must lie in (0, 10]");
   return Status::Ok();
@@ -79,9 +136,11 @@ SeenTips::~SeenTips() = default;
 SeenTips::SeenTips(SeenTips&&) noexcept = default;
 SeenTips& SeenTips::operator=(SeenTips&&) noexcept = default;
 
-SeenTips SeenTips::Find(const std::vector<StrandSegment>& segments, const SeenTipOptions& o) {
+SeenTips SeenTips::Find(const std::vector<StrandSegment>& segments, const SeenTipOptions& o,
+                        const std::vector<OrientedPoint>* points) {
   SeenTips found;
   if (!o.enabled) return found;
+  const PointsRunOn points_run_on(points, o);
   const SegmentVertices vertices = AllVertices(segments);
   const PointGrid grid(vertices.positions, 2.0);
   const float min_cos = static_cast<float>(std::cos(o.max_angle_deg * M_PI / 180.0));
@@ -115,7 +174,7 @@ SeenTips SeenTips::Find(const std::vector<StrandSegment>& segments, const SeenTi
       short_segment = other;
       return false;
     });
-    if (continued) continue;
+    if (continued || points_run_on(tip, t)) continue;
     index->tips.push_back(tip);
     index->tangents.push_back(t);
   }

@@ -20,7 +20,8 @@
 // max_angle_deg of the tip's (either sense: the direction MRF may have
 // turned the continuing segment the other way), on a segment that reaches
 // carry_on_mm or more ahead of the tip. A segment's own vertices do not
-// continue it. Strand growth (strand_growth.h) ends a strand that, while
+// continue it. Given the oriented points, nor do they run on past it
+// (points_ahead_max_share). Strand growth (strand_growth.h) ends a strand that, while
 // following a seen strand, comes within reach_mm of such a tip in about its
 // direction, except where the hair is seen to curl (curl_field.h): on
 // curly_blond 31 % of the uncontinued tip ends lie at a true tip, the rest
@@ -33,6 +34,7 @@
 #include <vector>
 
 #include "core/status.h"
+#include "reconstruction/point_cloud.h"
 #include "reconstruction/strand_segments.h"
 
 namespace hairrig {
@@ -54,6 +56,17 @@ struct SeenTipOptions {
   // of one lock do, does not carry the hair on past it (0: any vertex in the
   // window continues the tip, which keeps a quarter to a half as many tips).
   double carry_on_mm = 12;
+  // Where the hair ends, so do its oriented points: a tip is kept only where
+  // the points ahead of it (points_window_mm along its tangent, after
+  // points_gap_mm, within points_lateral_mm of its line and points_angle_deg
+  // of its direction, either sense) number under points_ahead_max_share of
+  // those as far behind it. On images unlike the simulated rig's the seen
+  // strands break where the hair does not end, and the points carry on past
+  // the break (docs/accuracy.md, "Where strands end"). 0: the points are not
+  // asked (nor are they when Find is given none).
+  double points_ahead_max_share = 0.08;
+  double points_gap_mm = 2, points_window_mm = 10;
+  double points_lateral_mm = 3, points_angle_deg = 30;
   double reach_mm = 1.5;  // a strand this close to a seen tip has reached it
   Status Check() const;
 };
@@ -66,8 +79,11 @@ class SeenTips {
   SeenTips& operator=(SeenTips&&) noexcept;
 
   // The uncontinued tip ends of `segments` (none when options.enabled is
-  // false). O(vertices) to index, then one radius query per segment.
-  static SeenTips Find(const std::vector<StrandSegment>& segments, const SeenTipOptions& options);
+  // false); with `points` (the oriented points the segments were grown
+  // from, may be null), only those the points do not run on past.
+  // O(vertices + points) to index, then a few radius queries per segment.
+  static SeenTips Find(const std::vector<StrandSegment>& segments, const SeenTipOptions& options,
+                       const std::vector<OrientedPoint>* points = nullptr);
 
   // Whether a strand at p growing along `direction` (unit) has reached a
   // seen tip: one lies within reach_mm of p, its tangent within 60 deg of

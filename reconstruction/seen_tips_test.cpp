@@ -71,6 +71,47 @@ TEST(SeenTips, ANeighbourThatEndsBesideTheTipDoesNotCarryItOn) {
   EXPECT_FALSE(SeenTips::Find(segments, any_vertex).Reached({0, 0, 150}, kDown));
 }
 
+// Oriented points along the z axis at (x, y), every 0.5 mm from z_top down
+// to z_bottom, on a 1 mm grid 3 wide across it, their direction `direction`.
+std::vector<OrientedPoint> PointsAlong(float x, float y, float z_top, float z_bottom,
+                                       const Eigen::Vector3f& direction = kDown) {
+  std::vector<OrientedPoint> points;
+  for (float z = z_top; z >= z_bottom - 1e-3f; z -= 0.5f)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        points.push_back({.position_mm = {x + dx, y + dy, z}, .direction = direction});
+  return points;
+}
+
+TEST(SeenTips, ATipThePointsRunOnPastIsNotKept) {
+  // A seen strand that ends at z = 150 where the hair ends, and one that
+  // ends at z = 150 where the hair runs on to z = 100 unseen as a strand.
+  const std::vector<StrandSegment> segments = {Vertical(0, 0, 200, 150), Vertical(20, 0, 200, 150)};
+  std::vector<OrientedPoint> points = PointsAlong(0, 0, 200, 150);
+  const std::vector<OrientedPoint> running_on = PointsAlong(20, 0, 200, 100);
+  points.insert(points.end(), running_on.begin(), running_on.end());
+  // A few stray points below the first tip, across the hair's direction.
+  const std::vector<OrientedPoint> across = PointsAlong(0, 0, 146, 140, {1, 0, 0});
+  points.insert(points.end(), across.begin(), across.end());
+
+  const SeenTips tips = SeenTips::Find(segments, SeenTipOptions{}, &points);
+  EXPECT_EQ(tips.size(), 1u);
+  EXPECT_TRUE(tips.Reached({0, 0, 150}, kDown)) << "the points end with the seen strand";
+  EXPECT_FALSE(tips.Reached({20, 0, 150}, kDown)) << "the points run on 50 mm past it";
+
+  SeenTipOptions not_asked;
+  not_asked.points_ahead_max_share = 0;
+  EXPECT_EQ(SeenTips::Find(segments, not_asked, &points).size(), 2u);
+  EXPECT_EQ(SeenTips::Find(segments, SeenTipOptions{}).size(), 2u) << "no points given";
+
+  // A thin run of points ahead, under the share of those behind, leaves the tip.
+  const std::vector<OrientedPoint> sparse = {{.position_mm = {0, 0, 145}, .direction = kDown}};
+  std::vector<OrientedPoint> with_one = PointsAlong(0, 0, 200, 150);
+  with_one.insert(with_one.end(), sparse.begin(), sparse.end());
+  EXPECT_TRUE(
+      SeenTips::Find({segments[0]}, SeenTipOptions{}, &with_one).Reached({0, 0, 150}, kDown));
+}
+
 TEST(SeenTips, ShortSeenStrandsGiveNoTips) {
   SeenTipOptions options;
   options.min_seen_length_mm = 45;
@@ -111,6 +152,18 @@ TEST(SeenTipOptions, CheckNamesTheBadField) {
   o = SeenTipOptions{};
   o.carry_on_mm = -1;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "carry_on_mm"));
+  o = SeenTipOptions{};
+  o.points_ahead_max_share = 2;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_ahead_max_share"));
+  o = SeenTipOptions{};
+  o.points_window_mm = 0;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_window_mm"));
+  o = SeenTipOptions{};
+  o.points_lateral_mm = 0;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_lateral_mm"));
+  o = SeenTipOptions{};
+  o.points_angle_deg = 0;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_angle_deg"));
   o = SeenTipOptions{};
   o.reach_mm = -1;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "reach_mm"));

@@ -129,7 +129,8 @@ Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points,
 }
 
 // Bao & Qi 2017 on the segments directed by the MRF.
-Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadModel& head,
+Result<StrandModel> RunBaoQi(const std::vector<OrientedPoint>& points,
+                             std::vector<StrandSegment> segments, const HeadModel& head,
                              const std::vector<DirectedRoot>& roots,
                              const StrandReconstructionOptions& o, const SkinViews* skin,
                              StrandReconstructionSummary* summary) {
@@ -152,7 +153,7 @@ Result<StrandModel> RunBaoQi(std::vector<StrandSegment> segments, const HeadMode
                           : o.given_curl.curly()     ? CurlField::Everywhere(o.given_curl)
                                                      : CurlField::Estimate(segments, growth.curl);
   summary->curl = curls.estimate();
-  const SeenTips seen_tips = SeenTips::Find(segments, growth.seen_tips);
+  const SeenTips seen_tips = SeenTips::Find(segments, growth.seen_tips, &points);
   StrandModel model;
   const FieldGrowth grow(field, &head, growth, skin, &curls, &seen_tips);
   model.strands = grow.FromRoots(roots, &summary->growth);
@@ -428,8 +429,8 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
-      HR_ASSIGN_OR_RETURN(
-          model, RunBaoQi(std::move(segments), *head, ScalpRoots(*head, o), o, skin, &summary));
+      HR_ASSIGN_OR_RETURN(model, RunBaoQi(points, std::move(segments), *head, ScalpRoots(*head, o),
+                                          o, skin, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);
