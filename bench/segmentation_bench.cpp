@@ -3,7 +3,8 @@
 // root:
 //   build/bench/hairrig_segmentation_bench CAPTURE [--colour-components K]
 //       [--texture-feature yes|no] [--texture-less-noise yes|no] [--skin-chromaticity SIGMAS]
-//       [--skin-chromaticity-log-ratio R] [--capture-skin yes|no] [--views 0,1,...]
+//       [--skin-chromaticity-log-ratio R] [--capture-skin yes|no]
+//       [--capture-skin-touching-outline yes|no] [--views 0,1,...]
 //       [--opaque-shadow-as-skin yes|no] [--opaque-shadow-touching-skin-only yes|no]
 //       [--outline-blend SIGMAS] [--clipped-level L]
 //       [--texture-sigma PX] [--threads T] [--pictures DIR]
@@ -83,15 +84,16 @@ Result<ViewRow> ScoreView(const ReconstructionView& view, const cv::Mat& image,
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr,
-                 "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
-                 "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] "
-                 "[--capture-skin yes|no] [--views 0,1,...] "
-                 "[--opaque-shadow-as-skin yes|no] [--opaque-shadow-touching-skin-only yes|no] "
-                 "[--outline-blend SIGMAS] [--clipped-level L] "
-                 "[--texture-sigma PX] [--threads T] "
-                 "[--pictures DIR]\n",
-                 argv[0]);
+    std::fprintf(
+        stderr,
+        "usage: %s CAPTURE [--colour-components K] [--texture-feature yes|no] "
+        "[--skin-chromaticity SIGMAS] [--skin-chromaticity-log-ratio R] "
+        "[--capture-skin yes|no] [--capture-skin-touching-outline yes|no] [--views 0,1,...] "
+        "[--opaque-shadow-as-skin yes|no] [--opaque-shadow-touching-skin-only yes|no] "
+        "[--outline-blend SIGMAS] [--clipped-level L] "
+        "[--texture-sigma PX] [--threads T] "
+        "[--pictures DIR]\n",
+        argv[0]);
     return 2;
   }
   const std::string capture = argv[1];
@@ -116,6 +118,8 @@ int main(int argc, char** argv) {
       options.skin_chromaticity_log_ratio = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--capture-skin") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.capture_skin)) return 2;
+    } else if (std::strcmp(argv[i], "--capture-skin-touching-outline") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.capture_skin_touching_outline)) return 2;
     } else if (std::strcmp(argv[i], "--opaque-shadow-as-skin") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.opaque_shadow_as_skin)) return 2;
     } else if (std::strcmp(argv[i], "--opaque-shadow-touching-skin-only") == 0) {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 #include <vector>
 
 #include "core/parallel.h"
@@ -98,6 +99,36 @@ double HiddenBackdropShare(const cv::Vec3b& p, const BackdropModel& backdrop) {
 // found (`skin`, within 3 px): skin in shadow continues lit skin (the neck
 // under the jaw); the dark gaps between locks, as opaque and as dark, lie
 // within the hair.
+// The pieces (8-connected) of `mask` that come within `reach_px` (a square
+// window) of a pixel of `reference`.
+cv::Mat1b PiecesTouching(const cv::Mat1b& mask, const cv::Mat1b& reference, int reach_px) {
+  cv::Mat1b near;
+  cv::dilate(
+      reference, near,
+      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach_px + 1, 2 * reach_px + 1)));
+  cv::Mat1i pieces;
+  const int n = cv::connectedComponents(mask, pieces, 8, CV_32S);
+  std::vector<uint8_t> touches(static_cast<size_t>(n), 0);
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x)
+      if (mask(y, x) && near(y, x)) touches[static_cast<size_t>(pieces(y, x))] = 255;
+  touches[0] = 0;
+  cv::Mat1b out(mask.size(), uint8_t{0});
+  out.forEach([&](uint8_t& o, const int* pos) {
+    o = touches[static_cast<size_t>(pieces(pos[0], pos[1]))];
+  });
+  return out;
+}
+
+// The pixels outside `foreground` connected to the image's border: the
+// backdrop around the subject, not the gaps within it.
+cv::Mat1b OuterBackdrop(const cv::Mat1b& foreground) {
+  const cv::Mat1b outside = Mask(foreground == 0);
+  cv::Mat1b border(outside.size(), uint8_t{0});
+  cv::rectangle(border, cv::Rect(0, 0, border.cols, border.rows), cv::Scalar(255), 1);
+  return PiecesTouching(outside, Mask(border & outside), 0);
+}
+
 cv::Mat1b OpaqueShadowOnSkin(const cv::Mat3b& bgr, const cv::Mat1b& hair_region,
                              const cv::Mat1f& distance, float full_coverage,
                              const BackdropModel& backdrop, const cv::Mat1b& skin,
@@ -110,19 +141,7 @@ cv::Mat1b OpaqueShadowOnSkin(const cv::Mat3b& bgr, const cv::Mat1b& hair_region,
       o = 255;
   });
   if (!touching_only) return opaque;
-  cv::Mat1b near_skin;
-  cv::dilate(skin, near_skin, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(7, 7)));
-  cv::Mat1i pieces;
-  const int n = cv::connectedComponents(opaque, pieces, 8, CV_32S);
-  std::vector<uint8_t> touches(static_cast<size_t>(n), 0);
-  for (int y = 0; y < opaque.rows; ++y)
-    for (int x = 0; x < opaque.cols; ++x)
-      if (opaque(y, x) && near_skin(y, x)) touches[static_cast<size_t>(pieces(y, x))] = 255;
-  touches[0] = 0;
-  opaque.forEach([&](uint8_t& o, const int* pos) {
-    o = touches[static_cast<size_t>(pieces(pos[0], pos[1]))];
-  });
-  return opaque;
+  return PiecesTouching(opaque, skin, 3);
 }
 
 // Gaussian blurs of values over the pixels in `weights` only (normalised
@@ -503,12 +522,16 @@ struct ChromaticityStep {
 // (over a few pixels, against sensor noise) lies within `sigmas` of the skin's
 // and is e^log_ratio times likelier under it than under the hair's becomes
 // skin. Only the pixels of `candidates` (the foreground whose colour is not
-// clipped) are fitted or turned. A view with too little skin of its own takes
-// `capture_skin` (may be null), and keeps only the regions it turns to skin
-// (CoherentPieces).
+// clipped) are fitted or turned. A view with too little skin of its own, or
+// whose own does not agree with `capture_skin` (may be null), takes
+// `capture_skin`, and keeps only the regions it turns to skin
+// (CoherentPieces) that reach the backdrop around the subject (outside
+// `foreground`) or the view's own skin, with
+// options.capture_skin_touching_outline.
 // Unchanged when the hair or the skin used has fewer than 50 samples.
 ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candidates,
-                                    const cv::Mat1b& hair, const SegmentationOptions& options,
+                                    const cv::Mat1b& foreground, const cv::Mat1b& hair,
+                                    const SegmentationOptions& options,
                                     const SkinChromaticity* capture_skin) {
   cv::Mat3f smooth;
   bgr.convertTo(smooth, CV_32F);
@@ -525,7 +548,8 @@ ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candi
   step.own_skin = FitSkinCore(skin_samples);
   const SkinChromaticity hair_fit = FitChromaticity(hair_samples);
   step.used_capture_skin = capture_skin != nullptr && capture_skin->samples > 0 &&
-                           step.own_skin.samples < options.skin_chromaticity_min_view_samples;
+                           (step.own_skin.samples < options.skin_chromaticity_min_view_samples ||
+                            !SkinModelAgrees(step.own_skin, *capture_skin));
   const SkinChromaticity& skin_fit = step.used_capture_skin ? *capture_skin : step.own_skin;
   if (hair_fit.samples == 0 || skin_fit.samples == 0) return step;
   const ChromaGaussian skin(skin_fit), hair_model(hair_fit);
@@ -541,6 +565,8 @@ ChromaticityStep SkinByChromaticity(const cv::Mat3b& bgr, const cv::Mat1b& candi
   if (step.used_capture_skin) {
     const double scale = options.work_scale;
     flips = CoherentPieces(flips, options.capture_skin_min_area_px * scale * scale);
+    if (options.capture_skin_touching_outline)
+      flips = PiecesTouching(flips, Mask(OuterBackdrop(foreground) | (candidates & ~hair)), 3);
     step.capture_skin_pixels = cv::countNonZero(flips);
   }
   step.hair = Mask(hair & ~flips);
@@ -734,24 +760,76 @@ SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views
   return pooled;
 }
 
+namespace {
+
+// The value below and above which half the weight lies (pairs of value and
+// weight; not empty).
+double WeightedMedian(std::vector<std::pair<double, double>> values) {
+  std::sort(values.begin(), values.end());
+  double total = 0;
+  for (const auto& [value, weight] : values) total += weight;
+  double below = 0;
+  for (const auto& [value, weight] : values) {
+    below += weight;
+    if (below >= 0.5 * total) return value;
+  }
+  return values.back().first;
+}
+
+double LargerDeviation(const SkinChromaticity& model) {
+  return std::sqrt(std::max(model.covariance(0, 0), model.covariance(1, 1)));
+}
+
+}  // namespace
+
+bool SkinModelAgrees(const SkinChromaticity& own, const SkinChromaticity& reference) {
+  if (own.samples == 0 || reference.samples == 0) return false;
+  constexpr double kMinTolerance = 0.01, kSigmas = 3;
+  const double tolerance = std::max(kMinTolerance, kSigmas * LargerDeviation(reference));
+  return cv::norm(own.mean - reference.mean) <= tolerance;
+}
+
+SkinChromaticity CaptureSkinChromaticity(const std::vector<SkinChromaticity>& views) {
+  std::vector<std::pair<double, double>> r, g, deviation;
+  for (const SkinChromaticity& v : views) {
+    if (v.samples == 0) continue;
+    const double weight = static_cast<double>(v.samples);
+    r.emplace_back(v.mean[0], weight);
+    g.emplace_back(v.mean[1], weight);
+    deviation.emplace_back(LargerDeviation(v), weight);
+  }
+  if (r.empty()) return SkinChromaticity{};
+  SkinChromaticity consensus;
+  consensus.samples = 1;
+  consensus.mean = cv::Vec2d(WeightedMedian(r), WeightedMedian(g));
+  const double sd = WeightedMedian(deviation);
+  consensus.covariance = cv::Matx22d::eye() * (sd * sd);
+  std::vector<SkinChromaticity> agreeing;
+  for (const SkinChromaticity& v : views)
+    if (SkinModelAgrees(v, consensus)) agreeing.push_back(v);
+  return PoolSkinChromaticity(agreeing);
+}
+
 std::vector<Result<HairSegmentation>> SegmentCaptureViews(
     size_t views, const SegmentationOptions& options, int threads,
     const std::function<Result<HairSegmentation>(size_t, const SkinChromaticity*)>& segment) {
   std::vector<Result<HairSegmentation>> out(
       views, Result<HairSegmentation>(FailedPrecondition("not segmented")));
   ParallelFor(views, threads, [&] { return [&](size_t v) { out[v] = segment(v, nullptr); }; });
+  const auto has_own = [&](size_t v) {
+    return out[v]->skin_chromaticity.samples >= options.skin_chromaticity_min_view_samples;
+  };
   std::vector<SkinChromaticity> own;
-  std::vector<size_t> again;
-  for (size_t v = 0; v < views; ++v) {
-    if (!out[v].ok()) continue;
-    if (out[v]->skin_chromaticity.samples >= options.skin_chromaticity_min_view_samples)
-      own.push_back(out[v]->skin_chromaticity);
-    else
-      again.push_back(v);
-  }
-  const SkinChromaticity capture_skin = PoolSkinChromaticity(own);
+  for (size_t v = 0; v < views; ++v)
+    if (out[v].ok() && has_own(v)) own.push_back(out[v]->skin_chromaticity);
+  const SkinChromaticity capture_skin = CaptureSkinChromaticity(own);
   if (capture_skin.samples == 0 || options.skin_chromaticity_sigmas <= 0 || !options.capture_skin)
     return out;
+  std::vector<size_t> again;
+  for (size_t v = 0; v < views; ++v) {
+    if (out[v].ok() && (!has_own(v) || !SkinModelAgrees(out[v]->skin_chromaticity, capture_skin)))
+      again.push_back(v);
+  }
   ParallelFor(again.size(), threads, [&] {
     return [&](size_t k) {
       Result<HairSegmentation> second = segment(again[k], &capture_skin);
@@ -832,8 +910,8 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
   ChromaticityStep chromaticity;
   chromaticity.hair = contrast_hair;
   if (options.skin_chromaticity_sigmas > 0)
-    chromaticity = SkinByChromaticity(small_bgr, Mask(small_candidates & ~clipped), contrast_hair,
-                                      options, capture_skin);
+    chromaticity = SkinByChromaticity(small_bgr, Mask(small_candidates & ~clipped),
+                                      small_candidates, contrast_hair, options, capture_skin);
   cv::Mat1b small_hair = chromaticity.hair;
   if (options.outline_blend_sigmas > 0)
     small_hair = Mask(small_hair & ~OutlineBlendsOfSkin(small_bgr, small_candidates, small_hair,

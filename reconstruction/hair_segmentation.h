@@ -25,8 +25,8 @@
 //     better become skin. A view that
 //     shows too little lit skin to model it (the back of the head, where the
 //     neck lies in the hair's shadow) borrows the capture's: the models of
-//     the views that have one, pooled (SegmentCaptureViews runs the two
-//     passes).
+//     the views that have one and agree, pooled (SegmentCaptureViews runs the
+//     two passes), and turns only regions that reach the subject's outline.
 // Labels use the simulated ground truth's numbering (core/truth_maps.h) so that
 // they compare directly.
 #pragma once
@@ -86,6 +86,14 @@ struct SegmentationOptions {
   // work_scale): the skin under the hair's shadow is a region, where hair
   // whose glints happen to match the skin's chromaticity is scattered.
   double capture_skin_min_area_px = 600;
+  // ... and only in pieces that reach (within 3 px at work_scale) the
+  // backdrop around the subject (connected to the image's border) or the
+  // skin the view's own material model found: the neck in the hair's shadow
+  // runs on to the silhouette's edge, while hair in shadow whose
+  // chromaticity the capture's model explains lies within the hair (the
+  // back views of a dimly lit head; docs/accuracy.md, "Hair segmentation").
+  // false: every piece large enough.
+  bool capture_skin_touching_outline = true;
   // A pixel of the hair's region whose colour lies nearer the backdrop than
   // half the hair's (coverage under 0.5, a blend) yet is too dark to be a
   // blend (it hides at least half of the backdrop's light in some channel):
@@ -146,6 +154,19 @@ struct SkinChromaticity {
 // samples) when none of them has one.
 SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views);
 
+// Whether a view's own skin model agrees with `reference`: their means lie
+// within 3 of the reference's standard deviations (its larger one) in
+// chromaticity, and at least 0.01. A view whose mixture named the backdrop or
+// hair its skin (an under-exposed back view, with no lit skin in sight) lies
+// far off. False when either has no model.
+bool SkinModelAgrees(const SkinChromaticity& own, const SkinChromaticity& reference);
+
+// The capture's skin from the views' own models: those that agree
+// (SkinModelAgrees) with the models' consensus (the sample-weighted median of
+// their means and of their standard deviations), pooled
+// (PoolSkinChromaticity). No model when none of them has one.
+SkinChromaticity CaptureSkinChromaticity(const std::vector<SkinChromaticity>& views);
+
 struct HairSegmentation {
   cv::Mat1b label;       // SegmentLabel per pixel, full size
   cv::Mat1f hair_alpha;  // hair coverage 0..1 (0 off the hair); label is hair where alpha >= 0.5
@@ -169,7 +190,8 @@ std::vector<cv::Point2f> ProjectedOutline(const CameraIntrinsics& camera,
 // when the border is not a backdrop (too varied: the subject or box touches
 // the edge, or the frame is black) or no pixel looks like hair.
 // `capture_skin` (may be null) stands in for the view's own skin model when
-// that rests on fewer than options.skin_chromaticity_min_view_samples.
+// that rests on fewer than options.skin_chromaticity_min_view_samples or does
+// not agree with it (SkinModelAgrees).
 Result<HairSegmentation> SegmentHair(const cv::Mat& image,
                                      const std::vector<std::vector<cv::Point2f>>& not_hair_px,
                                      const SegmentationOptions& options,
@@ -177,9 +199,9 @@ Result<HairSegmentation> SegmentHair(const cv::Mat& image,
 
 // Segments the views of one capture in two passes: every view with its own
 // skin model, then the views whose own model rests on fewer than
-// options.skin_chromaticity_min_view_samples again with the others' pooled
-// (PoolSkinChromaticity). `segment(v, capture_skin)` segments view v
-// (capture_skin null in the first pass) with `options`, may be called from
+// options.skin_chromaticity_min_view_samples, or does not agree with the
+// capture's, again with the capture's (CaptureSkinChromaticity). `segment(v, capture_skin)`
+// segments view v (capture_skin null in the first pass) with `options`, may be called from
 // `threads` threads at once and must not throw. Returns each view's result;
 // a view that fails in the first pass is not tried again, one that fails in
 // the second keeps its first.

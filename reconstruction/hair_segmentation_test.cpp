@@ -329,20 +329,24 @@ TEST(SegmentHair, SkinBlendedWithTheBackdropAlongItsOutlineIsNotHair) {
   EXPECT_GT(lock_with, lock_without - 0.05) << "hair across the outline stays hair";
 }
 
+// The views of one capture segmented as the points stage does (two passes,
+// the capture's skin for a view with too little of its own).
+std::vector<Result<HairSegmentation>> SegmentViews(const std::vector<cv::Mat3b>& images,
+                                                   const SegmentationOptions& options) {
+  return SegmentCaptureViews(images.size(), options, 2,
+                             [&](size_t v, const SkinChromaticity* skin) {
+                               return SegmentHair(images[v], {}, options, skin);
+                             });
+}
+
 TEST(SegmentCaptureViews, AViewWithoutLitSkinBorrowsTheCapturesSkin) {
   cv::Mat1b front_hair, front_shadow, back_hair, back_shadow;
   const std::vector<cv::Mat3b> images = {HeadWithHairShadowOnSkin(&front_hair, &front_shadow, -0.6),
                                          HeadWithHairShadowOnSkin(&back_hair, &back_shadow, 0.0)};
-  const auto segment = [&](const SegmentationOptions& options) {
-    return SegmentCaptureViews(images.size(), options, 2,
-                               [&](size_t v, const SkinChromaticity* skin) {
-                                 return SegmentHair(images[v], {}, options, skin);
-                               });
-  };
   SegmentationOptions alone;
   alone.capture_skin = false;
-  const auto separate = segment(alone);
-  const auto together = segment(SegmentationOptions{});
+  const auto separate = SegmentViews(images, alone);
+  const auto together = SegmentViews(images, SegmentationOptions{});
   for (const auto* views : {&separate, &together})
     for (const auto& view : *views) ASSERT_TRUE(view.ok()) << view.status().ToString();
   const double alone_share = ShareOf(separate[1]->label == kSegHair, back_shadow);
@@ -365,6 +369,46 @@ TEST(SegmentCaptureViews, AViewWithoutLitSkinBorrowsTheCapturesSkin) {
   EXPECT_EQ(cv::countNonZero(together[0]->label != separate[0]->label), 0);
 }
 
+// Paints, within the hair of a HeadWithHairShadowOnSkin view, a patch of
+// hair in shadow (fine stripes, 25-40 % of the skin's colour: the skin's
+// chromaticity) that the hair surrounds; `patch` receives its pixels.
+void PaintShadowedHairLikeSkin(cv::Mat3b* image, cv::Mat1b* patch) {
+  *patch = cv::Mat1b(image->size(), uint8_t{0});
+  const cv::Rect area(140, 110, 80, 60);  // well inside the ellipse's hair
+  for (int y = area.y; y < area.y + area.height; ++y) {
+    for (int x = area.x; x < area.x + area.width; ++x) {
+      const double stripe = 0.5 + 0.5 * std::sin(2 * M_PI * (0.27 * x + 0.96 * y) / 4.0);
+      const cv::Vec3d colour = cv::Vec3d(150, 175, 225) * (0.25 + 0.15 * stripe);
+      for (int c = 0; c < 3; ++c) (*image)(y, x)[c] = cv::saturate_cast<uint8_t>(colour[c]);
+      (*patch)(y, x) = 255;
+    }
+  }
+}
+
+TEST(SegmentCaptureViews, TheCapturesSkinTurnsOnlyPiecesThatReachTheOutline) {
+  cv::Mat1b front_hair, front_shadow, back_hair, back_shadow, patch;
+  std::vector<cv::Mat3b> images = {HeadWithHairShadowOnSkin(&front_hair, &front_shadow, -0.6),
+                                   HeadWithHairShadowOnSkin(&back_hair, &back_shadow, 0.0)};
+  PaintShadowedHairLikeSkin(&images[1], &patch);
+  SegmentationOptions every_piece;
+  every_piece.capture_skin_touching_outline = false;
+  const auto touching = SegmentViews(images, SegmentationOptions{});
+  const auto every = SegmentViews(images, every_piece);
+  for (const auto* views : {&touching, &every})
+    for (const auto& view : *views) ASSERT_TRUE(view.ok()) << view.status().ToString();
+  ASSERT_TRUE(touching[1]->used_capture_skin);
+  const double patch_hair = ShareOf(touching[1]->label == kSegHair, patch);
+  const double patch_hair_every = ShareOf(every[1]->label == kSegHair, patch);
+  const double neck_hair = ShareOf(touching[1]->label == kSegHair, back_shadow);
+  std::printf(
+      "shadowed hair the skin's colour, within the hair, labelled hair: %.3f (every piece: %.3f); "
+      "the neck in the hair's shadow: %.3f\n",
+      patch_hair, patch_hair_every, neck_hair);
+  EXPECT_LT(patch_hair_every, 0.5) << "the case this scene is built for";
+  EXPECT_GT(patch_hair, 0.9) << "a piece the hair surrounds stays hair";
+  EXPECT_LT(neck_hair, 0.18) << "the neck runs on to the outline: still skin";
+}
+
 TEST(PoolSkinChromaticity, PoolsAsTheSamplesTakenTogether) {
   SkinChromaticity a, b;
   a.mean = {0.40, 0.30};
@@ -382,6 +426,45 @@ TEST(PoolSkinChromaticity, PoolsAsTheSamplesTakenTogether) {
   EXPECT_NEAR(pooled.covariance(0, 1), 0.25e-4, 1e-12);
   EXPECT_NEAR(pooled.covariance(1, 1), 3e-4 + 0.5e-4, 1e-12);
   EXPECT_EQ(PoolSkinChromaticity({SkinChromaticity{}}).samples, 0);
+}
+
+SkinChromaticity ChromaModel(double r, double g, double sd, int64_t samples) {
+  SkinChromaticity m;
+  m.mean = {r, g};
+  m.covariance = cv::Matx22d::eye() * (sd * sd);
+  m.samples = samples;
+  return m;
+}
+
+TEST(CaptureSkinChromaticity, LeavesOutAViewWhoseSkinIsTheBackdropOrHair) {
+  // Three views' skin, a view whose mixture named the dark green backdrop
+  // its skin (wide, with more samples than any one of the others), and one
+  // that named reddish hair its skin: as an under-exposed capture's views.
+  const std::vector<SkinChromaticity> views = {
+      ChromaModel(0.413, 0.320, 0.002, 1000), ChromaModel(0.414, 0.319, 0.002, 800),
+      ChromaModel(0.412, 0.321, 0.003, 600),  ChromaModel(0.330, 0.457, 0.044, 1200),
+      ChromaModel(0.520, 0.306, 0.012, 900),  SkinChromaticity{}};
+  const SkinChromaticity capture = CaptureSkinChromaticity(views);
+  EXPECT_EQ(capture.samples, 2400);
+  EXPECT_NEAR(capture.mean[0], 0.413, 0.001);
+  EXPECT_NEAR(capture.mean[1], 0.320, 0.001);
+  EXPECT_LT(std::sqrt(capture.covariance(1, 1)), 0.004);
+  EXPECT_TRUE(SkinModelAgrees(views[1], capture));
+  EXPECT_FALSE(SkinModelAgrees(views[3], capture));
+  EXPECT_FALSE(SkinModelAgrees(views[4], capture));
+  EXPECT_FALSE(SkinModelAgrees(views[5], capture)) << "no model";
+  // Moment pooling alone lets the backdrop's view pull the mean and spread.
+  const SkinChromaticity all = PoolSkinChromaticity(views);
+  EXPECT_GT(std::sqrt(all.covariance(1, 1)), 0.03);
+  EXPECT_EQ(CaptureSkinChromaticity({SkinChromaticity{}}).samples, 0);
+}
+
+TEST(SkinModelAgrees, WithinThreeDeviationsAndAtLeastAHundredth) {
+  const SkinChromaticity reference = ChromaModel(0.41, 0.32, 0.002, 100);
+  EXPECT_TRUE(SkinModelAgrees(ChromaModel(0.418, 0.32, 0.01, 10), reference)) << "0.008 off";
+  EXPECT_FALSE(SkinModelAgrees(ChromaModel(0.422, 0.32, 0.01, 10), reference)) << "0.012 off";
+  const SkinChromaticity wide = ChromaModel(0.41, 0.32, 0.006, 100);
+  EXPECT_TRUE(SkinModelAgrees(ChromaModel(0.427, 0.32, 0.01, 10), wide)) << "under 3 x 0.006";
 }
 
 // A synthetic view taken a stop over: a green backdrop; a head (an ellipse)
