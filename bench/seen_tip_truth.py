@@ -167,7 +167,7 @@ def main():
     tree = cKDTree(seen)
     is_continued = np.array([continued(seen, offsets, tree, owner, seen_tangents, k, tips[k],
                                        tip_directions[k], window, args.carry_on) for k in probes])
-    if args.points:
+    if args.points and args.points_ahead > 0:
         run_on = PointsRunOn(args.points, args.points_ahead)
         is_continued |= np.array([run_on(tips[k], tip_directions[k]) for k in probes])
     left_tip = truth.left_at(tips[probes], tip_directions[probes])

@@ -13,8 +13,10 @@
 // for hair, hair taken for backdrop or skin), the median and worst IoU, and
 // the time per view, and what the true bare skin was labelled over all views
 // (the growth's skin tests see only what is labelled skin). The views are segmented as the points
-// stage does (SegmentCaptureViews: views with too little skin of their own borrow the capture's
-// skin model); --capture-skin no segments each view alone. --pictures writes each view with its
+// stage does (SegmentCaptureViews: views with too little skin of their own, or whose own does not
+// agree with the others', borrow the capture's skin model); --capture-skin no segments each view
+// alone, --capture-skin-touching-outline no keeps every region the capture's model turns to skin,
+// not only those that reach the subject's outline. --pictures writes each view with its
 // errors painted: red where skin or backdrop is taken for hair, blue where hair is missed, and
 // its labels (reconstruction/hair_segmentation.h, kSeg*) as a PNG.
 #include <algorithm>

@@ -91,14 +91,6 @@ double HiddenBackdropShare(const cv::Vec3b& p, const BackdropModel& backdrop) {
   return share;
 }
 
-// The pixels of the hair's region (`hair_region`) that are skin in the hair's
-// shadow: their coverage (`distance` / `full_coverage`) is under 0.5, yet they
-// hide at least half of the backdrop's light in some channel
-// (HiddenBackdropShare), so they are opaque and darker than the hair. With
-// `touching_only`, only their pieces that touch the skin the material model
-// found (`skin`, within 3 px): skin in shadow continues lit skin (the neck
-// under the jaw); the dark gaps between locks, as opaque and as dark, lie
-// within the hair.
 // The pieces (8-connected) of `mask` that come within `reach_px` (a square
 // window) of a pixel of `reference`.
 cv::Mat1b PiecesTouching(const cv::Mat1b& mask, const cv::Mat1b& reference, int reach_px) {
@@ -120,8 +112,9 @@ cv::Mat1b PiecesTouching(const cv::Mat1b& mask, const cv::Mat1b& reference, int 
   return out;
 }
 
-// The pixels outside `foreground` connected to the image's border: the
-// backdrop around the subject, not the gaps within it.
+// The pixels outside `foreground` connected (8-way) to the image's border:
+// the backdrop around the subject, not the gaps within it. A region outside
+// `foreground` that is not backdrop (the calibration box) counts as outside.
 cv::Mat1b OuterBackdrop(const cv::Mat1b& foreground) {
   const cv::Mat1b outside = Mask(foreground == 0);
   cv::Mat1b border(outside.size(), uint8_t{0});
@@ -129,6 +122,14 @@ cv::Mat1b OuterBackdrop(const cv::Mat1b& foreground) {
   return PiecesTouching(outside, Mask(border & outside), 0);
 }
 
+// The pixels of the hair's region (`hair_region`) that are skin in the hair's
+// shadow: their coverage (`distance` / `full_coverage`) is under 0.5, yet they
+// hide at least half of the backdrop's light in some channel
+// (HiddenBackdropShare), so they are opaque and darker than the hair. With
+// `touching_only`, only their pieces that touch the skin the material model
+// found (`skin`, within 3 px): skin in shadow continues lit skin (the neck
+// under the jaw); the dark gaps between locks, as opaque and as dark, lie
+// within the hair.
 cv::Mat1b OpaqueShadowOnSkin(const cv::Mat3b& bgr, const cv::Mat1b& hair_region,
                              const cv::Mat1f& distance, float full_coverage,
                              const BackdropModel& backdrop, const cv::Mat1b& skin,

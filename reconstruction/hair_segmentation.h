@@ -76,9 +76,9 @@ struct SegmentationOptions {
   double skin_chromaticity_sigmas = 3.0;
   double skin_chromaticity_log_ratio = 2.0;
   // A view whose own skin model rests on fewer pixels than this (at
-  // work_scale, every 2nd row and column) uses the capture's pooled model
-  // when one is given. capture_skin false: SegmentCaptureViews segments each
-  // view alone.
+  // work_scale, every 2nd row and column), or does not agree with the
+  // capture's (SkinModelAgrees), uses the capture's model when one is given. capture_skin false:
+  // SegmentCaptureViews segments each view alone.
   int skin_chromaticity_min_view_samples = 500;
   bool capture_skin = true;
   // Pixels turned to skin by the capture's model count only in pieces of at
@@ -155,16 +155,17 @@ struct SkinChromaticity {
 SkinChromaticity PoolSkinChromaticity(const std::vector<SkinChromaticity>& views);
 
 // Whether a view's own skin model agrees with `reference`: their means lie
-// within 3 of the reference's standard deviations (its larger one) in
-// chromaticity, and at least 0.01. A view whose mixture named the backdrop or
+// within max(0.01, 3 x the reference's larger standard deviation) in
+// chromaticity (the view's own spread does not count). A view whose mixture named the backdrop or
 // hair its skin (an under-exposed back view, with no lit skin in sight) lies
 // far off. False when either has no model.
 bool SkinModelAgrees(const SkinChromaticity& own, const SkinChromaticity& reference);
 
 // The capture's skin from the views' own models: those that agree
 // (SkinModelAgrees) with the models' consensus (the sample-weighted median of
-// their means and of their standard deviations), pooled
-// (PoolSkinChromaticity). No model when none of them has one.
+// their means and of their standard deviations, each coordinate on its
+// own), pooled (PoolSkinChromaticity). No model when none of them has one or
+// none agrees (the median of r and g apart can lie away from every view).
 SkinChromaticity CaptureSkinChromaticity(const std::vector<SkinChromaticity>& views);
 
 struct HairSegmentation {

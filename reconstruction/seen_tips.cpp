@@ -69,10 +69,13 @@ int64_t PointsAlong(const PointGrid& grid, const std::vector<OrientedPoint>& poi
   return count;
 }
 
-// Whether the points run on past the tip: those ahead of it number at least
-// points_ahead_max_share of those behind it.
+// Whether the points run on past the tip: some lie ahead of it, and they
+// number at least points_ahead_max_share of those behind it. Holds a grid
+// over its own copy of the positions: not copied or moved.
 class PointsRunOn {
  public:
+  PointsRunOn(const PointsRunOn&) = delete;
+  PointsRunOn& operator=(const PointsRunOn&) = delete;
   PointsRunOn(const std::vector<OrientedPoint>* points, const SeenTipOptions& o) : o_(o) {
     if (points == nullptr || o.points_ahead_max_share <= 0) return;
     points_ = points;

@@ -9,7 +9,8 @@
 // the simulated rig's default scene, of the tip ends of seen strands 40 mm
 // long or more that no other seen strand continues, 86 % lie within 5 mm of
 // a true strand's tip (56 % on the same scene as a photograph, 40 % path
-// traced), against 3 % of the seen strands' middle vertices
+// traced; 90, 63 and 46 % once the points' test below drops more), against 3 %
+// of the seen strands' middle vertices
 // (`bench/seen_tip_truth.py`; docs/accuracy.md, "Where strands end").
 //
 // SeenTips::Find keeps the tip ends of the directed segments (root to tip,
@@ -20,8 +21,8 @@
 // max_angle_deg of the tip's (either sense: the direction MRF may have
 // turned the continuing segment the other way), on a segment that reaches
 // carry_on_mm or more ahead of the tip. A segment's own vertices do not
-// continue it. Given the oriented points, nor do they run on past it
-// (points_ahead_max_share). Strand growth (strand_growth.h) ends a strand that, while
+// continue it. Given the oriented points, a tip they run on past is dropped
+// too (points_ahead_max_share). Strand growth (strand_growth.h) ends a strand that, while
 // following a seen strand, comes within reach_mm of such a tip in about its
 // direction, except where the hair is seen to curl (curl_field.h): on
 // curly_blond 31 % of the uncontinued tip ends lie at a true tip, the rest
@@ -59,8 +60,8 @@ struct SeenTipOptions {
   // Where the hair ends, so do its oriented points: a tip is kept only where
   // the points ahead of it (points_window_mm along its tangent, after
   // points_gap_mm, within points_lateral_mm of its line and points_angle_deg
-  // of its direction, either sense) number under points_ahead_max_share of
-  // those as far behind it. On images unlike the simulated rig's the seen
+  // of its direction, either sense) are none, or number under
+  // points_ahead_max_share of those as far behind it. On images unlike the simulated rig's the seen
   // strands break where the hair does not end, and the points carry on past
   // the break (docs/accuracy.md, "Where strands end"). 0: the points are not
   // asked (nor are they when Find is given none).
@@ -80,7 +81,8 @@ class SeenTips {
 
   // The uncontinued tip ends of `segments` (none when options.enabled is
   // false); with `points` (the oriented points the segments were grown
-  // from, may be null), only those the points do not run on past.
+  // from, in their frame, mm; may be null), only those the points do not run
+  // on past.
   // O(vertices + points) to index, then a few radius queries per segment.
   static SeenTips Find(const std::vector<StrandSegment>& segments, const SeenTipOptions& options,
                        const std::vector<OrientedPoint>* points = nullptr);

@@ -104,12 +104,16 @@ TEST(SeenTips, ATipThePointsRunOnPastIsNotKept) {
   EXPECT_EQ(SeenTips::Find(segments, not_asked, &points).size(), 2u);
   EXPECT_EQ(SeenTips::Find(segments, SeenTipOptions{}).size(), 2u) << "no points given";
 
-  // A thin run of points ahead, under the share of those behind, leaves the tip.
+  // A single point ahead, under the share of those behind, leaves the tip;
+  // so do points given where none lies near the tip.
   const std::vector<OrientedPoint> sparse = {{.position_mm = {0, 0, 145}, .direction = kDown}};
   std::vector<OrientedPoint> with_one = PointsAlong(0, 0, 200, 150);
   with_one.insert(with_one.end(), sparse.begin(), sparse.end());
   EXPECT_TRUE(
       SeenTips::Find({segments[0]}, SeenTipOptions{}, &with_one).Reached({0, 0, 150}, kDown));
+  const std::vector<OrientedPoint> far_away = PointsAlong(100, 0, 200, 100);
+  EXPECT_TRUE(
+      SeenTips::Find({segments[0]}, SeenTipOptions{}, &far_away).Reached({0, 0, 150}, kDown));
 }
 
 TEST(SeenTips, ShortSeenStrandsGiveNoTips) {
@@ -155,6 +159,9 @@ TEST(SeenTipOptions, CheckNamesTheBadField) {
   o = SeenTipOptions{};
   o.points_ahead_max_share = 2;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_ahead_max_share"));
+  o = SeenTipOptions{};
+  o.points_gap_mm = -1;
+  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_gap_mm"));
   o = SeenTipOptions{};
   o.points_window_mm = 0;
   EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_window_mm"));
