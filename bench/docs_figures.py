@@ -216,6 +216,7 @@ def modbus_table(record):
 RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table,
              "console_viewer": console_viewer_table, "gltf_animation": gltf_animation_table,
              "reconstruction_robustness": reconstruction_robustness_table,
+             "reconstruction_robustness_now": reconstruction_robustness_table,
              "reconstruction_robustness_luo_filter": reconstruction_robustness_table,
              "reconstruction_robustness_curly_blond": reconstruction_robustness_table,
              "reconstruction_robustness_grain": reconstruction_robustness_table,
