@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/support/status_testing.h"
@@ -137,43 +138,26 @@ TEST(SeenTips, OffFindsNone) {
 }
 
 TEST(SeenTipOptions, CheckNamesTheBadField) {
-  SeenTipOptions o;
-  EXPECT_TRUE(o.Check().ok());
-  o.ahead_max_mm = 0.5;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "ahead_max_mm"));
-  o = SeenTipOptions{};
-  o.lateral_mm = 0;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "lateral_mm"));
-  o = SeenTipOptions{};
-  o.max_angle_deg = 120;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "max_angle_deg"));
-  o = SeenTipOptions{};
-  o.min_seen_length_mm = -1;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "min_seen_length_mm"));
-  o = SeenTipOptions{};
-  o.min_strand_mm = -1;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "min_strand_mm"));
-  o = SeenTipOptions{};
-  o.carry_on_mm = -1;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "carry_on_mm"));
-  o = SeenTipOptions{};
-  o.points_ahead_max_share = 2;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_ahead_max_share"));
-  o = SeenTipOptions{};
-  o.points_gap_mm = -1;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_gap_mm"));
-  o = SeenTipOptions{};
-  o.points_window_mm = 0;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_window_mm"));
-  o = SeenTipOptions{};
-  o.points_lateral_mm = 0;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_lateral_mm"));
-  o = SeenTipOptions{};
-  o.points_angle_deg = 0;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "points_angle_deg"));
-  o = SeenTipOptions{};
-  o.reach_mm = -1;
-  EXPECT_TRUE(IsInvalidNaming(o.Check(), "reach_mm"));
+  EXPECT_TRUE(SeenTipOptions{}.Check().ok());
+  // Each case: the field named, and a value out of its range.
+  const std::vector<std::pair<std::string, void (*)(SeenTipOptions&)>> cases = {
+      {"ahead_max_mm", [](SeenTipOptions& o) { o.ahead_max_mm = 0.5; }},
+      {"lateral_mm", [](SeenTipOptions& o) { o.lateral_mm = 0; }},
+      {"max_angle_deg", [](SeenTipOptions& o) { o.max_angle_deg = 120; }},
+      {"min_seen_length_mm", [](SeenTipOptions& o) { o.min_seen_length_mm = -1; }},
+      {"min_strand_mm", [](SeenTipOptions& o) { o.min_strand_mm = -1; }},
+      {"carry_on_mm", [](SeenTipOptions& o) { o.carry_on_mm = -1; }},
+      {"points_ahead_max_share", [](SeenTipOptions& o) { o.points_ahead_max_share = 2; }},
+      {"points_gap_mm", [](SeenTipOptions& o) { o.points_gap_mm = -1; }},
+      {"points_window_mm", [](SeenTipOptions& o) { o.points_window_mm = 0; }},
+      {"points_lateral_mm", [](SeenTipOptions& o) { o.points_lateral_mm = 0; }},
+      {"points_angle_deg", [](SeenTipOptions& o) { o.points_angle_deg = 0; }},
+      {"reach_mm", [](SeenTipOptions& o) { o.reach_mm = -1; }}};
+  for (const auto& [field, set_bad] : cases) {
+    SeenTipOptions o;
+    set_bad(o);
+    EXPECT_TRUE(IsInvalidNaming(o.Check(), field)) << field;
+  }
 }
 
 }  // namespace
