@@ -9,7 +9,7 @@
 //       C] [--min-agreeing N]
 //       [--multiview-direction yes|no]
 //       [--direction-sigma MM] [--orientation-scales S] [--orientation-smoothing PX]
-//       [--max-cost C] [--orientation-truncation DEG] [--tag SUFFIX]
+//       [--max-cost C] [--orientation-truncation DEG] [--agreement-radius CELLS] [--tag SUFFIX]
 // CAPTURE is a folder from `hairrig capture --out CAPTURE --calibrate`; the
 // reconstructions go to CAPTURE/bench-reconstruction-<cost>[-mls]<SUFFIX>/
 // (the capture's own reconstruction/ is left alone). The last line compares
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
                  "[--min-agreeing N] "
                  "[--multiview-direction yes|no] [--direction-sigma MM] [--orientation-scales S] "
                  "[--orientation-smoothing PX] [--max-cost C] [--orientation-truncation DEG] "
-                 "[--tag SUFFIX]\n",
+                 "[--agreement-radius CELLS] [--tag SUFFIX]\n",
                  argv[0]);
     return 2;
   }
@@ -91,6 +91,8 @@ int main(int argc, char** argv) {
       options.fusion.direction_sigma_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--hull-uncertain-alpha") == 0) {
       options.hull_uncertain_alpha = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--agreement-radius") == 0) {
+      options.fusion.agreement_radius_cells = std::atoi(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--hull-tolerance") == 0) {
       options.hull.max_empty_share = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--prior-front") == 0) {

@@ -10,6 +10,7 @@
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
+//       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM]
 //       [--curl-radius-from curvature-and-torsion|curvature|turn-rate]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
@@ -33,6 +34,10 @@
 // come from (CurlRadiusFrom; curvature-and-torsion by default).
 // --curl-min-depth MM: strands wind only MM or further from the
 // seen strands' ribbons (CurlFieldOptions::min_depth_mm; 0 by default).
+// --curl-start-on-bend no starts every helix about the field's direction
+// (HelixGuide::Start) instead of on the bend of the seen strand just left;
+// --curl-bend-axis-relax MM is how far such a helix's axis takes to turn
+// towards the field's (CurlFieldOptions::bend_axis_relax_mm, 10).
 // --scalp-skin-band MM: skin seen behind a vertex above the hairline and within
 // MM of the head is the scalp showing through the hair, not bare skin
 // (SkinViews::ExcludeScalp; 12 as the reconstruction, 0 counts it as skin).
@@ -135,6 +140,7 @@ int main(int argc, char** argv) {
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
         "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
+        "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] "
         "[--curl-radius-from curvature-and-torsion|curvature|turn-rate] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
@@ -231,6 +237,10 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "--curl-oracle: RADIUS_MM,PITCH_MM[,+1|-1], not '%s'\n", argv[i + 1]);
         return 2;
       }
+    } else if (std::strcmp(argv[i], "--curl-start-on-bend") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.start_on_bend)) return 2;
+    } else if (std::strcmp(argv[i], "--curl-bend-axis-relax") == 0) {
+      options.growth.curl.bend_axis_relax_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-min-depth") == 0) {
       options.growth.curl.min_depth_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-radius-from") == 0) {

@@ -213,6 +213,11 @@ Status CurlFieldOptions::Check() const {
   if (!(region_mm > 0)) return InvalidArgument("curl region_mm must be positive");
   if (!(min_depth_mm >= 0 && std::isfinite(min_depth_mm)))
     return InvalidArgument("curl min_depth_mm must be finite and not negative");
+  if (!(bend_span_mm > 0 && bend_span_mm <= 20))
+    return InvalidArgument("curl bend_span_mm must lie in (0, 20]");
+  if (!(bend_axis_relax_mm > 0)) return InvalidArgument("curl bend_axis_relax_mm must be positive");
+  if (!(min_bend_deg >= 0 && min_bend_deg < 90))
+    return InvalidArgument("curl min_bend_deg must lie in [0, 90)");
   if (!(max_helix_angle_deg > min_arc_angle_deg && max_helix_angle_deg < 90))
     return InvalidArgument("curl max_helix_angle_deg must lie in (min_arc_angle_deg, 90)");
   if (!(min_radius_mm > 0 && max_radius_mm >= min_radius_mm))

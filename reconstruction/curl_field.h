@@ -95,6 +95,18 @@ struct CurlFieldOptions {
   // Strands wind only this far or further from the seen strands' ribbons
   // (the hybrid field's d_s): nearer, they follow the seen surface's field.
   double min_depth_mm = 0;
+  // A strand that leaves a seen strand it followed for more than
+  // bend_span_mm, which turned by min_bend_deg or more over that stretch,
+  // starts its helix on that bend (HelixGuide::StartOnBend): the seen arc's
+  // own ringlet, on the side it bends to. Else, and with start_on_bend
+  // false, the helix's axis is the field's direction (HelixGuide::Start).
+  bool start_on_bend = true;
+  double bend_span_mm = 4;
+  double min_bend_deg = 8;
+  // A helix started on a bend keeps its axis and turns it towards the
+  // field's direction over about this length (mm): at the seen surface the
+  // field runs along the seen strand, not along its ringlet's axis.
+  double bend_axis_relax_mm = 10;
   double max_helix_angle_deg = 80;
   // A smaller estimated radius is raised to min_radius_mm; a larger one than
   // max_radius_mm is no curl.

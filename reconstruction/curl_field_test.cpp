@@ -6,7 +6,9 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "reconstruction/helix_guide.h"
 
@@ -59,6 +61,43 @@ TEST(HelixGuide, WindsOnTheHelixItStartsOn) {
     EXPECT_LT(worst_from_truth, 0.5) << "handedness " << h;
     // Three turns down: the pitch held.
     EXPECT_NEAR(-p.z(), 3 * pitch, 0.5) << "handedness " << h;
+  }
+}
+
+// Started on the bend of the stretch a strand followed (its tangent and the
+// side it turns to over the last 4 mm, as growth measures them), the guide
+// winds on the ringlet's own helix about its own axis, with no axis given;
+// started about the seen strand's own direction (the field at the seen
+// surface) it kinks off at once.
+TEST(HelixGuide, StartedOnABendWindsOnItsRingletWithNoAxisGiven) {
+  for (const int h : {1, -1}) {
+    const Eigen::Vector3f top(0, 0, 0);
+    const double r = 6, pitch = 20, step = 1.0, at = 30;
+    const Curl curl{r, pitch, h};
+    const auto tangent = [&](double s) {
+      return (HelixPoint(top, r, pitch, h, 0.3, s + 0.5) -
+              HelixPoint(top, r, pitch, h, 0.3, s - 0.5))
+          .normalized()
+          .eval();
+    };
+    const Eigen::Vector3f t = tangent(at), earlier = tangent(at - 4);
+    HelixGuide on_bend(step), about_tangent(step);
+    Eigen::Vector3f p = HelixPoint(top, r, pitch, h, 0.3, at), q = p;
+    on_bend.StartOnBend(p, t, (t + earlier).normalized(), (t - earlier).normalized(), curl);
+    about_tangent.Start(q, t, t, curl);
+    EXPECT_LT((on_bend.axis() + Eigen::Vector3f::UnitZ()).norm(), 0.05) << "handedness " << h;
+    const Eigen::Vector3d centre = on_bend.centre();
+    EXPECT_LT(std::hypot(centre.x() - top.x(), centre.y() - top.y()), 0.1) << "handedness " << h;
+    double worst = 0;
+    for (double s = at + step; s < at + std::hypot(2 * M_PI * r, pitch); s += step) {
+      p += on_bend.Next(p, on_bend.axis()) * static_cast<float>(step);
+      worst =
+          std::max(worst, static_cast<double>((p - HelixPoint(top, r, pitch, h, 0.3, s)).norm()));
+    }
+    EXPECT_LT(worst, 0.5) << "handedness " << h;
+    const Eigen::Vector3f kinked = about_tangent.Next(q, t);
+    EXPECT_GT(std::acos(std::clamp(kinked.dot(t), -1.f, 1.f)) * 180 / M_PI, 40)
+        << "handedness " << h;
   }
 }
 
@@ -255,16 +294,22 @@ TEST(Curl, CheckNamesWhatIsWrong) {
 }
 
 TEST(CurlField, OptionsNameTheirField) {
-  CurlFieldOptions o;
-  o.min_arc_angle_deg = 95;
-  EXPECT_NE(o.Check().message().find("min_arc_angle_deg"), std::string::npos);
-  o = CurlFieldOptions{};
-  o.max_radius_mm = 1;
-  EXPECT_NE(o.Check().message().find("radii"), std::string::npos);
-  o = CurlFieldOptions{};
-  o.min_depth_mm = -1;
-  EXPECT_NE(o.Check().message().find("min_depth_mm"), std::string::npos);
   EXPECT_TRUE(CurlFieldOptions{}.Check().ok());
+  // Each case: the word the message names, and a value out of range.
+  const std::vector<std::pair<std::string, void (*)(CurlFieldOptions&)>> cases = {
+      {"min_arc_angle_deg", [](CurlFieldOptions& o) { o.min_arc_angle_deg = 95; }},
+      {"radii", [](CurlFieldOptions& o) { o.max_radius_mm = 1; }},
+      {"min_depth_mm", [](CurlFieldOptions& o) { o.min_depth_mm = -1; }},
+      {"bend_span_mm", [](CurlFieldOptions& o) { o.bend_span_mm = 0; }},
+      {"min_bend_deg", [](CurlFieldOptions& o) { o.min_bend_deg = 90; }},
+      {"bend_axis_relax_mm", [](CurlFieldOptions& o) { o.bend_axis_relax_mm = std::nan(""); }}};
+  for (const auto& [field, set_bad] : cases) {
+    CurlFieldOptions o;
+    set_bad(o);
+    const Status status = o.Check();
+    EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(status.message().find(field), std::string::npos) << field;
+  }
 }
 
 }  // namespace

@@ -30,6 +30,20 @@ void HelixContinuation::Follow(const Eigen::Vector3f& tangent) {
   fitted_ = false;
 }
 
+bool HelixContinuation::Bend(size_t span, double min_turn, Eigen::Vector3f* tangent,
+                             Eigen::Vector3f* normal) const {
+  if (span < 1 || window_.size() <= span) return false;
+  const size_t n = window_.size();
+  const Eigen::Vector3f& last = window_[(next_slot_ + n - 1) % n];
+  const Eigen::Vector3f& first = window_[(next_slot_ + n - 1 - span) % n];
+  // For unit tangents the sum and the difference are square to each other.
+  const Eigen::Vector3f turn = last - first;
+  if (!(turn.norm() >= 2 * std::sin(0.5 * min_turn))) return false;
+  *tangent = (last + first).normalized();
+  *normal = turn.normalized();
+  return true;
+}
+
 namespace {
 
 // The angle between a window's tangents `t` and its helix's axis: their mean

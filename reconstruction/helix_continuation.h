@@ -40,6 +40,13 @@ class HelixContinuation {
   // A tangent the strand took while following a seen strand.
   void Follow(const Eigen::Vector3f& tangent);
 
+  // The bend of the last `span` steps followed, at their middle: the unit
+  // tangent (the mean of the first and last tangents) and principal normal
+  // (towards the side they turn to). False when the window holds fewer
+  // steps, or they turn by less than `min_turn` (rad) in all. The caller
+  // knows whether they were followed in one run.
+  bool Bend(size_t span, double min_turn, Eigen::Vector3f* tangent, Eigen::Vector3f* normal) const;
+
   // The next tangent past the seen strands: `previous` turned about `axis`
   // (unit, the field's direction) as the window's helix turns. False, and
   // *next untouched, when the window is not full or the strand is straight.

@@ -45,6 +45,28 @@ TEST(HelixContinuation, CarriesACurlOnForAWholeTurn) {
   }
 }
 
+// The bend of the last tangents followed: at their middle, the helix's own
+// tangent and its principal normal, which lies square to the axis, towards it.
+// A straight stretch has none.
+TEST(HelixContinuation, TheBendFollowedPointsAtTheCurlsAxis) {
+  const double r = 5, c = 3, step = 1.0;
+  HelixContinuation helix({}, step);
+  Eigen::Vector3f tangent = Eigen::Vector3f::Zero(), normal = Eigen::Vector3f::Zero();
+  EXPECT_FALSE(helix.Bend(4, 0.1, &tangent, &normal));
+  double s = 0;
+  for (; s < 10; s += step) helix.Follow(HelixTangent(s, r, c, 1));
+  ASSERT_TRUE(helix.Bend(4, 0.1, &tangent, &normal));
+  // Midway between the last tangent (s - step) and the one 4 steps before
+  // (the mean of two tangents leans a little towards the axis); the helix
+  // about +z has its axis at -(cos t, sin t) from its point.
+  const double middle = s - 3 * step, t = middle / std::sqrt(r * r + c * c);
+  EXPECT_LT(AngleDeg(tangent, HelixTangent(middle, r, c, 1)), 3.0);
+  EXPECT_LT(AngleDeg(normal, Eigen::Vector3d(-std::cos(t), -std::sin(t), 0).cast<float>()), 1.0);
+  HelixContinuation straight({}, step);
+  for (int k = 0; k < 10; ++k) straight.Follow(Eigen::Vector3f(0, 0, -1));
+  EXPECT_FALSE(straight.Bend(4, 0.1, &tangent, &normal));
+}
+
 TEST(HelixContinuation, LeavesAStraightStrandToTheField) {
   HelixContinuation helix({}, 1.0);
   Eigen::Vector3f next = Eigen::Vector3f::Zero();

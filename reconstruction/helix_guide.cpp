@@ -48,6 +48,16 @@ void HelixGuide::Start(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent,
   active_ = true;
 }
 
+void HelixGuide::StartOnBend(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent,
+                             const Eigen::Vector3f& bend_tangent,
+                             const Eigen::Vector3f& bend_normal, const Curl& curl) {
+  const double alpha = curl.HelixAngle();
+  const Eigen::Vector3d t = bend_tangent.cast<double>().normalized();
+  const Eigen::Vector3d n = SquareTo(bend_normal.cast<double>(), t, t.unitOrthogonal());
+  const Eigen::Vector3d axis = std::cos(alpha) * t + curl.handedness * std::sin(alpha) * t.cross(n);
+  Start(p, tangent, axis.normalized().cast<float>(), curl);
+}
+
 Eigen::Vector3f HelixGuide::Next(const Eigen::Vector3f& p, const Eigen::Vector3f& axis) {
   Eigen::Vector3d a = axis.cast<double>().normalized();
   if (!a.allFinite()) a = axis_;

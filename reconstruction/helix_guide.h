@@ -49,6 +49,18 @@ class HelixGuide {
   // then taken square to the axis in a fixed way.
   void Start(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent, const Eigen::Vector3f& axis,
              const Curl& curl);
+  // Starts the helix through `p` with the strand's unit `tangent`, on the
+  // bend of the stretch it has just followed: `bend_tangent` and
+  // `bend_normal` are that stretch's unit tangent and principal normal (the
+  // side it turns to) at some point of it. A helix's axis is the same all
+  // along it, cos(alpha) t + h sin(alpha) (t x n) at every point (the
+  // Darboux vector's direction, Frenet-Serret); Start about that axis then
+  // places the centre. The strand goes on the way it came, where Start about
+  // another axis kinks it by the difference between its angle to that axis
+  // and alpha.
+  void StartOnBend(const Eigen::Vector3f& p, const Eigen::Vector3f& tangent,
+                   const Eigen::Vector3f& bend_tangent, const Eigen::Vector3f& bend_normal,
+                   const Curl& curl);
   void Stop() { active_ = false; }
   bool active() const { return active_; }
 
@@ -58,6 +70,8 @@ class HelixGuide {
   Eigen::Vector3f Next(const Eigen::Vector3f& p, const Eigen::Vector3f& axis);
 
   const Eigen::Vector3d& centre() const { return centre_; }
+  // The axis as last moved along (unit, the strand's way along it).
+  Eigen::Vector3f axis() const { return axis_.cast<float>(); }
 
  private:
   double step_mm_;

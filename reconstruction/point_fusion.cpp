@@ -20,8 +20,27 @@ struct ViewGeometry {
 };
 
 // How view w's map holds the segment at p (object frame) along `direction`.
-enum class Agreement { kNone, kDepthOnly, kDepthAndDirection };
+// kEmpty: the view's map holds no depth under max_cost there.
+enum class Agreement { kEmpty, kNone, kDepthOnly, kDepthAndDirection };
 
+// One cell of view w's map against the segment at p (depth q_z in that view).
+Agreement CellAgreement(const LineDepthMap& map, int gx, int gy, double q_z,
+                        const Eigen::Vector3f& direction, const FusionOptions& options,
+                        double cos_tolerance) {
+  if (gx < 0 || gy < 0 || gx >= map.depth_mm.cols || gy >= map.depth_mm.rows)
+    return Agreement::kNone;
+  const float depth = map.depth_mm(gy, gx);
+  if (!(depth > 0) || map.cost(gy, gx) > options.max_cost) return Agreement::kEmpty;
+  if (std::abs(depth - q_z) > options.depth_tolerance_mm) return Agreement::kNone;
+  const cv::Vec3f& d = map.direction(gy, gx);
+  return std::abs(direction.dot(Eigen::Vector3f(d[0], d[1], d[2]))) >= cos_tolerance
+             ? Agreement::kDepthAndDirection
+             : Agreement::kDepthOnly;
+}
+
+// How view w's map holds the segment at p (object frame) along `direction`:
+// at the cell nearest the projection, or where that cell holds no depth, the
+// best of the cells within options.agreement_radius_cells of it.
 Agreement AgreementOf(const ViewGeometry& g, const LineDepthMap& map, const Eigen::Vector3d& p,
                       const Eigen::Vector3f& direction, const FusionOptions& options,
                       double cos_tolerance) {
@@ -31,15 +50,14 @@ Agreement AgreementOf(const ViewGeometry& g, const LineDepthMap& map, const Eige
   ProjectCamPoint(g.params.data(), q.data(), uv);
   const int gx = static_cast<int>(std::lround(uv[0] / map.stride_px));
   const int gy = static_cast<int>(std::lround(uv[1] / map.stride_px));
-  if (gx < 0 || gy < 0 || gx >= map.depth_mm.cols || gy >= map.depth_mm.rows)
-    return Agreement::kNone;
-  const float depth = map.depth_mm(gy, gx);
-  if (!(depth > 0) || map.cost(gy, gx) > options.max_cost) return Agreement::kNone;
-  if (std::abs(depth - q.z()) > options.depth_tolerance_mm) return Agreement::kNone;
-  const cv::Vec3f& d = map.direction(gy, gx);
-  return std::abs(direction.dot(Eigen::Vector3f(d[0], d[1], d[2]))) >= cos_tolerance
-             ? Agreement::kDepthAndDirection
-             : Agreement::kDepthOnly;
+  Agreement best = CellAgreement(map, gx, gy, q.z(), direction, options, cos_tolerance);
+  if (best != Agreement::kEmpty) return best;
+  const int r = options.agreement_radius_cells;
+  for (int dy = -r; dy <= r && best != Agreement::kDepthAndDirection; ++dy)
+    for (int dx = -r; dx <= r && best != Agreement::kDepthAndDirection; ++dx)
+      best = std::max(
+          best, CellAgreement(map, gx + dx, gy + dy, q.z(), direction, options, cos_tolerance));
+  return best;
 }
 
 // The plane through view w's camera centre that holds the 2D orientation
@@ -148,7 +166,7 @@ std::vector<OrientedPoint> ConsistentPoints(const std::vector<MvsView>& views,
         if (w == r) continue;
         const Agreement a =
             AgreementOf(geometry[w], maps[w], p, point.direction, options, cos_tolerance);
-        depth_pairs += a != Agreement::kNone;
+        depth_pairs += a == Agreement::kDepthOnly || a == Agreement::kDepthAndDirection;
         if (a != Agreement::kDepthAndDirection) continue;
         ++counts->direction_pairs;
         point.views.push_back(static_cast<uint16_t>(w));
@@ -213,6 +231,8 @@ Status FusionOptions::Check() const {
     return InvalidArgument("fusion depth_tolerance_mm must be positive");
   if (!(angle_tolerance_deg > 0 && angle_tolerance_deg <= 90))
     return InvalidArgument("fusion angle_tolerance_deg must be in (0, 90]");
+  if (agreement_radius_cells < 0 || agreement_radius_cells > 3)
+    return InvalidArgument("fusion agreement_radius_cells must lie in 0..3");
   if (min_agreeing_views < 0)
     return InvalidArgument("fusion min_agreeing_views must not be negative");
   if (!(merge_mm >= 0.01)) return InvalidArgument("fusion merge_mm must be at least 0.01");

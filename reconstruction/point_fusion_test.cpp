@@ -103,6 +103,51 @@ TEST(PointFusion, ConfidenceGrowsWithTheViewsThatAgree) {
   EXPECT_NEAR(by_agreeing[3], 0.9 * 0.875, 1e-4);
 }
 
+// Two views of the plane: the first's map holds every cell, the second's
+// depths on every other row and column of its grid only, as a thin wisp's
+// map does where the grid falls beside it, each off by `offset_mm`.
+struct SparsePair {
+  std::vector<MvsView> views;
+  std::vector<LineDepthMap> maps;
+};
+SparsePair SparseSecondView(const PlaneScene& scene, double offset_mm) {
+  SparsePair pair;
+  std::vector<LineDepthMap> maps = MapsWithTiltedDirections(scene, 0);
+  pair.views = {scene.views[0], scene.views[1]};
+  pair.maps = {maps[0], maps[1]};
+  LineDepthMap& sparse = pair.maps[1];
+  for (int gy = 0; gy < sparse.depth_mm.rows; ++gy)
+    for (int gx = 0; gx < sparse.depth_mm.cols; ++gx) {
+      if (gy % 2 != 0 || gx % 2 != 0) {
+        sparse.depth_mm(gy, gx) = 0;
+        sparse.cost(gy, gx) = 1;
+      } else {
+        sparse.depth_mm(gy, gx) += static_cast<float>(offset_mm);
+      }
+    }
+  return pair;
+}
+
+// The first view's cells whose projections fall on an empty cell of the
+// other view's map find the agreeing cell beside it within
+// agreement_radius_cells; depths that disagree confirm nothing there either.
+TEST(PointFusion, ThinStructuresAgreeThroughTheCellsBesideTheirProjection) {
+  const PlaneScene scene = MakeScene();
+  FusionOptions options;
+  options.direction_sigma_mm = 0;
+  const auto count = [&](int radius, double offset_mm) {
+    options.agreement_radius_cells = radius;
+    const SparsePair pair = SparseSecondView(scene, offset_mm);
+    const auto points = FusePoints(pair.views, pair.maps, options);
+    EXPECT_TRUE(points.ok()) << points.status().ToString();
+    return points.ok() ? points->size() : size_t{0};
+  };
+  const size_t nearest = count(0, 0), beside = count(1, 0);
+  std::printf("points: %zu from the nearest cell, %zu with the cells beside it\n", nearest, beside);
+  EXPECT_GT(static_cast<double>(beside), 1.5 * static_cast<double>(nearest));
+  EXPECT_EQ(count(1, 5.0), 0u);
+}
+
 TEST(PointFusion, BadOptionsAreRefused) {
   FusionOptions options;
   options.direction_sigma_mm = -1;
@@ -111,6 +156,10 @@ TEST(PointFusion, BadOptionsAreRefused) {
   EXPECT_EQ(options.Check().code(), StatusCode::kInvalidArgument);
   options.direction_sigma_mm = 0;
   EXPECT_TRUE(options.Check().ok());
+  options.agreement_radius_cells = -1;
+  EXPECT_EQ(options.Check().code(), StatusCode::kInvalidArgument);
+  options.agreement_radius_cells = 4;
+  EXPECT_EQ(options.Check().code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace

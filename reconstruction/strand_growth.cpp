@@ -264,11 +264,21 @@ class FieldGrowth::Step {
     continuing_ = false;
     if (following) {
       helix_.Follow(*next);
+      ++followed_steps_;
       guide_.Stop();
-    } else if (const Curl* curl =
-                   d_s >= o.curl.min_depth_mm && g_.curls_ ? g_.curls_->At(p) : nullptr) {
+      return true;
+    }
+    const int followed_steps = followed_steps_;
+    followed_steps_ = 0;
+    if (const Curl* curl = d_s >= o.curl.min_depth_mm && g_.curls_ ? g_.curls_->At(p) : nullptr) {
       axis_ = *next;
-      if (!guide_.active()) guide_.Start(p, previous, axis_, *curl);
+      if (!guide_.active()) on_bend_ = StartHelix(p, previous, followed_steps, *curl);
+      if (on_bend_) {
+        const Eigen::Vector3f held = guide_.axis();
+        const float pull = static_cast<float>(o.step_mm / o.curl.bend_axis_relax_mm);
+        axis_ =
+            (held + pull * (axis_.dot(held) >= 0 ? axis_ : Eigen::Vector3f(-axis_))).normalized();
+      }
       *next = guide_.Next(p, axis_);
       continuing_ = true;
     } else {
@@ -288,6 +298,25 @@ class FieldGrowth::Step {
     if (g_.seen_tips_ == nullptr || !g_.seen_tips_->Reached(p, direction)) return false;
     return g_.curls_ == nullptr || g_.curls_->At(p) == nullptr;
   }
+  // Starts the curl's helix at p, where the strand (last direction
+  // `previous`) has just followed `followed_steps` steps of a seen strand:
+  // on that stretch's bend where it bends enough (CurlFieldOptions::
+  // start_on_bend), else about the field's direction axis_.
+  // True when it started on the bend.
+  bool StartHelix(const Eigen::Vector3f& p, const Eigen::Vector3f& previous, int followed_steps,
+                  const Curl& curl) {
+    const CurlFieldOptions& c = g_.o_.curl;
+    const auto span =
+        static_cast<size_t>(std::max(1.0, std::round(c.bend_span_mm / g_.o_.step_mm)));
+    Eigen::Vector3f bend_tangent, bend_normal;
+    if (c.start_on_bend && followed_steps > static_cast<int>(span) &&
+        helix_.Bend(span, c.min_bend_deg * M_PI / 180, &bend_tangent, &bend_normal)) {
+      guide_.StartOnBend(p, previous, bend_tangent, bend_normal, curl);
+      return true;
+    }
+    guide_.Start(p, previous, axis_, curl);
+    return false;
+  }
   bool AtScalp(const Eigen::Vector3f& p) const {
     if (g_.head_ == nullptr) return false;
     const Eigen::Vector3d q = p.cast<double>();
@@ -303,7 +332,10 @@ class FieldGrowth::Step {
   HelixGuide guide_;
   Eigen::Vector3f axis_ = Eigen::Vector3f::Zero();
   bool continuing_ = false;
-  double grown_mm_;  // the strand's length so far (mm)
+  int followed_steps_ = 0;
+  bool on_bend_ = false;  // the helix being wound started on a followed bend  // steps in a row
+                          // that followed a seen strand, up to the last
+  double grown_mm_;       // the strand's length so far (mm)
 };
 
 FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
