@@ -233,6 +233,7 @@ RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_cam
              "reconstruction_robustness_default_curls": reconstruction_robustness_table,
              "reconstruction_robustness_curls_light": reconstruction_robustness_table,
              "reconstruction_robustness_curls_exposure": reconstruction_robustness_table,
+             "reconstruction_robustness_curls_bend": reconstruction_robustness_table,
              "render_view": render_view_table, "modbus": modbus_table}
 
 
