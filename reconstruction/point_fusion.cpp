@@ -51,8 +51,8 @@ Agreement AgreementOf(const ViewGeometry& g, const LineDepthMap& map, const Eige
   const int gx = static_cast<int>(std::lround(uv[0] / map.stride_px));
   const int gy = static_cast<int>(std::lround(uv[1] / map.stride_px));
   Agreement best = CellAgreement(map, gx, gy, q.z(), direction, options, cos_tolerance);
-  if (best != Agreement::kEmpty) return best;
   const int r = options.agreement_radius_cells;
+  if (best != Agreement::kEmpty || r == 0) return best;
   for (int dy = -r; dy <= r && best != Agreement::kDepthAndDirection; ++dy)
     for (int dx = -r; dx <= r && best != Agreement::kDepthAndDirection; ++dx)
       best = std::max(

@@ -332,10 +332,9 @@ class FieldGrowth::Step {
   HelixGuide guide_;
   Eigen::Vector3f axis_ = Eigen::Vector3f::Zero();
   bool continuing_ = false;
-  int followed_steps_ = 0;
-  bool on_bend_ = false;  // the helix being wound started on a followed bend  // steps in a row
-                          // that followed a seen strand, up to the last
-  double grown_mm_;       // the strand's length so far (mm)
+  int followed_steps_ = 0;  // steps in a row that followed a seen strand, up to the last
+  bool on_bend_ = false;    // the helix being wound started on a followed bend
+  double grown_mm_;         // the strand's length so far (mm)
 };
 
 FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
