@@ -7,7 +7,10 @@
 start_console() {
   local log="$1" hairrig="$2"
   shift 2
-  "$hairrig" serve --listen 127.0.0.1:0 "$@" 2>"$log" >/dev/null &
+  # The log exists before the loop reads it: the background job opens it
+  # only once it runs.
+  : >"$log"
+  "$hairrig" serve --listen 127.0.0.1:0 "$@" 2>>"$log" >/dev/null &
   console_pid=$!
   trap 'kill "$console_pid" 2>/dev/null || true; wait "$console_pid" 2>/dev/null || true' EXIT
   console_url=""
