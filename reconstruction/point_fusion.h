@@ -28,11 +28,13 @@ struct FusionOptions {
       2.0;  // another view agrees where its depth at the projection is within this ...
   double angle_tolerance_deg = 20;  // ... and its direction within this
   int min_agreeing_views = 1;       // views besides the reference that must agree
-  // Another view's map is read at the cell nearest the projection and the
-  // cells within this many cells of it (0: the nearest alone); the cell that
-  // agrees best counts. A thin wisp or a ringlet's end is a few pixels wide,
-  // and the nearest cell of the other view's grid (every stride_px pixels)
-  // often falls on the backdrop beside it.
+  // Another view's map is read at the cell nearest the projection; where
+  // that cell holds no depth under max_cost, the cells within this many
+  // cells of it are read too and the one that agrees best counts (0: the
+  // nearest alone). A thin wisp or a ringlet's end is a few pixels wide, and
+  // the nearest cell of the other view's grid (every stride_px pixels) often
+  // falls on the backdrop beside it. A nearest cell whose depth disagrees is
+  // not passed over.
   int agreement_radius_cells = 0;
   double merge_mm = 0.5;  // points within one cell of this size are merged
   // Each consistent point's direction from the 2D orientation maps of every
