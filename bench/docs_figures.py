@@ -213,6 +213,21 @@ def modbus_table(record):
     return google_benchmark_table(record, MODBUS_EXCHANGES, "exchange", "us")[0]
 
 
+def strand_ceilings_table(record):
+    r = record["result"]
+    lines = ["| %s: the strand stage's input | P / all-strands R at (3 mm, 30 deg), directed | F1 "
+             "(gain) | curl grown on | median length | over bare skin |" % r["capture"],
+             "| --- | --- | --- | --- | --- | --- |"]
+    base = r["rows"][0]["f1"]
+    for row in r["rows"]:
+        lines.append("| %s | %.3f / %.3f | %.3f (%+.3f) | %s | %.0f mm | %.2f %% |" % (
+            row["case"], row["precision"], row["recall"], row["f1"], row["f1"] - base, row["curl"],
+            row["median_length_mm"], row["over_skin_percent"]))
+    lines += ["", "The true curl: %s (radius mm, pitch mm, handedness). %s." % (
+        r["true_curl"], provenance(record))]
+    return lines
+
+
 RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_campaign_table,
              "console_viewer": console_viewer_table, "gltf_animation": gltf_animation_table,
              "reconstruction_robustness": reconstruction_robustness_table,
@@ -234,6 +249,7 @@ RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_cam
              "reconstruction_robustness_curls_light": reconstruction_robustness_table,
              "reconstruction_robustness_curls_exposure": reconstruction_robustness_table,
              "reconstruction_robustness_curls_bend": reconstruction_robustness_table,
+             "strand_ceilings_curly_blond": strand_ceilings_table,
              "render_view": render_view_table, "modbus": modbus_table}
 
 
