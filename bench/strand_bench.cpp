@@ -10,7 +10,8 @@
 //       [--segment-step MM] [--points capture|truth|true-directions]
 //       [--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K]
 //       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
-//       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM]
+//       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region
+//       near-arcs|whole-hair] [--curl-region-cell MM]
 //       [--curl-radius-from curvature-and-torsion|curvature|turn-rate]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
@@ -32,6 +33,9 @@
 // curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
 // the estimate. --curl-radius-from picks what the estimate's radius and pitch
 // come from (CurlRadiusFrom; curvature-and-torsion by default).
+// --curl-region near-arcs winds the strands only near the seen arcs, in the
+// cells of --curl-region-cell MM next to a seen arc's (CurlFieldOptions::region,
+// region_mm 20), instead of wherever they grow (whole-hair).
 // --curl-min-depth MM: strands wind only MM or further from the
 // seen strands' ribbons (CurlFieldOptions::min_depth_mm; 0 by default).
 // --curl-start-on-bend no starts every helix about the field's direction
@@ -140,7 +144,8 @@ int main(int argc, char** argv) {
         "[--points capture|truth|true-directions] [--skin-labels capture|truth] "
         "[--helix-continuation yes|no] [--helix-window MM] [--helix-min-curvature K] "
         "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
-        "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] "
+        "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region "
+        "near-arcs|whole-hair] [--curl-region-cell MM] "
         "[--curl-radius-from curvature-and-torsion|curvature|turn-rate] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
@@ -241,6 +246,13 @@ int main(int argc, char** argv) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.start_on_bend)) return 2;
     } else if (std::strcmp(argv[i], "--curl-bend-axis-relax") == 0) {
       options.growth.curl.bend_axis_relax_mm = std::atof(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--curl-region") == 0) {
+      if (!ParseCurlRegion(argv[i + 1], &options.growth.curl.region)) {
+        std::fprintf(stderr, "--curl-region: near-arcs or whole-hair, not '%s'\n", argv[i + 1]);
+        return 2;
+      }
+    } else if (std::strcmp(argv[i], "--curl-region-cell") == 0) {
+      options.growth.curl.region_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-min-depth") == 0) {
       options.growth.curl.min_depth_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-radius-from") == 0) {

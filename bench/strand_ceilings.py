@@ -9,7 +9,7 @@ CAPTURE is a simulated capture whose points exist (`hairrig reconstruct CAPTURE 
 --curl is the simulated wig's curl (the scene's curl_radius_mm and curl_pitch_mm; +1 for
 right-handed, as the simulated rig winds its curls). The strand bench runs the Bao & Qi method
 six times, each into CAPTURE/bench-strands-bao-qi-ceiling-NAME/ (a run whose output is there,
-made with the same flags, is read again, not repeated):
+made by the same strand bench with the same flags, is read again, not repeated):
 
   capture           the capture's points, the curl estimated from them (what `reconstruct` does)
   estimate everywhere  the capture's points, the estimate's curl given everywhere: the strands
@@ -78,13 +78,14 @@ def curl_flag(curl_line):
 
 
 def run_case(strand_bench, capture, suffix, flags):
-    """The strand bench's output for these flags: read from the case's folder where a run with
-    the same flags finished there, else run."""
+    """The strand bench's output for these flags: read from the case's folder where the same
+    strand bench (path and modification time) finished a run with the same flags, else run."""
     saved = os.path.join(capture, "bench-strands-bao-qi" + suffix, "bench_output.json")
+    made_by = "%s %d" % (os.path.abspath(strand_bench), os.stat(strand_bench).st_mtime_ns)
     if os.path.exists(saved):
         with open(saved) as f:
             done = json.load(f)
-        if done["flags"] == flags:
+        if done["flags"] == flags and done.get("made_by") == made_by:
             return done["output"], done["seconds"]
     cmd = [strand_bench, capture, "--methods", "bao-qi", "--out-suffix", suffix] + flags
     start = time.monotonic()
@@ -94,7 +95,8 @@ def run_case(strand_bench, capture, suffix, flags):
         raise SystemExit("strand_ceilings: %s exited %d" % (" ".join(cmd), done.returncode))
     seconds = time.monotonic() - start
     with open(saved, "w") as f:
-        json.dump({"flags": flags, "output": done.stdout, "seconds": seconds}, f)
+        json.dump({"flags": flags, "made_by": made_by, "output": done.stdout, "seconds": seconds},
+                  f)
     return done.stdout, seconds
 
 

@@ -11,6 +11,7 @@
 
 #include "cli/cli.h"
 #include "core/log.h"
+#include "reconstruction/curl_field.h"
 #include "reconstruction/hair_segmentation.h"
 #include "rig/reconstruct_capture.h"
 #include "rig/reconstruction_input.h"
@@ -31,6 +32,7 @@ struct ReconstructArgs {
   std::string helix_continuation = StrandGrowthOptions{}.helix_continuation ? "yes" : "no";
   std::string cover_segments = SegmentCoverOptions{}.enabled ? "yes" : "no";
   std::string curls = CurlFieldOptions{}.enabled ? "yes" : "no";
+  std::string curl_region = CurlRegionName(CurlFieldOptions{}.region);
   std::string seen_tips = SeenTipOptions{}.enabled ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
@@ -105,6 +107,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.growth.helix_continuation = a.helix_continuation == "yes";
   options.strands.growth.cover.enabled = a.cover_segments == "yes";
   options.strands.growth.curl.enabled = a.curls == "yes";
+  ParseCurlRegion(a.curl_region, &options.strands.growth.curl.region);  // checked by the parser
   options.strands.growth.seen_tips.enabled = a.seen_tips == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
@@ -169,6 +172,13 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "bao-qi: estimate the curl from the seen strands and, where the hair is seen to "
                   "curl, wind strands past the seen strands on that helix (yes), or not (no)")
       ->check(CLI::IsMember({"yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--curl-region", args->curl_region,
+                  "bao-qi: where curly strands wind: wherever they grow (whole-hair), or only "
+                  "next to the seen strands that show the curl (near-arcs: for a head whose hair "
+                  "curls only in part)")
+      ->check(CLI::IsMember(
+          {CurlRegionName(CurlRegion::kWholeHair), CurlRegionName(CurlRegion::kNearArcs)}))
       ->capture_default_str();
   cmd->add_option("--cover-segments", args->cover_segments,
                   "bao-qi: give the seen strands no strand from the roots passes along a strand "

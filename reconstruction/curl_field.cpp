@@ -186,6 +186,20 @@ double WeightedMedian(std::vector<std::pair<double, double>> value_weight) {
 
 }  // namespace
 
+const char* CurlRegionName(CurlRegion region) {
+  return region == CurlRegion::kWholeHair ? "whole-hair" : "near-arcs";
+}
+
+bool ParseCurlRegion(const std::string& name, CurlRegion* region) {
+  for (const CurlRegion r : {CurlRegion::kNearArcs, CurlRegion::kWholeHair}) {
+    if (name == CurlRegionName(r)) {
+      *region = r;
+      return true;
+    }
+  }
+  return false;
+}
+
 const char* CurlRadiusFromName(CurlRadiusFrom from) {
   switch (from) {
     case CurlRadiusFrom::kCurvature:
@@ -211,6 +225,8 @@ Status CurlFieldOptions::Check() const {
   if (!(min_handedness_agreement >= 0.5 && min_handedness_agreement <= 1))
     return InvalidArgument("curl min_handedness_agreement must lie in [0.5, 1]");
   if (!(region_mm > 0)) return InvalidArgument("curl region_mm must be positive");
+  if (!(whole_hair_min_arc_share >= 0 && whole_hair_min_arc_share <= 1))
+    return InvalidArgument("curl whole_hair_min_arc_share must be in [0, 1]");
   if (!(min_depth_mm >= 0 && std::isfinite(min_depth_mm)))
     return InvalidArgument("curl min_depth_mm must be finite and not negative");
   if (!(bend_span_mm > 0 && bend_span_mm <= 20))
@@ -253,6 +269,7 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"curvature_per_mm", curvature_per_mm},
           {"torsion_per_mm", torsion_per_mm},
           {"radius_from", CurlRadiusFromName(radius_from)},
+          {"region", CurlRegionName(region)},
           {"handedness_agreement", HandednessAgreement()},
           {"right_handed_share", right_handed_share},
           {"local_handedness_agreement", local_handedness_agreement}};
@@ -261,6 +278,7 @@ nlohmann::json CurlEstimate::ToJson() const {
 // The cells (region_mm) within one cell of a seen arc's, and the way the
 // arcs about each axis cell turn.
 struct CurlField::Region {
+  bool whole_hair = false;  // CurlRegion::kWholeHair: `cells` is not asked
   double cell_mm = 20;
   std::unordered_set<int64_t> cells;
   double axis_cell_mm = 10;
@@ -371,6 +389,10 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
       e.local_handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
       !(pitch > 0 && std::isfinite(pitch)) || e.helix_angle_deg > o.max_helix_angle_deg)
     return field;
+  e.region = o.region == CurlRegion::kWholeHair && e.arc_share >= o.whole_hair_min_arc_share
+                 ? CurlRegion::kWholeHair
+                 : CurlRegion::kNearArcs;
+  region->whole_hair = e.region == CurlRegion::kWholeHair;
   e.curl.handedness = right_mm * 2 >= arc_mm ? 1 : -1;
   e.curl.radius_mm = radius;
   e.curl.pitch_mm = pitch;
@@ -385,7 +407,8 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
 const Curl* CurlField::At(const Eigen::Vector3f& p) const {
   if (!estimate_.curl.curly()) return nullptr;
   if (!region_) return &estimate_.curl;
-  if (region_->cells.count(CellKey(CellOf(p, region_->cell_mm))) == 0) return nullptr;
+  if (!region_->whole_hair && region_->cells.count(CellKey(CellOf(p, region_->cell_mm))) == 0)
+    return nullptr;
   const auto turn = region_->turn_mm.find(CellKey(CellOf(p, region_->axis_cell_mm)));
   const bool mirrored =
       turn != region_->turn_mm.end() && turn->second * estimate_.curl.handedness < 0;

@@ -56,6 +56,7 @@
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 #include <vector>
 
 #include "core/status.h"
@@ -73,6 +74,22 @@ enum class CurlRadiusFrom {
 };
 const char* CurlRadiusFromName(CurlRadiusFrom from);  // "curvature-and-torsion", ...
 
+// Where strands wind once the hair is found to curl.
+enum class CurlRegion {
+  // Near the seen arcs: in the cells of CurlFieldOptions::region_mm next to
+  // (or holding) a cell with a seen arc.
+  kNearArcs,
+  // Wherever a strand grows. The views see most ringlets along their outline
+  // and few of their arcs (a few per cent of the seen strands' length on a
+  // capture's points, under a third on the true visible surface), so a
+  // ringlet no arc lies on is as likely as one that shows its curl. On a
+  // head whose hair curls in part, the straight part winds too.
+  kWholeHair,
+};
+const char* CurlRegionName(CurlRegion region);  // "near-arcs", "whole-hair"
+// False for an unknown name.
+bool ParseCurlRegion(const std::string& name, CurlRegion* region);
+
 struct HelixShape {
   double radius_mm = 0, pitch_mm = 0;
 };
@@ -89,8 +106,17 @@ struct CurlFieldOptions {
   // Of the arcs' length, the share that must turn the way of the other arcs
   // in its axis cells (CurlEstimate::local_handedness_agreement).
   double min_handedness_agreement = 0.75;
-  // Strands wind in the cells of this size next to (or holding) a cell
-  // with a seen arc: from region_mm to about 3.5 region_mm from it.
+  CurlRegion region = CurlRegion::kWholeHair;
+  // Winding wherever strands grow needs this share of the seen length in
+  // arcs, more than min_arc_share: with less, strands wind near the arcs
+  // only, so that hair the test takes for curly by a small margin (the
+  // bends of waves or stray strands) is not wound throughout. The curls'
+  // arcs hold 1.8-4 % under the variations of docs/accuracy.md, bangs_real's
+  // 0.9 % (not curly).
+  double whole_hair_min_arc_share = 0.015;
+  // With CurlRegion::kNearArcs, strands wind in the cells of this size next
+  // to (or holding) a cell with a seen arc: from region_mm to about
+  // 3.5 region_mm from it.
   double region_mm = 20;
   // Strands wind only this far or further from the seen strands' ribbons
   // (the hybrid field's d_s): nearer, they follow the seen surface's field.
@@ -122,6 +148,7 @@ struct CurlEstimate {
   double helix_angle_deg = 0, rate_per_mm = 0;
   double curvature_per_mm = 0, torsion_per_mm = 0;  // the arcs' medians, 1/mm (|torsion|)
   CurlRadiusFrom radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
+  CurlRegion region = CurlRegion::kWholeHair;  // where strands wind (as decided, not as asked)
   // The helix the arcs give by radius_from, before min_radius_mm and the
   // curly test; infinite when they do not bend.
   HelixShape RawShape() const;
@@ -146,7 +173,9 @@ class CurlField {
   static CurlField Everywhere(const Curl& curl);
 
   const CurlEstimate& estimate() const { return estimate_; }
-  // The curl strands at p wind on; nullptr where the hair is not seen to curl.
+  // The curl strands at p wind on: the way the seen arcs in the axis cells
+  // about p turn, the estimate's (the arcs' majority) where none is near;
+  // nullptr where the hair is not seen to curl or p lies outside the region.
   const Curl* At(const Eigen::Vector3f& p) const;
 
  private:

@@ -150,10 +150,51 @@ TEST(CurlField, EstimatesTheRingletsCurl) {
     EXPECT_NEAR(e.curl.radius_mm, 6, 1.2);
     EXPECT_NEAR(e.curl.pitch_mm, 20, 4);
     EXPECT_GT(e.HandednessAgreement(), 0.9);
-    // In the ringlets' region, and not far away from it.
+    // Wherever strands grow, by default; near the seen arcs only, with kNearArcs.
     EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
-    EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
+    EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
+    CurlFieldOptions near_arcs;
+    near_arcs.region = CurlRegion::kNearArcs;
+    const CurlField near_field = CurlField::Estimate(Ringlets(6, 20, h), near_arcs);
+    EXPECT_NE(near_field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
+    EXPECT_EQ(near_field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
+    EXPECT_EQ(field.estimate().region, CurlRegion::kWholeHair);
+    EXPECT_EQ(near_field.estimate().region, CurlRegion::kNearArcs);
   }
+}
+
+// Curly by the test, but with fewer arcs than winding everywhere asks for:
+// the strands wind near the arcs only.
+TEST(CurlField, FewArcsWindOnlyNearThemselves) {
+  std::vector<StrandSegment> segments = Ringlets(6, 20, 1);
+  // Straight seen strands far from the ringlets, as many as they are.
+  const size_t ringlets = segments.size();
+  for (size_t k = 0; k < ringlets; ++k) {
+    StrandSegment straight;
+    for (const Eigen::Vector3f& p : segments[k].points_mm)
+      straight.points_mm.push_back(Eigen::Vector3f(400 + 2.0f * static_cast<float>(k), 0, p.z()));
+    segments.push_back(straight);
+  }
+  CurlFieldOptions options;
+  options.whole_hair_min_arc_share = 0.9;
+  const CurlField field = CurlField::Estimate(segments, options);
+  ASSERT_TRUE(field.estimate().curl.curly());
+  ASSERT_LT(field.estimate().arc_share, 0.9);
+  EXPECT_EQ(field.estimate().region, CurlRegion::kNearArcs);
+  EXPECT_NE(field.At(Eigen::Vector3f(50, 50, -60)), nullptr);
+  EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
+}
+
+TEST(CurlRegion, NamesParseBack) {
+  for (const CurlRegion region : {CurlRegion::kNearArcs, CurlRegion::kWholeHair}) {
+    CurlRegion parsed =
+        region == CurlRegion::kNearArcs ? CurlRegion::kWholeHair : CurlRegion::kNearArcs;
+    ASSERT_TRUE(ParseCurlRegion(CurlRegionName(region), &parsed));
+    EXPECT_EQ(parsed, region);
+  }
+  CurlRegion unchanged = CurlRegion::kNearArcs;
+  EXPECT_FALSE(ParseCurlRegion("everywhere", &unchanged));
+  EXPECT_EQ(unchanged, CurlRegion::kNearArcs);
 }
 
 TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
@@ -302,7 +343,8 @@ TEST(CurlField, OptionsNameTheirField) {
       {"min_depth_mm", [](CurlFieldOptions& o) { o.min_depth_mm = -1; }},
       {"bend_span_mm", [](CurlFieldOptions& o) { o.bend_span_mm = 0; }},
       {"min_bend_deg", [](CurlFieldOptions& o) { o.min_bend_deg = 90; }},
-      {"bend_axis_relax_mm", [](CurlFieldOptions& o) { o.bend_axis_relax_mm = std::nan(""); }}};
+      {"bend_axis_relax_mm", [](CurlFieldOptions& o) { o.bend_axis_relax_mm = std::nan(""); }},
+      {"whole_hair_min_arc_share", [](CurlFieldOptions& o) { o.whole_hair_min_arc_share = 2; }}};
   for (const auto& [field, set_bad] : cases) {
     CurlFieldOptions o;
     set_bad(o);

@@ -363,7 +363,9 @@ std::string StrandReconstructionSummary::BriefReport() const {
     } else {
       s << "from " << curl.arcs << " seen arcs (" << 100 * curl.arc_share
         << " % of the seen length; " << 100 * curl.right_handed_share << " % of it right-handed, "
-        << 100 * curl.local_handedness_agreement << " % turning as the arcs beside it)\n";
+        << 100 * curl.local_handedness_agreement << " % turning as the arcs beside it), wound "
+        << (curl.region == CurlRegion::kWholeHair ? "wherever strands grow" : "near the seen arcs")
+        << "\n";
     }
   } else if (curl.arcs > 0) {
     s << "  no curls: " << curl.arcs << " seen arcs, " << 100 * curl.arc_share
