@@ -12,8 +12,9 @@ six times, each into CAPTURE/bench-strands-bao-qi-ceiling-NAME/ (a run whose out
 made by the same strand bench with the same flags, is read again, not repeated):
 
   capture           the capture's points, the curl estimated from them (what `reconstruct` does)
-  estimate everywhere  the capture's points, the estimate's curl given everywhere: the strands
-                    wind wherever they leave the seen strands, not only near the seen arcs
+  estimate everywhere  the capture's points, the estimate's curl given everywhere: every strand
+                    winds wherever it leaves the seen strands, one way round (the estimate's
+                    region and the arcs' local handedness left out)
   true curl         the capture's points, the true curl in place of the estimate
   true directions   the capture's points with the true strands' directions, the curl estimated
   true points       points from the true visible surface (as many), the curl estimated
@@ -54,16 +55,18 @@ def parse(output):
     """The figures of one strand-bench run's output; SystemExit when a line is missing."""
     found = {name: pattern.search(output) for name, pattern in
              (("score", SCORE), ("curl", CURL), ("length", LENGTH), ("skin", SKIN))}
-    missing = [name for name, match in found.items() if match is None]
+    missing = [name for name, match in found.items() if match is None and name != "curl"]
     if missing:
-        raise SystemExit("strand_ceilings: the strand bench printed no %s line" % ", ".join(missing))
+        raise SystemExit("strand_ceilings: the strand bench printed no %s line"
+                         % ", ".join(missing))
     precision, recall = float(found["score"].group(1)), float(found["score"].group(2))
+    curl = found["curl"].group(1) if found["curl"] else None
     return {
         "precision": precision,
         "recall": recall,
         "f1": 2 * precision * recall / (precision + recall) if precision + recall > 0 else 0.0,
-        "curl": re.split(r", (?:from|given)", found["curl"].group(1))[0],
-        "curl_flag": curl_flag(found["curl"].group(1)),
+        "curl": re.split(r", (?:from|given)", curl)[0] if curl else "none",
+        "curl_flag": curl_flag(curl) if curl else None,
         "median_length_mm": float(found["length"].group(1)),
         "over_skin_percent": float(found["skin"].group(1)),
     }
@@ -109,7 +112,8 @@ def main():
     parser.add_argument("--json")
     args = parser.parse_args()
     if not re.fullmatch(r"[\d.]+,[\d.]+,[+-]?1", args.curl):
-        raise SystemExit("strand_ceilings: --curl wants RADIUS_MM,PITCH_MM,HANDEDNESS (e.g. 6,20,1)")
+        raise SystemExit("strand_ceilings: --curl wants RADIUS_MM,PITCH_MM,HANDEDNESS "
+                         "(e.g. 6,20,1)")
     if not os.path.isfile(os.path.join(args.capture, "reconstruction", "points.ply")):
         raise SystemExit("strand_ceilings: %s has no reconstruction/points.ply (run `hairrig "
                          "reconstruct %s --stage points` first)" % (args.capture, args.capture))

@@ -269,7 +269,7 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"curvature_per_mm", curvature_per_mm},
           {"torsion_per_mm", torsion_per_mm},
           {"radius_from", CurlRadiusFromName(radius_from)},
-          {"region", CurlRegionName(region)},
+          {"region", curl.curly() ? CurlRegionName(region) : "none"},
           {"handedness_agreement", HandednessAgreement()},
           {"right_handed_share", right_handed_share},
           {"local_handedness_agreement", local_handedness_agreement}};

@@ -1,6 +1,7 @@
 // Where the hair curls and how: a curl (helix radius, pitch, handedness)
-// estimated from the seen strands, and the region near the seen curls in
-// which strand growth winds on that helix (helix_guide.h, strand_growth.h).
+// estimated from the seen strands, and the region in which strand growth
+// winds on that helix (the whole hair, or near the seen arcs; CurlRegion;
+// helix_guide.h, strand_growth.h).
 //
 // Inside ringlets no view sees the strands, and Bao & Qi's Laplace field
 // (Sec. IV-A, Eq. 1) there runs along the curls' axis: a strand grown along
@@ -106,16 +107,19 @@ struct CurlFieldOptions {
   // Of the arcs' length, the share that must turn the way of the other arcs
   // in its axis cells (CurlEstimate::local_handedness_agreement).
   double min_handedness_agreement = 0.75;
+  // Where strands wind once the hair is found to curl. kWholeHair falls
+  // back to kNearArcs when the arcs hold less than whole_hair_min_arc_share
+  // (CurlEstimate::region says which was used).
   CurlRegion region = CurlRegion::kWholeHair;
-  // Winding wherever strands grow needs this share of the seen length in
-  // arcs, more than min_arc_share: with less, strands wind near the arcs
-  // only, so that hair the test takes for curly by a small margin (the
-  // bends of waves or stray strands) is not wound throughout. The curls'
-  // arcs hold 1.8-4 % under the variations of docs/accuracy.md, bangs_real's
-  // 0.9 % (not curly).
+  // The share of the seen length (a fraction in [0, 1]; Check() refuses
+  // others) the arcs must hold for kWholeHair to wind the whole hair. Hair
+  // the curly test passes by a small margin (the bends of waves or stray
+  // strands) then winds near its arcs only, not throughout. A value at or
+  // under min_arc_share has no effect. The curls' arcs hold 1.8-4 % under
+  // the variations of docs/accuracy.md, bangs_real's 0.9 % (not curly).
   double whole_hair_min_arc_share = 0.015;
-  // With CurlRegion::kNearArcs, strands wind in the cells of this size next
-  // to (or holding) a cell with a seen arc: from region_mm to about
+  // Where strands wind near the arcs, they wind in the cells of this size
+  // next to (or holding) a cell with a seen arc: from region_mm to about
   // 3.5 region_mm from it.
   double region_mm = 20;
   // Strands wind only this far or further from the seen strands' ribbons
@@ -148,7 +152,9 @@ struct CurlEstimate {
   double helix_angle_deg = 0, rate_per_mm = 0;
   double curvature_per_mm = 0, torsion_per_mm = 0;  // the arcs' medians, 1/mm (|torsion|)
   CurlRadiusFrom radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
-  CurlRegion region = CurlRegion::kWholeHair;  // where strands wind (as decided, not as asked)
+  // Where strands wind, as decided from the arcs (not as asked); meaningful
+  // only when curl.curly().
+  CurlRegion region = CurlRegion::kWholeHair;
   // The helix the arcs give by radius_from, before min_radius_mm and the
   // curly test; infinite when they do not bend.
   HelixShape RawShape() const;
