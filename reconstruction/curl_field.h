@@ -116,7 +116,8 @@ struct CurlFieldOptions {
   // the curly test passes by a small margin (the bends of waves or stray
   // strands) then winds near its arcs only, not throughout. A value at or
   // under min_arc_share has no effect. The curls' arcs hold 1.8-4 % under
-  // the variations of docs/accuracy.md, bangs_real's 0.9 % (not curly).
+  // the variations of docs/accuracy.md, bangs_real's 0.9 % (not curly): the
+  // `curl.arc_share` of each robustness run's strands/summary.json.
   double whole_hair_min_arc_share = 0.015;
   // Where strands wind near the arcs, they wind in the cells of this size
   // next to (or holding) a cell with a seen arc: from region_mm to about
