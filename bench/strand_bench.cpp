@@ -12,7 +12,7 @@
 //       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
 //       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region
 //       near-arcs|whole-hair] [--curl-region-cell MM]
-//       [--curl-radius-from curvature-and-torsion|curvature|turn-rate]
+//       [--curl-radius-from curvature-and-torsion|curvature|turn-rate|helix-fit]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
@@ -32,7 +32,7 @@
 // strand the curl given (radius, pitch, handedness: the simulated wig's
 // curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
 // the estimate. --curl-radius-from picks what the estimate's radius and pitch
-// come from (CurlRadiusFrom; curvature-and-torsion by default).
+// come from (CurlRadiusFrom; helix-fit by default).
 // --curl-region near-arcs winds the strands only near the seen arcs, in the
 // cells of --curl-region-cell MM next to a seen arc's (CurlFieldOptions::region,
 // region_mm 20), instead of wherever they grow (whole-hair).
@@ -105,18 +105,12 @@ std::vector<cv::Mat1b> TrueLabels(const std::string& capture,
 }
 
 // The --curl-radius-from value; false (with a message) for an unknown one.
-bool ParseCurlRadiusFrom(const std::string& name, hairrig::CurlRadiusFrom* out) {
-  for (const hairrig::CurlRadiusFrom from :
-       {hairrig::CurlRadiusFrom::kCurvatureAndTorsion, hairrig::CurlRadiusFrom::kCurvature,
-        hairrig::CurlRadiusFrom::kTurnRate}) {
-    if (name == hairrig::CurlRadiusFromName(from)) {
-      *out = from;
-      return true;
-    }
-  }
-  std::fprintf(
-      stderr, "--curl-radius-from: 'curvature-and-torsion', 'curvature' or 'turn-rate', not '%s'\n",
-      name.c_str());
+bool ReadCurlRadiusFrom(const std::string& name, hairrig::CurlRadiusFrom* out) {
+  if (hairrig::ParseCurlRadiusFrom(name, out)) return true;
+  std::fprintf(stderr,
+               "--curl-radius-from: 'curvature-and-torsion', 'curvature', 'turn-rate' or "
+               "'helix-fit', not '%s'\n",
+               name.c_str());
   return false;
 }
 
@@ -146,7 +140,7 @@ int main(int argc, char** argv) {
         "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
         "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region "
         "near-arcs|whole-hair] [--curl-region-cell MM] "
-        "[--curl-radius-from curvature-and-torsion|curvature|turn-rate] "
+        "[--curl-radius-from curvature-and-torsion|curvature|turn-rate|helix-fit] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -256,7 +250,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--curl-min-depth") == 0) {
       options.growth.curl.min_depth_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-radius-from") == 0) {
-      if (!ParseCurlRadiusFrom(argv[i + 1], &options.growth.curl.radius_from)) return 2;
+      if (!ReadCurlRadiusFrom(argv[i + 1], &options.growth.curl.radius_from)) return 2;
     } else if (std::strcmp(argv[i], "--curl-field") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.enabled)) return 2;
     } else if (std::strcmp(argv[i], "--helix-window") == 0) {

@@ -208,8 +208,22 @@ const char* CurlRadiusFromName(CurlRadiusFrom from) {
       return "turn-rate";
     case CurlRadiusFrom::kCurvatureAndTorsion:
       return "curvature-and-torsion";
+    case CurlRadiusFrom::kHelixFit:
+      return "helix-fit";
   }
   return "curvature";
+}
+
+bool ParseCurlRadiusFrom(const std::string& name, CurlRadiusFrom* from) {
+  for (const CurlRadiusFrom candidate :
+       {CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate,
+        CurlRadiusFrom::kHelixFit}) {
+    if (name == CurlRadiusFromName(candidate)) {
+      *from = candidate;
+      return true;
+    }
+  }
+  return false;
 }
 
 Status CurlFieldOptions::Check() const {
@@ -249,6 +263,8 @@ HelixShape CurlEstimate::RawShape() const {
     if (!(curvature_per_mm > 0)) return {kNone, kNone};
     return {curvature_per_mm / k2t2, 2 * M_PI * torsion_per_mm / k2t2};
   }
+  if (radius_from == CurlRadiusFrom::kHelixFit)
+    return fitted.radius_mm > 0 ? fitted : HelixShape{kNone, kNone};
   double radius = kNone;
   if (radius_from == CurlRadiusFrom::kTurnRate && rate_per_mm > 0)
     radius = std::sin(alpha) / rate_per_mm;
@@ -268,6 +284,8 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"rate_per_mm", rate_per_mm},
           {"curvature_per_mm", curvature_per_mm},
           {"torsion_per_mm", torsion_per_mm},
+          {"fitted_radius_mm", fitted.radius_mm},
+          {"fitted_pitch_mm", fitted.pitch_mm},
           {"radius_from", CurlRadiusFromName(radius_from)},
           {"region", curl.curly() ? CurlRegionName(region) : "none"},
           {"handedness_agreement", HandednessAgreement()},
@@ -342,7 +360,8 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   CurlField field;
   if (!o.enabled || segments.empty()) return field;
   const AxisGrid axes(segments, o.axis_cell_mm);
-  std::vector<std::pair<double, double>> angles, rates, curvatures, torsions;
+  std::vector<std::pair<double, double>> angles, rates, curvatures, torsions, fit_radii,
+      fit_pitches;
   std::vector<Arc> arcs;
   double seen_mm = 0, arc_mm = 0, right_mm = 0;
   auto region = std::make_shared<Region>();
@@ -363,6 +382,11 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
     Bending(s.points_mm, &curvature, &torsion);
     curvatures.emplace_back(curvature, turn.length_mm);
     torsions.emplace_back(std::abs(torsion), turn.length_mm);
+    HelixShape fitted;
+    if (FitHelix(s.points_mm, &fitted)) {
+      fit_radii.emplace_back(fitted.radius_mm, turn.length_mm);
+      fit_pitches.emplace_back(fitted.pitch_mm, turn.length_mm);
+    }
     arcs.push_back({turn.length_mm, turn.rate > 0 ? 1 : -1, AxisCells(s, o.axis_cell_mm)});
     for (const Eigen::Vector3f& p : s.points_mm)
       ForNeighbourCells(CellOf(p, o.region_mm), [&](int64_t k) { region->cells.insert(k); });
@@ -376,6 +400,7 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   e.rate_per_mm = rate;
   e.curvature_per_mm = WeightedMedian(curvatures);
   e.torsion_per_mm = WeightedMedian(torsions);
+  e.fitted = {WeightedMedian(fit_radii), WeightedMedian(fit_pitches)};
   e.radius_from = o.radius_from;
   e.right_handed_share = right_mm / arc_mm;
   const std::unordered_map<int64_t, double> per_cell = SignedLengthPerCell(arcs);

@@ -21,19 +21,19 @@
 //     (acos of the mean |t . a|) is at least min_arc_angle_deg and whose turns go mostly one way
 //     (the sum of the signed turns at least min_turn_consistency of the sum
 //     of their sizes);
-//   - the curl's shape from the arcs' curvature kappa and torsion tau (each
-//     arc's median over its steps, then the median over the arcs weighted
-//     by length), a helix's being kappa = r / (r^2 + c^2) and
-//     tau = c / (r^2 + c^2) with c = P / (2 pi): r = kappa / (kappa^2 +
-//     tau^2), P = 2 pi tau / (kappa^2 + tau^2) (raised to min_radius_mm if
-//     less, the pitch then 2 pi r / tan(alpha)); the handedness is the
-//     length-weighted majority's of the turns. Curvature and torsion do not
-//     depend on the axis. The seen arcs turn about the estimated axis at
-//     about half the rate their curvature implies (on curly_blond, with the
-//     true strands' axis as well), so r = sin(alpha) / rate comes out about
-//     twice the true radius; CurlRadiusFrom keeps that estimate and
-//     r = sin^2(alpha) / kappa beside it (docs/accuracy.md, "The curl's
-//     shape from the arcs' bending");
+//   - the curl's shape (radius and pitch) from each arc's own helix fitted
+//     to its points (helix_fit.h), the median over the arcs weighted by
+//     length, the radius raised to min_radius_mm if less (the pitch then
+//     2 pi r / tan(alpha)); the handedness is the length-weighted majority's
+//     of the turns. The fit finds each arc's own axis; about the axis
+//     estimated from its neighbours a seen arc turns at about half the rate
+//     its curvature implies (on curly_blond, with the true strands' axis as
+//     well). CurlRadiusFrom keeps the estimates from the arcs' curvature
+//     kappa and torsion tau (each arc's median over its steps: a helix's
+//     are kappa = r / (r^2 + c^2), tau = c / (r^2 + c^2), c = P / (2 pi)),
+//     whose torsion grows with the points' noise, and from the turn rate
+//     beside it (docs/accuracy.md, "The curl's shape from the arcs' own
+//     helices");
 //   - a head's ringlets need not all wind one way: a strand that starts
 //     winding at a point winds the way the arcs in the 27 axis cells around
 //     it turn (the majority by length, each arc counted in every cell it
@@ -61,6 +61,7 @@
 #include <vector>
 
 #include "core/status.h"
+#include "reconstruction/helix_fit.h"
 #include "reconstruction/helix_guide.h"
 #include "reconstruction/strand_segments.h"
 
@@ -72,8 +73,11 @@ enum class CurlRadiusFrom {
   kCurvatureAndTorsion,  // r = kappa / (kappa^2 + tau^2), P = 2 pi tau / (kappa^2 + tau^2)
   kCurvature,            // r = sin^2(alpha) / kappa, P = 2 pi r / tan(alpha)
   kTurnRate,             // r = sin(alpha) / rate, P = 2 pi r / tan(alpha)
+  kHelixFit,             // each arc's own helix fitted to its points (FitHelix)
 };
 const char* CurlRadiusFromName(CurlRadiusFrom from);  // "curvature-and-torsion", ...
+// False for an unknown name.
+bool ParseCurlRadiusFrom(const std::string& name, CurlRadiusFrom* from);
 
 // Where strands wind once the hair is found to curl.
 enum class CurlRegion {
@@ -91,13 +95,9 @@ const char* CurlRegionName(CurlRegion region);  // "near-arcs", "whole-hair"
 // False for an unknown name.
 bool ParseCurlRegion(const std::string& name, CurlRegion* region);
 
-struct HelixShape {
-  double radius_mm = 0, pitch_mm = 0;
-};
-
 struct CurlFieldOptions {
   bool enabled = true;  // false: no curl (growth as without it)
-  CurlRadiusFrom radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
+  CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFit;
   double axis_cell_mm = 10;
   double min_arc_angle_deg = 35;
   double min_arc_length_mm = 15;
@@ -152,7 +152,10 @@ struct CurlEstimate {
   double arc_share = 0;  // of the directed segments' length
   double helix_angle_deg = 0, rate_per_mm = 0;
   double curvature_per_mm = 0, torsion_per_mm = 0;  // the arcs' medians, 1/mm (|torsion|)
-  CurlRadiusFrom radius_from = CurlRadiusFrom::kCurvatureAndTorsion;
+  // The medians of the arcs' own fitted helices (FitHelix, mm; by
+  // length); 0 where no arc could be fitted.
+  HelixShape fitted;
+  CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFit;
   // Where strands wind, as decided from the arcs (not as asked); meaningful
   // only when curl.curly().
   CurlRegion region = CurlRegion::kWholeHair;

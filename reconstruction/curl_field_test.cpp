@@ -197,12 +197,27 @@ TEST(CurlRegion, NamesParseBack) {
   EXPECT_EQ(unchanged, CurlRegion::kNearArcs);
 }
 
+TEST(CurlRadiusFrom, NamesParseBack) {
+  for (const CurlRadiusFrom from :
+       {CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate,
+        CurlRadiusFrom::kHelixFit}) {
+    CurlRadiusFrom parsed =
+        from == CurlRadiusFrom::kCurvature ? CurlRadiusFrom::kTurnRate : CurlRadiusFrom::kCurvature;
+    ASSERT_TRUE(ParseCurlRadiusFrom(CurlRadiusFromName(from), &parsed));
+    EXPECT_EQ(parsed, from);
+  }
+  CurlRadiusFrom unchanged = CurlRadiusFrom::kTurnRate;
+  EXPECT_FALSE(ParseCurlRadiusFrom("torsion", &unchanged));
+  EXPECT_EQ(unchanged, CurlRadiusFrom::kTurnRate);
+}
+
 TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
   // On ideal helices the arcs turn about their axis as their curvature says,
   // so every estimate finds the curl; a looser, longer one too.
   for (const auto& [r, pitch] : {std::pair{6.0, 20.0}, std::pair{10.0, 40.0}}) {
-    for (const CurlRadiusFrom from : {CurlRadiusFrom::kCurvatureAndTorsion,
-                                      CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate}) {
+    for (const CurlRadiusFrom from :
+         {CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature,
+          CurlRadiusFrom::kTurnRate, CurlRadiusFrom::kHelixFit}) {
       CurlFieldOptions o;
       o.radius_from = from;
       const CurlEstimate e = CurlField::Estimate(Ringlets(r, pitch, 1), o).estimate();
@@ -233,6 +248,13 @@ TEST(CurlEstimate, EachShapeEstimateUsesItsOwnMeasures) {
   EXPECT_NEAR(e.RawShape().pitch_mm, 2 * M_PI * e.RawShape().radius_mm / tan_alpha, 1e-9);
   e.radius_from = CurlRadiusFrom::kTurnRate;
   EXPECT_NEAR(e.RawShape().radius_mm, sin_alpha / 0.1, 1e-9);
+  e.fitted = {5.5, 23};
+  e.radius_from = CurlRadiusFrom::kHelixFit;
+  EXPECT_EQ(e.RawShape().radius_mm, 5.5);
+  EXPECT_EQ(e.RawShape().pitch_mm, 23);
+  e.fitted = {};
+  EXPECT_TRUE(std::isinf(e.RawShape().radius_mm));
+  e.radius_from = CurlRadiusFrom::kTurnRate;
   // Arcs that do not bend give no shape.
   e.rate_per_mm = 0;
   EXPECT_TRUE(std::isinf(e.RawShape().radius_mm));
