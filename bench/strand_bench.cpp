@@ -12,7 +12,7 @@
 //       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
 //       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region
 //       near-arcs|whole-hair] [--curl-region-cell MM]
-//       [--curl-radius-from curvature-and-torsion|curvature|turn-rate|helix-fit]
+//       [--curl-radius-from helix-fit|curvature-and-torsion|curvature|turn-rate]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
@@ -107,10 +107,10 @@ std::vector<cv::Mat1b> TrueLabels(const std::string& capture,
 // The --curl-radius-from value; false (with a message) for an unknown one.
 bool ReadCurlRadiusFrom(const std::string& name, hairrig::CurlRadiusFrom* out) {
   if (hairrig::ParseCurlRadiusFrom(name, out)) return true;
-  std::fprintf(stderr,
-               "--curl-radius-from: 'curvature-and-torsion', 'curvature', 'turn-rate' or "
-               "'helix-fit', not '%s'\n",
-               name.c_str());
+  std::string known;
+  for (const hairrig::CurlRadiusFrom from : hairrig::kCurlRadiusFroms)
+    known += std::string(known.empty() ? "" : ", ") + hairrig::CurlRadiusFromName(from);
+  std::fprintf(stderr, "--curl-radius-from: one of %s, not '%s'\n", known.c_str(), name.c_str());
   return false;
 }
 
@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
         "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
         "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region "
         "near-arcs|whole-hair] [--curl-region-cell MM] "
-        "[--curl-radius-from curvature-and-torsion|curvature|turn-rate|helix-fit] "
+        "[--curl-radius-from helix-fit|curvature-and-torsion|curvature|turn-rate] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "

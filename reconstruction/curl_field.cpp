@@ -215,9 +215,7 @@ const char* CurlRadiusFromName(CurlRadiusFrom from) {
 }
 
 bool ParseCurlRadiusFrom(const std::string& name, CurlRadiusFrom* from) {
-  for (const CurlRadiusFrom candidate :
-       {CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate,
-        CurlRadiusFrom::kHelixFit}) {
+  for (const CurlRadiusFrom candidate : kCurlRadiusFroms) {
     if (name == CurlRadiusFromName(candidate)) {
       *from = candidate;
       return true;
@@ -286,6 +284,7 @@ nlohmann::json CurlEstimate::ToJson() const {
           {"torsion_per_mm", torsion_per_mm},
           {"fitted_radius_mm", fitted.radius_mm},
           {"fitted_pitch_mm", fitted.pitch_mm},
+          {"fitted_arcs", fitted_arcs},
           {"radius_from", CurlRadiusFromName(radius_from)},
           {"region", curl.curly() ? CurlRegionName(region) : "none"},
           {"handedness_agreement", HandednessAgreement()},
@@ -401,15 +400,24 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   e.curvature_per_mm = WeightedMedian(curvatures);
   e.torsion_per_mm = WeightedMedian(torsions);
   e.fitted = {WeightedMedian(fit_radii), WeightedMedian(fit_pitches)};
-  e.radius_from = o.radius_from;
+  e.fitted_arcs = static_cast<int64_t>(fit_radii.size());
+  // Too few arcs for fitted helices (loose curls' arcs turn under a quarter
+  // turn): their curvature and torsion.
+  e.radius_from = o.radius_from == CurlRadiusFrom::kHelixFit && e.fitted_arcs < o.min_arcs
+                      ? CurlRadiusFrom::kCurvatureAndTorsion
+                      : o.radius_from;
   e.right_handed_share = right_mm / arc_mm;
   const std::unordered_map<int64_t, double> per_cell = SignedLengthPerCell(arcs);
   e.local_handedness_agreement = LocalAgreement(arcs, per_cell);
   const HelixShape shape = e.RawShape();
   const double radius = std::max(shape.radius_mm, o.min_radius_mm);
-  // A radius raised to the least takes the pitch of the helix angle.
-  const double pitch =
-      radius > shape.radius_mm ? 2 * M_PI * radius / std::tan(alpha) : shape.pitch_mm;
+  // A radius raised to the least keeps the fitted helices' helix angle (the
+  // pitch scaled with it), else takes the arcs' angle to their neighbours'
+  // axis.
+  double pitch = shape.pitch_mm;
+  if (radius > shape.radius_mm)
+    pitch = e.radius_from == CurlRadiusFrom::kHelixFit ? shape.pitch_mm * radius / shape.radius_mm
+                                                       : 2 * M_PI * radius / std::tan(alpha);
   if (e.arcs < o.min_arcs || e.arc_share < o.min_arc_share ||
       e.local_handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
       !(pitch > 0 && std::isfinite(pitch)) || e.helix_angle_deg > o.max_helix_angle_deg)

@@ -21,19 +21,21 @@
 //     (acos of the mean |t . a|) is at least min_arc_angle_deg and whose turns go mostly one way
 //     (the sum of the signed turns at least min_turn_consistency of the sum
 //     of their sizes);
-//   - the curl's shape (radius and pitch) from each arc's own helix fitted
-//     to its points (helix_fit.h), the median over the arcs weighted by
-//     length, the radius raised to min_radius_mm if less (the pitch then
-//     2 pi r / tan(alpha)); the handedness is the length-weighted majority's
-//     of the turns. The fit finds each arc's own axis; about the axis
-//     estimated from its neighbours a seen arc turns at about half the rate
-//     its curvature implies (on curly_blond, with the true strands' axis as
-//     well). CurlRadiusFrom keeps the estimates from the arcs' curvature
-//     kappa and torsion tau (each arc's median over its steps: a helix's
-//     are kappa = r / (r^2 + c^2), tau = c / (r^2 + c^2), c = P / (2 pi)),
-//     whose torsion grows with the points' noise, and from the turn rate
-//     beside it (docs/accuracy.md, "The curl's shape from the arcs' own
-//     helices");
+//   - the curl's shape from each arc's own helix fitted to its points
+//     (helix_fit.h; arcs it refuses are left out): the radius and the pitch
+//     each their own median over the fitted arcs, weighted by length; the
+//     radius raised to min_radius_mm if less, the pitch scaled with it. With
+//     fewer than min_arcs arcs fitted (a loose curl's arcs turn under a
+//     quarter turn) the shape comes from the arcs' curvature kappa and
+//     torsion tau instead (each arc's median over its steps; a helix's are
+//     kappa = r / (r^2 + c^2), tau = c / (r^2 + c^2), c = P / (2 pi)), whose
+//     torsion grows with the points' noise. The handedness is the
+//     length-weighted majority's of the turns. About the axis estimated from
+//     its neighbours a seen arc turns at about half the rate its curvature
+//     implies (on curly_blond, with the true strands' axis as well); the
+//     fit finds each arc's own axis. CurlRadiusFrom keeps curvature and
+//     torsion, sin^2(alpha) / kappa and the turn rate measurable beside the
+//     fit (docs/accuracy.md, "The curl's shape from the arcs' own helices");
 //   - a head's ringlets need not all wind one way: a strand that starts
 //     winding at a point winds the way the arcs in the 27 axis cells around
 //     it turn (the majority by length, each arc counted in every cell it
@@ -75,7 +77,10 @@ enum class CurlRadiusFrom {
   kTurnRate,             // r = sin(alpha) / rate, P = 2 pi r / tan(alpha)
   kHelixFit,             // each arc's own helix fitted to its points (FitHelix)
 };
-const char* CurlRadiusFromName(CurlRadiusFrom from);  // "curvature-and-torsion", ...
+inline constexpr CurlRadiusFrom kCurlRadiusFroms[] = {
+    CurlRadiusFrom::kHelixFit, CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature,
+    CurlRadiusFrom::kTurnRate};
+const char* CurlRadiusFromName(CurlRadiusFrom from);  // "helix-fit", "curvature-and-torsion", ...
 // False for an unknown name.
 bool ParseCurlRadiusFrom(const std::string& name, CurlRadiusFrom* from);
 
@@ -152,15 +157,19 @@ struct CurlEstimate {
   double arc_share = 0;  // of the directed segments' length
   double helix_angle_deg = 0, rate_per_mm = 0;
   double curvature_per_mm = 0, torsion_per_mm = 0;  // the arcs' medians, 1/mm (|torsion|)
-  // The medians of the arcs' own fitted helices (FitHelix, mm; by
-  // length); 0 where no arc could be fitted.
+  // The medians of the arcs' own fitted helices (FitHelix, mm; weighted by
+  // length, the radius and the pitch each its own median), whatever
+  // radius_from is; 0 where no arc could be fitted. The arcs FitHelix
+  // refuses (under a quarter turn, or no cone to their chords) are left out.
   HelixShape fitted;
+  int64_t fitted_arcs = 0;
   CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFit;
   // Where strands wind, as decided from the arcs (not as asked); meaningful
   // only when curl.curly().
   CurlRegion region = CurlRegion::kWholeHair;
   // The helix the arcs give by radius_from, before min_radius_mm and the
-  // curly test; infinite when they do not bend.
+  // curly test; infinite when they do not bend (or, by kHelixFit, no arc was
+  // fitted).
   HelixShape RawShape() const;
   double right_handed_share = 0;  // of the arcs' length
   // The share of the arcs' length that turns the way the other arcs in its

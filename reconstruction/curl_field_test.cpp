@@ -198,9 +198,7 @@ TEST(CurlRegion, NamesParseBack) {
 }
 
 TEST(CurlRadiusFrom, NamesParseBack) {
-  for (const CurlRadiusFrom from :
-       {CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate,
-        CurlRadiusFrom::kHelixFit}) {
+  for (const CurlRadiusFrom from : kCurlRadiusFroms) {
     CurlRadiusFrom parsed =
         from == CurlRadiusFrom::kCurvature ? CurlRadiusFrom::kTurnRate : CurlRadiusFrom::kCurvature;
     ASSERT_TRUE(ParseCurlRadiusFrom(CurlRadiusFromName(from), &parsed));
@@ -215,21 +213,36 @@ TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
   // On ideal helices the arcs turn about their axis as their curvature says,
   // so every estimate finds the curl; a looser, longer one too.
   for (const auto& [r, pitch] : {std::pair{6.0, 20.0}, std::pair{10.0, 40.0}}) {
-    for (const CurlRadiusFrom from :
-         {CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature,
-          CurlRadiusFrom::kTurnRate, CurlRadiusFrom::kHelixFit}) {
+    for (const CurlRadiusFrom from : kCurlRadiusFroms) {
       CurlFieldOptions o;
       o.radius_from = from;
       const CurlEstimate e = CurlField::Estimate(Ringlets(r, pitch, 1), o).estimate();
       ASSERT_TRUE(e.curl.curly()) << "radius " << r;
-      EXPECT_NEAR(e.curl.radius_mm, r, 0.2 * r) << "radius " << r;
-      EXPECT_NEAR(e.curl.pitch_mm, pitch, 0.2 * pitch) << "radius " << r;
+      EXPECT_EQ(e.radius_from, from) << "radius " << r;
+      // The fit is exact on exact arcs; the other estimates within a fifth.
+      const double tolerance = from == CurlRadiusFrom::kHelixFit ? 0.02 : 0.2;
+      EXPECT_NEAR(e.curl.radius_mm, r, tolerance * r) << "radius " << r;
+      EXPECT_NEAR(e.curl.pitch_mm, pitch, tolerance * pitch) << "radius " << r;
+      EXPECT_NEAR(e.fitted.radius_mm, r, 0.02 * r) << "radius " << r;
+      EXPECT_NEAR(e.fitted.pitch_mm, pitch, 0.02 * pitch) << "radius " << r;
+      EXPECT_EQ(e.fitted_arcs, e.arcs) << "radius " << r;
       // A helix's curvature: r / (r^2 + (P / 2 pi)^2).
       const double c = pitch / (2 * M_PI);
       EXPECT_NEAR(e.curvature_per_mm, r / (r * r + c * c), 0.01) << "radius " << r;
       EXPECT_NEAR(e.torsion_per_mm, c / (r * r + c * c), 0.01) << "radius " << r;
     }
   }
+}
+
+TEST(CurlField, LooseCurlsTooShortToFitTakeTheirBending) {
+  // The ringlets' 24 mm arcs turn under a quarter turn of a 15 / 40 mm
+  // helix (25.6 mm), so no arc is fitted: the shape comes from the arcs'
+  // curvature and torsion, and says so.
+  const CurlEstimate e = CurlField::Estimate(Ringlets(15, 40, 1), CurlFieldOptions{}).estimate();
+  ASSERT_TRUE(e.curl.curly());
+  EXPECT_EQ(e.fitted_arcs, 0);
+  EXPECT_EQ(e.radius_from, CurlRadiusFrom::kCurvatureAndTorsion);
+  EXPECT_NEAR(e.curl.radius_mm, 15, 3);
 }
 
 TEST(CurlEstimate, EachShapeEstimateUsesItsOwnMeasures) {

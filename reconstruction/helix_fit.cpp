@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "reconstruction/circle_fit.h"
 
@@ -14,10 +15,12 @@ namespace {
 constexpr double kChordMm = 3;
 constexpr size_t kMinChords = 6;
 constexpr double kMinSpreadRatio = 2;
+constexpr double kMinSpread = 1e-9;  // of the chords' unit directions' covariance
 constexpr double kMinTurnRad = M_PI / 2;
 constexpr int kIterations = 30;
+constexpr double kMinRelativeGain = 1e-8;
 
-// The helix's parameters about a fixed reference frame (a0, u0, v0): the axis
+// The helix's parameters about a fixed frame (a0, u0, v0, centre0): the axis
 // a = normalise(a0 + tilt.x u0 + tilt.y v0) through centre0 + shift.x u0 +
 // shift.y v0, the radius, the height per radian (signed: positive for a
 // right-handed helix) and the height at angle 0.
@@ -30,7 +33,7 @@ struct Frame {
 
 // The radial and axial residuals of every point (2 per point); `angles`
 // (may be null) gets each point's angle about the axis (rad), unwrapped
-// along the polyline.
+// along the polyline from the first point's.
 Eigen::VectorXd Residuals(const std::vector<Eigen::Vector3d>& points, const Frame& f,
                           const Parameters& x, std::vector<double>* angles) {
   const Eigen::Vector3d a = (f.a0 + x[kTiltU] * f.u0 + x[kTiltV] * f.v0).normalized();
@@ -44,36 +47,55 @@ Eigen::VectorXd Residuals(const std::vector<Eigen::Vector3d>& points, const Fram
     const double angle = std::atan2(q.dot(v), q.dot(u));
     unwrapped = i == 0 ? angle : unwrapped + std::remainder(angle - previous, 2 * M_PI);
     previous = angle;
-    r[2 * i] = std::hypot(q.dot(u), q.dot(v)) - x[kRadius];
-    r[2 * i + 1] = q.dot(a) - x[kSlope] * unwrapped - x[kOffset];
+    const auto k = static_cast<Eigen::Index>(2 * i);
+    r[k] = std::hypot(q.dot(u), q.dot(v)) - x[kRadius];
+    r[k + 1] = q.dot(a) - x[kSlope] * unwrapped - x[kOffset];
     if (angles != nullptr) angles->push_back(unwrapped);
   }
   return r;
 }
 
-// Levenberg-Marquardt with forward-difference derivatives; returns the
-// parameters it ends on.
+// d(residuals)/d(parameters): forward differences for the axis' tilt and
+// shift, exact for the radius, slope and offset (the residuals are linear
+// in them).
+Eigen::MatrixXd Jacobian(const std::vector<Eigen::Vector3d>& points, const Frame& frame,
+                         const Parameters& x, const Eigen::VectorXd& r) {
+  std::vector<double> angles;
+  Residuals(points, frame, x, &angles);
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(r.size(), 7);
+  for (const int k : {kTiltU, kTiltV, kShiftU, kShiftV}) {
+    // Tilts are radians-like, shifts mm: both near 0, the data within the
+    // arc's own size of the frame's centre.
+    constexpr double kStep = 1e-6;
+    Parameters step = x;
+    step[k] += kStep;
+    jacobian.col(k) = (Residuals(points, frame, step, nullptr) - r) / kStep;
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto row = static_cast<Eigen::Index>(2 * i);
+    jacobian(row, kRadius) = -1;
+    jacobian(row + 1, kSlope) = -angles[i];
+    jacobian(row + 1, kOffset) = -1;
+  }
+  return jacobian;
+}
+
+// Levenberg-Marquardt from x; returns the parameters it ends on.
 Parameters Refine(const std::vector<Eigen::Vector3d>& points, const Frame& frame, Parameters x) {
   double lambda = 1e-3;
   Eigen::VectorXd r = Residuals(points, frame, x, nullptr);
   for (int iteration = 0; iteration < kIterations; ++iteration) {
-    Eigen::MatrixXd jacobian(r.size(), 7);
-    for (int k = 0; k < 7; ++k) {
-      Parameters step = x;
-      const double h = 1e-6 * std::max(1.0, std::abs(x[k]));
-      step[k] += h;
-      jacobian.col(k) = (Residuals(points, frame, step, nullptr) - r) / h;
-    }
+    const Eigen::MatrixXd jacobian = Jacobian(points, frame, x, r);
     const Eigen::Matrix<double, 7, 7> normal = jacobian.transpose() * jacobian;
     const Parameters gradient = jacobian.transpose() * r;
-    bool improved = false;
+    double gain = 0;
     while (lambda < 1e8) {
       Eigen::Matrix<double, 7, 7> damped = normal;
-      damped.diagonal() *= 1 + lambda;
+      damped.diagonal() = damped.diagonal() * (1 + lambda) + Parameters::Constant(1e-12);
       const Parameters candidate = x - damped.ldlt().solve(gradient);
       const Eigen::VectorXd candidate_r = Residuals(points, frame, candidate, nullptr);
       if (candidate.allFinite() && candidate_r.squaredNorm() < r.squaredNorm()) {
-        improved = r.squaredNorm() - candidate_r.squaredNorm() > 1e-12 * r.squaredNorm();
+        gain = (r.squaredNorm() - candidate_r.squaredNorm()) / r.squaredNorm();
         x = candidate;
         r = candidate_r;
         lambda = std::max(lambda / 10, 1e-9);
@@ -81,16 +103,14 @@ Parameters Refine(const std::vector<Eigen::Vector3d>& points, const Frame& frame
       }
       lambda *= 10;
     }
-    if (!improved) break;
+    if (gain < kMinRelativeGain) break;
   }
   return x;
 }
 
-}  // namespace
-
-bool FitHelix(const std::vector<Eigen::Vector3f>& polyline, HelixShape* shape) {
-  std::vector<Eigen::Vector3d> points;
-  for (const Eigen::Vector3f& p : polyline) points.push_back(p.cast<double>());
+// The unit directions of chords at least kChordMm long, one from each point
+// that has one after it.
+std::vector<Eigen::Vector3d> ChordDirections(const std::vector<Eigen::Vector3d>& points) {
   std::vector<Eigen::Vector3d> chords;
   size_t j = 0;
   for (size_t k = 0; k < points.size(); ++k) {
@@ -99,40 +119,73 @@ bool FitHelix(const std::vector<Eigen::Vector3f>& polyline, HelixShape* shape) {
     if (j == points.size()) break;
     chords.push_back((points[j] - points[k]).normalized());
   }
-  if (chords.size() < kMinChords) return false;
+  return chords;
+}
+
+// The frame the refinement starts from: the axis a0 along which the chords
+// vary least (pointing the way the polyline advances), the circle across it,
+// u0 towards the first point (so its angle starts at 0, away from the cut at
+// +-pi) and the centre level with the points' mean height (so a tilt pivots
+// among them). Nothing when the chords do not spread round a cone or no
+// finite circle fits.
+std::optional<std::pair<Frame, double>> StartingFrame(const std::vector<Eigen::Vector3d>& points,
+                                                      const std::vector<Eigen::Vector3d>& chords) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& c : chords) mean += c;
   mean /= static_cast<double>(chords.size());
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   for (const Eigen::Vector3d& c : chords) covariance += (c - mean) * (c - mean).transpose();
+  covariance /= static_cast<double>(chords.size());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
   const Eigen::Vector3d spread = solver.eigenvalues();  // ascending
-  if (!(spread(1) >= kMinSpreadRatio * spread(0))) return false;
-  Frame frame;
-  frame.a0 = solver.eigenvectors().col(0);
-  if (frame.a0.dot(points.back() - points.front()) < 0) frame.a0 = -frame.a0;
-  frame.u0 = solver.eigenvectors().col(1);
-  frame.v0 = frame.a0.cross(frame.u0);
+  if (!(spread(1) > kMinSpreadRatio * spread(0) && spread(1) > kMinSpread)) return std::nullopt;
+  Frame f;
+  f.a0 = solver.eigenvectors().col(0);
+  if (f.a0.dot(points.back() - points.front()) < 0) f.a0 = -f.a0;
+  const Eigen::Vector3d e1 = solver.eigenvectors().col(1), e2 = f.a0.cross(e1);
   std::vector<Eigen::Vector2d> across;
-  for (const Eigen::Vector3d& p : points) across.emplace_back(p.dot(frame.u0), p.dot(frame.v0));
+  double height = 0;
+  for (const Eigen::Vector3d& p : points) {
+    across.emplace_back(p.dot(e1), p.dot(e2));
+    height += p.dot(f.a0);
+  }
   Eigen::Vector2d centre;
   double radius = 0;
-  if (!FitCircleTaubin(across, &centre, &radius) || !(radius < kMaxCircleRadiusMm)) return false;
-  frame.centre0 = centre.x() * frame.u0 + centre.y() * frame.v0;
-  // The height against the unwrapped angle, a line by least squares,
-  // starts the slope and the offset (with both 0 the axial residual is the
-  // height itself).
+  if (!FitCircleTaubin(across, &centre, &radius) || !(radius < kMaxCircleRadiusMm))
+    return std::nullopt;
+  f.centre0 =
+      centre.x() * e1 + centre.y() * e2 + height / static_cast<double>(points.size()) * f.a0;
+  const Eigen::Vector3d first = points.front() - f.centre0;
+  f.u0 = (first - first.dot(f.a0) * f.a0).normalized();
+  f.v0 = f.a0.cross(f.u0);
+  if (!f.u0.allFinite()) return std::nullopt;
+  return std::make_pair(f, radius);
+}
+
+}  // namespace
+
+bool FitHelix(const std::vector<Eigen::Vector3f>& polyline, HelixShape* shape) {
+  std::vector<Eigen::Vector3d> points;
+  for (const Eigen::Vector3f& p : polyline) points.push_back(p.cast<double>());
+  const std::vector<Eigen::Vector3d> chords = ChordDirections(points);
+  if (chords.size() < kMinChords) return false;
+  const auto start = StartingFrame(points, chords);
+  if (!start) return false;
+  const Frame& frame = start->first;
+  // The height against the unwrapped angle, a line by least squares, starts
+  // the slope and the offset (with both 0 the axial residual is the height).
   Parameters x = Parameters::Zero();
-  x[kRadius] = radius;
+  x[kRadius] = start->second;
   std::vector<double> angles;
-  const Eigen::VectorXd flat = Residuals(points, frame, x, &angles);
+  const Eigen::VectorXd at_zero_slope = Residuals(points, frame, x, &angles);
   Eigen::MatrixXd design(points.size(), 2);
-  Eigen::VectorXd height(points.size());
+  Eigen::VectorXd heights(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
-    design.row(static_cast<Eigen::Index>(i)) << angles[i], 1;
-    height[static_cast<Eigen::Index>(i)] = flat[static_cast<Eigen::Index>(2 * i + 1)];
+    const auto row = static_cast<Eigen::Index>(i);
+    design.row(row) << angles[i], 1;
+    heights[row] = at_zero_slope[2 * row + 1];
   }
-  const Eigen::Vector2d line = design.colPivHouseholderQr().solve(height);
+  const Eigen::Vector2d line = design.colPivHouseholderQr().solve(heights);
   x[kSlope] = line[0];
   x[kOffset] = line[1];
   x = Refine(points, frame, x);
