@@ -185,28 +185,28 @@ TEST(CurlField, FewArcsWindOnlyNearThemselves) {
   EXPECT_EQ(field.At(Eigen::Vector3f(50, 50, -400)), nullptr);
 }
 
-TEST(CurlRegion, NamesParseBack) {
-  for (const CurlRegion region : {CurlRegion::kNearArcs, CurlRegion::kWholeHair}) {
-    CurlRegion parsed =
-        region == CurlRegion::kNearArcs ? CurlRegion::kWholeHair : CurlRegion::kNearArcs;
-    ASSERT_TRUE(ParseCurlRegion(CurlRegionName(region), &parsed));
-    EXPECT_EQ(parsed, region);
+// Every value's name parses back to it; an unknown name leaves the target
+// as it was.
+template <typename Enum, size_t N>
+void ExpectNamesParseBack(const Enum (&values)[N], const char* (*name)(Enum),
+                          bool (*parse)(const std::string&, Enum*), const char* unknown) {
+  for (const Enum value : values) {
+    Enum parsed = value == values[0] ? values[N - 1] : values[0];
+    ASSERT_TRUE(parse(name(value), &parsed)) << name(value);
+    EXPECT_EQ(parsed, value);
   }
-  CurlRegion unchanged = CurlRegion::kNearArcs;
-  EXPECT_FALSE(ParseCurlRegion("everywhere", &unchanged));
-  EXPECT_EQ(unchanged, CurlRegion::kNearArcs);
+  Enum unchanged = values[N - 1];
+  EXPECT_FALSE(parse(unknown, &unchanged)) << unknown;
+  EXPECT_EQ(unchanged, values[N - 1]);
+}
+
+TEST(CurlRegion, NamesParseBack) {
+  const CurlRegion regions[] = {CurlRegion::kNearArcs, CurlRegion::kWholeHair};
+  ExpectNamesParseBack(regions, CurlRegionName, ParseCurlRegion, "everywhere");
 }
 
 TEST(CurlRadiusFrom, NamesParseBack) {
-  for (const CurlRadiusFrom from : kCurlRadiusFroms) {
-    CurlRadiusFrom parsed =
-        from == CurlRadiusFrom::kCurvature ? CurlRadiusFrom::kTurnRate : CurlRadiusFrom::kCurvature;
-    ASSERT_TRUE(ParseCurlRadiusFrom(CurlRadiusFromName(from), &parsed));
-    EXPECT_EQ(parsed, from);
-  }
-  CurlRadiusFrom unchanged = CurlRadiusFrom::kTurnRate;
-  EXPECT_FALSE(ParseCurlRadiusFrom("torsion", &unchanged));
-  EXPECT_EQ(unchanged, CurlRadiusFrom::kTurnRate);
+  ExpectNamesParseBack(kCurlRadiusFroms, CurlRadiusFromName, ParseCurlRadiusFrom, "torsion");
 }
 
 TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
