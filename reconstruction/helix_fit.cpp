@@ -58,10 +58,10 @@ Eigen::VectorXd Residuals(const std::vector<Eigen::Vector3d>& points, const Fram
 // d(residuals)/d(parameters): forward differences for the axis' tilt and
 // shift, exact for the radius, slope and offset (the residuals are linear
 // in them).
+// `r` and `angles` are the residuals and angles at x.
 Eigen::MatrixXd Jacobian(const std::vector<Eigen::Vector3d>& points, const Frame& frame,
-                         const Parameters& x, const Eigen::VectorXd& r) {
-  std::vector<double> angles;
-  Residuals(points, frame, x, &angles);
+                         const Parameters& x, const Eigen::VectorXd& r,
+                         const std::vector<double>& angles) {
   Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(r.size(), 7);
   for (const int k : {kTiltU, kTiltV, kShiftU, kShiftV}) {
     // Tilts are radians-like, shifts mm: both near 0, the data within the
@@ -83,9 +83,10 @@ Eigen::MatrixXd Jacobian(const std::vector<Eigen::Vector3d>& points, const Frame
 // Levenberg-Marquardt from x; returns the parameters it ends on.
 Parameters Refine(const std::vector<Eigen::Vector3d>& points, const Frame& frame, Parameters x) {
   double lambda = 1e-3;
-  Eigen::VectorXd r = Residuals(points, frame, x, nullptr);
+  std::vector<double> angles, candidate_angles;
+  Eigen::VectorXd r = Residuals(points, frame, x, &angles);
   for (int iteration = 0; iteration < kIterations; ++iteration) {
-    const Eigen::MatrixXd jacobian = Jacobian(points, frame, x, r);
+    const Eigen::MatrixXd jacobian = Jacobian(points, frame, x, r, angles);
     const Eigen::Matrix<double, 7, 7> normal = jacobian.transpose() * jacobian;
     const Parameters gradient = jacobian.transpose() * r;
     double gain = 0;
@@ -93,11 +94,12 @@ Parameters Refine(const std::vector<Eigen::Vector3d>& points, const Frame& frame
       Eigen::Matrix<double, 7, 7> damped = normal;
       damped.diagonal() = damped.diagonal() * (1 + lambda) + Parameters::Constant(1e-12);
       const Parameters candidate = x - damped.ldlt().solve(gradient);
-      const Eigen::VectorXd candidate_r = Residuals(points, frame, candidate, nullptr);
+      const Eigen::VectorXd candidate_r = Residuals(points, frame, candidate, &candidate_angles);
       if (candidate.allFinite() && candidate_r.squaredNorm() < r.squaredNorm()) {
         gain = (r.squaredNorm() - candidate_r.squaredNorm()) / r.squaredNorm();
         x = candidate;
         r = candidate_r;
+        angles.swap(candidate_angles);
         lambda = std::max(lambda / 10, 1e-9);
         break;
       }
