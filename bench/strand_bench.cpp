@@ -13,6 +13,7 @@
 //       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region
 //       near-arcs|whole-hair] [--curl-region-cell MM]
 //       [--curl-radius-from helix-fit|curvature-and-torsion|curvature|turn-rate]
+//       [--helix-out-of-free-space yes|no] [--free-space-views N] [--free-space-margin MM]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
 //       [--scalp-skin-band MM] [--tip-skin-margin PX]
@@ -33,6 +34,9 @@
 // curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
 // the estimate. --curl-radius-from picks what the estimate's radius and pitch
 // come from (CurlRadiusFrom; helix-fit by default).
+// --helix-out-of-free-space no lets the helices wind in front of the seen hair
+// (StrandGrowthOptions::helix_out_of_free_space); --free-space-views and
+// --free-space-margin set its FreeSpaceOptions::min_views and margin_mm.
 // --curl-region near-arcs winds the strands only near the seen arcs, in the
 // cells of --curl-region-cell MM next to a seen arc's (CurlFieldOptions::region,
 // region_mm 20), instead of wherever they grow (whole-hair).
@@ -141,6 +145,7 @@ int main(int argc, char** argv) {
         "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region "
         "near-arcs|whole-hair] [--curl-region-cell MM] "
         "[--curl-radius-from helix-fit|curvature-and-torsion|curvature|turn-rate] "
+        "[--helix-out-of-free-space yes|no] [--free-space-views N] [--free-space-margin MM] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "
         "S] "
@@ -251,6 +256,12 @@ int main(int argc, char** argv) {
       options.growth.curl.min_depth_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-radius-from") == 0) {
       if (!ReadCurlRadiusFrom(argv[i + 1], &options.growth.curl.radius_from)) return 2;
+    } else if (std::strcmp(argv[i], "--helix-out-of-free-space") == 0) {
+      if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.helix_out_of_free_space)) return 2;
+    } else if (std::strcmp(argv[i], "--free-space-views") == 0) {
+      options.growth.free_space.min_views = std::atoi(argv[i + 1]);
+    } else if (std::strcmp(argv[i], "--free-space-margin") == 0) {
+      options.growth.free_space.margin_mm = std::atof(argv[i + 1]);
     } else if (std::strcmp(argv[i], "--curl-field") == 0) {
       if (!ParseYesNo(argv[i], argv[i + 1], &options.growth.curl.enabled)) return 2;
     } else if (std::strcmp(argv[i], "--helix-window") == 0) {
@@ -361,8 +372,8 @@ int main(int argc, char** argv) {
       fs::copy_file(capture + "/reconstruction/points.ply", dir + "/points.ply",
                     fs::copy_options::overwrite_existing);
     }
-    auto summary =
-        ReconstructStrands(dir, head->spec, head->source, options, skin.ok() ? &*skin : nullptr);
+    auto summary = ReconstructStrands(dir, head->spec, head->source, options,
+                                      skin.ok() ? &*skin : nullptr, &input->views);
     if (!summary.ok()) {
       std::fprintf(stderr, "%s: %s\n", name.c_str(), summary.status().ToString().c_str());
       return 1;

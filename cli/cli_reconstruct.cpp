@@ -33,6 +33,8 @@ struct ReconstructArgs {
   std::string cover_segments = SegmentCoverOptions{}.enabled ? "yes" : "no";
   std::string curls = CurlFieldOptions{}.enabled ? "yes" : "no";
   std::string curl_region = CurlRegionName(CurlFieldOptions{}.region);
+  std::string curls_out_of_free_space =
+      StrandGrowthOptions{}.helix_out_of_free_space ? "yes" : "no";
   std::string seen_tips = SeenTipOptions{}.enabled ? "yes" : "no";
   std::string colmap, images, masks;
   std::vector<int> views;
@@ -108,6 +110,7 @@ Result<ReconstructCaptureSummary> RunReconstruct(const ReconstructArgs& a) {
   options.strands.growth.cover.enabled = a.cover_segments == "yes";
   options.strands.growth.curl.enabled = a.curls == "yes";
   ParseCurlRegion(a.curl_region, &options.strands.growth.curl.region);  // checked by the parser
+  options.strands.growth.helix_out_of_free_space = a.curls_out_of_free_space == "yes";
   options.strands.growth.seen_tips.enabled = a.seen_tips == "yes";
   options.strands.threads = a.threads;
   options.progress = ProgressPrinter();
@@ -179,6 +182,12 @@ void AddReconstructCommand(CLI::App& app, CommonOptions& common, Dispatch& dispa
                   "curls only in part)")
       ->check(CLI::IsMember(
           {CurlRegionName(CurlRegion::kWholeHair), CurlRegionName(CurlRegion::kNearArcs)}))
+      ->capture_default_str();
+  cmd->add_option("--curls-out-of-free-space", args->curls_out_of_free_space,
+                  "bao-qi: a strand winding on the curl's helix keeps out of the space the "
+                  "cameras see through, in front of the points they saw (yes), or winds where "
+                  "its helix takes it (no)")
+      ->check(CLI::IsMember({"yes", "no"}))
       ->capture_default_str();
   cmd->add_option("--cover-segments", args->cover_segments,
                   "bao-qi: give the seen strands no strand from the roots passes along a strand "

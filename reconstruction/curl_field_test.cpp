@@ -113,6 +113,35 @@ TEST(HelixGuide, DrawsAStrayStrandBack) {
   EXPECT_NEAR(std::hypot(p.x() - centre.x(), p.y() - centre.y()), 6.0, 0.3);
 }
 
+// Moving the centre away from the point the strand heads for moves that
+// point as far, square to the axis, and the helix keeps winding about the
+// moved centre.
+TEST(HelixGuide, MovesItsCentreAwayFromAPointItMustNotReach) {
+  const Curl curl{6, 20, 1};
+  HelixGuide guide(1.0);
+  const Eigen::Vector3f axis = -Eigen::Vector3f::UnitZ();
+  const Eigen::Vector3f p(6, 0, 0);
+  guide.Start(p, Eigen::Vector3f(0, -1, -1).normalized(), axis, curl);
+  const Eigen::Vector3f q = p + guide.Next(p, axis);
+  const Eigen::Vector3d before = guide.centre();
+  guide.MoveCentreAwayFrom(q, 2.0);
+  const Eigen::Vector3d moved = guide.centre() - before;
+  EXPECT_NEAR(moved.norm(), 2.0, 1e-9);
+  EXPECT_NEAR(moved.z(), 0.0, 1e-9) << "square to the axis";
+  const Eigen::Vector3d from_q = before - q.cast<double>();
+  EXPECT_GT(moved.dot(from_q), 0.0) << "away from q";
+  // The point it now heads for lies 2 mm further from q, square to the axis.
+  const Eigen::Vector3f towards = guide.Towards(p);
+  EXPECT_NEAR(towards.norm(), 1.0f, 1e-5f);
+  Eigen::Vector3f r = p;
+  for (int k = 0; k < 40; ++k) r += guide.Next(r, axis);
+  EXPECT_NEAR(std::hypot(r.x() - guide.centre().x(), r.y() - guide.centre().y()), 6.0, 0.3);
+  // A point on the axis gives no side to move to.
+  const Eigen::Vector3d still = guide.centre();
+  guide.MoveCentreAwayFrom(still.cast<float>(), 2.0);
+  EXPECT_LT((guide.centre() - still).norm(), 1e-9);
+}
+
 // Ringlets on an 8 mm grid (closer than their 12 mm width, as ringlets hang
 // on a head), each seen as a few arcs of about two thirds of a turn; arc
 // `arc` of ringlet k (in column k / 12) winds handedness(k, arc).

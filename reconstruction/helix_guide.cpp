@@ -67,9 +67,21 @@ Eigen::Vector3f HelixGuide::Next(const Eigen::Vector3f& p, const Eigen::Vector3f
   centre_ += step_mm_ * cos_alpha_ * a;
   const double turn = curl_.handedness * step_mm_ * sin_alpha_ / curl_.radius_mm;
   radial_ = std::cos(turn) * radial_ + std::sin(turn) * a.cross(radial_);
+  return Towards(p);
+}
+
+Eigen::Vector3f HelixGuide::Towards(const Eigen::Vector3f& p) const {
   const Eigen::Vector3d to_next = centre_ + curl_.radius_mm * radial_ - p.cast<double>();
   const double n = to_next.norm();
-  return (n > 1e-9 ? Eigen::Vector3d(to_next / n) : a).cast<float>();
+  return (n > 1e-9 ? Eigen::Vector3d(to_next / n) : axis_).cast<float>();
+}
+
+void HelixGuide::MoveCentreAwayFrom(const Eigen::Vector3f& q, double distance_mm) {
+  Eigen::Vector3d away = centre_ - q.cast<double>();
+  away -= away.dot(axis_) * axis_;
+  const double n = away.norm();
+  if (n <= 1e-3) return;
+  centre_ += (distance_mm / n) * away;
 }
 
 }  // namespace hairrig

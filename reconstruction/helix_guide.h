@@ -69,6 +69,14 @@ class HelixGuide {
   // as at Start; flipped to it when given the other way).
   Eigen::Vector3f Next(const Eigen::Vector3f& p, const Eigen::Vector3f& axis);
 
+  // The unit direction from `p` towards the helix's point as it stands (the
+  // point Next last gave), without moving on.
+  Eigen::Vector3f Towards(const Eigen::Vector3f& p) const;
+  // Moves the helix's centre by `distance_mm` square to its axis, away from
+  // `q` (a point the strand must not reach: Next's point then moves as far
+  // from it). Nothing when q lies within a micrometre of the axis.
+  void MoveCentreAwayFrom(const Eigen::Vector3f& q, double distance_mm);
+
   const Eigen::Vector3d& centre() const { return centre_; }
   // The axis as last moved along (unit, the strand's way along it).
   Eigen::Vector3f axis() const { return axis_.cast<float>(); }

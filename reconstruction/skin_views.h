@@ -17,9 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <atomic>
 #include <cstdint>
-#include <memory>
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
@@ -28,6 +26,7 @@
 #include "core/status.h"
 #include "core/transform.h"
 #include "reconstruction/views.h"
+#include "reconstruction/voxel_cache.h"
 
 namespace hairrig {
 
@@ -106,24 +105,18 @@ class SkinViews {
 };
 
 // SkinViews::OverSkin answered once per cell of a regular grid, at the cell's
-// centre, for hot loops such as strand growth (a strand's every step). The
-// grid spans origin_mm + [0, size) * cell_mm in the object frame; a point
-// outside it is answered exactly. `views` must outlive the grid. Thread-safe:
-// concurrent callers may compute one cell twice, with the same answer.
+// centre (VoxelCache), for hot loops such as strand growth (a strand's every
+// step). The grid spans origin_mm + [0, size) * cell_mm in the object frame;
+// a point outside it is answered exactly. `views` must outlive the grid.
+// Thread-safe.
 class SkinGrid {
  public:
   SkinGrid(const SkinViews& views, const SkinViewOptions& options, const Eigen::Vector3f& origin_mm,
            const Eigen::Vector3i& size, double cell_mm);
-  bool OverSkin(const Eigen::Vector3f& p_object) const;
+  bool OverSkin(const Eigen::Vector3f& p_object) const { return cache_(p_object); }
 
  private:
-  enum : uint8_t { kUnknown = 0, kNotSkin = 1, kSkin = 2 };
-  const SkinViews& views_;
-  SkinViewOptions options_;
-  Eigen::Vector3f origin_mm_;
-  Eigen::Vector3i size_;
-  float cell_mm_;
-  std::unique_ptr<std::atomic<uint8_t>[]> cells_;
+  VoxelCache cache_;
 };
 
 }  // namespace hairrig

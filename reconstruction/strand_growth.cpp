@@ -166,6 +166,7 @@ Status StrandGrowthOptions::Check() const {
   HR_RETURN_IF_ERROR(cover.Check());
   HR_RETURN_IF_ERROR(curl.Check());
   HR_RETURN_IF_ERROR(seen_tips.Check());
+  HR_RETURN_IF_ERROR(free_space.Check());
   return tip_skin.Check();
 }
 
@@ -280,6 +281,7 @@ class FieldGrowth::Step {
             (held + pull * (axis_.dot(held) >= 0 ? axis_ : Eigen::Vector3f(-axis_))).normalized();
       }
       *next = guide_.Next(p, axis_);
+      KeepOutOfFreeSpace(p, next);
       continuing_ = true;
     } else {
       guide_.Stop();
@@ -317,6 +319,19 @@ class FieldGrowth::Step {
     guide_.Start(p, previous, axis_, curl);
     return false;
   }
+  // Moves the helix's centre a step at a time away from its next vertex
+  // while that vertex lies in the free space (helix_out_of_free_space), and
+  // turns *next towards the moved helix's point.
+  void KeepOutOfFreeSpace(const Eigen::Vector3f& p, Eigen::Vector3f* next) {
+    constexpr int kMaxMoves = 4;
+    if (!g_.free_) return;
+    const auto step = static_cast<float>(g_.o_.step_mm);
+    for (int move = 0; move < kMaxMoves && (*g_.free_)(p + step * *next); ++move) {
+      guide_.MoveCentreAwayFrom(p + step * *next, g_.o_.step_mm);
+      *next = guide_.Towards(p);
+      g_.helix_moves_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
   bool AtScalp(const Eigen::Vector3f& p) const {
     if (g_.head_ == nullptr) return false;
     const Eigen::Vector3d q = p.cast<double>();
@@ -339,13 +354,19 @@ class FieldGrowth::Step {
 
 FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
                          const StrandGrowthOptions& options, const SkinViews* skin,
-                         const CurlField* curls, const SeenTips* seen_tips)
+                         const CurlField* curls, const SeenTips* seen_tips,
+                         const FreeSpace* free_space)
     : field_(field),
       head_(head),
       o_(options),
       skin_(std::make_unique<Skin>()),
       curls_(curls),
       seen_tips_(seen_tips) {
+  if (o_.helix_out_of_free_space && free_space != nullptr) {
+    free_ = std::make_unique<const VoxelCache>(
+        [free_space](const Eigen::Vector3f& p) { return free_space->Free(p.cast<double>()); },
+        field.origin(), field.size() * 2, field.voxel_mm() / 2);
+  }
   if (o_.end_over_skin && skin != nullptr)
     skin_->ends = std::make_unique<const SkinGrid>(*skin, o_.skin, field.origin(), field.size(),
                                                    field.voxel_mm());
@@ -371,7 +392,9 @@ StrandSet FieldGrowth::FromRoots(const std::vector<DirectedRoot>& roots,
                                  StrandGrowthSummary* summary) const {
   const auto make_step = [&] { return Step(*this, false); };
   const auto trim_tip = [&](std::vector<Eigen::Vector3f>& strand) { return TrimTip(&strand); };
-  return GrowAll(roots, head_, o_, make_step, trim_tip, summary);
+  StrandSet strands = GrowAll(roots, head_, o_, make_step, trim_tip, summary);
+  if (summary != nullptr) summary->helix_moves_from_free_space = helix_moves_.load();
+  return strands;
 }
 
 std::optional<std::vector<Eigen::Vector3f>> FieldGrowth::FromScalpTo(
@@ -503,6 +526,7 @@ void FieldGrowth::ThroughUncoveredSegments(const std::vector<StrandSegment>& seg
     }
   }
   const std::vector<double> lengths = strands->StrandLengths();
+  s.helix_moves_from_free_space = helix_moves_.load();
   s.strands = static_cast<int64_t>(strands->num_strands());
   s.vertices = static_cast<int64_t>(strands->num_points());
   s.mean_length_mm = lengths.empty() ? 0

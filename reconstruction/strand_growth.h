@@ -27,6 +27,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -36,12 +37,14 @@
 #include "core/status.h"
 #include "core/strands.h"
 #include "reconstruction/curl_field.h"
+#include "reconstruction/free_space.h"
 #include "reconstruction/helix_continuation.h"
 #include "reconstruction/hybrid_field.h"
 #include "reconstruction/seen_tips.h"
 #include "reconstruction/segment_coverage.h"
 #include "reconstruction/skin_views.h"
 #include "reconstruction/strand_segments.h"
+#include "reconstruction/voxel_cache.h"
 
 namespace hairrig {
 
@@ -152,6 +155,17 @@ struct StrandGrowthOptions {
   // are found by the caller, SeenTips::Find). seen_tips.enabled = false: the
   // paper's growth, to the volume's edge.
   SeenTipOptions seen_tips;
+  // Bao & Qi growth with the free space given (free_space.h): a strand
+  // winding on a curl's helix whose next vertex would lie in front of the
+  // seen hair, where the cameras see through, moves the helix's centre away
+  // from that vertex, a step's length at a time (up to 4 per step), so the
+  // helix winds within the hair: a helix placed by the seen surface's bend
+  // swings half its turn out in front of the surface, and nothing there is
+  // hair. The caller builds the free space with `free_space` (strand_
+  // reconstruction.h, from the points and their views). false: the helix
+  // keeps its centre (docs/accuracy.md compares them).
+  bool helix_out_of_free_space = true;
+  FreeSpaceOptions free_space;
   SegmentCoverOptions cover;  // Bao & Qi growth only
   int threads = 2;
 
@@ -163,6 +177,8 @@ struct StrandGrowthSummary {
   int64_t stopped_volume = 0, stopped_length = 0, stopped_off_hair = 0, stopped_over_skin = 0,
           stopped_seen_tip = 0, dropped_short = 0;
   int64_t tips_trimmed_over_skin = 0;  // kept strands whose tip trim_tip_over_skin shortened
+  // Moves of a helix's centre out of the free space (helix_out_of_free_space).
+  int64_t helix_moves_from_free_space = 0;
   // The seen tips strands could end at (SeenTips::size; set by the caller that
   // found them) of the seen strands' tip ends looked at.
   int64_t seen_tips = 0, seen_tip_ends_examined = 0;
@@ -178,14 +194,15 @@ struct StrandGrowthSummary {
 
 // Bao & Qi's growth in a hybrid field. `head` (may be null: no head, no
 // strands through segments), `skin` (may be null: no skin test), `curls`
-// (may be null: no curl field) and `seen_tips` (may be null: strands do not
-// end at seen tips) in the field's frame; all five and `options` must
-// outlive the object.
+// (may be null: no curl field), `seen_tips` (may be null: strands do not
+// end at seen tips) and `free_space` (may be null: helices wind where they
+// will) in the field's frame; all six and `options` must outlive the object.
 class FieldGrowth {
  public:
   FieldGrowth(const HybridOrientationField& field, const HeadModel* head,
               const StrandGrowthOptions& options, const SkinViews* skin,
-              const CurlField* curls = nullptr, const SeenTips* seen_tips = nullptr);
+              const CurlField* curls = nullptr, const SeenTips* seen_tips = nullptr,
+              const FreeSpace* free_space = nullptr);
   ~FieldGrowth();
 
   // Eq. 2 from each root. Strands shorter than 2 vertices are dropped.
@@ -228,6 +245,9 @@ class FieldGrowth {
   std::unique_ptr<Skin> skin_;
   const CurlField* curls_;
   const SeenTips* seen_tips_;
+  // FreeSpace::Free once per half voxel of the field's grid; null without a free space.
+  std::unique_ptr<const VoxelCache> free_;
+  mutable std::atomic<int64_t> helix_moves_{0};
 };
 
 // FieldGrowth(field, head, options, skin).FromRoots(roots, summary).

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "core/clock.h"
@@ -133,7 +134,7 @@ Result<StrandModel> RunBaoQi(const std::vector<OrientedPoint>& points,
                              std::vector<StrandSegment> segments, const HeadModel& head,
                              const std::vector<DirectedRoot>& roots,
                              const StrandReconstructionOptions& o, const SkinViews* skin,
-                             StrandReconstructionSummary* summary) {
+                             const FreeSpace* free_space, StrandReconstructionSummary* summary) {
   int64_t t = SteadyNowNs();
   DirectionOptions direction = o.direction;
   direction.threads = o.threads;
@@ -155,7 +156,7 @@ Result<StrandModel> RunBaoQi(const std::vector<OrientedPoint>& points,
   summary->curl = curls.estimate();
   const SeenTips seen_tips = SeenTips::Find(segments, growth.seen_tips, &points);
   StrandModel model;
-  const FieldGrowth grow(field, &head, growth, skin, &curls, &seen_tips);
+  const FieldGrowth grow(field, &head, growth, skin, &curls, &seen_tips, free_space);
   model.strands = grow.FromRoots(roots, &summary->growth);
   summary->growth.seen_tips = static_cast<int64_t>(seen_tips.size());
   summary->growth.seen_tip_ends_examined = static_cast<int64_t>(seen_tips.examined());
@@ -303,6 +304,7 @@ nlohmann::json StrandReconstructionSummary::ToJson() const {
                         {"seen_tips", growth.seen_tips},
                         {"seen_tip_ends_examined", growth.seen_tip_ends_examined},
                         {"tips_trimmed_over_skin", growth.tips_trimmed_over_skin},
+                        {"helix_moves_from_free_space", growth.helix_moves_from_free_space},
                         {"through_uncovered_segments",
                          {{"segments", growth.cover_candidates},
                           {"strands", growth.cover_strands},
@@ -402,11 +404,10 @@ std::string StrandReconstructionSummary::BriefReport() const {
   return s.str();
 }
 
-Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir,
-                                                       const HeadSpec& head_spec,
-                                                       const std::string& head_source,
-                                                       const StrandReconstructionOptions& o,
-                                                       const SkinViews* skin) {
+Result<StrandReconstructionSummary> ReconstructStrands(
+    const std::string& reconstruction_dir, const HeadSpec& head_spec,
+    const std::string& head_source, const StrandReconstructionOptions& o, const SkinViews* skin,
+    const std::vector<ReconstructionView>* views) {
   HR_RETURN_IF_ERROR(o.Check());
   const int64_t start = SteadyNowNs();
   StrandReconstructionSummary summary;
@@ -431,8 +432,12 @@ Result<StrandReconstructionSummary> ReconstructStrands(const std::string& recons
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
+      // Where the cameras see through, for the helices' winding (helix_out_of_free_space).
+      std::optional<FreeSpace> free_space;
+      if (views != nullptr && o.growth.helix_continuation && o.growth.helix_out_of_free_space)
+        free_space.emplace(*views, points, o.growth.free_space);
       HR_ASSIGN_OR_RETURN(model, RunBaoQi(points, std::move(segments), *head, ScalpRoots(*head, o),
-                                          o, skin, &summary));
+                                          o, skin, free_space ? &*free_space : nullptr, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);

@@ -106,14 +106,16 @@ struct StrandReconstructionSummary {
 
 // Reads <reconstruction_dir>/points.ply, writes <reconstruction_dir>/strands/.
 // `skin` (may be null) is the views' skin in the points' frame: bao-qi's
-// strands end in front of it (StrandGrowthOptions::end_over_skin).
+// strands end in front of it (StrandGrowthOptions::end_over_skin). `views`
+// (may be null) are the views the points' view lists index: bao-qi's helices
+// wind out of the space they see through (StrandGrowthOptions::
+// helix_out_of_free_space).
 // NotFound when there are no points (run the points stage first);
 // InvalidArgument for bad options, a head whose mesh cannot be loaded (naming
 // it), points that give no strand segment, or (luo) no wisp.
-Result<StrandReconstructionSummary> ReconstructStrands(const std::string& reconstruction_dir,
-                                                       const HeadSpec& head,
-                                                       const std::string& head_source,
-                                                       const StrandReconstructionOptions& options,
-                                                       const SkinViews* skin = nullptr);
+Result<StrandReconstructionSummary> ReconstructStrands(
+    const std::string& reconstruction_dir, const HeadSpec& head, const std::string& head_source,
+    const StrandReconstructionOptions& options, const SkinViews* skin = nullptr,
+    const std::vector<ReconstructionView>* views = nullptr);
 
 }  // namespace hairrig

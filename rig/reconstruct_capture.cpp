@@ -90,8 +90,9 @@ Status RunStrands(const ReconstructCaptureOptions& o, const ReconstructionInput&
                skin.status().ToString());
   }
   const SkinViews* skin_views = skin.ok() ? &*skin : nullptr;
-  HR_ASSIGN_OR_RETURN(summary->strands, ReconstructStrands(request.reconstruction_dir, head.spec,
-                                                           head.source, o.strands, skin_views));
+  HR_ASSIGN_OR_RETURN(summary->strands,
+                      ReconstructStrands(request.reconstruction_dir, head.spec, head.source,
+                                         o.strands, skin_views, &input.views));
   // The strands and points as written, read once for the checks and the display copy.
   HR_ASSIGN_OR_RETURN(const StrandSet strands,
                       ReadStrands(summary->strands->output_dir + "/strands.ply"));
