@@ -124,12 +124,14 @@ TEST(HelixGuide, MovesItsCentreAwayFromAPointItMustNotReach) {
   guide.Start(p, Eigen::Vector3f(0, -1, -1).normalized(), axis, curl);
   const Eigen::Vector3f q = p + guide.Next(p, axis);
   const Eigen::Vector3d before = guide.centre();
-  guide.MoveCentreAwayFrom(q, 2.0);
+  EXPECT_TRUE(guide.MoveCentreAwayFrom(q, 2.0));
   const Eigen::Vector3d moved = guide.centre() - before;
   EXPECT_NEAR(moved.norm(), 2.0, 1e-9);
   EXPECT_NEAR(moved.z(), 0.0, 1e-9) << "square to the axis";
-  const Eigen::Vector3d from_q = before - q.cast<double>();
-  EXPECT_GT(moved.dot(from_q), 0.0) << "away from q";
+  // Along the centre's offset from q, square to the axis (the axis is -z).
+  Eigen::Vector3d from_q = before - q.cast<double>();
+  from_q.z() = 0;
+  EXPECT_NEAR(moved.normalized().dot(from_q.normalized()), 1.0, 1e-9) << "away from q";
   // The point it now heads for lies 2 mm further from q, square to the axis.
   const Eigen::Vector3f towards = guide.Towards(p);
   EXPECT_NEAR(towards.norm(), 1.0f, 1e-5f);
@@ -138,7 +140,7 @@ TEST(HelixGuide, MovesItsCentreAwayFromAPointItMustNotReach) {
   EXPECT_NEAR(std::hypot(r.x() - guide.centre().x(), r.y() - guide.centre().y()), 6.0, 0.3);
   // A point on the axis gives no side to move to.
   const Eigen::Vector3d still = guide.centre();
-  guide.MoveCentreAwayFrom(still.cast<float>(), 2.0);
+  EXPECT_FALSE(guide.MoveCentreAwayFrom(still.cast<float>(), 2.0));
   EXPECT_LT((guide.centre() - still).norm(), 1e-9);
 }
 

@@ -17,8 +17,8 @@ Status FreeSpaceOptions::Check() const {
 
 namespace {
 
-// The cell `p_cam` projects into and its depth; false behind the camera or
-// outside the buffer.
+// The cell `p_cam` projects into; false behind the camera or outside the
+// buffer (whose last row and column may reach a little past the image).
 bool CellOf(const CameraIntrinsics& camera, const cv::Mat1f& buffer, int cell_px,
             const Eigen::Vector3d& p_cam, cv::Point* cell) {
   Eigen::Vector2d uv;

@@ -51,7 +51,8 @@ class FreeSpace {
  public:
   // The views' depth buffers from the points' view lists (indices into
   // `views`; an index past its end is ignored). Points behind a camera or
-  // outside its image are left out of that view's buffer.
+  // outside its buffer are left out of that view's buffer. `options` must
+  // pass Check() (StrandGrowthOptions::Check checks them).
   FreeSpace(const std::vector<ReconstructionView>& views, const std::vector<OrientedPoint>& points,
             const FreeSpaceOptions& options);
 

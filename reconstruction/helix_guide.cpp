@@ -76,12 +76,13 @@ Eigen::Vector3f HelixGuide::Towards(const Eigen::Vector3f& p) const {
   return (n > 1e-9 ? Eigen::Vector3d(to_next / n) : axis_).cast<float>();
 }
 
-void HelixGuide::MoveCentreAwayFrom(const Eigen::Vector3f& q, double distance_mm) {
+bool HelixGuide::MoveCentreAwayFrom(const Eigen::Vector3f& q, double distance_mm) {
   Eigen::Vector3d away = centre_ - q.cast<double>();
   away -= away.dot(axis_) * axis_;
   const double n = away.norm();
-  if (n <= 1e-3) return;
+  if (n <= 1e-3) return false;
   centre_ += (distance_mm / n) * away;
+  return true;
 }
 
 }  // namespace hairrig

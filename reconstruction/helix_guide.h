@@ -73,9 +73,10 @@ class HelixGuide {
   // point Next last gave), without moving on.
   Eigen::Vector3f Towards(const Eigen::Vector3f& p) const;
   // Moves the helix's centre by `distance_mm` square to its axis, away from
-  // `q` (a point the strand must not reach: Next's point then moves as far
-  // from it). Nothing when q lies within a micrometre of the axis.
-  void MoveCentreAwayFrom(const Eigen::Vector3f& q, double distance_mm);
+  // `q` (a point the strand must not reach; Next's point moves with the
+  // centre). False, and nothing moved, when q lies within a micrometre of
+  // the axis.
+  bool MoveCentreAwayFrom(const Eigen::Vector3f& q, double distance_mm);
 
   const Eigen::Vector3d& centre() const { return centre_; }
   // The axis as last moved along (unit, the strand's way along it).

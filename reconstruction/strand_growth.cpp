@@ -327,7 +327,7 @@ class FieldGrowth::Step {
     if (!g_.free_) return;
     const auto step = static_cast<float>(g_.o_.step_mm);
     for (int move = 0; move < kMaxMoves && (*g_.free_)(p + step * *next); ++move) {
-      guide_.MoveCentreAwayFrom(p + step * *next, g_.o_.step_mm);
+      if (!guide_.MoveCentreAwayFrom(p + step * *next, g_.o_.step_mm)) return;
       *next = guide_.Towards(p);
       g_.helix_moves_.fetch_add(1, std::memory_order_relaxed);
     }
@@ -362,7 +362,9 @@ FieldGrowth::FieldGrowth(const HybridOrientationField& field, const HeadModel* h
       skin_(std::make_unique<Skin>()),
       curls_(curls),
       seen_tips_(seen_tips) {
-  if (o_.helix_out_of_free_space && free_space != nullptr) {
+  // Only strands winding on a curl ask (KeepOutOfFreeSpace): no cache where nothing curls.
+  if (o_.helix_out_of_free_space && free_space != nullptr && curls != nullptr &&
+      curls->estimate().curl.curly()) {
     free_ = std::make_unique<const VoxelCache>(
         [free_space](const Eigen::Vector3f& p) { return free_space->Free(p.cast<double>()); },
         field.origin(), field.size() * 2, field.voxel_mm() / 2);

@@ -1,6 +1,7 @@
 #include "reconstruction/strand_reconstruction.h"
 
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -9,6 +10,7 @@
 #include "core/file_util.h"
 #include "core/head_model.h"
 #include "core/image_file.h"
+#include "core/log.h"
 #include "core/strand_io.h"
 #include "reconstruction/point_cloud.h"
 #include "reconstruction/strand_preview.h"
@@ -127,6 +129,24 @@ Result<StrandModel> RunLuo(const std::vector<OrientedPoint>& points,
   model.wisp_centres = WispCentres(wisps);
   model.structure = true;
   return model;
+}
+
+// Whether the points' view lists index `views`: the points stage's
+// summary.json beside the points names its views in the order the lists
+// index them. True when there is no summary to compare with (a bench's copy
+// of the points).
+bool PointViewsAre(const std::string& reconstruction_dir,
+                   const std::vector<ReconstructionView>& views) {
+  std::ifstream in(reconstruction_dir + "/summary.json");
+  if (!in) return true;
+  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
+  if (summary.is_discarded() || !summary.contains("views") || !summary["views"].is_array())
+    return true;
+  const nlohmann::json& named = summary["views"];
+  if (named.size() != views.size()) return false;
+  for (size_t i = 0; i < views.size(); ++i)
+    if (named[i].value("name", std::string()) != views[i].name) return false;
+  return true;
 }
 
 // Bao & Qi 2017 on the segments directed by the MRF.
@@ -434,8 +454,15 @@ Result<StrandReconstructionSummary> ReconstructStrands(
     } else {
       // Where the cameras see through, for the helices' winding (helix_out_of_free_space).
       std::optional<FreeSpace> free_space;
-      if (views != nullptr && o.growth.helix_continuation && o.growth.helix_out_of_free_space)
-        free_space.emplace(*views, points, o.growth.free_space);
+      if (views != nullptr && o.growth.helix_continuation && o.growth.helix_out_of_free_space) {
+        if (PointViewsAre(reconstruction_dir, *views)) {
+          free_space.emplace(*views, points, o.growth.free_space);
+        } else {
+          LogWarning("strands: " + reconstruction_dir +
+                     "/summary.json names other views than these; winding strands are not kept "
+                     "out of the free space (run the points stage with the same --views)");
+        }
+      }
       HR_ASSIGN_OR_RETURN(model, RunBaoQi(points, std::move(segments), *head, ScalpRoots(*head, o),
                                           o, skin, free_space ? &*free_space : nullptr, &summary));
     }

@@ -1,8 +1,8 @@
 // A yes-or-no question about positions answered once per cell of a regular
 // grid, at the cell's centre, for hot loops such as strand growth (a strand's
 // every step asks), where the question itself is costly (projecting into
-// every view). The grid spans origin_mm + [0, size) * cell_mm; a position
-// outside it is answered exactly. Thread-safe: concurrent callers may answer
+// every view). Cell c is centred at origin_mm + c * cell_mm, c in [0, size);
+// a position outside the cells is answered exactly. Thread-safe: concurrent callers may answer
 // one cell twice, with the same answer, as long as the question is a pure
 // function of the position.
 #pragma once
