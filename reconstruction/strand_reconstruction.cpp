@@ -149,12 +149,33 @@ bool PointViewsAre(const std::string& reconstruction_dir,
   return true;
 }
 
+// The views the points were seen from, where the points lie (`views` may be null).
+struct StrandViews {
+  const std::string& reconstruction_dir;
+  const std::vector<ReconstructionView>* views;
+};
+
+// Where the cameras see through, for the helices' winding
+// (helix_out_of_free_space); none without views or with the option off, and
+// none (with a warning) when the points' view lists index other views.
+std::optional<FreeSpace> FreeSpaceFor(const std::vector<OrientedPoint>& points,
+                                      const StrandViews& seen, const StrandGrowthOptions& growth) {
+  if (seen.views == nullptr || !growth.helix_out_of_free_space) return std::nullopt;
+  if (!PointViewsAre(seen.reconstruction_dir, *seen.views)) {
+    LogWarning("strands: " + seen.reconstruction_dir +
+               "/summary.json names other views than these; winding strands are not kept "
+               "out of the free space (run the points stage with the same --views)");
+    return std::nullopt;
+  }
+  return FreeSpace(*seen.views, points, growth.free_space);
+}
+
 // Bao & Qi 2017 on the segments directed by the MRF.
 Result<StrandModel> RunBaoQi(const std::vector<OrientedPoint>& points,
                              std::vector<StrandSegment> segments, const HeadModel& head,
                              const std::vector<DirectedRoot>& roots,
                              const StrandReconstructionOptions& o, const SkinViews* skin,
-                             const FreeSpace* free_space, StrandReconstructionSummary* summary) {
+                             const StrandViews& seen, StrandReconstructionSummary* summary) {
   int64_t t = SteadyNowNs();
   DirectionOptions direction = o.direction;
   direction.threads = o.threads;
@@ -176,7 +197,11 @@ Result<StrandModel> RunBaoQi(const std::vector<OrientedPoint>& points,
   summary->curl = curls.estimate();
   const SeenTips seen_tips = SeenTips::Find(segments, growth.seen_tips, &points);
   StrandModel model;
-  const FieldGrowth grow(field, &head, growth, skin, &curls, &seen_tips, free_space);
+  // Only strands winding on a curl keep out of the free space.
+  const std::optional<FreeSpace> free_space =
+      curls.estimate().curl.curly() ? FreeSpaceFor(points, seen, growth) : std::nullopt;
+  const FieldGrowth grow(field, &head, growth, skin, &curls, &seen_tips,
+                         free_space ? &*free_space : nullptr);
   model.strands = grow.FromRoots(roots, &summary->growth);
   summary->growth.seen_tips = static_cast<int64_t>(seen_tips.size());
   summary->growth.seen_tip_ends_examined = static_cast<int64_t>(seen_tips.examined());
@@ -452,19 +477,9 @@ Result<StrandReconstructionSummary> ReconstructStrands(
     if (o.method == StrandMethod::kLuo) {
       HR_ASSIGN_OR_RETURN(model, RunLuo(points, segments, *head, o, &summary));
     } else {
-      // Where the cameras see through, for the helices' winding (helix_out_of_free_space).
-      std::optional<FreeSpace> free_space;
-      if (views != nullptr && o.growth.helix_continuation && o.growth.helix_out_of_free_space) {
-        if (PointViewsAre(reconstruction_dir, *views)) {
-          free_space.emplace(*views, points, o.growth.free_space);
-        } else {
-          LogWarning("strands: " + reconstruction_dir +
-                     "/summary.json names other views than these; winding strands are not kept "
-                     "out of the free space (run the points stage with the same --views)");
-        }
-      }
-      HR_ASSIGN_OR_RETURN(model, RunBaoQi(points, std::move(segments), *head, ScalpRoots(*head, o),
-                                          o, skin, free_space ? &*free_space : nullptr, &summary));
+      HR_ASSIGN_OR_RETURN(
+          model, RunBaoQi(points, std::move(segments), *head, ScalpRoots(*head, o), o, skin,
+                          StrandViews{reconstruction_dir, views}, &summary));
     }
   }
   summary.seconds_total = SecondsSince(start);
