@@ -281,7 +281,9 @@ std::string NewRunId(size_t submission_number) {
   std::random_device random;
   char suffix[16];
   std::snprintf(suffix, sizeof suffix, "%06x", static_cast<unsigned>(random() & 0xffffff));
-  return "r" + std::to_string(submission_number) + "-" + time_text + "-" + suffix;
+  char id[96];
+  std::snprintf(id, sizeof id, "r%zu-%s-%s", submission_number, time_text, suffix);
+  return id;
 }
 
 }  // namespace hairrig

@@ -119,9 +119,9 @@ std::string SlurmJobScript(const SubmitPlan& plan, const Submission& submission,
   for (const std::string& capture : plan.capture_dirs) script += "  " + ShellQuote(capture) + "\n";
   script += ")\nexec " + ShellQuote(plan.hairrig_exe);
   for (const std::string& arg : StageJobArguments(plan, submission, stage, kCapturePlaceholder)) {
-    script +=
-        " " + (arg == kCapturePlaceholder ? std::string("\"${captures[$SLURM_ARRAY_TASK_ID]}\"")
-                                          : ShellQuote(arg));
+    script += ' ';
+    script += arg == kCapturePlaceholder ? std::string("\"${captures[$SLURM_ARRAY_TASK_ID]}\"")
+                                         : ShellQuote(arg);
   }
   return script + "\n";
 }

@@ -12,7 +12,8 @@
 //       [--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM]
 //       [--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region
 //       near-arcs|whole-hair] [--curl-region-cell MM]
-//       [--curl-radius-from helix-fit|curvature-and-torsion|curvature|turn-rate]
+//       [--curl-radius-from
+//       helix-fit|helix-fit-less-bias|curvature-and-torsion|curvature|turn-rate]
 //       [--helix-out-of-free-space yes|no] [--free-space-views N] [--free-space-margin MM]
 //       [--follow-weight W] [--skin-min-share S] [--skin-min-views N]
 //       [--trim-tips-over-skin yes|no] [--tip-skin-min-share S] [--tip-skin-min-views N]
@@ -33,7 +34,7 @@
 // strand the curl given (radius, pitch, handedness: the simulated wig's
 // curl_radius_mm and curl_pitch_mm, right-handed, for its ceiling) in place of
 // the estimate. --curl-radius-from picks what the estimate's radius and pitch
-// come from (CurlRadiusFrom; helix-fit by default).
+// come from (CurlRadiusFrom; helix-fit-less-bias by default).
 // --helix-out-of-free-space no lets the helices wind in front of the seen hair
 // (StrandGrowthOptions::helix_out_of_free_space); --free-space-views and
 // --free-space-margin set its FreeSpaceOptions::min_views and margin_mm.
@@ -144,7 +145,8 @@ int main(int argc, char** argv) {
         "[--curl-field yes|no] [--curl-oracle RADIUS_MM,PITCH_MM[,+1|-1]] [--curl-min-depth MM] "
         "[--curl-start-on-bend yes|no] [--curl-bend-axis-relax MM] [--curl-region "
         "near-arcs|whole-hair] [--curl-region-cell MM] "
-        "[--curl-radius-from helix-fit|curvature-and-torsion|curvature|turn-rate] "
+        "[--curl-radius-from "
+        "helix-fit|helix-fit-less-bias|curvature-and-torsion|curvature|turn-rate] "
         "[--helix-out-of-free-space yes|no] [--free-space-views N] [--free-space-margin MM] "
         "[--overlap-stride K] "
         "[--max-overlaps K] [--overlap-mm MM] [--out-suffix "

@@ -210,8 +210,14 @@ const char* CurlRadiusFromName(CurlRadiusFrom from) {
       return "curvature-and-torsion";
     case CurlRadiusFrom::kHelixFit:
       return "helix-fit";
+    case CurlRadiusFrom::kHelixFitLessBias:
+      return "helix-fit-less-bias";
   }
   return "curvature";
+}
+
+bool FromFittedHelices(CurlRadiusFrom from) {
+  return from == CurlRadiusFrom::kHelixFit || from == CurlRadiusFrom::kHelixFitLessBias;
 }
 
 bool ParseCurlRadiusFrom(const std::string& name, CurlRadiusFrom* from) {
@@ -261,7 +267,7 @@ HelixShape CurlEstimate::RawShape() const {
     if (!(curvature_per_mm > 0)) return {kNone, kNone};
     return {curvature_per_mm / k2t2, 2 * M_PI * torsion_per_mm / k2t2};
   }
-  if (radius_from == CurlRadiusFrom::kHelixFit)
+  if (FromFittedHelices(radius_from))
     return fitted.radius_mm > 0 ? fitted : HelixShape{kNone, kNone};
   double radius = kNone;
   if (radius_from == CurlRadiusFrom::kTurnRate && rate_per_mm > 0)
@@ -382,7 +388,10 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
     curvatures.emplace_back(curvature, turn.length_mm);
     torsions.emplace_back(std::abs(torsion), turn.length_mm);
     HelixShape fitted;
-    if (FitHelix(s.points_mm, &fitted)) {
+    const bool fits = o.radius_from == CurlRadiusFrom::kHelixFitLessBias
+                          ? FitHelixLessItsBias(s.points_mm, &fitted)
+                          : FitHelix(s.points_mm, &fitted);
+    if (fits) {
       fit_radii.emplace_back(fitted.radius_mm, turn.length_mm);
       fit_pitches.emplace_back(fitted.pitch_mm, turn.length_mm);
     }
@@ -403,7 +412,7 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   e.fitted_arcs = static_cast<int64_t>(fit_radii.size());
   // Too few arcs for fitted helices (loose curls' arcs turn under a quarter
   // turn): their curvature and torsion.
-  e.radius_from = o.radius_from == CurlRadiusFrom::kHelixFit && e.fitted_arcs < o.min_arcs
+  e.radius_from = FromFittedHelices(o.radius_from) && e.fitted_arcs < o.min_arcs
                       ? CurlRadiusFrom::kCurvatureAndTorsion
                       : o.radius_from;
   e.right_handed_share = right_mm / arc_mm;
@@ -416,8 +425,8 @@ CurlField CurlField::Estimate(const std::vector<StrandSegment>& segments,
   // axis.
   double pitch = shape.pitch_mm;
   if (radius > shape.radius_mm)
-    pitch = e.radius_from == CurlRadiusFrom::kHelixFit ? shape.pitch_mm * radius / shape.radius_mm
-                                                       : 2 * M_PI * radius / std::tan(alpha);
+    pitch = FromFittedHelices(e.radius_from) ? shape.pitch_mm * radius / shape.radius_mm
+                                             : 2 * M_PI * radius / std::tan(alpha);
   if (e.arcs < o.min_arcs || e.arc_share < o.min_arc_share ||
       e.local_handedness_agreement < o.min_handedness_agreement || !(radius <= o.max_radius_mm) ||
       !(pitch > 0 && std::isfinite(pitch)) || e.helix_angle_deg > o.max_helix_angle_deg)

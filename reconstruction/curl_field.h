@@ -21,9 +21,11 @@
 //     (acos of the mean |t . a|) is at least min_arc_angle_deg and whose turns go mostly one way
 //     (the sum of the signed turns at least min_turn_consistency of the sum
 //     of their sizes);
-//   - the curl's shape from each arc's own helix fitted to its points
-//     (helix_fit.h; arcs it refuses are left out): the radius and the pitch
-//     each their own median over the fitted arcs, weighted by length; the
+//   - the curl's shape from each arc's own helix fitted to its points, less
+//     the fit's bias on that arc's noise (helix_fit.h, FitHelixLessItsBias;
+//     arcs it refuses are left out; kHelixFit keeps the plain fit, about a
+//     tenth wider on a capture's arcs): the radius and the pitch each their
+//     own median over the fitted arcs, weighted by length; the
 //     radius raised to min_radius_mm if less, the pitch scaled with it. With
 //     fewer than min_arcs arcs fitted (a loose curl's arcs turn under a
 //     quarter turn) the shape comes from the arcs' curvature kappa and
@@ -76,10 +78,13 @@ enum class CurlRadiusFrom {
   kCurvature,            // r = sin^2(alpha) / kappa, P = 2 pi r / tan(alpha)
   kTurnRate,             // r = sin(alpha) / rate, P = 2 pi r / tan(alpha)
   kHelixFit,             // each arc's own helix fitted to its points (FitHelix)
+  kHelixFitLessBias,     // the same less each fit's bias on its arc (FitHelixLessItsBias)
 };
 inline constexpr CurlRadiusFrom kCurlRadiusFroms[] = {
-    CurlRadiusFrom::kHelixFit, CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature,
-    CurlRadiusFrom::kTurnRate};
+    CurlRadiusFrom::kHelixFit, CurlRadiusFrom::kHelixFitLessBias,
+    CurlRadiusFrom::kCurvatureAndTorsion, CurlRadiusFrom::kCurvature, CurlRadiusFrom::kTurnRate};
+// True for the shapes from each arc's fitted helix (kHelixFit, kHelixFitLessBias).
+bool FromFittedHelices(CurlRadiusFrom from);
 const char* CurlRadiusFromName(CurlRadiusFrom from);  // "helix-fit", "curvature-and-torsion", ...
 // False for an unknown name.
 bool ParseCurlRadiusFrom(const std::string& name, CurlRadiusFrom* from);
@@ -102,7 +107,7 @@ bool ParseCurlRegion(const std::string& name, CurlRegion* region);
 
 struct CurlFieldOptions {
   bool enabled = true;  // false: no curl (growth as without it)
-  CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFit;
+  CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFitLessBias;
   double axis_cell_mm = 10;
   double min_arc_angle_deg = 35;
   double min_arc_length_mm = 15;
@@ -157,19 +162,20 @@ struct CurlEstimate {
   double arc_share = 0;  // of the directed segments' length
   double helix_angle_deg = 0, rate_per_mm = 0;
   double curvature_per_mm = 0, torsion_per_mm = 0;  // the arcs' medians, 1/mm (|torsion|)
-  // The medians of the arcs' own fitted helices (FitHelix, mm; weighted by
-  // length, the radius and the pitch each its own median), whatever
-  // radius_from is; 0 where no arc could be fitted. The arcs FitHelix
-  // refuses (under a quarter turn, or no cone to their chords) are left out.
+  // The medians of the arcs' own fitted helices (mm; weighted by length, the
+  // radius and the pitch each its own median), whatever radius_from is; 0
+  // where no arc could be fitted. By FitHelixLessItsBias when radius_from is
+  // kHelixFitLessBias, else by FitHelix. The arcs the fit refuses (under a
+  // quarter turn, or no cone to their chords) are left out.
   HelixShape fitted;
   int64_t fitted_arcs = 0;
-  CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFit;
+  CurlRadiusFrom radius_from = CurlRadiusFrom::kHelixFitLessBias;
   // Where strands wind, as decided from the arcs (not as asked); meaningful
   // only when curl.curly().
   CurlRegion region = CurlRegion::kWholeHair;
   // The helix the arcs give by radius_from, before min_radius_mm and the
-  // curly test; infinite when they do not bend (or, by kHelixFit, no arc was
-  // fitted).
+  // curly test; infinite when they do not bend (or, from fitted helices, no
+  // arc was fitted).
   HelixShape RawShape() const;
   double right_handed_share = 0;  // of the arcs' length
   // The share of the arcs' length that turns the way the other arcs in its

@@ -251,7 +251,7 @@ TEST(CurlField, EveryShapeEstimateFindsAnIdealHelix) {
       ASSERT_TRUE(e.curl.curly()) << "radius " << r;
       EXPECT_EQ(e.radius_from, from) << "radius " << r;
       // The fit is exact on exact arcs; the other estimates within a fifth.
-      const double tolerance = from == CurlRadiusFrom::kHelixFit ? 0.02 : 0.2;
+      const double tolerance = FromFittedHelices(from) ? 0.02 : 0.2;
       EXPECT_NEAR(e.curl.radius_mm, r, tolerance * r) << "radius " << r;
       EXPECT_NEAR(e.curl.pitch_mm, pitch, tolerance * pitch) << "radius " << r;
       EXPECT_NEAR(e.fitted.radius_mm, r, 0.02 * r) << "radius " << r;
@@ -293,9 +293,11 @@ TEST(CurlEstimate, EachShapeEstimateUsesItsOwnMeasures) {
   e.radius_from = CurlRadiusFrom::kTurnRate;
   EXPECT_NEAR(e.RawShape().radius_mm, sin_alpha / 0.1, 1e-9);
   e.fitted = {5.5, 23};
-  e.radius_from = CurlRadiusFrom::kHelixFit;
-  EXPECT_EQ(e.RawShape().radius_mm, 5.5);
-  EXPECT_EQ(e.RawShape().pitch_mm, 23);
+  for (const CurlRadiusFrom from : {CurlRadiusFrom::kHelixFit, CurlRadiusFrom::kHelixFitLessBias}) {
+    e.radius_from = from;
+    EXPECT_EQ(e.RawShape().radius_mm, 5.5);
+    EXPECT_EQ(e.RawShape().pitch_mm, 23);
+  }
   e.fitted = {};
   EXPECT_TRUE(std::isinf(e.RawShape().radius_mm));
   e.radius_from = CurlRadiusFrom::kTurnRate;

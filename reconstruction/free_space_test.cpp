@@ -28,6 +28,20 @@ TEST(FreeSpace, InFrontOfTheSeenFaceIsFreeBehindItAndBesideItIsNot) {
   EXPECT_EQ(free.ViewsSeeingPast({0, 700, 150}), 0);
 }
 
+TEST(FreeSpace, KeepsTheNearestSeenDepthNotTheLastOne) {
+  // A face at y = 24 and, after it in the list, points the stereo put 48 mm
+  // further from the cameras: what lies between them is not known to be empty.
+  const std::vector<ReconstructionView> views = front_views::Cameras(4, 150);
+  std::vector<OrientedPoint> points = front_views::FrontFace(24, 24, 100, 200, 4);
+  const std::vector<OrientedPoint> behind = front_views::FrontFace(-24, 24, 100, 200, 4);
+  points.insert(points.end(), behind.begin(), behind.end());
+  FreeSpaceOptions four;
+  four.min_views = 4;
+  const FreeSpace free(views, points, four);
+  EXPECT_EQ(free.ViewsSeeingPast({0, 0, 150}), 0);
+  EXPECT_TRUE(free.Free({0, 34, 150}));
+}
+
 TEST(FreeSpace, FewerViewsThanAskedForDoNotCarve) {
   const std::vector<ReconstructionView> views = front_views::Cameras(4, 150);
   // The points list only the first two views (and an index past the views, ignored).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <random>
 
 #include "reconstruction/circle_fit.h"
 
@@ -19,6 +20,8 @@ constexpr double kMinSpread = 1e-9;  // of the chords' unit directions' covarian
 constexpr double kMinTurnRad = M_PI / 2;
 constexpr int kIterations = 30;
 constexpr double kMinRelativeGain = 1e-8;
+// Seeds the resampled noise (with the arc's point count): the same arc, the same shape.
+constexpr unsigned kResampleSeed = 20131;
 
 // The helix's parameters about a fixed frame (a0, u0, v0, centre0): the axis
 // a = normalise(a0 + tilt.x u0 + tilt.y v0) through centre0 + shift.x u0 +
@@ -164,39 +167,118 @@ std::optional<std::pair<Frame, double>> StartingFrame(const std::vector<Eigen::V
   return std::make_pair(f, radius);
 }
 
-}  // namespace
+// A fitted helix: its frame and parameters, each point's unwrapped angle
+// about its axis (rad) and the points' noise per axis it implies (mm, the
+// standard deviation of isotropic Gaussian noise).
+struct FittedHelix {
+  Frame frame;
+  Parameters x;
+  std::vector<double> angles;
+  double sigma_mm = 0;
+};
 
-bool FitHelix(const std::vector<Eigen::Vector3f>& polyline, HelixShape* shape) {
-  std::vector<Eigen::Vector3d> points;
-  for (const Eigen::Vector3f& p : polyline) points.push_back(p.cast<double>());
+std::optional<FittedHelix> Fit(const std::vector<Eigen::Vector3d>& points) {
   const std::vector<Eigen::Vector3d> chords = ChordDirections(points);
-  if (chords.size() < kMinChords) return false;
+  if (chords.size() < kMinChords) return std::nullopt;
   const auto start = StartingFrame(points, chords);
-  if (!start) return false;
-  const Frame& frame = start->first;
+  if (!start) return std::nullopt;
+  FittedHelix fit;
+  fit.frame = start->first;
   // The height against the unwrapped angle, a line by least squares, starts
   // the slope and the offset (with both 0 the axial residual is the height).
-  Parameters x = Parameters::Zero();
+  Parameters& x = fit.x;
+  x = Parameters::Zero();
   x[kRadius] = start->second;
-  std::vector<double> angles;
-  const Eigen::VectorXd at_zero_slope = Residuals(points, frame, x, &angles);
+  const Eigen::VectorXd at_zero_slope = Residuals(points, fit.frame, x, &fit.angles);
   Eigen::MatrixXd design(points.size(), 2);
   Eigen::VectorXd heights(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
     const auto row = static_cast<Eigen::Index>(i);
-    design.row(row) << angles[i], 1;
+    design.row(row) << fit.angles[i], 1;
     heights[row] = at_zero_slope[2 * row + 1];
   }
   const Eigen::Vector2d line = design.colPivHouseholderQr().solve(heights);
   x[kSlope] = line[0];
   x[kOffset] = line[1];
-  x = Refine(points, frame, x);
-  Residuals(points, frame, x, &angles);
+  x = Refine(points, fit.frame, x);
+  const Eigen::VectorXd r = Residuals(points, fit.frame, x, &fit.angles);
   if (!x.allFinite() || !(x[kRadius] > 0 && x[kRadius] < kMaxCircleRadiusMm) ||
-      std::abs(angles.back() - angles.front()) < kMinTurnRad)
-    return false;
-  shape->radius_mm = x[kRadius];
-  shape->pitch_mm = 2 * M_PI * std::abs(x[kSlope]);
+      std::abs(fit.angles.back() - fit.angles.front()) < kMinTurnRad)
+    return std::nullopt;
+  // A point's noise along the circle moves its angle, and with the angle its
+  // expected height: its axial residual carries the noise along the circle
+  // times slope / radius beside the noise along the axis.
+  const double inflation = 1 + (x[kSlope] / x[kRadius]) * (x[kSlope] / x[kRadius]);
+  double sum = 0;
+  for (Eigen::Index k = 0; k < r.size(); k += 2)
+    sum += r[k] * r[k] + r[k + 1] * r[k + 1] / inflation;
+  fit.sigma_mm = std::sqrt(sum / std::max(1.0, static_cast<double>(r.size()) - 7));
+  return fit;
+}
+
+HelixShape ShapeOf(const Parameters& x) { return {x[kRadius], 2 * M_PI * std::abs(x[kSlope])}; }
+
+// The fitted helix's points at the fitted angles, each moved by Gaussian
+// noise of sigma_mm per axis.
+std::vector<Eigen::Vector3d> Resample(const FittedHelix& fit, double sigma_mm,
+                                      std::mt19937* random) {
+  const Frame& f = fit.frame;
+  const Parameters& x = fit.x;
+  const Eigen::Vector3d a = (f.a0 + x[kTiltU] * f.u0 + x[kTiltV] * f.v0).normalized();
+  const Eigen::Vector3d u = (f.u0 - f.u0.dot(a) * a).normalized(), v = a.cross(u);
+  const Eigen::Vector3d centre = f.centre0 + x[kShiftU] * f.u0 + x[kShiftV] * f.v0;
+  std::normal_distribution<double> noise(0.0, sigma_mm);
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(fit.angles.size());
+  for (const double angle : fit.angles) {
+    const Eigen::Vector3d on_helix = centre +
+                                     x[kRadius] * (std::cos(angle) * u + std::sin(angle) * v) +
+                                     (x[kSlope] * angle + x[kOffset]) * a;
+    points.push_back(on_helix + Eigen::Vector3d(noise(*random), noise(*random), noise(*random)));
+  }
+  return points;
+}
+
+double Median(std::vector<double> values) {
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+std::vector<Eigen::Vector3d> ToDouble(const std::vector<Eigen::Vector3f>& polyline) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(polyline.size());
+  for (const Eigen::Vector3f& p : polyline) points.push_back(p.cast<double>());
+  return points;
+}
+
+}  // namespace
+
+bool FitHelix(const std::vector<Eigen::Vector3f>& polyline, HelixShape* shape) {
+  const std::optional<FittedHelix> fit = Fit(ToDouble(polyline));
+  if (!fit) return false;
+  *shape = ShapeOf(fit->x);
+  return true;
+}
+
+bool FitHelixLessItsBias(const std::vector<Eigen::Vector3f>& polyline, HelixShape* shape,
+                         int resamples) {
+  const std::optional<FittedHelix> fit = Fit(ToDouble(polyline));
+  if (!fit || resamples < 1) return false;
+  const HelixShape fitted = ShapeOf(fit->x);
+  std::mt19937 random(kResampleSeed + static_cast<unsigned>(polyline.size()));
+  std::vector<double> radii, pitches;
+  for (int k = 0; k < resamples; ++k) {
+    const std::optional<FittedHelix> refit = Fit(Resample(*fit, fit->sigma_mm, &random));
+    if (!refit) continue;
+    radii.push_back(refit->x[kRadius]);
+    pitches.push_back(ShapeOf(refit->x).pitch_mm);
+  }
+  if (2 * radii.size() < static_cast<size_t>(resamples)) return false;
+  const HelixShape less_bias{2 * fitted.radius_mm - Median(radii),
+                             2 * fitted.pitch_mm - Median(pitches)};
+  if (!(less_bias.radius_mm > 0 && less_bias.pitch_mm > 0)) return false;
+  *shape = less_bias;
   return true;
 }
 

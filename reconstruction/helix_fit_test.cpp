@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -42,7 +43,11 @@ struct Fits {
   double MedianRadius() const { return radii[radii.size() / 2]; }
   double MedianPitch() const { return pitches[pitches.size() / 2]; }
 };
-Fits FitNoisyArcs(double r, double pitch, double length_mm, float sigma_mm) {
+using Fitter = bool (*)(const std::vector<Eigen::Vector3f>&, HelixShape*);
+bool FitLessBias(const std::vector<Eigen::Vector3f>& points, HelixShape* shape) {
+  return FitHelixLessItsBias(points, shape);
+}
+Fits FitNoisyArcs(double r, double pitch, double length_mm, float sigma_mm, Fitter fit = FitHelix) {
   std::mt19937 random(7);
   std::normal_distribution<float> noise(0.0f, sigma_mm);
   Fits fits;
@@ -52,7 +57,7 @@ Fits FitNoisyArcs(double r, double pitch, double length_mm, float sigma_mm) {
     for (Eigen::Vector3f& p : arc)
       p += Eigen::Vector3f(noise(random), noise(random), noise(random));
     HelixShape shape;
-    if (!FitHelix(arc, &shape)) continue;
+    if (!fit(arc, &shape)) continue;
     fits.radii.push_back(shape.radius_mm);
     fits.pitches.push_back(shape.pitch_mm);
   }
@@ -89,6 +94,41 @@ TEST(FitHelix, ShortNoisyArcsComeOutWide) {
     EXPECT_LT(fits.MedianRadius(), 1.35 * r) << "radius " << r;
     EXPECT_NEAR(fits.MedianPitch(), pitch, 0.3 * pitch) << "radius " << r;
   }
+}
+
+TEST(FitHelixLessItsBias, TakesTheWidthOfShortNoisyArcsOff) {
+  // Arcs of 20 mm with their points 0.2 and 0.4 mm off. Measured medians,
+  // plain fit against less its bias: at 0.2 mm, 6.24 / 5.93, 5.07 / 3.46 and
+  // 9.69 / 9.10 mm (pitches 20.4, 31.8, 26.4 mm less the bias); at 0.4 mm,
+  // 6.57 / 6.29, 9.06 / 8.21 and 10.51 / 10.01 mm. The flat coil (4 / 30 mm,
+  // under half a turn in 20 mm) over-corrects: the fit's bias there is
+  // larger at the wide fitted helix than at the true one. Asserted: the
+  // median radius nearer the truth than the plain fit's at both noises, at
+  // 0.2 mm within 5 % of it (20 % for the flat coil) and the pitch within
+  // 10 %, and at least half as many arcs fitted.
+  for (const float sigma : {0.2f, 0.4f}) {
+    for (const auto& [r, pitch] : kShapes) {
+      const Fits plain = FitNoisyArcs(r, pitch, 20, sigma);
+      const Fits less_bias = FitNoisyArcs(r, pitch, 20, sigma, FitLessBias);
+      const std::string what = "radius " + std::to_string(r) + ", noise " + std::to_string(sigma);
+      ASSERT_GE(2 * less_bias.radii.size(), plain.radii.size()) << what;
+      EXPECT_LT(std::abs(less_bias.MedianRadius() - r), std::abs(plain.MedianRadius() - r)) << what;
+      if (sigma > 0.3f) continue;
+      EXPECT_NEAR(less_bias.MedianRadius(), r, (r == 4.0 ? 0.2 : 0.05) * r) << what;
+      EXPECT_NEAR(less_bias.MedianPitch(), pitch, 0.1 * pitch) << what;
+    }
+  }
+}
+
+TEST(FitHelixLessItsBias, LeavesAnExactHelixAsItIs) {
+  HelixShape shape;
+  ASSERT_TRUE(FitHelixLessItsBias(HelixArc(6, 20, -1, 0.4, 0, 20), &shape));
+  EXPECT_NEAR(shape.radius_mm, 6, 0.01);
+  EXPECT_NEAR(shape.pitch_mm, 20, 0.05);
+  // What FitHelix refuses, and no resamples.
+  EXPECT_FALSE(FitHelixLessItsBias(HelixArc(15, 20, 1, 0, 0, 20), &shape));
+  EXPECT_FALSE(FitHelixLessItsBias(HelixArc(6, 20, 1, 0, 0, 20), &shape, 0));
+  EXPECT_NEAR(shape.radius_mm, 6, 0.01);
 }
 
 TEST(FitHelix, DoesNotDependOnWhereTheHelixLies) {

@@ -167,6 +167,14 @@ std::optional<FreeSpace> FreeSpaceFor(const std::vector<OrientedPoint>& points,
                "out of the free space (run the points stage with the same --views)");
     return std::nullopt;
   }
+  const int min_views = growth.free_space.min_views;
+  if (seen.views->size() < static_cast<size_t>(min_views)) {
+    LogWarning("strands: " + std::to_string(seen.views->size()) +
+               " views, fewer than the free space's min_views (" + std::to_string(min_views) +
+               "): winding strands are not kept out of the free space (give " +
+               std::to_string(min_views) + " views or more)");
+    return std::nullopt;
+  }
   return FreeSpace(*seen.views, points, growth.free_space);
 }
 
