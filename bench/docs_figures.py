@@ -252,6 +252,7 @@ RENDERERS = {"console_load": console_load_table, "hostile_campaign": hostile_cam
              "reconstruction_robustness_curls_whole_hair": reconstruction_robustness_table,
              "reconstruction_robustness_curls_helix_fit": reconstruction_robustness_table,
              "reconstruction_robustness_curls_free_space": reconstruction_robustness_table,
+             "reconstruction_robustness_curls_less_bias": reconstruction_robustness_table,
              "strand_ceilings_curly_blond": strand_ceilings_table,
              "render_view": render_view_table, "modbus": modbus_table}
 
