@@ -22,6 +22,7 @@ constexpr int kIterations = 30;
 constexpr double kMinRelativeGain = 1e-8;
 // Seeds the resampled noise (with the arc's point count): the same arc, the same shape.
 constexpr unsigned kResampleSeed = 20131;
+constexpr double kNoNoiseMm = 1e-9;
 
 // The helix's parameters about a fixed frame (a0, u0, v0, centre0): the axis
 // a = normalise(a0 + tilt.x u0 + tilt.y v0) through centre0 + shift.x u0 +
@@ -234,7 +235,10 @@ std::vector<Eigen::Vector3d> Resample(const FittedHelix& fit, double sigma_mm,
     const Eigen::Vector3d on_helix = centre +
                                      x[kRadius] * (std::cos(angle) * u + std::sin(angle) * v) +
                                      (x[kSlope] * angle + x[kOffset]) * a;
-    points.push_back(on_helix + Eigen::Vector3d(noise(*random), noise(*random), noise(*random)));
+    // Drawn in a fixed order (a constructor's arguments are evaluated in
+    // an unspecified one).
+    const double dz = noise(*random), dy = noise(*random), dx = noise(*random);
+    points.push_back(on_helix + Eigen::Vector3d(dx, dy, dz));
   }
   return points;
 }
@@ -266,6 +270,11 @@ bool FitHelixLessItsBias(const std::vector<Eigen::Vector3f>& polyline, HelixShap
   const std::optional<FittedHelix> fit = Fit(ToDouble(polyline));
   if (!fit || resamples < 1) return false;
   const HelixShape fitted = ShapeOf(fit->x);
+  // No residual: no noise to resample, no bias.
+  if (!(fit->sigma_mm > kNoNoiseMm)) {
+    *shape = fitted;
+    return true;
+  }
   std::mt19937 random(kResampleSeed + static_cast<unsigned>(polyline.size()));
   std::vector<double> radii, pitches;
   for (int k = 0; k < resamples; ++k) {

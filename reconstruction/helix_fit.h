@@ -23,10 +23,11 @@
 //      with the chords' noise, and a circle fitted across a tilted axis is
 //      an ellipse's, too small (3.9 mm against 6 on the path tracer's curls,
 //      docs/accuracy.md).
-// On noisy arcs the radius comes out a few per cent wide (3-8 % on the
-// synthetic arcs of helix_fit_test.cpp; 20 % on a capture's seen arcs), the
-// more so the shorter the arc and the noisier its points: with noise, a
-// circle through points spread across a tube is wider than the tube's axis.
+// On noisy arcs the radius comes out wide (4-27 % on the 20 mm synthetic
+// arcs of helix_fit_test.cpp, 1-3 % on 40 mm ones; 20 % on a capture's seen
+// arcs), the more so the noisier the points and the longer the pitch
+// against the radius (there the axis' tilt and the radius are hard to tell
+// apart).
 // FitHelixLessItsBias measures that bias on each arc and takes it off.
 #pragma once
 
@@ -57,12 +58,20 @@ bool FitHelix(const std::vector<Eigen::Vector3f>& points, HelixShape* shape);
 // out), and fitted again, `resamples` times; the radius is then
 // 2 r - median(r*) and the pitch 2 P - median(P*). The bias is measured at
 // the fitted helix, not the true one: where it changes fast with the
-// radius the correction overshoots (a flat coil's short arcs come out 13 %
-// narrow where the plain fit is 27 % wide, helix_fit_test.cpp). The
-// noise is drawn from a fixed seed: one arc, one shape. False (shape
-// untouched) where FitHelix is, where fewer than half the resampled arcs
-// can be fitted (the arc's noise hides its helix), and where the corrected
-// radius or pitch is not positive. About resamples + 1 times FitHelix's cost.
+// radius the correction overshoots (a stretched coil's short arcs, 4 / 30
+// mm, come out 13 % narrow where the plain fit is 27 % wide,
+// helix_fit_test.cpp). The noise model is the points' own, independent
+// from point to point and the same along every axis: whatever the helix
+// does not explain (a ringlet whose radius changes along it, a stereo error
+// mostly in depth, smoothing along the strand) is read as noise and pushes
+// towards over-correction. Points the helix passes through exactly (no
+// residual) are returned as fitted. The noise is drawn from a fixed seed: one arc, one
+// shape, with one build (the draws depend on the standard library). False
+// (shape untouched) where FitHelix is, for resamples under 1, where fewer
+// than half the resampled arcs can be fitted (the arc's noise hides its
+// helix; curl_field.h then leaves the arc out, as it does those FitHelix
+// refuses), and where the corrected radius or pitch is not positive. About
+// resamples + 1 times FitHelix's cost.
 bool FitHelixLessItsBias(const std::vector<Eigen::Vector3f>& points, HelixShape* shape,
                          int resamples = 16);
 

@@ -100,11 +100,11 @@ TEST(FitHelixLessItsBias, TakesTheWidthOfShortNoisyArcsOff) {
   // Arcs of 20 mm with their points 0.2 and 0.4 mm off. Measured medians,
   // plain fit against less its bias: at 0.2 mm, 6.24 / 5.93, 5.07 / 3.46 and
   // 9.69 / 9.10 mm (pitches 20.4, 31.8, 26.4 mm less the bias); at 0.4 mm,
-  // 6.57 / 6.29, 9.06 / 8.21 and 10.51 / 10.01 mm. The flat coil (4 / 30 mm,
-  // under half a turn in 20 mm) over-corrects: the fit's bias there is
-  // larger at the wide fitted helix than at the true one. Asserted: the
+  // 6.57 / 6.29, 9.06 / 8.21 and 10.51 / 10.01 mm. The stretched coil (4 / 30 mm,
+  // its pitch long against its radius) over-corrects: the fit's bias there
+  // is larger at the wide fitted helix than at the true one. Asserted: the
   // median radius nearer the truth than the plain fit's at both noises, at
-  // 0.2 mm within 5 % of it (20 % for the flat coil) and the pitch within
+  // 0.2 mm within 5 % of it (20 % for the stretched coil) and the pitch within
   // 10 %, and at least half as many arcs fitted.
   for (const float sigma : {0.2f, 0.4f}) {
     for (const auto& [r, pitch] : kShapes) {
@@ -125,10 +125,27 @@ TEST(FitHelixLessItsBias, LeavesAnExactHelixAsItIs) {
   ASSERT_TRUE(FitHelixLessItsBias(HelixArc(6, 20, -1, 0.4, 0, 20), &shape));
   EXPECT_NEAR(shape.radius_mm, 6, 0.01);
   EXPECT_NEAR(shape.pitch_mm, 20, 0.05);
-  // What FitHelix refuses, and no resamples.
+  // What FitHelix refuses, and no resamples: the shape untouched.
+  shape = {1, 2};
   EXPECT_FALSE(FitHelixLessItsBias(HelixArc(15, 20, 1, 0, 0, 20), &shape));
   EXPECT_FALSE(FitHelixLessItsBias(HelixArc(6, 20, 1, 0, 0, 20), &shape, 0));
-  EXPECT_NEAR(shape.radius_mm, 6, 0.01);
+  EXPECT_EQ(shape.radius_mm, 1);
+  EXPECT_EQ(shape.pitch_mm, 2);
+}
+
+TEST(FitHelixLessItsBias, GivesOneArcOneShape) {
+  std::mt19937 random(3);
+  std::normal_distribution<float> noise(0.0f, 0.2f);
+  std::vector<Eigen::Vector3f> arc = HelixArc(6, 20, 1, 0.4, 0, 30);
+  for (Eigen::Vector3f& p : arc) p += Eigen::Vector3f(noise(random), noise(random), noise(random));
+  HelixShape first, again;
+  ASSERT_TRUE(FitHelixLessItsBias(arc, &first));
+  ASSERT_TRUE(FitHelixLessItsBias(arc, &again));
+  EXPECT_EQ(first.radius_mm, again.radius_mm);
+  EXPECT_EQ(first.pitch_mm, again.pitch_mm);
+  HelixShape plain;
+  ASSERT_TRUE(FitHelix(arc, &plain));
+  EXPECT_NE(first.radius_mm, plain.radius_mm) << "a noisy arc's bias is taken off";
 }
 
 TEST(FitHelix, DoesNotDependOnWhereTheHelixLies) {

@@ -157,7 +157,8 @@ struct StrandViews {
 
 // Where the cameras see through, for the helices' winding
 // (helix_out_of_free_space); none without views or with the option off, and
-// none (with a warning) when the points' view lists index other views.
+// none (with a warning) when the points' view lists index other views or
+// fewer views are given than the free space's min_views (nothing is free).
 std::optional<FreeSpace> FreeSpaceFor(const std::vector<OrientedPoint>& points,
                                       const StrandViews& seen, const StrandGrowthOptions& growth) {
   if (seen.views == nullptr || !growth.helix_out_of_free_space) return std::nullopt;
