@@ -7,6 +7,7 @@
 #include <optional>
 #include <random>
 
+#include "core/statistics.h"
 #include "reconstruction/circle_fit.h"
 
 namespace hairrig {
@@ -241,12 +242,6 @@ std::vector<Eigen::Vector3d> Resample(const FittedHelix& fit, double sigma_mm,
     points.push_back(on_helix + Eigen::Vector3d(dx, dy, dz));
   }
   return points;
-}
-
-double Median(std::vector<double> values) {
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
 }
 
 std::vector<Eigen::Vector3d> ToDouble(const std::vector<Eigen::Vector3f>& polyline) {
